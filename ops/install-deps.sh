@@ -1,0 +1,47 @@
+#!/usr/bin/env bash
+# Installs everything fabatlas needs to build, test and run on Debian bookworm.
+# Idempotent: packages already present are not fetched again, and the package
+# index is refreshed at most once per call (only when something is missing).
+set -euo pipefail
+
+APT_PACKAGES=(
+  build-essential cmake ninja-build ccache pkg-config clang libclang-rt-14-dev
+  libopenvdb-dev libboost-iostreams-dev libtbb-dev libblosc-dev
+  libcgal-dev libgmp-dev libmpfr-dev
+  libopenmesh-dev libembree-dev
+  libceres-dev libeigen3-dev libsuitesparse-dev
+  libgrpc++-dev protobuf-compiler-grpc libprotobuf-dev protobuf-compiler
+  libsqlite3-dev sqlite3
+  libyaml-cpp-dev libmuparser-dev nlohmann-json3-dev libcli11-dev libspdlog-dev
+  libcpp-httplib-dev libtinygltf-dev libstb-dev libpng-dev libzstd-dev libssl-dev
+  libgtest-dev libgmock-dev libbenchmark-dev
+  openscad
+)
+# Node.js and npm: the machine's own if present, else Debian's.
+command -v npm >/dev/null 2>&1 || APT_PACKAGES+=(nodejs npm)
+
+missing=()
+for p in "${APT_PACKAGES[@]}"; do
+  if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
+    missing+=("$p")
+  fi
+done
+
+if ((${#missing[@]})); then
+  echo "install-deps: installing ${#missing[@]} Debian packages: ${missing[*]}"
+  SUDO=""
+  if [ "$(id -u)" != 0 ]; then SUDO=sudo; fi
+  export DEBIAN_FRONTEND=noninteractive
+  $SUDO apt-get update -qq
+  $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+fi
+
+# Node packages (test meshes, the web customiser's three.js, playwright-core)
+# are pinned by package-lock.json at the repository root.
+root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+if [ -f "$root/package.json" ]; then
+  if [ ! -d "$root/node_modules" ] || [ "$root/package-lock.json" -nt "$root/node_modules/.package-lock.json" ]; then
+    echo "install-deps: installing npm packages"
+    (cd "$root" && npm ci --no-audit --no-fund --loglevel=error)
+  fi
+fi
