@@ -20,6 +20,13 @@ class InputError : public std::runtime_error {
       : std::runtime_error(one_line_message) {}
 };
 
+// Input that is well formed but would exceed a resource limit (voxel counts
+// that would exhaust memory, a full disk). Still the user's to fix.
+class ResourceError : public InputError {
+ public:
+  using InputError::InputError;
+};
+
 // Exit status of every fabatlas binary when it rejects its input.
 inline constexpr int kExitBadInput = 2;
 

@@ -1,0 +1,74 @@
+// fabatlas/design/evaluate_sample.h — EvaluateSample(u) of seed 001 Alg. 2 and
+// the volumetric change ΔG of Eq. 2 between two evaluated samples.
+#pragma once
+
+#include <map>
+#include <string>
+#include <vector>
+
+#include "fabatlas/design/constraint_solve.h"
+#include "fabatlas/design/design.h"
+#include "fabatlas/design/subtree_cache.h"
+#include "fabatlas/geometry/solid.h"
+
+namespace fabatlas::design {
+
+// Failure types, in the order checks run. A sample's failure is the type of
+// its first failed check.
+inline constexpr const char* kUnsatConstraints = "unsat_constraints";
+inline constexpr const char* kNoGeometry = "no_geometry";
+inline constexpr const char* kNotWatertight = "not_watertight";
+inline constexpr const char* kSelfIntersecting = "self_intersecting";
+inline constexpr const char* kThinParts = "thin_parts";
+inline constexpr const char* kUnstable = "unstable";
+inline constexpr const char* kTooMuchMaterial = "too_much_material";
+
+struct CheckOutcome {
+  std::string name;     // check name (constraints, geometry, then the design's)
+  bool passed = false;
+  std::string failure;  // failure type when not passed
+  std::string reason;   // human explanation, e.g. "centre of mass 3.2 mm outside the support polygon"
+  double seconds = 0;
+};
+
+// One subtree root evaluated (or found in the cache) for this sample.
+struct SubtreeRecord {
+  std::string key;        // hex SHA-256 of (τ, ρ, voxel size): the cache key
+  std::string topology;   // hex SHA-256 of τ alone
+  std::string path;       // node position, e.g. "root/0/1"
+  std::string op;
+  double seconds = 0;     // root compute time given its children (0 if cached)
+  bool from_cache = false;
+  std::size_t bytes = 0;  // memory of the resulting grid
+  std::vector<std::string> children;  // keys of the child subtrees
+};
+
+struct EvaluateOptions {
+  SubtreeCache* cache = nullptr;  // optional; subtrees are looked up and offered
+  bool keep_solid = true;         // keep the root level set in the result
+};
+
+struct SampleResult {
+  Point u;
+  bool valid = false;
+  std::string failure;        // empty when valid
+  std::string failure_reason;
+  std::vector<CheckOutcome> checks;
+  std::map<std::string, double> properties;
+  std::map<std::string, double> values;  // every parameter after solving
+  geometry::Solid solid;                 // root geometry (empty when invalid before geometry)
+  std::vector<SubtreeRecord> subtrees;   // post-order, root last
+  std::map<std::string, double> timings; // solve, tree, checks, properties, total (wall seconds)
+};
+
+// Seed 001 Alg. 2. Bad values at this point (a negative radius after solving)
+// make the sample invalid with a reason; InputError is thrown only for
+// problems of the design itself (e.g. a resource limit, an unreadable mesh).
+SampleResult EvaluateSample(const Design& design, const Point& u, const EvaluateOptions& options = {});
+
+// ΔG(u1,u2) = |V(G1) xor V(G2)| / |V(G1) union V(G2)| (seed 001 Eq. 2), with
+// invalid samples taken as empty: ΔG(invalid, invalid) = 0 and
+// ΔG(valid, invalid) = 1.
+double DeltaG(const SampleResult& a, const SampleResult& b);
+
+}  // namespace fabatlas::design

@@ -1,0 +1,184 @@
+#include "checks.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <sstream>
+
+#include "fabatlas/mesh/mesh_report.h"
+#include "fabatlas/mesh/shape_diameter.h"
+
+namespace fabatlas::design {
+namespace {
+
+std::string Mm(double v) {
+  std::ostringstream s;
+  s.precision(3);
+  s << v << " mm";
+  return s.str();
+}
+
+double Cross(const geometry::Vec2& o, const geometry::Vec2& a, const geometry::Vec2& b) {
+  return (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0]);
+}
+
+// Watertight, manifold, not self-intersecting (on the extracted mesh).
+CheckOutcome Watertight(CheckContext& c) {
+  mesh::MeshReport report = mesh::InspectMesh(c.Mesh());
+  CheckOutcome o;
+  o.passed = report.closed && report.manifold && !report.self_intersecting;
+  if (!report.closed || !report.manifold) {
+    o.failure = kNotWatertight;
+    o.reason = !report.closed ? report.closed_reason : report.manifold_reason;
+  } else if (report.self_intersecting) {
+    o.failure = kSelfIntersecting;
+    o.reason = report.self_intersection_reason;
+  }
+  return o;
+}
+
+// No excessively thin features. method sdf (default): the shape diameter
+// function of Shapira et al. 2008, as seed 001 Table 2 uses; passes when the
+// share of surface area thinner than `value` is at most max_thin_fraction
+// (default 0.01). method opening: morphological opening of the level set by a
+// ball of diameter `value`; passes when the volume lost is at most
+// max_thin_fraction (default 0.02, sharp convex edges always lose a little).
+CheckOutcome MinThickness(const CheckSpec& spec, CheckContext& c) {
+  double value = c.Number(spec, "value", 1.0);
+  auto method_it = spec.args.find("method");
+  std::string method = method_it == spec.args.end() ? "sdf" : method_it->second.text;
+  CheckOutcome o;
+  o.failure = kThinParts;
+  std::ostringstream reason;
+  if (method == "opening") {
+    double allowed = c.Number(spec, "max_thin_fraction", 0.02);
+    double lost = geometry::OpeningLossFraction(c.solid(), value);
+    o.passed = lost <= allowed;
+    reason << 100 * lost << "% of the volume is thinner than " << Mm(value) << " (allowed " << 100 * allowed << "%)";
+  } else {
+    double allowed = c.Number(spec, "max_thin_fraction", 0.01);
+    mesh::ShapeDiameterOptions options;
+    options.thin_threshold = value;
+    mesh::ShapeDiameterSummary sdf = mesh::ShapeDiameter(c.Mesh(), options);
+    o.passed = sdf.area_fraction_below <= allowed;
+    reason << 100 * sdf.area_fraction_below << "% of the surface has shape diameter below " << Mm(value)
+           << " (thinnest " << Mm(sdf.min) << ", allowed " << 100 * allowed << "%)";
+  }
+  if (!o.passed) o.reason = reason.str();
+  else o.failure.clear();
+  return o;
+}
+
+// Stands on a flat surface: the centre of mass projects inside the convex
+// support polygon (the lowest points, within a quarter voxel of the minimum
+// z), at least `margin` mm from its boundary (Prévost et al. 2013, as cited by
+// seed 001 for its cups).
+CheckOutcome Stands(const CheckSpec& spec, CheckContext& c) {
+  double margin = c.Number(spec, "margin", 0.0);
+  const mesh::TriangleMesh& m = c.Mesh();
+  double zmin = std::numeric_limits<double>::infinity();
+  for (const auto& v : m.vertices) zmin = std::min(zmin, v[2]);
+  double tolerance = 0.25 * c.design().voxel_size;
+  std::vector<geometry::Vec2> support;
+  for (const auto& v : m.vertices)
+    if (v[2] <= zmin + tolerance) support.push_back({v[0], v[1]});
+  geometry::Vec3 com = c.solid().CenterOfMass();
+  double inside = DistanceInsideConvexHull(support, {com[0], com[1]});
+  CheckOutcome o;
+  o.passed = inside >= margin;
+  if (!o.passed) {
+    o.failure = kUnstable;
+    std::ostringstream reason;
+    if (inside < 0) reason << "centre of mass lies " << Mm(-inside) << " outside the support polygon";
+    else reason << "centre of mass lies only " << Mm(inside) << " inside the support polygon (margin " << Mm(margin) << ")";
+    o.reason = reason.str();
+  }
+  return o;
+}
+
+CheckOutcome MaxVolume(const CheckSpec& spec, CheckContext& c) {
+  double limit = c.Number(spec, "value", 0);
+  double volume = c.solid().Volume();
+  CheckOutcome o;
+  o.passed = volume <= limit;
+  if (!o.passed) {
+    o.failure = kTooMuchMaterial;
+    std::ostringstream reason;
+    reason << "material volume " << volume << " mm^3 exceeds " << limit << " mm^3";
+    o.reason = reason.str();
+  }
+  return o;
+}
+
+}  // namespace
+
+const mesh::TriangleMesh& CheckContext::Mesh() {
+  if (!mesh_) mesh_ = solid_.ToMesh();
+  return *mesh_;
+}
+
+double CheckContext::Number(const CheckSpec& spec, const std::string& name, double fallback) {
+  auto it = spec.args.find(name);
+  if (it == spec.args.end()) return fallback;
+  return Expression(it->second.text, scope_, it->second.place).Evaluate();
+}
+
+CheckOutcome RunCheck(const CheckSpec& spec, CheckContext& context) {
+  auto start = std::chrono::steady_clock::now();
+  CheckOutcome o;
+  if (spec.type == "watertight") o = Watertight(context);
+  else if (spec.type == "min_thickness") o = MinThickness(spec, context);
+  else if (spec.type == "stands") o = Stands(spec, context);
+  else if (spec.type == "max_volume") o = MaxVolume(spec, context);
+  o.name = spec.name;
+  o.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return o;
+}
+
+double SurfaceArea(const geometry::Solid& solid) {
+  mesh::TriangleMesh m = solid.ToMesh();
+  double area = 0;
+  for (const auto& t : m.triangles) {
+    const auto &a = m.vertices[t[0]], &b = m.vertices[t[1]], &c = m.vertices[t[2]];
+    double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, v[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+    double n[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
+    area += 0.5 * std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+  }
+  return area;
+}
+
+double DistanceInsideConvexHull(std::vector<geometry::Vec2> pts, const geometry::Vec2& p) {
+  std::sort(pts.begin(), pts.end());
+  pts.erase(std::unique(pts.begin(), pts.end()), pts.end());
+  if (pts.size() < 3) return -std::numeric_limits<double>::infinity();
+  // Andrew's monotone chain, counter-clockwise.
+  std::vector<geometry::Vec2> hull(2 * pts.size());
+  std::size_t k = 0;
+  for (std::size_t i = 0; i < pts.size(); ++i) {
+    while (k >= 2 && Cross(hull[k - 2], hull[k - 1], pts[i]) <= 0) --k;
+    hull[k++] = pts[i];
+  }
+  for (std::size_t i = pts.size() - 1, t = k + 1; i > 0; --i) {
+    while (k >= t && Cross(hull[k - 2], hull[k - 1], pts[i - 1]) <= 0) --k;
+    hull[k++] = pts[i - 1];
+  }
+  hull.resize(k - 1);
+  if (hull.size() < 3) return -std::numeric_limits<double>::infinity();
+  // Inside: distance to the nearest edge line; outside: distance to the hull.
+  bool inside = true;
+  double nearest_line = std::numeric_limits<double>::infinity();
+  double nearest_segment = std::numeric_limits<double>::infinity();
+  for (std::size_t i = 0; i < hull.size(); ++i) {
+    const auto& a = hull[i];
+    const auto& b = hull[(i + 1) % hull.size()];
+    double ex = b[0] - a[0], ey = b[1] - a[1], len = std::hypot(ex, ey);
+    double side = Cross(a, b, p) / len;
+    if (side < 0) inside = false;
+    nearest_line = std::min(nearest_line, side);
+    double t = std::clamp(((p[0] - a[0]) * ex + (p[1] - a[1]) * ey) / (len * len), 0.0, 1.0);
+    nearest_segment = std::min(nearest_segment, std::hypot(p[0] - a[0] - t * ex, p[1] - a[1] - t * ey));
+  }
+  return inside ? nearest_line : -nearest_segment;
+}
+
+}  // namespace fabatlas::design

@@ -1,0 +1,40 @@
+// Internal: the validity checks W_F of a design (seed 001 Sec. 4).
+#pragma once
+
+#include <optional>
+
+#include "expression.h"
+#include "fabatlas/design/evaluate_sample.h"
+#include "fabatlas/mesh/triangle_mesh.h"
+
+namespace fabatlas::design {
+
+// What checks look at: the sample's solid, and its mesh, extracted once.
+class CheckContext {
+ public:
+  CheckContext(const Design& design, const geometry::Solid& solid, Scope& scope)
+      : design_(design), solid_(solid), scope_(scope) {}
+  const Design& design() const { return design_; }
+  const geometry::Solid& solid() const { return solid_; }
+  const mesh::TriangleMesh& Mesh();
+  double Number(const CheckSpec& spec, const std::string& name, double fallback);
+
+ private:
+  const Design& design_;
+  const geometry::Solid& solid_;
+  Scope& scope_;
+  std::optional<mesh::TriangleMesh> mesh_;
+};
+
+CheckOutcome RunCheck(const CheckSpec& spec, CheckContext& context);
+
+// Surface area of the solid's zero iso-surface, mm^2.
+double SurfaceArea(const geometry::Solid& solid);
+
+// Signed distance (mm) of point p from the boundary of the convex hull of
+// `points` in the plane: positive inside, negative outside. Fewer than three
+// non-collinear points give a degenerate hull: the distance is then negative
+// (a point or segment cannot support a solid).
+double DistanceInsideConvexHull(std::vector<geometry::Vec2> points, const geometry::Vec2& p);
+
+}  // namespace fabatlas::design

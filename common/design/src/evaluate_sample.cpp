@@ -1,0 +1,274 @@
+// EvaluateSample (seed 001 Alg. 2) and ΔG (Eq. 2).
+#include "fabatlas/design/evaluate_sample.h"
+
+#include <chrono>
+#include <cmath>
+#include <fstream>
+#include <mutex>
+#include <sstream>
+
+#include "checks.h"
+#include "expression.h"
+#include "fabatlas/error.h"
+#include "fabatlas/sha256.h"
+#include "node_schema.h"
+#include "operations.h"
+
+namespace fabatlas::design {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double Since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+std::string Format(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.17g", v);
+  return buf;
+}
+
+// Digest of a file's bytes, remembered per path for the process lifetime.
+std::string FileDigest(const std::filesystem::path& p) {
+  static std::mutex mutex;
+  static std::map<std::string, std::string> digests;
+  std::lock_guard<std::mutex> lock(mutex);
+  auto it = digests.find(p.string());
+  if (it != digests.end()) return it->second;
+  std::ifstream in(p, std::ios::binary);
+  if (!in) throw InputError(p.string() + ": cannot read file");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return digests[p.string()] = Sha256Hex(ss.str());
+}
+
+// Evaluates the operation tree bottom-up, keying every subtree by (τ, ρ).
+class TreeEvaluation {
+ public:
+  TreeEvaluation(const Design& d, Scope& scope, const EvaluateOptions& options, std::vector<SubtreeRecord>& records)
+      : design_(d), scope_(scope), options_(options), records_(records) {
+    grid_.voxel_size = d.voxel_size;
+  }
+
+  struct Result {
+    geometry::Solid solid;
+    std::string key, tau;
+  };
+
+  Result Evaluate(const Node& node, const std::string& path) {
+    ResolvedArgs args = Resolve(node);
+    std::vector<Result> children;
+    for (std::size_t i = 0; i < node.children.size(); ++i)
+      children.push_back(Evaluate(node.children[i], path + "/" + std::to_string(i)));
+
+    // τ: operation, argument names and child topologies. ρ: resolved values.
+    std::string tau = node.op + "(";
+    for (const auto& [name, _] : node.args) tau += name + ",";
+    for (const auto& c : children) tau += c.tau + ";";
+    tau += ")";
+    std::string rho = "voxel=" + Format(design_.voxel_size) + ";" + args.Canonical();
+    for (const auto& c : children) rho += "child=" + c.key + ";";
+
+    SubtreeRecord record;
+    record.path = path;
+    record.op = node.op;
+    record.topology = Sha256Hex(tau);
+    record.key = Sha256Hex(tau + "|" + rho);
+    for (const auto& c : children) record.children.push_back(c.key);
+
+    Result out{{}, record.key, record.topology};
+    if (options_.cache) {
+      if (auto hit = options_.cache->Find(record.key)) {
+        out.solid = *hit;
+        record.from_cache = true;
+      }
+    }
+    if (!record.from_cache) {
+      std::vector<geometry::Solid> inputs;
+      for (auto& c : children) inputs.push_back(std::move(c.solid));
+      auto start = Clock::now();
+      out.solid = ApplyOperation(node, args, inputs, grid_, design_.file.parent_path());
+      record.seconds = Since(start);
+      if (options_.cache) options_.cache->Offer(record.key, out.solid, record.seconds);
+    }
+    record.bytes = out.solid.MemoryBytes();
+    records_.push_back(std::move(record));
+    return out;
+  }
+
+ private:
+  ResolvedArgs Resolve(const Node& node) {
+    ResolvedArgs r;
+    const OpSchema& schema = OperationSchemas().at(node.op);
+    for (const auto& spec : schema.args) {
+      auto it = node.args.find(spec.name);
+      if (it == node.args.end()) continue;
+      const Argument& a = it->second;
+      ResolvedArgs::Value v;
+      v.place = a.place;
+      auto number = [&](const Argument& x) {
+        double value = Expression(x.text, scope_, x.place).Evaluate();
+        if (!std::isfinite(value))
+          throw SampleFailure(kNoGeometry, x.place.str() + ": '" + spec.name + "' evaluates to " + Format(value));
+        return value;
+      };
+      switch (spec.shape) {
+        case ArgShape::kNumber: v.numbers = {number(a)}; break;
+        case ArgShape::kVec3:
+          for (const auto& x : a.items) v.numbers.push_back(number(x));
+          break;
+        case ArgShape::kVec2List:
+        case ArgShape::kVec3List:
+          for (const auto& p : a.items)
+            for (const auto& x : p.items) v.numbers.push_back(number(x));
+          break;
+        case ArgShape::kString:
+          v.text = a.text;
+          if (spec.name == "file") v.digest = FileDigest(design_.file.parent_path() / a.text);
+          break;
+        case ArgShape::kNumberMap:
+          for (std::size_t i = 0; i < a.items.size(); ++i) {
+            v.keys.push_back(a.keys[i]);
+            v.numbers.push_back(number(a.items[i]));
+          }
+          break;
+      }
+      r.values[spec.name] = std::move(v);
+    }
+    return r;
+  }
+
+  const Design& design_;
+  Scope& scope_;
+  const EvaluateOptions& options_;
+  std::vector<SubtreeRecord>& records_;
+  geometry::GridSpec grid_;
+};
+
+}  // namespace
+
+std::string ResolvedArgs::Canonical() const {
+  std::string out;
+  for (const auto& [name, v] : values) {
+    out += name + "=";
+    for (std::size_t i = 0; i < v.numbers.size(); ++i) {
+      if (i < v.keys.size()) out += v.keys[i] + ":";
+      out += Format(v.numbers[i]) + ",";
+    }
+    out += v.text + (v.digest.empty() ? "" : "@" + v.digest) + ";";
+  }
+  return out;
+}
+
+double ResolvedArgs::Number(const std::string& name, double fallback) const {
+  auto it = values.find(name);
+  return it == values.end() || it->second.numbers.empty() ? fallback : it->second.numbers[0];
+}
+
+geometry::Vec3 ResolvedArgs::Vec3(const std::string& name) const {
+  const auto& n = values.at(name).numbers;
+  return {n[0], n[1], n[2]};
+}
+
+std::string ResolvedArgs::Text(const std::string& name, const std::string& fallback) const {
+  auto it = values.find(name);
+  return it == values.end() ? fallback : it->second.text;
+}
+
+SampleResult EvaluateSample(const Design& design, const Point& u, const EvaluateOptions& options) {
+  auto start = Clock::now();
+  SampleResult r;
+  r.u = u;
+  auto fail = [&](const std::string& type, const std::string& reason) {
+    if (r.failure.empty()) {
+      r.failure = type;
+      r.failure_reason = reason;
+    }
+  };
+
+  // Lines 1–3: fix exposed parameters, solve constraints.
+  ConstraintSolveSummary solve = SolveConstraints(design, u);
+  r.values = solve.values;
+  r.timings["solve"] = solve.seconds;
+  CheckOutcome constraints{"constraints", solve.satisfiable, "", "", solve.seconds};
+  if (!solve.satisfiable) {
+    constraints.failure = kUnsatConstraints;
+    std::ostringstream reason;
+    reason << "constraint '" << solve.worst_constraint << "' stays violated by " << solve.max_violation;
+    constraints.reason = reason.str();
+    fail(kUnsatConstraints, constraints.reason);
+  }
+  r.checks.push_back(constraints);
+
+  if (solve.satisfiable) {
+    // Lines 7–9: set parameters, evaluate the tree (with cached subtrees).
+    Scope scope(ParameterNames(design));
+    for (const auto& [name, value] : solve.values) scope.Set(name, value);
+    auto tree_start = Clock::now();
+    CheckOutcome geometry_check{"geometry", true, "", "", 0};
+    try {
+      TreeEvaluation tree(design, scope, options, r.subtrees);
+      r.solid = tree.Evaluate(design.tree, "root").solid;
+      if (r.solid.empty()) {
+        geometry_check.passed = false;
+        geometry_check.reason = "the tree produced no material";
+      }
+    } catch (const SampleFailure& e) {
+      geometry_check.passed = false;
+      geometry_check.reason = e.what();
+    } catch (const ResourceError&) {
+      throw;
+    } catch (const InputError& e) {
+      // Out-of-range values at this point (e.g. a negative radius).
+      geometry_check.passed = false;
+      geometry_check.reason = e.what();
+    }
+    geometry_check.seconds = r.timings["tree"] = Since(tree_start);
+    if (!geometry_check.passed) {
+      geometry_check.failure = kNoGeometry;
+      fail(kNoGeometry, geometry_check.reason);
+      r.solid = geometry::Solid();
+    }
+    r.checks.push_back(geometry_check);
+
+    // Lines 10–15: every test w_i.
+    if (geometry_check.passed) {
+      auto checks_start = Clock::now();
+      CheckContext context(design, r.solid, scope);
+      for (const CheckSpec& spec : design.checks) {
+        CheckOutcome outcome = RunCheck(spec, context);
+        if (!outcome.passed) fail(outcome.failure, outcome.reason);
+        r.checks.push_back(std::move(outcome));
+      }
+      r.timings["checks"] = Since(checks_start);
+    }
+  }
+  r.valid = r.failure.empty();
+
+  // Lines 16–19: properties of valid samples.
+  if (r.valid) {
+    auto props_start = Clock::now();
+    for (const std::string& name : design.properties) {
+      if (name == "volume") {
+        r.properties["volume"] = r.solid.Volume();
+      } else if (name == "bbox") {
+        geometry::Box3 box = r.solid.BoundingBox();
+        r.properties["bbox_x"] = box.max[0] - box.min[0];
+        r.properties["bbox_y"] = box.max[1] - box.min[1];
+        r.properties["bbox_z"] = box.max[2] - box.min[2];
+      } else if (name == "area") {
+        r.properties["area"] = SurfaceArea(r.solid);
+      }
+    }
+    r.timings["properties"] = Since(props_start);
+  }
+  if (!options.keep_solid) r.solid = geometry::Solid();
+  r.timings["total"] = Since(start);
+  return r;
+}
+
+double DeltaG(const SampleResult& a, const SampleResult& b) {
+  if (!a.valid && !b.valid) return 0.0;
+  if (a.valid != b.valid) return 1.0;
+  return geometry::DeltaG(a.solid, b.solid);
+}
+
+}  // namespace fabatlas::design

@@ -1,0 +1,386 @@
+// Reads and lints a design file (docs/design-format.md).
+#include <yaml-cpp/yaml.h>
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <set>
+#include <sstream>
+
+#include "expression.h"
+#include "fabatlas/design/design.h"
+#include "fabatlas/error.h"
+#include "node_schema.h"
+
+namespace fabatlas::design {
+
+std::string SourcePlace::str() const {
+  if (line <= 0) return file;
+  return file + ":" + std::to_string(line) + ":" + std::to_string(column);
+}
+
+const ExposedParameter* Design::FindExposed(const std::string& name) const {
+  for (const auto& p : exposed)
+    if (p.name == name) return &p;
+  return nullptr;
+}
+
+namespace {
+
+class Reader {
+ public:
+  explicit Reader(std::string file) : file_(std::move(file)) {}
+
+  SourcePlace At(const YAML::Node& n) const {
+    YAML::Mark m = n.Mark();
+    if (m.is_null()) return {file_, 0, 0};
+    return {file_, m.line + 1, m.column + 1};
+  }
+
+  [[noreturn]] void Fail(const YAML::Node& n, const std::string& what) const {
+    throw InputError(At(n).str() + ": " + what);
+  }
+  [[noreturn]] void Fail(const SourcePlace& p, const std::string& what) const {
+    throw InputError(p.str() + ": " + what);
+  }
+
+  std::string String(const YAML::Node& n, const std::string& what) const {
+    if (!n.IsScalar()) Fail(n, what + " must be a single value");
+    return n.Scalar();
+  }
+
+  // A finite number written literally (ranges, defaults, voxel size).
+  double Number(const YAML::Node& n, const std::string& what) const {
+    if (!n.IsScalar()) Fail(n, what + " must be a number");
+    const std::string& s = n.Scalar();
+    double v = 0;
+    std::size_t used = 0;
+    try {
+      v = std::stod(s, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    std::string lower = s;
+    for (char& c : lower) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    if (lower == ".nan" || lower == "nan") Fail(n, what + " is NaN");
+    if (lower == ".inf" || lower == "-.inf" || lower == "+.inf") Fail(n, what + " is infinite");
+    if (used == 0 || used != s.size()) Fail(n, what + " must be a number, got '" + s + "'");
+    if (!std::isfinite(v)) Fail(n, what + " is not finite");
+    return v;
+  }
+
+  void OnlyKeys(const YAML::Node& map, const std::set<std::string>& allowed, const std::string& what) const {
+    for (auto it = map.begin(); it != map.end(); ++it) {
+      std::string key = it->first.Scalar();
+      if (!allowed.count(key)) {
+        std::string list;
+        for (const auto& k : allowed) list += (list.empty() ? "" : ", ") + k;
+        Fail(it->first, "unknown key '" + key + "' in " + what + " (expected one of: " + list + ")");
+      }
+    }
+  }
+
+  Argument ToArgument(const YAML::Node& n) const {
+    Argument a;
+    a.place = At(n);
+    if (n.IsScalar()) {
+      a.kind = Argument::Kind::kScalar;
+      a.text = n.Scalar();
+    } else if (n.IsSequence()) {
+      a.kind = Argument::Kind::kList;
+      for (const auto& item : n) a.items.push_back(ToArgument(item));
+    } else if (n.IsMap()) {
+      a.kind = Argument::Kind::kMap;
+      for (auto it = n.begin(); it != n.end(); ++it) {
+        a.keys.push_back(it->first.Scalar());
+        a.items.push_back(ToArgument(it->second));
+      }
+    } else {
+      Fail(n, "empty value");
+    }
+    return a;
+  }
+
+ private:
+  std::string file_;
+};
+
+// Checks that an argument has the shape its schema asks for and that every
+// expression in it compiles against the design's names.
+void LintArgument(const Argument& a, const ArgSpec& spec, Scope& scope, const std::filesystem::path& dir) {
+  auto fail = [&](const std::string& what) { throw InputError(a.place.str() + ": '" + spec.name + "' " + what); };
+  auto scalar_expr = [&](const Argument& x) {
+    if (x.kind != Argument::Kind::kScalar) throw InputError(x.place.str() + ": '" + spec.name + "' must hold numbers or expressions");
+    Expression(x.text, scope, x.place);
+  };
+  auto tuple = [&](const Argument& x, std::size_t n) {
+    if (x.kind != Argument::Kind::kList || x.items.size() != n)
+      throw InputError(x.place.str() + ": '" + spec.name + "' needs [" + (n == 2 ? "x, y" : "x, y, z") + "] entries");
+    for (const auto& item : x.items) scalar_expr(item);
+  };
+  switch (spec.shape) {
+    case ArgShape::kNumber:
+      scalar_expr(a);
+      break;
+    case ArgShape::kVec3:
+      tuple(a, 3);
+      break;
+    case ArgShape::kVec2List:
+      if (a.kind != Argument::Kind::kList || a.items.size() < 3) fail("must be a list of at least 3 [x, y] points");
+      for (const auto& p : a.items) tuple(p, 2);
+      break;
+    case ArgShape::kVec3List:
+      if (a.kind != Argument::Kind::kList || a.items.empty()) fail("must be a list of [x, y, z] points");
+      for (const auto& p : a.items) tuple(p, 3);
+      break;
+    case ArgShape::kString:
+      if (a.kind != Argument::Kind::kScalar) fail("must be a single word or path");
+      break;
+    case ArgShape::kNumberMap:
+      if (a.kind != Argument::Kind::kMap) fail("must be a map of name: expression");
+      for (const auto& item : a.items) scalar_expr(item);
+      break;
+  }
+  if (spec.name == "file") {
+    std::filesystem::path p = dir / a.text;
+    if (!std::filesystem::is_regular_file(p)) fail("names a file that does not exist: " + p.string());
+  }
+  if (spec.name == "exact" && a.text != "true" && a.text != "false") fail("must be true or false");
+  if (spec.name == "method" && a.text != "sdf" && a.text != "opening") fail("must be sdf or opening");
+}
+
+void LintArgs(const std::map<std::string, Argument>& args, const OpSchema& schema, const SourcePlace& place,
+              const std::string& what, Scope& scope, const std::filesystem::path& dir) {
+  for (const auto& spec : schema.args) {
+    auto it = args.find(spec.name);
+    if (it == args.end()) {
+      if (spec.required) throw InputError(place.str() + ": " + what + " needs '" + spec.name + "'");
+      continue;
+    }
+    LintArgument(it->second, spec, scope, dir);
+  }
+  for (const auto& [key, arg] : args) {
+    bool known = false;
+    for (const auto& spec : schema.args) known = known || spec.name == key;
+    if (!known) throw InputError(arg.place.str() + ": unknown argument '" + key + "' for " + what);
+  }
+}
+
+Node ReadNode(const Reader& r, const YAML::Node& y, Scope& scope, const std::filesystem::path& dir, int depth) {
+  if (depth > 200) r.Fail(y, "tree is nested more than 200 levels deep");
+  if (!y.IsMap()) r.Fail(y, "a tree node must be a map with an 'op' key");
+  Node node;
+  node.place = r.At(y);
+  if (!y["op"]) r.Fail(y, "tree node has no 'op'");
+  node.op = r.String(y["op"], "op");
+  const auto& ops = OperationSchemas();
+  auto schema_it = ops.find(node.op);
+  if (schema_it == ops.end()) r.Fail(y["op"], "unknown node type '" + node.op + "'");
+  for (auto it = y.begin(); it != y.end(); ++it) {
+    std::string key = it->first.Scalar();
+    if (key == "op") continue;
+    if (key == "name") {
+      node.name = r.String(it->second, "name");
+    } else if (key == "children") {
+      if (!it->second.IsSequence()) r.Fail(it->second, "'children' must be a list of nodes");
+      for (const auto& child : it->second) node.children.push_back(ReadNode(r, child, scope, dir, depth + 1));
+    } else {
+      node.args[key] = r.ToArgument(it->second);
+    }
+  }
+  const OpSchema& schema = schema_it->second;
+  int n = static_cast<int>(node.children.size());
+  if (n < schema.min_children || (schema.max_children >= 0 && n > schema.max_children)) {
+    std::string want = schema.max_children == 0 ? "no children"
+                       : schema.max_children < 0 ? "at least " + std::to_string(schema.min_children) + " children"
+                                                  : std::to_string(schema.max_children) + " children";
+    r.Fail(node.place, "'" + node.op + "' takes " + want + ", got " + std::to_string(n));
+  }
+  LintArgs(node.args, schema, node.place, "'" + node.op + "'", scope, dir);
+  return node;
+}
+
+void CheckUnique(const Reader& r, std::set<std::string>& seen, const std::string& name, const YAML::Node& at) {
+  if (name.empty() || !(std::isalpha(static_cast<unsigned char>(name[0])) || name[0] == '_'))
+    r.Fail(at, "parameter name '" + name + "' must start with a letter");
+  for (char c : name)
+    if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_')) r.Fail(at, "parameter name '" + name + "' may use only letters, digits and _");
+  if (name == "pi") r.Fail(at, "'pi' is reserved");
+  if (!seen.insert(name).second) r.Fail(at, "parameter '" + name + "' is declared twice");
+}
+
+}  // namespace
+
+Design LoadDesign(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path.string() + ": cannot open design file");
+  std::stringstream buffer;
+  buffer << in.rdbuf();
+  if (in.bad()) throw InputError(path.string() + ": cannot read design file");
+  return ParseDesign(buffer.str(), path);
+}
+
+Design ParseDesign(const std::string& text, const std::filesystem::path& path) {
+  const std::string file = path.string();
+  Design d;
+  d.file = path;
+  d.canonical_text = text;
+  Reader r(file);
+
+  YAML::Node root;
+  try {
+    root = YAML::Load(d.canonical_text);
+  } catch (const YAML::Exception& e) {
+    throw InputError(file + ":" + std::to_string(e.mark.line + 1) + ":" + std::to_string(e.mark.column + 1) +
+                     ": malformed YAML: " + e.msg);
+  }
+  if (!root.IsMap()) throw InputError(file + ": a design file must be a YAML map (name, parameters, tree, ...)");
+  r.OnlyKeys(root, {"name", "voxel_size", "parameters", "variables", "constraints", "tree", "checks", "properties", "description"},
+             "design");
+
+  d.name = root["name"] ? r.String(root["name"], "name") : path.stem().string();
+  if (root["voxel_size"]) {
+    d.voxel_size = r.Number(root["voxel_size"], "voxel_size");
+    if (d.voxel_size <= 0) r.Fail(root["voxel_size"], "voxel_size must be positive");
+  }
+
+  std::set<std::string> names;
+  if (!root["parameters"] || !root["parameters"].IsMap() || root["parameters"].size() == 0)
+    r.Fail(root["parameters"] ? root["parameters"] : root, "design needs a 'parameters' map with at least one exposed parameter");
+  for (auto it = root["parameters"].begin(); it != root["parameters"].end(); ++it) {
+    ExposedParameter p;
+    p.name = it->first.Scalar();
+    p.place = r.At(it->first);
+    CheckUnique(r, names, p.name, it->first);
+    const YAML::Node& spec = it->second;
+    if (!spec.IsMap()) r.Fail(spec, "parameter '" + p.name + "' must be a map with type, min, max");
+    r.OnlyKeys(spec, {"type", "min", "max", "default", "values"}, "parameter '" + p.name + "'");
+    std::string type = spec["type"] ? r.String(spec["type"], "type") : "real";
+    if (type == "real" || type == "integer") {
+      p.kind = type == "real" ? ParameterKind::kReal : ParameterKind::kInteger;
+      if (!spec["min"] || !spec["max"]) r.Fail(spec, "parameter '" + p.name + "' needs min and max");
+      p.min = r.Number(spec["min"], "min");
+      p.max = r.Number(spec["max"], "max");
+      if (p.min > p.max) r.Fail(spec["min"], "parameter '" + p.name + "' has min > max");
+      if (p.kind == ParameterKind::kInteger && (p.min != std::floor(p.min) || p.max != std::floor(p.max)))
+        r.Fail(spec, "integer parameter '" + p.name + "' needs whole-number min and max");
+      p.default_value = spec["default"] ? r.Number(spec["default"], "default") : 0.5 * (p.min + p.max);
+      if (p.kind == ParameterKind::kInteger) p.default_value = std::round(p.default_value);
+      if (p.default_value < p.min || p.default_value > p.max)
+        r.Fail(spec["default"], "default of '" + p.name + "' is outside [min, max]");
+    } else if (type == "enum") {
+      p.kind = ParameterKind::kEnumerated;
+      if (!spec["values"] || !spec["values"].IsSequence() || spec["values"].size() == 0)
+        r.Fail(spec, "enum parameter '" + p.name + "' needs a non-empty 'values' list");
+      for (const auto& v : spec["values"]) p.labels.push_back(r.String(v, "enum value"));
+      p.min = 0;
+      p.max = static_cast<double>(p.labels.size() - 1);
+      p.default_value = 0;
+      if (spec["default"]) {
+        std::string def = r.String(spec["default"], "default");
+        auto f = std::find(p.labels.begin(), p.labels.end(), def);
+        if (f == p.labels.end()) r.Fail(spec["default"], "default '" + def + "' is not one of the values of '" + p.name + "'");
+        p.default_value = static_cast<double>(f - p.labels.begin());
+      }
+    } else {
+      r.Fail(spec["type"], "unknown parameter type '" + type + "' (expected real, integer or enum)");
+    }
+    d.exposed.push_back(p);
+  }
+
+  if (root["variables"]) {
+    if (!root["variables"].IsMap()) r.Fail(root["variables"], "'variables' must be a map");
+    for (auto it = root["variables"].begin(); it != root["variables"].end(); ++it) {
+      MutableParameter m;
+      m.name = it->first.Scalar();
+      m.place = r.At(it->first);
+      CheckUnique(r, names, m.name, it->first);
+      const YAML::Node& spec = it->second;
+      if (!spec.IsMap()) r.Fail(spec, "variable '" + m.name + "' must be a map with min, max, default");
+      r.OnlyKeys(spec, {"min", "max", "default"}, "variable '" + m.name + "'");
+      if (spec["min"]) m.min = r.Number(spec["min"], "min");
+      if (spec["max"]) m.max = r.Number(spec["max"], "max");
+      if (m.min > m.max) r.Fail(spec["min"], "variable '" + m.name + "' has min > max");
+      m.default_value = spec["default"] ? r.Number(spec["default"], "default")
+                                        : (spec["min"] && spec["max"] ? 0.5 * (m.min + m.max) : std::clamp(0.0, m.min, m.max));
+      if (m.default_value < m.min || m.default_value > m.max)
+        r.Fail(spec["default"], "default of '" + m.name + "' is outside [min, max]");
+      d.mutables.push_back(m);
+    }
+  }
+
+  Scope scope(ParameterNames(d));
+  if (root["constraints"]) {
+    if (!root["constraints"].IsSequence()) r.Fail(root["constraints"], "'constraints' must be a list of relations");
+    for (const auto& c : root["constraints"]) {
+      Constraint k;
+      k.text = r.String(c, "constraint");
+      k.place = r.At(c);
+      struct Op { const char* token; Relation rel; bool swap; };
+      const Op ops[] = {{"==", Relation::kEqual, false}, {"<=", Relation::kLessEqual, false},
+                        {">=", Relation::kGreaterEqual, false}};
+      bool found = false;
+      for (const auto& op : ops) {
+        auto pos = k.text.find(op.token);
+        if (pos == std::string::npos) continue;
+        if (found || k.text.find(op.token, pos + 2) != std::string::npos)
+          r.Fail(c, "constraint '" + k.text + "' must hold exactly one of ==, <=, >=");
+        found = true;
+        k.lhs = k.text.substr(0, pos);
+        k.rhs = k.text.substr(pos + 2);
+        k.relation = op.rel;
+      }
+      if (!found) r.Fail(c, "constraint '" + k.text + "' needs one of ==, <=, >=");
+      Expression(k.lhs, scope, k.place);
+      Expression(k.rhs, scope, k.place);
+      d.constraints.push_back(k);
+    }
+  }
+
+  if (!root["tree"]) r.Fail(root, "design has no 'tree'");
+  d.tree = ReadNode(r, root["tree"], scope, path.parent_path(), 0);
+
+  if (root["checks"]) {
+    if (!root["checks"].IsSequence()) r.Fail(root["checks"], "'checks' must be a list");
+    const auto& schemas = CheckSchemas();
+    for (const auto& c : root["checks"]) {
+      CheckSpec check;
+      check.place = r.At(c);
+      if (c.IsScalar()) {
+        check.type = c.Scalar();
+      } else if (c.IsMap()) {
+        if (!c["type"]) r.Fail(c, "a check needs a 'type'");
+        check.type = r.String(c["type"], "type");
+        for (auto it = c.begin(); it != c.end(); ++it) {
+          std::string key = it->first.Scalar();
+          if (key == "type") continue;
+          if (key == "name") check.name = r.String(it->second, "name");
+          else check.args[key] = r.ToArgument(it->second);
+        }
+      } else {
+        r.Fail(c, "a check is a type name or a map with 'type'");
+      }
+      auto it = schemas.find(check.type);
+      if (it == schemas.end()) r.Fail(c, "unknown check type '" + check.type + "'");
+      if (check.name.empty()) check.name = check.type;
+      LintArgs(check.args, it->second, check.place, "check '" + check.type + "'", scope, path.parent_path());
+      d.checks.push_back(check);
+    }
+  }
+
+  if (root["properties"]) {
+    if (!root["properties"].IsSequence()) r.Fail(root["properties"], "'properties' must be a list");
+    for (const auto& p : root["properties"]) {
+      std::string name = r.String(p, "property");
+      const auto& known = PropertyNames();
+      if (std::find(known.begin(), known.end(), name) == known.end())
+        r.Fail(p, "unknown property '" + name + "' (expected volume, area or bbox)");
+      d.properties.push_back(name);
+    }
+  } else {
+    d.properties = {"volume"};
+  }
+  return d;
+}
+
+}  // namespace fabatlas::design

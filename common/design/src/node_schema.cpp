@@ -1,0 +1,62 @@
+#include "node_schema.h"
+
+namespace fabatlas::design {
+
+const std::map<std::string, OpSchema>& OperationSchemas() {
+  using S = ArgShape;
+  static const std::map<std::string, OpSchema> schemas = {
+      // Primitives (leaves).
+      {"sphere", {{{"radius", S::kNumber}}, 0, 0}},
+      {"box", {{{"size", S::kVec3}}, 0, 0}},
+      {"cylinder", {{{"radius", S::kNumber}, {"height", S::kNumber}}, 0, 0}},
+      {"cone", {{{"bottom_radius", S::kNumber}, {"top_radius", S::kNumber}, {"height", S::kNumber}}, 0, 0}},
+      {"torus", {{{"major_radius", S::kNumber}, {"minor_radius", S::kNumber}}, 0, 0}},
+      {"capsule", {{{"a", S::kVec3}, {"b", S::kVec3}, {"radius", S::kNumber}}, 0, 0}},
+      {"extrude", {{{"polygon", S::kVec2List}, {"height", S::kNumber}}, 0, 0}},
+      {"revolve", {{{"profile", S::kVec2List}, {"sides", S::kNumber, false}}, 0, 0}},
+      {"spheres", {{{"centers", S::kVec3List}, {"radius", S::kNumber}}, 0, 0}},
+      {"tentacle",
+       {{{"length", S::kNumber},
+         {"base_radius", S::kNumber},
+         {"tip_radius", S::kNumber},
+         {"curvature", S::kNumber},
+         {"heading", S::kNumber, false},
+         {"spacing", S::kNumber, false}},
+        0,
+        0}},
+      {"mesh", {{{"file", S::kString}}, 0, 0}},
+      {"openscad", {{{"file", S::kString}, {"set", S::kNumberMap, false}}, 0, 0}},
+      // Transforms: several children are unioned first.
+      {"translate", {{{"by", S::kVec3}}, 1, -1}},
+      {"rotate", {{{"degrees", S::kVec3}}, 1, -1}},
+      {"scale", {{{"factor", S::kNumber}}, 1, -1}},
+      // CSG: difference subtracts every later child from the first.
+      {"union", {{{"exact", S::kString, false}}, 2, -1}},
+      {"difference", {{{"exact", S::kString, false}}, 2, -1}},
+      {"intersection", {{{"exact", S::kString, false}}, 2, -1}},
+      {"offset", {{{"distance", S::kNumber}}, 1, -1}},
+      {"shell", {{{"thickness", S::kNumber}}, 1, -1}},
+      {"linear_array", {{{"count", S::kNumber}, {"step", S::kVec3}}, 1, -1}},
+      {"polar_array", {{{"count", S::kNumber}, {"angle", S::kNumber, false}}, 1, -1}},
+  };
+  return schemas;
+}
+
+const std::map<std::string, OpSchema>& CheckSchemas() {
+  using S = ArgShape;
+  static const std::map<std::string, OpSchema> schemas = {
+      {"watertight", {{}, 0, 0}},
+      {"min_thickness",
+       {{{"value", S::kNumber}, {"method", S::kString, false}, {"max_thin_fraction", S::kNumber, false}}, 0, 0}},
+      {"stands", {{{"margin", S::kNumber, false}}, 0, 0}},
+      {"max_volume", {{{"value", S::kNumber}}, 0, 0}},
+  };
+  return schemas;
+}
+
+const std::vector<std::string>& PropertyNames() {
+  static const std::vector<std::string> names = {"volume", "area", "bbox"};
+  return names;
+}
+
+}  // namespace fabatlas::design

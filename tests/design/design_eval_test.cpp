@@ -1,0 +1,195 @@
+// EvaluateSample (seed 001 Alg. 2), constraint solving, subtree keys and ΔG,
+// against analytic values.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "design_files.h"
+#include "fabatlas/design/evaluate_sample.h"
+#include "fabatlas/error.h"
+
+using namespace fabatlas;
+using fabatlas::testing::TempDesign;
+
+namespace {
+
+design::Design Load(const std::string& text) { return design::LoadDesign(TempDesign(text)); }
+
+design::SampleResult Eval(const design::Design& d, const std::string& at, design::SubtreeCache* cache = nullptr) {
+  design::EvaluateOptions options;
+  options.cache = cache;
+  return design::EvaluateSample(d, design::ParsePoint(d, at, "--at"), options);
+}
+
+const char* kShiftedBall = R"(name: shifted_ball
+voxel_size: 0.04
+parameters:
+  x: {type: real, min: -2, max: 2, default: 0}
+  r: {type: real, min: -1, max: 2, default: 1}
+tree:
+  op: translate
+  by: [x, 0, 0]
+  children: [{op: sphere, radius: r}]
+properties: [volume, bbox]
+)";
+
+}  // namespace
+
+TEST(ConstraintSolve, SolvesEqualitiesExactly) {
+  design::Design d = Load(R"(name: c
+parameters: {r: {type: real, min: 0, max: 5}}
+variables: {d: {min: 0, max: 10, default: 1}, e: {min: 0, max: 10, default: 1}}
+constraints: ["d == 2 * r", "e * e == d + 1"]
+tree: {op: sphere, radius: r}
+)");
+  design::ConstraintSolveSummary s = design::SolveConstraints(d, {{"r", 1.5}});
+  ASSERT_TRUE(s.satisfiable);
+  EXPECT_NEAR(s.values["d"], 3.0, 1e-9);
+  EXPECT_NEAR(s.values["e"], 2.0, 1e-9);  // positive root: e is bounded below by 0
+}
+
+TEST(ConstraintSolve, StaysAtDefaultsWhenConstraintsAllow) {
+  design::Design d = Load(R"(name: c
+parameters: {r: {type: real, min: 0, max: 5}}
+variables: {d: {min: 0, max: 10, default: 4}}
+constraints: ["d >= r"]
+tree: {op: sphere, radius: r}
+)");
+  EXPECT_NEAR(design::SolveConstraints(d, {{"r", 1}}).values["d"], 4.0, 1e-6);   // inactive: least change
+  EXPECT_NEAR(design::SolveConstraints(d, {{"r", 6}}).values["d"], 6.0, 1e-5);   // active: moves the least
+}
+
+TEST(ConstraintSolve, ReportsUnsatisfiable) {
+  design::Design d = Load(R"(name: c
+parameters: {r: {type: real, min: 0, max: 5}}
+variables: {d: {min: 0, max: 2.5, default: 1}}
+constraints: ["d == 2 * r"]
+tree: {op: sphere, radius: r}
+)");
+  EXPECT_TRUE(design::SolveConstraints(d, {{"r", 1.0}}).satisfiable);
+  design::ConstraintSolveSummary s = design::SolveConstraints(d, {{"r", 1.5}});
+  EXPECT_FALSE(s.satisfiable);
+  EXPECT_NEAR(s.max_violation, 0.5, 1e-6);  // d pinned at its bound 2.5, needs 3
+  EXPECT_EQ(s.worst_constraint, "d == 2 * r");
+
+  design::SampleResult r = design::EvaluateSample(d, {{"r", 1.5}});
+  EXPECT_FALSE(r.valid);
+  EXPECT_EQ(r.failure, design::kUnsatConstraints);
+  EXPECT_NE(r.failure_reason.find("d == 2 * r"), std::string::npos);
+  EXPECT_TRUE(r.solid.empty());
+}
+
+TEST(EvaluateSample, VolumeOfABallMatchesAnalytic) {
+  design::Design d = Load(kShiftedBall);
+  design::SampleResult r = Eval(d, "r=1");
+  ASSERT_TRUE(r.valid) << r.failure_reason;
+  EXPECT_NEAR(r.properties["volume"], 4.0 / 3.0 * M_PI, 0.01 * 4.0 / 3.0 * M_PI);
+  EXPECT_NEAR(r.properties["bbox_x"], 2.0, 0.05);
+}
+
+TEST(EvaluateSample, DeltaGOfUnitSpheresHalfApart) {
+  // Two unit balls with centres 0.5 apart: lens intersection
+  // V = pi (4r + d)(2r - d)^2 / 12, so dG = (2V_s - 2V) / (2V_s - V) = 0.53712.
+  design::Design d = Load(kShiftedBall);
+  design::SampleResult a = Eval(d, "x=0"), b = Eval(d, "x=0.5");
+  const double vs = 4.0 / 3.0 * M_PI, lens = M_PI * 4.5 * 1.5 * 1.5 / 12.0;
+  const double expected = (2 * vs - 2 * lens) / (2 * vs - lens);
+  EXPECT_NEAR(expected, 0.53712, 1e-4);
+  EXPECT_NEAR(design::DeltaG(a, b), expected, 0.01 * expected);
+  EXPECT_NEAR(design::DeltaG(a, a), 0.0, 1e-12);
+}
+
+TEST(EvaluateSample, InvalidSamplesFollowTheDeltaGConventions) {
+  design::Design d = Load(kShiftedBall);
+  design::SampleResult valid = Eval(d, "r=1"), bad1 = Eval(d, "r=-0.5"), bad2 = Eval(d, "r=-1");
+  ASSERT_TRUE(valid.valid);
+  ASSERT_FALSE(bad1.valid);
+  EXPECT_EQ(bad1.failure, design::kNoGeometry);  // negative radius: an invalid sample, not a crash
+  EXPECT_DOUBLE_EQ(design::DeltaG(bad1, bad2), 0.0);
+  EXPECT_DOUBLE_EQ(design::DeltaG(valid, bad1), 1.0);
+  EXPECT_DOUBLE_EQ(design::DeltaG(bad2, valid), 1.0);
+}
+
+TEST(EvaluateSample, StandsCheckUsesCentreOfMassOverSupport) {
+  // A post on a foot plate with an arm carrying a heavy block. Short arm:
+  // stands. Long arm: the block's weight pulls the centre of mass past the
+  // foot plate's edge (foot half-width 10).
+  design::Design d = Load(R"(name: lever
+voxel_size: 0.5
+parameters: {arm: {type: real, min: 0, max: 40, default: 5}}
+tree:
+  op: union
+  children:
+    - op: translate
+      by: [0, 0, 1]
+      children: [{op: box, size: [20, 20, 2]}]
+    - op: translate
+      by: [0, 0, 11]
+      children: [{op: box, size: [4, 4, 20]}]
+    - op: translate
+      by: [arm, 0, 24]
+      children: [{op: box, size: [12, 12, 8]}]
+checks: [stands]
+)");
+  design::SampleResult near = Eval(d, "arm=0");
+  EXPECT_TRUE(near.valid) << near.failure_reason;
+  design::SampleResult far = Eval(d, "arm=40");
+  EXPECT_FALSE(far.valid);
+  EXPECT_EQ(far.failure, design::kUnstable);
+  EXPECT_NE(far.failure_reason.find("outside the support polygon"), std::string::npos) << far.failure_reason;
+}
+
+TEST(EvaluateSample, WatertightCheckPassesOnLevelSetGeometry) {
+  design::Design d = Load(std::string(kShiftedBall) + "checks: [watertight]\n");
+  design::SampleResult r = Eval(d, "r=1");
+  EXPECT_TRUE(r.valid) << r.failure_reason;
+  ASSERT_GE(r.checks.size(), 3u);
+  EXPECT_EQ(r.checks[2].name, "watertight");
+  EXPECT_TRUE(r.checks[2].passed);
+}
+
+TEST(SubtreeKeys, EqualSubtreesShareKeysAndTheCacheIsUsed) {
+  design::Design d = Load(R"(name: pair
+voxel_size: 0.1
+parameters:
+  a: {type: real, min: 0.5, max: 2, default: 1}
+  b: {type: real, min: 0.5, max: 2, default: 1}
+tree:
+  op: union
+  children:
+    - {op: sphere, radius: a}
+    - op: translate
+      by: [3, 0, 0]
+      children: [{op: sphere, radius: b}]
+)");
+  design::InMemorySubtreeCache cache;
+  design::SampleResult first = Eval(d, "a=1,b=1", &cache);
+  ASSERT_EQ(first.subtrees.size(), 4u);  // sphere a, sphere b, translate, union
+  EXPECT_EQ(first.subtrees.back().path, "root");
+  // Spheres of equal radius have equal (τ, ρ) keys whatever their place.
+  EXPECT_EQ(first.subtrees[0].key, first.subtrees[1].key);
+
+  design::SampleResult again = Eval(d, "a=1,b=1", &cache);
+  EXPECT_TRUE(again.subtrees.back().from_cache);
+  EXPECT_EQ(again.subtrees.back().key, first.subtrees.back().key);
+
+  // Changing b keeps sphere a's key (topology and parameters unchanged) and
+  // finds it in the cache; b's chain and the root get new keys.
+  design::SampleResult other = Eval(d, "a=1,b=1.5", &cache);
+  EXPECT_EQ(other.subtrees[0].key, first.subtrees[0].key);
+  EXPECT_TRUE(other.subtrees[0].from_cache);
+  EXPECT_NE(other.subtrees[1].key, first.subtrees[1].key);
+  EXPECT_EQ(other.subtrees[1].topology, first.subtrees[1].topology);
+  EXPECT_NE(other.subtrees.back().key, first.subtrees.back().key);
+  EXPECT_FALSE(other.subtrees.back().from_cache);
+  EXPECT_GT(cache.hits(), 0u);
+}
+
+TEST(EvaluateSample, ResourceLimitIsAnInputError) {
+  design::Design d = Load(R"(name: huge
+voxel_size: 0.0001
+parameters: {s: {type: real, min: 1, max: 1000, default: 500}}
+tree: {op: box, size: [s, s, s]}
+)");
+  EXPECT_THROW(Eval(d, ""), ResourceError);
+}

@@ -1,0 +1,81 @@
+// The example designs of configs/designs, real meshes and OpenSCAD models,
+// evaluated end to end.
+#include <gtest/gtest.h>
+
+#include "design_files.h"
+#include "fabatlas/design/evaluate_sample.h"
+#include "fabatlas/error.h"
+
+using namespace fabatlas;
+using fabatlas::testing::SharedDir;
+using fabatlas::testing::SourceDir;
+using fabatlas::testing::TempDesign;
+
+namespace {
+
+design::Design Example(const std::string& name) {
+  return design::LoadDesign(SourceDir() / "configs/designs" / (name + ".yaml"));
+}
+
+design::SampleResult Eval(const design::Design& d, const std::string& at) {
+  return design::EvaluateSample(d, design::ParsePoint(d, at, "--at"));
+}
+
+}  // namespace
+
+TEST(ExampleDesigns, DefaultsAreValid) {
+  for (const char* name : {"vase", "cup", "pawn", "tealight", "tube_wall_2d", "tube_wall_3d"}) {
+    SCOPED_TRACE(name);
+    design::Design d = Example(name);
+    design::SampleResult r = Eval(d, "");
+    EXPECT_TRUE(r.valid) << r.failure << ": " << r.failure_reason;
+    EXPECT_GT(r.properties["volume"], 0);
+  }
+}
+
+TEST(ExampleDesigns, CupFailsAsDesigned) {
+  design::Design d = Example("cup");
+  // 2 (reach + thick) <= height - 6 with height = 2.2 radius + 20.
+  design::SampleResult unsat = Eval(d, "radius=15,handle_reach=40,handle_thick=10");
+  EXPECT_EQ(unsat.failure, design::kUnsatConstraints);
+  // A thick handle on a small, light cup tips it over.
+  design::SampleResult tips = Eval(d, "radius=15,handle_reach=12,handle_thick=12");
+  EXPECT_EQ(tips.failure, design::kUnstable) << tips.failure_reason;
+}
+
+TEST(ExampleDesigns, TubeWallBoundaryIsWhereTheAlgebraSaysItIs) {
+  // wall >= 1 + 0.01 radius^2: at radius 20 the boundary is wall = 5.
+  design::Design d = Example("tube_wall_2d");
+  EXPECT_TRUE(Eval(d, "radius=20,wall=5.2").valid);
+  EXPECT_EQ(Eval(d, "radius=20,wall=4.8").failure, design::kUnsatConstraints);
+  // radius - wall >= 2.
+  EXPECT_EQ(Eval(d, "radius=6,wall=4.5").failure, design::kUnsatConstraints);
+}
+
+TEST(ExampleDesigns, ImportsARealMesh) {
+  // The FabHacks mug (mesh volume 1.515e5 mm^3 per EXAMPLES.md).
+  auto mug = SharedDir() / "data/fabhacks/meshes/mug.obj";
+  ASSERT_TRUE(std::filesystem::exists(mug)) << mug;
+  design::Design d = design::LoadDesign(TempDesign(
+      "name: mug\nvoxel_size: 1.0\nparameters: {s: {type: real, min: 0.5, max: 1.5, default: 1}}\n"
+      "tree: {op: scale, factor: s, children: [{op: mesh, file: " + mug.string() + "}]}\nproperties: [volume]\n"));
+  design::SampleResult r = Eval(d, "");
+  ASSERT_TRUE(r.valid) << r.failure_reason;
+  EXPECT_NEAR(r.properties["volume"], 1.515e5, 0.05 * 1.515e5);
+}
+
+TEST(ExampleDesigns, OpenScadModelAtTwoSettings) {
+  // Debian's openscad ships the customizer example candleStand.scad.
+  std::filesystem::path scad = "/usr/share/openscad/examples/Parametric/candleStand.scad";
+  if (!std::filesystem::exists(scad)) GTEST_SKIP() << "openscad examples not installed";
+  design::Design d = design::LoadDesign(TempDesign(
+      "name: candles\nvoxel_size: 1.0\nparameters: {count: {type: integer, min: 3, max: 14, default: 7}}\n"
+      "tree: {op: openscad, file: " + scad.string() + ", set: {count: count}}\nproperties: [volume]\n"));
+  design::SampleResult a = Eval(d, "count=5"), b = Eval(d, "count=9");
+  ASSERT_TRUE(a.valid) << a.failure_reason;
+  ASSERT_TRUE(b.valid) << b.failure_reason;
+  EXPECT_GT(b.properties["volume"], a.properties["volume"]);  // more candle holders, more material
+  double dg = design::DeltaG(a, b);
+  EXPECT_GT(dg, 0.01);
+  EXPECT_LT(dg, 0.9);
+}
