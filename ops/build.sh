@@ -1,0 +1,8 @@
+#!/usr/bin/env bash
+# Installs what fabatlas needs and builds it (Release, Ninja, ccache) into
+# build/. Binaries land in build/bin/. Used by ops/demo.sh and ops/test.sh.
+set -euo pipefail
+root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+bash "$root/ops/install-deps.sh"
+cmake -S "$root" -B "$root/build" -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
+ninja -C "$root/build" -j"$(nproc)"
