@@ -13,6 +13,6 @@ cmake -S "$here" -B "$build" -G Ninja -DCMAKE_CXX_COMPILER=clang++ "${launcher[@
 ninja -C "$build" design_parser_fuzz >/dev/null
 corpus="$build/corpus"
 mkdir -p "$corpus"
-cp "$root"/configs/designs/*.yaml "$corpus/"
+cp "$root"/configs/designs/*.yaml "$root"/tests/fuzz/regressions/* "$corpus/"
 cd "$build"
 ./design_parser_fuzz -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 -print_final_stats=1 "$corpus" 2>&1 | tail -n 15

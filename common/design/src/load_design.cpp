@@ -182,8 +182,9 @@ Node ReadNode(const Reader& r, const YAML::Node& y, Scope& scope, const std::fil
     if (key == "name") {
       node.name = r.String(it->second, "name");
     } else if (key == "children") {
-      if (!it->second.IsSequence()) r.Fail(it->second, "'children' must be a list of nodes");
-      for (const auto& child : it->second) node.children.push_back(ReadNode(r, child, scope, dir, depth + 1));
+      const YAML::Node list = it->second;  // a copy: the iterator yields temporaries
+      if (!list.IsSequence()) r.Fail(list, "'children' must be a list of nodes");
+      for (std::size_t i = 0; i < list.size(); ++i) node.children.push_back(ReadNode(r, list[i], scope, dir, depth + 1));
     } else {
       node.args[key] = r.ToArgument(it->second);
     }
@@ -252,7 +253,7 @@ Design ParseDesign(const std::string& text, const std::filesystem::path& path) {
     p.name = it->first.Scalar();
     p.place = r.At(it->first);
     CheckUnique(r, names, p.name, it->first);
-    const YAML::Node& spec = it->second;
+    const YAML::Node spec = it->second;  // a copy: the iterator yields temporaries
     if (!spec.IsMap()) r.Fail(spec, "parameter '" + p.name + "' must be a map with type, min, max");
     r.OnlyKeys(spec, {"type", "min", "max", "default", "values"}, "parameter '" + p.name + "'");
     std::string type = spec["type"] ? r.String(spec["type"], "type") : "real";
@@ -295,7 +296,7 @@ Design ParseDesign(const std::string& text, const std::filesystem::path& path) {
       m.name = it->first.Scalar();
       m.place = r.At(it->first);
       CheckUnique(r, names, m.name, it->first);
-      const YAML::Node& spec = it->second;
+      const YAML::Node spec = it->second;  // a copy: the iterator yields temporaries
       if (!spec.IsMap()) r.Fail(spec, "variable '" + m.name + "' must be a map with min, max, default");
       r.OnlyKeys(spec, {"min", "max", "default"}, "variable '" + m.name + "'");
       if (spec["min"]) m.min = r.Number(spec["min"], "min");
