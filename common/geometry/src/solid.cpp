@@ -1,0 +1,325 @@
+// solid.cpp — Solid: measures (volume, centre of mass, bounds), meshing and
+// the deterministic byte encoding. See docs/geometry.md for the method notes.
+#include <openvdb/io/Stream.h>
+#include <openvdb/tools/VolumeToMesh.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <mutex>
+#include <numbers>
+#include <sstream>
+
+#include "solid_impl.h"
+
+namespace fabatlas::geometry {
+
+using openvdb::FloatGrid;
+using openvdb::FloatTree;
+using LeafT = FloatTree::LeafNodeType;
+
+namespace detail {
+
+void EnsureOpenVdbInitialized() {
+  static std::once_flag once;
+  std::call_once(once, [] { openvdb::initialize(); });
+}
+
+void RequirePositive(double value, const char* where, const char* name) {
+  if (!std::isfinite(value) || value <= 0) {
+    char buf[256];
+    std::snprintf(buf, sizeof buf, "%s: %s must be a finite number > 0 (got %g)", where, name, value);
+    throw InputError(buf);
+  }
+}
+
+void ValidateSpec(const GridSpec& spec, const char* where) {
+  RequirePositive(spec.voxel_size, where, "voxel size");
+  if (!std::isfinite(spec.half_width_voxels) || spec.half_width_voxels < 2.0) {
+    char buf[256];
+    std::snprintf(buf, sizeof buf, "%s: narrow-band half width must be >= 2 voxels (got %g)", where,
+                  spec.half_width_voxels);
+    throw InputError(buf);
+  }
+}
+
+openvdb::math::Transform::Ptr CanonicalTransform(double voxel_size) {
+  return openvdb::math::Transform::createLinearTransform(voxel_size);
+}
+
+void CheckActiveVoxelEstimate(const GridSpec& spec, double estimated_active, const char* what) {
+  if (!(estimated_active <= static_cast<double>(spec.max_active_voxels))) {
+    char buf[320];
+    std::snprintf(buf, sizeof buf, "voxel size %g mm on %s would need ~%.1e active voxels (limit %.1e)",
+                  spec.voxel_size, what, estimated_active, static_cast<double>(spec.max_active_voxels));
+    throw InputError(buf);
+  }
+}
+
+void CheckVoxelBudget(const GridSpec& spec, const Vec3& extent, const char* what) {
+  const double vs = spec.voxel_size;
+  const double band = 2.0 * spec.half_width_voxels + 1.0;
+  double e[3];
+  for (int i = 0; i < 3; ++i) e[i] = extent[i] / vs + band;
+  const double area = 2.0 * (e[0] * e[1] + e[1] * e[2] + e[2] * e[0]);
+  char desc[200];
+  std::snprintf(desc, sizeof desc, "a %g x %g x %g mm %s", extent[0], extent[1], extent[2], what);
+  CheckActiveVoxelEstimate(spec, area * band, desc);
+}
+
+Solid MakeSolid(FloatGrid::Ptr grid, const GridSpec& spec) {
+  grid->setGridClass(openvdb::GRID_LEVEL_SET);
+  grid->setName("solid");
+  auto impl = std::make_shared<Solid::Impl>();
+  impl->grid = std::move(grid);
+  impl->spec = spec;
+  return Solid(std::shared_ptr<const Solid::Impl>(std::move(impl)));
+}
+
+}  // namespace detail
+
+namespace {
+
+// Smooth Heaviside of the interior indicator, H(-phi), half width eps
+// (Osher & Fedkiw, "Level Set Methods", eq. 1.23 style sine ramp).
+inline double InsideWeight(double phi, double eps) {
+  const double x = -phi;
+  if (x <= -eps) return 0.0;
+  if (x >= eps) return 1.0;
+  return 0.5 * (1.0 + x / eps + std::sin(std::numbers::pi * x / eps) / std::numbers::pi);
+}
+
+struct Moments {
+  double m0 = 0;                // voxel count (weighted)
+  double m1[3] = {0, 0, 0};     // first moments in index coordinates
+};
+
+// Zeroth and first moments of the smoothed interior indicator. Leaves are
+// processed in parallel into per-leaf slots and summed in a fixed order, so
+// results are bit-identical whatever the thread count.
+Moments ComputeMoments(const FloatGrid& grid) {
+  const FloatTree& tree = grid.tree();
+  const double eps = 1.5;  // index units: 1.5 voxels, inside the >= 2-voxel band
+  std::vector<const LeafT*> leaves;
+  tree.getNodes(leaves);
+  std::vector<Moments> per_leaf(leaves.size());
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, leaves.size()), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t i = r.begin(); i != r.end(); ++i) {
+      Moments m;
+      for (auto it = leaves[i]->cbeginValueAll(); it; ++it) {
+        const double w = InsideWeight(*it, eps * grid.voxelSize()[0]);
+        if (w <= 0) continue;
+        const openvdb::Coord c = it.getCoord();
+        m.m0 += w;
+        m.m1[0] += w * c.x();
+        m.m1[1] += w * c.y();
+        m.m1[2] += w * c.z();
+      }
+      per_leaf[i] = m;
+    }
+  });
+  Moments total;
+  for (const Moments& m : per_leaf) {
+    total.m0 += m.m0;
+    for (int k = 0; k < 3; ++k) total.m1[k] += m.m1[k];
+  }
+  // Interior tiles (inactive, negative) above the leaf level.
+  auto it = tree.cbeginValueAll();
+  it.setMaxDepth(FloatTree::ValueAllCIter::LEAF_DEPTH - 1);
+  for (; it; ++it) {
+    if (*it >= 0) continue;
+    const openvdb::CoordBBox b = it.getBoundingBox();
+    const double n = static_cast<double>(b.volume());
+    total.m0 += n;
+    total.m1[0] += n * 0.5 * (b.min().x() + b.max().x());
+    total.m1[1] += n * 0.5 * (b.min().y() + b.max().y());
+    total.m1[2] += n * 0.5 * (b.min().z() + b.max().z());
+  }
+  return total;
+}
+
+}  // namespace
+
+Solid::Solid() = default;
+Solid::Solid(std::shared_ptr<const Impl> impl) : impl_(std::move(impl)) {}
+
+bool Solid::empty() const {
+  if (!impl_) return true;
+  const FloatTree& tree = impl_->grid->tree();
+  for (auto it = tree.cbeginValueAll(); it; ++it) {
+    if (*it < 0) return false;
+  }
+  return true;
+}
+
+double Solid::voxel_size() const { return impl_ ? impl_->spec.voxel_size : 0.0; }
+
+double Solid::Volume() const {
+  if (!impl_) return 0.0;
+  const double vs = impl_->spec.voxel_size;
+  return ComputeMoments(*impl_->grid).m0 * vs * vs * vs;
+}
+
+Vec3 Solid::CenterOfMass() const {
+  if (!impl_) return {0, 0, 0};
+  const Moments m = ComputeMoments(*impl_->grid);
+  if (m.m0 <= 0) return {0, 0, 0};
+  const double vs = impl_->spec.voxel_size;
+  return {m.m1[0] / m.m0 * vs, m.m1[1] / m.m0 * vs, m.m1[2] / m.m0 * vs};
+}
+
+Box3 Solid::BoundingBox() const {
+  if (!impl_) return {};
+  const FloatGrid& grid = *impl_->grid;
+  const double vs = impl_->spec.voxel_size;
+  const double deep = 0.99 * grid.background();
+  constexpr double inf = std::numeric_limits<double>::infinity();
+  Box3 box{{inf, inf, inf}, {-inf, -inf, -inf}};
+  bool any = false;
+  auto grow = [&](const Vec3& lo, const Vec3& hi) {
+    any = true;
+    for (int k = 0; k < 3; ++k) {
+      box.min[k] = std::min(box.min[k], lo[k]);
+      box.max[k] = std::max(box.max[k], hi[k]);
+    }
+  };
+  // A voxel inside the solid at distance |phi| from the surface: the surface
+  // reaches at least |phi| beyond it along every axis direction it faces, and
+  // the extreme voxel along an axis gives the extent to within interpolation
+  // accuracy.
+  for (auto it = grid.tree().cbeginValueAll(); it; ++it) {
+    const float v = *it;
+    if (v >= 0) continue;
+    if (it.isVoxelValue()) {
+      const openvdb::Coord c = it.getCoord();
+      const Vec3 p{c.x() * vs, c.y() * vs, c.z() * vs};
+      const double r = (v > -deep) ? -static_cast<double>(v) : 0.0;
+      grow({p[0] - r, p[1] - r, p[2] - r}, {p[0] + r, p[1] + r, p[2] + r});
+    } else {
+      const openvdb::CoordBBox b = it.getBoundingBox();
+      grow({b.min().x() * vs, b.min().y() * vs, b.min().z() * vs},
+           {b.max().x() * vs, b.max().y() * vs, b.max().z() * vs});
+    }
+  }
+  if (!any) return {};
+  return box;
+}
+
+std::size_t Solid::MemoryBytes() const {
+  return impl_ ? static_cast<std::size_t>(impl_->grid->memUsage()) : 0;
+}
+
+mesh::TriangleMesh Solid::ToMesh(double adaptivity) const {
+  mesh::TriangleMesh out;
+  if (!impl_) return out;
+  if (!std::isfinite(adaptivity) || adaptivity < 0 || adaptivity > 1) {
+    throw InputError("Solid::ToMesh: adaptivity must be in [0,1]");
+  }
+  std::vector<openvdb::Vec3s> points;
+  std::vector<openvdb::Vec3I> tris;
+  std::vector<openvdb::Vec4I> quads;
+  openvdb::tools::volumeToMesh(*impl_->grid, points, tris, quads, 0.0, adaptivity);
+  out.vertices.reserve(points.size());
+  for (const auto& p : points) out.vertices.push_back({p.x(), p.y(), p.z()});
+  out.triangles.reserve(tris.size() + 2 * quads.size());
+  // volumeToMesh orients its polygons clockwise seen from outside for a level
+  // set (negative inside); reverse them to the outward (counter-clockwise)
+  // convention of TriangleMesh.
+  auto idx = [](openvdb::Index32 i) { return static_cast<std::int32_t>(i); };
+  for (const auto& q : quads) {
+    out.triangles.push_back({idx(q[0]), idx(q[2]), idx(q[1])});
+    out.triangles.push_back({idx(q[0]), idx(q[3]), idx(q[2])});
+  }
+  for (const auto& t : tris) out.triangles.push_back({idx(t[0]), idx(t[2]), idx(t[1])});
+  return out;
+}
+
+namespace {
+// The archive header written by io::Stream contains a random UUID (36 ASCII
+// characters: 8-4-4-4-12 hex digits). Replace it by a constant so that equal
+// solids give equal bytes.
+void BlankArchiveUuid(std::string& bytes) {
+  const std::size_t search_end = std::min<std::size_t>(bytes.size(), 128);
+  for (std::size_t start = 0; start + 36 <= search_end; ++start) {
+    bool match = true;
+    for (std::size_t k = 0; k < 36 && match; ++k) {
+      const char ch = bytes[start + k];
+      const bool dash = (k == 8 || k == 13 || k == 18 || k == 23);
+      match = dash ? ch == '-' : std::isxdigit(static_cast<unsigned char>(ch)) != 0;
+    }
+    if (match) {
+      for (std::size_t k = 0; k < 36; ++k) {
+        const bool dash = (k == 8 || k == 13 || k == 18 || k == 23);
+        bytes[start + k] = dash ? '-' : '0';
+      }
+      return;
+    }
+  }
+  throw std::logic_error("Solid::Serialize: no archive UUID found in the OpenVDB stream header");
+}
+}  // namespace
+
+std::string Solid::Serialize() const {
+  detail::EnsureOpenVdbInitialized();
+  FloatGrid::Ptr grid;
+  GridSpec spec;
+  if (impl_) {
+    grid = impl_->grid;
+    spec = impl_->spec;
+  } else {
+    // The default-constructed Solid: an empty grid with voxel size 0 marker.
+    grid = FloatGrid::create(1.0f);
+    grid->setGridClass(openvdb::GRID_LEVEL_SET);
+    grid->setName("solid");
+    spec.voxel_size = 0;
+  }
+  std::ostringstream os(std::ios_base::binary);
+  openvdb::io::Stream stream(os);
+  // Active-mask compression only: lossless and deterministic; callers that
+  // want smaller blobs compress the bytes themselves.
+  stream.setCompression(openvdb::io::COMPRESS_ACTIVE_MASK);
+  stream.setGridStatsMetadataEnabled(false);
+  openvdb::MetaMap meta;
+  meta.insertMeta("fabatlas_voxel_size", openvdb::DoubleMetadata(spec.voxel_size));
+  meta.insertMeta("fabatlas_half_width_voxels", openvdb::DoubleMetadata(spec.half_width_voxels));
+  meta.insertMeta("fabatlas_max_active_voxels",
+                  openvdb::Int64Metadata(static_cast<int64_t>(spec.max_active_voxels)));
+  openvdb::GridCPtrVec grids{grid};
+  stream.write(grids, meta);
+  std::string bytes = os.str();
+  BlankArchiveUuid(bytes);
+  return bytes;
+}
+
+Solid Solid::Deserialize(std::string_view bytes) {
+  detail::EnsureOpenVdbInitialized();
+  try {
+    std::istringstream is(std::string(bytes), std::ios_base::binary);
+    openvdb::io::Stream stream(is, /*delayLoad=*/false);
+    openvdb::GridPtrVecPtr grids = stream.getGrids();
+    openvdb::MetaMap::Ptr meta = stream.getMetadata();
+    if (!grids || grids->size() != 1) throw InputError("Solid::Deserialize: expected exactly one grid");
+    FloatGrid::Ptr grid = openvdb::gridPtrCast<FloatGrid>(grids->front());
+    if (!grid || grid->getGridClass() != openvdb::GRID_LEVEL_SET) {
+      throw InputError("Solid::Deserialize: the grid is not a float level set");
+    }
+    GridSpec spec;
+    spec.voxel_size = meta->metaValue<double>("fabatlas_voxel_size");
+    spec.half_width_voxels = meta->metaValue<double>("fabatlas_half_width_voxels");
+    spec.max_active_voxels = static_cast<std::size_t>(meta->metaValue<int64_t>("fabatlas_max_active_voxels"));
+    if (spec.voxel_size == 0) return Solid();
+    detail::ValidateSpec(spec, "Solid::Deserialize");
+    if (std::abs(grid->voxelSize()[0] - spec.voxel_size) > 1e-12 * spec.voxel_size) {
+      throw InputError("Solid::Deserialize: grid transform does not match its recorded voxel size");
+    }
+    return detail::MakeSolid(grid, spec);
+  } catch (const InputError&) {
+    throw;
+  } catch (const std::exception& e) {
+    throw InputError(std::string("Solid::Deserialize: not a fabatlas solid (") + e.what() + ")");
+  }
+}
+
+}  // namespace fabatlas::geometry
