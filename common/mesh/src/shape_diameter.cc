@@ -1,0 +1,229 @@
+// Shape diameter function (Shapira, Shamir, Cohen-Or 2008, section 3) with
+// Embree 3 ray casting. See docs/mesh.md for the estimator and its tolerances.
+#include "fabatlas/mesh/shape_diameter.h"
+
+#include <embree3/rtcore.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "fabatlas/error.h"
+
+namespace fabatlas::mesh {
+namespace {
+
+using Vec = std::array<double, 3>;
+
+Vec Sub(const Vec& a, const Vec& b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
+Vec Cross(const Vec& a, const Vec& b) {
+  return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
+}
+double Dot(const Vec& a, const Vec& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+double Norm(const Vec& a) { return std::sqrt(Dot(a, a)); }
+
+// Orthonormal basis around unit vector n (Duff et al. 2017, branchless).
+void Basis(const Vec& n, Vec* t, Vec* b) {
+  const double sign = std::copysign(1.0, n[2]);
+  const double a = -1.0 / (sign + n[2]);
+  const double c = n[0] * n[1] * a;
+  *t = {1.0 + sign * n[0] * n[0] * a, sign * c, -sign * n[0]};
+  *b = {c, sign + n[1] * n[1] * a, -n[1]};
+}
+
+// RAII for the Embree device and scene.
+struct EmbreeScene {
+  RTCDevice device = nullptr;
+  RTCScene scene = nullptr;
+  ~EmbreeScene() {
+    if (scene) rtcReleaseScene(scene);
+    if (device) rtcReleaseDevice(device);
+  }
+};
+
+// Weighted median: smallest value whose cumulative weight reaches half the total.
+double WeightedMedian(std::vector<std::pair<double, double>>& values) {
+  std::sort(values.begin(), values.end());
+  double total = 0;
+  for (const auto& v : values) total += v.second;
+  double acc = 0;
+  for (const auto& v : values) {
+    acc += v.second;
+    if (acc >= 0.5 * total) return v.first;
+  }
+  return values.back().first;
+}
+
+}  // namespace
+
+ShapeDiameterSummary ShapeDiameter(const TriangleMesh& mesh, const ShapeDiameterOptions& options) {
+  if (options.rays < 1 || options.rays > 10000) {
+    throw InputError("shape diameter: rays must be in [1, 10000], got " + std::to_string(options.rays));
+  }
+  if (!(options.cone_angle_degrees > 0 && options.cone_angle_degrees < 180)) {
+    throw InputError("shape diameter: cone_angle_degrees must be in (0, 180), got " +
+                     std::to_string(options.cone_angle_degrees));
+  }
+  const auto nv = static_cast<std::int64_t>(mesh.vertices.size());
+  for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
+    for (std::int32_t v : mesh.triangles[t])
+      if (v < 0 || v >= nv) {
+        throw InputError("shape diameter: triangle " + std::to_string(t) + " has vertex index " + std::to_string(v) +
+                         " out of range");
+      }
+
+  const std::size_t nf = mesh.triangles.size();
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  ShapeDiameterSummary summary;
+  summary.per_face.assign(nf, nan);
+  summary.min = summary.percentile_5 = summary.median = summary.area_fraction_below = nan;
+  if (nf == 0) return summary;
+
+  // Face normals, areas and centroids in double.
+  std::vector<Vec> normal(nf), centroid(nf);
+  std::vector<double> area(nf);
+  Vec lo = mesh.vertices[mesh.triangles[0][0]], hi = lo;
+  for (std::size_t f = 0; f < nf; ++f) {
+    const auto& t = mesh.triangles[f];
+    const Vec& a = mesh.vertices[t[0]];
+    const Vec& b = mesh.vertices[t[1]];
+    const Vec& c = mesh.vertices[t[2]];
+    const Vec n = Cross(Sub(b, a), Sub(c, a));
+    const double len = Norm(n);
+    area[f] = 0.5 * len;
+    normal[f] = len > 0 ? Vec{n[0] / len, n[1] / len, n[2] / len} : Vec{0, 0, 0};
+    for (int k = 0; k < 3; ++k) centroid[f][k] = (a[k] + b[k] + c[k]) / 3.0;
+    for (const Vec* p : {&a, &b, &c})
+      for (int k = 0; k < 3; ++k) {
+        lo[k] = std::min(lo[k], (*p)[k]);
+        hi[k] = std::max(hi[k], (*p)[k]);
+      }
+  }
+  const double diagonal = Norm(Sub(hi, lo));
+  // Rays start on the face; hits closer than this are the face itself or its
+  // float32 rounding (1e-6 of the model size, well below any printable feature).
+  const float t_near = static_cast<float>(1e-6 * diagonal);
+
+  EmbreeScene embree;
+  embree.device = rtcNewDevice(nullptr);
+  if (!embree.device) throw std::runtime_error("shape diameter: cannot create Embree device");
+  embree.scene = rtcNewScene(embree.device);
+  RTCGeometry geometry = rtcNewGeometry(embree.device, RTC_GEOMETRY_TYPE_TRIANGLE);
+  auto* vb = static_cast<float*>(rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                                          3 * sizeof(float), mesh.vertices.size()));
+  auto* ib = static_cast<unsigned*>(rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                                             3 * sizeof(unsigned), nf));
+  if (!vb || !ib) {
+    rtcReleaseGeometry(geometry);
+    throw std::runtime_error("shape diameter: Embree buffer allocation failed");
+  }
+  for (std::size_t v = 0; v < mesh.vertices.size(); ++v)
+    for (int k = 0; k < 3; ++k) vb[3 * v + k] = static_cast<float>(mesh.vertices[v][k]);
+  for (std::size_t f = 0; f < nf; ++f)
+    for (int k = 0; k < 3; ++k) ib[3 * f + k] = static_cast<unsigned>(mesh.triangles[f][k]);
+  rtcCommitGeometry(geometry);
+  rtcAttachGeometry(embree.scene, geometry);
+  rtcReleaseGeometry(geometry);
+  rtcCommitScene(embree.scene);
+
+  // Fixed ray pattern in the cone frame: polar angle uniform in (0, cone/2),
+  // azimuth by the golden angle. Weight 1/theta (Shapira et al. 2008).
+  const int n_rays = options.rays;
+  const double half = 0.5 * options.cone_angle_degrees * std::numbers::pi / 180.0;
+  const double golden = std::numbers::pi * (3.0 - std::sqrt(5.0));
+  std::vector<std::array<double, 4>> pattern(n_rays);  // (sin th cos ph, sin th sin ph, cos th, weight)
+  for (int i = 0; i < n_rays; ++i) {
+    const double theta = half * (i + 0.5) / n_rays;
+    const double phi = golden * i;
+    pattern[i] = {std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi), std::cos(theta), 1.0 / theta};
+  }
+
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nf), [&](const tbb::blocked_range<std::size_t>& range) {
+    std::vector<std::pair<double, double>> hits;  // (length, weight)
+    std::vector<double> lengths;
+    RTCIntersectContext context;
+    for (std::size_t f = range.begin(); f != range.end(); ++f) {
+      if (area[f] <= 0) continue;
+      const Vec axis = {-normal[f][0], -normal[f][1], -normal[f][2]};
+      Vec t, b;
+      Basis(axis, &t, &b);
+      hits.clear();
+      for (const auto& r : pattern) {
+        const Vec dir = {r[0] * t[0] + r[1] * b[0] + r[2] * axis[0], r[0] * t[1] + r[1] * b[1] + r[2] * axis[1],
+                         r[0] * t[2] + r[1] * b[2] + r[2] * axis[2]};
+        rtcInitIntersectContext(&context);
+        RTCRayHit rh{};
+        rh.ray.org_x = static_cast<float>(centroid[f][0]);
+        rh.ray.org_y = static_cast<float>(centroid[f][1]);
+        rh.ray.org_z = static_cast<float>(centroid[f][2]);
+        rh.ray.dir_x = static_cast<float>(dir[0]);
+        rh.ray.dir_y = static_cast<float>(dir[1]);
+        rh.ray.dir_z = static_cast<float>(dir[2]);
+        rh.ray.tnear = t_near;
+        rh.ray.tfar = std::numeric_limits<float>::infinity();
+        rh.ray.mask = 0xFFFFFFFFu;
+        rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+        rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
+        rtcIntersect1(embree.scene, &context, &rh);
+        if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID || rh.hit.primID == f) continue;
+        // Valid only on the inner side of a wall: the hit face's outward normal
+        // points along the ray.
+        if (Dot(normal[rh.hit.primID], dir) <= 0) continue;
+        hits.push_back({static_cast<double>(rh.ray.tfar), r[3]});
+      }
+      if (hits.empty()) continue;
+      // Outlier removal: keep lengths within one standard deviation of the median.
+      lengths.clear();
+      for (const auto& h : hits) lengths.push_back(h.first);
+      std::sort(lengths.begin(), lengths.end());
+      const std::size_t m = lengths.size();
+      const double median = m % 2 ? lengths[m / 2] : 0.5 * (lengths[m / 2 - 1] + lengths[m / 2]);
+      double mean = 0;
+      for (double l : lengths) mean += l;
+      mean /= m;
+      double var = 0;
+      for (double l : lengths) var += (l - mean) * (l - mean);
+      const double sigma = std::sqrt(var / m);
+      std::erase_if(hits, [&](const auto& h) { return std::abs(h.first - median) > sigma; });
+      if (hits.empty()) continue;  // cannot happen: some length is within sigma of the median
+      summary.per_face[f] = WeightedMedian(hits);
+    }
+  });
+
+  // Area-weighted statistics over faces with a value.
+  std::vector<std::pair<double, double>> valued;  // (value, area)
+  double total = 0, below = 0;
+  for (std::size_t f = 0; f < nf; ++f) {
+    if (std::isnan(summary.per_face[f])) {
+      ++summary.faces_without_value;
+      continue;
+    }
+    valued.push_back({summary.per_face[f], area[f]});
+    total += area[f];
+    if (summary.per_face[f] < options.thin_threshold) below += area[f];
+  }
+  if (valued.empty() || !(total > 0)) return summary;
+  std::sort(valued.begin(), valued.end());
+  summary.min = valued.front().first;
+  auto quantile = [&](double q) {
+    double acc = 0;
+    for (const auto& v : valued) {
+      acc += v.second;
+      if (acc >= q * total) return v.first;
+    }
+    return valued.back().first;
+  };
+  summary.percentile_5 = quantile(0.05);
+  summary.median = quantile(0.5);
+  summary.area_fraction_below = below / total;
+  return summary;
+}
+
+}  // namespace fabatlas::mesh
