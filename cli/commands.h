@@ -1,0 +1,18 @@
+// The subcommands of `fabatlas`, one family per file. Each Add* function
+// registers its subcommands on the app; their callbacks set `exit_code` and
+// throw fabatlas::InputError for bad input (main prints it as one line and
+// exits with status 2).
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+namespace fabatlas::cli {
+
+// validate, eval, dg (cli/design_commands.cpp).
+void AddDesignCommands(CLI::App& app, int& exit_code);
+
+// sample: a whole precompute job in this process on a thread pool
+// (cli/sample_commands.cpp).
+void AddSampleCommands(CLI::App& app, int& exit_code);
+
+}  // namespace fabatlas::cli

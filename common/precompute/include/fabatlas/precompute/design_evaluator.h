@@ -1,0 +1,64 @@
+// fabatlas/precompute/design_evaluator.h — a real design as the sampler's
+// evaluator: EvaluateSample(u) of seed 001 Alg. 2 and ΔG of Eq. 2 on level
+// sets, behind the plain-data sampling::SampleEvaluator interface that local
+// thread pools and cluster workers both drive.
+#pragma once
+
+#include <cstddef>
+#include <list>
+#include <map>
+#include <memory>
+#include <mutex>
+
+#include "fabatlas/design/design.h"
+#include "fabatlas/design/subtree_cache.h"
+#include "fabatlas/geometry/solid.h"
+#include "fabatlas/sampling/design_space.h"
+#include "fabatlas/sampling/sample_evaluator.h"
+
+namespace fabatlas::precompute {
+
+// The design space U of a design: one sampling dimension per exposed
+// parameter, in the design's order (real -> real, integer -> integer,
+// enum -> enumerated with the design's labels).
+sampling::DesignSpace DesignSpaceOf(const design::Design& design, int subdivisions);
+
+// A sampling point's coordinates as a design point (by parameter name).
+design::Point DesignPointOf(const design::Design& design, const std::vector<double>& u);
+
+struct DesignEvaluatorOptions {
+  // Root solids of valid samples kept for ΔG, least recently used dropped
+  // first. A ΔG whose sample was dropped re-evaluates it (results are
+  // deterministic, so only time is lost).
+  std::size_t solid_memory_bytes = std::size_t{1} << 30;
+  // Subtree cache shared by all evaluations (seed 001 Sec. 6): subtrees whose
+  // root took at least min_subtree_seconds are kept.
+  std::size_t subtree_memory_bytes = std::size_t{512} << 20;
+  double min_subtree_seconds = 0.0;
+};
+
+// Thread-safe: the executor calls it from several threads at once.
+class DesignSampleEvaluator final : public sampling::SampleEvaluator {
+ public:
+  DesignSampleEvaluator(design::Design design, DesignEvaluatorOptions options = {});
+
+  sampling::SampleOutcome EvaluateSample(const sampling::SamplePoint& point) override;
+  double GeometryChange(const sampling::SamplePoint& a, const sampling::SamplePoint& b) override;
+
+  const design::Design& design() const { return design_; }
+  std::size_t reevaluations() const;
+
+ private:
+  geometry::Solid SolidOf(const sampling::SamplePoint& point);
+  void Remember(const sampling::PointKey& key, const geometry::Solid& solid);
+
+  design::Design design_;
+  DesignEvaluatorOptions options_;
+  design::InMemorySubtreeCache subtrees_;
+  mutable std::mutex mutex_;
+  std::list<std::pair<sampling::PointKey, geometry::Solid>> lru_;  // front = most recent
+  std::map<sampling::PointKey, decltype(lru_)::iterator> index_;
+  std::size_t bytes_ = 0, reevaluations_ = 0;
+};
+
+}  // namespace fabatlas::precompute

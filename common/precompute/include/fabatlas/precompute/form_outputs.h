@@ -1,0 +1,32 @@
+// fabatlas/precompute/form_outputs.h — what a finished sampling run leaves on
+// disk and prints: the Form, its seed-001 Table 3 statistics and 2-D validity
+// maps. Used by the local run and by the coordinator alike.
+#pragma once
+
+#include <filesystem>
+#include <string>
+
+#include "fabatlas/design/design.h"
+#include "fabatlas/sampling/adaptive_sampler.h"
+
+namespace fabatlas::precompute {
+
+// Writes into out_dir (created if missing; every file written to a temporary
+// name and renamed):
+//   form.json        the sampled form (sampling::FormToJson)
+//   statistics.json  samples, CPU time, valid-volume %, failure shares, ...
+//   map_<a>_<b>.png  validity map over exposed parameters a and b (every
+//                    consecutive pair; the others at their defaults)
+// Throws InputError naming the path on I/O failure (e.g. a full disk).
+void WriteFormOutputs(const design::Design& design, const sampling::SamplingSummary& summary,
+                      const std::filesystem::path& out_dir);
+
+// One line in the manner of seed 001 Table 3:
+//   "vase  |U|=3  samples 1,234  CPU 0.52 h  valid 6.5%  failures: 77% unsat_constraints, 23% not_watertight"
+std::string Table3Row(const design::Design& design, const sampling::SamplingStatistics& statistics);
+
+// Writes `bytes` to `path` through a temporary file, fsync and rename, so a
+// crash never leaves a partial file under the final name.
+void WriteFileAtomically(const std::filesystem::path& path, const std::string& bytes);
+
+}  // namespace fabatlas::precompute

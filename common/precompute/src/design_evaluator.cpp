@@ -1,0 +1,107 @@
+#include "fabatlas/precompute/design_evaluator.h"
+
+#include <time.h>
+
+#include "fabatlas/design/evaluate_sample.h"
+#include "fabatlas/error.h"
+
+namespace fabatlas::precompute {
+namespace {
+
+double ThreadCpuSeconds() {
+  timespec t{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
+}
+
+}  // namespace
+
+sampling::DesignSpace DesignSpaceOf(const design::Design& d, int subdivisions) {
+  std::vector<sampling::Dimension> dims;
+  for (const auto& p : d.exposed) {
+    sampling::Dimension dim;
+    dim.name = p.name;
+    dim.lo = p.min;
+    dim.hi = p.max;
+    switch (p.kind) {
+      case design::ParameterKind::kReal: dim.kind = sampling::DimensionKind::kReal; break;
+      case design::ParameterKind::kInteger: dim.kind = sampling::DimensionKind::kInteger; break;
+      case design::ParameterKind::kEnumerated:
+        dim.kind = sampling::DimensionKind::kEnumerated;
+        dim.values = p.labels;
+        break;
+    }
+    dims.push_back(dim);
+  }
+  return sampling::DesignSpace(dims, subdivisions);
+}
+
+design::Point DesignPointOf(const design::Design& d, const std::vector<double>& u) {
+  if (u.size() != d.exposed.size())
+    throw InputError(d.file.string() + ": a sample has " + std::to_string(u.size()) + " coordinates, the design " +
+                     std::to_string(d.exposed.size()) + " exposed parameters");
+  design::Point p;
+  for (std::size_t i = 0; i < u.size(); ++i) p[d.exposed[i].name] = u[i];
+  return p;
+}
+
+DesignSampleEvaluator::DesignSampleEvaluator(design::Design design, DesignEvaluatorOptions options)
+    : design_(std::move(design)),
+      options_(options),
+      subtrees_(design::InMemorySubtreeCache::Options{options.min_subtree_seconds, options.subtree_memory_bytes}) {}
+
+sampling::SampleOutcome DesignSampleEvaluator::EvaluateSample(const sampling::SamplePoint& point) {
+  double cpu_start = ThreadCpuSeconds();
+  design::EvaluateOptions eval;
+  eval.cache = &subtrees_;
+  design::SampleResult r = design::EvaluateSample(design_, DesignPointOf(design_, point.u), eval);
+  sampling::SampleOutcome out;
+  out.valid = r.valid;
+  out.failure_type = r.failure;
+  out.properties = r.properties;
+  if (r.valid) Remember(point.key, r.solid);
+  out.cpu_seconds = ThreadCpuSeconds() - cpu_start;
+  return out;
+}
+
+double DesignSampleEvaluator::GeometryChange(const sampling::SamplePoint& a, const sampling::SamplePoint& b) {
+  return geometry::DeltaG(SolidOf(a), SolidOf(b));
+}
+
+std::size_t DesignSampleEvaluator::reevaluations() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return reevaluations_;
+}
+
+geometry::Solid DesignSampleEvaluator::SolidOf(const sampling::SamplePoint& point) {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    auto it = index_.find(point.key);
+    if (it != index_.end()) {
+      lru_.splice(lru_.begin(), lru_, it->second);
+      return it->second->second;
+    }
+    ++reevaluations_;
+  }
+  design::EvaluateOptions eval;
+  eval.cache = &subtrees_;
+  design::SampleResult r = design::EvaluateSample(design_, DesignPointOf(design_, point.u), eval);
+  if (!r.valid) return geometry::Solid();  // the sampler only asks for valid pairs
+  Remember(point.key, r.solid);
+  return r.solid;
+}
+
+void DesignSampleEvaluator::Remember(const sampling::PointKey& key, const geometry::Solid& solid) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (index_.count(key)) return;
+  lru_.emplace_front(key, solid);
+  index_[key] = lru_.begin();
+  bytes_ += solid.MemoryBytes();
+  while (bytes_ > options_.solid_memory_bytes && lru_.size() > 1) {
+    bytes_ -= lru_.back().second.MemoryBytes();
+    index_.erase(lru_.back().first);
+    lru_.pop_back();
+  }
+}
+
+}  // namespace fabatlas::precompute

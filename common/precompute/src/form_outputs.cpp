@@ -1,0 +1,97 @@
+#include "fabatlas/precompute/form_outputs.h"
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
+#include <iomanip>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "fabatlas/error.h"
+#include "fabatlas/sampling/form_json.h"
+#include "fabatlas/sampling/validity_map.h"
+
+namespace fabatlas::precompute {
+
+void WriteFileAtomically(const std::filesystem::path& path, const std::string& bytes) {
+  std::filesystem::path tmp = path;
+  tmp += ".tmp-" + std::to_string(::getpid());
+  int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (fd < 0) throw InputError(path.string() + ": cannot create file: " + std::strerror(errno));
+  std::size_t done = 0;
+  while (done < bytes.size()) {
+    ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) {
+      int err = errno;
+      ::close(fd);
+      std::filesystem::remove(tmp);
+      if (err == ENOSPC) throw ResourceError(path.string() + ": disk full while writing");
+      throw InputError(path.string() + ": cannot write: " + std::strerror(err));
+    }
+    done += static_cast<std::size_t>(n);
+  }
+  if (::fsync(fd) != 0 || ::close(fd) != 0) {
+    int err = errno;
+    std::filesystem::remove(tmp);
+    throw InputError(path.string() + ": cannot flush to disk: " + std::strerror(err));
+  }
+  std::error_code ec;
+  std::filesystem::rename(tmp, path, ec);
+  if (ec) {
+    std::filesystem::remove(tmp);
+    throw InputError(path.string() + ": cannot rename into place: " + ec.message());
+  }
+}
+
+std::string Table3Row(const design::Design& design, const sampling::SamplingStatistics& s) {
+  std::ostringstream out;
+  out << design.name << "  |U|=" << design.exposed.size() << "  samples " << s.samples << "  CPU " << std::fixed
+      << std::setprecision(1) << s.evaluator_cpu_seconds << " s  valid " << std::setprecision(1) << s.valid_volume_percent
+      << "%  failures: ";
+  if (s.failure_shares.empty()) out << "none";
+  bool first = true;
+  for (const auto& [type, share] : s.failure_shares) {
+    out << (first ? "" : ", ") << std::setprecision(0) << 100 * share << "% " << type;
+    first = false;
+  }
+  return out.str();
+}
+
+void WriteFormOutputs(const design::Design& design, const sampling::SamplingSummary& summary,
+                      const std::filesystem::path& out_dir) {
+  std::error_code ec;
+  std::filesystem::create_directories(out_dir, ec);
+  if (ec) throw InputError(out_dir.string() + ": cannot create output directory: " + ec.message());
+  WriteFileAtomically(out_dir / "form.json", sampling::FormToJson(summary.form));
+
+  const auto& s = summary.statistics;
+  nlohmann::json stats{{"design", design.name},
+                       {"exposed_parameters", design.exposed.size()},
+                       {"samples", s.samples},
+                       {"valid_samples", s.valid_samples},
+                       {"leaves", s.leaves},
+                       {"geometry_changes", s.geometry_changes},
+                       {"evaluator_cpu_seconds", s.evaluator_cpu_seconds},
+                       {"evaluator_wall_seconds", s.evaluator_wall_seconds},
+                       {"wall_seconds", s.wall_seconds},
+                       {"sampling_logic_seconds", s.sampling_logic_seconds},
+                       {"valid_volume_percent", s.valid_volume_percent},
+                       {"failure_shares", s.failure_shares}};
+  WriteFileAtomically(out_dir / "statistics.json", stats.dump(2) + "\n");
+
+  std::vector<double> defaults;
+  for (const auto& p : design.exposed) defaults.push_back(p.default_value);
+  for (std::size_t i = 0; i + 1 < design.exposed.size(); ++i) {
+    sampling::ValidityMapOptions options;
+    options.x_dimension = static_cast<int>(i);
+    options.y_dimension = static_cast<int>(i + 1);
+    options.fixed = defaults;
+    std::filesystem::path png = out_dir / ("map_" + design.exposed[i].name + "_" + design.exposed[i + 1].name + ".png");
+    sampling::WriteValidityMap(summary.form, options, png.string());
+  }
+}
+
+}  // namespace fabatlas::precompute
