@@ -1,0 +1,61 @@
+// fabatlas/fem/fem_check.h — the design-level FEM validity check.
+//
+// Seed 001 (Fab Forms) validates its sandal design by a static finite-element
+// analysis: the solid is voxelised into hexahedra, a region is fixed, a load
+// is applied to another region, and the sample is invalid if the deformation
+// exceeds a threshold (DESIGN.md "FEM check"). This header runs that check on
+// a VoxelSolid with static_solve.h.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "fabatlas/fem/hex_mesh.h"
+#include "fabatlas/fem/neo_hookean.h"
+#include "fabatlas/fem/static_solve.h"
+
+namespace fabatlas::fem {
+
+struct AxisBox {
+  Vec3 min{0, 0, 0};  // mm
+  Vec3 max{0, 0, 0};  // mm
+  bool Contains(const Vec3& p, double tolerance = 0.0) const;
+};
+
+struct FemLoadCase {
+  // Every mesh node inside any of these boxes (closed, with a tolerance of
+  // 1e-6 voxel) is fixed in all three components.
+  std::vector<AxisBox> fixed_region;
+  // The total force is spread as a uniform dead traction over the boundary
+  // faces whose four nodes all lie inside one of these boxes.
+  std::vector<AxisBox> loaded_region;
+  Vec3 total_force{0, 0, 0};  // N
+  Material material;           // MPa (see Material::FromYoungPoisson)
+};
+
+struct FemCheckOptions {
+  double max_displacement = 1.0;  // mm; the check fails above it
+  double max_strain = 0.0;        // principal Green-Lagrange; <= 0: not checked
+  StaticSolveOptions solve;
+};
+
+struct FemCheckResult {
+  bool passed = false;
+  bool converged = false;
+  double max_displacement = 0;  // mm
+  double max_strain = 0;        // largest |principal Green-Lagrange strain|
+  int num_elements = 0;
+  int newton_iterations = 0;
+  double seconds = 0;
+  std::string reason;           // one line when !passed, empty otherwise
+};
+
+// Meshes the solid (HexMeshFromVoxels), applies the load case and solves.
+// passed = converged && max_displacement <= options.max_displacement (&& the
+// strain limit if set). Throws InputError for bad input: empty solid, a fixed
+// region that selects no node, or a loaded region that selects no boundary
+// face.
+FemCheckResult RunFemCheck(const VoxelSolid& solid, const FemLoadCase& load,
+                           const FemCheckOptions& options = {});
+
+}  // namespace fabatlas::fem

@@ -1,0 +1,110 @@
+// fabatlas/fem/static_solve.h — static equilibrium of a hyperelastic body.
+//
+// Total Lagrangian finite elements on 8-node trilinear hexahedra (Q1) with full
+// 2x2x2 Gauss integration, compressible Neo-Hookean material (neo_hookean.h).
+// Equilibrium is the minimiser of the potential energy
+//   Pi(u) = sum_e int_Omega_e Psi(F) dV - f_ext . u
+// found by Newton's method with a backtracking (Armijo) line search on Pi,
+// under load stepping: external forces and prescribed displacements are
+// applied in `load_steps` equal increments. Each Newton system is solved by a
+// sparse Cholesky factorisation (SuiteSparse CHOLMOD if available at build
+// time, otherwise Eigen SimplicialLLT); if the tangent is not positive
+// definite (far from equilibrium, or near an instability) it is shifted by a
+// multiple of its mean diagonal until it is, which keeps the step a descent
+// direction. Loads are dead loads (fixed in the reference configuration).
+//
+// Units: mm, N, MPa (N/mm^2). Threading: element assembly uses TBB.
+#pragma once
+
+#include <array>
+#include <string>
+#include <vector>
+
+#include "fabatlas/fem/hex_mesh.h"
+#include "fabatlas/fem/neo_hookean.h"
+
+namespace fabatlas::fem {
+
+// Displacement component `component` (0=x, 1=y, 2=z) of `node` is prescribed
+// to `value` mm (reached at the end of the load stepping).
+struct DirichletCondition {
+  int node = 0;
+  int component = 0;
+  double value = 0.0;
+};
+
+// Multi-point constraint u_component(node) = factor * u_component(master):
+// the dependent DOF is eliminated (master must be neither prescribed nor
+// linked). E.g. factor -1 across a mid-plane keeps a solution mirror-symmetric.
+struct LinkedComponent {
+  int node = 0;
+  int master = 0;
+  int component = 0;
+  double factor = 1.0;
+};
+
+struct NodalForce {
+  int node = 0;
+  Vec3 force{0, 0, 0};  // N
+};
+
+// A uniform (dead) traction over a set of quadrilateral faces, given by its
+// total force: traction t = total_force / (reference area of the faces), and
+// each face contributes the consistent nodal forces t * int N_a dA (2x2 Gauss
+// on the bilinear face).
+struct FaceTraction {
+  std::vector<std::array<int, 4>> faces;  // node indices of each face
+  Vec3 total_force{0, 0, 0};              // N
+};
+
+struct BoundaryConditions {
+  std::vector<DirichletCondition> dirichlet;
+  std::vector<LinkedComponent> links;
+  std::vector<NodalForce> nodal_forces;
+  std::vector<FaceTraction> tractions;
+
+  // Fix all three components of a node at zero displacement.
+  void FixNode(int node);
+  // Prescribe u_component = 0 at every node of the mesh (e.g. component 2 for
+  // plane strain modelled by one layer of hexahedra).
+  void FixComponentEverywhere(const HexMesh& mesh, int component);
+};
+
+struct StaticSolveOptions {
+  int load_steps = 4;               // equal load increments
+  int max_newton_iterations = 30;   // per load step (before a cutback)
+  int max_cutbacks = 4;             // a failing increment is halved this often
+  // Converged when ||r_free|| <= relative_tolerance * max(||f_ext,free||,
+  // ||reactions to prescribed displacements at the start of the step||).
+  double relative_tolerance = 1e-9;
+  double armijo_c = 1e-4;           // sufficient decrease constant
+  int max_line_search_halvings = 30;
+  bool verbose = false;             // log Newton progress to stderr
+};
+
+struct StaticSolveSummary {
+  bool converged = false;
+  std::string message;              // why it stopped if not converged
+  int newton_iterations = 0;        // total over all load steps
+  int load_steps_taken = 0;         // including cutback sub-steps
+  double final_residual_norm = 0;   // N
+  std::vector<Vec3> displacements;  // per node, mm (last accepted state)
+  double max_displacement = 0;      // max node |u|, mm
+  // Largest absolute principal value of the Green-Lagrange strain
+  // E = (F^T F - I)/2 over all Gauss points (dimensionless).
+  double max_principal_strain = 0;
+  int num_free_dofs = 0;
+  double assembly_seconds = 0;      // wall time in element assembly
+  double linear_solve_seconds = 0;  // wall time in factorisation + solves
+  double total_seconds = 0;
+};
+
+// Solves for static equilibrium. Bad input (empty mesh, node index out of
+// range, inverted element, non-positive material) throws InputError;
+// non-convergence is reported in the summary (converged = false) with the last
+// accepted state, never thrown.
+StaticSolveSummary SolveStatic(const HexMesh& mesh, const Material& material,
+                               const BoundaryConditions& bc,
+                               const StaticSolveOptions& options = {});
+
+}  // namespace fabatlas::fem

@@ -1,0 +1,556 @@
+// Total Lagrangian Q1 hexahedra, Neo-Hookean, Newton + line search + load
+// stepping. See static_solve.h for the method; DESIGN.md "FEM check".
+#include "fabatlas/fem/static_solve.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <string>
+
+#include <Eigen/Dense>
+#include <Eigen/Sparse>
+#ifdef FABATLAS_FEM_HAVE_CHOLMOD
+#include <Eigen/CholmodSupport>
+#endif
+#include <tbb/blocked_range.h>
+#include <tbb/combinable.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
+
+#include "fabatlas/error.h"
+
+namespace fabatlas::fem {
+
+void BoundaryConditions::FixNode(int node) {
+  for (int c = 0; c < 3; ++c) dirichlet.push_back({node, c, 0.0});
+}
+
+void BoundaryConditions::FixComponentEverywhere(const HexMesh& mesh, int component) {
+  for (int n = 0; n < static_cast<int>(mesh.nodes.size()); ++n) {
+    dirichlet.push_back({n, component, 0.0});
+  }
+}
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+using SpMat = Eigen::SparseMatrix<double, Eigen::ColMajor, int>;
+#ifdef FABATLAS_FEM_HAVE_CHOLMOD
+using Cholesky = Eigen::CholmodSupernodalLLT<SpMat, Eigen::Lower>;
+#else
+using Cholesky = Eigen::SimplicialLLT<SpMat, Eigen::Lower, Eigen::AMDOrdering<int>>;
+#endif
+
+double Seconds(Clock::time_point a, Clock::time_point b) {
+  return std::chrono::duration<double>(b - a).count();
+}
+
+constexpr double kGauss = 0.57735026918962576451;  // 1/sqrt(3)
+constexpr int kNodeSign[8][3] = {{-1, -1, -1}, {1, -1, -1}, {1, 1, -1}, {-1, 1, -1},
+                                 {-1, -1, 1},  {1, -1, 1},  {1, 1, 1},  {-1, 1, 1}};
+
+// Reference-configuration data of one Gauss point: dN_a/dX and weight*det J0.
+struct GaussPoint {
+  double dN[8][3];
+  double weight;
+};
+
+// Full 2x2x2 Gauss integration of the trilinear hexahedron.
+std::vector<GaussPoint> PrecomputeGaussPoints(const HexMesh& mesh) {
+  std::vector<GaussPoint> gps(mesh.elements.size() * 8);
+  for (std::size_t e = 0; e < mesh.elements.size(); ++e) {
+    const auto& el = mesh.elements[e];
+    for (int g = 0; g < 8; ++g) {
+      const double xi[3] = {kNodeSign[g][0] * kGauss, kNodeSign[g][1] * kGauss,
+                            kNodeSign[g][2] * kGauss};
+      double dNdxi[8][3];
+      for (int a = 0; a < 8; ++a) {
+        const double s[3] = {1 + kNodeSign[a][0] * xi[0], 1 + kNodeSign[a][1] * xi[1],
+                             1 + kNodeSign[a][2] * xi[2]};
+        dNdxi[a][0] = 0.125 * kNodeSign[a][0] * s[1] * s[2];
+        dNdxi[a][1] = 0.125 * kNodeSign[a][1] * s[0] * s[2];
+        dNdxi[a][2] = 0.125 * kNodeSign[a][2] * s[0] * s[1];
+      }
+      Eigen::Matrix3d J0 = Eigen::Matrix3d::Zero();  // dX_i/dxi_j
+      for (int a = 0; a < 8; ++a)
+        for (int i = 0; i < 3; ++i)
+          for (int j = 0; j < 3; ++j) J0(i, j) += mesh.nodes[el[a]][i] * dNdxi[a][j];
+      const double det = J0.determinant();
+      if (!(det > 0)) {
+        throw InputError("hex mesh: element " + std::to_string(e) +
+                         " is inverted or degenerate (det J = " + std::to_string(det) +
+                         "); check the node order");
+      }
+      const Eigen::Matrix3d Jinv = J0.inverse();
+      GaussPoint& gp = gps[e * 8 + g];
+      gp.weight = det;  // Gauss weights are 1
+      for (int a = 0; a < 8; ++a)
+        for (int j = 0; j < 3; ++j) {
+          gp.dN[a][j] = dNdxi[a][0] * Jinv(0, j) + dNdxi[a][1] * Jinv(1, j) + dNdxi[a][2] * Jinv(2, j);
+        }
+    }
+  }
+  return gps;
+}
+
+Mat3 DeformationGradient(const GaussPoint& gp, const std::array<int, 8>& el,
+                         const Eigen::VectorXd& u) {
+  Mat3 F{{{1, 0, 0}, {0, 1, 0}, {0, 0, 1}}};
+  for (int a = 0; a < 8; ++a) {
+    const double* ua = u.data() + 3 * static_cast<std::size_t>(el[a]);
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) F[i][j] += ua[i] * gp.dN[a][j];
+  }
+  return F;
+}
+
+// The discrete problem: mesh, Gauss data, DOF map, sparsity pattern.
+class Problem {
+ public:
+  Problem(const HexMesh& mesh, const Material& mat, std::vector<GaussPoint> gps,
+          std::vector<int> free_index, std::vector<double> coefficient, int num_free)
+      : mesh_(mesh), mat_(mat), gps_(std::move(gps)), free_(std::move(free_index)),
+        coef_(std::move(coefficient)), num_free_(num_free) {
+    BuildPattern();
+  }
+
+  int num_free() const { return num_free_; }
+  const std::vector<int>& free_index() const { return free_; }
+  SpMat& K() { return K_; }
+  const std::vector<int>& diagonal_slots() const { return diag_; }
+
+  // Strain energy sum_e int Psi dV (mJ); +inf if any Gauss point has J <= 0.
+  double StrainEnergy(const Eigen::VectorXd& u) const {
+    const std::size_t ne = mesh_.elements.size();
+    return tbb::parallel_reduce(
+        tbb::blocked_range<std::size_t>(0, ne, 256), 0.0,
+        [&](const tbb::blocked_range<std::size_t>& r, double acc) {
+          for (std::size_t e = r.begin(); e < r.end(); ++e) {
+            for (int g = 0; g < 8; ++g) {
+              const GaussPoint& gp = gps_[e * 8 + g];
+              acc += gp.weight * NeoHookeanEnergy(mat_, DeformationGradient(gp, mesh_.elements[e], u));
+            }
+          }
+          return acc;
+        },
+        std::plus<double>());
+  }
+
+  // Internal forces (all DOFs) and, if want_K, the free-free tangent into K().
+  void Assemble(const Eigen::VectorXd& u, Eigen::VectorXd* f_int, bool want_K) {
+    const std::size_t ne = mesh_.elements.size();
+    f_int->setZero(u.size());
+    if (want_K) std::fill(K_.valuePtr(), K_.valuePtr() + K_.nonZeros(), 0.0);
+    constexpr std::size_t kBatch = 2048;
+    ke_.resize(kBatch * 576);
+    fe_.resize(kBatch * 24);
+    for (std::size_t b0 = 0; b0 < ne; b0 += kBatch) {
+      const std::size_t b1 = std::min(ne, b0 + kBatch);
+      tbb::parallel_for(tbb::blocked_range<std::size_t>(b0, b1, 64),
+                        [&](const tbb::blocked_range<std::size_t>& r) {
+                          for (std::size_t e = r.begin(); e < r.end(); ++e) {
+                            ElementKernel(e, u, &fe_[(e - b0) * 24],
+                                          want_K ? &ke_[(e - b0) * 576] : nullptr);
+                          }
+                        });
+      for (std::size_t e = b0; e < b1; ++e) Scatter(e, &fe_[(e - b0) * 24], want_K ? &ke_[(e - b0) * 576] : nullptr, f_int);
+    }
+  }
+
+  // Largest |principal Green-Lagrange strain| over all Gauss points.
+  double MaxPrincipalStrain(const Eigen::VectorXd& u) const {
+    const std::size_t ne = mesh_.elements.size();
+    return tbb::parallel_reduce(
+        tbb::blocked_range<std::size_t>(0, ne, 256), 0.0,
+        [&](const tbb::blocked_range<std::size_t>& r, double acc) {
+          for (std::size_t e = r.begin(); e < r.end(); ++e) {
+            for (int g = 0; g < 8; ++g) {
+              const Mat3 F = DeformationGradient(gps_[e * 8 + g], mesh_.elements[e], u);
+              Eigen::Matrix3d Fm;
+              for (int i = 0; i < 3; ++i)
+                for (int j = 0; j < 3; ++j) Fm(i, j) = F[i][j];
+              const Eigen::Matrix3d E = 0.5 * (Fm.transpose() * Fm - Eigen::Matrix3d::Identity());
+              Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es;
+              es.computeDirect(E, Eigen::EigenvaluesOnly);
+              acc = std::max(acc, es.eigenvalues().cwiseAbs().maxCoeff());
+            }
+          }
+          return acc;
+        },
+        [](double a, double b) { return std::max(a, b); });
+  }
+
+ private:
+  void ElementKernel(std::size_t e, const Eigen::VectorXd& u, double* fe, double* ke) const {
+    const auto& el = mesh_.elements[e];
+    std::fill(fe, fe + 24, 0.0);
+    if (ke) std::fill(ke, ke + 576, 0.0);
+    for (int g = 0; g < 8; ++g) {
+      const GaussPoint& gp = gps_[e * 8 + g];
+      const Mat3 F = DeformationGradient(gp, el, u);
+      const Mat3 P = NeoHookeanStress(mat_, F);
+      for (int a = 0; a < 8; ++a)
+        for (int i = 0; i < 3; ++i) {
+          fe[3 * a + i] += gp.weight * (P[i][0] * gp.dN[a][0] + P[i][1] * gp.dN[a][1] + P[i][2] * gp.dN[a][2]);
+        }
+      if (!ke) continue;
+      const Tangent9 A = NeoHookeanTangent(mat_, F);
+      // T[a][i][kL] = sum_J dN_a/dX_J A[iJ][kL]
+      double T[8][3][9];
+      for (int a = 0; a < 8; ++a)
+        for (int i = 0; i < 3; ++i)
+          for (int kl = 0; kl < 9; ++kl) {
+            T[a][i][kl] = gp.dN[a][0] * A[3 * i][kl] + gp.dN[a][1] * A[3 * i + 1][kl] +
+                          gp.dN[a][2] * A[3 * i + 2][kl];
+          }
+      for (int a = 0; a < 8; ++a)
+        for (int i = 0; i < 3; ++i) {
+          double* row = ke + (3 * a + i) * 24;
+          for (int b = 0; b < 8; ++b)
+            for (int k = 0; k < 3; ++k) {
+              row[3 * b + k] += gp.weight * (T[a][i][3 * k] * gp.dN[b][0] + T[a][i][3 * k + 1] * gp.dN[b][1] +
+                                             T[a][i][3 * k + 2] * gp.dN[b][2]);
+            }
+        }
+    }
+  }
+
+  void Scatter(std::size_t e, const double* fe, const double* ke, Eigen::VectorXd* f_int) {
+    const auto& el = mesh_.elements[e];
+    int g[24];
+    double w[24];
+    for (int a = 0; a < 8; ++a)
+      for (int i = 0; i < 3; ++i) {
+        (*f_int)[3 * el[a] + i] += fe[3 * a + i];
+        g[3 * a + i] = free_[3 * static_cast<std::size_t>(el[a]) + i];
+        w[3 * a + i] = coef_[3 * static_cast<std::size_t>(el[a]) + i];
+      }
+    if (!ke) return;
+    const int* outer = K_.outerIndexPtr();
+    const int* inner = K_.innerIndexPtr();
+    double* val = K_.valuePtr();
+    for (int c = 0; c < 24; ++c) {
+      const int col = g[c];
+      if (col < 0) continue;
+      const int* begin = inner + outer[col];
+      const int* end = inner + outer[col + 1];
+      for (int r = 0; r < 24; ++r) {
+        const int row = g[r];
+        if (row < 0) continue;
+        const int* p = std::lower_bound(begin, end, row);
+        val[p - inner] += w[r] * w[c] * ke[r * 24 + c];
+      }
+    }
+  }
+
+  // Column j of K holds every free DOF that shares an element with a DOF
+  // mapped to j (linked DOFs map several mesh DOFs to one unknown).
+  void BuildPattern() {
+    const std::size_t nn = mesh_.nodes.size();
+    std::vector<std::vector<int>> nbr(nn);
+    for (const auto& el : mesh_.elements)
+      for (int a : el)
+        for (int b : el) nbr[a].push_back(b);
+    for (auto& v : nbr) {
+      std::sort(v.begin(), v.end());
+      v.erase(std::unique(v.begin(), v.end()), v.end());
+    }
+    std::vector<std::vector<int>> rows(num_free_);
+    for (std::size_t n = 0; n < nn; ++n)
+      for (int c = 0; c < 3; ++c) {
+        const int col = free_[3 * n + c];
+        if (col < 0) continue;
+        for (int m : nbr[n])
+          for (int d = 0; d < 3; ++d) {
+            const int row = free_[3 * static_cast<std::size_t>(m) + d];
+            if (row >= 0) rows[col].push_back(row);
+          }
+      }
+    std::vector<int> outer(num_free_ + 1, 0);
+    std::vector<int> inner;
+    for (int col = 0; col < num_free_; ++col) {
+      auto& v = rows[col];
+      std::sort(v.begin(), v.end());
+      v.erase(std::unique(v.begin(), v.end()), v.end());
+      inner.insert(inner.end(), v.begin(), v.end());
+      outer[col + 1] = static_cast<int>(inner.size());
+      std::vector<int>().swap(v);
+    }
+    K_.resize(num_free_, num_free_);
+    K_.resizeNonZeros(static_cast<Eigen::Index>(inner.size()));
+    std::copy(outer.begin(), outer.end(), K_.outerIndexPtr());
+    std::copy(inner.begin(), inner.end(), K_.innerIndexPtr());
+    std::fill(K_.valuePtr(), K_.valuePtr() + inner.size(), 0.0);
+    diag_.resize(num_free_);
+    for (int j = 0; j < num_free_; ++j) {
+      const int* p = std::lower_bound(K_.innerIndexPtr() + outer[j], K_.innerIndexPtr() + outer[j + 1], j);
+      diag_[j] = static_cast<int>(p - K_.innerIndexPtr());
+    }
+  }
+
+  const HexMesh& mesh_;
+  Material mat_;
+  std::vector<GaussPoint> gps_;
+  std::vector<int> free_;
+  std::vector<double> coef_;
+  int num_free_;
+  SpMat K_;
+  std::vector<int> diag_;
+  std::vector<double> ke_, fe_;
+};
+
+// Consistent nodal forces of a uniform traction with the given total force.
+void AddFaceTraction(const HexMesh& mesh, const FaceTraction& t, Eigen::VectorXd* f) {
+  if (t.faces.empty()) throw InputError("face traction: empty face set");
+  const int n = static_cast<int>(mesh.nodes.size());
+  // int N_a dA per face node, 2x2 Gauss on the bilinear quad.
+  std::vector<std::array<double, 4>> weights(t.faces.size());
+  double area = 0;
+  static constexpr double kS[4][2] = {{-1, -1}, {1, -1}, {1, 1}, {-1, 1}};
+  for (std::size_t fi = 0; fi < t.faces.size(); ++fi) {
+    const auto& face = t.faces[fi];
+    for (int a : face) {
+      if (a < 0 || a >= n) throw InputError("face traction: node index " + std::to_string(a) + " out of range");
+    }
+    weights[fi] = {0, 0, 0, 0};
+    for (int g = 0; g < 4; ++g) {
+      const double s = kS[g][0] * kGauss, r = kS[g][1] * kGauss;
+      Eigen::Vector3d xs = Eigen::Vector3d::Zero(), xr = Eigen::Vector3d::Zero();
+      double N[4];
+      for (int a = 0; a < 4; ++a) {
+        N[a] = 0.25 * (1 + kS[a][0] * s) * (1 + kS[a][1] * r);
+        const Eigen::Vector3d X(mesh.nodes[face[a]][0], mesh.nodes[face[a]][1], mesh.nodes[face[a]][2]);
+        xs += 0.25 * kS[a][0] * (1 + kS[a][1] * r) * X;
+        xr += 0.25 * kS[a][1] * (1 + kS[a][0] * s) * X;
+      }
+      const double dA = xs.cross(xr).norm();
+      for (int a = 0; a < 4; ++a) weights[fi][a] += N[a] * dA;
+      area += dA;
+    }
+  }
+  if (!(area > 0)) throw InputError("face traction: faces have zero area");
+  for (std::size_t fi = 0; fi < t.faces.size(); ++fi)
+    for (int a = 0; a < 4; ++a)
+      for (int i = 0; i < 3; ++i) (*f)[3 * t.faces[fi][a] + i] += t.total_force[i] / area * weights[fi][a];
+}
+
+}  // namespace
+
+StaticSolveSummary SolveStatic(const HexMesh& mesh, const Material& material,
+                               const BoundaryConditions& bc, const StaticSolveOptions& options) {
+  const auto t_start = Clock::now();
+  StaticSolveSummary summary;
+  if (mesh.elements.empty()) throw InputError("static solve: mesh has no elements");
+  if (!(material.mu > 0) || !(material.kappa > 0)) {
+    throw InputError("static solve: material needs mu > 0 and kappa > 0");
+  }
+  if (options.load_steps < 1) throw InputError("static solve: load_steps must be >= 1");
+  const int nn = static_cast<int>(mesh.nodes.size());
+  for (const auto& el : mesh.elements)
+    for (int a : el)
+      if (a < 0 || a >= nn) throw InputError("hex mesh: element node index " + std::to_string(a) + " out of range");
+  const std::size_t ndof = 3 * static_cast<std::size_t>(nn);
+
+  // DOF map and prescribed values.
+  std::vector<int> free_index(ndof, 0);
+  Eigen::VectorXd prescribed = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(ndof));
+  for (const auto& d : bc.dirichlet) {
+    if (d.node < 0 || d.node >= nn || d.component < 0 || d.component > 2 || !std::isfinite(d.value)) {
+      throw InputError("dirichlet condition: node " + std::to_string(d.node) + " component " +
+                       std::to_string(d.component) + " is invalid");
+    }
+    free_index[3 * d.node + d.component] = -1;
+    prescribed[3 * d.node + d.component] = d.value;
+  }
+  std::vector<double> coefficient(ndof, 1.0);
+  for (const auto& l : bc.links) {
+    if (l.node < 0 || l.node >= nn || l.master < 0 || l.master >= nn || l.component < 0 ||
+        l.component > 2 || l.node == l.master || !std::isfinite(l.factor)) {
+      throw InputError("linked component: node " + std::to_string(l.node) + " master " +
+                       std::to_string(l.master) + " is invalid");
+    }
+    const std::size_t k = 3 * static_cast<std::size_t>(l.node) + l.component;
+    if (free_index[k] != 0) throw InputError("linked component: node " + std::to_string(l.node) + " is also prescribed or linked twice");
+    free_index[k] = -2;  // resolved below
+  }
+  int num_free = 0;
+  for (auto& f : free_index)
+    if (f == 0) f = num_free++;
+  for (const auto& l : bc.links) {
+    const std::size_t k = 3 * static_cast<std::size_t>(l.node) + l.component;
+    const std::size_t m = 3 * static_cast<std::size_t>(l.master) + l.component;
+    if (free_index[m] < 0) {
+      throw InputError("linked component: master node " + std::to_string(l.master) + " must be free");
+    }
+    free_index[k] = free_index[m];
+    coefficient[k] = l.factor;
+  }
+  if (num_free == 0) throw InputError("static solve: every degree of freedom is prescribed");
+
+  Eigen::VectorXd f_total = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(ndof));
+  for (const auto& nf : bc.nodal_forces) {
+    if (nf.node < 0 || nf.node >= nn) throw InputError("nodal force: node " + std::to_string(nf.node) + " out of range");
+    for (int i = 0; i < 3; ++i) f_total[3 * nf.node + i] += nf.force[i];
+  }
+  for (const auto& t : bc.tractions) AddFaceTraction(mesh, t, &f_total);
+
+  std::vector<GaussPoint> gauss_points = PrecomputeGaussPoints(mesh);
+  std::vector<double> problem_gauss_weights;
+  problem_gauss_weights.reserve(gauss_points.size());
+  for (const auto& gp : gauss_points) problem_gauss_weights.push_back(gp.weight);
+  Problem problem(mesh, material, std::move(gauss_points), free_index, coefficient, num_free);
+  summary.num_free_dofs = num_free;
+  const Eigen::Index nf = num_free;
+  auto restrict_free = [&](const Eigen::VectorXd& full) {
+    Eigen::VectorXd r = Eigen::VectorXd::Zero(nf);
+    for (std::size_t k = 0; k < ndof; ++k)
+      if (free_index[k] >= 0) r[free_index[k]] += coefficient[k] * full[static_cast<Eigen::Index>(k)];
+    return r;
+  };
+  const Eigen::VectorXd f_total_free = restrict_free(f_total);
+
+  Cholesky solver;
+#ifdef FABATLAS_FEM_HAVE_CHOLMOD
+  solver.cholmod().print = 0;  // the shift below handles "not positive definite"
+#endif
+  bool analysed = false;
+
+  Eigen::VectorXd u = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(ndof));
+  Eigen::VectorXd f_int;
+  auto potential = [&](const Eigen::VectorXd& x, double lambda) {
+    return problem.StrainEnergy(x) - lambda * f_total.dot(x);
+  };
+
+  // Rounding noise of the energy sum: a few ulps of the energy density
+  // scale (mu + kappa) times the reference volume.
+  double volume = 0;
+  for (const auto& gp : problem_gauss_weights) volume += gp;
+  const double energy_noise = 1e-11 * (material.mu + material.kappa) * volume;
+
+  double lambda = 0.0;
+  double dlambda = 1.0 / options.load_steps;
+  int cutbacks = 0;
+  while (lambda < 1.0 - 1e-14) {
+    const double target = std::min(1.0, lambda + dlambda);
+    const Eigen::VectorXd u_step_start = u;
+    for (std::size_t k = 0; k < ndof; ++k)
+      if (free_index[k] < 0) u[static_cast<Eigen::Index>(k)] = target * prescribed[static_cast<Eigen::Index>(k)];
+    bool step_ok = false;
+    std::string failure;
+    double scale = target * f_total_free.norm();
+    for (int it = 0; it < options.max_newton_iterations; ++it) {
+      const auto ta = Clock::now();
+      problem.Assemble(u, &f_int, true);
+      summary.assembly_seconds += Seconds(ta, Clock::now());
+      const Eigen::VectorXd r = restrict_free(f_int) - target * f_total_free;
+      const double rnorm = r.norm();
+      if (!std::isfinite(rnorm)) {
+        failure = "non-finite residual (inverted element)";
+        break;
+      }
+      if (it == 0) scale = std::max(scale, rnorm);
+      summary.final_residual_norm = rnorm;
+      if (options.verbose) {
+        std::fprintf(stderr, "fem: lambda=%.4f it=%d |r|=%.3e scale=%.3e\n", target, it, rnorm, scale);
+      }
+      if (rnorm <= options.relative_tolerance * scale || scale == 0.0) {
+        step_ok = true;
+        break;
+      }
+      // Newton direction: K d = -r, K shifted until positive definite.
+      const auto ts = Clock::now();
+      SpMat& K = problem.K();
+      if (!analysed) {
+        solver.analyzePattern(K);
+        analysed = true;
+      }
+      double mean_diag = 0;
+      for (int j = 0; j < num_free; ++j) mean_diag += std::abs(K.valuePtr()[problem.diagonal_slots()[j]]);
+      mean_diag /= num_free;
+      double shift = 0;
+      solver.factorize(K);
+      while (solver.info() != Eigen::Success && shift < 1e6 * mean_diag) {
+        const double next = shift == 0 ? 1e-6 * mean_diag : shift * 10;
+        for (int j = 0; j < num_free; ++j) K.valuePtr()[problem.diagonal_slots()[j]] += next - shift;
+        shift = next;
+        solver.factorize(K);
+      }
+      if (solver.info() != Eigen::Success) {
+        summary.linear_solve_seconds += Seconds(ts, Clock::now());
+        failure = "tangent stiffness could not be factorised (a part not held by the fixed region?)";
+        break;
+      }
+      const Eigen::VectorXd d = solver.solve(-r);
+      summary.linear_solve_seconds += Seconds(ts, Clock::now());
+      ++summary.newton_iterations;
+
+      // Backtracking line search on the potential energy (Armijo).
+      Eigen::VectorXd u_trial = u;
+      const double pi0 = potential(u, target);
+      const double slope = r.dot(d);  // dPi/dalpha at alpha = 0 (< 0)
+      double alpha = 1.0;
+      bool accepted = false;
+      for (int ls = 0; ls <= options.max_line_search_halvings; ++ls, alpha *= 0.5) {
+        u_trial = u;
+        for (std::size_t k = 0; k < ndof; ++k) {
+          const int fk = free_index[k];
+          if (fk >= 0) u_trial[static_cast<Eigen::Index>(k)] += alpha * coefficient[k] * d[fk];
+        }
+        const double pi = potential(u_trial, target);
+        if (!std::isfinite(pi)) continue;
+        if (pi <= pi0 + options.armijo_c * alpha * slope) {
+          accepted = true;
+          break;
+        }
+        // Near the solution the energy decrease (~ r.d/2) drops below the
+        // rounding noise of the energy sum; then accept a step that reduces
+        // the residual norm instead.
+        if (std::isfinite(pi0) && std::abs(pi - pi0) <= energy_noise) {
+          Eigen::VectorXd f_trial;
+          problem.Assemble(u_trial, &f_trial, false);
+          if ((restrict_free(f_trial) - target * f_total_free).norm() < rnorm) {
+            accepted = true;
+            break;
+          }
+        }
+      }
+      if (!accepted) {
+        failure = "line search found no decrease of the energy";
+        break;
+      }
+      u = u_trial;
+    }
+    if (step_ok) {
+      lambda = target;
+      ++summary.load_steps_taken;
+      continue;
+    }
+    u = u_step_start;
+    if (failure.empty()) {
+      failure = "no convergence in " + std::to_string(options.max_newton_iterations) + " Newton iterations";
+    }
+    if (cutbacks >= options.max_cutbacks) {
+      summary.message = failure + " at load factor " + std::to_string(target) + " after " +
+                        std::to_string(cutbacks) + " cutbacks";
+      break;
+    }
+    ++cutbacks;
+    dlambda *= 0.5;
+  }
+  summary.converged = lambda >= 1.0 - 1e-14;
+  if (!summary.converged && summary.message.empty()) summary.message = "did not reach the full load";
+
+  summary.displacements.resize(static_cast<std::size_t>(nn));
+  for (int n = 0; n < nn; ++n) {
+    Vec3 d{u[3 * n], u[3 * n + 1], u[3 * n + 2]};
+    summary.displacements[n] = d;
+    summary.max_displacement = std::max(summary.max_displacement, std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]));
+  }
+  summary.max_principal_strain = problem.MaxPrincipalStrain(u);
+  summary.total_seconds = Seconds(t_start, Clock::now());
+  return summary;
+}
+
+}  // namespace fabatlas::fem

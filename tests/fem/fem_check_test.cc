@@ -1,0 +1,82 @@
+// The design-level FEM check (seed 001 sandal; DESIGN.md "FEM check"): a short
+// thick block passes, a slender cantilever under the same load fails.
+#include "fabatlas/fem/fem_check.h"
+
+#include <gtest/gtest.h>
+
+#include "fabatlas/error.h"
+
+namespace fabatlas::fem {
+namespace {
+
+VoxelSolid Block(int nx, int ny, int nz, double h) {
+  VoxelSolid s;
+  s.voxel_size = h;
+  s.dims = {nx, ny, nz};
+  s.occupied.assign(static_cast<std::size_t>(nx) * ny * nz, 1);
+  return s;
+}
+
+// Fixed at the x = 0 face, loaded on the x = length face with `force`.
+FemLoadCase EndLoad(double length, const Vec3& force) {
+  FemLoadCase lc;
+  lc.fixed_region.push_back({{-0.01, -1e3, -1e3}, {0.01, 1e3, 1e3}});
+  lc.loaded_region.push_back({{length - 0.01, -1e3, -1e3}, {length + 0.01, 1e3, 1e3}});
+  lc.total_force = force;
+  lc.material = Material::FromYoungPoisson(100.0, 0.3);  // MPa, a soft printed elastomer
+  return lc;
+}
+
+TEST(FemCheck, ShortThickBlockPasses) {
+  // 8 x 8 x 8 mm block, 1 mm voxels, 0.5 N sideways on its free end.
+  const FemLoadCase lc = EndLoad(8.0, {0, 0, -0.5});
+  FemCheckOptions opt;
+  opt.max_displacement = 0.5;  // mm
+  const FemCheckResult r = RunFemCheck(Block(8, 8, 8, 1.0), lc, opt);
+  EXPECT_TRUE(r.passed) << r.reason;
+  EXPECT_TRUE(r.converged);
+  EXPECT_TRUE(r.reason.empty());
+  EXPECT_EQ(r.num_elements, 512);
+  // Beam theory with shear for a stubby block is only an order of magnitude:
+  // PL^3/(3EI) = 0.5*512/(3*100*341.3) = 2.5e-3 mm; shear adds about as much.
+  EXPECT_GT(r.max_displacement, 1e-3);
+  EXPECT_LT(r.max_displacement, 2e-2);
+}
+
+TEST(FemCheck, SlenderCantileverFailsWithReason) {
+  // 60 x 3 x 3 mm beam, same load: Euler-Bernoulli PL^3/(3EI) = 106 mm in
+  // the linear theory, far beyond the 0.5 mm threshold.
+  const FemLoadCase lc = EndLoad(60.0, {0, 0, -0.5});
+  FemCheckOptions opt;
+  opt.max_displacement = 0.5;
+  const FemCheckResult r = RunFemCheck(Block(60, 3, 3, 1.0), lc, opt);
+  EXPECT_FALSE(r.passed);
+  EXPECT_FALSE(r.reason.empty());
+  if (r.converged) {
+    EXPECT_GT(r.max_displacement, 0.5);
+    EXPECT_NE(r.reason.find("exceeds the threshold"), std::string::npos) << r.reason;
+  }
+}
+
+TEST(FemCheck, StrainLimitIsChecked) {
+  const FemLoadCase lc = EndLoad(8.0, {0, 0, -0.5});
+  FemCheckOptions opt;
+  opt.max_displacement = 0.5;
+  opt.max_strain = 1e-6;
+  const FemCheckResult r = RunFemCheck(Block(8, 8, 8, 1.0), lc, opt);
+  EXPECT_FALSE(r.passed);
+  EXPECT_NE(r.reason.find("strain"), std::string::npos) << r.reason;
+  EXPECT_GT(r.max_strain, 1e-6);
+}
+
+TEST(FemCheck, RegionsThatSelectNothingAreInputErrors) {
+  FemLoadCase lc = EndLoad(8.0, {0, 0, -0.5});
+  lc.fixed_region = {{{100, 100, 100}, {101, 101, 101}}};
+  EXPECT_THROW(RunFemCheck(Block(8, 8, 8, 1.0), lc), InputError);
+  lc = EndLoad(8.0, {0, 0, -0.5});
+  lc.loaded_region = {{{3.5, 3.5, 3.5}, {4.5, 4.5, 4.5}}};  // interior: no boundary face
+  EXPECT_THROW(RunFemCheck(Block(8, 8, 8, 1.0), lc), InputError);
+}
+
+}  // namespace
+}  // namespace fabatlas::fem
