@@ -1,10 +1,12 @@
 // tests/mesh/synthetic_meshes.h — meshes with known analytic answers.
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <map>
 #include <utility>
+#include <vector>
 
 #include "fabatlas/mesh/triangle_mesh.h"
 
