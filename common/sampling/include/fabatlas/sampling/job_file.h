@@ -1,0 +1,40 @@
+// fabatlas/sampling/job_file.h — the precompute job file (YAML), documented
+// in docs/job-format.md:
+//
+//   design: designs/vase.yaml      # required, relative to the job file
+//   sampling:                      # optional, defaults as SamplingOptions
+//     subdivisions: 5              #   bootstrap cells per dimension
+//     max_depth: 6
+//     dg_threshold: 0.1
+//     max_samples: 100000
+//   threads: 2                     # optional, local executor threads
+//   cluster: {...}                 # reserved, kept as YAML text
+//   cache: {...}                   # reserved, kept as YAML text
+#pragma once
+
+#include <map>
+#include <string>
+
+#include "fabatlas/sampling/adaptive_sampler.h"
+
+namespace fabatlas::sampling {
+
+struct JobFile {
+  std::string path;          // the job file as given
+  std::string design_path;   // resolved against the job file's directory
+  int subdivisions = 5;
+  SamplingOptions sampling;
+  int threads = 1;
+  // Reserved sections ("cluster", "cache") as YAML text, for later readers.
+  std::map<std::string, std::string> reserved_sections;
+};
+
+// Parses YAML text; `path` names the file in messages and anchors
+// design_path. Every problem throws fabatlas::InputError with a one-line
+// "path:line:col: message" (1-based line and column): syntax errors, unknown
+// keys, missing design, wrong types, values out of range.
+JobFile ParseJobFile(const std::string& yaml_text, const std::string& path);
+// Reads and parses a file; an unreadable file is an InputError too.
+JobFile ReadJobFile(const std::string& path);
+
+}  // namespace fabatlas::sampling

@@ -1,0 +1,127 @@
+#include "fabatlas/sampling/job_file.h"
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include <yaml-cpp/yaml.h>
+
+#include "fabatlas/error.h"
+
+namespace fabatlas::sampling {
+
+namespace {
+
+[[noreturn]] void Fail(const std::string& path, const YAML::Mark& mark, const std::string& msg) {
+  if (mark.line < 0) throw InputError(path + ": " + msg);
+  throw InputError(path + ":" + std::to_string(mark.line + 1) + ":" + std::to_string(mark.column + 1) +
+                   ": " + msg);
+}
+
+std::string Scalar(const std::string& path, const YAML::Node& node, const std::string& what) {
+  if (!node.IsScalar()) Fail(path, node.Mark(), what + " must be a scalar");
+  return node.Scalar();
+}
+
+long long Integer(const std::string& path, const YAML::Node& node, const std::string& what,
+                  long long lo, long long hi) {
+  const std::string s = Scalar(path, node, what);
+  size_t used = 0;
+  long long v = 0;
+  try {
+    v = std::stoll(s, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used == 0 || used != s.size()) Fail(path, node.Mark(), what + " must be an integer, got '" + s + "'");
+  if (v < lo || v > hi)
+    Fail(path, node.Mark(),
+         what + " must be in [" + std::to_string(lo) + ", " + std::to_string(hi) + "], got " + s);
+  return v;
+}
+
+double Real(const std::string& path, const YAML::Node& node, const std::string& what, double lo,
+            double hi) {
+  const std::string s = Scalar(path, node, what);
+  size_t used = 0;
+  double v = 0;
+  try {
+    v = std::stod(s, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used == 0 || used != s.size() || !std::isfinite(v))
+    Fail(path, node.Mark(), what + " must be a number, got '" + s + "'");
+  if (v < lo || v > hi)
+    Fail(path, node.Mark(), what + " must be in [" + std::to_string(lo) + ", " + std::to_string(hi) +
+                                "], got " + s);
+  return v;
+}
+
+}  // namespace
+
+JobFile ParseJobFile(const std::string& yaml_text, const std::string& path) {
+  YAML::Node root;
+  try {
+    root = YAML::Load(yaml_text);
+  } catch (const YAML::Exception& e) {
+    Fail(path, e.mark, e.msg);
+  }
+  if (!root.IsMap()) Fail(path, root.Mark(), "a job file must be a mapping with at least 'design'");
+  JobFile job;
+  job.path = path;
+  bool have_design = false;
+  for (const auto& entry : root) {
+    const std::string key = entry.first.as<std::string>();
+    const YAML::Node& value = entry.second;
+    if (key == "design") {
+      const std::string design = Scalar(path, value, "design");
+      if (design.empty()) Fail(path, value.Mark(), "design must name a design file");
+      const std::filesystem::path p(design);
+      job.design_path = p.is_absolute()
+                            ? p.lexically_normal().string()
+                            : (std::filesystem::path(path).parent_path() / p).lexically_normal().string();
+      have_design = true;
+    } else if (key == "sampling") {
+      if (!value.IsMap()) Fail(path, value.Mark(), "sampling must be a mapping");
+      for (const auto& s : value) {
+        const std::string skey = s.first.as<std::string>();
+        const YAML::Node& sv = s.second;
+        if (skey == "subdivisions")
+          job.subdivisions = static_cast<int>(Integer(path, sv, "sampling.subdivisions", 1, 1000));
+        else if (skey == "max_depth")
+          job.sampling.max_depth = static_cast<int>(Integer(path, sv, "sampling.max_depth", 0, 4 * kDyadicBits));
+        else if (skey == "dg_threshold")
+          job.sampling.dg_threshold = Real(path, sv, "sampling.dg_threshold", 0.0, 1.0);
+        else if (skey == "max_samples")
+          job.sampling.max_samples = Integer(path, sv, "sampling.max_samples", 1, 1000000000000LL);
+        else
+          Fail(path, s.first.Mark(),
+               "unknown key 'sampling." + skey +
+                   "' (expected subdivisions, max_depth, dg_threshold, max_samples)");
+      }
+    } else if (key == "threads") {
+      job.threads = static_cast<int>(Integer(path, value, "threads", 1, 4096));
+    } else if (key == "cluster" || key == "cache") {
+      YAML::Emitter out;
+      out << value;
+      job.reserved_sections[key] = out.c_str();
+    } else {
+      Fail(path, entry.first.Mark(),
+           "unknown key '" + key + "' (expected design, sampling, threads, cluster, cache)");
+    }
+  }
+  if (!have_design) Fail(path, root.Mark(), "missing required key 'design'");
+  return job;
+}
+
+JobFile ReadJobFile(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path + ": cannot read job file");
+  std::ostringstream text;
+  text << in.rdbuf();
+  return ParseJobFile(text.str(), path);
+}
+
+}  // namespace fabatlas::sampling

@@ -1,0 +1,288 @@
+#include "fabatlas/sampling/validity_map.h"
+
+#include <png.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <cstdio>
+#include <map>
+#include <set>
+#include <stdexcept>
+
+#include "fabatlas/error.h"
+
+namespace fabatlas::sampling {
+
+namespace {
+
+// 3x5 bitmap font: five rows of three bits (MSB left) per glyph.
+struct Glyph {
+  char c;
+  unsigned char rows[5];
+};
+constexpr Glyph kFont[] = {
+    {'0', {7, 5, 5, 5, 7}}, {'1', {2, 6, 2, 2, 7}}, {'2', {7, 1, 7, 4, 7}}, {'3', {7, 1, 7, 1, 7}},
+    {'4', {5, 5, 7, 1, 1}}, {'5', {7, 4, 7, 1, 7}}, {'6', {7, 4, 7, 5, 7}}, {'7', {7, 1, 1, 1, 1}},
+    {'8', {7, 5, 7, 5, 7}}, {'9', {7, 5, 7, 1, 7}}, {'A', {2, 5, 7, 5, 5}}, {'B', {6, 5, 6, 5, 6}},
+    {'C', {3, 4, 4, 4, 3}}, {'D', {6, 5, 5, 5, 6}}, {'E', {7, 4, 6, 4, 7}}, {'F', {7, 4, 6, 4, 4}},
+    {'G', {3, 4, 5, 5, 3}}, {'H', {5, 5, 7, 5, 5}}, {'I', {7, 2, 2, 2, 7}}, {'J', {1, 1, 1, 5, 2}},
+    {'K', {5, 5, 6, 5, 5}}, {'L', {4, 4, 4, 4, 7}}, {'M', {5, 7, 7, 5, 5}}, {'N', {6, 5, 5, 5, 5}},
+    {'O', {2, 5, 5, 5, 2}}, {'P', {6, 5, 6, 4, 4}}, {'Q', {2, 5, 5, 6, 3}}, {'R', {6, 5, 6, 5, 5}},
+    {'S', {3, 4, 2, 1, 6}}, {'T', {7, 2, 2, 2, 2}}, {'U', {5, 5, 5, 5, 7}}, {'V', {5, 5, 5, 5, 2}},
+    {'W', {5, 5, 7, 7, 5}}, {'X', {5, 5, 2, 5, 5}}, {'Y', {5, 5, 2, 2, 2}}, {'Z', {7, 1, 2, 4, 7}},
+    {'.', {0, 0, 0, 0, 2}},  {'-', {0, 0, 7, 0, 0}}, {'_', {0, 0, 0, 0, 7}}, {' ', {0, 0, 0, 0, 0}},
+    {'(', {2, 4, 4, 4, 2}},  {')', {2, 1, 1, 1, 2}}, {'=', {0, 7, 0, 7, 0}}, {':', {0, 2, 0, 2, 0}},
+    {'+', {0, 2, 7, 2, 0}},  {'%', {5, 1, 2, 4, 5}}, {'/', {1, 1, 2, 4, 4}}, {',', {0, 0, 0, 2, 4}},
+};
+constexpr int kScale = 2;
+constexpr int kCharW = 4 * kScale;  // 3 columns + 1 spacing
+constexpr int kCharH = 6 * kScale;
+
+const Glyph* FindGlyph(char c) {
+  c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+  for (const Glyph& g : kFont)
+    if (g.c == c) return &g;
+  return nullptr;
+}
+
+struct Image {
+  int w, h;
+  std::vector<unsigned char> rgb;
+  Image(int w_, int h_) : w(w_), h(h_), rgb(static_cast<size_t>(w_) * h_ * 3, 255) {}
+  void Set(int x, int y, unsigned c) {
+    if (x < 0 || y < 0 || x >= w || y >= h) return;
+    unsigned char* p = &rgb[(static_cast<size_t>(y) * w + x) * 3];
+    p[0] = (c >> 16) & 255;
+    p[1] = (c >> 8) & 255;
+    p[2] = c & 255;
+  }
+  void Fill(int x0, int y0, int x1, int y1, unsigned c) {
+    for (int y = y0; y < y1; ++y)
+      for (int x = x0; x < x1; ++x) Set(x, y, c);
+  }
+  void Text(int x, int y, const std::string& s, unsigned c) {
+    for (char ch : s) {
+      const Glyph* g = FindGlyph(ch);
+      if (!g) g = FindGlyph('?' == ch ? ' ' : '_');
+      for (int r = 0; r < 5; ++r)
+        for (int col = 0; col < 3; ++col)
+          if (g->rows[r] & (4 >> col)) Fill(x + col * kScale, y + r * kScale, x + (col + 1) * kScale, y + (r + 1) * kScale, c);
+      x += kCharW;
+    }
+  }
+};
+
+unsigned Blend(unsigned c, double t) {  // t = 0: c, t = 1: white
+  auto ch = [&](int s) {
+    const double v = ((c >> s) & 255) * (1 - t) + 255 * t;
+    return static_cast<unsigned>(std::lround(v)) << s;
+  };
+  return ch(16) | ch(8) | ch(0);
+}
+
+std::vector<std::string> FailureTypes(const Form& form) {
+  std::set<std::string> types;
+  for (const FormSample& s : form.samples)
+    if (!s.outcome.valid) types.insert(s.outcome.failure_type.empty() ? "invalid" : s.outcome.failure_type);
+  return {types.begin(), types.end()};
+}
+
+std::string Format(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.3g", v);
+  return buf;
+}
+
+void WritePng(const Image& img, const std::string& path) {
+  FILE* f = std::fopen(path.c_str(), "wb");
+  if (!f) throw std::runtime_error(path + ": cannot open for writing");
+  png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, nullptr, nullptr, nullptr);
+  png_infop info = png ? png_create_info_struct(png) : nullptr;
+  if (!png || !info || setjmp(png_jmpbuf(png))) {
+    png_destroy_write_struct(&png, &info);
+    std::fclose(f);
+    throw std::runtime_error(path + ": libpng failed to write the validity map");
+  }
+  png_init_io(png, f);
+  png_set_IHDR(png, info, img.w, img.h, 8, PNG_COLOR_TYPE_RGB, PNG_INTERLACE_NONE,
+               PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
+  png_write_info(png, info);
+  for (int y = 0; y < img.h; ++y)
+    png_write_row(png, const_cast<png_bytep>(&img.rgb[static_cast<size_t>(y) * img.w * 3]));
+  png_write_end(png, nullptr);
+  png_destroy_write_struct(&png, &info);
+  if (std::fclose(f) != 0) throw std::runtime_error(path + ": cannot write");
+}
+
+}  // namespace
+
+unsigned ValidColour() { return 0x2E9E44; }
+
+unsigned FailureColour(const Form& form, const std::string& failure_type) {
+  static const unsigned kPalette[] = {0xC0392B, 0x2C5AA0, 0x8E44AD, 0xD68910,
+                                      0x6E2C00, 0xC2185B, 0x117A65, 0x555555};
+  const auto types = FailureTypes(form);
+  const std::string t = failure_type.empty() ? "invalid" : failure_type;
+  const auto it = std::find(types.begin(), types.end(), t);
+  const size_t i = it == types.end() ? 7 : static_cast<size_t>(it - types.begin());
+  return kPalette[std::min<size_t>(i, 7)];
+}
+
+ValidityMapLayout WriteValidityMap(const Form& form, const ValidityMapOptions& options, const std::string& path) {
+  const DesignSpace space = form.space();
+  const int n = space.dimension_count();
+  const int xd = options.x_dimension, yd = options.y_dimension;
+  if (xd < 0 || yd < 0 || xd >= n || yd >= n || xd == yd)
+    throw InputError("validity map: dimensions " + std::to_string(xd) + " and " + std::to_string(yd) +
+                     " are not two distinct dimensions of a " + std::to_string(n) + "-D space");
+  std::vector<double> fixed = options.fixed;
+  if (fixed.empty()) {
+    for (int d = 0; d < n; ++d) {
+      const double mid = 0.5 * (space.dimension(d).lo + space.dimension(d).hi);
+      fixed.push_back(space.is_discrete(d) ? std::floor(mid) : mid);
+    }
+  }
+  if (static_cast<int>(fixed.size()) != n)
+    throw InputError("validity map: expected " + std::to_string(n) + " fixed values, got " +
+                     std::to_string(fixed.size()));
+  for (int d = 0; d < n; ++d)
+    if (d != xd && d != yd && !(fixed[d] >= space.dimension(d).lo && fixed[d] <= space.dimension(d).hi))
+      throw InputError("validity map: fixed value " + Format(fixed[d]) + " of '" + space.dimension(d).name +
+                       "' is outside its range");
+
+  const int P = std::max(64, options.plot_pixels);
+  const int left = 80, top = 20, bottom = 60, gap = 30;
+  const auto types = FailureTypes(form);
+  int legend_w = 0;
+  for (const auto& t : types) legend_w = std::max<int>(legend_w, static_cast<int>(t.size()) + 10);
+  legend_w = std::max(legend_w, 20) * kCharW + 30;
+  const int W = left + P + gap + legend_w;
+  const int H = std::max(top + P + bottom, top + static_cast<int>(types.size() + 6) * 2 * kCharH);
+  Image img(W, H);
+
+  const Dimension& dx = space.dimension(xd);
+  const Dimension& dy = space.dimension(yd);
+  auto ux = [&](double px) { return dx.lo + px / P * (dx.hi - dx.lo); };
+  auto uy = [&](double py) { return dy.hi - py / P * (dy.hi - dy.lo); };
+
+  // Leaf colours.
+  std::vector<long long> leaf_id(static_cast<size_t>(P) * P, -1);
+  std::map<long long, unsigned> leaf_colour;
+  std::set<long long> leaves_hit;
+  std::vector<double> u = fixed;
+  for (int py = 0; py < P; ++py)
+    for (int px = 0; px < P; ++px) {
+      u[xd] = ux(px + 0.5);
+      u[yd] = uy(py + 0.5);
+      const auto leaf = LocateLeaf(form, u);
+      if (!leaf) continue;
+      const long long id = (static_cast<long long>(leaf->tree) << 32) | leaf->node;
+      leaf_id[static_cast<size_t>(py) * P + px] = id;
+      auto it = leaf_colour.find(id);
+      if (it == leaf_colour.end()) {
+        const FormNode& node = form.trees[leaf->tree].nodes[leaf->node];
+        std::map<std::string, int> counts;
+        int invalid = 0, total = 0;
+        for (std::int64_t s : CornerSampleIds(form, node)) {
+          ++total;
+          if (form.samples[s].outcome.valid) continue;
+          ++invalid;
+          ++counts[form.samples[s].outcome.failure_type];
+        }
+        unsigned c = ValidColour();
+        if (invalid > 0) {
+          std::string top_type;
+          int best = -1;
+          for (const auto& [t, k] : counts)
+            if (k > best) best = k, top_type = t;
+          c = FailureColour(form, top_type);
+          if (invalid < total) c = Blend(c, 0.55);
+        }
+        it = leaf_colour.emplace(id, c).first;
+        leaves_hit.insert(id);
+      }
+      img.Set(left + px, top + py, it->second);
+    }
+  // Leaf boundaries.
+  for (int py = 0; py < P; ++py)
+    for (int px = 0; px < P; ++px) {
+      const long long id = leaf_id[static_cast<size_t>(py) * P + px];
+      const bool edge = (px > 0 && leaf_id[static_cast<size_t>(py) * P + px - 1] != id) ||
+                        (py > 0 && leaf_id[static_cast<size_t>(py - 1) * P + px] != id);
+      if (edge) img.Set(left + px, top + py, 0x7F7F7F);
+    }
+  // Corner dots: a projected corner is valid when every corner of the leaf
+  // projecting onto it is valid.
+  std::map<std::pair<int, int>, bool> dots;
+  for (long long id : leaves_hit) {
+    const FormNode& node = form.trees[id >> 32].nodes[id & 0xffffffff];
+    const auto ids = CornerSampleIds(form, node);
+    for (size_t c = 0; c < ids.size(); ++c) {
+      const double vx = space.value(xd, (c >> xd) & 1 ? node.hi[xd] : node.lo[xd]);
+      const double vy = space.value(yd, (c >> yd) & 1 ? node.hi[yd] : node.lo[yd]);
+      const int px = static_cast<int>(std::lround((vx - dx.lo) / (dx.hi - dx.lo) * P));
+      const int py = static_cast<int>(std::lround((dy.hi - vy) / (dy.hi - dy.lo) * P));
+      auto [it, inserted] = dots.emplace(std::make_pair(px, py), true);
+      it->second = it->second && form.samples[ids[c]].outcome.valid;
+    }
+  }
+  for (const auto& [p, valid] : dots) {
+    const int cx = left + p.first, cy = top + p.second;
+    img.Fill(cx - 2, cy - 2, cx + 3, cy + 3, 0x000000);
+    if (valid) img.Fill(cx - 1, cy - 1, cx + 2, cy + 2, 0xFFFFFF);
+  }
+  // Frame and axes.
+  for (int i = -1; i <= P; ++i) {
+    img.Set(left + i, top - 1, 0), img.Set(left + i, top + P, 0);
+    img.Set(left - 1, top + i, 0), img.Set(left + P, top + i, 0);
+  }
+  auto ticks = [&](int d) {
+    std::vector<std::int64_t> keys;
+    const int cells = space.cell_count(d);
+    const int step = std::max(1, (cells + 9) / 10);
+    for (int j = 0; j <= cells; j += step) keys.push_back(space.grid_key(d, j));
+    if (keys.back() != space.key_hi(d)) keys.push_back(space.key_hi(d));
+    return keys;
+  };
+  auto label = [&](int d, std::int64_t key) {
+    const Dimension& dim = space.dimension(d);
+    if (dim.kind == DimensionKind::kEnumerated) return dim.values[static_cast<size_t>(key)];
+    return Format(space.value(d, key));
+  };
+  for (std::int64_t k : ticks(xd)) {
+    const int px = left + static_cast<int>(std::lround((space.value(xd, k) - dx.lo) / (dx.hi - dx.lo) * P));
+    img.Fill(px, top + P, px + 1, top + P + 6, 0);
+    const std::string s = label(xd, k);
+    img.Text(px - static_cast<int>(s.size()) * kCharW / 2, top + P + 9, s, 0);
+  }
+  for (std::int64_t k : ticks(yd)) {
+    const int py = top + static_cast<int>(std::lround((dy.hi - space.value(yd, k)) / (dy.hi - dy.lo) * P));
+    img.Fill(left - 6, py, left, py + 1, 0);
+    const std::string s = label(yd, k);
+    img.Text(left - 8 - static_cast<int>(s.size()) * kCharW, py - kCharH / 2 + 1, s, 0);
+  }
+  img.Text(left + P / 2 - static_cast<int>(dx.name.size()) * kCharW / 2, top + P + 9 + 2 * kCharH, dx.name, 0);
+  img.Text(4, top - 14 > 0 ? 2 : 2, dy.name, 0);
+  // Legend.
+  const int lx = left + P + gap;
+  int ly = top;
+  auto swatch = [&](unsigned c, const std::string& text) {
+    img.Fill(lx, ly, lx + 16, ly + 12, 0);
+    img.Fill(lx + 1, ly + 1, lx + 15, ly + 11, c);
+    img.Text(lx + 22, ly + 1, text, 0);
+    ly += 2 * kCharH;
+  };
+  swatch(ValidColour(), "valid");
+  for (const auto& t : types) swatch(FailureColour(form, t), t);
+  for (const auto& t : types) swatch(Blend(FailureColour(form, t), 0.55), "mixed " + t);
+  img.Fill(lx + 5, ly + 2, lx + 11, ly + 8, 0), img.Fill(lx + 6, ly + 3, lx + 10, ly + 7, 0xFFFFFF);
+  img.Text(lx + 22, ly + 1, "valid sample", 0);
+  ly += 2 * kCharH;
+  img.Fill(lx + 5, ly + 2, lx + 11, ly + 8, 0);
+  img.Text(lx + 22, ly + 1, "invalid sample", 0);
+  WritePng(img, path);
+  return ValidityMapLayout{W, H, left, top, P};
+}
+
+}  // namespace fabatlas::sampling
