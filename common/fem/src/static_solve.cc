@@ -520,7 +520,16 @@ StaticSolveSummary SolveStatic(const HexMesh& mesh, const Material& material,
         failure = "line search found no decrease of the energy";
         break;
       }
+      if (options.verbose) {
+        std::fprintf(stderr, "fem:   step alpha=%.3g shift=%.3g |d|=%.3e\n", alpha, shift, d.norm());
+      }
       u = u_trial;
+      // Rounding floor: a full Newton step that moves no node by more than
+      // step_tolerance relative to the displacement field is converged.
+      if (alpha == 1.0 && d.lpNorm<Eigen::Infinity>() <= options.step_tolerance * u.lpNorm<Eigen::Infinity>()) {
+        step_ok = true;
+        break;
+      }
     }
     if (step_ok) {
       lambda = target;

@@ -77,6 +77,10 @@ struct StaticSolveOptions {
   // Converged when ||r_free|| <= relative_tolerance * max(||f_ext,free||,
   // ||reactions to prescribed displacements at the start of the step||).
   double relative_tolerance = 1e-9;
+  // Also converged when a full Newton step changes no displacement component
+  // by more than step_tolerance * max |u| (the residual is then at its
+  // floating-point floor, which can lie above relative_tolerance).
+  double step_tolerance = 1e-10;
   double armijo_c = 1e-4;           // sufficient decrease constant
   int max_line_search_halvings = 30;
   bool verbose = false;             // log Newton progress to stderr
