@@ -120,6 +120,17 @@ TEST(MeshReport, TwoCubesSharingOnlyAVertexHaveANonManifoldVertex) {
   EXPECT_EQ(r.components, 1);
 }
 
+TEST(MeshReport, DuplicatedTriangleIsNonManifoldAndSelfIntersecting) {
+  TriangleMesh m = testing::UnitCube();
+  m.triangles.push_back(m.triangles[0]);
+  const MeshReport r = InspectMesh(m);
+  EXPECT_TRUE(r.closed);
+  EXPECT_EQ(r.non_manifold_edges, 3);
+  EXPECT_FALSE(r.manifold);
+  EXPECT_TRUE(r.self_intersecting);
+  EXPECT_FALSE(r.outward);
+}
+
 TEST(MeshReport, DegenerateTrianglesAreCountedNotFatal) {
   TriangleMesh m = testing::UnitCube();
   m.vertices.push_back({2, 2, 2});
