@@ -1,0 +1,192 @@
+// fabatlas/storage/job_store.h — the coordinator's durable state in SQLite
+// (WAL mode): jobs, tasks (key, kind, state, attempt, result), leases,
+// workers, job outputs and events (DESIGN.md "Cluster and reliability").
+//
+// Every state change is one SQLite transaction, so a kill -9 at any moment
+// leaves a consistent store; the coordinator resumes from it (restart by
+// replay, see coordinator/coordinator.h).
+//
+// Tasks. A task row is keyed by its task key (SHA-256 of kind, canonical
+// inputs and code version), so adding a task twice is a no-op and the first
+// completion wins: `completions` counts accepted results and is 1 for every
+// finished task.
+//   queued --GrantLeases--> leased --Complete--> done
+//      ^                      |
+//      +---- ExpireLeases ----+ (attempt fenced, retry after a backoff;
+//                                 the quarantine_after-th expiry -> quarantined)
+// Leases. One row per attempt; a lease is active until completed, expired,
+// returned or fenced. Lease ids are "<first 16 hex of the key>.<attempt>".
+//
+// Thread-safe: one connection guarded by a mutex (SQLite serialises writers
+// anyway). Errors: an unopenable or unwritable database, a full disk or a
+// corrupt file throw fabatlas::ResourceError naming the path and SQLite's
+// message.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace fabatlas::storage {
+
+// Values match fabatlas.v1.JobState.
+enum class JobState { kQueued = 1, kRunning = 2, kSucceeded = 3, kFailed = 4, kCancelled = 5 };
+enum class TaskState { kQueued = 0, kLeased = 1, kDone = 2, kQuarantined = 3 };
+
+struct JobRecord {
+  std::string id;
+  std::string bundle_digest;
+  std::string design_name;
+  JobState state = JobState::kQueued;
+  std::string error;
+  std::int64_t created_ms = 0;
+  std::int64_t finished_ms = 0;
+};
+
+struct NewTask {
+  std::string key;
+  std::string job_id;
+  int kind = 0;          // fabatlas.v1.TaskKind
+  std::string payload;   // serialized fabatlas.v1.TaskPayload
+};
+
+struct TaskRecord {
+  std::string key, job_id;
+  int kind = 0;
+  std::string payload;
+  TaskState state = TaskState::kQueued;
+  std::int64_t attempt = 0;      // attempts granted so far
+  std::int64_t expiries = 0;     // leases that expired
+  std::int64_t completions = 0;  // accepted results (0 or 1)
+  std::string result;            // serialized fabatlas.v1.TaskResult
+};
+
+struct LeaseGrant {
+  std::string lease_id, task_key, job_id, bundle_digest;
+  std::int64_t attempt = 0;
+  int kind = 0;
+  std::string payload;
+  std::int64_t deadline_ms = 0;
+};
+
+struct Completion {
+  std::string lease_id, task_key;
+  std::int64_t attempt = 0;
+  std::string result;      // serialized TaskResult; ignored when failed
+  bool failed = false;     // the worker could not run the task: requeue
+  int sample_valid = -1;   // sample tasks: 1 valid, 0 invalid; -1 otherwise
+};
+
+enum class CompletionOutcome {
+  kAccepted,   // stored; the first completion of the key
+  kDuplicate,  // the key was already finished: acknowledged, ignored
+  kFenced,     // the lease is no longer current (expired, returned): ignored
+  kUnknown,    // no such task
+  kRequeued,   // failed: the task goes back to the queue
+};
+
+struct ExpiredLease {
+  std::string lease_id, task_key, job_id, worker_id;
+  bool quarantined = false;
+};
+
+struct TaskCounts {
+  std::int64_t total = 0, queued = 0, leased = 0, done = 0, quarantined = 0;
+  std::int64_t samples_done = 0, samples_valid = 0;
+  std::int64_t lease_expiries = 0, fenced_results = 0;
+};
+
+struct Event {
+  std::int64_t time_ms = 0;
+  std::string job_id, kind, message;
+};
+
+class JobStore {
+ public:
+  // Opens or creates the database (WAL, synchronous=NORMAL, foreign keys).
+  explicit JobStore(const std::filesystem::path& path);
+  ~JobStore();
+  JobStore(const JobStore&) = delete;
+  JobStore& operator=(const JobStore&) = delete;
+
+  const std::filesystem::path& path() const { return path_; }
+
+  // --- jobs ---
+  // Inserts the job; false (and nothing changed) when the id exists.
+  bool CreateJob(const JobRecord& job);
+  std::optional<JobRecord> FindJob(const std::string& id);
+  std::vector<JobRecord> Jobs();
+  void SetJobState(const std::string& id, JobState state, const std::string& error,
+                   std::int64_t finished_ms);
+  void PutJobOutput(const std::string& job_id, const std::string& name, const std::string& digest);
+  std::map<std::string, std::string> JobOutputs(const std::string& job_id);
+
+  // --- tasks ---
+  // Inserts the tasks that do not exist yet (one transaction). Returns the
+  // stored result of every given key that is already done or quarantined.
+  std::map<std::string, std::string> AddTasks(const std::vector<NewTask>& tasks);
+  std::optional<TaskRecord> FindTask(const std::string& key);
+  std::vector<TaskRecord> Tasks(const std::string& job_id);
+
+  // --- scheduling ---
+  // Leases up to `max` queued tasks of running jobs whose backoff has passed,
+  // oldest first, to `worker_id` until now_ms + lease_ms.
+  std::vector<LeaseGrant> GrantLeases(const std::string& worker_id, int max, std::int64_t now_ms,
+                                      std::int64_t lease_ms);
+  // Applies the results (one transaction); outcomes in input order.
+  // retry_backoff_ms: delay before a failed task may be leased again.
+  std::vector<CompletionOutcome> Complete(const std::vector<Completion>& completions,
+                                          std::int64_t now_ms, std::int64_t retry_backoff_ms);
+  // Moves the deadline of the worker's listed active leases to deadline_ms.
+  // Returns the listed ids that are not active leases of this worker.
+  std::vector<std::string> ExtendLeases(const std::string& worker_id,
+                                        const std::vector<std::string>& lease_ids,
+                                        std::int64_t deadline_ms);
+  // Active leases of the worker that are not in `known` (lost in transit or
+  // forgotten by a restarted worker) go back to the queue at once, without
+  // counting as an expiry. Returns how many.
+  int ReturnUnknownLeases(const std::string& worker_id, const std::vector<std::string>& known);
+  // Expires every active lease whose deadline is before now_ms: the task is
+  // queued again, eligible after backoff_ms * 2^(expiries-1) (capped at 30 s),
+  // or, on its quarantine_after-th expiry, finished with
+  // quarantine_result(kind) and marked quarantined.
+  std::vector<ExpiredLease> ExpireLeases(std::int64_t now_ms, std::int64_t backoff_ms,
+                                         int quarantine_after,
+                                         const std::function<std::string(int kind)>& quarantine_result);
+  // Gives every active lease until now_ms + grace_ms (used at start-up, so
+  // workers that kept running while the coordinator was down can report).
+  void ExtendAllLeases(std::int64_t deadline_ms);
+  // Counts for one job, or for all jobs when job_id is empty.
+  TaskCounts CountTasks(const std::string& job_id);
+  std::int64_t ActiveLeases();
+
+  // --- workers ---
+  void TouchWorker(const std::string& worker_id, int slots, std::int64_t now_ms);
+  // Workers seen since since_ms.
+  std::int64_t CountWorkers(std::int64_t since_ms);
+
+  // --- events ---
+  void AddEvent(const Event& event);
+  std::vector<Event> Events(const std::string& job_id);
+
+  // Invariants, for tests and `fabatlas-coordinator --check`: every finished
+  // task completed exactly once, no active lease on a task that is not
+  // leased, every leased task has exactly one active lease. Returns one line
+  // per violation (empty = consistent).
+  std::vector<std::string> CheckConsistency();
+
+  struct Db;  // the SQLite connection (src/job_store.cpp)
+
+ private:
+  std::filesystem::path path_;
+  std::unique_ptr<Db> db_;
+  std::mutex mutex_;
+};
+
+}  // namespace fabatlas::storage

@@ -1,0 +1,241 @@
+// Content-addressed blob store (see blob_store.h).
+#include "fabatlas/storage/blob_store.h"
+
+#include <fcntl.h>
+#include <openssl/evp.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cstring>
+#include <fstream>
+#include <memory>
+
+#include "fabatlas/error.h"
+#include "fabatlas/sha256.h"
+
+namespace fabatlas::storage {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+[[noreturn]] void IoFail(const fs::path& path, const std::string& what, int err) {
+  throw ResourceError(path.string() + ": " + what + ": " + std::strerror(err));
+}
+
+void CheckDigest(const std::string& digest) {
+  if (!IsDigest(digest))
+    throw InputError("blob digest '" + digest.substr(0, 80) + "': not 64 lowercase hex digits");
+}
+
+void WriteAll(int fd, const fs::path& path, const char* data, std::size_t size) {
+  while (size > 0) {
+    ssize_t n = ::write(fd, data, size);
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      IoFail(path, "write", errno);
+    }
+    data += n;
+    size -= static_cast<std::size_t>(n);
+  }
+}
+
+void FsyncDirectory(const fs::path& dir) {
+  int fd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY);
+  if (fd >= 0) {
+    ::fsync(fd);
+    ::close(fd);
+  }
+}
+
+}  // namespace
+
+bool IsDigest(const std::string& digest) {
+  return digest.size() == 64 && std::all_of(digest.begin(), digest.end(), [](char c) {
+           return (c >= '0' && c <= '9') || (c >= 'a' && c <= 'f');
+         });
+}
+
+std::string Sha256OfFile(const fs::path& path) {
+  int fd = ::open(path.c_str(), O_RDONLY);
+  if (fd < 0) IoFail(path, "open", errno);
+  std::unique_ptr<EVP_MD_CTX, decltype(&EVP_MD_CTX_free)> ctx(EVP_MD_CTX_new(), EVP_MD_CTX_free);
+  EVP_DigestInit_ex(ctx.get(), EVP_sha256(), nullptr);
+  std::string buffer(1 << 20, '\0');
+  while (true) {
+    ssize_t n = ::read(fd, buffer.data(), buffer.size());
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      int err = errno;
+      ::close(fd);
+      IoFail(path, "read", err);
+    }
+    if (n == 0) break;
+    EVP_DigestUpdate(ctx.get(), buffer.data(), static_cast<std::size_t>(n));
+  }
+  ::close(fd);
+  unsigned char md[EVP_MAX_MD_SIZE];
+  unsigned int len = 0;
+  EVP_DigestFinal_ex(ctx.get(), md, &len);
+  static const char* hex = "0123456789abcdef";
+  std::string out;
+  for (unsigned int i = 0; i < len; ++i) {
+    out += hex[md[i] >> 4];
+    out += hex[md[i] & 15];
+  }
+  return out;
+}
+
+BlobStore::BlobStore(fs::path root) : root_(std::move(root)) {
+  std::error_code ec;
+  fs::create_directories(root_ / "partial", ec);
+  if (ec) throw ResourceError(root_.string() + ": cannot create the blob store: " + ec.message());
+}
+
+fs::path BlobStore::PathOf(const std::string& digest) const {
+  return root_ / digest.substr(0, 2) / digest;
+}
+
+fs::path BlobStore::PartialPath(const std::string& digest) const {
+  return root_ / "partial" / digest;
+}
+
+bool BlobStore::Contains(const std::string& digest) const {
+  if (!IsDigest(digest)) return false;
+  std::error_code ec;
+  return fs::is_regular_file(PathOf(digest), ec);
+}
+
+std::int64_t BlobStore::Size(const std::string& digest) const {
+  if (!IsDigest(digest)) return -1;
+  std::error_code ec;
+  auto size = fs::file_size(PathOf(digest), ec);
+  return ec ? -1 : static_cast<std::int64_t>(size);
+}
+
+std::int64_t BlobStore::CommittedSize(const std::string& digest) const {
+  CheckDigest(digest);
+  std::int64_t full = Size(digest);
+  if (full >= 0) return full;
+  std::error_code ec;
+  auto size = fs::file_size(PartialPath(digest), ec);
+  return ec ? 0 : static_cast<std::int64_t>(size);
+}
+
+std::int64_t BlobStore::Append(const std::string& digest, std::int64_t offset,
+                               const std::string& data) {
+  CheckDigest(digest);
+  std::lock_guard lock(mutex_);
+  std::int64_t full = Size(digest);
+  if (full >= 0) return full;  // already published: nothing to do
+  fs::path partial = PartialPath(digest);
+  std::error_code ec;
+  auto held_u = fs::file_size(partial, ec);
+  std::int64_t held = ec ? 0 : static_cast<std::int64_t>(held_u);
+  if (offset < held && offset + static_cast<std::int64_t>(data.size()) <= held) return held;
+  if (offset != held)
+    throw InputError("blob " + digest + ": chunk at offset " + std::to_string(offset) +
+                     " but " + std::to_string(held) + " bytes are held (resume at that offset)");
+  int fd = ::open(partial.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
+  if (fd < 0) IoFail(partial, "open", errno);
+  try {
+    WriteAll(fd, partial, data.data(), data.size());
+  } catch (...) {
+    ::close(fd);
+    throw;
+  }
+  ::close(fd);
+  return held + static_cast<std::int64_t>(data.size());
+}
+
+void BlobStore::Finish(const std::string& digest) {
+  CheckDigest(digest);
+  std::lock_guard lock(mutex_);
+  if (Size(digest) >= 0) return;
+  fs::path partial = PartialPath(digest);
+  if (!fs::exists(partial)) {
+    // An empty blob has no chunks: create it.
+    int fd = ::open(partial.c_str(), O_WRONLY | O_CREAT, 0644);
+    if (fd < 0) IoFail(partial, "open", errno);
+    ::close(fd);
+  }
+  int fd = ::open(partial.c_str(), O_RDONLY);
+  if (fd < 0) IoFail(partial, "open", errno);
+  if (::fsync(fd) != 0) {
+    int err = errno;
+    ::close(fd);
+    IoFail(partial, "fsync", err);
+  }
+  ::close(fd);
+  std::string actual = Sha256OfFile(partial);
+  if (actual != digest) {
+    std::error_code ec;
+    fs::remove(partial, ec);
+    throw InputError("blob " + digest + ": the uploaded bytes hash to " + actual +
+                     " (upload discarded)");
+  }
+  fs::path final_path = PathOf(digest);
+  std::error_code ec;
+  fs::create_directories(final_path.parent_path(), ec);
+  if (ec) throw ResourceError(final_path.parent_path().string() + ": " + ec.message());
+  if (::rename(partial.c_str(), final_path.c_str()) != 0) IoFail(final_path, "rename", errno);
+  FsyncDirectory(final_path.parent_path());
+}
+
+std::string BlobStore::Put(const std::string& bytes) {
+  std::string digest = Sha256Hex(bytes);
+  if (Contains(digest)) return digest;
+  {
+    std::lock_guard lock(mutex_);
+    std::error_code ec;
+    fs::remove(PartialPath(digest), ec);
+  }
+  Append(digest, 0, bytes);
+  Finish(digest);
+  return digest;
+}
+
+std::string BlobStore::Read(const std::string& digest, std::int64_t offset,
+                            std::int64_t max_bytes) const {
+  CheckDigest(digest);
+  fs::path path = PathOf(digest);
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError("blob " + digest + ": not in the store " + root_.string());
+  in.seekg(0, std::ios::end);
+  std::int64_t size = in.tellg();
+  offset = std::clamp<std::int64_t>(offset, 0, size);
+  std::int64_t n = size - offset;
+  if (max_bytes >= 0) n = std::min(n, max_bytes);
+  std::string out(static_cast<std::size_t>(n), '\0');
+  in.seekg(offset);
+  in.read(out.data(), n);
+  if (!in) throw ResourceError(path.string() + ": read failed");
+  return out;
+}
+
+bool BlobStore::Verify(const std::string& digest) const {
+  if (!Contains(digest)) return false;
+  try {
+    return Sha256OfFile(PathOf(digest)) == digest;
+  } catch (const ResourceError&) {
+    return false;
+  }
+}
+
+std::vector<std::string> BlobStore::List() const {
+  std::vector<std::string> out;
+  std::error_code ec;
+  for (const auto& dir : fs::directory_iterator(root_, ec)) {
+    if (!dir.is_directory() || dir.path().filename() == "partial") continue;
+    for (const auto& f : fs::directory_iterator(dir.path(), ec)) {
+      std::string name = f.path().filename().string();
+      if (IsDigest(name)) out.push_back(name);
+    }
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+}  // namespace fabatlas::storage

@@ -1,0 +1,607 @@
+// SQLite job store (see job_store.h).
+#include "fabatlas/storage/job_store.h"
+
+#include <sqlite3.h>
+
+#include <algorithm>
+#include <set>
+
+#include "fabatlas/error.h"
+
+namespace fabatlas::storage {
+
+namespace {
+
+constexpr const char* kSchema = R"sql(
+CREATE TABLE IF NOT EXISTS jobs (
+  id TEXT PRIMARY KEY, bundle_digest TEXT NOT NULL, design_name TEXT NOT NULL,
+  state INTEGER NOT NULL, error TEXT NOT NULL DEFAULT '',
+  created_ms INTEGER NOT NULL, finished_ms INTEGER NOT NULL DEFAULT 0);
+CREATE TABLE IF NOT EXISTS job_outputs (
+  job_id TEXT NOT NULL, name TEXT NOT NULL, digest TEXT NOT NULL,
+  PRIMARY KEY (job_id, name));
+CREATE TABLE IF NOT EXISTS tasks (
+  seq INTEGER PRIMARY KEY AUTOINCREMENT,
+  key TEXT NOT NULL UNIQUE, job_id TEXT NOT NULL, kind INTEGER NOT NULL,
+  payload BLOB NOT NULL, state INTEGER NOT NULL DEFAULT 0,
+  attempt INTEGER NOT NULL DEFAULT 0, expiries INTEGER NOT NULL DEFAULT 0,
+  completions INTEGER NOT NULL DEFAULT 0, fenced INTEGER NOT NULL DEFAULT 0,
+  not_before_ms INTEGER NOT NULL DEFAULT 0, sample_valid INTEGER NOT NULL DEFAULT -1,
+  result BLOB);
+CREATE INDEX IF NOT EXISTS tasks_state ON tasks (state, seq);
+CREATE INDEX IF NOT EXISTS tasks_job ON tasks (job_id, state);
+CREATE TABLE IF NOT EXISTS leases (
+  lease_id TEXT PRIMARY KEY, task_key TEXT NOT NULL, attempt INTEGER NOT NULL,
+  worker_id TEXT NOT NULL, granted_ms INTEGER NOT NULL, deadline_ms INTEGER NOT NULL,
+  state TEXT NOT NULL DEFAULT 'active');
+CREATE INDEX IF NOT EXISTS leases_active ON leases (state, deadline_ms);
+CREATE INDEX IF NOT EXISTS leases_worker ON leases (worker_id, state);
+CREATE TABLE IF NOT EXISTS workers (
+  id TEXT PRIMARY KEY, slots INTEGER NOT NULL, first_seen_ms INTEGER NOT NULL,
+  last_seen_ms INTEGER NOT NULL);
+CREATE TABLE IF NOT EXISTS events (
+  id INTEGER PRIMARY KEY AUTOINCREMENT, time_ms INTEGER NOT NULL, job_id TEXT NOT NULL,
+  kind TEXT NOT NULL, message TEXT NOT NULL);
+)sql";
+
+}  // namespace
+
+struct JobStore::Db {
+  sqlite3* handle = nullptr;
+  std::string path;
+
+  [[noreturn]] void Fail(const std::string& what) const {
+    throw ResourceError(path + ": " + what + ": " + sqlite3_errmsg(handle));
+  }
+  void Exec(const char* sql) {
+    char* message = nullptr;
+    if (sqlite3_exec(handle, sql, nullptr, nullptr, &message) != SQLITE_OK) {
+      std::string text = message ? message : "error";
+      sqlite3_free(message);
+      throw ResourceError(path + ": " + text);
+    }
+  }
+};
+
+namespace {
+
+// A prepared statement with positional binding; finalised on scope exit.
+class Stmt {
+ public:
+  Stmt(JobStore::Db& db, const char* sql) : db_(db) {
+    if (sqlite3_prepare_v2(db.handle, sql, -1, &stmt_, nullptr) != SQLITE_OK) db.Fail("prepare");
+  }
+  ~Stmt() { sqlite3_finalize(stmt_); }
+  Stmt& Bind(int i, const std::string& v) {
+    sqlite3_bind_blob(stmt_, i, v.data(), static_cast<int>(v.size()), SQLITE_TRANSIENT);
+    return *this;
+  }
+  Stmt& BindText(int i, const std::string& v) {
+    sqlite3_bind_text(stmt_, i, v.data(), static_cast<int>(v.size()), SQLITE_TRANSIENT);
+    return *this;
+  }
+  Stmt& Bind(int i, std::int64_t v) {
+    sqlite3_bind_int64(stmt_, i, v);
+    return *this;
+  }
+  // True while a row is available.
+  bool Step() {
+    int rc = sqlite3_step(stmt_);
+    if (rc == SQLITE_ROW) return true;
+    if (rc == SQLITE_DONE) return false;
+    db_.Fail("step");
+  }
+  void Run() {
+    while (Step()) {
+    }
+  }
+  void Reset() {
+    sqlite3_reset(stmt_);
+    sqlite3_clear_bindings(stmt_);
+  }
+  std::int64_t Int(int c) const { return sqlite3_column_int64(stmt_, c); }
+  std::string Text(int c) const {
+    const void* p = sqlite3_column_blob(stmt_, c);
+    int n = sqlite3_column_bytes(stmt_, c);
+    return p ? std::string(static_cast<const char*>(p), n) : std::string();
+  }
+  bool IsNull(int c) const { return sqlite3_column_type(stmt_, c) == SQLITE_NULL; }
+
+ private:
+  JobStore::Db& db_;
+  sqlite3_stmt* stmt_ = nullptr;
+};
+
+// BEGIN IMMEDIATE ... COMMIT, rolled back if an exception escapes.
+class Transaction {
+ public:
+  explicit Transaction(JobStore::Db& db) : db_(db) { db_.Exec("BEGIN IMMEDIATE"); }
+  ~Transaction() {
+    if (!done_) sqlite3_exec(db_.handle, "ROLLBACK", nullptr, nullptr, nullptr);
+  }
+  void Commit() {
+    db_.Exec("COMMIT");
+    done_ = true;
+  }
+
+ private:
+  JobStore::Db& db_;
+  bool done_ = false;
+};
+
+JobRecord ReadJob(const Stmt& s) {
+  JobRecord j;
+  j.id = s.Text(0);
+  j.bundle_digest = s.Text(1);
+  j.design_name = s.Text(2);
+  j.state = static_cast<JobState>(s.Int(3));
+  j.error = s.Text(4);
+  j.created_ms = s.Int(5);
+  j.finished_ms = s.Int(6);
+  return j;
+}
+
+std::string LeaseIdOf(const std::string& key, std::int64_t attempt) {
+  return key.substr(0, 16) + "." + std::to_string(attempt);
+}
+
+}  // namespace
+
+JobStore::JobStore(const std::filesystem::path& path) : path_(path), db_(std::make_unique<Db>()) {
+  db_->path = path.string();
+  std::error_code ec;
+  if (path.has_parent_path()) std::filesystem::create_directories(path.parent_path(), ec);
+  if (sqlite3_open_v2(db_->path.c_str(), &db_->handle,
+                      SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE | SQLITE_OPEN_FULLMUTEX,
+                      nullptr) != SQLITE_OK) {
+    std::string message = db_->handle ? sqlite3_errmsg(db_->handle) : "cannot open";
+    sqlite3_close(db_->handle);
+    db_->handle = nullptr;
+    throw ResourceError(db_->path + ": cannot open the job store: " + message);
+  }
+  sqlite3_busy_timeout(db_->handle, 10000);
+  try {
+    db_->Exec("PRAGMA journal_mode=WAL");
+    db_->Exec("PRAGMA synchronous=NORMAL");
+    db_->Exec(kSchema);
+  } catch (...) {
+    sqlite3_close(db_->handle);
+    db_->handle = nullptr;
+    throw;
+  }
+}
+
+JobStore::~JobStore() {
+  if (db_ && db_->handle) sqlite3_close(db_->handle);
+}
+
+bool JobStore::CreateJob(const JobRecord& job) {
+  std::lock_guard lock(mutex_);
+  Stmt s(*db_,
+         "INSERT OR IGNORE INTO jobs (id, bundle_digest, design_name, state, error, created_ms, "
+         "finished_ms) VALUES (?,?,?,?,?,?,?)");
+  s.BindText(1, job.id).BindText(2, job.bundle_digest).BindText(3, job.design_name);
+  s.Bind(4, static_cast<std::int64_t>(job.state)).BindText(5, job.error);
+  s.Bind(6, job.created_ms).Bind(7, job.finished_ms);
+  s.Run();
+  return sqlite3_changes(db_->handle) == 1;
+}
+
+std::optional<JobRecord> JobStore::FindJob(const std::string& id) {
+  std::lock_guard lock(mutex_);
+  Stmt s(*db_,
+         "SELECT id, bundle_digest, design_name, state, error, created_ms, finished_ms FROM jobs "
+         "WHERE id = ?");
+  s.BindText(1, id);
+  if (!s.Step()) return std::nullopt;
+  return ReadJob(s);
+}
+
+std::vector<JobRecord> JobStore::Jobs() {
+  std::lock_guard lock(mutex_);
+  Stmt s(*db_,
+         "SELECT id, bundle_digest, design_name, state, error, created_ms, finished_ms FROM jobs "
+         "ORDER BY created_ms, id");
+  std::vector<JobRecord> jobs;
+  while (s.Step()) jobs.push_back(ReadJob(s));
+  return jobs;
+}
+
+void JobStore::SetJobState(const std::string& id, JobState state, const std::string& error,
+                           std::int64_t finished_ms) {
+  std::lock_guard lock(mutex_);
+  Stmt s(*db_, "UPDATE jobs SET state = ?, error = ?, finished_ms = ? WHERE id = ?");
+  s.Bind(1, static_cast<std::int64_t>(state)).BindText(2, error).Bind(3, finished_ms).BindText(4, id);
+  s.Run();
+}
+
+void JobStore::PutJobOutput(const std::string& job_id, const std::string& name,
+                            const std::string& digest) {
+  std::lock_guard lock(mutex_);
+  Stmt s(*db_, "INSERT OR REPLACE INTO job_outputs (job_id, name, digest) VALUES (?,?,?)");
+  s.BindText(1, job_id).BindText(2, name).BindText(3, digest);
+  s.Run();
+}
+
+std::map<std::string, std::string> JobStore::JobOutputs(const std::string& job_id) {
+  std::lock_guard lock(mutex_);
+  Stmt s(*db_, "SELECT name, digest FROM job_outputs WHERE job_id = ? ORDER BY name");
+  s.BindText(1, job_id);
+  std::map<std::string, std::string> out;
+  while (s.Step()) out[s.Text(0)] = s.Text(1);
+  return out;
+}
+
+std::map<std::string, std::string> JobStore::AddTasks(const std::vector<NewTask>& tasks) {
+  std::lock_guard lock(mutex_);
+  Transaction t(*db_);
+  Stmt insert(*db_, "INSERT OR IGNORE INTO tasks (key, job_id, kind, payload) VALUES (?,?,?,?)");
+  Stmt find(*db_, "SELECT result FROM tasks WHERE key = ? AND state IN (2, 3)");
+  std::map<std::string, std::string> finished;
+  for (const NewTask& task : tasks) {
+    insert.BindText(1, task.key).BindText(2, task.job_id).Bind(3, std::int64_t{task.kind});
+    insert.Bind(4, task.payload);
+    insert.Run();
+    insert.Reset();
+    find.BindText(1, task.key);
+    if (find.Step()) finished[task.key] = find.Text(0);
+    find.Reset();
+  }
+  t.Commit();
+  return finished;
+}
+
+namespace {
+constexpr const char* kTaskColumns =
+    "SELECT key, job_id, kind, payload, state, attempt, expiries, completions, result FROM tasks ";
+TaskRecord ReadTask(const Stmt& s) {
+  TaskRecord r;
+  r.key = s.Text(0);
+  r.job_id = s.Text(1);
+  r.kind = static_cast<int>(s.Int(2));
+  r.payload = s.Text(3);
+  r.state = static_cast<TaskState>(s.Int(4));
+  r.attempt = s.Int(5);
+  r.expiries = s.Int(6);
+  r.completions = s.Int(7);
+  r.result = s.Text(8);
+  return r;
+}
+}  // namespace
+
+std::optional<TaskRecord> JobStore::FindTask(const std::string& key) {
+  std::lock_guard lock(mutex_);
+  Stmt s(*db_, (std::string(kTaskColumns) + "WHERE key = ?").c_str());
+  s.BindText(1, key);
+  if (!s.Step()) return std::nullopt;
+  return ReadTask(s);
+}
+
+std::vector<TaskRecord> JobStore::Tasks(const std::string& job_id) {
+  std::lock_guard lock(mutex_);
+  Stmt s(*db_, (std::string(kTaskColumns) + "WHERE job_id = ? ORDER BY seq").c_str());
+  s.BindText(1, job_id);
+  std::vector<TaskRecord> out;
+  while (s.Step()) out.push_back(ReadTask(s));
+  return out;
+}
+
+std::vector<LeaseGrant> JobStore::GrantLeases(const std::string& worker_id, int max,
+                                              std::int64_t now_ms, std::int64_t lease_ms) {
+  std::vector<LeaseGrant> grants;
+  if (max <= 0) return grants;
+  std::lock_guard lock(mutex_);
+  Transaction t(*db_);
+  {
+    Stmt pick(*db_,
+              "SELECT t.key, t.job_id, j.bundle_digest, t.attempt, t.kind, t.payload FROM tasks t "
+              "JOIN jobs j ON j.id = t.job_id WHERE t.state = 0 AND j.state = 2 AND "
+              "t.not_before_ms <= ? ORDER BY t.seq LIMIT ?");
+    pick.Bind(1, now_ms).Bind(2, std::int64_t{max});
+    while (pick.Step()) {
+      LeaseGrant g;
+      g.task_key = pick.Text(0);
+      g.job_id = pick.Text(1);
+      g.bundle_digest = pick.Text(2);
+      g.attempt = pick.Int(3) + 1;
+      g.kind = static_cast<int>(pick.Int(4));
+      g.payload = pick.Text(5);
+      g.lease_id = LeaseIdOf(g.task_key, g.attempt);
+      g.deadline_ms = now_ms + lease_ms;
+      grants.push_back(std::move(g));
+    }
+  }
+  Stmt update(*db_, "UPDATE tasks SET state = 1, attempt = ? WHERE key = ?");
+  Stmt lease(*db_,
+             "INSERT OR REPLACE INTO leases (lease_id, task_key, attempt, worker_id, granted_ms, "
+             "deadline_ms, state) VALUES (?,?,?,?,?,?,'active')");
+  for (const LeaseGrant& g : grants) {
+    update.Bind(1, g.attempt).BindText(2, g.task_key);
+    update.Run();
+    update.Reset();
+    lease.BindText(1, g.lease_id).BindText(2, g.task_key).Bind(3, g.attempt).BindText(4, worker_id);
+    lease.Bind(5, now_ms).Bind(6, g.deadline_ms);
+    lease.Run();
+    lease.Reset();
+  }
+  if (!grants.empty()) {
+    Stmt w(*db_, "UPDATE workers SET last_seen_ms = ? WHERE id = ?");
+    w.Bind(1, now_ms).BindText(2, worker_id);
+    w.Run();
+  }
+  t.Commit();
+  return grants;
+}
+
+std::vector<CompletionOutcome> JobStore::Complete(const std::vector<Completion>& completions,
+                                                  std::int64_t now_ms,
+                                                  std::int64_t retry_backoff_ms) {
+  std::vector<CompletionOutcome> outcomes;
+  if (completions.empty()) return outcomes;
+  std::lock_guard lock(mutex_);
+  Transaction t(*db_);
+  Stmt task(*db_, "SELECT state, attempt FROM tasks WHERE key = ?");
+  Stmt lease(*db_, "SELECT state FROM leases WHERE lease_id = ? AND task_key = ? AND attempt = ?");
+  Stmt set_lease(*db_, "UPDATE leases SET state = ? WHERE lease_id = ? AND state = 'active'");
+  Stmt done(*db_,
+            "UPDATE tasks SET state = 2, result = ?, completions = completions + 1, "
+            "sample_valid = ? WHERE key = ?");
+  Stmt fenced(*db_, "UPDATE tasks SET fenced = fenced + 1 WHERE key = ?");
+  Stmt requeue(*db_, "UPDATE tasks SET state = 0, not_before_ms = ? WHERE key = ?");
+  for (const Completion& c : completions) {
+    task.BindText(1, c.task_key);
+    if (!task.Step()) {
+      task.Reset();
+      outcomes.push_back(CompletionOutcome::kUnknown);
+      continue;
+    }
+    auto state = static_cast<TaskState>(task.Int(0));
+    std::int64_t attempt = task.Int(1);
+    task.Reset();
+    lease.BindText(1, c.lease_id).BindText(2, c.task_key).Bind(3, c.attempt);
+    bool active = lease.Step() && lease.Text(0) == "active";
+    lease.Reset();
+    CompletionOutcome outcome;
+    std::string lease_state;
+    if (state == TaskState::kDone || state == TaskState::kQuarantined) {
+      outcome = CompletionOutcome::kDuplicate;
+      lease_state = "duplicate";
+    } else if (!active || state != TaskState::kLeased || c.attempt != attempt) {
+      outcome = CompletionOutcome::kFenced;
+      lease_state = "fenced";
+      fenced.BindText(1, c.task_key);
+      fenced.Run();
+      fenced.Reset();
+    } else if (c.failed) {
+      outcome = CompletionOutcome::kRequeued;
+      lease_state = "failed";
+      requeue.Bind(1, now_ms + retry_backoff_ms).BindText(2, c.task_key);
+      requeue.Run();
+      requeue.Reset();
+    } else {
+      outcome = CompletionOutcome::kAccepted;
+      lease_state = "completed";
+      done.Bind(1, c.result).Bind(2, std::int64_t{c.sample_valid}).BindText(3, c.task_key);
+      done.Run();
+      done.Reset();
+    }
+    set_lease.BindText(1, lease_state).BindText(2, c.lease_id);
+    set_lease.Run();
+    set_lease.Reset();
+    outcomes.push_back(outcome);
+  }
+  t.Commit();
+  return outcomes;
+}
+
+std::vector<std::string> JobStore::ExtendLeases(const std::string& worker_id,
+                                                const std::vector<std::string>& lease_ids,
+                                                std::int64_t deadline_ms) {
+  std::vector<std::string> revoked;
+  std::lock_guard lock(mutex_);
+  Transaction t(*db_);
+  Stmt s(*db_,
+         "UPDATE leases SET deadline_ms = MAX(deadline_ms, ?) WHERE lease_id = ? AND worker_id = ? "
+         "AND state = 'active'");
+  for (const std::string& id : lease_ids) {
+    s.Bind(1, deadline_ms).BindText(2, id).BindText(3, worker_id);
+    s.Run();
+    if (sqlite3_changes(db_->handle) == 0) revoked.push_back(id);
+    s.Reset();
+  }
+  t.Commit();
+  return revoked;
+}
+
+int JobStore::ReturnUnknownLeases(const std::string& worker_id,
+                                  const std::vector<std::string>& known) {
+  std::lock_guard lock(mutex_);
+  std::set<std::string> keep(known.begin(), known.end());
+  std::vector<std::pair<std::string, std::string>> lost;  // lease id, task key
+  {
+    Stmt s(*db_, "SELECT lease_id, task_key FROM leases WHERE worker_id = ? AND state = 'active'");
+    s.BindText(1, worker_id);
+    while (s.Step())
+      if (!keep.count(s.Text(0))) lost.emplace_back(s.Text(0), s.Text(1));
+  }
+  if (lost.empty()) return 0;
+  Transaction t(*db_);
+  Stmt lease(*db_, "UPDATE leases SET state = 'returned' WHERE lease_id = ?");
+  Stmt task(*db_, "UPDATE tasks SET state = 0 WHERE key = ? AND state = 1");
+  for (const auto& [id, key] : lost) {
+    lease.BindText(1, id);
+    lease.Run();
+    lease.Reset();
+    task.BindText(1, key);
+    task.Run();
+    task.Reset();
+  }
+  t.Commit();
+  return static_cast<int>(lost.size());
+}
+
+std::vector<ExpiredLease> JobStore::ExpireLeases(
+    std::int64_t now_ms, std::int64_t backoff_ms, int quarantine_after,
+    const std::function<std::string(int kind)>& quarantine_result) {
+  std::vector<ExpiredLease> expired;
+  std::lock_guard lock(mutex_);
+  std::vector<std::int64_t> kinds, expiries;
+  {
+    Stmt s(*db_,
+           "SELECT l.lease_id, l.task_key, t.job_id, l.worker_id, t.kind, t.expiries FROM leases l "
+           "JOIN tasks t ON t.key = l.task_key WHERE l.state = 'active' AND l.deadline_ms < ?");
+    s.Bind(1, now_ms);
+    while (s.Step()) {
+      ExpiredLease e;
+      e.lease_id = s.Text(0);
+      e.task_key = s.Text(1);
+      e.job_id = s.Text(2);
+      e.worker_id = s.Text(3);
+      kinds.push_back(s.Int(4));
+      expiries.push_back(s.Int(5) + 1);
+      expired.push_back(std::move(e));
+    }
+  }
+  if (expired.empty()) return expired;
+  Transaction t(*db_);
+  Stmt lease(*db_, "UPDATE leases SET state = 'expired' WHERE lease_id = ?");
+  Stmt requeue(*db_,
+               "UPDATE tasks SET state = 0, expiries = ?, not_before_ms = ? WHERE key = ? AND "
+               "state = 1");
+  Stmt quarantine(*db_,
+                  "UPDATE tasks SET state = 3, expiries = ?, result = ?, completions = "
+                  "completions + 1, sample_valid = CASE WHEN kind = 1 THEN 0 ELSE -1 END "
+                  "WHERE key = ? AND state = 1");
+  Stmt event(*db_, "INSERT INTO events (time_ms, job_id, kind, message) VALUES (?,?,?,?)");
+  for (std::size_t i = 0; i < expired.size(); ++i) {
+    ExpiredLease& e = expired[i];
+    lease.BindText(1, e.lease_id);
+    lease.Run();
+    lease.Reset();
+    std::string kind = "lease_expired";
+    if (expiries[i] >= quarantine_after) {
+      e.quarantined = true;
+      kind = "quarantined";
+      quarantine.Bind(1, expiries[i]).Bind(2, quarantine_result(static_cast<int>(kinds[i])));
+      quarantine.BindText(3, e.task_key);
+      quarantine.Run();
+      quarantine.Reset();
+    } else {
+      std::int64_t delay = backoff_ms << std::min<std::int64_t>(expiries[i] - 1, 20);
+      delay = std::min<std::int64_t>(delay, 30000);
+      requeue.Bind(1, expiries[i]).Bind(2, now_ms + delay).BindText(3, e.task_key);
+      requeue.Run();
+      requeue.Reset();
+    }
+    event.Bind(1, now_ms).BindText(2, e.job_id).BindText(3, kind);
+    event.BindText(4, "task " + e.task_key.substr(0, 16) + " lease " + e.lease_id + " of worker " +
+                          e.worker_id + " expired (" + std::to_string(expiries[i]) + " so far)");
+    event.Run();
+    event.Reset();
+  }
+  t.Commit();
+  return expired;
+}
+
+void JobStore::ExtendAllLeases(std::int64_t deadline_ms) {
+  std::lock_guard lock(mutex_);
+  Stmt s(*db_, "UPDATE leases SET deadline_ms = MAX(deadline_ms, ?) WHERE state = 'active'");
+  s.Bind(1, deadline_ms);
+  s.Run();
+}
+
+TaskCounts JobStore::CountTasks(const std::string& job_id) {
+  std::lock_guard lock(mutex_);
+  std::string where = job_id.empty() ? "" : " WHERE job_id = ?";
+  Stmt s(*db_, ("SELECT state, COUNT(*), SUM(sample_valid = 1), SUM(sample_valid >= 0), "
+                "SUM(expiries), SUM(fenced) FROM tasks" + where + " GROUP BY state").c_str());
+  if (!job_id.empty()) s.BindText(1, job_id);
+  TaskCounts c;
+  while (s.Step()) {
+    std::int64_t n = s.Int(1);
+    c.total += n;
+    switch (static_cast<TaskState>(s.Int(0))) {
+      case TaskState::kQueued: c.queued += n; break;
+      case TaskState::kLeased: c.leased += n; break;
+      case TaskState::kDone: c.done += n; break;
+      case TaskState::kQuarantined: c.quarantined += n; break;
+    }
+    if (s.Int(0) >= 2) {
+      c.samples_valid += s.Int(2);
+      c.samples_done += s.Int(3);
+    }
+    c.lease_expiries += s.Int(4);
+    c.fenced_results += s.Int(5);
+  }
+  return c;
+}
+
+std::int64_t JobStore::ActiveLeases() {
+  std::lock_guard lock(mutex_);
+  Stmt s(*db_, "SELECT COUNT(*) FROM leases WHERE state = 'active'");
+  s.Step();
+  return s.Int(0);
+}
+
+void JobStore::TouchWorker(const std::string& worker_id, int slots, std::int64_t now_ms) {
+  std::lock_guard lock(mutex_);
+  Stmt s(*db_,
+         "INSERT INTO workers (id, slots, first_seen_ms, last_seen_ms) VALUES (?,?,?,?) "
+         "ON CONFLICT(id) DO UPDATE SET slots = excluded.slots, last_seen_ms = excluded.last_seen_ms");
+  s.BindText(1, worker_id).Bind(2, std::int64_t{slots}).Bind(3, now_ms).Bind(4, now_ms);
+  s.Run();
+}
+
+std::int64_t JobStore::CountWorkers(std::int64_t since_ms) {
+  std::lock_guard lock(mutex_);
+  Stmt s(*db_, "SELECT COUNT(*) FROM workers WHERE last_seen_ms >= ?");
+  s.Bind(1, since_ms);
+  s.Step();
+  return s.Int(0);
+}
+
+void JobStore::AddEvent(const Event& event) {
+  std::lock_guard lock(mutex_);
+  Stmt s(*db_, "INSERT INTO events (time_ms, job_id, kind, message) VALUES (?,?,?,?)");
+  s.Bind(1, event.time_ms).BindText(2, event.job_id).BindText(3, event.kind);
+  s.BindText(4, event.message);
+  s.Run();
+}
+
+std::vector<Event> JobStore::Events(const std::string& job_id) {
+  std::lock_guard lock(mutex_);
+  Stmt s(*db_, "SELECT time_ms, job_id, kind, message FROM events WHERE job_id = ? ORDER BY id");
+  s.BindText(1, job_id);
+  std::vector<Event> out;
+  while (s.Step()) out.push_back({s.Int(0), s.Text(1), s.Text(2), s.Text(3)});
+  return out;
+}
+
+std::vector<std::string> JobStore::CheckConsistency() {
+  std::lock_guard lock(mutex_);
+  std::vector<std::string> problems;
+  {
+    Stmt s(*db_, "SELECT key, completions FROM tasks WHERE state IN (2, 3) AND completions != 1");
+    while (s.Step())
+      problems.push_back("task " + s.Text(0) + " completed " + std::to_string(s.Int(1)) + " times");
+  }
+  {
+    Stmt s(*db_,
+           "SELECT l.lease_id FROM leases l JOIN tasks t ON t.key = l.task_key WHERE "
+           "l.state = 'active' AND (t.state != 1 OR t.attempt != l.attempt)");
+    while (s.Step()) problems.push_back("orphaned active lease " + s.Text(0));
+  }
+  {
+    Stmt s(*db_,
+           "SELECT t.key FROM tasks t WHERE t.state = 1 AND (SELECT COUNT(*) FROM leases l WHERE "
+           "l.task_key = t.key AND l.state = 'active') != 1");
+    while (s.Step()) problems.push_back("leased task " + s.Text(0) + " without one active lease");
+  }
+  {
+    Stmt s(*db_, "SELECT key FROM tasks WHERE state IN (0, 1) AND completions != 0");
+    while (s.Step()) problems.push_back("unfinished task " + s.Text(0) + " has a result");
+  }
+  return problems;
+}
+
+}  // namespace fabatlas::storage

@@ -1,0 +1,201 @@
+// The durable job store and the blob store: leases, fencing, quarantine,
+// durability across reopen, content addresses and resumable uploads.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "fabatlas/error.h"
+#include "fabatlas/sha256.h"
+#include "fabatlas/storage/blob_store.h"
+#include "fabatlas/storage/job_store.h"
+
+namespace fs = std::filesystem;
+using namespace fabatlas::storage;
+
+namespace {
+
+fs::path FreshDir(const std::string& name) {
+  fs::path dir = fs::temp_directory_path() / ("fabatlas_" + name + "_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  return dir;
+}
+
+std::string Key(int i) { return fabatlas::Sha256Hex("task" + std::to_string(i)); }
+
+void AddRunningJob(JobStore& store, int tasks) {
+  ASSERT_TRUE(store.CreateJob({"job1", std::string(64, 'a'), "d", JobState::kRunning, "", 1, 0}));
+  std::vector<NewTask> batch;
+  for (int i = 0; i < tasks; ++i) batch.push_back({Key(i), "job1", 1, "payload" + std::to_string(i)});
+  EXPECT_TRUE(store.AddTasks(batch).empty());
+}
+
+}  // namespace
+
+TEST(ClusterStorage, SHA256OfKnownVector) {
+  // FIPS 180-2 test vector "abc".
+  fs::path dir = FreshDir("sha");
+  std::ofstream(dir / "abc") << "abc";
+  EXPECT_EQ(Sha256OfFile(dir / "abc"),
+            "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad");
+}
+
+TEST(ClusterStorage, LeaseCompleteDuplicateAndDurability) {
+  fs::path dir = FreshDir("store1");
+  {
+    JobStore store(dir / "state.db");
+    AddRunningJob(store, 5);
+    // Adding the same tasks again inserts nothing.
+    store.AddTasks({{Key(0), "job1", 1, "other"}});
+    EXPECT_EQ(store.CountTasks("job1").total, 5);
+    auto grants = store.GrantLeases("w1", 3, 1000, 500);
+    ASSERT_EQ(grants.size(), 3u);
+    EXPECT_EQ(grants[0].task_key, Key(0));  // oldest first
+    EXPECT_EQ(grants[0].attempt, 1);
+    EXPECT_EQ(grants[0].payload, "payload0");
+    EXPECT_EQ(grants[0].deadline_ms, 1500);
+    auto outcomes = store.Complete({{grants[0].lease_id, grants[0].task_key, 1, "r0", false, 1},
+                                    {grants[0].lease_id, grants[0].task_key, 1, "r0b", false, 1}},
+                                   1100, 100);
+    EXPECT_EQ(outcomes[0], CompletionOutcome::kAccepted);
+    EXPECT_EQ(outcomes[1], CompletionOutcome::kDuplicate);
+    EXPECT_EQ(store.FindTask(Key(0))->result, "r0");  // first completion wins
+    EXPECT_EQ(store.CountTasks("job1").leased, 2);
+    EXPECT_TRUE(store.CheckConsistency().empty());
+  }
+  // Reopen: everything is still there, including the two active leases.
+  JobStore store(dir / "state.db");
+  TaskCounts c = store.CountTasks("job1");
+  EXPECT_EQ(c.done, 1);
+  EXPECT_EQ(c.leased, 2);
+  EXPECT_EQ(c.queued, 2);
+  EXPECT_EQ(c.samples_valid, 1);
+  EXPECT_EQ(store.ActiveLeases(), 2);
+  auto finished = store.AddTasks({{Key(0), "job1", 1, "payload0"}, {Key(1), "job1", 1, "payload1"}});
+  ASSERT_EQ(finished.size(), 1u);
+  EXPECT_EQ(finished[Key(0)], "r0");
+}
+
+TEST(ClusterStorage, ExpiryFencesLateResultsAndQuarantinesAfterThree) {
+  fs::path dir = FreshDir("store2");
+  JobStore store(dir / "state.db");
+  AddRunningJob(store, 1);
+  auto quarantine_result = [](int kind) { return "quarantined kind " + std::to_string(kind); };
+  std::int64_t now = 0;
+  std::vector<LeaseGrant> history;
+  for (int attempt = 1; attempt <= 3; ++attempt) {
+    auto g = store.GrantLeases("w" + std::to_string(attempt), 1, now, 100);
+    ASSERT_EQ(g.size(), 1u) << "attempt " << attempt;
+    EXPECT_EQ(g[0].attempt, attempt);
+    history.push_back(g[0]);
+    now += 101;  // past the deadline
+    auto expired = store.ExpireLeases(now, 10, 3, quarantine_result);
+    ASSERT_EQ(expired.size(), 1u);
+    EXPECT_EQ(expired[0].quarantined, attempt == 3);
+    // The backoff keeps the task back: 10 ms, then 20 ms.
+    if (attempt < 3) {
+      EXPECT_TRUE(store.GrantLeases("x", 1, now, 100).empty());
+      now += 10 << (attempt - 1);
+    }
+  }
+  // The first holder comes back late: fenced.
+  auto late = store.Complete({{history[0].lease_id, history[0].task_key, 1, "late", false, 1}}, now, 0);
+  EXPECT_EQ(late[0], CompletionOutcome::kDuplicate);  // already quarantined
+  auto task = store.FindTask(Key(0));
+  EXPECT_EQ(task->state, TaskState::kQuarantined);
+  EXPECT_EQ(task->result, "quarantined kind 1");
+  EXPECT_EQ(task->completions, 1);
+  EXPECT_EQ(store.ActiveLeases(), 0);
+  EXPECT_TRUE(store.CheckConsistency().empty());
+  EXPECT_EQ(store.Events("job1").size(), 3u);
+}
+
+TEST(ClusterStorage, LateResultOfAnExpiredAttemptIsFenced) {
+  fs::path dir = FreshDir("store3");
+  JobStore store(dir / "state.db");
+  AddRunningJob(store, 1);
+  auto first = store.GrantLeases("w1", 1, 0, 100);
+  store.ExpireLeases(200, 0, 3, [](int) { return std::string(); });
+  auto second = store.GrantLeases("w2", 1, 200, 100);
+  ASSERT_EQ(second[0].attempt, 2);
+  auto out = store.Complete({{first[0].lease_id, first[0].task_key, 1, "old", false, 1},
+                             {second[0].lease_id, second[0].task_key, 2, "new", false, 0}},
+                            250, 0);
+  EXPECT_EQ(out[0], CompletionOutcome::kFenced);
+  EXPECT_EQ(out[1], CompletionOutcome::kAccepted);
+  EXPECT_EQ(store.FindTask(Key(0))->result, "new");
+  EXPECT_EQ(store.CountTasks("job1").fenced_results, 1);
+  EXPECT_TRUE(store.CheckConsistency().empty());
+}
+
+TEST(ClusterStorage, LeasesUnknownToTheWorkerAreReturned) {
+  fs::path dir = FreshDir("store4");
+  JobStore store(dir / "state.db");
+  AddRunningJob(store, 3);
+  auto g = store.GrantLeases("w1", 3, 0, 1000);
+  EXPECT_EQ(store.ReturnUnknownLeases("w1", {g[1].lease_id}), 2);
+  EXPECT_EQ(store.CountTasks("job1").queued, 2);
+  EXPECT_EQ(store.CountTasks("job1").lease_expiries, 0);
+  auto revoked = store.ExtendLeases("w1", {g[0].lease_id, g[1].lease_id}, 5000);
+  ASSERT_EQ(revoked.size(), 1u);
+  EXPECT_EQ(revoked[0], g[0].lease_id);
+  EXPECT_TRUE(store.CheckConsistency().empty());
+}
+
+TEST(ClusterStorage, CancelledJobsAreNotLeased) {
+  fs::path dir = FreshDir("store5");
+  JobStore store(dir / "state.db");
+  AddRunningJob(store, 2);
+  store.SetJobState("job1", JobState::kCancelled, "", 5);
+  EXPECT_TRUE(store.GrantLeases("w1", 2, 0, 1000).empty());
+}
+
+TEST(ClusterStorage, UnwritableDatabaseIsAOneLineResourceError) {
+  try {
+    JobStore store("/proc/fabatlas/state.db");
+    FAIL() << "expected ResourceError";
+  } catch (const fabatlas::ResourceError& e) {
+    std::string what = e.what();
+    EXPECT_NE(what.find("/proc/fabatlas/state.db"), std::string::npos) << what;
+    EXPECT_EQ(what.find('\n'), std::string::npos);
+  }
+}
+
+TEST(ClusterStorage, BlobsAreContentAddressedAndResumable) {
+  fs::path dir = FreshDir("blobs");
+  BlobStore blobs(dir);
+  std::string data(3 * 1000 + 7, 'x');
+  for (std::size_t i = 0; i < data.size(); ++i) data[i] = static_cast<char>(i * 31 + 7);
+  std::string digest = fabatlas::Sha256Hex(data);
+  EXPECT_EQ(blobs.Append(digest, 0, data.substr(0, 1000)), 1000);
+  // Interrupted upload: the store reports where to resume.
+  BlobStore reopened(dir);
+  EXPECT_EQ(reopened.CommittedSize(digest), 1000);
+  EXPECT_FALSE(reopened.Contains(digest));
+  EXPECT_THROW(reopened.Append(digest, 2000, data.substr(2000)), fabatlas::InputError);
+  EXPECT_EQ(reopened.Append(digest, 0, data.substr(0, 1000)), 1000);  // repeated chunk ignored
+  EXPECT_EQ(reopened.Append(digest, 1000, data.substr(1000)), static_cast<std::int64_t>(data.size()));
+  reopened.Finish(digest);
+  EXPECT_TRUE(reopened.Contains(digest));
+  EXPECT_TRUE(reopened.Verify(digest));
+  EXPECT_EQ(reopened.Read(digest), data);
+  EXPECT_EQ(reopened.Read(digest, 3000, 5), data.substr(3000, 5));
+  EXPECT_EQ(reopened.List(), std::vector<std::string>{digest});
+  EXPECT_EQ(reopened.Put(data), digest);
+}
+
+TEST(ClusterStorage, CorruptUploadIsRejectedAndCorruptBlobFailsVerify) {
+  fs::path dir = FreshDir("blobs2");
+  BlobStore blobs(dir);
+  std::string digest = fabatlas::Sha256Hex("hello");
+  blobs.Append(digest, 0, "jello");
+  EXPECT_THROW(blobs.Finish(digest), fabatlas::InputError);
+  EXPECT_FALSE(blobs.Contains(digest));
+  EXPECT_EQ(blobs.CommittedSize(digest), 0);  // partial discarded
+  EXPECT_EQ(blobs.Put("hello"), digest);
+  std::ofstream(blobs.PathOf(digest), std::ios::trunc) << "hellO";
+  EXPECT_FALSE(blobs.Verify(digest));
+  EXPECT_THROW(blobs.Append("not-a-digest", 0, "x"), fabatlas::InputError);
+}
