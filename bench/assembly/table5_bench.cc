@@ -1,0 +1,62 @@
+// Full-solve time of each seed 000 Table 5 example (pre-checks + two-step
+// solve), median of N runs, side by side with the published Python times
+// (data/fabhacks/EXAMPLES.md). Usage:
+//   assembly_table5_bench [--runs N] [--configs DIR]
+#include <algorithm>
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+#include <vector>
+
+#include "fabatlas/assembly/program.h"
+#include "fabatlas/assembly/solve.h"
+#include "fabatlas/error.h"
+
+using namespace fabatlas::assembly;
+
+int main(int argc, char** argv) {
+  int runs = 5;
+  std::string dir = "configs/assemblies";
+  for (int i = 1; i + 1 < argc; i += 2) {
+    if (std::string(argv[i]) == "--runs") runs = std::atoi(argv[i + 1]);
+    if (std::string(argv[i]) == "--configs") dir = argv[i + 1];
+  }
+  struct Example {
+    const char* file;
+    const char* label;
+    double published_s;
+  };
+  const std::vector<Example> examples = {
+      {"demo", "demo", 10.0},          {"toothbrush_holder", "toothbrush", 15.6},
+      {"charger_holder", "charger", 2.0}, {"soap_bottle_holder", "soap bottle", 26.9},
+      {"mug_hanger", "mug hanger", 5.2}, {"bird_feeder", "bird feeder", 45.7},
+      {"paper_towel_holder", "paper towel", 20.5}, {"diaper_caddy", "diaper caddy", 50.8},
+      {"bathroom_basket", "bathroom basket", 28.2}, {"clip_lights_1", "clip lights 1", 30.8},
+      {"clip_lights_2", "clip lights 2", 28.3}, {"clip_lights_3", "clip lights 3", 19.2},
+      {"clip_lights_4", "clip lights 4", 18.7}};
+  std::printf("| example | feasible | stable | target err step1 (mm) | final (mm, deg) | starts | median solve (s) | published (s) | speed-up |\n");
+  std::printf("|---|---|---|---|---|---|---|---|---|\n");
+  try {
+    for (const auto& ex : examples) {
+      const Program prog = LoadProgram(dir + "/" + ex.file + ".yaml");
+      std::vector<double> t;
+      SolveSummary s;
+      for (int r = 0; r < runs; ++r) {
+        s = SolveAssembly(prog);
+        t.push_back(s.seconds);
+      }
+      std::sort(t.begin(), t.end());
+      const double med = t[t.size() / 2];
+      std::printf("| %s | %s | %s | %.2f | %.2f, %.1f%s | %d | %.4f | %.1f | %.0fx |\n", ex.label,
+                  s.feasible ? "yes" : "NO", s.stable ? "yes" : "no", s.step1_target_error_mm,
+                  s.final_target_error_mm, s.final_target_error_deg, prog.target_match_rotation ? "" : " (pos only)",
+                  s.starts_tried, med, ex.published_s, ex.published_s / med);
+      for (const auto& m : s.messages) std::printf("    note: %s\n", m.c_str());
+      for (const auto& f : s.falls_apart) std::printf("    falls apart: %s\n", f.c_str());
+    }
+  } catch (const fabatlas::InputError& e) {
+    std::fprintf(stderr, "%s\n", e.what());
+    return fabatlas::kExitBadInput;
+  }
+  return 0;
+}

@@ -1,0 +1,78 @@
+// fabatlas/assembly/solve.h — the two-step FabHacks solve (seed 000, 4.3.2–4.3.3).
+//
+// Unknowns: a 6-DoF pose per part (translation mm + rotation) and the
+// connection parameters of both primitives of every connect (bounded as in
+// Primitive::Params()). A connection holds when P_a·M_a(s_a)·A = P_b·M_b(s_b);
+// its residual is the position difference (mm) and `rotation_scale_mm` × the
+// rotation-matrix difference.
+//  0. Feasibility (cycle closure, 4.3.2): minimise C = Σ‖g_j‖² from a
+//     deterministic quasi-random grid of starts (Halton points over the
+//     parameter box; start 0 = box centre), poses initialised by forward
+//     kinematics along a spanning tree so tree connections hold exactly;
+//     stall detection aborts a start whose log-cost stops decreasing.
+//     Feasible when C < feasibility_tolerance.
+//  1. User objective (4.3.3 step 1): minimise ‖target pose − end_with frame‖²
+//     + σ·(C + C_m), σ from penalty_start doubling up to penalty_doublings
+//     times until C < feasibility_tolerance. C_m: multi-connection spacing.
+//  2. Relaxation under gravity (4.3.3 step 2): minimise Σ m_i g z_i +
+//     σ_r Σ‖g_j‖² over all poses and parameters (clip parameters and is_fixed
+//     connections held), mass = mesh volume × 1 g/cm³, g = 9.8 m/s² along −z.
+//     Then every BOUNDED_AND_OPEN parameter pinned at a bound whose energy
+//     gradient points out of its interval is reported as falling apart.
+// Single-threaded (Ceres with one thread); deterministic.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <Eigen/Geometry>
+
+#include "fabatlas/assembly/program.h"
+
+namespace fabatlas::assembly {
+
+struct SolveOptions {
+  int restarts = 16;                    // starts of the feasibility solve (seed 000 uses T = 16)
+  double feasibility_tolerance = 1e-6;  // C threshold, mm² (seed 000: 1e-6)
+  double penalty_start = 100;           // σ of step 1 (seed 000: 100, doubling)
+  int penalty_doublings = 5;
+  double relaxation_penalty = 1e4;      // σ_r of step 2 (EXAMPLES.md: 1e4)
+  double gravity = 9.8;                 // m/s²
+  double rotation_scale_mm = 20;        // mm per unit of rotation-matrix difference
+  int max_iterations = 200;             // Ceres iterations per solve
+  int stall_window = 10;                // iterations in the stall regression
+  double stall_slope = 1e-3;            // abort if log10(C) falls slower than this per iteration
+  bool relax = true;                    // run step 2
+  // Step 1 stops trying further feasible starts once the target is within:
+  double early_exit_mm = 1.0;
+  // ... and after this many feasible starts have run step 1.
+  int objective_starts = 4;
+  // "stable": nothing falls apart and relaxation moves the target by at most
+  double stable_displacement_mm = 25;
+  double stable_rotation_deg = 10;
+  // "target reached": final (relaxed) target pose within
+  double target_tolerance_mm = 25;
+  double target_tolerance_deg = 10;
+};
+
+struct SolveSummary {
+  bool prechecks_passed = true;
+  bool feasible = false;       // cycles close: C < feasibility_tolerance
+  bool stable = false;         // nothing falls apart, relaxation moves the target little
+  bool target_reached = false; // relaxed target within target_tolerance
+  double constraint_residual = 0;  // C after step 1 (mm²)
+  double step1_target_error_mm = 0, step1_target_error_deg = 0;
+  double final_target_error_mm = 0, final_target_error_deg = 0;  // after relaxation
+  double relax_displacement_mm = 0, relax_rotation_deg = 0;      // target motion in step 2
+  std::vector<std::string> falls_apart;  // "hook1.hook.theta at max" ...
+  std::vector<std::string> messages;     // pre-check issues and solver notes
+  int starts_tried = 0;
+  double seconds = 0;  // wall time of the whole solve
+  std::vector<Eigen::Isometry3d> step1_poses, poses;  // per instance (mm)
+  std::vector<std::vector<double>> params;             // per connection: s_a then s_b
+};
+
+// Pre-checks, then the two-step solve. Never throws for a loaded Program.
+SolveSummary SolveAssembly(const Program& program, const SolveOptions& options = {});
+
+}  // namespace fabatlas::assembly

@@ -1,0 +1,482 @@
+#include "fabatlas/assembly/solve.h"
+
+#include <array>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <cmath>
+#include <deque>
+#include <memory>
+#include <queue>
+
+#include <ceres/ceres.h>
+#include <ceres/rotation.h>
+
+#include "connector_frames.h"
+#include "fabatlas/assembly/precheck.h"
+
+namespace fabatlas::assembly {
+namespace {
+
+using internal::Mat4;
+
+constexpr double kEnergyDatum = 1e5;  // mm; see EnergyResidual
+
+template <typename T>
+Mat4<T> RigidInverse(const Mat4<T>& m) {
+  Mat4<T> r = Mat4<T>::Identity();
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) r(i, j) = m(j, i);
+  for (int i = 0; i < 3; ++i) r(i, 3) = -(r(i, 0) * m(0, 3) + r(i, 1) * m(1, 3) + r(i, 2) * m(2, 3));
+  return r;
+}
+
+enum class Phase { kFeasibility, kObjective, kRelaxation };
+
+// Reduced coordinates (seed 000, 4.3: "a reduced representation of a kinematic
+// rigid body chain"): the environment pose is fixed and every other part pose
+// follows from the connection parameters by forward kinematics along a
+// spanning tree, P_b = P_a·M_a(s_a)·A·M_b(s_b)⁻¹. Tree connections therefore
+// hold exactly; each non-tree connection closes a cycle and contributes the
+// 12 residuals of P_a·M_a·A − P_b·M_b (position mm, rotation × scale).
+struct Kinematics {
+  const Program* prog;
+  std::vector<std::pair<int, int>> tree;  // (connection, child) in BFS order
+  std::vector<int> closing;               // non-tree connections
+  std::vector<Eigen::Matrix4d> base_a, base_b, align;
+  Eigen::Matrix4d env;
+
+  template <typename T>
+  void Frames(int e, const T* sa, const T* sb, Mat4<T>& ma, Mat4<T>& mb) const {
+    const auto& c = prog->connections[e];
+    ma = base_a[e].template cast<T>() * internal::SymmetricConnectorFrame<T>(prog->PrimitiveA(c), sa);
+    mb = base_b[e].template cast<T>() * internal::SymmetricConnectorFrame<T>(prog->PrimitiveB(c), sb);
+  }
+
+  // params[2e] = s_a of connection e, params[2e+1] = s_b.
+  template <typename T>
+  std::vector<Mat4<T>> Poses(T const* const* params) const {
+    std::vector<Mat4<T>> p(prog->instances.size(), Mat4<T>::Identity());
+    p[0] = env.template cast<T>();
+    for (const auto& [e, child] : tree) {
+      const auto& c = prog->connections[e];
+      Mat4<T> ma, mb;
+      Frames<T>(e, params[2 * e], params[2 * e + 1], ma, mb);
+      if (child == c.part_b)
+        p[child] = p[c.part_a] * ma * align[e].template cast<T>() * RigidInverse<T>(mb);
+      else
+        p[child] = p[c.part_b] * mb * RigidInverse<T>(Mat4<T>(align[e].template cast<T>())) * RigidInverse<T>(ma);
+    }
+    return p;
+  }
+};
+
+struct SpacingTerm {
+  int block1, block2;  // parameter block indices (2e + side)
+  double length, half_widths;
+};
+
+struct EnergyTerm {
+  int part;
+  Eigen::Vector3d com;
+  double scale;  // sqrt(m g / (1000 D))
+};
+
+// All residuals of one phase as one cost over all parameter blocks.
+struct AssemblyResidual {
+  const Kinematics* kin;
+  Phase phase;
+  double closure_weight, rot_scale, target_rot_scale;
+  std::vector<SpacingTerm> spacing;
+  std::vector<EnergyTerm> energy;
+  Eigen::Matrix3d target_r;
+  Eigen::Vector3d target_t;
+
+  int NumResiduals() const {
+    return 12 * static_cast<int>(kin->closing.size()) + static_cast<int>(spacing.size()) +
+           (phase == Phase::kObjective ? 12 : 0) + (phase == Phase::kRelaxation ? static_cast<int>(energy.size()) : 0);
+  }
+
+  template <typename T>
+  bool operator()(T const* const* params, T* r) const {
+    const std::vector<Mat4<T>> p = kin->Poses<T>(params);
+    int k = 0;
+    for (int e : kin->closing) {
+      const auto& c = kin->prog->connections[e];
+      Mat4<T> ma, mb;
+      kin->Frames<T>(e, params[2 * e], params[2 * e + 1], ma, mb);
+      const Mat4<T> fa = p[c.part_a] * ma * kin->align[e].template cast<T>();
+      const Mat4<T> fb = p[c.part_b] * mb;
+      for (int i = 0; i < 3; ++i) r[k++] = T(closure_weight) * (fa(i, 3) - fb(i, 3));
+      for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) r[k++] = T(closure_weight * rot_scale) * (fa(i, j) - fb(i, j));
+    }
+    // Multi-connection spacing (seed 000, 4.3.1): f = |t1 − t2|·L − (w1 + w2)/2, f² if f < 0.
+    for (const auto& s : spacing) {
+      T d = params[s.block1][0] - params[s.block2][0];
+      if (d < T(0)) d = -d;
+      const T f = d * T(s.length) - T(s.half_widths);
+      r[k++] = f < T(0) ? T(closure_weight) * f : T(0);
+    }
+    if (phase == Phase::kObjective) {
+      const Mat4<T>& q = p[kin->prog->target];
+      for (int i = 0; i < 3; ++i) r[k++] = q(i, 3) - T(target_t[i]);
+      for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) r[k++] = T(target_rot_scale) * (q(i, j) - T(target_r(i, j)));
+    }
+    if (phase == Phase::kRelaxation) {
+      // Potential m·g·z (J, z in mm/1000) as ½r² = m g (z + D)² / (2000 D):
+      // gradient m g (z + D)/(1000 D) = m g/1000 up to a relative |z|/D < 1e-2.
+      for (const auto& en : energy) {
+        const Mat4<T>& q = p[en.part];
+        T z = q(2, 3);
+        for (int i = 0; i < 3; ++i) z += q(2, i) * T(en.com[i]);
+        r[k++] = T(en.scale) * (z + T(kEnergyDatum));
+      }
+    }
+    return true;
+  }
+};
+
+// Stall prevention (seed 000, 4.3.2): linear regression of log10(cost) over a
+// sliding window; abort when it decreases slower than `slope` per iteration.
+class StallCallback : public ceres::IterationCallback {
+ public:
+  StallCallback(int window, double slope, double floor) : window_(window), slope_(slope), floor_(floor) {}
+  ceres::CallbackReturnType operator()(const ceres::IterationSummary& s) override {
+    const double c = 2 * s.cost;
+    if (c < floor_) return ceres::SOLVER_TERMINATE_SUCCESSFULLY;
+    logs_.push_back(std::log10(std::max(c, 1e-300)));
+    if (static_cast<int>(logs_.size()) > window_) logs_.pop_front();
+    if (static_cast<int>(logs_.size()) < window_) return ceres::SOLVER_CONTINUE;
+    double mx = 0, my = 0;
+    const int n = static_cast<int>(logs_.size());
+    for (int i = 0; i < n; ++i) mx += i, my += logs_[i];
+    mx /= n;
+    my /= n;
+    double sxy = 0, sxx = 0;
+    for (int i = 0; i < n; ++i) sxy += (i - mx) * (logs_[i] - my), sxx += (i - mx) * (i - mx);
+    return sxy / sxx > -slope_ ? ceres::SOLVER_ABORT : ceres::SOLVER_CONTINUE;
+  }
+
+ private:
+  int window_;
+  double slope_, floor_;
+  std::deque<double> logs_;
+};
+
+using Block = std::array<double, internal::kParamBlock>;
+
+double Halton(int index, int base) {
+  double f = 1, r = 0;
+  while (index > 0) {
+    f /= base;
+    r += f * (index % base);
+    index /= base;
+  }
+  return r;
+}
+
+class Solver {
+ public:
+  Solver(const Program& prog, const SolveOptions& opt) : prog_(prog), opt_(opt) {
+    const int n = static_cast<int>(prog.instances.size());
+    const int m = static_cast<int>(prog.connections.size());
+    blocks_.assign(2 * m, Block{0, 0, 0, 0});
+    kin_.prog = &prog;
+    kin_.env = ToIsometry(prog.environment_frame).matrix();
+    for (const auto& c : prog.connections) {
+      kin_.base_a.push_back(ToIsometry(prog.PrimitiveA(c).frame).matrix());
+      kin_.base_b.push_back(ToIsometry(prog.PrimitiveB(c).frame).matrix());
+      Eigen::Matrix4d a = Eigen::Matrix4d::Identity();
+      a.topLeftCorner<3, 3>() = AlignmentOffset(prog.PrimitiveA(c), prog.PrimitiveB(c), c.flip);
+      kin_.align.push_back(a);
+    }
+    std::vector<std::vector<int>> adj(n);
+    for (int e = 0; e < m; ++e) {
+      adj[prog.connections[e].part_a].push_back(e);
+      adj[prog.connections[e].part_b].push_back(e);
+    }
+    std::vector<bool> seen(n, false), used(m, false);
+    seen[0] = true;
+    std::queue<int> q;
+    q.push(0);
+    while (!q.empty()) {
+      const int u = q.front();
+      q.pop();
+      for (int e : adj[u]) {
+        const auto& c = prog.connections[e];
+        const int v = c.part_a == u ? c.part_b : c.part_a;
+        if (seen[v]) continue;
+        seen[v] = true;
+        used[e] = true;
+        kin_.tree.push_back({e, v});
+        q.push(v);
+      }
+    }
+    for (int e = 0; e < m; ++e)
+      if (!used[e]) kin_.closing.push_back(e);
+    // Spacing terms for connections sharing one rod/tube/edge.
+    for (int b1 = 0; b1 < 2 * m; ++b1)
+      for (int b2 = b1 + 1; b2 < 2 * m; ++b2) {
+        const auto& c1 = prog.connections[b1 / 2];
+        const auto& c2 = prog.connections[b2 / 2];
+        if (b1 / 2 == b2 / 2) continue;
+        const int i1 = b1 % 2 == 0 ? c1.part_a : c1.part_b, i2 = b2 % 2 == 0 ? c2.part_a : c2.part_b;
+        const std::string& n1 = b1 % 2 == 0 ? c1.primitive_a : c1.primitive_b;
+        const std::string& n2 = b2 % 2 == 0 ? c2.primitive_a : c2.primitive_b;
+        if (i1 != i2 || n1 != n2) continue;
+        const Primitive& host = *prog.PartOf(i1).Find(n1);
+        if (host.type != PrimitiveType::kRod && host.type != PrimitiveType::kTube && host.type != PrimitiveType::kEdge)
+          continue;
+        const Primitive& g1 = b1 % 2 == 0 ? prog.PrimitiveB(c1) : prog.PrimitiveA(c1);
+        const Primitive& g2 = b2 % 2 == 0 ? prog.PrimitiveB(c2) : prog.PrimitiveA(c2);
+        spacing_.push_back(
+            {b1, b2, host.Shape("length"), 0.5 * (g1.OccupiedSize(host.type) + g2.OccupiedSize(host.type))});
+      }
+    for (int i = 1; i < n; ++i) {
+      const Part& part = prog.PartOf(i);
+      if (part.mass <= 0) continue;
+      const double mass_kg = part.mass * 1e-6;  // mm³ × 1 g/cm³
+      energy_.push_back({i, part.centre_of_mass, std::sqrt(mass_kg * opt.gravity / (1000.0 * kEnergyDatum))});
+    }
+  }
+
+  bool HasCycles() const { return !kin_.closing.empty() || !spacing_.empty(); }
+
+  // Connection parameter values of start k (k = 0: box centre; else Halton).
+  void SetStart(int k) {
+    int dim = 0;
+    static const int kPrimes[] = {2, 3, 5, 7, 11, 13, 17, 19, 23, 29, 31, 37, 41, 43, 47, 53, 59, 61, 67, 71, 73,
+                                  79, 83, 89, 97, 101, 103, 107, 109, 113, 127, 131, 137, 139, 149, 151, 157, 163};
+    const int np = sizeof(kPrimes) / sizeof(int);
+    for (size_t b = 0; b < blocks_.size(); ++b) {
+      const Primitive& p = Prim(static_cast<int>(b));
+      const std::vector<double>& fixed = Fixed(static_cast<int>(b));
+      Block& s = blocks_[b];
+      const auto specs = p.Params();
+      for (size_t i = 0; i < specs.size(); ++i) {
+        if (!fixed.empty()) {
+          s[i] = fixed[i];
+          continue;
+        }
+        const double u = k == 0 ? (specs[i].kind == ParamKind::kUnbounded ? 0.0 : 0.5) : Halton(k, kPrimes[dim++ % np]);
+        s[i] = specs[i].min + u * (specs[i].max - specs[i].min);
+      }
+      if (internal::SymmetryAxis(p.type) >= 0) s[3] = k == 0 ? 0.0 : 360.0 * Halton(k, kPrimes[dim++ % np]);
+    }
+  }
+
+  ceres::Solver::Summary Run(Phase phase, double sigma, std::unique_ptr<ceres::Problem>* keep = nullptr) {
+    auto problem = std::make_unique<ceres::Problem>();
+    Build(*problem, phase, sigma);
+    ceres::Solver::Options o;
+    o.linear_solver_type = ceres::DENSE_QR;
+    o.max_num_iterations = opt_.max_iterations;
+    o.num_threads = 1;
+    o.logging_type = ceres::SILENT;
+    o.function_tolerance = 1e-12;
+    o.gradient_tolerance = 1e-12;
+    o.parameter_tolerance = 1e-10;
+    StallCallback stall(opt_.stall_window, opt_.stall_slope, opt_.feasibility_tolerance);
+    if (phase == Phase::kFeasibility) o.callbacks.push_back(&stall);
+    ceres::Solver::Summary s;
+    ceres::Solve(o, problem.get(), &s);
+    if (std::getenv("FABATLAS_ASSEMBLY_DEBUG"))
+      std::fprintf(stderr, "phase %d sigma %g: %s\n", static_cast<int>(phase), sigma, s.BriefReport().c_str());
+    if (keep) *keep = std::move(problem);
+    return s;
+  }
+
+  // C = Σ‖g_j‖² + C_m at the current parameters (unit weights).
+  double ConstraintResidual() {
+    if (!HasCycles()) return 0;
+    AssemblyResidual f = Residual(Phase::kFeasibility, 1.0);
+    std::vector<double> r(f.NumResiduals());
+    f(Pointers().data(), r.data());
+    double c = 0;
+    for (double x : r) c += x * x;
+    return c;
+  }
+
+  std::vector<Eigen::Isometry3d> Poses() const {
+    std::vector<const double*> ptr;
+    for (const auto& b : blocks_) ptr.push_back(b.data());
+    const auto p = kin_.Poses<double>(ptr.data());
+    std::vector<Eigen::Isometry3d> out;
+    for (const auto& m : p) {
+      Eigen::Isometry3d t;
+      t.matrix() = m;
+      out.push_back(t);
+    }
+    return out;
+  }
+
+  // BOUNDED_AND_OPEN parameters at a bound with outward energy gradient
+  // (seed 000, 4.3.3).
+  std::vector<std::string> FallsApart(ceres::Problem& problem) {
+    std::vector<std::string> out;
+    ceres::Problem::EvaluateOptions eo;
+    for (auto& b : blocks_) eo.parameter_blocks.push_back(b.data());
+    double cost = 0;
+    std::vector<double> grad;
+    problem.Evaluate(eo, &cost, nullptr, &grad, nullptr);
+    for (size_t b = 0; b < blocks_.size(); ++b) {
+      if (problem.IsParameterBlockConstant(blocks_[b].data())) continue;
+      const auto& c = prog_.connections[b / 2];
+      const std::string where = b % 2 == 0 ? prog_.instances[c.part_a].name + "." + c.primitive_a
+                                           : prog_.instances[c.part_b].name + "." + c.primitive_b;
+      const auto specs = Prim(static_cast<int>(b)).Params();
+      for (size_t i = 0; i < specs.size(); ++i) {
+        if (specs[i].kind != ParamKind::kBoundedAndOpen) continue;
+        const double x = blocks_[b][i], g = grad[internal::kParamBlock * b + i];
+        const double eps = 1e-6 * (specs[i].max - specs[i].min);
+        if (x <= specs[i].min + eps && g > 1e-9) out.push_back(where + "." + specs[i].name + " at min");
+        else if (x >= specs[i].max - eps && g < -1e-9) out.push_back(where + "." + specs[i].name + " at max");
+      }
+    }
+    return out;
+  }
+
+  std::vector<Block>& blocks() { return blocks_; }
+
+ private:
+  const Primitive& Prim(int b) const {
+    const auto& c = prog_.connections[b / 2];
+    return b % 2 == 0 ? prog_.PrimitiveA(c) : prog_.PrimitiveB(c);
+  }
+  const std::vector<double>& Fixed(int b) const {
+    const auto& c = prog_.connections[b / 2];
+    return b % 2 == 0 ? c.fixed_a : c.fixed_b;
+  }
+  std::vector<double*> Pointers() {
+    std::vector<double*> ptr;
+    for (auto& b : blocks_) ptr.push_back(b.data());
+    return ptr;
+  }
+
+  AssemblyResidual Residual(Phase phase, double sigma) const {
+    AssemblyResidual f;
+    f.kin = &kin_;
+    f.phase = phase;
+    f.closure_weight = phase == Phase::kFeasibility ? 1.0
+                       : phase == Phase::kObjective ? std::sqrt(sigma)
+                                                    : std::sqrt(2 * sigma);
+    f.rot_scale = opt_.rotation_scale_mm;
+    f.target_rot_scale = prog_.target_match_rotation ? opt_.rotation_scale_mm : 0.0;
+    f.spacing = spacing_;
+    f.energy = energy_;
+    f.target_r = EulerToRotation(prog_.target_frame.euler_deg);
+    f.target_t = prog_.target_frame.position;
+    return f;
+  }
+
+  void Build(ceres::Problem& problem, Phase phase, double sigma) {
+    auto* f = new ceres::DynamicAutoDiffCostFunction<AssemblyResidual, internal::kParamBlock>(
+        new AssemblyResidual(Residual(phase, sigma)));
+    for (size_t b = 0; b < blocks_.size(); ++b) f->AddParameterBlock(internal::kParamBlock);
+    f->SetNumResiduals(Residual(phase, sigma).NumResiduals());
+    problem.AddResidualBlock(f, nullptr, Pointers());
+    for (size_t b = 0; b < blocks_.size(); ++b) {
+      const auto& c = prog_.connections[b / 2];
+      const Primitive& p = Prim(static_cast<int>(b));
+      double* s = blocks_[b].data();
+      const auto specs = p.Params();
+      for (size_t i = 0; i < specs.size(); ++i)
+        if (specs[i].kind != ParamKind::kUnbounded) {
+          problem.SetParameterLowerBound(s, static_cast<int>(i), specs[i].min);
+          problem.SetParameterUpperBound(s, static_cast<int>(i), specs[i].max);
+        }
+      const bool hold = !Fixed(static_cast<int>(b)).empty() ||
+                        (phase == Phase::kRelaxation && (c.is_fixed || p.type == PrimitiveType::kClip));
+      if (hold) problem.SetParameterBlockConstant(s);
+    }
+  }
+
+  const Program& prog_;
+  const SolveOptions& opt_;
+  Kinematics kin_;
+  std::vector<Block> blocks_;
+  std::vector<SpacingTerm> spacing_;
+  std::vector<EnergyTerm> energy_;
+};
+
+void TargetErrors(const Program& prog, const Eigen::Isometry3d& pose, double& mm, double& deg) {
+  mm = (pose.translation() - prog.target_frame.position).norm();
+  deg = RotationAngleDeg(pose.linear(), EulerToRotation(prog.target_frame.euler_deg));
+}
+
+}  // namespace
+
+SolveSummary SolveAssembly(const Program& prog, const SolveOptions& opt) {
+  const auto t0 = std::chrono::steady_clock::now();
+  SolveSummary out;
+  const PrecheckSummary pre = Precheck(prog);
+  for (const auto& i : pre.issues) out.messages.push_back(i.message);
+  out.prechecks_passed = pre.ok;
+  auto finish = [&]() {
+    out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    return out;
+  };
+  if (!pre.ok) return finish();
+
+  Solver solver(prog, opt);
+  std::vector<Block> best;
+  double best_obj = std::numeric_limits<double>::infinity();
+  int objective_starts = 0;
+  for (int k = 0; k < opt.restarts; ++k) {
+    ++out.starts_tried;
+    solver.SetStart(k);
+    if (solver.ConstraintResidual() >= opt.feasibility_tolerance) solver.Run(Phase::kFeasibility, 1.0);
+    if (solver.ConstraintResidual() >= opt.feasibility_tolerance) continue;
+    out.feasible = true;
+    // Step 1: user objective with penalty σ doubling (seed 000, 4.3.3).
+    double sigma = opt.penalty_start;
+    for (int d = 0; d <= (solver.HasCycles() ? opt.penalty_doublings : 0); ++d, sigma *= 2) {
+      solver.Run(Phase::kObjective, sigma);
+      if (solver.ConstraintResidual() < opt.feasibility_tolerance) break;
+    }
+    double mm, deg;
+    TargetErrors(prog, solver.Poses()[prog.target], mm, deg);
+    if (!prog.target_match_rotation) deg = 0;
+    const double obj = mm * mm + std::pow(opt.rotation_scale_mm * deg * M_PI / 180, 2);
+    if (obj < best_obj) {
+      best_obj = obj;
+      best = solver.blocks();
+    }
+    if (mm < opt.early_exit_mm && deg < 1.0) break;
+    if (++objective_starts >= opt.objective_starts) break;
+  }
+  if (!out.feasible) {
+    out.messages.push_back(prog.file + ": cycles do not close after " + std::to_string(out.starts_tried) + " starts");
+    return finish();
+  }
+  solver.blocks() = best;
+  out.constraint_residual = solver.ConstraintResidual();
+  out.step1_poses = solver.Poses();
+  TargetErrors(prog, out.step1_poses[prog.target], out.step1_target_error_mm, out.step1_target_error_deg);
+  if (opt.relax) {
+    std::unique_ptr<ceres::Problem> problem;
+    solver.Run(Phase::kRelaxation, opt.relaxation_penalty, &problem);
+    out.falls_apart = solver.FallsApart(*problem);
+  }
+  out.poses = solver.Poses();
+  for (size_t e = 0; e < prog.connections.size(); ++e) {
+    std::vector<double> s;
+    const auto& c = prog.connections[e];
+    for (size_t i = 0; i < prog.PrimitiveA(c).Params().size(); ++i) s.push_back(solver.blocks()[2 * e][i]);
+    for (size_t i = 0; i < prog.PrimitiveB(c).Params().size(); ++i) s.push_back(solver.blocks()[2 * e + 1][i]);
+    out.params.push_back(s);
+  }
+  TargetErrors(prog, out.poses[prog.target], out.final_target_error_mm, out.final_target_error_deg);
+  out.relax_displacement_mm =
+      (out.poses[prog.target].translation() - out.step1_poses[prog.target].translation()).norm();
+  out.relax_rotation_deg = RotationAngleDeg(out.poses[prog.target].linear(), out.step1_poses[prog.target].linear());
+  out.stable = out.falls_apart.empty() && out.relax_displacement_mm <= opt.stable_displacement_mm &&
+               out.relax_rotation_deg <= opt.stable_rotation_deg;
+  out.target_reached = out.final_target_error_mm <= opt.target_tolerance_mm &&
+                       (!prog.target_match_rotation || out.final_target_error_deg <= opt.target_tolerance_deg);
+  return finish();
+}
+
+}  // namespace fabatlas::assembly
