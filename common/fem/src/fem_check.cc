@@ -72,6 +72,8 @@ FemCheckResult RunFemCheck(const VoxelSolid& solid, const FemLoadCase& load,
   r.max_strain = s.max_principal_strain;
   r.num_elements = static_cast<int>(mesh.elements.size());
   r.newton_iterations = s.newton_iterations;
+  r.assembly_seconds = s.assembly_seconds;
+  r.linear_solve_seconds = s.linear_solve_seconds;
   if (!s.converged) {
     r.reason = "static solve did not converge: " + s.message;
   } else if (s.max_displacement > options.max_displacement) {
