@@ -10,6 +10,7 @@ namespace fabatlas::assembly {
 
 std::string DefaultMeshDir() {
   if (const char* s = std::getenv("FABATLAS_SHARED_DIR")) return std::string(s) + "/data/fabhacks/meshes";
+  if (const char* s = std::getenv("FABATLAS_SOURCE_DIR")) return std::string(s) + "/../shared/data/fabhacks/meshes";
   return "../shared/data/fabhacks/meshes";
 }
 

@@ -260,7 +260,7 @@ class Solver {
           s[i] = fixed[i];
           continue;
         }
-        const double u = k == 0 ? (specs[i].kind == ParamKind::kUnbounded ? 0.0 : 0.5) : Halton(k, kPrimes[dim++ % np]);
+        const double u = k == 0 ? 0.5 : Halton(k, kPrimes[dim++ % np]);
         s[i] = specs[i].min + u * (specs[i].max - specs[i].min);
       }
       if (internal::SymmetryAxis(p.type) >= 0) s[3] = k == 0 ? 0.0 : 360.0 * Halton(k, kPrimes[dim++ % np]);
@@ -387,8 +387,10 @@ class Solver {
           problem.SetParameterLowerBound(s, static_cast<int>(i), specs[i].min);
           problem.SetParameterUpperBound(s, static_cast<int>(i), specs[i].max);
         }
-      const bool hold = !Fixed(static_cast<int>(b)).empty() ||
-                        (phase == Phase::kRelaxation && (c.is_fixed || p.type == PrimitiveType::kClip));
+      // A clip clamps its partner: both sides of a clip connection are held
+      // during relaxation (EXAMPLES.md), as are is_fixed connections.
+      const bool clip = prog_.PrimitiveA(c).type == PrimitiveType::kClip || prog_.PrimitiveB(c).type == PrimitiveType::kClip;
+      const bool hold = !Fixed(static_cast<int>(b)).empty() || (phase == Phase::kRelaxation && (c.is_fixed || clip));
       if (hold) problem.SetParameterBlockConstant(s);
     }
   }

@@ -58,6 +58,7 @@ Program ParseProgram(const std::string& yaml_text, const std::string& name,
 
 // Default mesh directory: $FABATLAS_SHARED_DIR/data/fabhacks/meshes, else
 // ../shared/data/fabhacks/meshes relative to the working directory.
+// ($FABATLAS_SOURCE_DIR/../shared/... when only the source dir is known.)
 std::string DefaultMeshDir();
 
 }  // namespace fabatlas::assembly

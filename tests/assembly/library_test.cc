@@ -1,0 +1,106 @@
+// Part library: frames, parametrised connector frames (EXAMPLES.md formulas),
+// alignment offsets, mesh mass properties (EXAMPLES.md volumes), YAML errors.
+#include <cmath>
+#include <cstdlib>
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "fabatlas/assembly/mass_properties.h"
+#include "fabatlas/assembly/part_library.h"
+#include "fabatlas/assembly/program.h"
+#include "fabatlas/error.h"
+
+using namespace fabatlas::assembly;
+
+namespace {
+std::string Shared() { return DefaultMeshDir() + "/../../.."; }
+std::string Source() { return std::getenv("FABATLAS_SOURCE_DIR"); }
+
+Primitive Hook(double arc_radius, double arc_angle, double thickness) {
+  Primitive p;
+  p.name = "hook";
+  p.type = PrimitiveType::kHook;
+  p.shape = {{"arc_radius", arc_radius}, {"arc_angle", arc_angle}, {"thickness", thickness}};
+  return p;
+}
+}  // namespace
+
+TEST(AssemblyFrame, EulerIsRzRyRx) {
+  // Rx(90) maps y to z; Rz(90) maps x to y; R = Rz(c)·Ry(b)·Rx(a).
+  EXPECT_TRUE((EulerToRotation({90, 0, 0}) * Eigen::Vector3d::UnitY()).isApprox(Eigen::Vector3d::UnitZ(), 1e-12));
+  EXPECT_TRUE((EulerToRotation({0, 0, 90}) * Eigen::Vector3d::UnitX()).isApprox(Eigen::Vector3d::UnitY(), 1e-12));
+  // Rz(90)·Rx(90) applied to y: Rx sends y to z, Rz keeps z.
+  EXPECT_TRUE((EulerToRotation({90, 0, 90}) * Eigen::Vector3d::UnitY()).isApprox(Eigen::Vector3d::UnitZ(), 1e-12));
+  EXPECT_NEAR(RotationAngleDeg(EulerToRotation({0, 0, 30}), Eigen::Matrix3d::Identity()), 30, 1e-9);
+}
+
+TEST(AssemblyPrimitive, HookFrameFollowsArc) {
+  // r' = arc_radius − thickness = 14; theta = 90° puts the contact at (0, −r', 0)
+  // with R = Rx(−90) (EXAMPLES.md hook parametrisation).
+  const Primitive h = Hook(19, 210, 5);
+  const Eigen::Isometry3d m = ConnectorFrame(h, {90});
+  EXPECT_TRUE(m.translation().isApprox(Eigen::Vector3d(0, -14, 0), 1e-12));
+  EXPECT_TRUE(m.linear().isApprox(EulerToRotation({-90, 0, 0}), 1e-12));
+  EXPECT_TRUE(ConnectorFrame(h, {0}).translation().isApprox(Eigen::Vector3d(0, 0, -14), 1e-12));
+  ASSERT_EQ(h.Params().size(), 1u);
+  EXPECT_EQ(h.Params()[0].max, 210);
+  EXPECT_EQ(h.Params()[0].kind, ParamKind::kBoundedAndOpen);
+}
+
+TEST(AssemblyPrimitive, RodFrameSlidesAlongAxis) {
+  Primitive r;
+  r.type = PrimitiveType::kRod;
+  r.shape = {{"length", 500}, {"radius", 5}};
+  EXPECT_TRUE(ConnectorFrame(r, {1.0, 90}).translation().isApprox(Eigen::Vector3d(0, 5, 250), 1e-12));
+  EXPECT_TRUE(ConnectorFrame(r, {0.0, 90}).translation().isApprox(Eigen::Vector3d(0, 5, -250), 1e-12));
+  r.closed = true;  // closed: sliding off the end is impossible
+  EXPECT_EQ(r.Params()[0].kind, ParamKind::kBoundedAndClamped);
+}
+
+TEST(AssemblyPrimitive, AlignmentOffsetsAndFlip) {
+  Primitive rod, hook = Hook(19, 210, 5), clip, edge;
+  rod.type = PrimitiveType::kRod;
+  clip.type = PrimitiveType::kClip;
+  edge.type = PrimitiveType::kEdge;
+  EXPECT_TRUE(AlignmentOffset(rod, hook, false).isApprox(EulerToRotation({180, 0, 90}), 1e-12));
+  EXPECT_TRUE(AlignmentOffset(rod, hook, true).isApprox(EulerToRotation({180, 0, -90}), 1e-12));
+  EXPECT_TRUE(AlignmentOffset(clip, edge, true).isApprox(EulerToRotation({0, -90, -90}), 1e-12));
+  // Unlisted order uses the inverse of the listed one: P_b·M_b·A_ba = P_a·M_a.
+  EXPECT_TRUE(AlignmentOffset(rod, clip, false).isApprox(EulerToRotation({0, 180, 0}).transpose(), 1e-12));
+  EXPECT_TRUE(CanConnect(PrimitiveType::kHook, PrimitiveType::kRod));
+  EXPECT_FALSE(CanConnect(PrimitiveType::kRod, PrimitiveType::kRod));
+}
+
+TEST(AssemblyMass, MeshVolumesMatchReference) {
+  // EXAMPLES.md part masses (mesh volume, density 1) and centres of mass.
+  const std::string d = Shared() + "/data/fabhacks/meshes/";
+  EXPECT_NEAR(ComputeMassProperties(d + "ringXS.off").volume_mm3, 7054, 0.005 * 7054);
+  EXPECT_NEAR(ComputeMassProperties(d + "ringL.off").volume_mm3, 13409, 0.005 * 13409);
+  const MassProperties he = ComputeMassProperties(d + "hookeyeleft.obj");
+  EXPECT_NEAR(he.volume_mm3, 17222, 0.005 * 17222);
+  EXPECT_NEAR(he.centre_of_mass.z(), -30.1, 0.1);
+  EXPECT_NEAR(ComputeMassProperties(d + "basket.obj").centre_of_mass.z(), 100.5, 0.1);
+  EXPECT_NEAR(ComputeMassProperties(d + "hanger.off").centre_of_mass.z(), -54.4, 0.1);
+  EXPECT_NEAR(ComputeMassProperties(d + "turnbuckle.stl").volume_mm3, 2005, 5);
+  EXPECT_THROW(ComputeMassProperties(d + "no_such_mesh.obj"), fabatlas::InputError);
+}
+
+TEST(AssemblyProgram, ParseErrorsNameFileLineColumn) {
+  const std::string lib = Source() + "/configs/assemblies/parts.yaml";
+  const std::string mesh = Shared() + "/data/fabhacks/meshes";
+  try {
+    ParseProgram("start_with: {name: door, part: DoorRod, frame: [[0,0,0],[0,0,0]]}\n"
+                 "end_with: {name: b, part: SoapBottle, frame: [[0,0,0],[0,0,0]]}\n"
+                 "connect:\n  - {a: b.surface, b: door.pole}\n",
+                 "prog.yaml", lib, mesh);
+    FAIL() << "expected InputError";
+  } catch (const fabatlas::InputError& e) {
+    EXPECT_EQ(std::string(e.what()).rfind("prog.yaml:4:", 0), 0u) << e.what();
+    EXPECT_NE(std::string(e.what()).find("no primitive 'pole'"), std::string::npos) << e.what();
+    EXPECT_EQ(std::string(e.what()).find('\n'), std::string::npos);
+  }
+  EXPECT_THROW(ParseProgram("start_with: [", "bad.yaml", lib, mesh), fabatlas::InputError);
+  EXPECT_THROW(ParseProgram("start_with: {name: d, part: Nope, frame: [0,0,0,0,0,0]}\n", "p.yaml", lib, mesh),
+               fabatlas::InputError);
+}
