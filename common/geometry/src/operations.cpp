@@ -1,9 +1,11 @@
 // operations.cpp — transforms, CSG, offsets, arrays and the measures built on
 // them (ΔG of seed 001 Eq. 2, morphological opening).
 #include <openvdb/tools/Composite.h>
-#include <openvdb/tools/FastSweeping.h>
 #include <openvdb/tools/LevelSetRebuild.h>
+#include <openvdb/tools/Interpolation.h>
+#include <openvdb/tools/Morphology.h>
 #include <openvdb/tools/SignedFloodFill.h>
+#include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <cmath>
@@ -15,6 +17,7 @@
 namespace fabatlas::geometry {
 
 using openvdb::FloatGrid;
+using LeafT = openvdb::FloatTree::LeafNodeType;
 
 namespace {
 
@@ -33,7 +36,7 @@ double ActiveVoxels(const Solid& s) { return static_cast<double>(s.impl()->grid-
 Solid Rebuild(const FloatGrid& src, const GridSpec& spec) {
   auto xform = detail::CanonicalTransform(spec.voxel_size);
   const float hw = static_cast<float>(spec.half_width_voxels);
-  FloatGrid::Ptr out = openvdb::tools::levelSetRebuild(src, 0.0f, hw, hw, xform.get());
+  FloatGrid::Ptr out = openvdb::tools::levelSetRebuild(src, static_cast<float>(kMeshIso * src.voxelSize()[0]), hw, hw, xform.get());
   return detail::MakeSolid(out, spec);
 }
 
@@ -47,14 +50,67 @@ FloatGrid::ConstPtr OnSpecOf(const Solid& a, const Solid& b) {
 }
 
 // Resample s after mapping its geometry by `post` (applied after s's
-// canonical index-to-world map).
+// canonical index-to-world map). For rigid maps and enlargements the signed
+// distances themselves are interpolated (triquadratic) at the new voxel
+// centres, which keeps sharp edges and curvature; shrinking maps would thin
+// the narrow band, so they rebuild from the mesh of the zero level set.
 template <typename Fn>
-Solid MapAndRebuild(const Solid& s, Fn post) {
-  FloatGrid::Ptr src = s.impl()->grid->copy();  // shares the tree, own transform
-  auto xform = s.impl()->grid->transform().copy();
+Solid MapAndRebuild(const Solid& s, Fn post, double scale = 1.0) {
+  const GridSpec& spec = s.impl()->spec;
+  const FloatGrid& in = *s.impl()->grid;
+  auto xform = in.transform().copy();
   post(*xform);
-  src->setTransform(xform);
-  return Rebuild(*src, s.impl()->spec);
+  if (scale < 1.0) {
+    // A new grid object sharing the (unmodified) tree, with its own transform.
+    FloatGrid::Ptr src = openvdb::ConstPtrCast<FloatGrid>(in.copy());
+    src->setTransform(xform);
+    return Rebuild(*src, spec);
+  }
+  const auto out_xform = detail::CanonicalTransform(spec.voxel_size);
+  const double bg = spec.half_width_voxels * spec.voxel_size;
+  // Candidate output voxels: the images of the input's active voxels,
+  // dilated to close the gaps a rotation or enlargement leaves.
+  openvdb::MaskGrid::Ptr mask = openvdb::MaskGrid::create(false);
+  {
+    auto macc = mask->getAccessor();
+    for (auto it = in.tree().cbeginValueOn(); it; ++it) {
+      const openvdb::Vec3d w = xform->indexToWorld(it.getCoord());
+      macc.setValueOn(openvdb::Coord::floor(out_xform->worldToIndex(w)));
+    }
+  }
+  openvdb::tools::dilateActiveValues(mask->tree(), static_cast<int>(std::ceil(scale)) + 1,
+                                     openvdb::tools::NN_FACE_EDGE_VERTEX, openvdb::tools::IGNORE_TILES);
+  std::vector<openvdb::MaskTree::LeafNodeType*> mleaves;
+  mask->tree().getNodes(mleaves);
+  std::vector<LeafT*> out_leaves(mleaves.size(), nullptr);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, mleaves.size()), [&](const tbb::blocked_range<size_t>& r) {
+    auto acc = in.getConstAccessor();  // one accessor per task (not thread-safe)
+    for (size_t i = r.begin(); i != r.end(); ++i) {
+      auto* leaf = new LeafT(mleaves[i]->origin(), static_cast<float>(bg), false);
+      bool any = false;
+      for (auto it = mleaves[i]->cbeginValueOn(); it; ++it) {
+        const openvdb::Vec3d w = out_xform->indexToWorld(it.getCoord());
+        const openvdb::Vec3d src_index = xform->worldToIndex(w);
+        const double v = scale * openvdb::tools::QuadraticSampler::sample(acc, src_index);
+        if (std::abs(v) < bg) {
+          leaf->setValueOn(it.pos(), static_cast<float>(v));
+          any = true;
+        } else {
+          leaf->setValueOff(it.pos(), static_cast<float>(v > 0 ? bg : -bg));
+        }
+      }
+      if (any) {
+        out_leaves[i] = leaf;
+      } else {
+        delete leaf;
+      }
+    }
+  });
+  FloatGrid::Ptr out = EmptyGrid(spec);
+  for (LeafT* leaf : out_leaves)
+    if (leaf) out->tree().addLeaf(leaf);
+  openvdb::tools::signedFloodFill(out->tree());
+  return detail::MakeSolid(out, spec);
 }
 
 bool IsLatticeShift(const Vec3& t, double vs, openvdb::Coord& shift) {
@@ -115,7 +171,7 @@ Solid Scale(const Solid& s, double factor) {
   if (!s.impl()) return s;
   if (factor == 1.0) return s;
   detail::CheckActiveVoxelEstimate(s.impl()->spec, ActiveVoxels(s) * factor * factor, "the scaled solid");
-  return MapAndRebuild(s, [&](openvdb::math::Transform& x) { x.postScale(factor); });
+  return MapAndRebuild(s, [&](openvdb::math::Transform& x) { x.postScale(factor); }, factor);
 }
 
 // ---- CSG ------------------------------------------------------------------------
@@ -147,9 +203,6 @@ Solid Offset(const Solid& s, double distance) {
   if (s.empty()) return EmptyLike(s);
   const GridSpec& spec = s.impl()->spec;
   const double vs = spec.voxel_size;
-  // Widen the band on the side we move towards (fast sweeping, an Eikonal
-  // solve) so that the iso-value `distance` lies well inside it, then rebuild
-  // a standard narrow band around that iso-surface.
   const int dilation = static_cast<int>(std::ceil(std::abs(distance) / vs)) + 2;
   const double band_growth = (spec.half_width_voxels + dilation) / spec.half_width_voxels;
   detail::CheckActiveVoxelEstimate(spec, ActiveVoxels(s) * band_growth, "the widened offset band");
@@ -160,12 +213,44 @@ Solid Offset(const Solid& s, double distance) {
                               b.max[2] - b.min[2] + 2 * distance},
                              "offset solid");
   }
-  const auto mode = distance > 0 ? openvdb::tools::FastSweepingDomain::SWEEP_GREATER_THAN_ISOVALUE
-                                 : openvdb::tools::FastSweepingDomain::SWEEP_LESS_THAN_ISOVALUE;
-  FloatGrid::Ptr wide = openvdb::tools::dilateSdf(*s.impl()->grid, dilation, openvdb::tools::NN_FACE, 1, mode);
+  // Exact distances (to the mesh of the zero level set) in a band widened on
+  // the side we move towards, then a standard band around the iso-value.
   const float hw = static_cast<float>(spec.half_width_voxels);
-  FloatGrid::Ptr out = openvdb::tools::levelSetRebuild(*wide, static_cast<float>(distance), hw, hw);
-  out->setTransform(detail::CanonicalTransform(vs));
+  const float widened = hw + static_cast<float>(dilation);
+  const FloatGrid& in = *s.impl()->grid;
+  const float iso0 = static_cast<float>(kMeshIso * vs);
+  FloatGrid::Ptr wide = openvdb::tools::levelSetRebuild(in, iso0, distance > 0 ? widened : hw,
+                                                        distance < 0 ? widened : hw);
+  // phi - distance is the signed distance to the offset surface (exact on the
+  // side the surface moved towards, a lower bound at creases); keep the band.
+  const double bg = spec.half_width_voxels * vs;
+  std::vector<LeafT*> wide_leaves;
+  wide->tree().getNodes(wide_leaves);
+  std::vector<LeafT*> out_leaves(wide_leaves.size(), nullptr);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, wide_leaves.size()), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t i = r.begin(); i != r.end(); ++i) {
+      auto* leaf = new LeafT(wide_leaves[i]->origin(), static_cast<float>(bg), false);
+      bool any = false;
+      for (auto it = wide_leaves[i]->cbeginValueAll(); it; ++it) {
+        const double v = static_cast<double>(*it) - distance;
+        if (it.isValueOn() && std::abs(v) < bg) {
+          leaf->setValueOn(it.pos(), static_cast<float>(v));
+          any = true;
+        } else {
+          leaf->setValueOff(it.pos(), static_cast<float>(v > 0 ? bg : -bg));
+        }
+      }
+      if (any) {
+        out_leaves[i] = leaf;
+      } else {
+        delete leaf;
+      }
+    }
+  });
+  FloatGrid::Ptr out = EmptyGrid(spec);
+  for (LeafT* leaf : out_leaves)
+    if (leaf) out->tree().addLeaf(leaf);
+  openvdb::tools::signedFloodFill(out->tree());
   return detail::MakeSolid(out, spec);
 }
 

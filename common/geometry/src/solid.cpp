@@ -5,6 +5,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -92,50 +93,74 @@ inline double InsideWeight(double phi, double eps) {
 }
 
 struct Moments {
-  double m0 = 0;                // voxel count (weighted)
-  double m1[3] = {0, 0, 0};     // first moments in index coordinates
+  double m0 = 0;             // voxel count (weighted)
+  double m1[3] = {0, 0, 0};  // first moments in index coordinates
+  void Add(double w, const openvdb::Coord& c) {
+    m0 += w;
+    m1[0] += w * c.x();
+    m1[1] += w * c.y();
+    m1[2] += w * c.z();
+  }
+  void Add(const Moments& o) {
+    m0 += o.m0;
+    for (int k = 0; k < 3; ++k) m1[k] += o.m1[k];
+  }
 };
 
-// Zeroth and first moments of the smoothed interior indicator. Leaves are
-// processed in parallel into per-leaf slots and summed in a fixed order, so
-// results are bit-identical whatever the thread count.
-Moments ComputeMoments(const FloatGrid& grid) {
+// Zeroth and first moments of the interior indicator, in voxel units.
+//
+// Method: the indicator is smoothed, H(-phi/eps), and summed over every voxel.
+// The leading error of that sum is c * eps^2 * (total mean curvature of the
+// surface, including sharp creases, where max/min CSG makes it large), so we
+// sum with two smoothing widths, eps1 = 1 and eps2 = 2 voxels, in one pass and
+// Richardson-extrapolate to eps = 0: M = (eps2^2 M(eps1) - eps1^2 M(eps2)) /
+// (eps2^2 - eps1^2). eps2 is capped by the narrow-band half width so every
+// smoothed value comes from stored distances.
+//
+// Leaves are processed in parallel into per-leaf slots and summed in a fixed
+// order, so results are bit-identical whatever the thread count.
+Moments ComputeMoments(const FloatGrid& grid, double half_width_voxels) {
   const FloatTree& tree = grid.tree();
-  const double eps = 1.5;  // index units: 1.5 voxels, inside the >= 2-voxel band
+  const double vs = grid.voxelSize()[0];
+  const double e1 = 1.0, e2 = std::min(2.0, half_width_voxels);  // voxels
+  const double eps1 = e1 * vs, eps2 = e2 * vs;                   // mm
   std::vector<const LeafT*> leaves;
   tree.getNodes(leaves);
-  std::vector<Moments> per_leaf(leaves.size());
+  std::vector<std::array<Moments, 2>> per_leaf(leaves.size());
   tbb::parallel_for(tbb::blocked_range<size_t>(0, leaves.size()), [&](const tbb::blocked_range<size_t>& r) {
     for (size_t i = r.begin(); i != r.end(); ++i) {
-      Moments m;
+      std::array<Moments, 2> m;
       for (auto it = leaves[i]->cbeginValueAll(); it; ++it) {
-        const double w = InsideWeight(*it, eps * grid.voxelSize()[0]);
-        if (w <= 0) continue;
+        const double phi = *it;
+        if (phi >= eps2) continue;
         const openvdb::Coord c = it.getCoord();
-        m.m0 += w;
-        m.m1[0] += w * c.x();
-        m.m1[1] += w * c.y();
-        m.m1[2] += w * c.z();
+        m[0].Add(InsideWeight(phi, eps1), c);
+        m[1].Add(InsideWeight(phi, eps2), c);
       }
       per_leaf[i] = m;
     }
   });
-  Moments total;
-  for (const Moments& m : per_leaf) {
-    total.m0 += m.m0;
-    for (int k = 0; k < 3; ++k) total.m1[k] += m.m1[k];
+  std::array<Moments, 2> sum;
+  for (const auto& m : per_leaf) {
+    sum[0].Add(m[0]);
+    sum[1].Add(m[1]);
   }
-  // Interior tiles (inactive, negative) above the leaf level.
+  const double a = e2 * e2 / (e2 * e2 - e1 * e1), b = -e1 * e1 / (e2 * e2 - e1 * e1);
+  Moments total;
+  total.m0 = a * sum[0].m0 + b * sum[1].m0;
+  for (int k = 0; k < 3; ++k) total.m1[k] = a * sum[0].m1[k] + b * sum[1].m1[k];
+  if (total.m0 < 0) total = Moments{};
+  // Interior tiles (inactive, negative) above the leaf level count fully.
   auto it = tree.cbeginValueAll();
   it.setMaxDepth(FloatTree::ValueAllCIter::LEAF_DEPTH - 1);
   for (; it; ++it) {
     if (*it >= 0) continue;
-    const openvdb::CoordBBox b = it.getBoundingBox();
-    const double n = static_cast<double>(b.volume());
+    const openvdb::CoordBBox bb = it.getBoundingBox();
+    const double n = static_cast<double>(bb.volume());
     total.m0 += n;
-    total.m1[0] += n * 0.5 * (b.min().x() + b.max().x());
-    total.m1[1] += n * 0.5 * (b.min().y() + b.max().y());
-    total.m1[2] += n * 0.5 * (b.min().z() + b.max().z());
+    total.m1[0] += n * 0.5 * (bb.min().x() + bb.max().x());
+    total.m1[1] += n * 0.5 * (bb.min().y() + bb.max().y());
+    total.m1[2] += n * 0.5 * (bb.min().z() + bb.max().z());
   }
   return total;
 }
@@ -159,12 +184,12 @@ double Solid::voxel_size() const { return impl_ ? impl_->spec.voxel_size : 0.0; 
 double Solid::Volume() const {
   if (!impl_) return 0.0;
   const double vs = impl_->spec.voxel_size;
-  return ComputeMoments(*impl_->grid).m0 * vs * vs * vs;
+  return ComputeMoments(*impl_->grid, impl_->spec.half_width_voxels).m0 * vs * vs * vs;
 }
 
 Vec3 Solid::CenterOfMass() const {
   if (!impl_) return {0, 0, 0};
-  const Moments m = ComputeMoments(*impl_->grid);
+  const Moments m = ComputeMoments(*impl_->grid, impl_->spec.half_width_voxels);
   if (m.m0 <= 0) return {0, 0, 0};
   const double vs = impl_->spec.voxel_size;
   return {m.m1[0] / m.m0 * vs, m.m1[1] / m.m0 * vs, m.m1[2] / m.m0 * vs};
@@ -220,7 +245,10 @@ mesh::TriangleMesh Solid::ToMesh(double adaptivity) const {
   std::vector<openvdb::Vec3s> points;
   std::vector<openvdb::Vec3I> tris;
   std::vector<openvdb::Vec4I> quads;
-  openvdb::tools::volumeToMesh(*impl_->grid, points, tris, quads, 0.0, adaptivity);
+  // Iso-value a hair above 0 (1e-4 voxel): voxels lying exactly on the surface
+  // (faces of boxes at round sizes fall on voxel centres) then count as
+  // inside, which avoids a chamfer of up to a voxel along such edges.
+  openvdb::tools::volumeToMesh(*impl_->grid, points, tris, quads, kMeshIso * impl_->spec.voxel_size, adaptivity);
   out.vertices.reserve(points.size());
   for (const auto& p : points) out.vertices.push_back({p.x(), p.y(), p.z()});
   out.triangles.reserve(tris.size() + 2 * quads.size());
@@ -299,6 +327,7 @@ Solid Solid::Deserialize(std::string_view bytes) {
     std::istringstream is(std::string(bytes), std::ios_base::binary);
     openvdb::io::Stream stream(is, /*delayLoad=*/false);
     openvdb::GridPtrVecPtr grids = stream.getGrids();
+    if (is.fail()) throw InputError("Solid::Deserialize: truncated or corrupt grid stream");
     openvdb::MetaMap::Ptr meta = stream.getMetadata();
     if (!grids || grids->size() != 1) throw InputError("Solid::Deserialize: expected exactly one grid");
     FloatGrid::Ptr grid = openvdb::gridPtrCast<FloatGrid>(grids->front());

@@ -18,6 +18,9 @@ struct Solid::Impl {
   GridSpec spec;
 };
 
+// Iso-value used when meshing a level set, in voxels (see Solid::ToMesh).
+inline constexpr double kMeshIso = 1e-4;
+
 namespace detail {
 
 // openvdb::initialize() once per process (grid type registry, used by io).
