@@ -1,0 +1,52 @@
+// The clip-lights family: all 80 variations (n = 1..4 pairs, extension l in
+// 20 steps over [0, 45.7] mm, ring XS/S/M/L); reports per ring size the
+// best variation (smallest relaxed target deviation among feasible ones) next
+// to the extension the paper chose. Usage:
+//   assembly_clip_lights_bench [--library configs/assemblies/parts.yaml]
+#include <chrono>
+#include <cstdio>
+#include <string>
+
+#include "fabatlas/assembly/clip_lights.h"
+#include "fabatlas/error.h"
+
+using namespace fabatlas::assembly;
+
+int main(int argc, char** argv) {
+  std::string lib = "configs/assemblies/parts.yaml";
+  for (int i = 1; i + 1 < argc; i += 2)
+    if (std::string(argv[i]) == "--library") lib = argv[i + 1];
+  const RingSize rings[] = {RingSize::kXS, RingSize::kS, RingSize::kM, RingSize::kL};
+  const double paper[] = {25.135, 4.57, 43.415, 27.42};
+  const auto t0 = std::chrono::steady_clock::now();
+  int evaluated = 0, valid = 0;
+  std::printf("| ring | best n | best l (mm) | deviation (mm) | stable | paper l (mm) | deviation at paper l, best n (mm) |\n|---|---|---|---|---|---|---|\n");
+  try {
+    for (int ri = 0; ri < 4; ++ri) {
+      ClipLightsParams best;
+      double best_dev = 1e300;
+      bool best_stable = false;
+      for (int n = 1; n <= 4; ++n)
+        for (int k = 0; k < 20; ++k) {
+          const ClipLightsParams p{n, 45.7 * k / 19.0, rings[ri]};
+          const ClipLightsResult r = EvaluateClipLights(p, lib);
+          ++evaluated;
+          valid += r.feasible && r.stable && r.target_reached;
+          if (r.feasible && r.target_deviation_mm < best_dev) {
+            best_dev = r.target_deviation_mm;
+            best = p;
+            best_stable = r.stable;
+          }
+        }
+      const ClipLightsResult at_paper = EvaluateClipLights({best.pairs, paper[ri], rings[ri]}, lib);
+      std::printf("| %s | %d | %.2f | %.1f | %s | %.3f | %.1f |\n", ToString(rings[ri]), best.pairs, best.extension,
+                  best_dev, best_stable ? "yes" : "no", paper[ri], at_paper.target_deviation_mm);
+    }
+  } catch (const fabatlas::InputError& e) {
+    std::fprintf(stderr, "%s\n", e.what());
+    return fabatlas::kExitBadInput;
+  }
+  std::printf("\n%d variations, %d valid (feasible, stable, within 25 mm), %.1f s total\n", evaluated, valid,
+              std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+  return 0;
+}
