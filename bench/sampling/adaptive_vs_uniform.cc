@@ -6,7 +6,7 @@
 // time per call. Results: docs/bench-sampling.md.
 //
 // Usage: bench_sampling_adaptive_vs_uniform [--threshold T] [--burn-ms MS]
-//        [--repeats K] [--iou-points P]
+//        [--repeats K] [--iou-points P (0: skip)] [--subdivisions S] [--overhead-depth D]
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -30,9 +30,9 @@ struct Reach {
 };
 
 template <class Eval, class Truth>
-Reach UniformToTarget(Eval& ev, Truth truth, double target, int points, int max_n) {
+Reach UniformToTarget(Eval& ev, Truth truth, double target, int points, int first_n, int max_n) {
   ThreadPoolExecutor ex(1);
-  for (int n = 1; n <= max_n; ++n) {
+  for (int n = first_n; n <= max_n; ++n) {
     DesignSpace space(Eval::Dimensions(), n);
     SamplingOptions o;
     o.max_depth = 0;
@@ -44,9 +44,10 @@ Reach UniformToTarget(Eval& ev, Truth truth, double target, int points, int max_
 }
 
 template <class Eval, class Truth>
-Reach AdaptiveToTarget(Eval& ev, Truth truth, double target, int points, double threshold, int subdivisions) {
+Reach AdaptiveToTarget(Eval& ev, Truth truth, double target, int points, double threshold, int subdivisions,
+                       int first_depth) {
   ThreadPoolExecutor ex(1);
-  for (int depth = 0; depth <= 30; ++depth) {
+  for (int depth = first_depth; depth <= 30; ++depth) {
     DesignSpace space(Eval::Dimensions(), subdivisions);
     SamplingOptions o;
     o.max_depth = depth;
@@ -97,41 +98,50 @@ double Median(std::vector<double> v) {
 
 int main(int argc, char** argv) {
   double threshold = 0.5, burn_ms = 20.0;
-  int repeats = 5, points = 200000, subdivisions = 5;
+  int repeats = 5, points = 200000, subdivisions = 5, overhead_depth = 3;
   for (int i = 1; i + 1 < argc; i += 2) {
     if (!std::strcmp(argv[i], "--threshold")) threshold = std::atof(argv[i + 1]);
     else if (!std::strcmp(argv[i], "--burn-ms")) burn_ms = std::atof(argv[i + 1]);
     else if (!std::strcmp(argv[i], "--repeats")) repeats = std::atoi(argv[i + 1]);
     else if (!std::strcmp(argv[i], "--iou-points")) points = std::atoi(argv[i + 1]);
     else if (!std::strcmp(argv[i], "--subdivisions")) subdivisions = std::atoi(argv[i + 1]);
+    else if (!std::strcmp(argv[i], "--overhead-depth")) overhead_depth = std::atoi(argv[i + 1]);
     else { std::fprintf(stderr, "unknown option %s\n", argv[i]); return 2; }
   }
-  const double target = 0.95;
-  std::printf("IoU target %.2f, Monte Carlo points %d (seed 12345), adaptive: subdivisions %d, dg_threshold %.3g\n\n",
-              target, points, subdivisions, threshold);
-  std::printf("| design | uniform samples (grid n) | adaptive samples (max_depth) | adaptive / uniform |\n");
-  std::printf("|---|---|---|---|\n");
-  {
+  std::printf("IoU by Monte Carlo, %d points (seed 12345); adaptive: subdivisions %d, dg_threshold %.3g\n\n",
+              points, subdivisions, threshold);
+  std::printf("| design | IoU target | uniform samples (grid n, IoU) | adaptive samples (max_depth, IoU) | adaptive / uniform |\n");
+  std::printf("|---|---|---|---|---|\n");
+  auto row = [&](const char* name, double target, const Reach& u, const Reach& a) {
+    std::printf("| %s | %.2f | %lld (n=%d, %.4f) | %lld (depth %d, %.4f) | %.3f |\n", name, target, u.samples,
+                u.setting, u.iou, a.samples, a.setting, a.iou, double(a.samples) / double(u.samples));
+    std::fflush(stdout);
+  };
+  if (points > 0) {
     HollowCylinder2D ev;
-    auto u = UniformToTarget(ev, HollowCylinder2D::TrulyValid, target, points, 200);
-    auto a = AdaptiveToTarget(ev, HollowCylinder2D::TrulyValid, target, points, threshold, subdivisions);
-    std::printf("| hollow cylinder 2-D | %lld (n=%d, IoU %.4f) | %lld (depth %d, IoU %.4f) | %.3f |\n", u.samples,
-                u.setting, u.iou, a.samples, a.setting, a.iou, double(a.samples) / double(u.samples));
+    Reach u{0, 1, 0}, a{0, 0, 0};
+    for (double target : {0.95, 0.98, 0.99}) {
+      u = UniformToTarget(ev, HollowCylinder2D::TrulyValid, target, points, u.setting, 400);
+      a = AdaptiveToTarget(ev, HollowCylinder2D::TrulyValid, target, points, threshold, subdivisions, a.setting);
+      row("hollow cylinder 2-D", target, u, a);
+    }
   }
-  {
+  if (points > 0) {
     HollowCylinder3D ev;
-    auto u = UniformToTarget(ev, HollowCylinder3D::TrulyValid, target, points, 60);
-    auto a = AdaptiveToTarget(ev, HollowCylinder3D::TrulyValid, target, points, threshold, subdivisions);
-    std::printf("| hollow cylinder 3-D | %lld (n=%d, IoU %.4f) | %lld (depth %d, IoU %.4f) | %.3f |\n", u.samples,
-                u.setting, u.iou, a.samples, a.setting, a.iou, double(a.samples) / double(u.samples));
+    Reach u{0, 1, 0}, a{0, 0, 0};
+    for (double target : {0.95, 0.97}) {
+      u = UniformToTarget(ev, HollowCylinder3D::TrulyValid, target, points, u.setting, 100);
+      a = AdaptiveToTarget(ev, HollowCylinder3D::TrulyValid, target, points, threshold, subdivisions, a.setting);
+      row("hollow cylinder 3-D", target, u, a);
+    }
   }
   std::fflush(stdout);
   if (repeats <= 0) return 0;
 
-  // Overhead: 3-D cylinder, max_depth 4, evaluator burning burn_ms per sample
+  // Overhead: 3-D cylinder, max_depth --overhead-depth, evaluator burning burn_ms per sample
   // and burn_ms / 4 per ΔG.
-  std::printf("\nOverhead (3-D hollow cylinder, depth 4, %.1f ms CPU per sample, %.1f ms per ΔG), %d repeats\n\n",
-              burn_ms, burn_ms / 4, repeats);
+  std::printf("\nOverhead (3-D hollow cylinder, max_depth %d, %.1f ms CPU per sample, %.1f ms per ΔG), %d repeats\n\n",
+              overhead_depth, burn_ms, burn_ms / 4, repeats);
   std::printf("| threads | samples | ΔG calls | job wall s (median) | sampling logic %% (median) | overhead %% (median) |\n");
   std::printf("|---|---|---|---|---|---|\n");
   for (int threads : {1, 2}) {
@@ -143,7 +153,7 @@ int main(int argc, char** argv) {
       ThreadPoolExecutor ex(threads);
       DesignSpace space(HollowCylinder3D::Dimensions(), subdivisions);
       SamplingOptions o;
-      o.max_depth = 4;
+      o.max_depth = overhead_depth;
       o.dg_threshold = threshold;
       auto s = SampleDesignSpace(space, ev, ex, o);
       samples = s.statistics.samples;

@@ -39,7 +39,7 @@ std::vector<double> ScoreVector(const Form& f, const FormNode& node, int d) {
   return s;
 }
 
-TEST(AdaptiveSampler, HollowCylinder2DReachesIoU95) {
+TEST(SamplingAdaptive, HollowCylinder2DReachesIoU95) {
   testing::HollowCylinder2D ev;
   ThreadPoolExecutor ex(2);
   const auto s = SampleDesignSpace(DesignSpace(ev.Dimensions(), 5), ev, ex, Options(7, 0.5));
@@ -52,7 +52,7 @@ TEST(AdaptiveSampler, HollowCylinder2DReachesIoU95) {
   EXPECT_EQ(s.statistics.failure_shares.at("min_thickness"), 1.0);
 }
 
-TEST(AdaptiveSampler, HollowCylinder3DReachesIoU95) {
+TEST(SamplingAdaptive, HollowCylinder3DReachesIoU95) {
   testing::HollowCylinder3D ev;
   ThreadPoolExecutor ex(2);
   const auto s = SampleDesignSpace(DesignSpace(ev.Dimensions(), 5), ev, ex, Options(10, 0.5));
@@ -70,7 +70,7 @@ TEST(AdaptiveSampler, HollowCylinder3DReachesIoU95) {
 
 // 1 thread, 2 threads and shuffled completion on two threads give the same
 // form byte for byte.
-TEST(AdaptiveSampler, DeterministicWhateverThreadsAndCompletionOrder) {
+TEST(SamplingAdaptive, DeterministicWhateverThreadsAndCompletionOrder) {
   auto run = [](SampleEvaluator& ev, const std::vector<Dimension>& dims, Executor& ex, int depth) {
     return FormToJson(SampleDesignSpace(DesignSpace(dims, 5), ev, ex, Options(depth, 0.2)).form);
   };
@@ -90,7 +90,7 @@ TEST(AdaptiveSampler, DeterministicWhateverThreadsAndCompletionOrder) {
   }
 }
 
-TEST(AdaptiveSampler, SharedVerticesAndEdgesEvaluatedOnce) {
+TEST(SamplingAdaptive, SharedVerticesAndEdgesEvaluatedOnce) {
   testing::HollowCylinder3D inner;
   CountingEvaluator ev(inner);
   ThreadPoolExecutor ex(2);
@@ -105,7 +105,7 @@ TEST(AdaptiveSampler, SharedVerticesAndEdgesEvaluatedOnce) {
 }
 
 // DESIGN.md step 4: invalid samples have empty volume.
-TEST(AdaptiveSampler, GeometryChangeConventionsAndEveryLeafEdgeKept) {
+TEST(SamplingAdaptive, GeometryChangeConventionsAndEveryLeafEdgeKept) {
   testing::HollowCylinder2D ev;
   ThreadPoolExecutor ex(1);
   const auto s = SampleDesignSpace(DesignSpace(ev.Dimensions(), 5), ev, ex, Options(6, 0.2));
@@ -138,7 +138,7 @@ TEST(AdaptiveSampler, GeometryChangeConventionsAndEveryLeafEdgeKept) {
 // valid. s(R) = [ΔG((5,5),(20,5)) = 1 (disjoint annuli), 0]; s(t) = [1, 1]
 // -> split t at its midpoint 2.75, creating (5, 2.75) valid and (20, 2.75)
 // invalid (t_min(20) = 4.5).
-TEST(AdaptiveSampler, SplitChoiceWorkedByHand) {
+TEST(SamplingAdaptive, SplitChoiceWorkedByHand) {
   testing::HollowCylinder2D ev;
   ThreadPoolExecutor ex(1);
   const auto s = SampleDesignSpace(DesignSpace(ev.Dimensions(), 1), ev, ex, Options(1, 0.1));
@@ -186,7 +186,7 @@ void ExpectSplitsFollowRanking(const Form& f, const SamplingOptions& o) {
     }
 }
 
-TEST(AdaptiveSampler, EverySplitFollowsLexicographicRanking) {
+TEST(SamplingAdaptive, EverySplitFollowsLexicographicRanking) {
   testing::HollowCylinder3D ev;
   ThreadPoolExecutor ex(2);
   const auto o = Options(5, 0.15);
@@ -198,7 +198,7 @@ TEST(AdaptiveSampler, EverySplitFollowsLexicographicRanking) {
 // adjacent values and can never split; the sampler hands over to length.
 // All-valid leaves need length < the smaller limit of the band's two
 // materials: 0.31 for {pla, petg}, 0.57 for {petg, tpu}.
-TEST(AdaptiveSampler, EnumeratedDimensionHandsOverToNextRanked) {
+TEST(SamplingAdaptive, EnumeratedDimensionHandsOverToNextRanked) {
   testing::MaterialBar ev;
   ThreadPoolExecutor ex(2);
   const int depth = 8;
@@ -227,7 +227,7 @@ TEST(AdaptiveSampler, EnumeratedDimensionHandsOverToNextRanked) {
 
 // Integer dimension: blocks in [0, 10] with 2 bootstrap cells [0,5], [5,10];
 // valid iff blocks <= 6; x never matters (ΔG 0 along x), so no x split.
-TEST(AdaptiveSampler, IntegerDimensionSplitsOnlyAtWholeValues) {
+TEST(SamplingAdaptive, IntegerDimensionSplitsOnlyAtWholeValues) {
   testing::BlockStack ev;
   ThreadPoolExecutor ex(1);
   const auto o = Options(10, 0.1);
@@ -242,7 +242,7 @@ TEST(AdaptiveSampler, IntegerDimensionSplitsOnlyAtWholeValues) {
   EXPECT_EQ(s.statistics.failure_shares.at("too_tall"), 1.0);
 }
 
-TEST(AdaptiveSampler, StopsAtMaxDepth) {
+TEST(SamplingAdaptive, StopsAtMaxDepth) {
   testing::HollowCylinder2D ev;
   ThreadPoolExecutor ex(1);
   const auto flat = SampleDesignSpace(DesignSpace(ev.Dimensions(), 5), ev, ex, Options(0, 0.1));
@@ -254,7 +254,7 @@ TEST(AdaptiveSampler, StopsAtMaxDepth) {
   EXPECT_GT(s.statistics.leaf_stops.at(LeafStop::kMaxDepth), 0);
 }
 
-TEST(AdaptiveSampler, StopsAtThreshold) {
+TEST(SamplingAdaptive, StopsAtThreshold) {
   testing::HollowCylinder2D ev;
   ThreadPoolExecutor ex(1);
   const auto o = Options(12, 0.3);
@@ -276,7 +276,7 @@ TEST(AdaptiveSampler, StopsAtThreshold) {
   EXPECT_LT(b.statistics.samples, s.statistics.samples);
 }
 
-TEST(AdaptiveSampler, StopsAtSampleBudget) {
+TEST(SamplingAdaptive, StopsAtSampleBudget) {
   testing::HollowCylinder2D ev;
   ThreadPoolExecutor ex(2);
   for (std::int64_t budget : {37, 120, 500}) {
@@ -292,7 +292,7 @@ TEST(AdaptiveSampler, StopsAtSampleBudget) {
 
 // Half-plane x + y <= 1.3 on the unit square: true valid fraction 75.5 %; the
 // region is convex, so the conservative estimate approaches it from below.
-TEST(AdaptiveSampler, ValidVolumeOfKnownFraction) {
+TEST(SamplingAdaptive, ValidVolumeOfKnownFraction) {
   testing::HalfPlane ev;
   ThreadPoolExecutor ex(2);
   const auto s = SampleDesignSpace(DesignSpace(ev.Dimensions(), 5), ev, ex, Options(12, 0.5));
@@ -304,7 +304,7 @@ TEST(AdaptiveSampler, ValidVolumeOfKnownFraction) {
   EXPECT_NEAR(coarse.statistics.valid_volume_percent, 60.0, 1e-9);
 }
 
-TEST(AdaptiveSampler, RejectsBadOptions) {
+TEST(SamplingAdaptive, RejectsBadOptions) {
   testing::HalfPlane ev;
   ThreadPoolExecutor ex(1);
   const DesignSpace space(ev.Dimensions(), 5);

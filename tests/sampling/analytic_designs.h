@@ -222,9 +222,10 @@ double EstimatedRegionIoU(const Form& form, TrulyValid truly_valid, int points =
   for (const Dimension& d : form.dimensions) dist.emplace_back(d.lo, d.hi);
   long long inter = 0, uni = 0;
   std::vector<double> u(form.dimensions.size());
+  const DesignSpace space = form.space();
   for (int i = 0; i < points; ++i) {
     for (size_t d = 0; d < u.size(); ++d) u[d] = dist[d](rng);
-    const bool t = truly_valid(u), e = InEstimatedValidRegion(form, u);
+    const bool t = truly_valid(u), e = InEstimatedValidRegion(form, space, u);
     inter += t && e;
     uni += t || e;
   }

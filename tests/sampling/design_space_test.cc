@@ -7,7 +7,7 @@
 namespace fabatlas::sampling {
 namespace {
 
-TEST(DesignSpace, BootstrapCellsPerKind) {
+TEST(SamplingDesignSpace, BootstrapCellsPerKind) {
   DesignSpace space({{"r", DimensionKind::kReal, 1.0, 2.0, {}},
                      {"n", DimensionKind::kInteger, 2.0, 4.0, {}},
                      {"m", DimensionKind::kEnumerated, 0, 0, {"a", "b", "c", "d", "e", "f", "g"}},
@@ -39,7 +39,7 @@ TEST(DesignSpace, BootstrapCellsPerKind) {
   EXPECT_DOUBLE_EQ(space.length(2, 0, 6), 6.0);
 }
 
-TEST(DesignSpace, RejectsBadDimensionsWithOneLineMessages) {
+TEST(SamplingDesignSpace, RejectsBadDimensionsWithOneLineMessages) {
   auto bad = [](std::vector<Dimension> dims, int sub = 5) {
     try {
       DesignSpace s(std::move(dims), sub);

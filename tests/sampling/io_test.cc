@@ -25,7 +25,7 @@ std::string ErrorOf(const std::string& yaml) {
   return "no error";
 }
 
-TEST(JobFile, ParsesAllSections) {
+TEST(SamplingJobFile, ParsesAllSections) {
   const JobFile job = ParseJobFile(
       "design: ../designs/vase.yaml\n"
       "sampling:\n"
@@ -52,7 +52,7 @@ TEST(JobFile, ParsesAllSections) {
   EXPECT_EQ(minimal.threads, 1);
 }
 
-TEST(JobFile, ErrorsNameFileLineAndColumn) {
+TEST(SamplingJobFile, ErrorsNameFileLineAndColumn) {
   EXPECT_EQ(ErrorOf("design: a.yaml\nsampling:\n  max_depht: 3\n"),
             "jobs/vase.yaml:3:3: unknown key 'sampling.max_depht' (expected subdivisions, max_depth, "
             "dg_threshold, max_samples)");
@@ -78,7 +78,7 @@ SamplingSummary SampleCylinder(int depth) {
   return SampleDesignSpace(DesignSpace(ev.Dimensions(), 5), ev, ex, o);
 }
 
-TEST(FormJson, RoundTripIsByteIdentical) {
+TEST(SamplingFormJson, RoundTripIsByteIdentical) {
   const auto s = SampleCylinder(5);
   const std::string text = FormToJson(s.form);
   const Form back = FormFromJson(text);
@@ -90,7 +90,7 @@ TEST(FormJson, RoundTripIsByteIdentical) {
   EXPECT_EQ(text.find("cpu_seconds"), std::string::npos);
 }
 
-TEST(FormJson, RejectsBrokenForms) {
+TEST(SamplingFormJson, RejectsBrokenForms) {
   const std::string text = FormToJson(SampleCylinder(2).form);
   auto error = [](const std::string& t) {
     try {
@@ -129,7 +129,7 @@ Png ReadPng(const std::string& path) {
   return img;
 }
 
-TEST(ValidityMap, PixelsShowValidAndFailureRegions) {
+TEST(SamplingValidityMap, PixelsShowValidAndFailureRegions) {
   const auto s = SampleCylinder(6);
   const std::string path =
       (std::filesystem::temp_directory_path() / ("sampling_validity_map_" + std::to_string(::getpid()) + ".png")).string();

@@ -22,7 +22,10 @@ bool IsAllValidLeaf(const Form& form, const FormNode& node) {
 }
 
 std::optional<LeafRef> LocateLeaf(const Form& form, const std::vector<double>& u) {
-  const DesignSpace space = form.space();
+  return LocateLeaf(form, form.space(), u);
+}
+
+std::optional<LeafRef> LocateLeaf(const Form& form, const DesignSpace& space, const std::vector<double>& u) {
   const int n = space.dimension_count();
   if (static_cast<int>(u.size()) != n) return std::nullopt;
   std::vector<double> x(n);
@@ -47,7 +50,11 @@ std::optional<LeafRef> LocateLeaf(const Form& form, const std::vector<double>& u
 }
 
 bool InEstimatedValidRegion(const Form& form, const std::vector<double>& u) {
-  const auto leaf = LocateLeaf(form, u);
+  return InEstimatedValidRegion(form, form.space(), u);
+}
+
+bool InEstimatedValidRegion(const Form& form, const DesignSpace& space, const std::vector<double>& u) {
+  const auto leaf = LocateLeaf(form, space, u);
   if (!leaf) return false;
   return IsAllValidLeaf(form, form.trees[leaf->tree].nodes[leaf->node]);
 }

@@ -79,7 +79,10 @@ struct LeafRef {
 // on a shared face go to the hi-side leaf except on the upper domain bound.
 // Returns nullopt outside the bounded space.
 std::optional<LeafRef> LocateLeaf(const Form& form, const std::vector<double>& u);
+// Same, with the form's space passed in (saves rebuilding it per query).
+std::optional<LeafRef> LocateLeaf(const Form& form, const DesignSpace& space, const std::vector<double>& u);
 // u lies in an all-valid leaf (the estimated valid region, seed 001 Sec. 7.1).
 bool InEstimatedValidRegion(const Form& form, const std::vector<double>& u);
+bool InEstimatedValidRegion(const Form& form, const DesignSpace& space, const std::vector<double>& u);
 
 }  // namespace fabatlas::sampling
