@@ -20,7 +20,9 @@ namespace {
 
 using internal::Mat4;
 
-constexpr double kEnergyDatum = 1e5;  // mm; see EnergyResidual
+constexpr double kEnergyDatum = 1e5;  // mm; see AssemblyResidual
+// Derivatives per pass of the dynamic autodiff (fewer passes over the chain).
+constexpr int kJetStride = 16;
 
 template <typename T>
 Mat4<T> RigidInverse(const Mat4<T>& m) {
@@ -372,7 +374,7 @@ class Solver {
   }
 
   void Build(ceres::Problem& problem, Phase phase, double sigma) {
-    auto* f = new ceres::DynamicAutoDiffCostFunction<AssemblyResidual, internal::kParamBlock>(
+    auto* f = new ceres::DynamicAutoDiffCostFunction<AssemblyResidual, kJetStride>(
         new AssemblyResidual(Residual(phase, sigma)));
     for (size_t b = 0; b < blocks_.size(); ++b) f->AddParameterBlock(internal::kParamBlock);
     f->SetNumResiduals(Residual(phase, sigma).NumResiduals());
