@@ -304,6 +304,46 @@ TEST(SamplingAdaptive, ValidVolumeOfKnownFraction) {
   EXPECT_NEAR(coarse.statistics.valid_volume_percent, 60.0, 1e-9);
 }
 
+// Six dimensions (the most DESIGN.md allows): 2^6 corners per leaf. Valid iff
+// |u| <= 0.8 on [0,1]^6 (1/64 of the 6-ball, volume
+// pi^3/6 0.8^6 / 64 = 2.1167 %); geometry a ball of radius 1 + |u|, nested,
+// so ΔG = 1 - (r_small / r_big)^3. The ball is convex: estimate <= 2.1167 %.
+class SixBall : public SampleEvaluator {
+ public:
+  static double Norm(const std::vector<double>& u) {
+    double s = 0;
+    for (double x : u) s += x * x;
+    return std::sqrt(s);
+  }
+  SampleOutcome EvaluateSample(const SamplePoint& p) override {
+    SampleOutcome o;
+    o.valid = Norm(p.u) <= 0.8;
+    if (!o.valid) o.failure_type = "outside";
+    return o;
+  }
+  double GeometryChange(const SamplePoint& a, const SamplePoint& b) override {
+    const double ra = 1 + Norm(a.u), rb = 1 + Norm(b.u);
+    return 1.0 - std::pow(std::min(ra, rb) / std::max(ra, rb), 3);
+  }
+};
+
+TEST(SamplingAdaptive, SixDimensions) {
+  std::vector<Dimension> dims;
+  for (int d = 0; d < 6; ++d) dims.push_back({"u" + std::to_string(d), DimensionKind::kReal, 0.0, 1.0, {}});
+  SixBall ev;
+  CountingEvaluator counting(ev);
+  ThreadPoolExecutor ex(2);
+  const auto o = Options(6, 0.5);
+  const auto s = SampleDesignSpace(DesignSpace(dims, 2), counting, ex, o);
+  EXPECT_GT(s.statistics.samples, 729);  // 3^6 bootstrap vertices, then refinement
+  EXPECT_EQ(static_cast<std::int64_t>(counting.sample_calls_.size()), s.statistics.samples);
+  ExpectSplitsFollowRanking(s.form, o);
+  const double exact = 100.0 * std::pow(std::numbers::pi, 3) / 6.0 * std::pow(0.8, 6) / 64.0;
+  EXPECT_NEAR(exact, 2.1167, 1e-4);
+  EXPECT_LE(s.statistics.valid_volume_percent, exact);
+  EXPECT_GT(s.statistics.valid_volume_percent, 0.0);
+}
+
 TEST(SamplingAdaptive, RejectsBadOptions) {
   testing::HalfPlane ev;
   ThreadPoolExecutor ex(1);

@@ -29,10 +29,10 @@ struct ThreadPoolExecutor::Arena {
 
 ThreadPoolExecutor::ThreadPoolExecutor(int threads) : threads_(threads) {
   if (threads < 1) throw std::invalid_argument("ThreadPoolExecutor: threads must be >= 1");
-  arena_ = new Arena(threads);
+  arena_ = std::make_unique<Arena>(threads);
 }
 
-ThreadPoolExecutor::~ThreadPoolExecutor() { delete arena_; }
+ThreadPoolExecutor::~ThreadPoolExecutor() = default;
 
 std::vector<SampleOutcome> ThreadPoolExecutor::RunSampleTasks(const std::vector<SampleTask>& tasks,
                                                               SampleEvaluator& evaluator,

@@ -9,6 +9,7 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "fabatlas/sampling/sample_evaluator.h"
@@ -60,6 +61,8 @@ class ThreadPoolExecutor : public Executor {
  public:
   explicit ThreadPoolExecutor(int threads);
   ~ThreadPoolExecutor() override;
+  ThreadPoolExecutor(const ThreadPoolExecutor&) = delete;
+  ThreadPoolExecutor& operator=(const ThreadPoolExecutor&) = delete;
   int threads() const { return threads_; }
 
   std::vector<SampleOutcome> RunSampleTasks(const std::vector<SampleTask>& tasks,
@@ -72,7 +75,7 @@ class ThreadPoolExecutor : public Executor {
  private:
   int threads_;
   struct Arena;
-  Arena* arena_;
+  std::unique_ptr<Arena> arena_;
 };
 
 }  // namespace fabatlas::sampling
