@@ -263,7 +263,7 @@ ValidityMapLayout WriteValidityMap(const Form& form, const ValidityMapOptions& o
     img.Text(left - 8 - static_cast<int>(s.size()) * kCharW, py - kCharH / 2 + 1, s, 0);
   }
   img.Text(left + P / 2 - static_cast<int>(dx.name.size()) * kCharW / 2, top + P + 9 + 2 * kCharH, dx.name, 0);
-  img.Text(4, top - 14 > 0 ? 2 : 2, dy.name, 0);
+  img.Text(4, 2, dy.name, 0);  // y axis name, top left
   // Legend.
   const int lx = left + P + gap;
   int ly = top;
