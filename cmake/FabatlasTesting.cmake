@@ -1,7 +1,9 @@
-# fabatlas_add_test(NAME <name> LABELS <label...> SOURCES <src...> LIBS <lib...>)
+# fabatlas_add_test(NAME <name> LABELS <label...> SOURCES <src...> LIBS <lib...> [TIMEOUT s])
 # Builds a GoogleTest binary into build/bin and registers each TEST with CTest,
-# labelled. Tests find the repository and ../shared through the environment
-# variables FABATLAS_SOURCE_DIR and FABATLAS_SHARED_DIR.
+# labelled. Tests find the repository, ../shared and build/bin through the
+# environment variables FABATLAS_SOURCE_DIR, FABATLAS_SHARED_DIR and
+# FABATLAS_BIN_DIR; the same paths are compiled in as FABATLAS_*_DEFAULT for
+# running a test binary by hand.
 function(fabatlas_add_test)
   cmake_parse_arguments(T "" "NAME;TIMEOUT" "LABELS;SOURCES;LIBS" ${ARGN})
   if(NOT T_TIMEOUT)
@@ -9,10 +11,17 @@ function(fabatlas_add_test)
   endif()
   add_executable(${T_NAME} ${T_SOURCES})
   target_link_libraries(${T_NAME} PRIVATE ${T_LIBS} GTest::gtest GTest::gtest_main)
+  target_compile_definitions(${T_NAME} PRIVATE
+    FABATLAS_SOURCE_DIR_DEFAULT="${CMAKE_SOURCE_DIR}"
+    FABATLAS_SHARED_DIR_DEFAULT="${FABATLAS_SHARED_DIR}"
+    FABATLAS_BIN_DIR_DEFAULT="${CMAKE_BINARY_DIR}/bin")
+  # gtest_discover_tests writes PROPERTIES into a script: a list needs its
+  # separators escaped twice to survive as one ENVIRONMENT value.
+  set(env "FABATLAS_SOURCE_DIR=${CMAKE_SOURCE_DIR}\\\;FABATLAS_SHARED_DIR=${FABATLAS_SHARED_DIR}\\\;FABATLAS_BIN_DIR=${CMAKE_BINARY_DIR}/bin")
   gtest_discover_tests(${T_NAME}
     DISCOVERY_TIMEOUT 60
     PROPERTIES
       LABELS "${T_LABELS}"
       TIMEOUT ${T_TIMEOUT}
-      ENVIRONMENT "FABATLAS_SOURCE_DIR=${CMAKE_SOURCE_DIR};FABATLAS_SHARED_DIR=${FABATLAS_SHARED_DIR};FABATLAS_BIN_DIR=${CMAKE_BINARY_DIR}/bin")
+      ENVIRONMENT "${env}")
 endfunction()

@@ -12,16 +12,16 @@
 
 namespace {
 
-struct Run {
+struct CommandRun {
   int status = -1;
   std::string out, err;
 };
 
-Run Fabatlas(const std::string& args) {
-  std::string bin = std::string(std::getenv("FABATLAS_BIN_DIR")) + "/fabatlas";
+CommandRun Fabatlas(const std::string& args) {
+  std::string bin = (fabatlas::testing::BinDir() / "fabatlas").string();
   auto err_path = std::filesystem::temp_directory_path() / ("fabatlas-cli-err-" + std::to_string(::getpid()));
   std::string cmd = bin + " " + args + " 2>" + err_path.string();
-  Run r;
+  CommandRun r;
   FILE* pipe = ::popen(cmd.c_str(), "r");
   std::array<char, 4096> buf;
   std::size_t n;
@@ -40,14 +40,14 @@ int Lines(const std::string& s) { return static_cast<int>(std::count(s.begin(), 
 }  // namespace
 
 TEST(Cli, ValidateExample) {
-  Run r = Fabatlas("validate " + Examples() + "/vase.yaml");
+  CommandRun r = Fabatlas("validate " + Examples() + "/vase.yaml");
   EXPECT_EQ(r.status, 0) << r.err;
   EXPECT_NE(r.out.find("ok"), std::string::npos);
 }
 
 TEST(Cli, ValidateRejectsWithOneLineAndExitTwo) {
   auto path = fabatlas::testing::TempDesign("name: x\nparameters:\n  r: {type: real, min: 2, max: 1}\ntree: {op: sphere, radius: r}\n");
-  Run r = Fabatlas("validate " + path.string());
+  CommandRun r = Fabatlas("validate " + path.string());
   EXPECT_EQ(r.status, 2);
   EXPECT_EQ(Lines(r.err), 1) << r.err;
   EXPECT_NE(r.err.find(path.string() + ":3:"), std::string::npos) << r.err;
@@ -55,7 +55,7 @@ TEST(Cli, ValidateRejectsWithOneLineAndExitTwo) {
 }
 
 TEST(Cli, EvalJson) {
-  Run r = Fabatlas("eval " + Examples() + "/tube_wall_2d.yaml --at radius=10,wall=3 --json");
+  CommandRun r = Fabatlas("eval " + Examples() + "/tube_wall_2d.yaml --at radius=10,wall=3 --json");
   ASSERT_EQ(r.status, 0) << r.err;
   auto j = nlohmann::json::parse(r.out);
   EXPECT_TRUE(j["valid"].get<bool>());
@@ -68,7 +68,7 @@ TEST(Cli, EvalJson) {
 }
 
 TEST(Cli, EvalReportsUnsatisfiable) {
-  Run r = Fabatlas("eval " + Examples() + "/tube_wall_2d.yaml --at radius=20,wall=2 --json");
+  CommandRun r = Fabatlas("eval " + Examples() + "/tube_wall_2d.yaml --at radius=20,wall=2 --json");
   ASSERT_EQ(r.status, 0) << r.err;
   auto j = nlohmann::json::parse(r.out);
   EXPECT_FALSE(j["valid"].get<bool>());
@@ -77,7 +77,7 @@ TEST(Cli, EvalReportsUnsatisfiable) {
 
 TEST(Cli, EvalRejectsBadPoints) {
   for (const char* at : {"radius=nan", "radius=99", "colour=1", "radius"}) {
-    Run r = Fabatlas("eval " + Examples() + "/tube_wall_2d.yaml --at " + at);
+    CommandRun r = Fabatlas("eval " + Examples() + "/tube_wall_2d.yaml --at " + at);
     EXPECT_EQ(r.status, 2) << at;
     EXPECT_EQ(Lines(r.err), 1) << r.err;
     EXPECT_NE(r.err.find("--at"), std::string::npos) << r.err;
@@ -86,14 +86,14 @@ TEST(Cli, EvalRejectsBadPoints) {
 
 TEST(Cli, EvalWritesMesh) {
   auto out = std::filesystem::temp_directory_path() / ("fabatlas-cli-" + std::to_string(::getpid()) + ".stl");
-  Run r = Fabatlas("eval " + Examples() + "/pawn.yaml --mesh " + out.string());
+  CommandRun r = Fabatlas("eval " + Examples() + "/pawn.yaml --mesh " + out.string());
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_GT(std::filesystem::file_size(out), 1000u);
   std::filesystem::remove(out);
 }
 
 TEST(Cli, DeltaG) {
-  Run r = Fabatlas("dg " + Examples() + "/tube_wall_2d.yaml --a radius=10,wall=3 --b radius=10,wall=3 --json");
+  CommandRun r = Fabatlas("dg " + Examples() + "/tube_wall_2d.yaml --a radius=10,wall=3 --b radius=10,wall=3 --json");
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_NEAR(nlohmann::json::parse(r.out)["dg"].get<double>(), 0.0, 1e-12);
   // Valid against unsatisfiable: dG = 1 by convention.
@@ -103,7 +103,7 @@ TEST(Cli, DeltaG) {
 }
 
 TEST(Cli, MissingDesignAndBadMesh) {
-  Run r = Fabatlas("eval /nonexistent/design.yaml");
+  CommandRun r = Fabatlas("eval /nonexistent/design.yaml");
   EXPECT_EQ(r.status, 2);
   EXPECT_NE(r.err.find("/nonexistent/design.yaml"), std::string::npos);
   // A broken mesh (garbage bytes with an .stl name).

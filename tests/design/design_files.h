@@ -22,12 +22,17 @@ inline std::filesystem::path TempDesign(const std::string& text, const std::stri
 
 inline std::filesystem::path SourceDir() {
   const char* s = std::getenv("FABATLAS_SOURCE_DIR");
-  return s ? s : ".";
+  return s ? s : FABATLAS_SOURCE_DIR_DEFAULT;
 }
 
 inline std::filesystem::path SharedDir() {
   const char* s = std::getenv("FABATLAS_SHARED_DIR");
-  return s ? s : "../shared";
+  return s ? s : FABATLAS_SHARED_DIR_DEFAULT;
+}
+
+inline std::filesystem::path BinDir() {
+  const char* s = std::getenv("FABATLAS_BIN_DIR");
+  return s ? s : FABATLAS_BIN_DIR_DEFAULT;
 }
 
 }  // namespace fabatlas::testing

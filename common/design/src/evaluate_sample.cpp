@@ -216,6 +216,8 @@ SampleResult EvaluateSample(const Design& design, const Point& u, const Evaluate
       geometry_check.reason = e.what();
     } catch (const ResourceError&) {
       throw;
+    } catch (const DesignFault&) {
+      throw;
     } catch (const InputError& e) {
       // Out-of-range values at this point (e.g. a negative radius).
       geometry_check.passed = false;

@@ -80,7 +80,7 @@ Solid Tentacle(const geometry::GridSpec& g, const ResolvedArgs& a, const Node& n
 Solid OpenScad(const geometry::GridSpec& g, const ResolvedArgs& a, const Node& node, const std::filesystem::path& dir) {
   std::filesystem::path scad = dir / a.Text("file");
   char tmpl[] = "/tmp/fabatlas-openscad-XXXXXX";
-  if (!mkdtemp(tmpl)) throw InputError(node.place.str() + ": cannot create a temporary directory for openscad");
+  if (!mkdtemp(tmpl)) throw DesignFault(node.place.str() + ": cannot create a temporary directory for openscad");
   std::filesystem::path work(tmpl);
   std::filesystem::path out = work / "out.stl", log = work / "log.txt";
   std::vector<std::string> argv = {"timeout", "300", "openscad", "--quiet", "-o", out.string()};
@@ -94,7 +94,7 @@ Solid OpenScad(const geometry::GridSpec& g, const ResolvedArgs& a, const Node& n
   }
   argv.push_back(scad.string());
   pid_t pid = fork();
-  if (pid < 0) throw InputError(node.place.str() + ": cannot start openscad");
+  if (pid < 0) throw DesignFault(node.place.str() + ": cannot start openscad");
   if (pid == 0) {
     FILE* f = std::freopen(log.c_str(), "w", stderr);
     (void)f;
@@ -109,7 +109,7 @@ Solid OpenScad(const geometry::GridSpec& g, const ResolvedArgs& a, const Node& n
   int code = WIFEXITED(status) ? WEXITSTATUS(status) : 128;
   if (code == 127) {
     std::filesystem::remove_all(work);
-    throw InputError(node.place.str() + ": the openscad program is not installed (apt-get install openscad)");
+    throw DesignFault(node.place.str() + ": the openscad program is not installed (apt-get install openscad)");
   }
   if (code != 0 || !std::filesystem::exists(out)) {
     std::ifstream in(log);
@@ -148,7 +148,15 @@ Solid ApplyOperation(const Node& node, const ResolvedArgs& a, std::vector<Solid>
     return UnionAll(std::move(balls));
   }
   if (op == "tentacle") return Tentacle(g, a, node);
-  if (op == "mesh") return geometry::FromMesh(g, mesh::ReadMesh(dir / a.Text("file")));
+  if (op == "mesh") {
+    mesh::TriangleMesh m;
+    try {
+      m = mesh::ReadMesh(dir / a.Text("file"));
+    } catch (const InputError& e) {
+      throw DesignFault(node.place.str() + ": " + e.what());
+    }
+    return geometry::FromMesh(g, m);
+  }
   if (op == "openscad") return OpenScad(g, a, node, dir);
 
   // Operations over children. Transforms union several children first.

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "fabatlas/design/design.h"
+#include "fabatlas/error.h"
 #include "fabatlas/geometry/solid.h"
 
 namespace fabatlas::design {
@@ -20,6 +21,13 @@ class SampleFailure : public std::runtime_error {
 
  private:
   std::string type_;
+};
+
+// A problem of the design itself met during evaluation (an unreadable mesh
+// file, a missing program): reported to the user, never a sample outcome.
+class DesignFault : public InputError {
+ public:
+  using InputError::InputError;
 };
 
 // A node's arguments with every expression evaluated at the current sample.

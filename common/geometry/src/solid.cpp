@@ -55,7 +55,7 @@ void CheckActiveVoxelEstimate(const GridSpec& spec, double estimated_active, con
     char buf[320];
     std::snprintf(buf, sizeof buf, "voxel size %g mm on %s would need ~%.1e active voxels (limit %.1e)",
                   spec.voxel_size, what, estimated_active, static_cast<double>(spec.max_active_voxels));
-    throw InputError(buf);
+    throw ResourceError(buf);
   }
 }
 
