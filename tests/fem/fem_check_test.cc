@@ -44,18 +44,18 @@ TEST(FemCheck, ShortThickBlockPasses) {
 }
 
 TEST(FemCheck, SlenderCantileverFailsWithReason) {
-  // 60 x 3 x 3 mm beam, same load: Euler-Bernoulli PL^3/(3EI) = 106 mm in
-  // the linear theory, far beyond the 0.5 mm threshold.
+  // 60 x 3 x 3 mm beam, same load: Euler-Bernoulli PL^3/(3EI) = 53 mm in
+  // the linear theory (large rotation makes it about 36 mm), far beyond the
+  // 0.5 mm threshold.
   const FemLoadCase lc = EndLoad(60.0, {0, 0, -0.5});
   FemCheckOptions opt;
   opt.max_displacement = 0.5;
   const FemCheckResult r = RunFemCheck(Block(60, 3, 3, 1.0), lc, opt);
   EXPECT_FALSE(r.passed);
-  EXPECT_FALSE(r.reason.empty());
-  if (r.converged) {
-    EXPECT_GT(r.max_displacement, 0.5);
-    EXPECT_NE(r.reason.find("exceeds the threshold"), std::string::npos) << r.reason;
-  }
+  ASSERT_TRUE(r.converged) << r.reason;
+  EXPECT_GT(r.max_displacement, 10.0);
+  EXPECT_LT(r.max_displacement, 53.4);  // below the linear theory
+  EXPECT_NE(r.reason.find("exceeds the threshold 0.5 mm"), std::string::npos) << r.reason;
 }
 
 TEST(FemCheck, StrainLimitIsChecked) {

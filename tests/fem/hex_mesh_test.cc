@@ -15,7 +15,7 @@ VoxelSolid Grid(int nx, int ny, int nz, double h) {
   return s;
 }
 
-TEST(HexMeshFromVoxels, NeighbouringVoxelsShareNodes) {
+TEST(FemHexMeshFromVoxels, NeighbouringVoxelsShareNodes) {
   VoxelSolid s = Grid(2, 1, 1, 0.5);
   s.origin = {10, 20, 30};
   const HexMesh m = HexMeshFromVoxels(s);
@@ -37,7 +37,7 @@ TEST(HexMeshFromVoxels, NeighbouringVoxelsShareNodes) {
   EXPECT_EQ(BoundaryFaces(m).size(), 10u);
 }
 
-TEST(HexMeshFromVoxels, OnlyOccupiedVoxelsAndTheirCorners) {
+TEST(FemHexMeshFromVoxels, OnlyOccupiedVoxelsAndTheirCorners) {
   VoxelSolid s = Grid(3, 3, 3, 1.0);
   std::fill(s.occupied.begin(), s.occupied.end(), 0);
   s.occupied[s.Index(0, 0, 0)] = 1;
@@ -52,7 +52,7 @@ TEST(HexMeshFromVoxels, OnlyOccupiedVoxelsAndTheirCorners) {
   EXPECT_EQ(BoundaryFaces(full).size(), 54u);
 }
 
-TEST(HexMeshFromVoxels, RejectsBadInput) {
+TEST(FemHexMeshFromVoxels, RejectsBadInput) {
   VoxelSolid s = Grid(2, 2, 2, 1.0);
   s.occupied.pop_back();
   EXPECT_THROW(HexMeshFromVoxels(s), InputError);
@@ -60,7 +60,7 @@ TEST(HexMeshFromVoxels, RejectsBadInput) {
   EXPECT_THROW(HexMeshFromVoxels(t), InputError);
 }
 
-TEST(HexMeshFromQuadPatch, StructuredTrapezoid) {
+TEST(FemHexMeshFromQuadPatch, StructuredTrapezoid) {
   const HexMesh m = HexMeshFromQuadPatch({Vec2{0, 0}, Vec2{48, 44}, Vec2{48, 60}, Vec2{0, 44}}, 4, 4, 1.0);
   EXPECT_EQ(m.elements.size(), 16u);
   EXPECT_EQ(m.nodes.size(), 50u);

@@ -17,7 +17,7 @@ const Material kMat = Material::FromShearPoisson(0.4225, 0.3);
 // A general deformation gradient with det F > 0 (rotation + stretch + shear).
 Mat3 SampleF() { return Mat3{{{1.10, 0.23, -0.07}, {-0.12, 0.91, 0.15}, {0.05, -0.09, 1.22}}}; }
 
-TEST(NeoHookean, ZeroEnergyAndStressInReferenceState) {
+TEST(FemNeoHookean, ZeroEnergyAndStressInReferenceState) {
   const Mat3 I{{{1, 0, 0}, {0, 1, 0}, {0, 0, 1}}};
   EXPECT_NEAR(NeoHookeanEnergy(kMat, I), 0.0, 1e-15);
   const Mat3 P = NeoHookeanStress(kMat, I);
@@ -25,12 +25,12 @@ TEST(NeoHookean, ZeroEnergyAndStressInReferenceState) {
     for (int j = 0; j < 3; ++j) EXPECT_NEAR(P[i][j], 0.0, 1e-15);
 }
 
-TEST(NeoHookean, InvertedElementHasInfiniteEnergy) {
+TEST(FemNeoHookean, InvertedElementHasInfiniteEnergy) {
   const Mat3 F{{{-1, 0, 0}, {0, 1, 0}, {0, 0, 1}}};
   EXPECT_TRUE(std::isinf(NeoHookeanEnergy(kMat, F)));
 }
 
-TEST(NeoHookean, StressIsEnergyGradient) {
+TEST(FemNeoHookean, StressIsEnergyGradient) {
   const Mat3 F = SampleF();
   const Mat3 P = NeoHookeanStress(kMat, F);
   const double h = 1e-6;
@@ -44,7 +44,7 @@ TEST(NeoHookean, StressIsEnergyGradient) {
     }
 }
 
-TEST(NeoHookean, TangentIsStressGradient) {
+TEST(FemNeoHookean, TangentIsStressGradient) {
   const Mat3 F = SampleF();
   const Tangent9 A = NeoHookeanTangent(kMat, F);
   const double h = 1e-6;
@@ -68,7 +68,7 @@ TEST(NeoHookean, TangentIsStressGradient) {
     for (int c = 0; c < 9; ++c) EXPECT_NEAR(A[r][c], A[c][r], 1e-12 * max_val);
 }
 
-TEST(NeoHookean, SmallStrainLimitIsHookesLaw) {
+TEST(FemNeoHookean, SmallStrainLimitIsHookesLaw) {
   const Material m = Material::FromYoungPoisson(200.0, 0.3);
   const double lambda = m.kappa - 2.0 * m.mu / 3.0;
   // Symmetric small strain eps; F = I + eps.
@@ -85,7 +85,7 @@ TEST(NeoHookean, SmallStrainLimitIsHookesLaw) {
     }
 }
 
-TEST(NeoHookean, MaterialConstants) {
+TEST(FemNeoHookean, MaterialConstants) {
   const Material a = Material::FromYoungPoisson(1000.0, 0.25);
   EXPECT_DOUBLE_EQ(a.mu, 400.0);
   EXPECT_NEAR(a.kappa, 1000.0 / 1.5, 1e-12);

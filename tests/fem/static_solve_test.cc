@@ -56,9 +56,9 @@ struct CookCase {
   double reference_uy;  // mm, DESIGN.md table
 };
 
-class CooksMembrane : public ::testing::TestWithParam<CookCase> {};
+class FemCooksMembrane : public ::testing::TestWithParam<CookCase> {};
 
-TEST_P(CooksMembrane, TipDisplacementMatchesPublishedWithinOnePercent) {
+TEST_P(FemCooksMembrane, TipDisplacementMatchesPublishedWithinOnePercent) {
   const int n = GetParam().n;
   const StaticSolveSummary s = SolveCooksMembrane(n, Thickness::kPublishedSymmetricSlab);
   ASSERT_TRUE(s.converged) << s.message;
@@ -68,7 +68,7 @@ TEST_P(CooksMembrane, TipDisplacementMatchesPublishedWithinOnePercent) {
       << "n=" << n << " newton=" << s.newton_iterations;
 }
 
-INSTANTIATE_TEST_SUITE_P(ElementsPerEdge, CooksMembrane,
+INSTANTIATE_TEST_SUITE_P(ElementsPerEdge, FemCooksMembrane,
                          ::testing::Values(CookCase{1, 5.15}, CookCase{2, 8.72}, CookCase{4, 12.02},
                                            CookCase{8, 13.61}, CookCase{16, 14.13},
                                            CookCase{32, 14.28}),
@@ -76,7 +76,7 @@ INSTANTIATE_TEST_SUITE_P(ElementsPerEdge, CooksMembrane,
 
 // True plane strain (u_z = 0 at every node) adds a constraint, so the
 // membrane is stiffer than the free-thickness slab of the published table.
-TEST(CooksMembranePlaneStrain, StifferThanFreeThicknessSlab) {
+TEST(FemCooksMembranePlaneStrain, StifferThanFreeThicknessSlab) {
   const StaticSolveSummary ps = SolveCooksMembrane(8, Thickness::kPlaneStrain);
   const StaticSolveSummary slab = SolveCooksMembrane(8, Thickness::kPublishedSymmetricSlab);
   ASSERT_TRUE(ps.converged && slab.converged);
@@ -87,7 +87,7 @@ TEST(CooksMembranePlaneStrain, StifferThanFreeThicknessSlab) {
 
 // Patch test: a block under uniaxial dead traction must reproduce the
 // homogeneous Neo-Hookean stretch exactly (every node on the affine map).
-TEST(StaticSolve, PatchTestUniaxialStretch) {
+TEST(FemStaticSolve, PatchTestUniaxialStretch) {
   const Material mat = Material::FromYoungPoisson(10.0, 0.3);
   const double stretch = 1.2;
   // Lateral stretch s with P_yy(diag(stretch, s, s)) = 0, by bisection.
@@ -149,7 +149,7 @@ TEST(StaticSolve, PatchTestUniaxialStretch) {
 // beam theory, delta = P L^3 / (3 E I). nu = 0 keeps the clamp free of
 // Poisson constraint effects; 6 elements through the thickness keep the
 // shear locking of full-integration Q1 small.
-TEST(StaticSolve, SmallStrainCantileverMatchesEulerBernoulli) {
+TEST(FemStaticSolve, SmallStrainCantileverMatchesEulerBernoulli) {
   const double L = 60, h = 6, E = 100, P = 0.02;
   VoxelSolid v;
   v.voxel_size = 1.0;
