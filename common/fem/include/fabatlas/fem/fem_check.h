@@ -36,7 +36,11 @@ struct FemLoadCase {
 struct FemCheckOptions {
   double max_displacement = 1.0;  // mm; the check fails above it
   double max_strain = 0.0;        // principal Green-Lagrange; <= 0: not checked
-  StaticSolveOptions solve;
+  // Solver settings. The check starts with a single load step: valid designs
+  // deform little, and a step that fails is halved (max_cutbacks), so hard
+  // cases still get load stepping. On the 20k-element heel of bench/fem this
+  // takes 5 Newton iterations instead of 16 with 4 steps (same answer).
+  StaticSolveOptions solve{.load_steps = 1};
 };
 
 struct FemCheckResult {
