@@ -15,4 +15,8 @@ void AddDesignCommands(CLI::App& app, int& exit_code);
 // (cli/sample_commands.cpp).
 void AddSampleCommands(CLI::App& app, int& exit_code);
 
+// run, submit, status, watch, cancel, fetch, jobs: jobs on the cluster
+// (cli/job_commands.cpp).
+void AddJobCommands(CLI::App& app, int& exit_code);
+
 }  // namespace fabatlas::cli

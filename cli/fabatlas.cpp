@@ -14,6 +14,7 @@ int main(int argc, char** argv) {
   int exit_code = 0;
   fabatlas::cli::AddDesignCommands(app, exit_code);
   fabatlas::cli::AddSampleCommands(app, exit_code);
+  fabatlas::cli::AddJobCommands(app, exit_code);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

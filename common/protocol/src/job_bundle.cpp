@@ -1,0 +1,116 @@
+// Job bundles (see job_bundle.h).
+#include "fabatlas/protocol/job_bundle.h"
+
+#include <google/protobuf/io/coded_stream.h>
+#include <google/protobuf/io/zero_copy_stream_impl_lite.h>
+
+#include <fstream>
+#include <functional>
+#include <sstream>
+
+#include "fabatlas/design/design.h"
+#include "fabatlas/error.h"
+#include "fabatlas/sampling/job_file.h"
+#include "fabatlas/sha256.h"
+
+namespace fabatlas::protocol {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+std::string ReadFile(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path.string() + ": cannot read");
+  std::ostringstream out;
+  out << in.rdbuf();
+  return out.str();
+}
+
+void WriteFile(const fs::path& path, const std::string& bytes) {
+  std::error_code ec;
+  fs::create_directories(path.parent_path(), ec);
+  std::ofstream out(path, std::ios::binary | std::ios::trunc);
+  out << bytes;
+  out.close();
+  if (!out) throw ResourceError(path.string() + ": cannot write");
+}
+
+bool StaysInside(const fs::path& relative) {
+  if (relative.empty() || relative.is_absolute()) return false;
+  for (const auto& part : relative)
+    if (part == "..") return false;
+  return true;
+}
+
+}  // namespace
+
+v1::JobBundle MakeJobBundle(const fs::path& job_file) {
+  std::string job_text = ReadFile(job_file);
+  sampling::JobFile job = sampling::ParseJobFile(job_text, job_file.string());
+  fs::path design_path = job.design_path;
+  design::Design design = design::LoadDesign(design_path);
+  v1::JobBundle bundle;
+  bundle.set_job_file_name(job_file.filename().string());
+  bundle.set_job_file(job_text);
+  bundle.set_design_file_name(design_path.filename().string());
+  bundle.set_design_file(ReadFile(design_path));
+  // Files named by node arguments (meshes, OpenSCAD models), relative to the
+  // design file.
+  fs::path base = design_path.parent_path();
+  std::function<void(const design::Argument&)> visit_argument = [&](const design::Argument& a) {
+    if (a.kind == design::Argument::Kind::kScalar) {
+      fs::path rel(a.text);
+      std::error_code ec;
+      if (StaysInside(rel) && rel.has_extension() && fs::is_regular_file(base / rel, ec))
+        (*bundle.mutable_files())[rel.generic_string()] = ReadFile(base / rel);
+    }
+    for (const auto& item : a.items) visit_argument(item);
+  };
+  std::function<void(const design::Node&)> visit = [&](const design::Node& node) {
+    for (const auto& [name, arg] : node.args) visit_argument(arg);
+    for (const auto& child : node.children) visit(child);
+  };
+  visit(design.tree);
+  return bundle;
+}
+
+std::string BundleBytes(const v1::JobBundle& bundle) {
+  std::string out;
+  {
+    google::protobuf::io::StringOutputStream stream(&out);
+    google::protobuf::io::CodedOutputStream coded(&stream);
+    coded.SetSerializationDeterministic(true);
+    bundle.SerializeToCodedStream(&coded);
+  }
+  return out;
+}
+
+std::string EvaluationDigest(const v1::JobBundle& bundle) {
+  v1::JobBundle evaluation;
+  evaluation.set_design_file_name(bundle.design_file_name());
+  evaluation.set_design_file(bundle.design_file());
+  *evaluation.mutable_files() = bundle.files();
+  return Sha256Hex(BundleBytes(evaluation));
+}
+
+MaterializedBundle Materialize(const v1::JobBundle& bundle, const fs::path& dir) {
+  auto check = [](const std::string& name) {
+    if (!StaysInside(fs::path(name)))
+      throw InputError("job bundle: file name '" + name + "' leaves the job directory");
+  };
+  check(bundle.job_file_name());
+  check(bundle.design_file_name());
+  MaterializedBundle m;
+  m.job_file = dir / "job" / bundle.job_file_name();
+  m.design_file = dir / "design" / bundle.design_file_name();
+  WriteFile(m.job_file, bundle.job_file());
+  WriteFile(m.design_file, bundle.design_file());
+  for (const auto& [name, bytes] : bundle.files()) {
+    check(name);
+    WriteFile(dir / "design" / name, bytes);
+  }
+  return m;
+}
+
+}  // namespace fabatlas::protocol

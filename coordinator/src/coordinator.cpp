@@ -1,0 +1,811 @@
+// The coordinator: JobService, WorkerService and BlobService over the durable
+// store, one sampling driver thread per running job, the lease sweeper and
+// the /metrics endpoint (see coordinator.h).
+#include "fabatlas/coordinator/coordinator.h"
+
+#include <grpcpp/grpcpp.h>
+#include <grpcpp/health_check_service_interface.h>
+#include <httplib.h>
+
+#include <atomic>
+#include <condition_variable>
+#include <deque>
+#include <fstream>
+#include <map>
+#include <set>
+#include <sstream>
+#include <thread>
+#include <unordered_map>
+
+#include "fabatlas/design/design.h"
+#include "fabatlas/error.h"
+#include "fabatlas/precompute/design_evaluator.h"
+#include "fabatlas/precompute/form_outputs.h"
+#include "fabatlas/protocol/channel.h"
+#include "fabatlas/protocol/job_bundle.h"
+#include "fabatlas/protocol/tasks.h"
+#include "fabatlas/sampling/adaptive_sampler.h"
+#include "fabatlas/sampling/job_file.h"
+#include "fabatlas/storage/blob_store.h"
+#include "fabatlas/storage/job_store.h"
+#include "fabatlas/v1/blob.grpc.pb.h"
+#include "fabatlas/v1/job.grpc.pb.h"
+#include "fabatlas/v1/worker.grpc.pb.h"
+
+namespace fabatlas::coordinator {
+
+namespace fs = std::filesystem;
+using grpc::ServerContext;
+using grpc::Status;
+using grpc::StatusCode;
+
+namespace {
+
+std::int64_t NowMs() {
+  return std::chrono::duration_cast<std::chrono::milliseconds>(
+             std::chrono::system_clock::now().time_since_epoch())
+      .count();
+}
+
+struct Stopping {};
+struct JobCancelled {};
+
+bool Terminal(storage::JobState s) {
+  return s == storage::JobState::kSucceeded || s == storage::JobState::kFailed ||
+         s == storage::JobState::kCancelled;
+}
+
+std::string ReadFile(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream out;
+  out << in.rdbuf();
+  return out.str();
+}
+
+}  // namespace
+
+struct Coordinator::Impl {
+  explicit Impl(CoordinatorOptions o) : options(std::move(o)) {}
+
+  CoordinatorOptions options;
+  std::unique_ptr<storage::JobStore> store;
+  std::unique_ptr<storage::BlobStore> blobs;
+  std::unique_ptr<grpc::Server> server;
+  std::vector<std::unique_ptr<grpc::Service>> services;
+  int port = 0;
+  std::atomic<bool> stopping{false}, draining{false}, started{false};
+
+  // Long polls wait for new work here.
+  std::mutex work_mu;
+  std::condition_variable work_cv;
+  std::uint64_t work_epoch = 0;
+
+  // Drivers wait for results here.
+  struct Waiter {
+    std::string job_id;
+    std::map<std::string, std::string> results;
+    std::size_t pending = 0;
+  };
+  std::mutex results_mu;
+  std::condition_variable results_cv;
+  std::unordered_multimap<std::string, Waiter*> waiting;
+  std::set<std::string> cancelled_jobs;
+
+  std::mutex drivers_mu;
+  std::vector<std::thread> drivers;
+  std::set<std::string> running_drivers;
+
+  std::thread sweeper;
+  std::unique_ptr<httplib::Server> metrics;
+  std::thread metrics_thread;
+  std::atomic<std::int64_t> last_retry_ms{0};
+  std::atomic<std::int64_t> completed_total{0}, fenced_total{0}, duplicate_total{0};
+
+  // tasks/s per job: (time, tasks done) samples over the last 10 s.
+  std::mutex rate_mu;
+  std::map<std::string, std::deque<std::pair<std::int64_t, std::int64_t>>> rate_samples;
+
+  std::mutex shutdown_mu;
+  std::condition_variable shutdown_cv;
+  bool shut_down = false;
+
+  void SignalWork() {
+    {
+      std::lock_guard lock(work_mu);
+      ++work_epoch;
+    }
+    work_cv.notify_all();
+  }
+
+  void Deliver(const std::string& key, const std::string& result) {
+    {
+      std::lock_guard lock(results_mu);
+      auto range = waiting.equal_range(key);
+      for (auto it = range.first; it != range.second; ++it)
+        if (it->second->results.emplace(key, result).second) --it->second->pending;
+    }
+    results_cv.notify_all();
+  }
+
+  std::vector<std::string> RunTasks(const std::string& job_id, const std::vector<std::string>& payloads,
+                                    const std::vector<std::string>& keys, const std::vector<int>& kinds) {
+    Waiter waiter;
+    waiter.job_id = job_id;
+    std::vector<storage::NewTask> tasks;
+    std::set<std::string> unique;
+    for (std::size_t i = 0; i < keys.size(); ++i)
+      if (unique.insert(keys[i]).second) tasks.push_back({keys[i], job_id, kinds[i], payloads[i]});
+    {
+      std::lock_guard lock(results_mu);
+      waiter.pending = unique.size();
+      for (const auto& key : unique) waiting.emplace(key, &waiter);
+    }
+    auto unregister = [&] {
+      for (const auto& key : unique) {
+        auto range = waiting.equal_range(key);
+        for (auto it = range.first; it != range.second; ++it)
+          if (it->second == &waiter) {
+            waiting.erase(it);
+            break;
+          }
+      }
+    };
+    std::map<std::string, std::string> finished;
+    try {
+      finished = store->AddTasks(tasks);
+    } catch (...) {
+      std::lock_guard lock(results_mu);
+      unregister();
+      throw;
+    }
+    for (const auto& [key, result] : finished) Deliver(key, result);
+    SignalWork();
+    std::unique_lock lock(results_mu);
+    results_cv.wait(lock, [&] {
+      return waiter.pending == 0 || stopping || cancelled_jobs.count(job_id) > 0;
+    });
+    unregister();
+    if (waiter.pending > 0) {
+      if (stopping) throw Stopping{};
+      throw JobCancelled{};
+    }
+    std::vector<std::string> out;
+    out.reserve(keys.size());
+    for (const auto& key : keys) out.push_back(waiter.results.at(key));
+    return out;
+  }
+
+  // sampling::Executor whose tasks run on the workers.
+  class RemoteExecutor : public sampling::Executor {
+   public:
+    RemoteExecutor(Impl& impl, std::string job_id, std::string evaluation_digest, int subdivisions)
+        : impl_(impl), job_id_(std::move(job_id)), digest_(std::move(evaluation_digest)),
+          subdivisions_(subdivisions) {}
+
+    std::vector<sampling::SampleOutcome> RunSampleTasks(const std::vector<sampling::SampleTask>& tasks,
+                                                        sampling::SampleEvaluator&,
+                                                        std::vector<sampling::TaskTiming>* timings) override {
+      std::vector<v1::TaskPayload> payloads;
+      for (const auto& t : tasks) payloads.push_back(protocol::SamplePayload(t));
+      auto results = Run(payloads);
+      std::vector<sampling::SampleOutcome> out;
+      if (timings) timings->assign(tasks.size(), {});
+      for (std::size_t i = 0; i < results.size(); ++i) {
+        out.push_back(protocol::SampleOutcomeOf(results[i]));
+        if (timings) (*timings)[i].wall_seconds = results[i].wall_seconds();
+      }
+      return out;
+    }
+
+    std::vector<sampling::GeometryChangeResult> RunGeometryChangeTasks(
+        const std::vector<sampling::GeometryChangeTask>& tasks, sampling::SampleEvaluator&,
+        std::vector<sampling::TaskTiming>* timings) override {
+      std::vector<v1::TaskPayload> payloads;
+      for (const auto& t : tasks) payloads.push_back(protocol::GeometryChangePayload(t));
+      auto results = Run(payloads);
+      std::vector<sampling::GeometryChangeResult> out;
+      if (timings) timings->assign(tasks.size(), {});
+      for (std::size_t i = 0; i < results.size(); ++i) {
+        out.push_back({results[i].geometry_change(), results[i].cpu_seconds()});
+        if (timings) (*timings)[i].wall_seconds = results[i].wall_seconds();
+      }
+      return out;
+    }
+
+   private:
+    std::vector<v1::TaskResult> Run(const std::vector<v1::TaskPayload>& payloads) {
+      std::vector<std::string> bytes, keys;
+      std::vector<int> kinds;
+      for (const auto& p : payloads) {
+        bytes.push_back(p.SerializeAsString());
+        keys.push_back(protocol::TaskKey(p, digest_, subdivisions_));
+        kinds.push_back(static_cast<int>(p.kind()));
+      }
+      auto results = impl_.RunTasks(job_id_, bytes, keys, kinds);
+      std::vector<v1::TaskResult> out(results.size());
+      for (std::size_t i = 0; i < results.size(); ++i) out[i].ParseFromString(results[i]);
+      return out;
+    }
+
+    Impl& impl_;
+    std::string job_id_, digest_;
+    int subdivisions_;
+  };
+
+  void Event(const std::string& job_id, const std::string& kind, const std::string& message) {
+    try {
+      store->AddEvent({NowMs(), job_id, kind, message});
+    } catch (const std::exception&) {
+    }
+  }
+
+  void Drive(const std::string& job_id) {
+    try {
+      auto job = store->FindJob(job_id);
+      if (!job) return;
+      v1::JobBundle bundle;
+      if (!bundle.ParseFromString(blobs->Read(job->bundle_digest)))
+        throw InputError("job " + job_id + ": the bundle blob is not a JobBundle");
+      fs::path dir = options.state_dir / "jobs" / job_id;
+      auto files = protocol::Materialize(bundle, dir);
+      sampling::JobFile job_file = sampling::ParseJobFile(bundle.job_file(), files.job_file.string());
+      design::Design design = design::LoadDesign(files.design_file);
+      sampling::DesignSpace space = precompute::DesignSpaceOf(design, job_file.subdivisions);
+      precompute::DesignSampleEvaluator unused_local(design);
+      RemoteExecutor executor(*this, job_id, protocol::EvaluationDigest(bundle), job_file.subdivisions);
+      Event(job_id, "driver_started", "sampling driver started (replaying stored results)");
+      sampling::SamplingSummary summary =
+          sampling::SampleDesignSpace(space, unused_local, executor, job_file.sampling);
+      fs::path out = dir / "out";
+      precompute::WriteFormOutputs(design, summary, out);
+      for (const auto& entry : fs::directory_iterator(out)) {
+        if (!entry.is_regular_file()) continue;
+        std::string name = entry.path().filename().string();
+        if (name.find(".tmp") != std::string::npos) continue;
+        store->PutJobOutput(job_id, name, blobs->Put(ReadFile(entry.path())));
+      }
+      store->SetJobState(job_id, storage::JobState::kSucceeded, "", NowMs());
+      Event(job_id, "succeeded", precompute::Table3Row(design, summary.statistics));
+    } catch (const Stopping&) {
+    } catch (const JobCancelled&) {
+    } catch (const std::exception& e) {
+      if (!stopping) {
+        store->SetJobState(job_id, storage::JobState::kFailed, e.what(), NowMs());
+        Event(job_id, "failed", e.what());
+      }
+    }
+    std::lock_guard lock(drivers_mu);
+    running_drivers.erase(job_id);
+  }
+
+  void StartDriver(const std::string& job_id) {
+    std::lock_guard lock(drivers_mu);
+    if (stopping || !running_drivers.insert(job_id).second) return;
+    drivers.emplace_back([this, job_id] { Drive(job_id); });
+  }
+
+  v1::JobStatus StatusOf(const storage::JobRecord& job) {
+    v1::JobStatus s;
+    s.set_job_id(job.id);
+    s.set_state(static_cast<v1::JobState>(job.state));
+    s.set_design_name(job.design_name);
+    storage::TaskCounts c = store->CountTasks(job.id);
+    s.set_tasks_total(c.total);
+    s.set_tasks_done(c.done + c.quarantined);
+    s.set_tasks_leased(c.leased);
+    s.set_tasks_queued(c.queued);
+    s.set_tasks_quarantined(c.quarantined);
+    s.set_samples_done(c.samples_done);
+    s.set_samples_valid(c.samples_valid);
+    s.set_lease_expiries(c.lease_expiries);
+    s.set_fenced_results(c.fenced_results);
+    s.set_error(job.error);
+    s.set_created_unix_ms(job.created_ms);
+    s.set_finished_unix_ms(job.finished_ms);
+    std::int64_t now = NowMs(), done = c.done + c.quarantined;
+    std::lock_guard lock(rate_mu);
+    auto& samples = rate_samples[job.id];
+    samples.emplace_back(now, done);
+    while (samples.size() > 1 && samples.front().first < now - 10000) samples.pop_front();
+    if (samples.size() > 1 && now > samples.front().first)
+      s.set_tasks_per_second(1000.0 * static_cast<double>(done - samples.front().second) /
+                             static_cast<double>(now - samples.front().first));
+    return s;
+  }
+
+  std::string Metrics() {
+    std::ostringstream m;
+    storage::TaskCounts c = store->CountTasks("");
+    std::int64_t now = NowMs();
+    m << "# HELP fabatlas_tasks Tasks in the store by state.\n# TYPE fabatlas_tasks gauge\n";
+    m << "fabatlas_tasks{state=\"queued\"} " << c.queued << "\n";
+    m << "fabatlas_tasks{state=\"leased\"} " << c.leased << "\n";
+    m << "fabatlas_tasks{state=\"done\"} " << c.done << "\n";
+    m << "fabatlas_tasks{state=\"quarantined\"} " << c.quarantined << "\n";
+    m << "# HELP fabatlas_tasks_completed_total Results accepted since start-up (rate() = throughput).\n"
+         "# TYPE fabatlas_tasks_completed_total counter\n";
+    m << "fabatlas_tasks_completed_total " << completed_total.load() << "\n";
+    m << "# HELP fabatlas_results_fenced_total Late results of expired leases since start-up.\n"
+         "# TYPE fabatlas_results_fenced_total counter\n";
+    m << "fabatlas_results_fenced_total " << fenced_total.load() << "\n";
+    m << "# HELP fabatlas_lease_expiries Lease expiries recorded in the store.\n"
+         "# TYPE fabatlas_lease_expiries gauge\n";
+    m << "fabatlas_lease_expiries " << c.lease_expiries << "\n";
+    m << "# HELP fabatlas_workers Workers seen within two lease periods.\n# TYPE fabatlas_workers gauge\n";
+    m << "fabatlas_workers " << store->CountWorkers(now - 2 * options.lease_ms) << "\n";
+    std::map<int, int> jobs;
+    for (const auto& j : store->Jobs()) ++jobs[static_cast<int>(j.state)];
+    m << "# HELP fabatlas_jobs Jobs by state.\n# TYPE fabatlas_jobs gauge\n";
+    for (int st = 1; st <= 5; ++st)
+      m << "fabatlas_jobs{state=\"" << v1::JobState_Name(static_cast<v1::JobState>(st)).substr(10)
+        << "\"} " << jobs[st] << "\n";
+    m << "# HELP fabatlas_draining 1 while the coordinator drains.\n# TYPE fabatlas_draining gauge\n";
+    m << "fabatlas_draining " << (draining ? 1 : 0) << "\n";
+    return m.str();
+  }
+
+  void Sweep() {
+    auto quarantine = [](int kind) {
+      return protocol::QuarantineResult(static_cast<v1::TaskKind>(kind)).SerializeAsString();
+    };
+    while (!stopping) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(100));
+      try {
+        std::int64_t now = NowMs();
+        auto expired = store->ExpireLeases(now, options.retry_backoff_ms, options.quarantine_after, quarantine);
+        for (const auto& e : expired) {
+          if (!e.quarantined) continue;
+          if (auto task = store->FindTask(e.task_key)) Deliver(e.task_key, task->result);
+        }
+        if (!expired.empty()) last_retry_ms = now;
+        if (!expired.empty() || now - last_retry_ms < 31000) SignalWork();
+      } catch (const std::exception&) {
+      }
+    }
+  }
+};
+
+namespace {
+
+Status Invalid(const std::string& message) { return Status(StatusCode::INVALID_ARGUMENT, message); }
+
+Status FromException(const std::exception& e) {
+  if (dynamic_cast<const ResourceError*>(&e)) return Status(StatusCode::RESOURCE_EXHAUSTED, e.what());
+  if (dynamic_cast<const InputError*>(&e)) return Status(StatusCode::INVALID_ARGUMENT, e.what());
+  return Status(StatusCode::INTERNAL, e.what());
+}
+
+class JobServiceImpl final : public v1::JobService::Service {
+ public:
+  explicit JobServiceImpl(Coordinator::Impl& impl) : impl_(impl) {}
+
+  Status Submit(ServerContext* ctx, const v1::SubmitRequest* req, v1::SubmitResponse* resp) override {
+    if (Status s = protocol::CheckToken(*ctx, impl_.options.token); !s.ok()) return s;
+    const std::string& digest = req->bundle_digest();
+    if (!storage::IsDigest(digest)) return Invalid("bundle_digest is not a SHA-256 hex digest");
+    if (!impl_.blobs->Contains(digest))
+      return Status(StatusCode::FAILED_PRECONDITION, "bundle " + digest + " not uploaded");
+    try {
+      v1::JobBundle bundle;
+      if (!bundle.ParseFromString(impl_.blobs->Read(digest))) return Invalid("bundle is not a JobBundle");
+      std::string id = digest.substr(0, 16);
+      fs::path dir = impl_.options.state_dir / "jobs" / id;
+      auto files = protocol::Materialize(bundle, dir);
+      sampling::ParseJobFile(bundle.job_file(), files.job_file.string());
+      design::Design design = design::LoadDesign(files.design_file);
+      bool created = impl_.store->CreateJob(
+          {id, digest, design.name, storage::JobState::kRunning, "", NowMs(), 0});
+      if (!created) {
+        auto job = impl_.store->FindJob(id);
+        if (job && (job->state == storage::JobState::kCancelled || job->state == storage::JobState::kFailed)) {
+          impl_.store->SetJobState(id, storage::JobState::kRunning, "", 0);
+          std::lock_guard lock(impl_.results_mu);
+          impl_.cancelled_jobs.erase(id);
+        }
+      }
+      impl_.Event(id, created ? "submitted" : "resubmitted", "design " + design.name);
+      auto job = impl_.store->FindJob(id);
+      if (job && job->state == storage::JobState::kRunning) impl_.StartDriver(id);
+      resp->set_job_id(id);
+      resp->set_created(created);
+      return Status::OK;
+    } catch (const std::exception& e) {
+      return FromException(e);
+    }
+  }
+
+  Status GetStatus(ServerContext* ctx, const v1::GetStatusRequest* req, v1::JobStatus* resp) override {
+    if (Status s = protocol::CheckToken(*ctx, impl_.options.token); !s.ok()) return s;
+    auto job = impl_.store->FindJob(req->job_id());
+    if (!job) return Status(StatusCode::NOT_FOUND, "no job " + req->job_id());
+    *resp = impl_.StatusOf(*job);
+    return Status::OK;
+  }
+
+  Status Watch(ServerContext* ctx, const v1::GetStatusRequest* req,
+               grpc::ServerWriter<v1::JobStatus>* writer) override {
+    if (Status s = protocol::CheckToken(*ctx, impl_.options.token); !s.ok()) return s;
+    std::string last;
+    while (!ctx->IsCancelled() && !impl_.stopping) {
+      auto job = impl_.store->FindJob(req->job_id());
+      if (!job) return Status(StatusCode::NOT_FOUND, "no job " + req->job_id());
+      v1::JobStatus status = impl_.StatusOf(*job);
+      v1::JobStatus compare = status;
+      compare.clear_tasks_per_second();
+      std::string bytes = compare.SerializeAsString();
+      if (bytes != last) {
+        if (!writer->Write(status)) break;
+        last = bytes;
+      }
+      if (Terminal(job->state)) break;
+      std::this_thread::sleep_for(std::chrono::milliseconds(200));
+    }
+    if (impl_.stopping) return Status(StatusCode::UNAVAILABLE, "coordinator shutting down");
+    return Status::OK;
+  }
+
+  Status Cancel(ServerContext* ctx, const v1::CancelRequest* req, v1::JobStatus* resp) override {
+    if (Status s = protocol::CheckToken(*ctx, impl_.options.token); !s.ok()) return s;
+    auto job = impl_.store->FindJob(req->job_id());
+    if (!job) return Status(StatusCode::NOT_FOUND, "no job " + req->job_id());
+    if (!Terminal(job->state)) {
+      impl_.store->SetJobState(job->id, storage::JobState::kCancelled, "", NowMs());
+      {
+        std::lock_guard lock(impl_.results_mu);
+        impl_.cancelled_jobs.insert(job->id);
+      }
+      impl_.results_cv.notify_all();
+      impl_.Event(job->id, "cancelled", "cancelled by an operator");
+    }
+    *resp = impl_.StatusOf(*impl_.store->FindJob(job->id));
+    return Status::OK;
+  }
+
+  Status ListJobs(ServerContext* ctx, const v1::ListJobsRequest*, v1::ListJobsResponse* resp) override {
+    if (Status s = protocol::CheckToken(*ctx, impl_.options.token); !s.ok()) return s;
+    for (const auto& job : impl_.store->Jobs()) *resp->add_jobs() = impl_.StatusOf(job);
+    return Status::OK;
+  }
+
+  Status FetchResult(ServerContext* ctx, const v1::FetchResultRequest* req,
+                     v1::FetchResultResponse* resp) override {
+    if (Status s = protocol::CheckToken(*ctx, impl_.options.token); !s.ok()) return s;
+    auto job = impl_.store->FindJob(req->job_id());
+    if (!job) return Status(StatusCode::NOT_FOUND, "no job " + req->job_id());
+    if (job->state != storage::JobState::kSucceeded)
+      return Status(StatusCode::FAILED_PRECONDITION,
+                    "job " + job->id + " is " + v1::JobState_Name(static_cast<v1::JobState>(job->state)));
+    try {
+      for (const auto& [name, digest] : impl_.store->JobOutputs(job->id))
+        (*resp->mutable_files())[name] = impl_.blobs->Read(digest);
+    } catch (const std::exception& e) {
+      return FromException(e);
+    }
+    return Status::OK;
+  }
+
+ private:
+  Coordinator::Impl& impl_;
+};
+
+class WorkerServiceImpl final : public v1::WorkerService::Service {
+ public:
+  explicit WorkerServiceImpl(Coordinator::Impl& impl) : impl_(impl) {}
+
+  Status Sync(ServerContext* ctx, const v1::SyncRequest* req, v1::SyncResponse* resp) override {
+    if (Status s = protocol::CheckToken(*ctx, impl_.options.token); !s.ok()) return s;
+    if (req->worker_id().empty()) return Invalid("worker_id is empty");
+    const auto& o = impl_.options;
+    try {
+      std::int64_t now = NowMs();
+      impl_.store->TouchWorker(req->worker_id(), req->free_slots(), now);
+      std::vector<storage::Completion> completions;
+      std::vector<std::string> known(req->in_flight_lease_ids().begin(), req->in_flight_lease_ids().end());
+      for (const auto& c : req->completed()) {
+        storage::Completion done;
+        done.lease_id = c.lease_id();
+        done.task_key = c.task_key();
+        done.attempt = c.attempt();
+        done.failed = !c.error().empty();
+        done.result = c.result().SerializeAsString();
+        done.sample_valid = c.result().has_sample() ? (c.result().sample().valid() ? 1 : 0) : -1;
+        completions.push_back(std::move(done));
+        known.push_back(c.lease_id());
+      }
+      auto outcomes = impl_.store->Complete(completions, now, o.retry_backoff_ms);
+      bool requeued = false;
+      for (std::size_t i = 0; i < outcomes.size(); ++i) {
+        resp->add_acknowledged_lease_ids(completions[i].lease_id);
+        switch (outcomes[i]) {
+          case storage::CompletionOutcome::kAccepted:
+            ++impl_.completed_total;
+            impl_.Deliver(completions[i].task_key, completions[i].result);
+            break;
+          case storage::CompletionOutcome::kFenced: ++impl_.fenced_total; break;
+          case storage::CompletionOutcome::kDuplicate: ++impl_.duplicate_total; break;
+          case storage::CompletionOutcome::kRequeued: requeued = true; break;
+          case storage::CompletionOutcome::kUnknown: break;
+        }
+      }
+      if (requeued) impl_.last_retry_ms = now;
+      if (impl_.store->ReturnUnknownLeases(req->worker_id(), known) > 0) impl_.SignalWork();
+      std::vector<std::string> in_flight(req->in_flight_lease_ids().begin(), req->in_flight_lease_ids().end());
+      for (const auto& id : impl_.store->ExtendLeases(req->worker_id(), in_flight, now + o.lease_ms))
+        resp->add_revoked_lease_ids(id);
+      resp->set_heartbeat_interval_ms(static_cast<int>(o.heartbeat_ms));
+      if (impl_.draining || impl_.stopping || req->leaving()) {
+        resp->set_draining(impl_.draining || impl_.stopping);
+        return Status::OK;
+      }
+      int want = std::min(req->free_slots(), o.max_leases_per_sync);
+      std::int64_t wait_ms = std::min<std::int64_t>(req->max_wait_ms(), o.max_poll_ms);
+      auto until = std::chrono::steady_clock::now() + std::chrono::milliseconds(std::max<std::int64_t>(wait_ms, 0));
+      std::vector<storage::LeaseGrant> grants;
+      while (want > 0) {
+        std::uint64_t epoch;
+        {
+          std::lock_guard lock(impl_.work_mu);
+          epoch = impl_.work_epoch;
+        }
+        grants = impl_.store->GrantLeases(req->worker_id(), want, NowMs(), o.lease_ms);
+        if (!grants.empty() || !completions.empty() || impl_.stopping || impl_.draining || ctx->IsCancelled())
+          break;
+        std::unique_lock lock(impl_.work_mu);
+        auto slice = std::min(until, std::chrono::steady_clock::now() + std::chrono::milliseconds(250));
+        impl_.work_cv.wait_until(lock, slice, [&] { return impl_.work_epoch != epoch || impl_.stopping.load(); });
+        if (std::chrono::steady_clock::now() >= until) {
+          lock.unlock();
+          grants = impl_.store->GrantLeases(req->worker_id(), want, NowMs(), o.lease_ms);
+          break;
+        }
+      }
+      for (auto& g : grants) {
+        v1::Lease* lease = resp->add_leases();
+        lease->set_lease_id(g.lease_id);
+        lease->set_task_key(g.task_key);
+        lease->set_attempt(g.attempt);
+        lease->set_job_id(g.job_id);
+        lease->set_job_bundle_digest(g.bundle_digest);
+        lease->mutable_payload()->ParseFromString(g.payload);
+        lease->set_deadline_unix_ms(g.deadline_ms);
+      }
+      return Status::OK;
+    } catch (const std::exception& e) {
+      return FromException(e);
+    }
+  }
+
+  Status Heartbeat(ServerContext* ctx, const v1::HeartbeatRequest* req, v1::HeartbeatResponse* resp) override {
+    if (Status s = protocol::CheckToken(*ctx, impl_.options.token); !s.ok()) return s;
+    try {
+      std::int64_t now = NowMs();
+      std::vector<std::string> ids(req->lease_ids().begin(), req->lease_ids().end());
+      for (const auto& id : impl_.store->ExtendLeases(req->worker_id(), ids, now + impl_.options.lease_ms))
+        resp->add_revoked_lease_ids(id);
+      return Status::OK;
+    } catch (const std::exception& e) {
+      return FromException(e);
+    }
+  }
+
+ private:
+  Coordinator::Impl& impl_;
+};
+
+class BlobServiceImpl final : public v1::BlobService::Service {
+ public:
+  explicit BlobServiceImpl(Coordinator::Impl& impl) : impl_(impl) {}
+
+  Status FindMissing(ServerContext* ctx, const v1::FindMissingRequest* req,
+                     v1::FindMissingResponse* resp) override {
+    if (Status s = protocol::CheckToken(*ctx, impl_.options.token); !s.ok()) return s;
+    for (const auto& d : req->digests())
+      if (!impl_.blobs->Contains(d)) resp->add_missing_digests(d);
+    return Status::OK;
+  }
+
+  Status QueryWriteStatus(ServerContext* ctx, const v1::QueryWriteStatusRequest* req,
+                          v1::QueryWriteStatusResponse* resp) override {
+    if (Status s = protocol::CheckToken(*ctx, impl_.options.token); !s.ok()) return s;
+    try {
+      resp->set_committed_size(impl_.blobs->CommittedSize(req->digest()));
+      resp->set_complete(impl_.blobs->Contains(req->digest()));
+      return Status::OK;
+    } catch (const std::exception& e) {
+      return FromException(e);
+    }
+  }
+
+  Status Write(ServerContext* ctx, grpc::ServerReader<v1::WriteChunk>* reader, v1::WriteResponse* resp) override {
+    if (Status s = protocol::CheckToken(*ctx, impl_.options.token); !s.ok()) return s;
+    v1::WriteChunk chunk;
+    std::string digest;
+    std::int64_t held = 0;
+    try {
+      while (reader->Read(&chunk)) {
+        if (digest.empty()) digest = chunk.digest();
+        if (chunk.digest() != digest) return Invalid("one Write stream carries one blob");
+        if (chunk.data().size() > static_cast<std::size_t>(protocol::kBlobChunkBytes))
+          return Invalid("chunk larger than 1 MiB");
+        if (chunk.size() > (std::int64_t{4} << 30)) return Invalid("blob larger than 4 GiB");
+        if (!chunk.data().empty()) held = impl_.blobs->Append(digest, chunk.offset(), chunk.data());
+        if (chunk.finish()) {
+          try {
+            impl_.blobs->Finish(digest);
+          } catch (const ResourceError& e) {
+            return Status(StatusCode::RESOURCE_EXHAUSTED, e.what());
+          } catch (const InputError& e) {
+            return Status(StatusCode::DATA_LOSS, e.what());
+          }
+          held = impl_.blobs->Size(digest);
+        }
+      }
+    } catch (const ResourceError& e) {
+      return Status(StatusCode::RESOURCE_EXHAUSTED, e.what());
+    } catch (const InputError& e) {
+      return Status(StatusCode::FAILED_PRECONDITION, e.what());
+    }
+    resp->set_committed_size(held);
+    resp->set_complete(!digest.empty() && impl_.blobs->Contains(digest));
+    return Status::OK;
+  }
+
+  Status Read(ServerContext* ctx, const v1::ReadRequest* req, grpc::ServerWriter<v1::ReadChunk>* writer) override {
+    if (Status s = protocol::CheckToken(*ctx, impl_.options.token); !s.ok()) return s;
+    std::int64_t size = impl_.blobs->Size(req->digest());
+    if (size < 0) return Status(StatusCode::NOT_FOUND, "no blob " + req->digest());
+    try {
+      for (std::int64_t offset = req->offset(); offset < size; offset += protocol::kBlobChunkBytes) {
+        v1::ReadChunk chunk;
+        chunk.set_data(impl_.blobs->Read(req->digest(), offset, protocol::kBlobChunkBytes));
+        if (!writer->Write(chunk)) break;
+      }
+    } catch (const std::exception& e) {
+      return FromException(e);
+    }
+    return Status::OK;
+  }
+
+ private:
+  Coordinator::Impl& impl_;
+};
+
+}  // namespace
+
+Coordinator::Coordinator(CoordinatorOptions options) : impl_(std::make_unique<Impl>(std::move(options))) {}
+
+Coordinator::~Coordinator() { Shutdown(); }
+
+void Coordinator::Start() {
+  Impl& m = *impl_;
+  const auto& o = m.options;
+  if (o.state_dir.empty()) throw InputError("coordinator: a state directory is required (--state-dir)");
+  std::shared_ptr<grpc::ServerCredentials> credentials;
+  if (!o.tls_cert.empty() || !o.tls_key.empty()) {
+    if (o.tls_cert.empty() || o.tls_key.empty())
+      throw InputError("coordinator: TLS needs both a certificate (--tls-cert) and a key (--tls-key)");
+    grpc::SslServerCredentialsOptions ssl(o.tls_client_ca.empty()
+                                              ? GRPC_SSL_DONT_REQUEST_CLIENT_CERTIFICATE
+                                              : GRPC_SSL_REQUEST_AND_REQUIRE_CLIENT_CERTIFICATE_AND_VERIFY);
+    if (!o.tls_client_ca.empty()) ssl.pem_root_certs = protocol::ReadPemFile(o.tls_client_ca, "client CA");
+    ssl.pem_key_cert_pairs.push_back({protocol::ReadPemFile(o.tls_key, "TLS key"),
+                                      protocol::ReadPemFile(o.tls_cert, "TLS certificate")});
+    credentials = grpc::SslServerCredentials(ssl);
+  } else {
+    if (!protocol::IsLoopback(o.listen) && !o.allow_insecure_network)
+      throw InputError("coordinator: refusing plaintext on non-loopback address " + o.listen +
+                       " (give --tls-cert/--tls-key, see ops/tls/make-certs.sh)");
+    credentials = grpc::InsecureServerCredentials();
+  }
+  m.store = std::make_unique<storage::JobStore>(o.state_dir / "state.db");
+  m.blobs = std::make_unique<storage::BlobStore>(o.state_dir / "blobs");
+  m.store->ExtendAllLeases(NowMs() + o.lease_ms);
+
+  grpc::EnableDefaultHealthCheckService(true);
+  grpc::ServerBuilder builder;
+  builder.AddListeningPort(o.listen, credentials, &m.port);
+  builder.SetMaxReceiveMessageSize(protocol::kMaxMessageBytes);
+  builder.SetMaxSendMessageSize(protocol::kMaxMessageBytes);
+  builder.AddChannelArgument(GRPC_ARG_KEEPALIVE_TIME_MS, 20000);
+  builder.AddChannelArgument(GRPC_ARG_KEEPALIVE_TIMEOUT_MS, 10000);
+  builder.AddChannelArgument(GRPC_ARG_KEEPALIVE_PERMIT_WITHOUT_CALLS, 1);
+  builder.AddChannelArgument(GRPC_ARG_HTTP2_MIN_RECV_PING_INTERVAL_WITHOUT_DATA_MS, 5000);
+  builder.AddChannelArgument(GRPC_ARG_HTTP2_MAX_PING_STRIKES, 0);
+  m.services.push_back(std::make_unique<JobServiceImpl>(m));
+  m.services.push_back(std::make_unique<WorkerServiceImpl>(m));
+  m.services.push_back(std::make_unique<BlobServiceImpl>(m));
+  for (auto& s : m.services) builder.RegisterService(s.get());
+  m.server = builder.BuildAndStart();
+  if (!m.server || m.port == 0) throw InputError("coordinator: cannot listen on " + o.listen);
+  m.server->GetHealthCheckService()->SetServingStatus(true);
+  m.started = true;
+  m.sweeper = std::thread([&m] { m.Sweep(); });
+
+  if (!o.metrics_listen.empty()) {
+    auto colon = o.metrics_listen.rfind(':');
+    if (colon == std::string::npos) throw InputError("coordinator: --metrics wants HOST:PORT, got " + o.metrics_listen);
+    std::string host = o.metrics_listen.substr(0, colon);
+    int port = std::atoi(o.metrics_listen.c_str() + colon + 1);
+    m.metrics = std::make_unique<httplib::Server>();
+    m.metrics->Get("/metrics", [&m](const httplib::Request&, httplib::Response& res) {
+      try {
+        res.set_content(m.Metrics(), "text/plain; version=0.0.4");
+      } catch (const std::exception& e) {
+        res.status = 500;
+        res.set_content(e.what(), "text/plain");
+      }
+    });
+    if (!m.metrics->bind_to_port(host, port)) throw InputError("coordinator: cannot listen on " + o.metrics_listen);
+    m.metrics_thread = std::thread([&m] { m.metrics->listen_after_bind(); });
+  }
+  for (const auto& job : m.store->Jobs())
+    if (job.state == storage::JobState::kRunning) m.StartDriver(job.id);
+}
+
+int Coordinator::port() const { return impl_->port; }
+
+void Coordinator::Drain(std::int64_t timeout_ms) {
+  Impl& m = *impl_;
+  if (!m.started) return;
+  m.draining = true;
+  m.server->GetHealthCheckService()->SetServingStatus(false);
+  m.SignalWork();
+  auto until = std::chrono::steady_clock::now() + std::chrono::milliseconds(timeout_ms);
+  while (std::chrono::steady_clock::now() < until && m.store->ActiveLeases() > 0)
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+}
+
+void Coordinator::Shutdown() {
+  Impl& m = *impl_;
+  {
+    std::lock_guard lock(m.shutdown_mu);
+    if (m.shut_down) return;
+    m.shut_down = true;
+  }
+  m.stopping = true;
+  m.SignalWork();
+  m.results_cv.notify_all();
+  if (m.server) m.server->Shutdown(std::chrono::system_clock::now() + std::chrono::seconds(2));
+  if (m.sweeper.joinable()) m.sweeper.join();
+  if (m.metrics) m.metrics->stop();
+  if (m.metrics_thread.joinable()) m.metrics_thread.join();
+  std::vector<std::thread> drivers;
+  {
+    std::lock_guard lock(m.drivers_mu);
+    drivers.swap(m.drivers);
+  }
+  for (auto& t : drivers) t.join();
+  m.shutdown_cv.notify_all();
+}
+
+void Coordinator::Wait() {
+  Impl& m = *impl_;
+  std::unique_lock lock(m.shutdown_mu);
+  m.shutdown_cv.wait(lock, [&] { return m.shut_down; });
+}
+
+storage::JobStore& Coordinator::store() { return *impl_->store; }
+storage::BlobStore& Coordinator::blobs() { return *impl_->blobs; }
+
+std::vector<std::string> Coordinator::RunTasks(const std::string& job_id,
+                                               const std::vector<std::string>& payloads,
+                                               const std::vector<std::string>& keys) {
+  Impl& m = *impl_;
+  if (!m.store->FindJob(job_id))
+    m.store->CreateJob({job_id, std::string(64, '0'), "tasks", storage::JobState::kRunning, "", NowMs(), 0});
+  std::vector<int> kinds;
+  for (const auto& p : payloads) {
+    v1::TaskPayload payload;
+    payload.ParseFromString(p);
+    kinds.push_back(static_cast<int>(payload.kind()));
+  }
+  try {
+    return m.RunTasks(job_id, payloads, keys, kinds);
+  } catch (const Stopping&) {
+    throw InputError("coordinator: shutting down");
+  } catch (const JobCancelled&) {
+    throw InputError("job " + job_id + " cancelled");
+  }
+}
+
+}  // namespace fabatlas::coordinator

@@ -1,0 +1,191 @@
+// The operator's client (see job_client.h).
+#include "fabatlas/coordinator/job_client.h"
+
+#include <cstdio>
+
+#include "fabatlas/error.h"
+#include "fabatlas/protocol/job_bundle.h"
+#include "fabatlas/sha256.h"
+#include "fabatlas/v1/blob.grpc.pb.h"
+
+namespace fabatlas::coordinator {
+
+JobClient::JobClient(std::string target, protocol::ClientSecurity security, std::chrono::milliseconds timeout)
+    : target_(std::move(target)), security_(std::move(security)), timeout_(timeout),
+      channel_(protocol::MakeChannel(target_, security_)) {}
+
+void JobClient::Fail(const std::string& what, const grpc::Status& status) const {
+  std::string reason = status.error_message();
+  for (char& c : reason)
+    if (c == '\n') c = ' ';
+  if (status.error_code() == grpc::StatusCode::UNAVAILABLE ||
+      status.error_code() == grpc::StatusCode::DEADLINE_EXCEEDED)
+    throw InputError("cannot reach coordinator " + target_ + " (" + what + "): " + reason);
+  static const char* names[] = {"OK", "CANCELLED", "UNKNOWN", "INVALID_ARGUMENT", "DEADLINE_EXCEEDED",
+                                "NOT_FOUND", "ALREADY_EXISTS", "PERMISSION_DENIED", "RESOURCE_EXHAUSTED",
+                                "FAILED_PRECONDITION", "ABORTED", "OUT_OF_RANGE", "UNIMPLEMENTED",
+                                "INTERNAL", "UNAVAILABLE", "DATA_LOSS", "UNAUTHENTICATED"};
+  int code = static_cast<int>(status.error_code());
+  std::string name = code >= 0 && code <= 16 ? names[code] : std::to_string(code);
+  throw InputError("coordinator " + target_ + " (" + what + "): " + name + ": " + reason);
+}
+
+std::string JobClient::UploadBlob(const std::string& bytes) {
+  std::string digest = Sha256Hex(bytes);
+  auto stub = v1::BlobService::NewStub(channel_);
+  std::int64_t offset = 0;
+  {
+    grpc::ClientContext ctx;
+    protocol::Prepare(ctx, security_, timeout_);
+    v1::QueryWriteStatusRequest req;
+    req.set_digest(digest);
+    v1::QueryWriteStatusResponse resp;
+    grpc::Status s = stub->QueryWriteStatus(&ctx, req, &resp);
+    if (!s.ok()) Fail("blob status", s);
+    if (resp.complete()) return digest;
+    offset = resp.committed_size();
+  }
+  grpc::ClientContext ctx;
+  protocol::Prepare(ctx, security_, timeout_ + std::chrono::milliseconds(bytes.size() / 1000));
+  v1::WriteResponse resp;
+  auto writer = stub->Write(&ctx, &resp);
+  do {
+    v1::WriteChunk chunk;
+    chunk.set_digest(digest);
+    chunk.set_size(static_cast<std::int64_t>(bytes.size()));
+    chunk.set_offset(offset);
+    std::size_t n = std::min<std::size_t>(protocol::kBlobChunkBytes, bytes.size() - static_cast<std::size_t>(offset));
+    chunk.set_data(bytes.substr(static_cast<std::size_t>(offset), n));
+    offset += static_cast<std::int64_t>(n);
+    chunk.set_finish(offset >= static_cast<std::int64_t>(bytes.size()));
+    if (!writer->Write(chunk)) break;
+  } while (offset < static_cast<std::int64_t>(bytes.size()));
+  writer->WritesDone();
+  grpc::Status s = writer->Finish();
+  if (!s.ok()) Fail("blob upload", s);
+  return digest;
+}
+
+std::string JobClient::DownloadBlob(const std::string& digest) {
+  auto stub = v1::BlobService::NewStub(channel_);
+  grpc::ClientContext ctx;
+  protocol::Prepare(ctx, security_, timeout_ * 10);
+  v1::ReadRequest req;
+  req.set_digest(digest);
+  auto reader = stub->Read(&ctx, req);
+  std::string out;
+  v1::ReadChunk chunk;
+  while (reader->Read(&chunk)) out += chunk.data();
+  grpc::Status s = reader->Finish();
+  if (!s.ok()) Fail("blob download", s);
+  if (Sha256Hex(out) != digest) throw InputError("blob " + digest + ": downloaded bytes do not match");
+  return out;
+}
+
+std::string JobClient::Submit(const std::filesystem::path& job_file, bool* created) {
+  v1::JobBundle bundle = protocol::MakeJobBundle(job_file);
+  std::string digest = UploadBlob(protocol::BundleBytes(bundle));
+  auto stub = v1::JobService::NewStub(channel_);
+  grpc::ClientContext ctx;
+  protocol::Prepare(ctx, security_, timeout_);
+  v1::SubmitRequest req;
+  req.set_bundle_digest(digest);
+  v1::SubmitResponse resp;
+  grpc::Status s = stub->Submit(&ctx, req, &resp);
+  if (!s.ok()) Fail("submit " + job_file.string(), s);
+  if (created) *created = resp.created();
+  return resp.job_id();
+}
+
+v1::JobStatus JobClient::Status(const std::string& job_id) {
+  auto stub = v1::JobService::NewStub(channel_);
+  grpc::ClientContext ctx;
+  protocol::Prepare(ctx, security_, timeout_);
+  v1::GetStatusRequest req;
+  req.set_job_id(job_id);
+  v1::JobStatus resp;
+  grpc::Status s = stub->GetStatus(&ctx, req, &resp);
+  if (!s.ok()) Fail("status " + job_id, s);
+  return resp;
+}
+
+v1::JobStatus JobClient::Watch(const std::string& job_id,
+                               const std::function<bool(const v1::JobStatus&)>& on_status) {
+  auto stub = v1::JobService::NewStub(channel_);
+  grpc::ClientContext ctx;
+  protocol::Prepare(ctx, security_, std::chrono::hours(24 * 30));
+  v1::GetStatusRequest req;
+  req.set_job_id(job_id);
+  auto reader = stub->Watch(&ctx, req);
+  v1::JobStatus status, last;
+  bool stopped = false;
+  while (reader->Read(&status)) {
+    last = status;
+    if (!on_status(status)) {
+      stopped = true;
+      ctx.TryCancel();
+      break;
+    }
+  }
+  grpc::Status s = reader->Finish();
+  if (!s.ok() && !stopped) Fail("watch " + job_id, s);
+  return last;
+}
+
+v1::JobStatus JobClient::Cancel(const std::string& job_id) {
+  auto stub = v1::JobService::NewStub(channel_);
+  grpc::ClientContext ctx;
+  protocol::Prepare(ctx, security_, timeout_);
+  v1::CancelRequest req;
+  req.set_job_id(job_id);
+  v1::JobStatus resp;
+  grpc::Status s = stub->Cancel(&ctx, req, &resp);
+  if (!s.ok()) Fail("cancel " + job_id, s);
+  return resp;
+}
+
+std::vector<v1::JobStatus> JobClient::List() {
+  auto stub = v1::JobService::NewStub(channel_);
+  grpc::ClientContext ctx;
+  protocol::Prepare(ctx, security_, timeout_);
+  v1::ListJobsResponse resp;
+  grpc::Status s = stub->ListJobs(&ctx, v1::ListJobsRequest(), &resp);
+  if (!s.ok()) Fail("list jobs", s);
+  return {resp.jobs().begin(), resp.jobs().end()};
+}
+
+std::map<std::string, std::string> JobClient::Fetch(const std::string& job_id) {
+  auto stub = v1::JobService::NewStub(channel_);
+  grpc::ClientContext ctx;
+  protocol::Prepare(ctx, security_, timeout_ * 5);
+  v1::FetchResultRequest req;
+  req.set_job_id(job_id);
+  v1::FetchResultResponse resp;
+  grpc::Status s = stub->FetchResult(&ctx, req, &resp);
+  if (!s.ok()) Fail("fetch " + job_id, s);
+  return {resp.files().begin(), resp.files().end()};
+}
+
+std::string JobStateName(v1::JobState state) {
+  std::string name = v1::JobState_Name(state);
+  return name.rfind("JOB_STATE_", 0) == 0 ? name.substr(10) : name;
+}
+
+std::string ProgressLine(const v1::JobStatus& s) {
+  char buffer[512];
+  double valid = s.samples_done() ? 100.0 * s.samples_valid() / s.samples_done() : 0.0;
+  std::string eta = "-";
+  std::int64_t left = s.tasks_queued() + s.tasks_leased();
+  if (s.tasks_per_second() > 0 && left > 0)
+    eta = std::to_string(static_cast<long long>(left / s.tasks_per_second() + 0.5)) + " s";
+  std::snprintf(buffer, sizeof buffer,
+                "job %s %-9s samples %lld (%.1f%% valid)  tasks %lld/%lld  %.1f tasks/s  ETA %s  "
+                "failures: %lld expired, %lld quarantined",
+                s.job_id().c_str(), JobStateName(s.state()).c_str(),
+                static_cast<long long>(s.samples_done()), valid, static_cast<long long>(s.tasks_done()),
+                static_cast<long long>(s.tasks_total()), s.tasks_per_second(), eta.c_str(),
+                static_cast<long long>(s.lease_expiries()), static_cast<long long>(s.tasks_quarantined()));
+  return buffer;
+}
+
+}  // namespace fabatlas::coordinator

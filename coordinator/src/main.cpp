@@ -1,0 +1,79 @@
+// fabatlas-coordinator — the cluster's coordinator process (coordinator.h).
+//   fabatlas-coordinator --listen 0.0.0.0:7450 --state-dir /var/lib/fabatlas \
+//       --tls-cert server.pem --tls-key server.key [--token-file F] [--metrics 0.0.0.0:9450]
+// SIGTERM / SIGINT: drain (no new leases, wait up to --drain-seconds for
+// running leases), then stop; running jobs resume on the next start.
+#include <CLI/CLI.hpp>
+
+#include <csignal>
+#include <fstream>
+#include <iostream>
+#include <sstream>
+#include <thread>
+
+#include "fabatlas/coordinator/coordinator.h"
+#include "fabatlas/error.h"
+
+namespace {
+
+std::string Trimmed(std::string s) {
+  while (!s.empty() && (s.back() == '\n' || s.back() == '\r' || s.back() == ' ')) s.pop_back();
+  return s;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"fabatlas coordinator: jobs, leases and blobs over gRPC"};
+  fabatlas::coordinator::CoordinatorOptions o;
+  std::string token_file, port_file;
+  double drain_seconds = 30;
+  app.add_option("--listen", o.listen, "gRPC address HOST:PORT (port 0: pick one)");
+  app.add_option("--state-dir", o.state_dir, "durable state directory")->required();
+  app.add_option("--token", o.token, "bearer token required on every call");
+  app.add_option("--token-file", token_file, "file holding the bearer token");
+  app.add_option("--tls-cert", o.tls_cert, "server certificate chain (PEM)");
+  app.add_option("--tls-key", o.tls_key, "server private key (PEM)");
+  app.add_option("--tls-client-ca", o.tls_client_ca, "require client certificates signed by this CA (PEM)");
+  app.add_flag("--allow-insecure-network", o.allow_insecure_network,
+               "allow plaintext on a non-loopback address (isolated test networks only)");
+  app.add_option("--metrics", o.metrics_listen, "serve Prometheus /metrics on HOST:PORT");
+  app.add_option("--lease-ms", o.lease_ms, "lease duration");
+  app.add_option("--heartbeat-ms", o.heartbeat_ms, "worker heartbeat interval");
+  app.add_option("--retry-backoff-ms", o.retry_backoff_ms, "first requeue delay after an expiry");
+  app.add_option("--quarantine-after", o.quarantine_after, "lease expiries before a task is quarantined");
+  app.add_option("--drain-seconds", drain_seconds, "how long SIGTERM waits for running leases");
+  app.add_option("--port-file", port_file, "write the bound port here once listening");
+  CLI11_PARSE(app, argc, argv);
+  sigset_t signals;
+  sigemptyset(&signals);
+  sigaddset(&signals, SIGTERM);
+  sigaddset(&signals, SIGINT);
+  pthread_sigmask(SIG_BLOCK, &signals, nullptr);  // every thread inherits the mask
+  try {
+    if (!token_file.empty()) {
+      std::ifstream in(token_file);
+      if (!in) throw fabatlas::InputError(token_file + ": cannot read the token file");
+      std::stringstream ss;
+      ss << in.rdbuf();
+      o.token = Trimmed(ss.str());
+    }
+    fabatlas::coordinator::Coordinator coordinator(o);
+    coordinator.Start();
+    std::cerr << "fabatlas-coordinator listening on port " << coordinator.port() << "\n";
+    if (!port_file.empty()) {
+      std::string tmp = port_file + ".tmp";
+      std::ofstream(tmp) << coordinator.port() << "\n";
+      std::rename(tmp.c_str(), port_file.c_str());
+    }
+    int sig = 0;
+    sigwait(&signals, &sig);
+    std::cerr << "fabatlas-coordinator: draining\n";
+    coordinator.Drain(static_cast<std::int64_t>(drain_seconds * 1000));
+    coordinator.Shutdown();
+    return 0;
+  } catch (const fabatlas::InputError& e) {
+    std::cerr << "fabatlas-coordinator: " << e.what() << "\n";
+    return fabatlas::kExitBadInput;
+  }
+}

@@ -1,0 +1,239 @@
+// The cluster with real processes on loopback (label cluster): a job through
+// a fabatlas-coordinator and fabatlas-worker processes gives the same form,
+// byte for byte, as the in-process ThreadPoolExecutor run, whatever the number
+// of workers and whatever faults are injected (SIGKILL / SIGSTOP of workers,
+// kill -9 of the coordinator). After each run the durable store is checked:
+// every task key completed once, no orphaned lease, every blob verifies.
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "cluster_process.h"
+#include "fabatlas/coordinator/job_client.h"
+#include "fabatlas/design/design.h"
+#include "fabatlas/error.h"
+#include "fabatlas/precompute/design_evaluator.h"
+#include "fabatlas/sampling/adaptive_sampler.h"
+#include "fabatlas/sampling/executor.h"
+#include "fabatlas/sampling/form_json.h"
+#include "fabatlas/sampling/job_file.h"
+#include "fabatlas/storage/blob_store.h"
+#include "fabatlas/storage/job_store.h"
+
+using namespace fabatlas;
+using namespace fabatlas::cluster_test;
+
+namespace {
+
+fs::path JobPath() { return SourceDir() / "tests/cluster/data/tube_small.yaml"; }
+
+// The form of the job computed in this process on a thread pool.
+const std::string& ReferenceForm() {
+  static const std::string form = [] {
+    sampling::JobFile job = sampling::ReadJobFile(JobPath().string());
+    design::Design design = design::LoadDesign(job.design_path);
+    sampling::DesignSpace space = precompute::DesignSpaceOf(design, job.subdivisions);
+    precompute::DesignSampleEvaluator evaluator(design);
+    sampling::ThreadPoolExecutor executor(2);
+    return sampling::FormToJson(sampling::SampleDesignSpace(space, evaluator, executor, job.sampling).form);
+  }();
+  return form;
+}
+
+// Fast failure detection for the fault tests.
+const std::vector<std::string> kFastLeases = {"--lease-ms", "1500", "--heartbeat-ms", "300",
+                                              "--retry-backoff-ms", "50", "--quarantine-after", "1000"};
+
+coordinator::JobClient Client(int port, const std::string& token = "") {
+  protocol::ClientSecurity security;
+  security.token = token;
+  return coordinator::JobClient("127.0.0.1:" + std::to_string(port), security, std::chrono::seconds(5));
+}
+
+// Polls until the job ends (tolerating a coordinator that is down) or the
+// timeout passes; calls between() after each poll.
+v1::JobStatus WaitForJob(const std::function<int()>& port, const std::string& id, std::chrono::seconds timeout,
+                         const std::function<void(const v1::JobStatus&)>& between = {}) {
+  auto until = std::chrono::steady_clock::now() + timeout;
+  v1::JobStatus last;
+  while (std::chrono::steady_clock::now() < until) {
+    try {
+      last = Client(port()).Status(id);
+      if (last.state() >= v1::JOB_STATE_SUCCEEDED) return last;
+    } catch (const InputError&) {
+    }
+    if (between) between(last);
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
+  return last;
+}
+
+// Stops the coordinator (SIGTERM: drain and exit) and checks the store.
+void StopAndCheckStore(const CoordinatorProcess& c, const fs::path& state, const std::string& job_id) {
+  ::kill(c.pid, SIGTERM);
+  EXPECT_EQ(WaitExit(c.pid, std::chrono::seconds(30)), 0) << ReadText(state / "coordinator.log");
+  storage::JobStore store(state / "state.db");
+  EXPECT_EQ(store.CheckConsistency(), std::vector<std::string>{});
+  EXPECT_EQ(store.ActiveLeases(), 0);
+  storage::TaskCounts counts = store.CountTasks(job_id);
+  EXPECT_EQ(counts.done, counts.total);
+  EXPECT_EQ(counts.quarantined, 0);
+  for (const auto& task : store.Tasks(job_id)) EXPECT_EQ(task.completions, 1) << task.key;
+  storage::BlobStore blobs(state / "blobs");
+  auto digests = blobs.List();
+  EXPECT_GE(digests.size(), 3u);  // bundle, form.json, statistics.json
+  for (const auto& d : digests) EXPECT_TRUE(blobs.Verify(d)) << d;
+}
+
+std::string RunJobOnWorkers(const std::string& name, int workers, int slots, std::string* job_id = nullptr) {
+  fs::path dir = FreshDir(name);
+  CoordinatorProcess c = StartCoordinator(dir / "state", 0);
+  EXPECT_GT(c.port, 0) << ReadText(dir / "state/coordinator.log");
+  std::vector<pid_t> pids;
+  for (int i = 0; i < workers; ++i)
+    pids.push_back(StartWorker(c.port, dir / ("w" + std::to_string(i)), {"--slots", std::to_string(slots)}));
+  std::string id = Client(c.port).Submit(JobPath());
+  v1::JobStatus s = WaitForJob([&] { return c.port; }, id, std::chrono::seconds(240));
+  EXPECT_EQ(s.state(), v1::JOB_STATE_SUCCEEDED) << s.error();
+  std::string form = Client(c.port).Fetch(id)["form.json"];
+  for (pid_t p : pids) ::kill(p, SIGTERM);
+  for (pid_t p : pids) EXPECT_EQ(WaitExit(p, std::chrono::seconds(30)), 0);
+  StopAndCheckStore(c, dir / "state", id);
+  if (job_id) *job_id = id;
+  return form;
+}
+
+}  // namespace
+
+TEST(ClusterLoopback, FormIsIdenticalForOneWorkerSeveralWorkersAndInProcess) {
+  const std::string& reference = ReferenceForm();
+  ASSERT_FALSE(reference.empty());
+  std::string one = RunJobOnWorkers("one", 1, 1);
+  EXPECT_EQ(one, reference);
+  std::string three = RunJobOnWorkers("three", 3, 2);
+  EXPECT_EQ(three, reference);
+}
+
+TEST(ClusterFaults, TwentyWorkerKillsMidTaskLoseNothing) {
+  fs::path dir = FreshDir("kills");
+  CoordinatorProcess c = StartCoordinator(dir / "state", 0, kFastLeases);
+  ASSERT_GT(c.port, 0);
+  std::vector<pid_t> workers;
+  int spawned = 0;
+  auto spawn = [&] { return StartWorker(c.port, dir / ("w" + std::to_string(spawned++))); };
+  for (int i = 0; i < 3; ++i) workers.push_back(spawn());
+  std::string id = Client(c.port).Submit(JobPath());
+  std::mt19937 rng(4);
+  int kills = 0;
+  auto last_kill = std::chrono::steady_clock::now();
+  v1::JobStatus s = WaitForJob([&] { return c.port; }, id, std::chrono::seconds(300), [&](const v1::JobStatus& st) {
+    // Kill a random worker every 150 ms while it holds leases (mid-task).
+    if (kills >= 30 || st.tasks_leased() == 0) return;
+    if (std::chrono::steady_clock::now() - last_kill < std::chrono::milliseconds(150)) return;
+    std::size_t victim = rng() % workers.size();
+    KillAndReap(workers[victim]);
+    workers[victim] = spawn();
+    ++kills;
+    last_kill = std::chrono::steady_clock::now();
+  });
+  EXPECT_EQ(s.state(), v1::JOB_STATE_SUCCEEDED) << s.error();
+  EXPECT_GE(kills, 20);
+  EXPECT_GT(s.lease_expiries(), 0);  // the kills did hit leased work
+  EXPECT_EQ(Client(c.port).Fetch(id)["form.json"], ReferenceForm());
+  for (pid_t p : workers) ::kill(p, SIGTERM);
+  for (pid_t p : workers) WaitExit(p, std::chrono::seconds(30));
+  StopAndCheckStore(c, dir / "state", id);
+}
+
+TEST(ClusterFaults, StoppedWorkerLosesItsLeaseAndTheTaskMoves) {
+  fs::path dir = FreshDir("sigstop");
+  CoordinatorProcess c = StartCoordinator(dir / "state", 0, kFastLeases);
+  ASSERT_GT(c.port, 0);
+  pid_t frozen = StartWorker(c.port, dir / "frozen");
+  std::string id = Client(c.port).Submit(JobPath());
+  // Freeze the only worker once it holds a lease; then a healthy one joins.
+  bool holds_lease = false;
+  for (int i = 0; i < 600 && !holds_lease; ++i) {
+    try {
+      holds_lease = Client(c.port).Status(id).tasks_leased() > 0;
+    } catch (const InputError&) {
+    }
+    if (!holds_lease) std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  ASSERT_TRUE(holds_lease) << "the worker never held a lease";
+  ::kill(frozen, SIGSTOP);
+  pid_t healthy = StartWorker(c.port, dir / "healthy");
+  v1::JobStatus s = WaitForJob([&] { return c.port; }, id, std::chrono::seconds(240));
+  EXPECT_EQ(s.state(), v1::JOB_STATE_SUCCEEDED) << s.error();
+  EXPECT_GE(s.lease_expiries(), 1);
+  EXPECT_EQ(Client(c.port).Fetch(id)["form.json"], ReferenceForm());
+  // Thawed, the frozen worker reports a stale attempt: fenced, not stored.
+  ::kill(frozen, SIGCONT);
+  std::this_thread::sleep_for(std::chrono::milliseconds(1500));
+  for (pid_t p : {frozen, healthy}) ::kill(p, SIGTERM);
+  for (pid_t p : {frozen, healthy}) EXPECT_EQ(WaitExit(p, std::chrono::seconds(30)), 0);
+  StopAndCheckStore(c, dir / "state", id);
+}
+
+TEST(ClusterFaults, CoordinatorKilledThreeTimesResumesByReplay) {
+  fs::path dir = FreshDir("coordkill");
+  CoordinatorProcess c = StartCoordinator(dir / "state", 0, kFastLeases);
+  ASSERT_GT(c.port, 0);
+  const int port = c.port;
+  std::vector<pid_t> workers;
+  for (int i = 0; i < 2; ++i) workers.push_back(StartWorker(port, dir / ("w" + std::to_string(i))));
+  std::string id = Client(port).Submit(JobPath());
+  std::mt19937 rng(7);
+  int kills = 0;
+  std::int64_t done_at_last_kill = -1;
+  v1::JobStatus s = WaitForJob([&] { return port; }, id, std::chrono::seconds(300), [&](const v1::JobStatus& st) {
+    // kill -9 at random moments once some new work was done since the last restart.
+    if (kills >= 3 || st.tasks_done() <= done_at_last_kill || st.tasks_done() == 0) return;
+    if (rng() % 4 != 0) return;
+    KillAndReap(c.pid);
+    ++kills;
+    done_at_last_kill = st.tasks_done();
+    c = StartCoordinator(dir / "state", port, kFastLeases);
+    ASSERT_EQ(c.port, port) << ReadText(dir / "state/coordinator.log");
+  });
+  EXPECT_EQ(kills, 3);
+  EXPECT_EQ(s.state(), v1::JOB_STATE_SUCCEEDED) << s.error();
+  EXPECT_EQ(Client(port).Fetch(id)["form.json"], ReferenceForm());
+  for (pid_t p : workers) ::kill(p, SIGTERM);
+  for (pid_t p : workers) EXPECT_EQ(WaitExit(p, std::chrono::seconds(30)), 0);
+  StopAndCheckStore(c, dir / "state", id);
+}
+
+TEST(ClusterBadInput, UnreachableCoordinatorIsAOneLineErrorAndNonZeroExit) {
+  fs::path dir = FreshDir("unreachable");
+  // Port 1 on loopback: nothing listens there.
+  pid_t cli = Spawn({(BinDir() / "fabatlas").string(), "status", "0123456789abcdef", "--coordinator",
+                     "127.0.0.1:1"}, dir / "cli.log");
+  EXPECT_EQ(WaitExit(cli, std::chrono::seconds(60)), 2);
+  std::string text = ReadText(dir / "cli.log");
+  EXPECT_NE(text.find("cannot reach coordinator 127.0.0.1:1"), std::string::npos) << text;
+  EXPECT_EQ(std::count(text.begin(), text.end(), '\n'), 1) << text;
+  pid_t worker = StartWorker(1, dir / "w", {"--connect-timeout", "1"});
+  EXPECT_EQ(WaitExit(worker, std::chrono::seconds(60)), 2);
+  std::string wtext = ReadText(dir / "w/worker.log");
+  EXPECT_NE(wtext.find("cannot reach coordinator 127.0.0.1:1"), std::string::npos) << wtext;
+}
+
+TEST(ClusterBadInput, WrongTokenIsRefused) {
+  fs::path dir = FreshDir("token");
+  CoordinatorProcess c = StartCoordinator(dir / "state", 0, {"--token", "s3cret"});
+  ASSERT_GT(c.port, 0);
+  try {
+    Client(c.port, "wrong").List();
+    ADD_FAILURE() << "a wrong token was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("UNAUTHENTICATED"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(Client(c.port).List(), InputError);  // no token at all
+  EXPECT_NO_THROW(Client(c.port, "s3cret").List());
+  pid_t worker = StartWorker(c.port, dir / "w", {"--token", "wrong"});
+  EXPECT_EQ(WaitExit(worker, std::chrono::seconds(30)), 2);
+  EXPECT_NE(ReadText(dir / "w/worker.log").find("refused"), std::string::npos);
+  ::kill(c.pid, SIGTERM);
+  EXPECT_EQ(WaitExit(c.pid, std::chrono::seconds(30)), 0);
+}

@@ -1,0 +1,44 @@
+// fabatlas/worker/worker.h — a cluster worker: pulls leases from the
+// coordinator (WorkerService.Sync long polls), runs them on `slots` threads
+// with a DesignSampleEvaluator per job, reports results, and heartbeats its
+// leases from a separate thread (DESIGN.md "Cluster and reliability").
+//
+// Jobs are fetched once per job bundle digest from BlobService and unpacked
+// under cache_dir. Reconnects with exponential backoff (200 ms doubling to
+// 5 s) when the coordinator goes away, and keeps reporting its in-flight
+// leases and unsent results, so a restarted coordinator accepts them.
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <filesystem>
+#include <string>
+
+#include "fabatlas/protocol/channel.h"
+
+namespace fabatlas::worker {
+
+struct WorkerOptions {
+  std::string coordinator;             // HOST:PORT
+  protocol::ClientSecurity security;
+  int slots = 1;                       // tasks run at once
+  std::filesystem::path cache_dir;     // job bundles; default: a temp dir
+  std::string worker_id;               // default: host-pid-start time
+  // Give up (InputError) when the coordinator has not answered once within
+  // this time; after the first answer the worker retries forever.
+  std::int64_t connect_timeout_ms = 30000;
+  std::int64_t poll_ms = 5000;         // long-poll wait when idle
+};
+
+struct WorkerSummary {
+  std::int64_t tasks_run = 0;
+  std::int64_t results_acknowledged = 0;
+};
+
+// Runs until `stop` becomes true, then finishes the running tasks, reports
+// them, returns the leases it had not started and returns. Throws InputError
+// when the coordinator cannot be reached at first, refuses the token, or the
+// options are invalid.
+WorkerSummary RunWorker(const WorkerOptions& options, const std::atomic<bool>& stop);
+
+}  // namespace fabatlas::worker

@@ -1,0 +1,65 @@
+// fabatlas-worker — one process per worker machine (worker.h).
+//   fabatlas-worker --coordinator HOST:PORT [--slots N] [--token T | --token-file F]
+//                   [--tls-ca ca.pem [--tls-cert c.pem --tls-key c.key]]
+// SIGTERM / SIGINT: finish the running tasks, report them, return the leases
+// not started, exit 0. Exit 2 with one line on stderr when the coordinator
+// cannot be reached or refuses the worker.
+#include <CLI/CLI.hpp>
+
+#include <atomic>
+#include <csignal>
+#include <fstream>
+#include <iostream>
+#include <sstream>
+#include <thread>
+
+#include "fabatlas/error.h"
+#include "fabatlas/worker/worker.h"
+
+int main(int argc, char** argv) {
+  CLI::App app{"fabatlas worker: runs sampling tasks leased by a coordinator"};
+  fabatlas::worker::WorkerOptions o;
+  std::string token_file;
+  double connect_timeout = 30;
+  app.add_option("--coordinator", o.coordinator, "coordinator HOST:PORT")->required();
+  app.add_option("--slots", o.slots, "tasks run at once (default 1)");
+  app.add_option("--token", o.security.token, "bearer token");
+  app.add_option("--token-file", token_file, "file holding the bearer token");
+  app.add_option("--tls-ca", o.security.tls_ca, "CA certificate of the deployment (PEM); enables TLS");
+  app.add_option("--tls-cert", o.security.tls_cert, "client certificate (PEM)");
+  app.add_option("--tls-key", o.security.tls_key, "client key (PEM)");
+  app.add_option("--cache-dir", o.cache_dir, "where job bundles are unpacked");
+  app.add_option("--id", o.worker_id, "worker id (default host-pid-time)");
+  app.add_option("--connect-timeout", connect_timeout, "seconds to wait for the first answer");
+  CLI11_PARSE(app, argc, argv);
+  o.connect_timeout_ms = static_cast<std::int64_t>(connect_timeout * 1000);
+
+  sigset_t signals;
+  sigemptyset(&signals);
+  sigaddset(&signals, SIGTERM);
+  sigaddset(&signals, SIGINT);
+  pthread_sigmask(SIG_BLOCK, &signals, nullptr);
+  static std::atomic<bool> stop{false};
+  std::thread([signals]() mutable {
+    int sig = 0;
+    sigwait(&signals, &sig);
+    stop = true;
+  }).detach();
+  try {
+    if (!token_file.empty()) {
+      std::ifstream in(token_file);
+      if (!in) throw fabatlas::InputError(token_file + ": cannot read the token file");
+      std::stringstream ss;
+      ss << in.rdbuf();
+      o.security.token = ss.str();
+      while (!o.security.token.empty() && (o.security.token.back() == '\n' || o.security.token.back() == ' '))
+        o.security.token.pop_back();
+    }
+    auto summary = fabatlas::worker::RunWorker(o, stop);
+    std::cerr << "fabatlas-worker: ran " << summary.tasks_run << " tasks\n";
+    return 0;
+  } catch (const fabatlas::InputError& e) {
+    std::cerr << "fabatlas-worker: " << e.what() << "\n";
+    return fabatlas::kExitBadInput;
+  }
+}

@@ -1,0 +1,328 @@
+// The worker loop (see worker.h).
+#include "fabatlas/worker/worker.h"
+
+#include <unistd.h>
+
+#include <chrono>
+#include <condition_variable>
+#include <csignal>
+#include <cstdlib>
+#include <ctime>
+#include <deque>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <set>
+#include <thread>
+
+#include "fabatlas/design/design.h"
+#include "fabatlas/error.h"
+#include "fabatlas/precompute/design_evaluator.h"
+#include "fabatlas/protocol/job_bundle.h"
+#include "fabatlas/protocol/tasks.h"
+#include "fabatlas/sha256.h"
+#include "fabatlas/v1/blob.grpc.pb.h"
+#include "fabatlas/v1/worker.grpc.pb.h"
+
+namespace fabatlas::worker {
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+namespace {
+
+double ThreadCpuSeconds() {
+  timespec ts{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
+}
+
+std::string DefaultWorkerId() {
+  char host[256] = {0};
+  gethostname(host, sizeof host - 1);
+  auto ms = std::chrono::duration_cast<std::chrono::milliseconds>(
+                std::chrono::system_clock::now().time_since_epoch())
+                .count();
+  return std::string(host) + "-" + std::to_string(::getpid()) + "-" + std::to_string(ms);
+}
+
+struct JobContext {
+  std::unique_ptr<precompute::DesignSampleEvaluator> evaluator;
+  std::string error;  // set when the job could not be loaded
+};
+
+class Worker {
+ public:
+  Worker(WorkerOptions options, const std::atomic<bool>& stop) : o_(std::move(options)), stop_(stop) {
+    if (o_.coordinator.empty()) throw InputError("worker: --coordinator HOST:PORT is required");
+    if (o_.slots < 1 || o_.slots > 1024) throw InputError("worker: --slots must be in 1..1024");
+    if (o_.worker_id.empty()) o_.worker_id = DefaultWorkerId();
+    if (o_.cache_dir.empty()) o_.cache_dir = fs::temp_directory_path() / ("fabatlas-worker-" + std::to_string(::getpid()));
+    channel_ = protocol::MakeChannel(o_.coordinator, o_.security);
+    stub_ = v1::WorkerService::NewStub(channel_);
+    blob_stub_ = v1::BlobService::NewStub(channel_);
+    if (const char* crash = std::getenv("FABATLAS_WORKER_CRASH_KEY_PREFIX")) crash_prefix_ = crash;
+  }
+
+  WorkerSummary Run() {
+    for (int i = 0; i < o_.slots; ++i) slots_.emplace_back([this] { SlotLoop(); });
+    heartbeat_ = std::thread([this] { HeartbeatLoop(); });
+    try {
+      SyncLoop();
+    } catch (...) {
+      Finish();
+      throw;
+    }
+    Finish();
+    return summary_;
+  }
+
+ private:
+  void Finish() {
+    {
+      std::lock_guard lock(mu_);
+      exiting_ = true;
+    }
+    cv_.notify_all();
+    for (auto& t : slots_) t.join();
+    if (heartbeat_.joinable()) heartbeat_.join();
+  }
+
+  void SyncLoop() {
+    auto started = Clock::now();
+    std::int64_t backoff_ms = 200;
+    bool connected = false;
+    while (true) {
+      v1::SyncRequest req;
+      bool leaving = false;
+      {
+        std::lock_guard lock(mu_);
+        if (stop_) {
+          // Return the leases not started yet: the coordinator requeues
+          // leases missing from in_flight at once.
+          for (const auto& l : queue_) in_flight_.erase(l.lease_id());
+          queue_.clear();
+          leaving = running_ == 0;
+        }
+        req.set_worker_id(o_.worker_id);
+        int busy = static_cast<int>(queue_.size()) + running_;
+        req.set_free_slots(stop_ ? 0 : std::max(0, o_.slots - busy));
+        for (const auto& id : in_flight_) req.add_in_flight_lease_ids(id);
+        for (auto& c : done_) *req.add_completed() = std::move(c);
+        done_.clear();
+        req.set_leaving(leaving);
+        bool idle = in_flight_.empty() && req.completed_size() == 0 && !stop_;
+        req.set_max_wait_ms(idle ? static_cast<int>(o_.poll_ms) : 0);
+      }
+      grpc::ClientContext ctx;
+      protocol::Prepare(ctx, o_.security, std::chrono::milliseconds(req.max_wait_ms() + 15000));
+      v1::SyncResponse resp;
+      grpc::Status status = stub_->Sync(&ctx, req, &resp);
+      if (!status.ok()) {
+        {
+          std::lock_guard lock(mu_);
+          for (auto& c : *req.mutable_completed()) done_.push_back(std::move(c));
+        }
+        if (status.error_code() == grpc::StatusCode::UNAUTHENTICATED ||
+            status.error_code() == grpc::StatusCode::PERMISSION_DENIED)
+          throw InputError("coordinator " + o_.coordinator + " refused this worker: " + status.error_message());
+        auto waited = std::chrono::duration_cast<std::chrono::milliseconds>(Clock::now() - started).count();
+        if (!connected && waited > o_.connect_timeout_ms)
+          throw InputError("cannot reach coordinator " + o_.coordinator + ": " + status.error_message());
+        if (stop_ && waited > o_.connect_timeout_ms) return;  // leaving and nobody listens
+        std::this_thread::sleep_for(std::chrono::milliseconds(backoff_ms));
+        backoff_ms = std::min<std::int64_t>(backoff_ms * 2, 5000);
+        continue;
+      }
+      if (!connected) started = Clock::now();
+      connected = true;
+      backoff_ms = 200;
+      summary_.results_acknowledged += resp.acknowledged_lease_ids_size();
+      if (leaving) return;
+      {
+        std::lock_guard lock(mu_);
+        if (resp.heartbeat_interval_ms() > 0) heartbeat_ms_ = resp.heartbeat_interval_ms();
+        Revoke(resp.revoked_lease_ids());
+        for (auto& lease : *resp.mutable_leases()) {
+          in_flight_.insert(lease.lease_id());
+          queue_.push_back(std::move(lease));
+        }
+      }
+      cv_.notify_all();
+      // Nothing new: wait for a result (or briefly for free slots to be worth
+      // asking for more work again).
+      std::unique_lock lock(mu_);
+      if (resp.leases_size() == 0 && !in_flight_.empty()) {
+        bool full = static_cast<int>(queue_.size()) + running_ >= o_.slots;
+        cv_.wait_for(lock, std::chrono::milliseconds(full ? 1000 : 200),
+                     [&] { return !done_.empty() || stop_; });
+      }
+      if (stop_ && running_ > 0)
+        cv_.wait_for(lock, std::chrono::milliseconds(200), [&] { return !done_.empty(); });
+    }
+  }
+
+  template <typename Ids>
+  void Revoke(const Ids& ids) {
+    for (const auto& id : ids) {
+      in_flight_.erase(id);
+      for (auto it = queue_.begin(); it != queue_.end(); ++it)
+        if (it->lease_id() == id) {
+          queue_.erase(it);
+          break;
+        }
+    }
+  }
+
+  void HeartbeatLoop() {
+    while (true) {
+      v1::HeartbeatRequest req;
+      {
+        std::unique_lock lock(mu_);
+        cv_.wait_for(lock, std::chrono::milliseconds(heartbeat_ms_), [&] { return exiting_; });
+        if (exiting_) return;
+        if (in_flight_.empty()) continue;
+        req.set_worker_id(o_.worker_id);
+        for (const auto& id : in_flight_) req.add_lease_ids(id);
+      }
+      grpc::ClientContext ctx;
+      protocol::Prepare(ctx, o_.security, std::chrono::milliseconds(5000));
+      v1::HeartbeatResponse resp;
+      if (stub_->Heartbeat(&ctx, req, &resp).ok()) {
+        std::lock_guard lock(mu_);
+        // Leases still queued are dropped; a running one finishes and its
+        // result is fenced or acknowledged as a duplicate.
+        for (const auto& id : resp.revoked_lease_ids())
+          for (auto it = queue_.begin(); it != queue_.end(); ++it)
+            if (it->lease_id() == id) {
+              in_flight_.erase(id);
+              queue_.erase(it);
+              break;
+            }
+      }
+    }
+  }
+
+  void SlotLoop() {
+    while (true) {
+      v1::Lease lease;
+      {
+        std::unique_lock lock(mu_);
+        cv_.wait(lock, [&] { return exiting_ || (!queue_.empty() && !stop_); });
+        if (exiting_) return;
+        lease = std::move(queue_.front());
+        queue_.pop_front();
+        ++running_;
+      }
+      v1::CompletedTask done = Execute(lease);
+      {
+        std::lock_guard lock(mu_);
+        --running_;
+        ++summary_.tasks_run;
+        in_flight_.erase(lease.lease_id());
+        done_.push_back(std::move(done));
+      }
+      cv_.notify_all();
+    }
+  }
+
+  std::shared_ptr<JobContext> ContextFor(const v1::Lease& lease) {
+    std::lock_guard lock(jobs_mu_);
+    auto& ctx = jobs_[lease.job_bundle_digest()];
+    if (ctx && ctx->evaluator) return ctx;
+    ctx = std::make_shared<JobContext>();
+    try {
+      grpc::ClientContext call;
+      protocol::Prepare(call, o_.security, std::chrono::seconds(120));
+      v1::ReadRequest req;
+      req.set_digest(lease.job_bundle_digest());
+      auto reader = blob_stub_->Read(&call, req);
+      std::string bytes;
+      v1::ReadChunk chunk;
+      while (reader->Read(&chunk)) bytes += chunk.data();
+      grpc::Status s = reader->Finish();
+      if (!s.ok()) throw InputError("cannot fetch job bundle: " + s.error_message());
+      if (Sha256Hex(bytes) != lease.job_bundle_digest()) throw InputError("job bundle digest mismatch");
+      v1::JobBundle bundle;
+      if (!bundle.ParseFromString(bytes)) throw InputError("job bundle does not parse");
+      auto files = protocol::Materialize(bundle, o_.cache_dir / lease.job_bundle_digest().substr(0, 16));
+      ctx->evaluator = std::make_unique<precompute::DesignSampleEvaluator>(design::LoadDesign(files.design_file));
+    } catch (const std::exception& e) {
+      ctx->error = e.what();
+      auto failed = ctx;
+      ctx.reset();  // try again on the next lease
+      return failed;
+    }
+    return ctx;
+  }
+
+  v1::CompletedTask Execute(const v1::Lease& lease) {
+    v1::CompletedTask done;
+    done.set_lease_id(lease.lease_id());
+    done.set_task_key(lease.task_key());
+    done.set_attempt(lease.attempt());
+    if (!crash_prefix_.empty() && lease.task_key().rfind(crash_prefix_, 0) == 0) std::raise(SIGKILL);
+    const v1::TaskPayload& p = lease.payload();
+    auto wall0 = Clock::now();
+    double cpu0 = ThreadCpuSeconds();
+    v1::TaskResult result;
+    if (p.kind() == v1::TASK_KIND_NOOP) {
+      result.set_noop(true);
+    } else {
+      auto ctx = ContextFor(lease);
+      if (!ctx->evaluator) {
+        done.set_error(ctx->error.empty() ? "job not loaded" : ctx->error);
+        return done;
+      }
+      try {
+        if (p.kind() == v1::TASK_KIND_SAMPLE) {
+          result = protocol::SampleResultOf(ctx->evaluator->EvaluateSample(protocol::PointOf(p.point_a())));
+        } else if (p.kind() == v1::TASK_KIND_GEOMETRY_CHANGE) {
+          result.set_geometry_change(
+              ctx->evaluator->GeometryChange(protocol::PointOf(p.point_a()), protocol::PointOf(p.point_b())));
+        } else {
+          done.set_error("unknown task kind " + std::to_string(p.kind()));
+          return done;
+        }
+      } catch (const std::exception& e) {
+        done.set_error(e.what());
+        return done;
+      }
+    }
+    result.set_cpu_seconds(ThreadCpuSeconds() - cpu0);
+    result.set_wall_seconds(std::chrono::duration<double>(Clock::now() - wall0).count());
+    *done.mutable_result() = std::move(result);
+    return done;
+  }
+
+  WorkerOptions o_;
+  const std::atomic<bool>& stop_;
+  std::shared_ptr<grpc::Channel> channel_;
+  std::unique_ptr<v1::WorkerService::Stub> stub_;
+  std::unique_ptr<v1::BlobService::Stub> blob_stub_;
+  std::string crash_prefix_;
+
+  std::mutex mu_;
+  std::condition_variable cv_;
+  std::deque<v1::Lease> queue_;
+  std::set<std::string> in_flight_;
+  std::vector<v1::CompletedTask> done_;
+  int running_ = 0;
+  bool exiting_ = false;
+  std::int64_t heartbeat_ms_ = 2000;
+  std::vector<std::thread> slots_;
+  std::thread heartbeat_;
+
+  std::mutex jobs_mu_;
+  std::map<std::string, std::shared_ptr<JobContext>> jobs_;
+  WorkerSummary summary_;
+};
+
+}  // namespace
+
+WorkerSummary RunWorker(const WorkerOptions& options, const std::atomic<bool>& stop) {
+  Worker worker(options, stop);
+  return worker.Run();
+}
+
+}  // namespace fabatlas::worker
