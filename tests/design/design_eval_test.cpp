@@ -193,3 +193,24 @@ tree: {op: box, size: [s, s, s]}
 )");
   EXPECT_THROW(Eval(d, ""), ResourceError);
 }
+
+TEST(EvaluateSample, ExactBooleanMatchesAnalyticVolume) {
+  // A 4 mm cube minus a ball of radius 1.5 at its centre, by CGAL
+  // corefinement of the two meshes: 64 - 4/3 pi 1.5^3.
+  design::Design d = Load(R"(name: exact
+voxel_size: 0.05
+parameters: {r: {type: real, min: 0.5, max: 1.9, default: 1.5}}
+tree:
+  op: difference
+  exact: true
+  children:
+    - {op: box, size: [4, 4, 4]}
+    - {op: sphere, radius: r}
+checks: [watertight]
+properties: [volume]
+)");
+  design::SampleResult r = Eval(d, "r=1.5");
+  ASSERT_TRUE(r.valid) << r.failure_reason;
+  const double expected = 64.0 - 4.0 / 3.0 * M_PI * 1.5 * 1.5 * 1.5;
+  EXPECT_NEAR(r.properties["volume"], expected, 0.01 * expected);
+}
