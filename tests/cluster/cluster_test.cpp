@@ -237,3 +237,59 @@ TEST(ClusterBadInput, WrongTokenIsRefused) {
   ::kill(c.pid, SIGTERM);
   EXPECT_EQ(WaitExit(c.pid, std::chrono::seconds(30)), 0);
 }
+
+TEST(ClusterSecurity, TlsWithTokenRunsTheJobAndServesMetrics) {
+  fs::path dir = FreshDir("tls");
+  fs::path certs = dir / "certs";
+  std::string make = "bash " + (SourceDir() / "ops/tls/make-certs.sh").string() + " " + certs.string() +
+                     " > " + (dir / "certs.log").string() + " 2>&1";
+  ASSERT_EQ(std::system(make.c_str()), 0) << ReadText(dir / "certs.log");
+  std::string token = ReadText(certs / "token");
+  while (!token.empty() && token.back() == '\n') token.pop_back();
+  // A free port for /metrics: bind 0 through a throwaway coordinator is
+  // overkill; 127.0.0.1:0 is not allowed by httplib, so pick from the pid.
+  int metrics_port = 20000 + ::getpid() % 20000;
+  CoordinatorProcess c = StartCoordinator(
+      dir / "state", 0,
+      {"--tls-cert", (certs / "server.pem").string(), "--tls-key", (certs / "server.key").string(),
+       "--token-file", (certs / "token").string(), "--metrics", "127.0.0.1:" + std::to_string(metrics_port)});
+  ASSERT_GT(c.port, 0) << ReadText(dir / "state/coordinator.log");
+  protocol::ClientSecurity security;
+  security.token = token;
+  security.tls_ca = (certs / "ca.pem").string();
+  coordinator::JobClient client("127.0.0.1:" + std::to_string(c.port), security);
+  // Plaintext to a TLS port fails.
+  EXPECT_THROW(Client(c.port, token).List(), InputError);
+  pid_t worker = StartWorker(c.port, dir / "w",
+                             {"--tls-ca", (certs / "ca.pem").string(), "--token-file", (certs / "token").string(),
+                              "--slots", "2"});
+  std::string id = client.Submit(JobPath());
+  v1::JobStatus s = client.Watch(id, [](const v1::JobStatus&) { return true; });
+  EXPECT_EQ(s.state(), v1::JOB_STATE_SUCCEEDED) << s.error();
+  EXPECT_EQ(client.Fetch(id)["form.json"], ReferenceForm());
+  // Prometheus text over plain HTTP.
+  std::string metrics_file = (dir / "metrics.txt").string();
+  std::string curl = "curl -sf http://127.0.0.1:" + std::to_string(metrics_port) + "/metrics > " + metrics_file;
+  if (std::system("command -v curl > /dev/null") == 0) {
+    ASSERT_EQ(std::system(curl.c_str()), 0);
+    std::string text = ReadText(metrics_file);
+    EXPECT_NE(text.find("fabatlas_tasks{state=\"done\"} " + std::to_string(s.tasks_total())), std::string::npos)
+        << text;
+    EXPECT_NE(text.find("# TYPE fabatlas_tasks_completed_total counter"), std::string::npos) << text;
+    EXPECT_NE(text.find("fabatlas_workers 1"), std::string::npos) << text;
+  }
+  ::kill(worker, SIGTERM);
+  EXPECT_EQ(WaitExit(worker, std::chrono::seconds(30)), 0);
+  ::kill(c.pid, SIGTERM);
+  EXPECT_EQ(WaitExit(c.pid, std::chrono::seconds(30)), 0);
+}
+
+TEST(ClusterSecurity, PlaintextOnANonLoopbackAddressIsRefused) {
+  fs::path dir = FreshDir("plaintext");
+  pid_t pid = Spawn({(BinDir() / "fabatlas-coordinator").string(), "--listen", "0.0.0.0:0", "--state-dir",
+                     (dir / "state").string()},
+                    dir / "log");
+  EXPECT_EQ(WaitExit(pid, std::chrono::seconds(30)), 2);
+  std::string text = ReadText(dir / "log");
+  EXPECT_NE(text.find("refusing plaintext on non-loopback address 0.0.0.0:0"), std::string::npos) << text;
+}
