@@ -1,0 +1,98 @@
+// Sampling real designs: the design's space maps onto sampling dimensions,
+// the result does not depend on thread count, and the estimated valid region
+// of a closed-form design matches the algebra.
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "../design/design_files.h"
+#include "fabatlas/design/constraint_solve.h"
+#include "fabatlas/error.h"
+#include "fabatlas/precompute/design_evaluator.h"
+#include "fabatlas/precompute/form_outputs.h"
+#include "fabatlas/sampling/adaptive_sampler.h"
+#include "fabatlas/sampling/executor.h"
+#include "fabatlas/sampling/form_json.h"
+
+using namespace fabatlas;
+
+namespace {
+
+design::Design TubeWall() {
+  return design::LoadDesign(fabatlas::testing::SourceDir() / "configs/designs/tube_wall_2d.yaml");
+}
+
+sampling::SamplingSummary Sample(const design::Design& d, int threads, const sampling::SamplingOptions& options) {
+  sampling::DesignSpace space = precompute::DesignSpaceOf(d, 4);
+  precompute::DesignSampleEvaluator evaluator(d);
+  sampling::ThreadPoolExecutor executor(threads);
+  return sampling::SampleDesignSpace(space, evaluator, executor, options);
+}
+
+}  // namespace
+
+TEST(Precompute, DesignSpaceFollowsTheExposedParameters) {
+  design::Design d = design::LoadDesign(fabatlas::testing::SourceDir() / "configs/designs/vase.yaml");
+  sampling::DesignSpace space = precompute::DesignSpaceOf(d, 5);
+  ASSERT_EQ(space.dimension_count(), 3);
+  EXPECT_EQ(space.dimension(0).name, "sides");
+  EXPECT_EQ(space.dimension(0).kind, sampling::DimensionKind::kInteger);
+  EXPECT_EQ(space.dimension(1).kind, sampling::DimensionKind::kReal);
+  EXPECT_DOUBLE_EQ(space.dimension(1).lo, 10);
+  EXPECT_DOUBLE_EQ(space.dimension(1).hi, 50);
+  design::Point p = precompute::DesignPointOf(d, {5, 20, 30});
+  EXPECT_DOUBLE_EQ(p["bulge_r"], 20);
+}
+
+TEST(Precompute, SameFormWhateverTheThreadCount) {
+  design::Design d = TubeWall();
+  sampling::SamplingOptions options;
+  options.max_depth = 2;
+  std::string one = sampling::FormToJson(Sample(d, 1, options).form);
+  std::string two = sampling::FormToJson(Sample(d, 2, options).form);
+  EXPECT_EQ(one, two);
+}
+
+TEST(Precompute, EstimatedRegionAgreesWithTheAlgebra) {
+  // tube_wall_2d is valid exactly where wall >= 1 + 0.01 radius^2 and
+  // radius - wall >= 2. Points of all-valid leaves must be truly valid
+  // (the estimate is conservative), and most truly valid points must be in
+  // the estimate (IoU on a fixed random set).
+  design::Design d = TubeWall();
+  sampling::SamplingOptions options;
+  options.max_depth = 9;
+  options.dg_threshold = 0.5;  // refine where validity changes, not the interior
+  sampling::SamplingSummary s = Sample(d, 2, options);
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> radius(5, 30), wall(0.5, 12);
+  int both = 0, either = 0, false_valid = 0;
+  for (int i = 0; i < 20000; ++i) {
+    double r = radius(rng), w = wall(rng);
+    bool truth = w >= 1 + 0.01 * r * r && r - w >= 2;
+    bool estimate = sampling::InEstimatedValidRegion(s.form, {r, w});
+    both += truth && estimate;
+    either += truth || estimate;
+    false_valid += estimate && !truth;
+  }
+  double iou = static_cast<double>(both) / either;
+  EXPECT_GE(iou, 0.95) << "IoU " << iou;
+  EXPECT_LE(false_valid, 20000 * 0.01) << "points estimated valid that are not";
+  EXPECT_GT(s.statistics.valid_volume_percent, 0);
+  EXPECT_DOUBLE_EQ(s.statistics.failure_shares.at("unsat_constraints"), 1.0);
+}
+
+TEST(Precompute, OutputsAreWrittenAndReadable) {
+  design::Design d = TubeWall();
+  sampling::SamplingOptions options;
+  options.max_depth = 1;
+  sampling::SamplingSummary s = Sample(d, 2, options);
+  auto out = fabatlas::testing::TempDesign("", "placeholder").parent_path() / "out";
+  precompute::WriteFormOutputs(d, s, out);
+  EXPECT_TRUE(std::filesystem::exists(out / "statistics.json"));
+  EXPECT_GT(std::filesystem::file_size(out / "map_radius_wall.png"), 1000u);
+  std::ifstream in(out / "form.json");
+  std::string text((std::istreambuf_iterator<char>(in)), {});
+  EXPECT_EQ(sampling::FormToJson(sampling::FormFromJson(text)), text);
+  // A path that cannot be created is a one-line input error.
+  EXPECT_THROW(precompute::WriteFormOutputs(d, s, "/proc/fabatlas-cannot-write"), InputError);
+}
