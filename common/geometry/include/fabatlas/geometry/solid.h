@@ -95,8 +95,10 @@ Solid Extrude(const GridSpec& g, const std::vector<Vec2>& polygon, double height
 // has a regular n-gon cross-section (profile r is the circumradius), as the
 // chess pieces and vase of seed 001.
 Solid Revolve(const GridSpec& g, const std::vector<Vec2>& profile, int sides);
-// Level set of a closed triangle mesh (open meshes: the unsigned distance band
-// is closed by winding-number sign; throws InputError if no interior results).
+// Level set of a closed triangle mesh (OpenVDB meshToLevelSet; orientation
+// does not matter). Open meshes are signed by OpenVDB's flood fill, which may
+// leak; throws InputError if no interior results, or on bad indices/NaNs.
+// (Winding-number signing of open meshes is not implemented yet.)
 Solid FromMesh(const GridSpec& g, const mesh::TriangleMesh& m);
 
 // ---- Transforms (rotations in degrees, applied as R = Rz*Ry*Rx) ------------
