@@ -293,3 +293,121 @@ TEST(ClusterSecurity, PlaintextOnANonLoopbackAddressIsRefused) {
   std::string text = ReadText(dir / "log");
   EXPECT_NE(text.find("refusing plaintext on non-loopback address 0.0.0.0:0"), std::string::npos) << text;
 }
+
+namespace {
+
+int Sh(const std::string& command) { return std::system((command + " > /dev/null 2>&1").c_str()); }
+
+// Two network namespaces ("hosts"), each joined to the root namespace by a
+// veth pair: host i is 10.77.<net+i>.2, the coordinator side 10.77.<net+i>.1.
+struct TwoHosts {
+  std::string tag = std::to_string(::getpid() % 100000);
+  int net = 100 + ::getpid() % 100;
+  bool ok = false;
+  std::string Ns(int i) const { return "fabatlas_" + tag + "_" + std::to_string(i); }
+  std::string Root(int i) const { return "fa" + tag + "r" + std::to_string(i); }
+  std::string Peer(int i) const { return "fa" + tag + "p" + std::to_string(i); }
+  std::string CoordinatorIp(int i) const { return "10.77." + std::to_string(net + i) + ".1"; }
+  std::string HostIp(int i) const { return "10.77." + std::to_string(net + i) + ".2"; }
+  bool Setup() {
+    for (int i = 0; i < 2; ++i) {
+      std::string ns = Ns(i);
+      if (Sh("ip netns add " + ns) != 0) return false;
+      if (Sh("ip link add " + Root(i) + " type veth peer name " + Peer(i)) != 0) return false;
+      Sh("ip link set " + Peer(i) + " netns " + ns);
+      Sh("ip addr add " + CoordinatorIp(i) + "/24 dev " + Root(i));
+      Sh("ip link set " + Root(i) + " up");
+      Sh("ip netns exec " + ns + " ip addr add " + HostIp(i) + "/24 dev " + Peer(i));
+      Sh("ip netns exec " + ns + " ip link set " + Peer(i) + " up");
+      Sh("ip netns exec " + ns + " ip link set lo up");
+      if (Sh("ip netns exec " + ns + " ping -c 1 -W 2 " + CoordinatorIp(i)) != 0 &&
+          Sh("ip netns exec " + ns + " ip route get " + CoordinatorIp(i)) != 0)
+        return false;
+    }
+    ok = true;
+    return true;
+  }
+  ~TwoHosts() {
+    for (int i = 0; i < 2; ++i) {
+      Sh("ip link del " + Root(i));
+      Sh("ip netns del " + Ns(i));
+    }
+  }
+};
+
+}  // namespace
+
+TEST(ClusterMultiHost, WorkersInNetworkNamespacesSurviveAPartition) {
+  if (::geteuid() != 0 || Sh("ip netns list") != 0) GTEST_SKIP() << "needs CAP_NET_ADMIN for ip netns; loopback tests cover the rest";
+  TwoHosts hosts;
+  if (!hosts.Setup()) GTEST_SKIP() << "cannot create network namespaces and veth pairs here (needs CAP_NET_ADMIN)";
+  fs::path dir = FreshDir("netns");
+  fs::path certs = dir / "certs";
+  ASSERT_EQ(Sh("bash " + (SourceDir() / "ops/tls/make-certs.sh").string() + " " + certs.string() + " " +
+               hosts.CoordinatorIp(0) + " " + hosts.CoordinatorIp(1)),
+            0);
+  std::string token = ReadText(certs / "token");
+  while (!token.empty() && token.back() == '\n') token.pop_back();
+  // Not loopback: TLS and a token (plaintext would be refused).
+  std::vector<std::string> flags = kFastLeases;
+  for (const std::string& f : {std::string("--tls-cert"), (certs / "server.pem").string(), std::string("--tls-key"),
+                               (certs / "server.key").string(), std::string("--token-file"), (certs / "token").string()})
+    flags.push_back(f);
+  fs::path state = dir / "state";
+  fs::create_directories(state);
+  std::vector<std::string> argv = {(BinDir() / "fabatlas-coordinator").string(), "--listen", "0.0.0.0:0",
+                                   "--state-dir", state.string(), "--port-file", (state / "port").string()};
+  argv.insert(argv.end(), flags.begin(), flags.end());
+  CoordinatorProcess c;
+  c.pid = Spawn(argv, state / "coordinator.log");
+  for (int i = 0; i < 500 && c.port == 0; ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    c.port = std::atoi(ReadText(state / "port").c_str());
+  }
+  ASSERT_GT(c.port, 0) << ReadText(state / "coordinator.log");
+  std::vector<pid_t> workers;
+  for (int i = 0; i < 2; ++i) {
+    fs::path wdir = dir / ("host" + std::to_string(i));
+    fs::create_directories(wdir);
+    workers.push_back(Spawn({"/usr/sbin/ip", "netns", "exec", hosts.Ns(i), (BinDir() / "fabatlas-worker").string(),
+                             "--coordinator", hosts.CoordinatorIp(i) + ":" + std::to_string(c.port), "--tls-ca",
+                             (certs / "ca.pem").string(), "--token", token, "--cache-dir", (wdir / "cache").string()},
+                            wdir / "worker.log"));
+  }
+  protocol::ClientSecurity security;
+  security.token = token;
+  security.tls_ca = (certs / "ca.pem").string();
+  auto client = [&] {
+    return coordinator::JobClient("127.0.0.1:" + std::to_string(c.port), security, std::chrono::seconds(5));
+  };
+  std::string id = client().Submit(JobPath());
+  // Partition host 0 (link down) once work is flowing, for 3 lease periods; then heal.
+  bool partitioned = false, healed = false;
+  auto partition_at = std::chrono::steady_clock::now();
+  v1::JobStatus s;
+  auto until = std::chrono::steady_clock::now() + std::chrono::seconds(240);
+  while (std::chrono::steady_clock::now() < until) {
+    s = client().Status(id);
+    if (s.state() >= v1::JOB_STATE_SUCCEEDED) break;
+    if (!partitioned && s.tasks_done() > 5) {
+      ASSERT_EQ(Sh("ip link set " + hosts.Root(0) + " down"), 0);
+      partitioned = true;
+      partition_at = std::chrono::steady_clock::now();
+    }
+    if (partitioned && !healed && std::chrono::steady_clock::now() - partition_at > std::chrono::milliseconds(4500)) {
+      ASSERT_EQ(Sh("ip link set " + hosts.Root(0) + " up"), 0);
+      Sh("ip addr add " + hosts.CoordinatorIp(0) + "/24 dev " + hosts.Root(0));
+      healed = true;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
+  if (partitioned && !healed) Sh("ip link set " + hosts.Root(0) + " up");
+  EXPECT_TRUE(partitioned);
+  EXPECT_EQ(s.state(), v1::JOB_STATE_SUCCEEDED) << s.error();
+  EXPECT_EQ(client().Fetch(id)["form.json"], ReferenceForm());
+  for (pid_t p : workers) ::kill(p, SIGTERM);
+  for (pid_t p : workers) WaitExit(p, std::chrono::seconds(30));
+  StopAndCheckStore(c, state, id);
+  std::string log0 = ReadText(dir / "host0/worker.log");
+  EXPECT_EQ(log0.find("cannot reach"), std::string::npos) << log0;  // reconnected, did not give up
+}
