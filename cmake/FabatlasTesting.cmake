@@ -18,7 +18,9 @@ function(fabatlas_add_test)
   # gtest_discover_tests writes PROPERTIES into a script: a list needs its
   # separators escaped twice to survive as one ENVIRONMENT value.
   set(env "FABATLAS_SOURCE_DIR=${CMAKE_SOURCE_DIR}\\\;FABATLAS_SHARED_DIR=${FABATLAS_SHARED_DIR}\\\;FABATLAS_BIN_DIR=${CMAKE_BINARY_DIR}/bin")
+  # Test names are "<binary>.<Suite>.<Test>", so `ctest -R design_` selects an area.
   gtest_discover_tests(${T_NAME}
+    TEST_PREFIX "${T_NAME}."
     DISCOVERY_TIMEOUT 60
     PROPERTIES
       LABELS "${T_LABELS}"

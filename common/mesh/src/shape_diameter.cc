@@ -145,11 +145,17 @@ ShapeDiameterSummary ShapeDiameter(const TriangleMesh& mesh, const ShapeDiameter
     pattern[i] = {std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi), std::cos(theta), 1.0 / theta};
   }
 
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nf), [&](const tbb::blocked_range<std::size_t>& range) {
+  const std::size_t stride =
+      options.max_faces > 0 && nf > static_cast<std::size_t>(options.max_faces)
+          ? (nf + static_cast<std::size_t>(options.max_faces) - 1) / static_cast<std::size_t>(options.max_faces)
+          : 1;
+  summary.faces_measured = static_cast<std::int64_t>((nf + stride - 1) / stride);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, (nf + stride - 1) / stride), [&](const tbb::blocked_range<std::size_t>& range) {
     std::vector<std::pair<double, double>> hits;  // (length, weight)
     std::vector<double> lengths;
     RTCIntersectContext context;
-    for (std::size_t f = range.begin(); f != range.end(); ++f) {
+    for (std::size_t i = range.begin(); i != range.end(); ++i) {
+      const std::size_t f = i * stride;
       if (area[f] <= 0) continue;
       const Vec axis = {-normal[f][0], -normal[f][1], -normal[f][2]};
       Vec t, b;
@@ -200,7 +206,7 @@ ShapeDiameterSummary ShapeDiameter(const TriangleMesh& mesh, const ShapeDiameter
   // Area-weighted statistics over faces with a value.
   std::vector<std::pair<double, double>> valued;  // (value, area)
   double total = 0, below = 0;
-  for (std::size_t f = 0; f < nf; ++f) {
+  for (std::size_t f = 0; f < nf; f += stride) {
     if (std::isnan(summary.per_face[f])) {
       ++summary.faces_without_value;
       continue;

@@ -18,12 +18,18 @@ struct ShapeDiameterOptions {
   double cone_angle_degrees = 120.0;
   // Faces thinner than this (mm) count in ShapeDiameterSummary::area_fraction_below.
   double thin_threshold = 1.0;
+  // When > 0 and the mesh has more faces, only every k-th face (k = ceil(faces
+  // / max_faces), a fixed stride, so results stay deterministic) is measured
+  // and the area-weighted statistics estimate the whole surface from them;
+  // unmeasured faces are NaN in per_face. 0 measures every face.
+  std::int64_t max_faces = 0;
 };
 
 struct ShapeDiameterSummary {
   // Per input triangle: local thickness in mm, NaN when no ray found a valid hit
   // (open meshes, faces pointing inward) or the triangle is degenerate.
   std::vector<double> per_face;
+  std::int64_t faces_measured = 0;  // faces rays were cast from
   std::int64_t faces_without_value = 0;
   // Statistics over faces with a value, weighted by face area (so they do not
   // depend on the tessellation); NaN when no face has a value.
