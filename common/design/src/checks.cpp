@@ -5,6 +5,8 @@
 #include <cmath>
 #include <sstream>
 
+#include "fabatlas/error.h"
+#include "fabatlas/fem/fem_check.h"
 #include "fabatlas/mesh/mesh_report.h"
 #include "fabatlas/mesh/shape_diameter.h"
 
@@ -111,6 +113,101 @@ CheckOutcome MaxVolume(const CheckSpec& spec, CheckContext& c) {
   return o;
 }
 
+
+// Largest number of voxel hexahedra the fem check meshes; beyond it the sparse
+// factorisation takes minutes and gigabytes (docs/bench-fem.md: 20k elements
+// already take ~40 s), so the design's FEM voxel is too small.
+constexpr std::size_t kMaxFemElements = 200000;
+
+// One expression argument (an item of a list argument) evaluated with the
+// sample's parameters.
+double EvaluateItem(CheckContext& c, const CheckSpec& spec, const Argument& item) {
+  CheckSpec one;
+  one.args["item"] = item;
+  one.place = spec.place;
+  return c.Number(one, "item", 0);
+}
+
+// The `fixed` / `loaded` argument: exactly two [x, y, z] corners, min then max.
+fem::AxisBox FemBox(CheckContext& c, const CheckSpec& spec, const std::string& name) {
+  const Argument& a = spec.args.at(name);
+  if (a.items.size() != 2)
+    throw InputError(a.place.str() + ": check '" + spec.name + "': '" + name +
+                     "' must be two corners [[xmin, ymin, zmin], [xmax, ymax, zmax]]");
+  fem::AxisBox box;
+  for (int k = 0; k < 3; ++k) {
+    box.min[k] = EvaluateItem(c, spec, a.items[0].items[k]);
+    box.max[k] = EvaluateItem(c, spec, a.items[1].items[k]);
+    if (!(box.min[k] <= box.max[k]))
+      throw InputError(a.place.str() + ": check '" + spec.name + "': '" + name + "' has min > max along " +
+                       "xyz"[k]);
+  }
+  return box;
+}
+
+// Static Neo-Hookean FEM on voxel hexahedra (seed 001 Sec. 8, the sandal's
+// deformation check; method in docs/fem.md): the solid is resampled at the
+// check's own `voxel` (mm), nodes in `fixed` are clamped, `force` (N, total)
+// is spread over the boundary faces inside `loaded`, and the check passes iff
+// the solve converges and max |u| <= max_displacement (and the largest
+// principal Green-Lagrange strain <= max_strain if given). The reason states
+// max displacement and strain whether or not the check passes.
+CheckOutcome Fem(const CheckSpec& spec, CheckContext& c) {
+  const std::string where = spec.place.str() + ": check '" + spec.name + "'";
+  const double voxel = c.Number(spec, "voxel", 0);
+  if (!std::isfinite(voxel) || voxel <= 0) throw InputError(where + ": 'voxel' must be > 0 mm");
+  const double youngs = c.Number(spec, "youngs_modulus", 0);
+  const double poisson = c.Number(spec, "poisson", 0.3);
+  const double limit = c.Number(spec, "max_displacement", 0);
+  if (!std::isfinite(limit) || limit <= 0) throw InputError(where + ": 'max_displacement' must be > 0 mm");
+
+  fem::FemLoadCase load;
+  load.fixed_region.push_back(FemBox(c, spec, "fixed"));
+  load.loaded_region.push_back(FemBox(c, spec, "loaded"));
+  const Argument& force = spec.args.at("force");
+  for (int k = 0; k < 3; ++k) load.total_force[k] = EvaluateItem(c, spec, force.items[k]);
+  fem::FemCheckOptions options;
+  options.max_displacement = limit;
+  options.max_strain = c.Number(spec, "max_strain", 0.0);
+
+  geometry::Occupancy occupancy;
+  fem::FemCheckResult result;
+  try {
+    load.material = fem::Material::FromYoungPoisson(youngs, poisson);
+    occupancy = geometry::SampleOccupancy(c.solid(), voxel, 8 * kMaxFemElements);
+  } catch (const InputError& e) {
+    throw InputError(where + ": " + e.what() + " (the FEM voxel is too small for the design?)");
+  }
+  if (occupancy.inside_count > kMaxFemElements) {
+    std::ostringstream m;
+    m << where << ": FEM voxel " << voxel << " mm gives " << occupancy.inside_count << " elements (limit "
+      << kMaxFemElements << "): the FEM voxel is too small for the design";
+    throw InputError(m.str());
+  }
+  fem::VoxelSolid voxels;
+  voxels.origin = occupancy.origin;
+  voxels.voxel_size = occupancy.cell_size;
+  voxels.dims = occupancy.dims;
+  voxels.occupied = std::move(occupancy.inside);
+  try {
+    result = fem::RunFemCheck(voxels, load, options);
+  } catch (const InputError& e) {
+    throw InputError(where + ": " + e.what());
+  }
+  CheckOutcome o;
+  o.passed = result.passed;
+  std::ostringstream reason;
+  if (!result.passed) {
+    o.failure = kTooMuchDeformation;
+    reason << result.reason << "; ";
+  }
+  reason.precision(3);
+  reason << "max displacement " << result.max_displacement << " mm (limit " << limit << " mm), max strain "
+         << result.max_strain << ", " << result.num_elements << " elements of " << voxel << " mm";
+  o.reason = reason.str();
+  return o;
+}
+
 }  // namespace
 
 const mesh::TriangleMesh& CheckContext::Mesh() {
@@ -131,6 +228,7 @@ CheckOutcome RunCheck(const CheckSpec& spec, CheckContext& context) {
   else if (spec.type == "min_thickness") o = MinThickness(spec, context);
   else if (spec.type == "stands") o = Stands(spec, context);
   else if (spec.type == "max_volume") o = MaxVolume(spec, context);
+  else if (spec.type == "fem") o = Fem(spec, context);
   o.name = spec.name;
   o.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return o;

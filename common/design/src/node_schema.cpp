@@ -50,6 +50,17 @@ const std::map<std::string, OpSchema>& CheckSchemas() {
        {{{"value", S::kNumber}, {"method", S::kString, false}, {"max_thin_fraction", S::kNumber, false}}, 0, 0}},
       {"stands", {{{"margin", S::kNumber, false}}, 0, 0}},
       {"max_volume", {{{"value", S::kNumber}}, 0, 0}},
+      {"fem",
+       {{{"voxel", S::kNumber},
+         {"youngs_modulus", S::kNumber},
+         {"poisson", S::kNumber, false},
+         {"fixed", S::kVec3List},
+         {"loaded", S::kVec3List},
+         {"force", S::kVec3},
+         {"max_displacement", S::kNumber},
+         {"max_strain", S::kNumber, false}},
+        0,
+        0}},
   };
   return schemas;
 }

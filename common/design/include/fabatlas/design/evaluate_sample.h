@@ -22,6 +22,7 @@ inline constexpr const char* kSelfIntersecting = "self_intersecting";
 inline constexpr const char* kThinParts = "thin_parts";
 inline constexpr const char* kUnstable = "unstable";
 inline constexpr const char* kTooMuchMaterial = "too_much_material";
+inline constexpr const char* kTooMuchDeformation = "too_much_deformation";  // fem check
 
 struct CheckOutcome {
   std::string name;     // check name (constraints, geometry, then the design's)

@@ -130,4 +130,22 @@ double DeltaG(const Solid& a, const Solid& b);
 // with a ball of radius min_thickness/2. Thin features vanish under opening.
 double OpeningLossFraction(const Solid& s, double min_thickness);
 
+// Dense inside/outside sampling on a regular grid of cubic cells, e.g. the
+// voxel hexahedra of the FEM check (seed 001 Sec. 8, docs/fem.md), whose
+// resolution is independent of the level set's voxel size. Cell (i,j,k) is
+// the box [origin + (i,j,k)*cell_size, origin + (i+1,j+1,k+1)*cell_size] (mm);
+// it is inside iff the level set, trilinearly interpolated at the cell centre,
+// is negative. Cell corners lie on integer multiples of cell_size, and the
+// cells cover the solid's bounding box.
+struct Occupancy {
+  Vec3 origin{0, 0, 0};              // min corner of cell (0,0,0), mm
+  double cell_size = 0;              // mm
+  std::array<int, 3> dims{0, 0, 0};  // all 0 for the empty solid
+  std::vector<unsigned char> inside;  // inside[i + dims[0]*(j + dims[1]*k)]: 1 or 0
+  std::size_t inside_count = 0;      // number of cells with inside == 1
+};
+// Throws InputError if cell_size is not finite and > 0, or if the covering
+// grid would have more than max_cells cells. Threading: TBB over z slices.
+Occupancy SampleOccupancy(const Solid& s, double cell_size, std::size_t max_cells = 20'000'000);
+
 }  // namespace fabatlas::geometry
