@@ -65,13 +65,13 @@ inline pid_t Spawn(const std::vector<std::string>& argv, const fs::path& log) {
 // timeout, or 128 + signal when killed.
 inline int WaitExit(pid_t pid, std::chrono::milliseconds timeout) {
   auto until = std::chrono::steady_clock::now() + timeout;
-  while (std::chrono::steady_clock::now() < until) {
+  while (true) {  // checks at least once, also with a zero timeout
     int status = 0;
     pid_t r = ::waitpid(pid, &status, WNOHANG);
     if (r == pid) return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+    if (std::chrono::steady_clock::now() >= until) return -1;
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   }
-  return -1;
 }
 
 inline void KillAndReap(pid_t pid) {

@@ -411,3 +411,50 @@ TEST(ClusterMultiHost, WorkersInNetworkNamespacesSurviveAPartition) {
   std::string log0 = ReadText(dir / "host0/worker.log");
   EXPECT_EQ(log0.find("cannot reach"), std::string::npos) << log0;  // reconnected, did not give up
 }
+
+TEST(ClusterFaults, TaskThatKillsThreeWorkersIsQuarantinedAndTheJobFinishes) {
+  fs::path dir = FreshDir("quarantine");
+  std::vector<std::string> flags = {"--lease-ms", "1500", "--heartbeat-ms", "300", "--retry-backoff-ms", "50",
+                                    "--quarantine-after", "3"};
+  CoordinatorProcess c = StartCoordinator(dir / "state", 0, flags);
+  ASSERT_GT(c.port, 0);
+  std::string id = Client(c.port).Submit(JobPath());
+  // The first bootstrap sample becomes poison: a worker that leases it kills
+  // itself (fault injection through FABATLAS_WORKER_CRASH_KEY_PREFIX).
+  std::string poison;
+  for (int i = 0; i < 500 && poison.empty(); ++i) {
+    storage::JobStore store(dir / "state/state.db");
+    auto tasks = store.Tasks(id);
+    if (!tasks.empty()) poison = tasks.front().key;
+    else std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  ASSERT_FALSE(poison.empty());
+  ::setenv("FABATLAS_WORKER_CRASH_KEY_PREFIX", poison.c_str(), 1);
+  std::vector<pid_t> workers;
+  int spawned = 0, deaths = 0;
+  for (int i = 0; i < 2; ++i) workers.push_back(StartWorker(c.port, dir / ("w" + std::to_string(spawned++))));
+  v1::JobStatus s = WaitForJob([&] { return c.port; }, id, std::chrono::seconds(240), [&](const v1::JobStatus&) {
+    for (pid_t& p : workers)
+      if (WaitExit(p, std::chrono::milliseconds(0)) != -1) {
+        ++deaths;
+        p = StartWorker(c.port, dir / ("w" + std::to_string(spawned++)));
+      }
+  });
+  ::unsetenv("FABATLAS_WORKER_CRASH_KEY_PREFIX");
+  EXPECT_EQ(s.state(), v1::JOB_STATE_SUCCEEDED) << s.error();
+  EXPECT_EQ(s.tasks_quarantined(), 1);
+  EXPECT_EQ(deaths, 3);  // three holders died, then the task was quarantined
+  std::string form = Client(c.port).Fetch(id)["form.json"];
+  EXPECT_NE(form.find("\"quarantined\""), std::string::npos);
+  EXPECT_NE(form, ReferenceForm());
+  for (pid_t p : workers) ::kill(p, SIGTERM);
+  for (pid_t p : workers) WaitExit(p, std::chrono::seconds(30));
+  ::kill(c.pid, SIGTERM);
+  EXPECT_EQ(WaitExit(c.pid, std::chrono::seconds(30)), 0);
+  storage::JobStore store(dir / "state/state.db");
+  EXPECT_EQ(store.CheckConsistency(), std::vector<std::string>{});
+  EXPECT_EQ(store.FindTask(poison)->state, storage::TaskState::kQuarantined);
+  int quarantine_events = 0;
+  for (const auto& e : store.Events(id)) quarantine_events += e.kind == "quarantined";
+  EXPECT_EQ(quarantine_events, 1);
+}
