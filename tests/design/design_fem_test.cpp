@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdio>
 #include <string>
+#include <utility>
 
 #include "design_files.h"
 #include "fabatlas/design/evaluate_sample.h"
@@ -80,11 +81,72 @@ TEST(DesignFem, SandalDefaultPasses) {
 
 TEST(DesignFem, ThinTallHeelDeformsTooMuch) {
   design::Design d = Sandal();
-  design::SampleResult r = Evaluate(d, "heel_height=80,heel_thickness=8");
+  design::SampleResult r = Evaluate(d, "heel_height=80,heel_thickness=10");
   const design::CheckOutcome& fem = FemOutcome(r);
   std::printf("sandal thin tall heel: %s\n", fem.reason.c_str());
   EXPECT_FALSE(r.valid);
   EXPECT_EQ(r.failure, design::kTooMuchDeformation);
   EXPECT_FALSE(fem.passed);
   EXPECT_NE(r.failure_reason.find("max displacement"), std::string::npos) << r.failure_reason;
+}
+
+// Euler-Bernoulli: tip deflection of a clamped beam under an end load,
+// delta = F L^3 / (3 E I), I = b h^3 / 12. Full-integration Q1 hexahedra are
+// stiff in bending (shear locking, docs/fem.md) and the 3D clamp and shear
+// deformation (Timoshenko, +0.8% at L/h = 10) shift the answer by a few
+// percent; the error must shrink as the FEM voxel does. The load is small
+// (delta/L = 1e-3), so the Neo-Hookean solution is in its linear range. The
+// reported max |u| includes the tip's axial displacement from the end
+// rotation (+0.3%).
+TEST(DesignFem, CantileverMatchesEulerBernoulli) {
+  const double L = 100, b = 10, h = 10, E = 1000, F = 0.25;
+  const double I = b * h * h * h / 12;
+  const double expected = F * L * L * L / (3 * E * I);  // 0.1 mm
+  double previous_error = 1;
+  for (auto [voxel, tolerance] : {std::pair{2.0, 0.03}, std::pair{1.25, 0.015}}) {
+    design::Design d = design::LoadDesign(TempDesign(Cantilever(L, b, h, voxel, E, F, "[[-1, -1, -1], [0.01, 11, 11]]")));
+    auto start = std::chrono::steady_clock::now();
+    design::SampleResult r = Evaluate(d);
+    double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    const design::CheckOutcome& fem = FemOutcome(r);
+    double u = MaxDisplacement(fem);
+    std::printf("cantilever voxel %g: %s; Euler-Bernoulli %.5f mm, ratio %.4f (%.2f s)\n", voxel, fem.reason.c_str(),
+                expected, u / expected, seconds);
+    EXPECT_TRUE(fem.passed);
+    EXPECT_NEAR(u / expected, 1.0, tolerance) << "voxel " << voxel;
+    double error = std::abs(u / expected - 1);
+    EXPECT_LT(error, previous_error) << "voxel " << voxel;
+    previous_error = error;
+  }
+}
+
+// Bad FEM arguments are problems of the design: one-line InputError naming
+// the check, never a crash or a silently passing sample.
+void ExpectOneLineError(const std::string& text, const std::string& needle) {
+  design::Design d = design::LoadDesign(TempDesign(text));
+  try {
+    Evaluate(d);
+    ADD_FAILURE() << "no InputError (expected one mentioning '" << needle << "')";
+  } catch (const InputError& e) {
+    std::string what = e.what();
+    std::printf("error: %s\n", what.c_str());
+    EXPECT_EQ(what.find('\n'), std::string::npos) << what;
+    EXPECT_NE(what.find("check 'fem'"), std::string::npos) << what;
+    EXPECT_NE(what.find(needle), std::string::npos) << what;
+  }
+}
+
+TEST(DesignFem, EmptyFixedRegionIsAnInputError) {
+  ExpectOneLineError(Cantilever(100, 10, 10, 2, 1000, 0.25, "[[-10, -10, -10], [-5, -5, -5]]"), "fixed");
+}
+
+TEST(DesignFem, FixedRegionNeedsTwoCorners) {
+  ExpectOneLineError(Cantilever(100, 10, 10, 2, 1000, 0.25, "[[0, 0, 0], [1, 1, 1], [2, 2, 2]]"), "two corners");
+}
+
+TEST(DesignFem, TooManyElementsIsAnInputError) {
+  // 216 000 voxel hexahedra of 1 mm fill a 60 mm cube (limit 200 000).
+  ExpectOneLineError(Cantilever(60, 60, 60, 1, 1000, 0.25, "[[-1, -1, -1], [0.01, 61, 61]]"), "too small");
+  // 0.05 mm voxels: 1.7e9 cells over the bounding box, refused before sampling.
+  ExpectOneLineError(Cantilever(60, 60, 60, 0.05, 1000, 0.25, "[[-1, -1, -1], [0.01, 61, 61]]"), "too small");
 }

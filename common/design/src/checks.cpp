@@ -174,9 +174,13 @@ CheckOutcome Fem(const CheckSpec& spec, CheckContext& c) {
   fem::FemCheckResult result;
   try {
     load.material = fem::Material::FromYoungPoisson(youngs, poisson);
+  } catch (const InputError& e) {
+    throw InputError(where + ": " + e.what());
+  }
+  try {
     occupancy = geometry::SampleOccupancy(c.solid(), voxel, 8 * kMaxFemElements);
   } catch (const InputError& e) {
-    throw InputError(where + ": " + e.what() + " (the FEM voxel is too small for the design?)");
+    throw InputError(where + ": " + e.what() + ": the FEM voxel is too small for the design");
   }
   if (occupancy.inside_count > kMaxFemElements) {
     std::ostringstream m;
@@ -197,13 +201,17 @@ CheckOutcome Fem(const CheckSpec& spec, CheckContext& c) {
   CheckOutcome o;
   o.passed = result.passed;
   std::ostringstream reason;
+  reason.precision(4);
   if (!result.passed) {
     o.failure = kTooMuchDeformation;
-    reason << result.reason << "; ";
+    if (!result.converged) reason << result.reason << "; last state: ";
   }
-  reason.precision(3);
-  reason << "max displacement " << result.max_displacement << " mm (limit " << limit << " mm), max strain "
-         << result.max_strain << ", " << result.num_elements << " elements of " << voxel << " mm";
+  reason << "max displacement " << result.max_displacement << " mm"
+         << (result.max_displacement > limit ? " exceeds " : " (limit ") << limit << " mm"
+         << (result.max_displacement > limit ? "" : ")") << ", max strain " << result.max_strain;
+  if (options.max_strain > 0) reason << (result.max_strain > options.max_strain ? " exceeds " : " (limit ")
+                                     << options.max_strain << (result.max_strain > options.max_strain ? "" : ")");
+  reason << ", " << result.num_elements << " elements of " << voxel << " mm";
   o.reason = reason.str();
   return o;
 }
