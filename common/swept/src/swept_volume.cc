@@ -148,15 +148,20 @@ mesh::TriangleMesh SweptDistanceField::Surface(double iso) const {
 
 std::vector<Transform> SampleMotion(const mesh::TriangleMesh& body, const RigidMotion& motion,
                                     const SweptVolumeOptions& options) {
+  return SamplePoses(body, [&motion](double t) { return motion.At(t); }, options);
+}
+
+std::vector<Transform> SamplePoses(const mesh::TriangleMesh& body, const std::function<Transform(double)>& motion,
+                                   const SweptVolumeOptions& options) {
   CheckOptions(options);
   const auto corners = CheckedCorners(body);
   const double max_step = options.max_step_displacement > 0 ? options.max_step_displacement : options.voxel_size;
   // Path length bound of the fastest point, from a fine sampling of the motion.
   constexpr int kProbe = 4096;
   double path = 0;
-  Transform prev = motion.At(0.0);
+  Transform prev = motion(0.0);
   for (int i = 1; i <= kProbe; ++i) {
-    const Transform cur = motion.At(static_cast<double>(i) / kProbe);
+    const Transform cur = motion(static_cast<double>(i) / kProbe);
     path += PoseDistance(corners, prev, cur);
     prev = cur;
   }
@@ -165,7 +170,7 @@ std::vector<Transform> SampleMotion(const mesh::TriangleMesh& body, const RigidM
   const int steps = std::max(options.time_steps, static_cast<int>(wanted));
   std::vector<Transform> poses;
   poses.reserve(steps);
-  for (int i = 0; i < steps; ++i) poses.push_back(motion.At(static_cast<double>(i) / (steps - 1)));
+  for (int i = 0; i < steps; ++i) poses.push_back(motion(static_cast<double>(i) / (steps - 1)));
   return poses;
 }
 

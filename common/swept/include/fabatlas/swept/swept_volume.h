@@ -29,6 +29,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <vector>
 
@@ -112,6 +113,12 @@ SweptDistanceField ComputeSweptDistance(const mesh::TriangleMesh& body, const Ri
 // The time samples ComputeSweptDistance(body, motion, ...) uses.
 std::vector<Transform> SampleMotion(const mesh::TriangleMesh& body, const RigidMotion& motion,
                                     const SweptVolumeOptions& options);
+// Same for any pose function t in [0,1] -> Transform (e.g. a relative motion
+// f_A^-1 o f_B): at least options.time_steps samples, more until no corner of
+// the body's bounding box moves more than max_step_displacement per step
+// (measured on a 4096-step probe of the motion).
+std::vector<Transform> SamplePoses(const mesh::TriangleMesh& body, const std::function<Transform(double)>& pose,
+                                   const SweptVolumeOptions& options);
 
 // Epsilon-offset surface of the swept volume (seed 004: offset(sweep(B, f), eps))
 // as a closed triangle mesh.
