@@ -113,6 +113,10 @@ TEST(DesignFem, CantileverMatchesEulerBernoulli) {
     std::printf("cantilever voxel %g: %s; Euler-Bernoulli %.5f mm, ratio %.4f (%.2f s)\n", voxel, fem.reason.c_str(),
                 expected, u / expected, seconds);
     EXPECT_TRUE(fem.passed);
+    // SampleOccupancy aligns cells to multiples of the voxel: the beam is
+    // exactly (L/v) x (b/v) x (h/v) hexahedra.
+    const long elements = std::lround(L / voxel) * std::lround(b / voxel) * std::lround(h / voxel);
+    EXPECT_NE(fem.reason.find(", " + std::to_string(elements) + " elements"), std::string::npos) << fem.reason;
     EXPECT_NEAR(u / expected, 1.0, tolerance) << "voxel " << voxel;
     double error = std::abs(u / expected - 1);
     EXPECT_LT(error, previous_error) << "voxel " << voxel;
