@@ -90,7 +90,10 @@ bool CollidesAtAnyPose(const mesh::TriangleMesh& a, const mesh::TriangleMesh& b,
   const Surface sa = ToSurface(a, nullptr, "collision: part A");
   for (const auto& f : poses_b) {
     const Surface sb = ToSurface(b, &f, "collision: part B");
-    if (PMP::do_intersect(sa, sb)) return true;
+    if (PMP::do_intersect(sa, sb, CGAL::parameters::do_overlap_test_of_bounded_sides(true),
+                          CGAL::parameters::do_overlap_test_of_bounded_sides(true))) {
+      return true;
+    }
   }
   return false;
 }

@@ -1,0 +1,85 @@
+// Collision intervals of a scripted scene against hand-computed time spans.
+#include "fabatlas/swept/spacetime_collision.h"
+
+#include <gtest/gtest.h>
+
+#include "fabatlas/error.h"
+#include "test_shapes.h"
+
+namespace fabatlas::swept {
+namespace {
+
+TEST(SpacetimeCollision, BoxThroughBoxMatchesHandComputedSpan) {
+  // A: unit cube [0,1]^3, static. B: 0.5-cube centred at (x(t), 0.5, 0.5)
+  // with x(t) = -3 + 6t. They touch or overlap while x + 0.25 >= 0 and
+  // x - 0.25 <= 1, i.e. t in [2.75/6, 4.25/6] = [0.4583, 0.7083].
+  // C: a cube far away (z = 10) moving along y: never collides.
+  std::vector<MovingPart> parts(3);
+  parts[0].mesh = testing::BoxMesh({0, 0, 0}, {1, 1, 1});
+  parts[1].mesh = testing::BoxMesh({-0.25, 0.25, 0.25}, {0.25, 0.75, 0.75});
+  parts[1].motion = RigidMotion::Line({-3, 0, 0}, {3, 0, 0});
+  parts[2].mesh = testing::BoxMesh({0, 0, 10}, {1, 1, 11});
+  parts[2].motion = RigidMotion::Line({0, -5, 0}, {0, 5, 0});
+  SpacetimeOptions o;
+  o.time_steps = 121;  // dt = 1/120; B moves 0.05 mm per step
+  const CollisionReport r = DetectCollisions(parts, o);
+  ASSERT_EQ(r.intervals.size(), 1u);
+  const auto& c = r.intervals[0];
+  EXPECT_EQ(c.part_a, 0);
+  EXPECT_EQ(c.part_b, 1);
+  const double dt = 1.0 / 120;
+  EXPECT_NEAR(c.t_begin, 2.75 / 6, dt + 1e-12);
+  EXPECT_NEAR(c.t_end, 4.25 / 6, dt + 1e-12);
+  EXPECT_GE(c.t_begin, 2.75 / 6 - 1e-9 - dt);
+  // Where: B's y/z slab inside A, x across all of A.
+  EXPECT_NEAR(c.where.min[0], 0.0, 0.05 + 1e-9);
+  EXPECT_NEAR(c.where.max[0], 1.0, 0.05 + 1e-9);
+  EXPECT_NEAR(c.where.min[1], 0.25, 1e-12);
+  EXPECT_NEAR(c.where.max[1], 0.75, 1e-12);
+  EXPECT_NEAR(c.where.min[2], 0.25, 1e-12);
+  EXPECT_NEAR(c.where.max[2], 0.75, 1e-12);
+  EXPECT_EQ(r.proxies, 3u * 120u);
+}
+
+TEST(SpacetimeCollision, TwoSeparateIntervalsAreReportedInTimeOrder) {
+  // A small cube orbits the z axis at radius 3; two static cubes sit on the
+  // orbit at 0 and 180 degrees.
+  std::vector<MovingPart> parts(3);
+  parts[0].mesh = testing::BoxMesh({2.5, -0.5, -0.5}, {3.5, 0.5, 0.5});    // at angle 0
+  parts[1].mesh = testing::BoxMesh({-3.5, -0.5, -0.5}, {-2.5, 0.5, 0.5});  // at angle 180
+  parts[2].mesh = testing::BoxMesh({2.9, -0.1, -0.1}, {3.1, 0.1, 0.1});    // small cube at angle 0
+  parts[2].motion = RigidMotion::Turn({0, 0, 1}, 360, {0, 0, 0});
+  SpacetimeOptions o;
+  o.time_steps = 361;
+  const CollisionReport r = DetectCollisions(parts, o);
+  // The small cube (half size 0.1, centre at radius 3, angle a) reaches the
+  // static cube's side y = 0.5 while 3 sin a - 0.1 (cos a + sin a) <= 0.5,
+  // i.e. 2.9 sin a - 0.1 cos a <= 0.5: a <= 11.93 degrees (t <= 0.03314).
+  // Around the static cube at 180 degrees the same holds by symmetry.
+  ASSERT_EQ(r.intervals.size(), 3u);
+  EXPECT_EQ(r.intervals[0].part_a, 0);
+  EXPECT_DOUBLE_EQ(r.intervals[0].t_begin, 0.0);
+  EXPECT_NEAR(r.intervals[0].t_end, 11.93 / 360, 1.0 / 360);
+  EXPECT_LE(r.intervals[0].t_end, 11.93 / 360);
+  EXPECT_EQ(r.intervals[1].part_a, 1);
+  EXPECT_EQ(r.intervals[1].part_b, 2);
+  EXPECT_LT(r.intervals[1].t_begin, 0.5);
+  EXPECT_GT(r.intervals[1].t_end, 0.5);
+  EXPECT_NEAR(r.intervals[1].t_end - 0.5, 0.5 - r.intervals[1].t_begin, 1.0 / 360 + 1e-12);  // symmetric
+  EXPECT_DOUBLE_EQ(r.intervals[2].t_end, 1.0);
+}
+
+TEST(SpacetimeCollision, BadInputIsInputError) {
+  std::vector<MovingPart> parts(2);
+  parts[0].mesh = testing::BoxMesh({0, 0, 0}, {1, 1, 1});
+  parts[1].mesh = testing::BoxMesh({0, 0, 0}, {1, 1, 1});
+  parts[1].mesh.triangles.pop_back();
+  EXPECT_THROW(DetectCollisions(parts), InputError);
+  SpacetimeOptions o;
+  o.time_steps = 1;
+  parts[1].mesh = parts[0].mesh;
+  EXPECT_THROW(DetectCollisions(parts, o), InputError);
+}
+
+}  // namespace
+}  // namespace fabatlas::swept
