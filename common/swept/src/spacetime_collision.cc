@@ -172,15 +172,20 @@ CollisionReport DetectCollisions(const std::vector<MovingPart>& parts, const Spa
 
   // Candidate (pair, sample) from overlapping proxies of different parts in the same interval.
   std::set<std::tuple<int, int, int>> candidates;  // (a, b, sample)
-  for (std::size_t q = 0; q < boxes.size(); ++q) {
-    tree.Query(boxes[q], [&](int r) {
-      const auto [pa, ia] = owner[q];
-      const auto [pb, ib] = owner[r];
-      if (pa >= pb || ia != ib) return;  // each pair once; same time interval
-      ++report.candidate_pairs;
-      candidates.emplace(pa, pb, ia);
-      candidates.emplace(pa, pb, ia + 1);
-    });
+  auto consider = [&](std::size_t q, std::size_t r) {
+    const auto [pa, ia] = owner[q];
+    const auto [pb, ib] = owner[r];
+    if (pa >= pb || ia != ib) return;  // each pair once; same time interval
+    ++report.candidate_pairs;
+    candidates.emplace(pa, pb, ia);
+    candidates.emplace(pa, pb, ia + 1);
+  };
+  if (options.broad_phase == SpacetimeOptions::BroadPhase::kHierarchy) {
+    for (std::size_t q = 0; q < boxes.size(); ++q) tree.Query(boxes[q], [&](int r) { consider(q, r); });
+  } else {
+    for (std::size_t q = 0; q < boxes.size(); ++q)
+      for (std::size_t r = 0; r < boxes.size(); ++r)
+        if (Overlap(boxes[q], boxes[r])) consider(q, r);
   }
   // Exact test at candidate samples (posed meshes built on demand).
   std::map<std::pair<int, int>, Surface> posed;

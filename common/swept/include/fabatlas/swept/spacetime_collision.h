@@ -30,6 +30,10 @@ struct MovingPart {
 
 struct SpacetimeOptions {
   int time_steps = 101;  // samples t_i = i/(n-1), n >= 2
+  // Broad phase: the proxy hierarchy (default) or every pair of proxies
+  // (reference for tests and the benchmark; same result, O(proxies^2)).
+  enum class BroadPhase { kHierarchy, kAllPairs };
+  BroadPhase broad_phase = BroadPhase::kHierarchy;
 };
 
 struct SpatialBox {
