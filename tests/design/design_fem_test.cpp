@@ -77,6 +77,10 @@ TEST(DesignFem, SandalDefaultPasses) {
   EXPECT_TRUE(r.valid) << r.failure << ": " << r.failure_reason;
   EXPECT_TRUE(fem.passed);
   EXPECT_LT(MaxDisplacement(fem), 2.0);
+  // The measured values are properties of the valid sample.
+  EXPECT_DOUBLE_EQ(r.properties.at("fem_max_displacement"), fem.measures.at("fem_max_displacement"));
+  EXPECT_NEAR(r.properties.at("fem_max_displacement"), MaxDisplacement(fem), 1e-3);
+  EXPECT_GT(r.properties.at("fem_max_strain"), 0.0);
 }
 
 TEST(DesignFem, ThinTallHeelDeformsTooMuch) {

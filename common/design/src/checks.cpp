@@ -213,6 +213,8 @@ CheckOutcome Fem(const CheckSpec& spec, CheckContext& c) {
                                      << options.max_strain << (result.max_strain > options.max_strain ? "" : ")");
   reason << ", " << result.num_elements << " elements of " << voxel << " mm";
   o.reason = reason.str();
+  o.measures["fem_max_displacement"] = result.max_displacement;
+  o.measures["fem_max_strain"] = result.max_strain;
   return o;
 }
 

@@ -260,6 +260,8 @@ SampleResult EvaluateSample(const Design& design, const Point& u, const Evaluate
         r.properties["area"] = SurfaceArea(r.solid);
       }
     }
+    for (const CheckOutcome& c : r.checks)
+      for (const auto& [name, value] : c.measures) r.properties[name] = value;
     r.timings["properties"] = Since(props_start);
   }
   if (!options.keep_solid) r.solid = geometry::Solid();

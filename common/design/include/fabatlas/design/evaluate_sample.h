@@ -30,6 +30,9 @@ struct CheckOutcome {
   std::string failure;  // failure type when not passed
   std::string reason;   // human explanation, e.g. "centre of mass 3.2 mm outside the support polygon"
   double seconds = 0;
+  // Quantities the check measured (e.g. fem_max_displacement in mm); they
+  // become properties of valid samples.
+  std::map<std::string, double> measures;
 };
 
 // One subtree root evaluated (or found in the cache) for this sample.
