@@ -82,6 +82,17 @@ TEST(SweptVolume, SolidResultMatchesMesh) {
   EXPECT_NEAR(solid.Volume() / CapsuleVolume(3.5, 10.0), 1.0, 0.02);
 }
 
+TEST(SweptVolume, SolidBodyAlongSegmentIsCapsule) {
+  geometry::GridSpec g;
+  g.voxel_size = 0.2;
+  const auto ball = geometry::Sphere(g, 3.0);
+  SweptVolumeOptions o;
+  o.voxel_size = 0.2;
+  const auto field = ComputeSweptDistance(ball, RigidMotion::Line({0, 0, 0}, {0, 8, 0}), o);
+  EXPECT_NEAR(EnclosedVolume(field.Surface(0.0)) / CapsuleVolume(3.0, 8.0), 1.0, 0.01);
+  EXPECT_THROW(ComputeSweptDistance(geometry::Solid(), RigidMotion(), o), InputError);
+}
+
 TEST(SweptVolume, BadInputIsInputError) {
   const auto sphere = testing::Icosphere(1.0, 1);
   SweptVolumeOptions o;

@@ -286,6 +286,12 @@ SweptDistanceField ComputeSweptDistance(const mesh::TriangleMesh& body, const Ri
   return ComputeSweptDistance(body, SampleMotion(body, motion, options), options, summary);
 }
 
+SweptDistanceField ComputeSweptDistance(const geometry::Solid& body, const RigidMotion& motion,
+                                        const SweptVolumeOptions& options, SweptVolumeSummary* summary) {
+  if (body.empty()) throw InputError("swept volume: body solid is empty");
+  return ComputeSweptDistance(body.ToMesh(), motion, options, summary);
+}
+
 mesh::TriangleMesh SweptOffsetSurface(const mesh::TriangleMesh& body, const RigidMotion& motion,
                                       const SweptVolumeOptions& options) {
   return ComputeSweptDistance(body, motion, options).Surface(options.offset);

@@ -110,6 +110,12 @@ SweptDistanceField ComputeSweptDistance(const mesh::TriangleMesh& body, const Ri
                                         const SweptVolumeOptions& options = {},
                                         SweptVolumeSummary* summary = nullptr);
 
+// Same for a body given as a Solid: its zero iso-surface (Solid::ToMesh) is
+// swept. Throws InputError for an empty Solid.
+SweptDistanceField ComputeSweptDistance(const geometry::Solid& body, const RigidMotion& motion,
+                                        const SweptVolumeOptions& options = {},
+                                        SweptVolumeSummary* summary = nullptr);
+
 // The time samples ComputeSweptDistance(body, motion, ...) uses.
 std::vector<Transform> SampleMotion(const mesh::TriangleMesh& body, const RigidMotion& motion,
                                     const SweptVolumeOptions& options);
