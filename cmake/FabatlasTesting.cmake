@@ -11,6 +11,7 @@ function(fabatlas_add_test)
   endif()
   add_executable(${T_NAME} ${T_SOURCES})
   target_link_libraries(${T_NAME} PRIVATE ${T_LIBS} GTest::gtest GTest::gtest_main)
+  target_include_directories(${T_NAME} PRIVATE ${CMAKE_SOURCE_DIR}/tests/support/include)
   target_compile_definitions(${T_NAME} PRIVATE
     FABATLAS_SOURCE_DIR_DEFAULT="${CMAKE_SOURCE_DIR}"
     FABATLAS_SHARED_DIR_DEFAULT="${FABATLAS_SHARED_DIR}"

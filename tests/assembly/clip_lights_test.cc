@@ -5,13 +5,15 @@
 
 #include <gtest/gtest.h>
 
+#include "fabatlas/testing/paths.h"
+
 #include "fabatlas/assembly/clip_lights.h"
 #include "fabatlas/error.h"
 
 using namespace fabatlas::assembly;
 
 namespace {
-std::string Lib() { return std::string(std::getenv("FABATLAS_SOURCE_DIR")) + "/configs/assemblies/parts.yaml"; }
+std::string Lib() { return fabatlas::testing::SourceDir().string() + "/configs/assemblies/parts.yaml"; }
 }  // namespace
 
 TEST(AssemblyClipLights, RejectsParametersOutsideTheirRanges) {

@@ -6,6 +6,8 @@
 
 #include <gtest/gtest.h>
 
+#include "fabatlas/testing/paths.h"
+
 #include "fabatlas/assembly/mass_properties.h"
 #include "fabatlas/assembly/part_library.h"
 #include "fabatlas/assembly/program.h"
@@ -15,7 +17,7 @@ using namespace fabatlas::assembly;
 
 namespace {
 std::string Shared() { return DefaultMeshDir() + "/../../.."; }
-std::string Source() { return std::getenv("FABATLAS_SOURCE_DIR"); }
+std::string Source() { return fabatlas::testing::SourceDir().string(); }
 
 Primitive Hook(double arc_radius, double arc_angle, double thickness) {
   Primitive p;

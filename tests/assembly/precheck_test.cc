@@ -5,6 +5,8 @@
 
 #include <gtest/gtest.h>
 
+#include "fabatlas/testing/paths.h"
+
 #include "fabatlas/assembly/precheck.h"
 #include "fabatlas/assembly/program.h"
 #include "fabatlas/assembly/solve.h"
@@ -12,7 +14,7 @@
 using namespace fabatlas::assembly;
 
 namespace {
-std::string Lib() { return std::string(std::getenv("FABATLAS_SOURCE_DIR")) + "/configs/assemblies/parts.yaml"; }
+std::string Lib() { return fabatlas::testing::SourceDir().string() + "/configs/assemblies/parts.yaml"; }
 std::string Mesh() { return DefaultMeshDir(); }
 CycleLink L(double lo, double hi) { return {"p", lo, hi}; }
 }  // namespace

@@ -4,6 +4,8 @@
 
 #include <gtest/gtest.h>
 
+#include "fabatlas/testing/paths.h"
+
 #include "fabatlas/assembly/precheck.h"
 #include "fabatlas/assembly/program.h"
 #include "fabatlas/assembly/solve.h"
@@ -12,7 +14,7 @@ using namespace fabatlas::assembly;
 
 namespace {
 std::string Config(const std::string& name) {
-  return std::string(std::getenv("FABATLAS_SOURCE_DIR")) + "/configs/assemblies/" + name + ".yaml";
+  return fabatlas::testing::SourceDir().string() + "/configs/assemblies/" + name + ".yaml";
 }
 }  // namespace
 

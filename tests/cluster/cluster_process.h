@@ -2,6 +2,8 @@
 // from the build's bin/ directory, signalled and reaped by pid.
 #pragma once
 
+#include "fabatlas/testing/paths.h"
+
 #include <signal.h>
 #include <sys/prctl.h>
 #include <sys/wait.h>
@@ -26,10 +28,7 @@ inline fs::path BinDir() {
   if (dir && fs::exists(fs::path(dir) / "fabatlas-coordinator")) return dir;
   return fs::read_symlink("/proc/self/exe").parent_path();
 }
-inline fs::path SourceDir() {
-  const char* dir = std::getenv("FABATLAS_SOURCE_DIR");
-  return dir ? fs::path(dir) : fs::path(FABATLAS_TEST_SOURCE_DIR);
-}
+inline fs::path SourceDir() { return fabatlas::testing::SourceDir(); }
 
 inline fs::path FreshDir(const std::string& name) {
   fs::path dir = fs::temp_directory_path() / ("fabatlas_cluster_" + name + "_" + std::to_string(::getpid()));
