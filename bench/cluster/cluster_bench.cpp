@@ -1,4 +1,4 @@
-// Cluster benchmarks with plain timers (results in docs/bench-cluster.md).
+// Cluster benchmarks with plain timers (results in docs/benchmarks.md (Cluster)).
 //   cluster_bench [--tasks N] [--repeats R] [--blob-mb M] [--idle W] [--job JOB.yaml]
 // 1. No-op round trips/s: N no-op tasks through an in-process coordinator to
 //    2 fabatlas-worker processes (64 slots each, leases batched per Sync),

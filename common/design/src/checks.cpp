@@ -115,7 +115,7 @@ CheckOutcome MaxVolume(const CheckSpec& spec, CheckContext& c) {
 
 
 // Largest number of voxel hexahedra the fem check meshes; beyond it the sparse
-// factorisation takes minutes and gigabytes (docs/bench-fem.md: 20k elements
+// factorisation takes minutes and gigabytes (docs/benchmarks.md (FEM): 20k elements
 // already take ~40 s), so the design's FEM voxel is too small.
 constexpr std::size_t kMaxFemElements = 200000;
 
