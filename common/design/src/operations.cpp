@@ -1,9 +1,12 @@
 #include "operations.h"
 
+#include <fcntl.h>
+#include <spawn.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <cmath>
+#include <cstring>
 #include <fstream>
 
 #include "exact_boolean.h"
@@ -93,16 +96,20 @@ Solid OpenScad(const geometry::GridSpec& g, const ResolvedArgs& a, const Node& n
     }
   }
   argv.push_back(scad.string());
-  pid_t pid = fork();
-  if (pid < 0) throw DesignFault(node.place.str() + ": cannot start openscad");
-  if (pid == 0) {
-    FILE* f = std::freopen(log.c_str(), "w", stderr);
-    (void)f;
-    std::vector<char*> args;
-    for (auto& s : argv) args.push_back(s.data());
-    args.push_back(nullptr);
-    execvp(args[0], args.data());
-    _exit(127);
+  // posix_spawn, not fork + freopen: sample evaluation runs on many threads,
+  // and only async-signal-safe calls may follow a fork there.
+  std::vector<char*> args;
+  for (auto& s : argv) args.push_back(s.data());
+  args.push_back(nullptr);
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_addopen(&actions, STDERR_FILENO, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  pid_t pid = 0;
+  int spawned = posix_spawnp(&pid, args[0], &actions, nullptr, args.data(), environ);
+  posix_spawn_file_actions_destroy(&actions);
+  if (spawned != 0) {
+    std::filesystem::remove_all(work);
+    throw DesignFault(node.place.str() + ": cannot start openscad: " + std::strerror(spawned));
   }
   int status = 0;
   waitpid(pid, &status, 0);
