@@ -1,21 +1,9 @@
 #include "fabatlas/precompute/design_evaluator.h"
 
-#include <time.h>
-
 #include "fabatlas/design/evaluate_sample.h"
 #include "fabatlas/error.h"
 
 namespace fabatlas::precompute {
-namespace {
-
-double ThreadCpuSeconds() {
-  timespec t{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
-  return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
-}
-
-}  // namespace
-
 sampling::DesignSpace DesignSpaceOf(const design::Design& d, int subdivisions) {
   std::vector<sampling::Dimension> dims;
   for (const auto& p : d.exposed) {
@@ -50,18 +38,21 @@ DesignSampleEvaluator::DesignSampleEvaluator(design::Design design, DesignEvalua
       options_(options),
       subtrees_(design::InMemorySubtreeCache::Options{options.min_subtree_seconds, options.subtree_memory_bytes}) {}
 
-sampling::SampleOutcome DesignSampleEvaluator::EvaluateSample(const sampling::SamplePoint& point) {
-  double cpu_start = ThreadCpuSeconds();
+design::SampleResult DesignSampleEvaluator::Evaluate(const sampling::SamplePoint& point) {
   design::EvaluateOptions eval;
   eval.cache = &subtrees_;
   design::SampleResult r = design::EvaluateSample(design_, DesignPointOf(design_, point.u), eval);
+  if (r.valid) Remember(point.key, r.solid);
+  return r;
+}
+
+sampling::SampleOutcome DesignSampleEvaluator::EvaluateSample(const sampling::SamplePoint& point) {
+  design::SampleResult r = Evaluate(point);
   sampling::SampleOutcome out;
   out.valid = r.valid;
   out.failure_type = r.failure;
   out.properties = r.properties;
-  if (r.valid) Remember(point.key, r.solid);
-  out.cpu_seconds = ThreadCpuSeconds() - cpu_start;
-  return out;
+  return out;  // cpu_seconds is the executor's to measure (sample_evaluator.h)
 }
 
 double DesignSampleEvaluator::GeometryChange(const sampling::SamplePoint& a, const sampling::SamplePoint& b) {
@@ -83,12 +74,10 @@ geometry::Solid DesignSampleEvaluator::SolidOf(const sampling::SamplePoint& poin
     }
     ++reevaluations_;
   }
-  design::EvaluateOptions eval;
-  eval.cache = &subtrees_;
-  design::SampleResult r = design::EvaluateSample(design_, DesignPointOf(design_, point.u), eval);
-  if (!r.valid) return geometry::Solid();  // the sampler only asks for valid pairs
-  Remember(point.key, r.solid);
-  return r.solid;
+  // Dropped from memory: evaluate again (deterministic). Invalid samples have
+  // no solid; the sampler only asks for valid pairs.
+  design::SampleResult r = Evaluate(point);
+  return r.valid ? r.solid : geometry::Solid();
 }
 
 void DesignSampleEvaluator::Remember(const sampling::PointKey& key, const geometry::Solid& solid) {

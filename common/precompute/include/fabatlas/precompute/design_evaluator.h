@@ -11,6 +11,7 @@
 #include <mutex>
 
 #include "fabatlas/design/design.h"
+#include "fabatlas/design/evaluate_sample.h"
 #include "fabatlas/design/subtree_cache.h"
 #include "fabatlas/geometry/solid.h"
 #include "fabatlas/sampling/design_space.h"
@@ -49,6 +50,9 @@ class DesignSampleEvaluator final : public sampling::SampleEvaluator {
   std::size_t reevaluations() const;
 
  private:
+  // EvaluateSample of seed 001 Alg. 2 through the subtree cache; remembers
+  // the root solid of a valid sample for later ΔG.
+  design::SampleResult Evaluate(const sampling::SamplePoint& point);
   geometry::Solid SolidOf(const sampling::SamplePoint& point);
   void Remember(const sampling::PointKey& key, const geometry::Solid& solid);
 
