@@ -1,0 +1,206 @@
+// The cache optimisation of seed 001 Sec. 6.2 as an integer program ("can be
+// formulated as an integer linear program"), solved with GLPK's branch and
+// cut. Formulation in exact_cache.h.
+#include "fabatlas/cache/exact_cache.h"
+
+#include <glpk.h>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <memory>
+
+#include "fabatlas/error.h"
+
+namespace fabatlas::cache {
+
+namespace {
+using Id = std::int32_t;
+
+struct Problem {
+  glp_prob* lp = glp_create_prob();
+  ~Problem() { glp_delete_prob(lp); }
+};
+
+// Rows are added one at a time with their coefficients (1-based for GLPK).
+struct Row {
+  std::vector<int> cols{0};
+  std::vector<double> vals{0.0};
+  void Add(int col, double v) {
+    cols.push_back(col);
+    vals.push_back(v);
+  }
+};
+
+int AddRow(glp_prob* lp, Row& row, int type, double lo, double hi) {
+  int r = glp_add_rows(lp, 1);
+  glp_set_row_bnds(lp, r, type, lo, hi);
+  glp_set_mat_row(lp, r, static_cast<int>(row.cols.size()) - 1, row.cols.data(), row.vals.data());
+  return r;
+}
+}  // namespace
+
+ExactCacheSummary SolveExactCache(const DependencyGraph& g, const ExactCacheOptions& o) {
+  ExactCacheSummary out;
+  const std::size_t n = g.keys.size();
+  out.cache.assign(n, 0);
+  auto choosable = [&](Id x) {
+    auto i = static_cast<std::size_t>(x);
+    return g.stored[i] && g.seconds[i] > 0 && g.seconds[i] >= o.min_seconds;
+  };
+  // Distinct sample roots with their multiplicity.
+  std::map<Id, int> roots;
+  for (Id r : g.sample_roots) ++roots[r];
+  if (roots.empty()) {
+    out.solved = out.optimal = true;
+    out.cost = EvaluateCache(g, out.cache);
+    return out;
+  }
+  std::vector<Id> topo_pos(n);
+  for (std::size_t i = 0; i < n; ++i) topo_pos[static_cast<std::size_t>(g.topological_order[i])] = static_cast<Id>(i);
+
+  // Each root's sub-DAG, parents before children.
+  struct SampleDag {
+    Id root;
+    int weight;
+    std::vector<Id> nodes;            // topological
+    std::map<Id, int> column;         // node -> k column
+  };
+  std::vector<SampleDag> dags;
+  std::int64_t k_columns = 0;
+  std::vector<char> seen(n, 0);
+  for (auto [r, w] : roots) {
+    SampleDag d{r, w, {}, {}};
+    std::vector<Id> stack{r};
+    seen[static_cast<std::size_t>(r)] = 1;
+    while (!stack.empty()) {
+      Id v = stack.back();
+      stack.pop_back();
+      d.nodes.push_back(v);
+      for (std::int64_t e = g.child_begin[v]; e < g.child_begin[v + 1]; ++e) {
+        Id c = g.child_ids[static_cast<std::size_t>(e)];
+        if (!seen[static_cast<std::size_t>(c)]) {
+          seen[static_cast<std::size_t>(c)] = 1;
+          stack.push_back(c);
+        }
+      }
+    }
+    for (Id v : d.nodes) seen[static_cast<std::size_t>(v)] = 0;
+    std::sort(d.nodes.begin(), d.nodes.end(),
+              [&](Id a, Id b) { return topo_pos[static_cast<std::size_t>(a)] < topo_pos[static_cast<std::size_t>(b)]; });
+    k_columns += static_cast<std::int64_t>(d.nodes.size());
+    dags.push_back(std::move(d));
+  }
+  out.variables = k_columns;
+  if (k_columns > o.max_variables) {
+    out.message = "program too large: " + std::to_string(k_columns) + " evaluation variables > max_variables " +
+                  std::to_string(o.max_variables);
+    return out;
+  }
+
+  Problem p;
+  glp_prob* lp = p.lp;
+  glp_set_obj_dir(lp, GLP_MIN);
+  // h columns for choosable nodes below some root.
+  std::map<Id, int> h_col;
+  for (const SampleDag& d : dags)
+    for (Id v : d.nodes)
+      if (choosable(v) && !h_col.count(v)) h_col[v] = 0;
+  for (auto& [v, col] : h_col) {
+    col = glp_add_cols(lp, 1);
+    glp_set_col_kind(lp, col, GLP_BV);
+  }
+  int z_col = 0;
+  if (o.objective == ExactObjective::kWorst) {
+    z_col = glp_add_cols(lp, 1);
+    glp_set_col_bnds(lp, z_col, GLP_LO, 0.0, 0.0);
+    glp_set_obj_coef(lp, z_col, 1.0);
+  }
+  const double samples = static_cast<double>(g.sample_roots.size());
+  for (SampleDag& d : dags) {
+    // Path counts from the root: the most evaluations X can need.
+    std::map<Id, double> paths;
+    paths[d.root] = 1;
+    for (Id v : d.nodes) {
+      int col = glp_add_cols(lp, 1);
+      glp_set_col_bnds(lp, col, GLP_LO, 0.0, 0.0);
+      d.column[v] = col;
+      if (o.objective == ExactObjective::kMean)
+        glp_set_obj_coef(lp, col, g.seconds[static_cast<std::size_t>(v)] * d.weight / samples);
+      for (std::int64_t e = g.child_begin[v]; e < g.child_begin[v + 1]; ++e)
+        paths[g.child_ids[static_cast<std::size_t>(e)]] += paths[v];
+    }
+    // Parents' use of each node, with multiplicity.
+    std::map<Id, std::map<Id, int>> uses;  // child -> parent -> count
+    for (Id v : d.nodes)
+      for (std::int64_t e = g.child_begin[v]; e < g.child_begin[v + 1]; ++e)
+        ++uses[g.child_ids[static_cast<std::size_t>(e)]][v];
+    for (Id v : d.nodes) {
+      Row row;
+      row.Add(d.column[v], 1.0);
+      auto h = h_col.find(v);
+      if (h != h_col.end()) row.Add(h->second, v == d.root ? 1.0 : paths[v]);
+      if (v == d.root) {
+        AddRow(lp, row, GLP_LO, 1.0, 0.0);  // k_root + h_root >= 1
+        continue;
+      }
+      for (auto [parent, count] : uses[v]) row.Add(d.column[parent], -static_cast<double>(count));
+      AddRow(lp, row, GLP_LO, 0.0, 0.0);
+    }
+    if (o.objective == ExactObjective::kWorst) {
+      Row row;
+      row.Add(z_col, 1.0);
+      for (Id v : d.nodes)
+        if (g.seconds[static_cast<std::size_t>(v)] != 0) row.Add(d.column[v], -g.seconds[static_cast<std::size_t>(v)]);
+      AddRow(lp, row, GLP_LO, 0.0, 0.0);  // z >= T(r)
+    }
+  }
+  if (o.budget_bytes != std::numeric_limits<std::uint64_t>::max() && !h_col.empty()) {
+    Row row;
+    for (auto [v, col] : h_col) row.Add(col, static_cast<double>(g.bytes[static_cast<std::size_t>(v)]));
+    AddRow(lp, row, GLP_UP, 0.0, static_cast<double>(o.budget_bytes));
+  }
+
+  glp_smcp smcp;
+  glp_init_smcp(&smcp);
+  smcp.msg_lev = GLP_MSG_OFF;
+  if (glp_simplex(lp, &smcp) != 0 || glp_get_status(lp) != GLP_OPT) {
+    out.message = "LP relaxation not solved";
+    return out;
+  }
+  const double lp_bound = glp_get_obj_val(lp);
+  glp_iocp iocp;
+  glp_init_iocp(&iocp);
+  iocp.msg_lev = GLP_MSG_OFF;
+  iocp.tm_lim = static_cast<int>(std::min(o.time_limit_seconds * 1000.0, 2.0e9));
+  iocp.gmi_cuts = GLP_ON;
+  iocp.mir_cuts = GLP_ON;
+  int rc = glp_intopt(lp, &iocp);
+  int status = glp_mip_status(lp);
+  if (status != GLP_OPT && status != GLP_FEAS) {
+    out.message = rc == GLP_ETMLIM ? "time limit before any integer solution" : "no integer solution";
+    out.bound = lp_bound;
+    return out;
+  }
+  out.solved = true;
+  out.optimal = status == GLP_OPT;
+  out.objective = glp_mip_obj_val(lp);
+  out.bound = out.optimal ? out.objective : lp_bound;
+  if (!out.optimal) out.message = "time limit: best solution found, not proven optimal";
+  for (auto [v, col] : h_col)
+    if (glp_mip_col_val(lp, col) > 0.5) out.cache[static_cast<std::size_t>(v)] = 1;
+  // Drop chosen nodes no sample reaches any more (they cost bytes, save nothing).
+  std::vector<double> q(n, 0.0);
+  for (Id r : g.sample_roots) q[static_cast<std::size_t>(r)] += 1;
+  for (Id v : g.topological_order) {
+    if (out.cache[static_cast<std::size_t>(v)] || q[static_cast<std::size_t>(v)] == 0) continue;
+    for (std::int64_t e = g.child_begin[v]; e < g.child_begin[v + 1]; ++e)
+      q[static_cast<std::size_t>(g.child_ids[static_cast<std::size_t>(e)])] += q[static_cast<std::size_t>(v)];
+  }
+  for (std::size_t i = 0; i < n; ++i)
+    if (out.cache[i] && q[i] == 0) out.cache[i] = 0;
+  out.cost = EvaluateCache(g, out.cache);
+  return out;
+}
+
+}  // namespace fabatlas::cache
