@@ -19,6 +19,8 @@ find_package(OpenSSL REQUIRED)
 find_package(Protobuf REQUIRED)
 find_package(gRPC CONFIG REQUIRED)
 find_package(SQLite3 REQUIRED)
+# The artifact (issue 5): cache entries as glTF binary.
+find_package(TinyGLTF CONFIG REQUIRED)
 find_package(PkgConfig REQUIRED)
 pkg_check_modules(MUPARSER REQUIRED IMPORTED_TARGET muparser)
 if(FABATLAS_BUILD_TESTS)

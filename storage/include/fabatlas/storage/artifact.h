@@ -57,7 +57,7 @@ struct ArtifactStatistics {
 // The geometry cache as chosen by the cache task (seed 001 Sec. 6, Fig. 14).
 // Sizes are in entries and bytes of level-set memory (SubtreeRecord::bytes).
 struct CacheSummary {
-  std::string strategy;               // "NAIVE", "OPT-AVE", "OPT-MAX"; empty = no cache
+  std::string strategy;               // "naive", "opt_ave", "opt_max" (cache::StrategyName); empty = no cache
   std::int64_t budget_bytes = 0;      // memory budget from the job file (0 = none)
   double threshold_seconds = 0.0;     // subtrees whose root took less were not stored
   std::string cost_model;             // how entry costs were obtained (docs/cache.md)
@@ -106,7 +106,7 @@ struct CacheEntry {
 // One point of a Fig. 13 curve: predicted preview time over all samples with
 // the first `entries` subtrees chosen by `strategy`.
 struct CacheCurvePoint {
-  std::string strategy;  // "NAIVE", "OPT-AVE", "OPT-MAX"
+  std::string strategy;  // "naive", "opt_ave", "opt_max"
   std::int64_t step = 0;  // position along the curve, from 0 (no cache)
   std::int64_t entries = 0;
   std::int64_t bytes = 0;

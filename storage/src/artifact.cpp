@@ -1,0 +1,826 @@
+// The published artifact as one SQLite file (see artifact.h and
+// docs/artifact.md for the schema).
+#include "fabatlas/storage/artifact.h"
+
+#include <fcntl.h>
+#include <sqlite3.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <set>
+#include <sstream>
+
+#include "fabatlas/error.h"
+#include "fabatlas/sha256.h"
+#include "fabatlas/sampling/design_space.h"
+#include "fabatlas/sampling/adaptive_sampler.h"
+
+namespace fabatlas::storage {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr int kMaxDimensions = 6;
+constexpr int kPageSize = 4096;
+
+// ---- schema v1 --------------------------------------------------------------
+
+constexpr const char* kSchemaV1 = R"sql(
+CREATE TABLE manifest (key TEXT PRIMARY KEY, value TEXT NOT NULL) WITHOUT ROWID;
+CREATE TABLE dimensions (idx INTEGER PRIMARY KEY, name TEXT NOT NULL, kind TEXT NOT NULL,
+  lo REAL NOT NULL, hi REAL NOT NULL, enum_values TEXT NOT NULL);
+CREATE TABLE trees (tree INTEGER PRIMARY KEY, cell TEXT NOT NULL);
+CREATE TABLE nodes (tree INTEGER NOT NULL, node INTEGER NOT NULL, depth INTEGER NOT NULL,
+  lo TEXT NOT NULL, hi TEXT NOT NULL, split_dimension INTEGER NOT NULL, split_key INTEGER NOT NULL,
+  child_lo INTEGER NOT NULL, child_hi INTEGER NOT NULL, stop TEXT NOT NULL,
+  PRIMARY KEY (tree, node)) WITHOUT ROWID;
+CREATE TABLE samples (id INTEGER PRIMARY KEY, key TEXT NOT NULL UNIQUE,
+  u0 REAL, u1 REAL, u2 REAL, u3 REAL, u4 REAL, u5 REAL,
+  valid INTEGER NOT NULL, failure TEXT NOT NULL);
+CREATE TABLE sample_properties (sample_id INTEGER NOT NULL, name TEXT NOT NULL, value REAL NOT NULL,
+  PRIMARY KEY (sample_id, name)) WITHOUT ROWID;
+CREATE TABLE geometry_changes (a INTEGER NOT NULL, b INTEGER NOT NULL, dg REAL NOT NULL,
+  PRIMARY KEY (a, b)) WITHOUT ROWID;
+CREATE TABLE cache_entries (key TEXT PRIMARY KEY, op TEXT NOT NULL, children TEXT NOT NULL,
+  bytes INTEGER NOT NULL, cost_seconds REAL NOT NULL, in_opt INTEGER NOT NULL, in_rfree INTEGER NOT NULL,
+  grid BLOB NOT NULL, grid_sha256 TEXT NOT NULL, glb BLOB NOT NULL) WITHOUT ROWID;
+CREATE TABLE cache_curves (strategy TEXT NOT NULL, step INTEGER NOT NULL, entries INTEGER NOT NULL,
+  bytes INTEGER NOT NULL, mean_seconds REAL NOT NULL, worst_seconds REAL NOT NULL,
+  PRIMARY KEY (strategy, step)) WITHOUT ROWID;
+CREATE TABLE starting_points (idx INTEGER PRIMARY KEY, sample_id INTEGER NOT NULL, component INTEGER NOT NULL);
+CREATE TABLE bundle_files (role TEXT NOT NULL, name TEXT NOT NULL, bytes BLOB NOT NULL,
+  PRIMARY KEY (role, name)) WITHOUT ROWID;
+)sql";
+
+// Tables covered by a checksum, with their canonical (primary key) order.
+struct TableOrder {
+  const char* table;
+  const char* order;
+};
+constexpr TableOrder kTablesV1[] = {
+    {"dimensions", "idx"},          {"trees", "tree"},
+    {"nodes", "tree, node"},        {"samples", "id"},
+    {"sample_properties", "sample_id, name"}, {"geometry_changes", "a, b"},
+    {"cache_entries", "key"},       {"cache_curves", "strategy, step"},
+    {"starting_points", "idx"},     {"bundle_files", "role, name"},
+};
+
+// ---- SQLite plumbing ----------------------------------------------------------
+
+// Errors inside the reader carry only "what is wrong"; ReadArtifact prefixes the path.
+struct Corrupt : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+class Db {
+ public:
+  Db(const std::string& uri, int flags) {
+    if (sqlite3_open_v2(uri.c_str(), &handle_, flags, nullptr) != SQLITE_OK) {
+      std::string message = handle_ ? sqlite3_errmsg(handle_) : "out of memory";
+      sqlite3_close(handle_);
+      throw Corrupt("cannot open: " + message);
+    }
+    sqlite3_extended_result_codes(handle_, 1);
+  }
+  ~Db() { sqlite3_close(handle_); }
+  Db(const Db&) = delete;
+  Db& operator=(const Db&) = delete;
+  sqlite3* get() const { return handle_; }
+  void Exec(const std::string& sql) {
+    char* message = nullptr;
+    if (sqlite3_exec(handle_, sql.c_str(), nullptr, nullptr, &message) != SQLITE_OK) {
+      std::string text = message ? message : sqlite3_errmsg(handle_);
+      sqlite3_free(message);
+      throw Corrupt(text);
+    }
+  }
+
+ private:
+  sqlite3* handle_ = nullptr;
+};
+
+class Stmt {
+ public:
+  Stmt(Db& db, const std::string& sql) : db_(db) {
+    if (sqlite3_prepare_v2(db.get(), sql.c_str(), -1, &stmt_, nullptr) != SQLITE_OK)
+      throw Corrupt(std::string("SQLite: ") + sqlite3_errmsg(db.get()));
+  }
+  ~Stmt() { sqlite3_finalize(stmt_); }
+  Stmt(const Stmt&) = delete;
+  Stmt& operator=(const Stmt&) = delete;
+
+  Stmt& Int(int i, std::int64_t v) { return Check(sqlite3_bind_int64(stmt_, i, v)); }
+  Stmt& Real(int i, double v) { return Check(sqlite3_bind_double(stmt_, i, v)); }
+  Stmt& Null(int i) { return Check(sqlite3_bind_null(stmt_, i)); }
+  Stmt& Text(int i, const std::string& v) {
+    return Check(sqlite3_bind_text64(stmt_, i, v.data(), v.size(), SQLITE_TRANSIENT, SQLITE_UTF8));
+  }
+  Stmt& Blob(int i, const std::string& v) {
+    return Check(sqlite3_bind_blob64(stmt_, i, v.data(), v.size(), SQLITE_TRANSIENT));
+  }
+  // Runs an INSERT/UPDATE to completion and resets for the next bindings.
+  void Run() {
+    int rc = sqlite3_step(stmt_);
+    if (rc != SQLITE_DONE) throw Corrupt(std::string("SQLite: ") + sqlite3_errmsg(db_.get()));
+    sqlite3_reset(stmt_);
+    sqlite3_clear_bindings(stmt_);
+  }
+  // Next row of a SELECT; false at the end.
+  bool Next() {
+    int rc = sqlite3_step(stmt_);
+    if (rc == SQLITE_ROW) return true;
+    if (rc == SQLITE_DONE) return false;
+    throw Corrupt(std::string("SQLite: ") + sqlite3_errmsg(db_.get()));
+  }
+  int Columns() const { return sqlite3_column_count(stmt_); }
+  int Type(int c) const { return sqlite3_column_type(stmt_, c); }
+  std::int64_t GetInt(int c) const { return sqlite3_column_int64(stmt_, c); }
+  double GetReal(int c) const { return sqlite3_column_double(stmt_, c); }
+  std::string GetText(int c) const {
+    const void* p = sqlite3_column_blob(stmt_, c);
+    int n = sqlite3_column_bytes(stmt_, c);
+    return p ? std::string(static_cast<const char*>(p), static_cast<std::size_t>(n)) : std::string();
+  }
+
+ private:
+  Stmt& Check(int rc) {
+    if (rc != SQLITE_OK) throw Corrupt(std::string("SQLite: ") + sqlite3_errmsg(db_.get()));
+    return *this;
+  }
+  Db& db_;
+  sqlite3_stmt* stmt_ = nullptr;
+};
+
+// SHA-256 of a table's rows in primary-key order (docs/artifact.md).
+std::string TableChecksum(Db& db, const TableOrder& t) {
+  Stmt s(db, std::string("SELECT * FROM ") + t.table + " ORDER BY " + t.order);
+  std::string canonical;
+  auto put64 = [&](std::uint64_t v) {
+    for (int i = 0; i < 8; ++i) canonical.push_back(static_cast<char>((v >> (8 * i)) & 0xff));
+  };
+  while (s.Next()) {
+    for (int c = 0; c < s.Columns(); ++c) {
+      switch (s.Type(c)) {
+        case SQLITE_NULL: canonical.push_back('N'); break;
+        case SQLITE_INTEGER:
+          canonical.push_back('I');
+          put64(static_cast<std::uint64_t>(s.GetInt(c)));
+          break;
+        case SQLITE_FLOAT: {
+          canonical.push_back('R');
+          double d = s.GetReal(c);
+          std::uint64_t bits;
+          std::memcpy(&bits, &d, 8);
+          put64(bits);
+          break;
+        }
+        default: {
+          canonical.push_back(s.Type(c) == SQLITE_TEXT ? 'T' : 'B');
+          std::string v = s.GetText(c);
+          put64(v.size());
+          canonical += v;
+        }
+      }
+    }
+  }
+  return Sha256Hex(canonical);
+}
+
+// ---- text encodings -------------------------------------------------------------
+
+std::string JoinInts(const std::vector<std::int64_t>& v) {
+  std::string out;
+  for (std::size_t i = 0; i < v.size(); ++i) out += (i ? "," : "") + std::to_string(v[i]);
+  return out;
+}
+
+std::vector<std::int64_t> SplitInts(const std::string& text, const char* what) {
+  std::vector<std::int64_t> out;
+  if (text.empty()) return out;
+  std::size_t start = 0;
+  while (true) {
+    std::size_t end = text.find(',', start);
+    std::string part = text.substr(start, end == std::string::npos ? std::string::npos : end - start);
+    try {
+      std::size_t used = 0;
+      out.push_back(std::stoll(part, &used));
+      if (used != part.size()) throw std::invalid_argument(part);
+    } catch (const std::exception&) {
+      throw Corrupt(std::string("malformed ") + what + " '" + text + "'");
+    }
+    if (end == std::string::npos) break;
+    start = end + 1;
+  }
+  return out;
+}
+
+std::string JoinStrings(const std::vector<std::string>& v) {
+  std::string out;
+  for (std::size_t i = 0; i < v.size(); ++i) out += (i ? "," : "") + v[i];
+  return out;
+}
+
+std::vector<std::string> SplitStrings(const std::string& text) {
+  std::vector<std::string> out;
+  if (text.empty()) return out;
+  std::stringstream in(text);
+  std::string part;
+  while (std::getline(in, part, ',')) out.push_back(part);
+  return out;
+}
+
+std::string Number(double v) {
+  char buf[40];
+  std::snprintf(buf, sizeof buf, "%.17g", v);
+  return buf;
+}
+
+const char* KindName(sampling::DimensionKind k) {
+  switch (k) {
+    case sampling::DimensionKind::kReal: return "real";
+    case sampling::DimensionKind::kInteger: return "integer";
+    case sampling::DimensionKind::kEnumerated: return "enumerated";
+  }
+  return "real";
+}
+
+const char* StopName(sampling::LeafStop s) {
+  switch (s) {
+    case sampling::LeafStop::kNone: return "none";
+    case sampling::LeafStop::kThreshold: return "threshold";
+    case sampling::LeafStop::kMaxDepth: return "max_depth";
+    case sampling::LeafStop::kUnsplittable: return "unsplittable";
+    case sampling::LeafStop::kBudget: return "budget";
+  }
+  return "none";
+}
+
+sampling::LeafStop StopOf(const std::string& s) {
+  for (auto v : {sampling::LeafStop::kNone, sampling::LeafStop::kThreshold, sampling::LeafStop::kMaxDepth,
+                 sampling::LeafStop::kUnsplittable, sampling::LeafStop::kBudget})
+    if (s == StopName(v)) return v;
+  throw Corrupt("unknown leaf stop '" + s + "'");
+}
+
+// ---- file plumbing ------------------------------------------------------------------
+
+void FsyncPath(const fs::path& path, bool directory) {
+  int fd = ::open(path.c_str(), (directory ? O_RDONLY | O_DIRECTORY : O_RDONLY) | O_CLOEXEC);
+  if (fd < 0) throw ResourceError(path.string() + ": cannot open to flush: " + std::strerror(errno));
+  int rc = ::fsync(fd);
+  int err = errno;
+  ::close(fd);
+  if (rc != 0) throw ResourceError(path.string() + ": cannot flush to disk: " + std::strerror(err));
+}
+
+std::uint32_t BigEndian(const unsigned char* p, int n) {
+  std::uint32_t v = 0;
+  for (int i = 0; i < n; ++i) v = (v << 8) | p[i];
+  return v;
+}
+
+// Checks SQLite's 100-byte header: magic, application id, schema version,
+// and that the file holds every page the header announces. Returns the
+// schema version.
+int CheckHeader(const fs::path& path) {
+  std::error_code ec;
+  if (!fs::exists(path, ec)) throw Corrupt("no such file");
+  if (!fs::is_regular_file(path, ec)) throw Corrupt("not a regular file");
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw Corrupt("cannot read");
+  unsigned char h[100] = {};
+  in.read(reinterpret_cast<char*>(h), sizeof h);
+  const auto got = in.gcount();
+  if (got < 16 || std::memcmp(h, "SQLite format 3", 16) != 0)
+    throw Corrupt("not a fabatlas artifact (not an SQLite database)");
+  if (got < 100) throw Corrupt("truncated (" + std::to_string(got) + " bytes, shorter than the SQLite header)");
+  if (static_cast<std::int32_t>(BigEndian(h + 68, 4)) != kArtifactApplicationId)
+    throw Corrupt("not a fabatlas artifact (an SQLite database with application id " +
+                  std::to_string(static_cast<std::int32_t>(BigEndian(h + 68, 4))) + ")");
+  std::uint32_t page_size = BigEndian(h + 16, 2);
+  if (page_size == 1) page_size = 65536;
+  const std::uint32_t pages = BigEndian(h + 28, 4);
+  const bool size_valid = pages != 0 && BigEndian(h + 24, 4) == BigEndian(h + 92, 4);
+  const auto file_size = fs::file_size(path, ec);
+  if (size_valid && file_size < std::uint64_t{page_size} * pages)
+    throw Corrupt("truncated (" + std::to_string(file_size) + " of " +
+                  std::to_string(std::uint64_t{page_size} * pages) + " bytes)");
+  const int version = static_cast<int>(BigEndian(h + 60, 4));
+  if (version < 1) throw Corrupt("not a fabatlas artifact (schema version 0)");
+  if (version > kArtifactSchemaVersion)
+    throw Corrupt("written by a newer fabatlas (schema version " + std::to_string(version) +
+                  "; this reader knows versions 1 to " + std::to_string(kArtifactSchemaVersion) + ")");
+  return version;
+}
+
+// ---- writing ----------------------------------------------------------------------------
+
+void InsertManifest(Db& db, const std::map<std::string, std::string>& rows) {
+  Stmt s(db, "INSERT INTO manifest (key, value) VALUES (?, ?)");
+  for (const auto& [key, value] : rows) {
+    s.Text(1, key).Text(2, value);
+    s.Run();
+  }
+}
+
+std::map<std::string, std::string> ManifestRows(const Artifact& a) {
+  const Manifest& m = a.manifest;
+  std::map<std::string, std::string> r;
+  r["format"] = "fabatlas.artifact";
+  r["schema_version"] = std::to_string(kArtifactSchemaVersion);
+  r["design_name"] = m.design_name;
+  r["design_hash"] = m.design_hash;
+  r["code_version"] = m.code_version;
+  r["sampling.subdivisions"] = std::to_string(a.form.subdivisions);
+  r["sampling.max_depth"] = std::to_string(m.max_depth);
+  r["sampling.dg_threshold"] = Number(m.dg_threshold);
+  r["sampling.max_samples"] = std::to_string(m.max_samples);
+  const ArtifactStatistics& s = m.statistics;
+  r["statistics.samples"] = std::to_string(s.samples);
+  r["statistics.valid_samples"] = std::to_string(s.valid_samples);
+  r["statistics.leaves"] = std::to_string(s.leaves);
+  r["statistics.geometry_changes"] = std::to_string(s.geometry_changes);
+  r["statistics.valid_volume_percent"] = Number(s.valid_volume_percent);
+  for (const auto& [type, share] : s.failure_shares) r["statistics.failure_share." + type] = Number(share);
+  const CacheSummary& c = m.cache;
+  r["cache.strategy"] = c.strategy;
+  r["cache.budget_bytes"] = std::to_string(c.budget_bytes);
+  r["cache.threshold_seconds"] = Number(c.threshold_seconds);
+  r["cache.cost_model"] = c.cost_model;
+  r["cache.top_entries"] = std::to_string(c.top_entries);
+  r["cache.top_bytes"] = std::to_string(c.top_bytes);
+  r["cache.opt_entries"] = std::to_string(c.opt_entries);
+  r["cache.opt_bytes"] = std::to_string(c.opt_bytes);
+  r["cache.rfree_entries"] = std::to_string(c.rfree_entries);
+  r["cache.rfree_bytes"] = std::to_string(c.rfree_bytes);
+  return r;
+}
+
+void InsertContent(Db& db, const Artifact& a) {
+  const sampling::Form& form = a.form;
+  const int n = static_cast<int>(form.dimensions.size());
+  if (n < 1 || n > kMaxDimensions)
+    throw InputError("artifact: a form needs 1 to 6 dimensions, this one has " + std::to_string(n));
+  {
+    Stmt s(db, "INSERT INTO dimensions VALUES (?, ?, ?, ?, ?, ?)");
+    for (int d = 0; d < n; ++d) {
+      const auto& dim = form.dimensions[d];
+      s.Int(1, d).Text(2, dim.name).Text(3, KindName(dim.kind)).Real(4, dim.lo).Real(5, dim.hi);
+      s.Text(6, dim.kind == sampling::DimensionKind::kEnumerated ? nlohmann::json(dim.values).dump() : "");
+      s.Run();
+    }
+  }
+  {
+    Stmt t(db, "INSERT INTO trees VALUES (?, ?)");
+    Stmt s(db, "INSERT INTO nodes VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?)");
+    for (std::size_t ti = 0; ti < form.trees.size(); ++ti) {
+      const auto& tree = form.trees[ti];
+      t.Int(1, static_cast<std::int64_t>(ti)).Text(2, JoinInts({tree.cell.begin(), tree.cell.end()}));
+      t.Run();
+      for (std::size_t ni = 0; ni < tree.nodes.size(); ++ni) {
+        const auto& node = tree.nodes[ni];
+        s.Int(1, static_cast<std::int64_t>(ti)).Int(2, static_cast<std::int64_t>(ni)).Int(3, node.depth);
+        s.Text(4, JoinInts(node.lo)).Text(5, JoinInts(node.hi)).Int(6, node.split_dimension);
+        s.Int(7, node.split_key).Int(8, node.children[0]).Int(9, node.children[1]).Text(10, StopName(node.stop));
+        s.Run();
+      }
+    }
+  }
+  {
+    Stmt s(db, "INSERT INTO samples VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?)");
+    Stmt p(db, "INSERT INTO sample_properties VALUES (?, ?, ?)");
+    for (std::size_t i = 0; i < form.samples.size(); ++i) {
+      const auto& sample = form.samples[i];
+      if (static_cast<int>(sample.u.size()) != n || static_cast<int>(sample.key.size()) != n)
+        throw InputError("artifact: sample " + std::to_string(i) + " has the wrong dimension");
+      s.Int(1, static_cast<std::int64_t>(i)).Text(2, JoinInts(sample.key));
+      for (int d = 0; d < kMaxDimensions; ++d) {
+        if (d < n) s.Real(3 + d, sample.u[d]);
+        else s.Null(3 + d);
+      }
+      s.Int(9, sample.outcome.valid ? 1 : 0).Text(10, sample.outcome.failure_type);
+      s.Run();
+      for (const auto& [name, value] : sample.outcome.properties) {
+        p.Int(1, static_cast<std::int64_t>(i)).Text(2, name).Real(3, value);
+        p.Run();
+      }
+    }
+  }
+  {
+    Stmt s(db, "INSERT INTO geometry_changes VALUES (?, ?, ?)");
+    for (const auto& [edge, dg] : form.geometry_changes) {
+      s.Int(1, edge.first).Int(2, edge.second).Real(3, dg);
+      s.Run();
+    }
+  }
+  {
+    std::vector<const CacheEntry*> entries;
+    for (const auto& e : a.cache) entries.push_back(&e);
+    std::sort(entries.begin(), entries.end(), [](auto* x, auto* y) { return x->key < y->key; });
+    Stmt s(db, "INSERT INTO cache_entries VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?)");
+    for (std::size_t i = 0; i < entries.size(); ++i) {
+      const CacheEntry& e = *entries[i];
+      if (i > 0 && entries[i - 1]->key == e.key) throw InputError("artifact: cache entry " + e.key + " appears twice");
+      s.Text(1, e.key).Text(2, e.op).Text(3, JoinStrings(e.children)).Int(4, e.bytes).Real(5, e.cost_seconds);
+      s.Int(6, e.in_opt ? 1 : 0).Int(7, e.in_rfree ? 1 : 0).Blob(8, e.grid).Text(9, Sha256Hex(e.grid)).Blob(10, e.glb);
+      s.Run();
+    }
+  }
+  {
+    std::vector<const CacheCurvePoint*> points;
+    for (const auto& p : a.cache_curves) points.push_back(&p);
+    std::sort(points.begin(), points.end(), [](auto* x, auto* y) {
+      return std::tie(x->strategy, x->step) < std::tie(y->strategy, y->step);
+    });
+    Stmt s(db, "INSERT INTO cache_curves VALUES (?, ?, ?, ?, ?, ?)");
+    for (const auto* p : points) {
+      s.Text(1, p->strategy).Int(2, p->step).Int(3, p->entries).Int(4, p->bytes).Real(5, p->mean_seconds);
+      s.Real(6, p->worst_seconds);
+      s.Run();
+    }
+  }
+  {
+    Stmt s(db, "INSERT INTO starting_points VALUES (?, ?, ?)");
+    for (std::size_t i = 0; i < a.starting_points.size(); ++i) {
+      const auto& sp = a.starting_points[i];
+      if (sp.sample_id < 0 || sp.sample_id >= static_cast<std::int64_t>(form.samples.size()))
+        throw InputError("artifact: starting point " + std::to_string(i) + " names sample " +
+                         std::to_string(sp.sample_id) + ", which does not exist");
+      s.Int(1, static_cast<std::int64_t>(i)).Int(2, sp.sample_id).Int(3, sp.component);
+      s.Run();
+    }
+  }
+  {
+    Stmt s(db, "INSERT INTO bundle_files VALUES (?, ?, ?)");
+    s.Text(1, "design").Text(2, a.bundle.design_file_name).Blob(3, a.bundle.design_file);
+    s.Run();
+    for (const auto& [name, bytes] : a.bundle.files) {
+      s.Text(1, "file").Text(2, name).Blob(3, bytes);
+      s.Run();
+    }
+    s.Text(1, "job").Text(2, a.bundle.job_file_name).Blob(3, a.bundle.job_file);
+    s.Run();
+  }
+}
+
+// ---- reading ----------------------------------------------------------------------------
+
+std::map<std::string, std::string> ReadManifestRows(Db& db) {
+  std::map<std::string, std::string> rows;
+  Stmt s(db, "SELECT key, value FROM manifest ORDER BY key");
+  while (s.Next()) rows[s.GetText(0)] = s.GetText(1);
+  return rows;
+}
+
+struct ManifestReader {
+  const std::map<std::string, std::string>& rows;
+  std::string Text(const std::string& key) const {
+    auto it = rows.find(key);
+    if (it == rows.end()) throw Corrupt("manifest has no '" + key + "'");
+    return it->second;
+  }
+  std::int64_t Int(const std::string& key) const {
+    std::string v = Text(key);
+    try {
+      std::size_t used = 0;
+      std::int64_t x = std::stoll(v, &used);
+      if (used == v.size()) return x;
+    } catch (const std::exception&) {
+    }
+    throw Corrupt("manifest '" + key + "' is not an integer: '" + v + "'");
+  }
+  double Real(const std::string& key) const {
+    std::string v = Text(key);
+    try {
+      std::size_t used = 0;
+      double x = std::stod(v, &used);
+      if (used == v.size()) return x;
+    } catch (const std::exception&) {
+    }
+    throw Corrupt("manifest '" + key + "' is not a number: '" + v + "'");
+  }
+};
+
+Artifact ReadV1(Db& db, const ArtifactReadOptions& options) {
+  Artifact a;
+  const auto rows = ReadManifestRows(db);
+  ManifestReader m{rows};
+  if (m.Text("format") != "fabatlas.artifact") throw Corrupt("manifest format is '" + m.Text("format") + "'");
+  if (m.Int("schema_version") != 1)
+    throw Corrupt("manifest schema_version " + m.Text("schema_version") + " disagrees with the file header (1)");
+  Manifest& man = a.manifest;
+  man.schema_version = 1;
+  man.design_name = m.Text("design_name");
+  man.design_hash = m.Text("design_hash");
+  man.code_version = m.Text("code_version");
+  man.subdivisions = static_cast<int>(m.Int("sampling.subdivisions"));
+  man.max_depth = static_cast<int>(m.Int("sampling.max_depth"));
+  man.dg_threshold = m.Real("sampling.dg_threshold");
+  man.max_samples = m.Int("sampling.max_samples");
+  man.statistics.samples = m.Int("statistics.samples");
+  man.statistics.valid_samples = m.Int("statistics.valid_samples");
+  man.statistics.leaves = m.Int("statistics.leaves");
+  man.statistics.geometry_changes = m.Int("statistics.geometry_changes");
+  man.statistics.valid_volume_percent = m.Real("statistics.valid_volume_percent");
+  const std::string share_prefix = "statistics.failure_share.";
+  for (const auto& [key, value] : rows)
+    if (key.rfind(share_prefix, 0) == 0) man.statistics.failure_shares[key.substr(share_prefix.size())] = m.Real(key);
+  man.cache.strategy = m.Text("cache.strategy");
+  man.cache.budget_bytes = m.Int("cache.budget_bytes");
+  man.cache.threshold_seconds = m.Real("cache.threshold_seconds");
+  man.cache.cost_model = m.Text("cache.cost_model");
+  man.cache.top_entries = m.Int("cache.top_entries");
+  man.cache.top_bytes = m.Int("cache.top_bytes");
+  man.cache.opt_entries = m.Int("cache.opt_entries");
+  man.cache.opt_bytes = m.Int("cache.opt_bytes");
+  man.cache.rfree_entries = m.Int("cache.rfree_entries");
+  man.cache.rfree_bytes = m.Int("cache.rfree_bytes");
+  const std::string checksum_prefix = "checksum.";
+  for (const auto& [key, value] : rows)
+    if (key.rfind(checksum_prefix, 0) == 0) man.checksums[key.substr(checksum_prefix.size())] = value;
+
+  if (options.verify_checksums) {
+    for (const auto& t : kTablesV1) {
+      auto it = man.checksums.find(t.table);
+      if (it == man.checksums.end()) throw Corrupt(std::string("manifest has no checksum of table ") + t.table);
+      if (TableChecksum(db, t) != it->second)
+        throw Corrupt(std::string("table ") + t.table + " does not match its checksum (the file was altered or damaged)");
+    }
+  }
+
+  sampling::Form& form = a.form;
+  form.subdivisions = man.subdivisions;
+  {
+    Stmt s(db, "SELECT idx, name, kind, lo, hi, enum_values FROM dimensions ORDER BY idx");
+    while (s.Next()) {
+      if (s.GetInt(0) != static_cast<std::int64_t>(form.dimensions.size())) throw Corrupt("dimension indices are not 0..n-1");
+      sampling::Dimension d;
+      d.name = s.GetText(1);
+      std::string kind = s.GetText(2);
+      if (kind == "real") d.kind = sampling::DimensionKind::kReal;
+      else if (kind == "integer") d.kind = sampling::DimensionKind::kInteger;
+      else if (kind == "enumerated") d.kind = sampling::DimensionKind::kEnumerated;
+      else throw Corrupt("dimension '" + d.name + "' has unknown kind '" + kind + "'");
+      d.lo = s.GetReal(3);
+      d.hi = s.GetReal(4);
+      if (d.kind == sampling::DimensionKind::kEnumerated) {
+        try {
+          d.values = nlohmann::json::parse(s.GetText(5)).get<std::vector<std::string>>();
+        } catch (const std::exception&) {
+          throw Corrupt("dimension '" + d.name + "' has malformed enum_values");
+        }
+      }
+      form.dimensions.push_back(std::move(d));
+    }
+  }
+  const int n = static_cast<int>(form.dimensions.size());
+  if (n < 1 || n > kMaxDimensions) throw Corrupt("the form has " + std::to_string(n) + " dimensions (1 to 6 expected)");
+  {
+    Stmt s(db, "SELECT id, key, u0, u1, u2, u3, u4, u5, valid, failure FROM samples ORDER BY id");
+    while (s.Next()) {
+      const auto id = static_cast<std::int64_t>(form.samples.size());
+      if (s.GetInt(0) != id) throw Corrupt("sample ids are not 0..n-1");
+      sampling::FormSample sample;
+      sample.key = SplitInts(s.GetText(1), "sample key");
+      if (static_cast<int>(sample.key.size()) != n) throw Corrupt("sample " + std::to_string(id) + " has a key of the wrong dimension");
+      for (int d = 0; d < n; ++d) {
+        if (s.Type(2 + d) != SQLITE_FLOAT && s.Type(2 + d) != SQLITE_INTEGER)
+          throw Corrupt("sample " + std::to_string(id) + " has no u" + std::to_string(d));
+        sample.u.push_back(s.GetReal(2 + d));
+      }
+      sample.outcome.valid = s.GetInt(8) != 0;
+      sample.outcome.failure_type = s.GetText(9);
+      if (!form.sample_ids.emplace(sample.key, id).second) throw Corrupt("two samples share key " + s.GetText(1));
+      form.samples.push_back(std::move(sample));
+    }
+  }
+  {
+    Stmt s(db, "SELECT sample_id, name, value FROM sample_properties ORDER BY sample_id, name");
+    while (s.Next()) {
+      auto id = s.GetInt(0);
+      if (id < 0 || id >= static_cast<std::int64_t>(form.samples.size()))
+        throw Corrupt("a property names sample " + std::to_string(id) + ", which does not exist");
+      form.samples[id].outcome.properties[s.GetText(1)] = s.GetReal(2);
+    }
+  }
+  {
+    Stmt t(db, "SELECT tree, cell FROM trees ORDER BY tree");
+    while (t.Next()) {
+      if (t.GetInt(0) != static_cast<std::int64_t>(form.trees.size())) throw Corrupt("tree indices are not 0..n-1");
+      sampling::FormTree tree;
+      for (auto c : SplitInts(t.GetText(1), "tree cell")) tree.cell.push_back(static_cast<int>(c));
+      form.trees.push_back(std::move(tree));
+    }
+    Stmt s(db,
+           "SELECT tree, node, depth, lo, hi, split_dimension, split_key, child_lo, child_hi, stop FROM nodes "
+           "ORDER BY tree, node");
+    while (s.Next()) {
+      auto ti = s.GetInt(0);
+      if (ti < 0 || ti >= static_cast<std::int64_t>(form.trees.size())) throw Corrupt("a node names a tree that does not exist");
+      auto& tree = form.trees[ti];
+      if (s.GetInt(1) != static_cast<std::int64_t>(tree.nodes.size()))
+        throw Corrupt("node indices of tree " + std::to_string(ti) + " are not 0..n-1");
+      sampling::FormNode node;
+      node.depth = static_cast<int>(s.GetInt(2));
+      node.lo = SplitInts(s.GetText(3), "node box");
+      node.hi = SplitInts(s.GetText(4), "node box");
+      node.split_dimension = static_cast<int>(s.GetInt(5));
+      node.split_key = s.GetInt(6);
+      node.children[0] = static_cast<int>(s.GetInt(7));
+      node.children[1] = static_cast<int>(s.GetInt(8));
+      node.stop = StopOf(s.GetText(9));
+      if (static_cast<int>(node.lo.size()) != n || static_cast<int>(node.hi.size()) != n)
+        throw Corrupt("a node of tree " + std::to_string(ti) + " has a box of the wrong dimension");
+      if (node.split_dimension >= n) throw Corrupt("a node splits a dimension that does not exist");
+      tree.nodes.push_back(std::move(node));
+    }
+    for (std::size_t ti = 0; ti < form.trees.size(); ++ti) {
+      const auto& tree = form.trees[ti];
+      if (tree.nodes.empty()) throw Corrupt("tree " + std::to_string(ti) + " has no nodes");
+      for (const auto& node : tree.nodes) {
+        if (node.split_dimension >= 0) {
+          for (int c : node.children)
+            if (c <= 0 || c >= static_cast<int>(tree.nodes.size()))
+              throw Corrupt("a node of tree " + std::to_string(ti) + " has a child index out of range");
+        } else {
+          try {
+            sampling::CornerSampleIds(form, node);
+          } catch (const std::out_of_range&) {
+            throw Corrupt("a leaf of tree " + std::to_string(ti) + " has a corner without a sample");
+          }
+        }
+      }
+    }
+  }
+  {
+    Stmt s(db, "SELECT a, b, dg FROM geometry_changes ORDER BY a, b");
+    const auto count = static_cast<std::int64_t>(form.samples.size());
+    while (s.Next()) {
+      auto x = s.GetInt(0), y = s.GetInt(1);
+      if (x < 0 || y < 0 || x >= count || y >= count) throw Corrupt("a ΔG value names a sample that does not exist");
+      form.geometry_changes[{x, y}] = s.GetReal(2);
+    }
+  }
+  {
+    Stmt s(db, options.load_geometry
+                   ? "SELECT key, op, children, bytes, cost_seconds, in_opt, in_rfree, grid_sha256, grid, glb "
+                     "FROM cache_entries ORDER BY key"
+                   : "SELECT key, op, children, bytes, cost_seconds, in_opt, in_rfree, grid_sha256 "
+                     "FROM cache_entries ORDER BY key");
+    while (s.Next()) {
+      CacheEntry e;
+      e.key = s.GetText(0);
+      e.op = s.GetText(1);
+      e.children = SplitStrings(s.GetText(2));
+      e.bytes = s.GetInt(3);
+      e.cost_seconds = s.GetReal(4);
+      e.in_opt = s.GetInt(5) != 0;
+      e.in_rfree = s.GetInt(6) != 0;
+      e.grid_sha256 = s.GetText(7);
+      if (options.load_geometry) {
+        e.grid = s.GetText(8);
+        e.glb = s.GetText(9);
+        if (Sha256Hex(e.grid) != e.grid_sha256) throw Corrupt("cache entry " + e.key + " does not match its grid_sha256");
+      }
+      a.cache.push_back(std::move(e));
+    }
+  }
+  {
+    Stmt s(db, "SELECT strategy, step, entries, bytes, mean_seconds, worst_seconds FROM cache_curves ORDER BY strategy, step");
+    while (s.Next())
+      a.cache_curves.push_back({s.GetText(0), s.GetInt(1), s.GetInt(2), s.GetInt(3), s.GetReal(4), s.GetReal(5)});
+  }
+  {
+    Stmt s(db, "SELECT idx, sample_id, component FROM starting_points ORDER BY idx");
+    while (s.Next()) {
+      StartingPoint p;
+      p.sample_id = s.GetInt(1);
+      p.component = static_cast<int>(s.GetInt(2));
+      if (p.sample_id < 0 || p.sample_id >= static_cast<std::int64_t>(form.samples.size()))
+        throw Corrupt("a starting point names sample " + std::to_string(p.sample_id) + ", which does not exist");
+      p.u = form.samples[p.sample_id].u;
+      a.starting_points.push_back(std::move(p));
+    }
+  }
+  {
+    Stmt s(db, "SELECT role, name, bytes FROM bundle_files ORDER BY role, name");
+    int jobs = 0, designs = 0;
+    while (s.Next()) {
+      std::string role = s.GetText(0);
+      if (role == "job") {
+        a.bundle.job_file_name = s.GetText(1);
+        a.bundle.job_file = s.GetText(2);
+        ++jobs;
+      } else if (role == "design") {
+        a.bundle.design_file_name = s.GetText(1);
+        a.bundle.design_file = s.GetText(2);
+        ++designs;
+      } else if (role == "file") {
+        a.bundle.files[s.GetText(1)] = s.GetText(2);
+      } else {
+        throw Corrupt("bundle file of unknown role '" + role + "'");
+      }
+    }
+    if (jobs != 1 || designs != 1) throw Corrupt("the bundle needs exactly one job file and one design file");
+  }
+  try {
+    form.space();
+  } catch (const std::exception& e) {
+    throw Corrupt(std::string("invalid dimensions: ") + e.what());
+  }
+  return a;
+}
+
+}  // namespace
+
+ArtifactStatistics StatisticsOf(const sampling::Form& form) {
+  ArtifactStatistics s;
+  s.samples = static_cast<std::int64_t>(form.samples.size());
+  s.geometry_changes = static_cast<std::int64_t>(form.geometry_changes.size());
+  std::int64_t invalid = 0;
+  for (const auto& sample : form.samples) {
+    if (sample.outcome.valid) {
+      ++s.valid_samples;
+      continue;
+    }
+    ++invalid;
+    s.failure_shares[sample.outcome.failure_type] += 1.0;
+  }
+  for (auto& [type, share] : s.failure_shares) share /= static_cast<double>(invalid);
+  for (const auto& tree : form.trees)
+    for (const auto& node : tree.nodes)
+      if (node.split_dimension < 0) ++s.leaves;
+  if (!form.trees.empty()) s.valid_volume_percent = sampling::ValidVolumePercent(form);
+  return s;
+}
+
+void WriteArtifact(const Artifact& artifact, const fs::path& path) {
+  fs::path tmp = path;
+  tmp += ".tmp-" + std::to_string(::getpid());
+  std::error_code ec;
+  fs::remove(tmp, ec);
+  try {
+    {
+      Db db(":memory:", SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE);
+      db.Exec("PRAGMA page_size = " + std::to_string(kPageSize) + "; PRAGMA application_id = " +
+              std::to_string(kArtifactApplicationId) + "; PRAGMA user_version = " +
+              std::to_string(kArtifactSchemaVersion) + "; PRAGMA encoding = 'UTF-8';");
+      db.Exec("BEGIN");
+      db.Exec(kSchemaV1);
+      InsertContent(db, artifact);
+      auto rows = ManifestRows(artifact);
+      for (const auto& t : kTablesV1) rows[std::string("checksum.") + t.table] = TableChecksum(db, t);
+      InsertManifest(db, rows);
+      db.Exec("COMMIT");
+      Stmt vacuum(db, "VACUUM INTO ?");
+      vacuum.Text(1, tmp.string());
+      vacuum.Run();
+    }
+    FsyncPath(tmp, false);
+  } catch (const Corrupt& e) {
+    fs::remove(tmp, ec);
+    std::string what = e.what();
+    if (what.find("full") != std::string::npos) throw ResourceError(path.string() + ": disk full while writing the artifact");
+    throw ResourceError(path.string() + ": cannot write the artifact: " + what);
+  } catch (...) {
+    fs::remove(tmp, ec);
+    throw;
+  }
+  fs::rename(tmp, path, ec);
+  if (ec) {
+    fs::remove(tmp);
+    throw ResourceError(path.string() + ": cannot rename the artifact into place: " + ec.message());
+  }
+  fs::path dir = path.parent_path().empty() ? fs::path(".") : path.parent_path();
+  FsyncPath(dir, true);
+}
+
+Artifact ReadArtifact(const fs::path& path, const ArtifactReadOptions& options) {
+  try {
+    const int version = CheckHeader(path);
+    // immutable=1: published artifacts never change; no locks, no -wal/-shm files.
+    char* uri = sqlite3_mprintf("file:%q?immutable=1", fs::absolute(path).string().c_str());
+    std::string uri_text = uri ? uri : "";
+    sqlite3_free(uri);
+    Db db(uri_text, SQLITE_OPEN_READONLY | SQLITE_OPEN_URI);
+    switch (version) {
+      case 1: return ReadV1(db, options);
+    }
+    throw Corrupt("unsupported schema version " + std::to_string(version));
+  } catch (const Corrupt& e) {
+    throw InputError(path.string() + ": " + e.what());
+  } catch (const InputError&) {
+    throw;
+  } catch (const std::exception& e) {
+    throw InputError(path.string() + ": corrupt artifact: " + e.what());
+  }
+}
+
+}  // namespace fabatlas::storage

@@ -1,0 +1,149 @@
+// Meshes as glTF binary through tinygltf (see glb.h).
+#include "fabatlas/storage/glb.h"
+
+#include <tiny_gltf.h>
+
+#include <algorithm>
+#include <cstring>
+#include <limits>
+#include <sstream>
+
+#include "fabatlas/error.h"
+
+namespace fabatlas::storage {
+
+std::string MeshToGlb(const mesh::TriangleMesh& m) {
+  tinygltf::Model model;
+  model.asset.version = "2.0";
+  model.asset.generator = "fabatlas";
+  tinygltf::Scene scene;
+  tinygltf::Node node;
+  node.name = "geometry";  // also keeps an empty node a JSON object
+  if (!m.empty()) {
+    tinygltf::Buffer buffer;
+    const std::size_t position_bytes = m.vertices.size() * 3 * sizeof(float);
+    const std::size_t index_bytes = m.triangles.size() * 3 * sizeof(std::uint32_t);
+    buffer.data.resize(position_bytes + index_bytes);
+    std::vector<double> lo(3, std::numeric_limits<double>::infinity()), hi(3, -std::numeric_limits<double>::infinity());
+    unsigned char* out = buffer.data.data();
+    for (const auto& v : m.vertices)
+      for (int k = 0; k < 3; ++k) {
+        const float f = static_cast<float>(v[k]);
+        lo[k] = std::min(lo[k], static_cast<double>(f));
+        hi[k] = std::max(hi[k], static_cast<double>(f));
+        std::memcpy(out, &f, sizeof f);
+        out += sizeof f;
+      }
+    for (const auto& t : m.triangles)
+      for (int k = 0; k < 3; ++k) {
+        if (t[k] < 0 || static_cast<std::size_t>(t[k]) >= m.vertices.size())
+          throw InputError("glb: triangle index " + std::to_string(t[k]) + " out of range");
+        const auto i = static_cast<std::uint32_t>(t[k]);
+        std::memcpy(out, &i, sizeof i);
+        out += sizeof i;
+      }
+    model.buffers.push_back(std::move(buffer));
+
+    tinygltf::BufferView positions;
+    positions.buffer = 0;
+    positions.byteOffset = 0;
+    positions.byteLength = position_bytes;
+    positions.target = TINYGLTF_TARGET_ARRAY_BUFFER;
+    tinygltf::BufferView indices;
+    indices.buffer = 0;
+    indices.byteOffset = position_bytes;
+    indices.byteLength = index_bytes;
+    indices.target = TINYGLTF_TARGET_ELEMENT_ARRAY_BUFFER;
+    model.bufferViews = {positions, indices};
+
+    tinygltf::Accessor position_accessor;
+    position_accessor.bufferView = 0;
+    position_accessor.componentType = TINYGLTF_COMPONENT_TYPE_FLOAT;
+    position_accessor.count = m.vertices.size();
+    position_accessor.type = TINYGLTF_TYPE_VEC3;
+    position_accessor.minValues = lo;
+    position_accessor.maxValues = hi;
+    tinygltf::Accessor index_accessor;
+    index_accessor.bufferView = 1;
+    index_accessor.componentType = TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT;
+    index_accessor.count = m.triangles.size() * 3;
+    index_accessor.type = TINYGLTF_TYPE_SCALAR;
+    model.accessors = {position_accessor, index_accessor};
+
+    tinygltf::Primitive primitive;
+    primitive.attributes["POSITION"] = 0;
+    primitive.indices = 1;
+    primitive.mode = TINYGLTF_MODE_TRIANGLES;
+    tinygltf::Mesh mesh;
+    mesh.primitives.push_back(std::move(primitive));
+    model.meshes.push_back(std::move(mesh));
+    node.mesh = 0;
+  }
+  model.nodes.push_back(node);
+  scene.nodes.push_back(0);
+  model.scenes.push_back(scene);
+  model.defaultScene = 0;
+  std::ostringstream stream;
+  tinygltf::TinyGLTF writer;
+  if (!writer.WriteGltfSceneToStream(&model, stream, false, true))
+    throw InputError("glb: tinygltf could not write the mesh");
+  return stream.str();
+}
+
+mesh::TriangleMesh GlbToMesh(std::string_view glb, const std::string& source) {
+  tinygltf::Model model;
+  tinygltf::TinyGLTF loader;
+  std::string error, warning;
+  if (!loader.LoadBinaryFromMemory(&model, &error, &warning, reinterpret_cast<const unsigned char*>(glb.data()),
+                                   static_cast<unsigned int>(glb.size())))
+    throw InputError(source + ": not a glTF binary: " + (error.empty() ? "unreadable" : error.substr(0, error.find('\n'))));
+  mesh::TriangleMesh out;
+  if (model.meshes.empty()) return out;
+  if (model.meshes[0].primitives.empty()) throw InputError(source + ": the first mesh has no primitive");
+  const tinygltf::Primitive& p = model.meshes[0].primitives[0];
+  auto accessor_data = [&](int index, int component_type, std::size_t component_size, int type) {
+    if (index < 0 || index >= static_cast<int>(model.accessors.size())) throw InputError(source + ": accessor out of range");
+    const auto& a = model.accessors[index];
+    if (a.componentType != component_type || a.type != type) throw InputError(source + ": unexpected accessor type");
+    const auto& view = model.bufferViews.at(a.bufferView);
+    const auto& buffer = model.buffers.at(view.buffer);
+    const std::size_t width = component_size * (type == TINYGLTF_TYPE_VEC3 ? 3 : 1);
+    const std::size_t stride = view.byteStride ? view.byteStride : width;
+    const std::size_t begin = view.byteOffset + a.byteOffset;
+    if (a.count > 0 && begin + stride * (a.count - 1) + width > buffer.data.size())
+      throw InputError(source + ": accessor runs past its buffer");
+    return std::make_pair(buffer.data.data() + begin, stride);
+  };
+  auto it = p.attributes.find("POSITION");
+  if (it == p.attributes.end()) throw InputError(source + ": the primitive has no POSITION");
+  auto [pos, pos_stride] = accessor_data(it->second, TINYGLTF_COMPONENT_TYPE_FLOAT, 4, TINYGLTF_TYPE_VEC3);
+  const std::size_t vertex_count = model.accessors[it->second].count;
+  for (std::size_t i = 0; i < vertex_count; ++i) {
+    float f[3];
+    std::memcpy(f, pos + i * pos_stride, sizeof f);
+    out.vertices.push_back({f[0], f[1], f[2]});
+  }
+  if (p.indices < 0) throw InputError(source + ": the primitive has no indices");
+  const auto& ia = model.accessors.at(p.indices);
+  const std::size_t size = ia.componentType == TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT     ? 4
+                           : ia.componentType == TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT ? 2
+                                                                                        : 1;
+  auto [idx, idx_stride] = accessor_data(p.indices, ia.componentType, size, TINYGLTF_TYPE_SCALAR);
+  if (ia.count % 3 != 0) throw InputError(source + ": index count is not a multiple of 3");
+  for (std::size_t t = 0; t < ia.count / 3; ++t) {
+    std::array<std::int32_t, 3> tri{};
+    for (int k = 0; k < 3; ++k) {
+      const unsigned char* q = idx + (3 * t + k) * idx_stride;
+      std::uint32_t v = 0;
+      if (size == 4) std::memcpy(&v, q, 4);
+      else if (size == 2) { std::uint16_t s; std::memcpy(&s, q, 2); v = s; }
+      else v = *q;
+      if (v >= vertex_count) throw InputError(source + ": index out of range");
+      tri[k] = static_cast<std::int32_t>(v);
+    }
+    out.triangles.push_back(tri);
+  }
+  return out;
+}
+
+}  // namespace fabatlas::storage
