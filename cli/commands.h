@@ -19,4 +19,8 @@ void AddSampleCommands(CLI::App& app, int& exit_code);
 // (cli/job_commands.cpp).
 void AddJobCommands(CLI::App& app, int& exit_code);
 
+// inspect: an artifact's Table 3 / Fig. 14 rows and Fig. 13 PNG
+// (cli/inspect_commands.cpp).
+void AddInspectCommands(CLI::App& app, int& exit_code);
+
 }  // namespace fabatlas::cli

@@ -15,6 +15,7 @@ int main(int argc, char** argv) {
   fabatlas::cli::AddDesignCommands(app, exit_code);
   fabatlas::cli::AddSampleCommands(app, exit_code);
   fabatlas::cli::AddJobCommands(app, exit_code);
+  fabatlas::cli::AddInspectCommands(app, exit_code);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -127,8 +127,13 @@ int Run(const ClusterArgs& a) {
     v1::JobStatus s = WatchJob(client, id, a.quiet);
     int code = FinishedExitCode(s);
     if (code == 0) {
-      WriteOutputs(client.Fetch(id), out);
-      std::cout << "wrote " << (out / "form.json").string() << " and statistics.json\n";
+      auto files = client.Fetch(id);
+      WriteOutputs(files, out);
+      std::string artifact;
+      for (const auto& [name, bytes] : files)
+        if (fs::path(name).extension() == ".fabatlas") artifact = (out / name).string();
+      std::cout << "wrote " << (artifact.empty() ? "" : artifact + ", ") << (out / "form.json").string()
+                << " and statistics.json\n";
     }
     stop_workers();
     coordinator.Shutdown();
@@ -148,7 +153,7 @@ void AddJobCommands(CLI::App& app, int& exit_code) {
   run->add_option("job", a->job, "job YAML (docs/job-format.md)")->required();
   run->add_option("--workers", a->workers, "worker processes (default 2)");
   run->add_option("--slots", a->slots, "tasks per worker at once (default 1)");
-  run->add_option("--out", a->out, "output directory (form.json, statistics.json; cluster-state/ keeps the store)")->required();
+  run->add_option("--out", a->out, "output directory (<design>.fabatlas, form.json, statistics.json; cluster-state/ keeps the store)")->required();
   run->add_flag("--quiet", a->quiet, "no progress line");
   run->callback([a, &exit_code] { exit_code = Run(*a); });
 

@@ -6,6 +6,9 @@
 #include <memory>
 
 #include "commands.h"
+#include "fabatlas/coordinator/publish.h"
+#include "fabatlas/protocol/job_bundle.h"
+#include "fabatlas/storage/artifact.h"
 #include "fabatlas/design/design.h"
 #include "fabatlas/precompute/design_evaluator.h"
 #include "fabatlas/precompute/form_outputs.h"
@@ -31,8 +34,12 @@ void Sample(const SampleArgs& args) {
   sampling::ThreadPoolExecutor executor(threads);
   sampling::SamplingSummary summary = sampling::SampleDesignSpace(space, evaluator, executor, job.sampling);
   precompute::WriteFormOutputs(design, summary, args.out);
+  // The same artifact the cluster publishes for this job (docs/artifact.md).
+  const std::string artifact = coordinator::ArtifactFileName(design.name);
+  storage::WriteArtifact(coordinator::ArtifactOf(protocol::MakeJobBundle(args.job), design.name, job, summary.form),
+                         std::filesystem::path(args.out) / artifact);
   std::cout << precompute::Table3Row(design, summary.statistics) << "\n";
-  std::cout << "wrote " << args.out << "/form.json, statistics.json and validity maps\n";
+  std::cout << "wrote " << args.out << "/" << artifact << ", form.json, statistics.json and validity maps\n";
 }
 
 }  // namespace

@@ -17,6 +17,7 @@
 #include <thread>
 #include <unordered_map>
 
+#include "fabatlas/coordinator/publish.h"
 #include "fabatlas/design/design.h"
 #include "fabatlas/error.h"
 #include "fabatlas/precompute/design_evaluator.h"
@@ -26,6 +27,7 @@
 #include "fabatlas/protocol/tasks.h"
 #include "fabatlas/sampling/adaptive_sampler.h"
 #include "fabatlas/sampling/job_file.h"
+#include "fabatlas/storage/artifact.h"
 #include "fabatlas/storage/blob_store.h"
 #include "fabatlas/storage/job_store.h"
 #include "fabatlas/v1/blob.grpc.pb.h"
@@ -258,6 +260,9 @@ struct Coordinator::Impl {
           sampling::SampleDesignSpace(space, unused_local, executor, job_file.sampling);
       fs::path out = dir / "out";
       precompute::WriteFormOutputs(design, summary, out);
+      // The published artifact (docs/artifact.md): deterministic, atomic.
+      storage::WriteArtifact(ArtifactOf(bundle, design.name, job_file, summary.form),
+                             out / ArtifactFileName(design.name));
       for (const auto& entry : fs::directory_iterator(out)) {
         if (!entry.is_regular_file()) continue;
         std::string name = entry.path().filename().string();

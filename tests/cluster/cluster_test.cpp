@@ -10,6 +10,7 @@
 
 #include "cluster_process.h"
 #include "fabatlas/coordinator/job_client.h"
+#include "fabatlas/coordinator/publish.h"
 #include "fabatlas/design/design.h"
 #include "fabatlas/error.h"
 #include "fabatlas/precompute/design_evaluator.h"
@@ -17,6 +18,8 @@
 #include "fabatlas/sampling/executor.h"
 #include "fabatlas/sampling/form_json.h"
 #include "fabatlas/sampling/job_file.h"
+#include "fabatlas/protocol/job_bundle.h"
+#include "fabatlas/storage/artifact.h"
 #include "fabatlas/storage/blob_store.h"
 #include "fabatlas/storage/job_store.h"
 
@@ -38,6 +41,23 @@ const std::string& ReferenceForm() {
     return sampling::FormToJson(sampling::SampleDesignSpace(space, evaluator, executor, job.sampling).form);
   }();
   return form;
+}
+
+// The published artifact of the job (docs/artifact.md), computed in this
+// process from the reference form: every cluster run must publish exactly
+// these bytes, whatever the worker count and the faults.
+const char* const kArtifactName = "tube_wall_2d.fabatlas";
+const std::string& ReferenceArtifact() {
+  static const std::string bytes = [] {
+    sampling::JobFile job = sampling::ReadJobFile(JobPath().string());
+    sampling::Form form = sampling::FormFromJson(ReferenceForm());
+    storage::Artifact artifact =
+        coordinator::ArtifactOf(protocol::MakeJobBundle(JobPath()), "tube_wall_2d", job, form);
+    fs::path path = FreshDir("reference-artifact") / kArtifactName;
+    storage::WriteArtifact(artifact, path);
+    return ReadText(path);
+  }();
+  return bytes;
 }
 
 // Fast failure detection for the fault tests.
@@ -95,7 +115,9 @@ std::string RunJobOnWorkers(const std::string& name, int workers, int slots, std
   std::string id = Client(c.port).Submit(JobPath());
   v1::JobStatus s = WaitForJob([&] { return c.port; }, id, std::chrono::seconds(240));
   EXPECT_EQ(s.state(), v1::JOB_STATE_SUCCEEDED) << s.error();
-  std::string form = Client(c.port).Fetch(id)["form.json"];
+  auto outputs = Client(c.port).Fetch(id);
+  std::string form = outputs["form.json"];
+  EXPECT_TRUE(outputs[kArtifactName] == ReferenceArtifact()) << name << ": the artifact differs from the in-process one";
   for (pid_t p : pids) ::kill(p, SIGTERM);
   for (pid_t p : pids) EXPECT_EQ(WaitExit(p, std::chrono::seconds(30)), 0);
   StopAndCheckStore(c, dir / "state", id);
@@ -140,6 +162,7 @@ TEST(ClusterFaults, TwentyWorkerKillsMidTaskLoseNothing) {
   EXPECT_GE(kills, 20);
   EXPECT_GT(s.lease_expiries(), 0);  // the kills did hit leased work
   EXPECT_EQ(Client(c.port).Fetch(id)["form.json"], ReferenceForm());
+  EXPECT_TRUE(Client(c.port).Fetch(id)[kArtifactName] == ReferenceArtifact()) << "the artifact differs";
   for (pid_t p : workers) ::kill(p, SIGTERM);
   for (pid_t p : workers) WaitExit(p, std::chrono::seconds(30));
   StopAndCheckStore(c, dir / "state", id);
@@ -167,6 +190,7 @@ TEST(ClusterFaults, StoppedWorkerLosesItsLeaseAndTheTaskMoves) {
   EXPECT_EQ(s.state(), v1::JOB_STATE_SUCCEEDED) << s.error();
   EXPECT_GE(s.lease_expiries(), 1);
   EXPECT_EQ(Client(c.port).Fetch(id)["form.json"], ReferenceForm());
+  EXPECT_TRUE(Client(c.port).Fetch(id)[kArtifactName] == ReferenceArtifact()) << "the artifact differs";
   // Thawed, the frozen worker reports a stale attempt: fenced, not stored.
   ::kill(frozen, SIGCONT);
   std::this_thread::sleep_for(std::chrono::milliseconds(1500));
@@ -199,6 +223,7 @@ TEST(ClusterFaults, CoordinatorKilledThreeTimesResumesByReplay) {
   EXPECT_EQ(kills, 3);
   EXPECT_EQ(s.state(), v1::JOB_STATE_SUCCEEDED) << s.error();
   EXPECT_EQ(Client(port).Fetch(id)["form.json"], ReferenceForm());
+  EXPECT_TRUE(Client(port).Fetch(id)[kArtifactName] == ReferenceArtifact()) << "the artifact differs";
   for (pid_t p : workers) ::kill(p, SIGTERM);
   for (pid_t p : workers) EXPECT_EQ(WaitExit(p, std::chrono::seconds(30)), 0);
   StopAndCheckStore(c, dir / "state", id);

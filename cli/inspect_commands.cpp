@@ -1,0 +1,201 @@
+// fabatlas inspect ART [--json] [--png PATH] [--points N] — what a published
+// artifact (docs/artifact.md) holds, as the rows of seed 001's evaluation:
+//   Table 3: samples, CPU time, valid volume %, failure shares;
+//   Fig. 14: H_TOP, H_opt and H_rfree sizes, and mean / worst preview time
+//            with no cache, with H_opt and with H_rfree, measured by
+//            re-evaluating the design from the artifact's bundle at N random
+//            points of the valid region (default 200, as in the paper);
+//   Fig. 13: mean and worst predicted preview time against cache size for
+//            the three strategies, written as a PNG.
+// The CPU time is a measurement of the run, kept out of the (deterministic)
+// artifact: it is read from statistics.json beside the artifact when present.
+#include <unistd.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <iostream>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <sstream>
+
+#include "commands.h"
+#include "fabatlas/coordinator/publish.h"
+#include "fabatlas/design/design.h"
+#include "fabatlas/error.h"
+#include "fabatlas/geometry/solid.h"
+#include "fabatlas/precompute/cache_curves_plot.h"
+#include "fabatlas/precompute/preview_times.h"
+#include "fabatlas/protocol/job_bundle.h"
+#include "fabatlas/storage/artifact.h"
+
+namespace fabatlas::cli {
+
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+struct InspectArgs {
+  std::string artifact, png;
+  bool json = false;
+  int points = 200;
+  std::uint64_t seed = 1;
+};
+
+// evaluator_cpu_seconds from statistics.json beside the artifact, if any.
+std::optional<double> RunCpuSeconds(const fs::path& artifact) {
+  const fs::path stats = artifact.parent_path() / "statistics.json";
+  std::ifstream in(stats);
+  if (!in) return std::nullopt;
+  try {
+    json j = json::parse(in);
+    return j.at("evaluator_cpu_seconds").get<double>();
+  } catch (const std::exception&) {
+    return std::nullopt;
+  }
+}
+
+std::string MiB(std::int64_t bytes) {
+  std::ostringstream out;
+  out << std::fixed << std::setprecision(2) << static_cast<double>(bytes) / (1 << 20) << " MiB";
+  return out.str();
+}
+
+std::string Seconds(double s) {
+  std::ostringstream out;
+  out << std::fixed << std::setprecision(s < 1 ? 4 : 2) << s << " s";
+  return out.str();
+}
+
+json TimesJson(const std::optional<precompute::PreviewTimes>& t) {
+  if (!t) return nullptr;
+  return json{{"mean_seconds", t->mean_seconds}, {"worst_seconds", t->worst_seconds},
+              {"points", t->seconds.size()}, {"failures", t->failures}};
+}
+
+std::string TimesText(const std::optional<precompute::PreviewTimes>& t) {
+  if (!t) return "n/a";
+  return "mean " + Seconds(t->mean_seconds) + " worst " + Seconds(t->worst_seconds);
+}
+
+void Inspect(const InspectArgs& a, int& exit_code) {
+  const fs::path path = a.artifact;
+  if (a.points < 0) throw InputError("inspect: --points must be >= 0");
+  const storage::Artifact art = storage::ReadArtifact(path);
+  const storage::Manifest& m = art.manifest;
+
+  // The design, from the artifact's own bundle.
+  const fs::path scratch = fs::temp_directory_path() / ("fabatlas-inspect-" + std::to_string(::getpid()));
+  struct Cleanup {
+    fs::path dir;
+    ~Cleanup() {
+      std::error_code ec;
+      fs::remove_all(dir, ec);
+    }
+  } cleanup{scratch};
+  const auto files = protocol::Materialize(coordinator::ProtoBundle(art.bundle), scratch);
+  const design::Design design = design::LoadDesign(files.design_file);
+  if (design.exposed.size() != art.form.dimensions.size())
+    throw InputError(path.string() + ": the bundled design has " + std::to_string(design.exposed.size()) +
+                     " exposed parameters, the form " + std::to_string(art.form.dimensions.size()));
+
+  // Table 3.
+  const auto cpu = RunCpuSeconds(path);
+  const auto& s = m.statistics;
+  std::ostringstream table3;
+  table3 << m.design_name << "  |U|=" << art.form.dimensions.size() << "  samples " << s.samples << "  CPU "
+         << (cpu ? Seconds(*cpu) : std::string("n/a")) << "  valid " << std::fixed << std::setprecision(1)
+         << s.valid_volume_percent << "%  failures: ";
+  if (s.failure_shares.empty()) table3 << "none";
+  bool first = true;
+  for (const auto& [type, share] : s.failure_shares) {
+    table3 << (first ? "" : ", ") << std::setprecision(0) << 100 * share << "% " << type;
+    first = false;
+  }
+
+  // Fig. 14: preview times at random valid points.
+  const auto points = precompute::RandomValidPoints(art.form, a.points, a.seed);
+  std::optional<precompute::PreviewTimes> t_none, t_opt, t_rfree;
+  if (!points.empty()) {
+    t_none = precompute::MeasurePreviewTimes(design, points, nullptr);
+    if (!m.cache.strategy.empty() && !art.cache.empty()) {
+      precompute::FrozenSubtreeCache opt, rfree;
+      for (const auto& e : art.cache) {
+        geometry::Solid solid = geometry::Solid::Deserialize(e.grid);
+        if (e.in_opt) opt.Add(e.key, solid);
+        if (e.in_rfree) rfree.Add(e.key, solid);
+      }
+      t_opt = precompute::MeasurePreviewTimes(design, points, &opt);
+      t_rfree = precompute::MeasurePreviewTimes(design, points, &rfree);
+    }
+  }
+
+  // Fig. 13.
+  std::string png;
+  if (!art.cache_curves.empty()) {
+    fs::path out = a.png.empty() ? fs::path(path).replace_extension(".fig13.png") : fs::path(a.png);
+    precompute::WriteCacheCurvesPng(art.cache_curves, out, {.title = m.design_name});
+    png = out.string();
+  }
+
+  const bool has_cache = !m.cache.strategy.empty();
+  if (a.json) {
+    json j;
+    j["artifact"] = path.string();
+    j["schema_version"] = m.schema_version;
+    j["design"] = m.design_name;
+    j["design_hash"] = m.design_hash;
+    j["code_version"] = m.code_version;
+    j["table3"] = {{"samples", s.samples},
+                   {"valid_samples", s.valid_samples},
+                   {"cpu_seconds", cpu ? json(*cpu) : json(nullptr)},
+                   {"valid_volume_percent", s.valid_volume_percent},
+                   {"failure_shares", s.failure_shares}};
+    auto size = [&](std::int64_t entries, std::int64_t bytes) {
+      return has_cache ? json{{"entries", entries}, {"bytes", bytes}} : json(nullptr);
+    };
+    j["fig14"] = {{"cache_strategy", m.cache.strategy},
+                  {"h_top", size(m.cache.top_entries, m.cache.top_bytes)},
+                  {"h_opt", size(m.cache.opt_entries, m.cache.opt_bytes)},
+                  {"h_rfree", size(m.cache.rfree_entries, m.cache.rfree_bytes)},
+                  {"points", points.size()},
+                  {"seed", a.seed},
+                  {"t_nocache", TimesJson(t_none)},
+                  {"t_opt", TimesJson(t_opt)},
+                  {"t_rfree", TimesJson(t_rfree)}};
+    j["fig13_png"] = png.empty() ? json(nullptr) : json(png);
+    std::cout << j.dump(2) << "\n";
+  } else {
+    std::cout << "artifact " << path.string() << "  schema v" << m.schema_version << "  design " << m.design_name
+              << "  hash " << m.design_hash.substr(0, 16) << "  code " << m.code_version << "\n";
+    std::cout << "Table 3: " << table3.str() << "\n";
+    std::cout << "Fig. 14: ";
+    if (has_cache)
+      std::cout << "H_TOP " << MiB(m.cache.top_bytes) << "  H_opt " << MiB(m.cache.opt_bytes) << "  H_rfree "
+                << MiB(m.cache.rfree_bytes) << " (" << m.cache.strategy << ")";
+    else
+      std::cout << "no geometry cache in the artifact";
+    std::cout << "\n         preview over " << points.size() << " random valid points: no cache " << TimesText(t_none)
+              << "  H_opt " << TimesText(t_opt) << "  H_rfree " << TimesText(t_rfree) << "\n";
+    std::cout << "Fig. 13: " << (png.empty() ? "no cache curves in the artifact" : "wrote " + png) << "\n";
+  }
+  exit_code = 0;
+}
+
+}  // namespace
+
+void AddInspectCommands(CLI::App& app, int& exit_code) {
+  auto a = std::make_shared<InspectArgs>();
+  auto* inspect = app.add_subcommand("inspect", "show an artifact's seed-001 Table 3 and Fig. 14 rows, plot Fig. 13");
+  inspect->add_option("artifact", a->artifact, "a published artifact (<design>.fabatlas)")->required();
+  inspect->add_flag("--json", a->json, "print JSON");
+  inspect->add_option("--png", a->png, "where to write the Fig. 13 curves (default: ART with .fig13.png)");
+  inspect->add_option("--points", a->points, "random valid points for the preview times (default 200)");
+  inspect->add_option("--seed", a->seed, "seed of the random points (default 1)");
+  inspect->callback([a, &exit_code] { Inspect(*a, exit_code); });
+}
+
+}  // namespace fabatlas::cli
