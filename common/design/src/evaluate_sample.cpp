@@ -232,7 +232,7 @@ SampleResult EvaluateSample(const Design& design, const Point& u, const Evaluate
     r.checks.push_back(geometry_check);
 
     // Lines 10–15: every test w_i.
-    if (geometry_check.passed) {
+    if (geometry_check.passed && options.run_checks) {
       auto checks_start = Clock::now();
       CheckContext context(design, r.solid, scope);
       for (const CheckSpec& spec : design.checks) {
@@ -246,7 +246,7 @@ SampleResult EvaluateSample(const Design& design, const Point& u, const Evaluate
   r.valid = r.failure.empty();
 
   // Lines 16–19: properties of valid samples.
-  if (r.valid) {
+  if (r.valid && options.run_checks) {
     auto props_start = Clock::now();
     for (const std::string& name : design.properties) {
       if (name == "volume") {

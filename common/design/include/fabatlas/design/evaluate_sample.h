@@ -50,6 +50,10 @@ struct SubtreeRecord {
 struct EvaluateOptions {
   SubtreeCache* cache = nullptr;  // optional; subtrees are looked up and offered
   bool keep_solid = true;         // keep the root level set in the result
+  // false: a preview (seed 001 Sec. 7): solve and build the geometry only,
+  // skip the checks and properties (the sample is then valid iff it has
+  // geometry).
+  bool run_checks = true;
 };
 
 struct SampleResult {

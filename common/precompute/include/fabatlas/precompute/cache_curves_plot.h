@@ -1,0 +1,27 @@
+// fabatlas/precompute/cache_curves_plot.h — seed 001 Fig. 13 as a PNG: mean
+// (Eq. 3) and worst preview time against cache size for the cache
+// strategies, from the artifact's cache_curves table (docs/artifact.md).
+#pragma once
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "fabatlas/storage/artifact.h"
+
+namespace fabatlas::precompute {
+
+struct CacheCurvesPlotOptions {
+  int width = 900, height = 560;  // pixels
+  std::string title;              // e.g. the design name
+};
+
+// x: cache size in MiB, y: preview time in seconds; per strategy a solid
+// line for the worst time and a lighter line for the mean (NAIVE red,
+// OPT-AVE purple, OPT-MAX blue, as in Fig. 13), with a legend and axis
+// ticks. Written atomically. Throws InputError when `points` is empty or the
+// file cannot be written.
+void WriteCacheCurvesPng(const std::vector<storage::CacheCurvePoint>& points, const std::filesystem::path& path,
+                         const CacheCurvesPlotOptions& options = {});
+
+}  // namespace fabatlas::precompute

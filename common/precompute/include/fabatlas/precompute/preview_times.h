@@ -1,0 +1,52 @@
+// fabatlas/precompute/preview_times.h — measured preview times of a design
+// with and without a geometry cache (seed 001 Sec. 8 "Performance
+// Evaluation", Fig. 14: "actual time to compute preview across 200 design
+// points ... randomly drawn from the valid region").
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "fabatlas/design/design.h"
+#include "fabatlas/design/subtree_cache.h"
+#include "fabatlas/sampling/form.h"
+
+namespace fabatlas::precompute {
+
+// `count` points drawn uniformly from the form's estimated valid region (the
+// all-valid k-d leaves, seed 001 Sec. 7.1) by rejection from the bounded
+// space with a fixed seed; discrete dimensions draw whole values. Returns
+// fewer points when 100 * count draws find fewer (a tiny valid region), and
+// none when the region is empty.
+std::vector<std::vector<double>> RandomValidPoints(const sampling::Form& form, int count, std::uint64_t seed = 1);
+
+// A read-only subtree cache: Find() serves the loaded entries, Offer()
+// ignores what evaluation offers, so every preview sees the same cache H.
+class FrozenSubtreeCache final : public design::SubtreeCache {
+ public:
+  void Add(const std::string& key, geometry::Solid solid) { entries_[key] = std::move(solid); }
+  std::size_t size() const { return entries_.size(); }
+  std::optional<geometry::Solid> Find(const std::string& key) override;
+  void Offer(const std::string&, const geometry::Solid&, double) override {}
+
+ private:
+  std::map<std::string, geometry::Solid> entries_;
+};
+
+struct PreviewTimes {
+  std::vector<double> seconds;  // wall seconds per point (constraint solve + geometry)
+  double mean_seconds = 0.0;
+  double worst_seconds = 0.0;
+  int failures = 0;             // points whose geometry failed (should be 0 in the valid region)
+};
+
+// Evaluates the design at every point (parameter values in the design's
+// exposed order) as a preview: constraint solve and geometry, no checks
+// (design::EvaluateOptions::run_checks = false), through `cache` (nullptr =
+// no cache). Times are wall seconds of each evaluation.
+PreviewTimes MeasurePreviewTimes(const design::Design& design, const std::vector<std::vector<double>>& points,
+                                 design::SubtreeCache* cache);
+
+}  // namespace fabatlas::precompute

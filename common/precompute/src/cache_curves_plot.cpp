@@ -1,0 +1,159 @@
+// Fig. 13 curves as a PNG (see cache_curves_plot.h), drawn with
+// stb_easy_font text and written with stb_image_write.
+#include "fabatlas/precompute/cache_curves_plot.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <map>
+
+#define STB_IMAGE_WRITE_STATIC
+#define STB_IMAGE_WRITE_IMPLEMENTATION
+#include <stb/stb_image_write.h>
+#include <stb/stb_easy_font.h>
+
+#include "fabatlas/error.h"
+#include "fabatlas/precompute/form_outputs.h"
+
+namespace fabatlas::precompute {
+
+namespace {
+
+struct Canvas {
+  int w, h;
+  std::vector<unsigned char> rgb;
+  Canvas(int w_, int h_) : w(w_), h(h_), rgb(static_cast<std::size_t>(w_) * h_ * 3, 255) {}
+  void Set(int x, int y, unsigned c) {
+    if (x < 0 || y < 0 || x >= w || y >= h) return;
+    unsigned char* p = &rgb[(static_cast<std::size_t>(y) * w + x) * 3];
+    p[0] = (c >> 16) & 255;
+    p[1] = (c >> 8) & 255;
+    p[2] = c & 255;
+  }
+  void Rect(int x0, int y0, int x1, int y1, unsigned c) {
+    for (int y = y0; y < y1; ++y)
+      for (int x = x0; x < x1; ++x) Set(x, y, c);
+  }
+  // Thick line (Bresenham with a square pen); dashed when dash > 0.
+  void Line(double x0, double y0, double x1, double y1, unsigned c, int pen, int dash = 0) {
+    const double len = std::hypot(x1 - x0, y1 - y0);
+    const int steps = std::max(1, static_cast<int>(std::ceil(len)));
+    for (int i = 0; i <= steps; ++i) {
+      if (dash > 0 && (i / dash) % 2 == 1) continue;
+      const double t = static_cast<double>(i) / steps;
+      const int x = static_cast<int>(std::lround(x0 + t * (x1 - x0)));
+      const int y = static_cast<int>(std::lround(y0 + t * (y1 - y0)));
+      Rect(x - pen / 2, y - pen / 2, x - pen / 2 + pen, y - pen / 2 + pen, c);
+    }
+  }
+  // Text with stb_easy_font (about 6 px per character at scale 1).
+  void Text(int x, int y, const std::string& text, unsigned c, int scale = 2) {
+    static char buffer[99999];
+    const int quads = stb_easy_font_print(0, 0, const_cast<char*>(text.c_str()), nullptr, buffer, sizeof buffer);
+    for (int q = 0; q < quads; ++q) {
+      const float* v = reinterpret_cast<const float*>(buffer + q * 64);
+      // Vertex k of the quad at v + 4k floats (x, y, z, colour).
+      const float qx0 = v[0], qy0 = v[1], qx1 = v[8], qy1 = v[9];
+      Rect(x + static_cast<int>(qx0 * scale), y + static_cast<int>(qy0 * scale), x + static_cast<int>(qx1 * scale),
+           y + static_cast<int>(qy1 * scale), c);
+    }
+  }
+  static int TextWidth(const std::string& text, int scale = 2) {
+    return stb_easy_font_width(const_cast<char*>(text.c_str())) * scale;
+  }
+};
+
+unsigned StrategyColour(const std::string& s, bool mean) {
+  if (s == "naive" || s == "NAIVE") return mean ? 0xF4A6A6 : 0xC0392B;
+  if (s == "opt_ave" || s == "OPT-AVE") return mean ? 0xC9A7E0 : 0x7D3C98;
+  if (s == "opt_max" || s == "OPT-MAX") return mean ? 0x9CC9F0 : 0x1F5FA8;
+  return mean ? 0xBBBBBB : 0x444444;
+}
+
+std::string Tick(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.3g", v);
+  return buf;
+}
+
+// A "nice" step (1, 2 or 5 times a power of ten) giving about `ticks` ticks.
+double NiceStep(double range, int ticks) {
+  if (!(range > 0)) return 1.0;
+  const double raw = range / ticks;
+  const double p = std::pow(10.0, std::floor(std::log10(raw)));
+  for (double m : {1.0, 2.0, 5.0, 10.0})
+    if (m * p >= raw) return m * p;
+  return 10 * p;
+}
+
+}  // namespace
+
+void WriteCacheCurvesPng(const std::vector<storage::CacheCurvePoint>& points, const std::filesystem::path& path,
+                         const CacheCurvesPlotOptions& options) {
+  if (points.empty()) throw InputError(path.string() + ": no cache curves to plot");
+  std::map<std::string, std::vector<storage::CacheCurvePoint>> curves;
+  for (const auto& p : points) curves[p.strategy].push_back(p);
+  double max_mib = 0, max_s = 0;
+  for (auto& [name, c] : curves) {
+    std::sort(c.begin(), c.end(), [](const auto& a, const auto& b) { return a.step < b.step; });
+    for (const auto& p : c) {
+      max_mib = std::max(max_mib, static_cast<double>(p.bytes) / (1 << 20));
+      max_s = std::max({max_s, p.worst_seconds, p.mean_seconds});
+    }
+  }
+  if (!(max_mib > 0)) max_mib = 1;
+  if (!(max_s > 0)) max_s = 1;
+  const double x_step = NiceStep(max_mib, 6), y_step = NiceStep(max_s, 6);
+  max_mib = std::ceil(max_mib / x_step) * x_step;
+  max_s = std::ceil(max_s / y_step) * y_step;
+
+  Canvas img(options.width, options.height);
+  const int left = 90, right = options.width - 220, top = 50, bottom = options.height - 70;
+  auto X = [&](double mib) { return left + (right - left) * mib / max_mib; };
+  auto Y = [&](double s) { return bottom - (bottom - top) * s / max_s; };
+  for (double v = 0; v <= max_mib + 1e-9; v += x_step) {
+    img.Line(X(v), top, X(v), bottom, 0xEEEEEE, 1);
+    img.Text(static_cast<int>(X(v)) - Canvas::TextWidth(Tick(v)) / 2, bottom + 10, Tick(v), 0x333333);
+  }
+  for (double v = 0; v <= max_s + 1e-9; v += y_step) {
+    img.Line(left, Y(v), right, Y(v), 0xEEEEEE, 1);
+    img.Text(left - 10 - Canvas::TextWidth(Tick(v)), static_cast<int>(Y(v)) - 6, Tick(v), 0x333333);
+  }
+  img.Line(left, top, left, bottom, 0x000000, 2);
+  img.Line(left, bottom, right, bottom, 0x000000, 2);
+  img.Text(left + (right - left) / 2 - 100, bottom + 40, "cache size (MiB)", 0x000000);
+  img.Text(10, top - 30, "preview time (s)", 0x000000);
+  const std::string title = (options.title.empty() ? std::string() : options.title + ": ") +
+                            "mean and worst preview time vs cache size (seed 001 Fig. 13)";
+  img.Text(left, 12, title, 0x000000);
+
+  int legend_y = top + 10;
+  for (const auto& [name, c] : curves) {
+    for (bool mean : {false, true}) {
+      const unsigned colour = StrategyColour(name, mean);
+      for (std::size_t i = 1; i < c.size(); ++i) {
+        const double a = mean ? c[i - 1].mean_seconds : c[i - 1].worst_seconds;
+        const double b = mean ? c[i].mean_seconds : c[i].worst_seconds;
+        const double xa = static_cast<double>(c[i - 1].bytes) / (1 << 20), xb = static_cast<double>(c[i].bytes) / (1 << 20);
+        img.Line(X(xa), Y(a), X(xb), Y(b), colour, 3, mean ? 6 : 0);
+      }
+      if (c.size() == 1) {
+        const double v = mean ? c[0].mean_seconds : c[0].worst_seconds;
+        img.Rect(static_cast<int>(X(0)) - 3, static_cast<int>(Y(v)) - 3, static_cast<int>(X(0)) + 4,
+                 static_cast<int>(Y(v)) + 4, colour);
+      }
+      img.Line(right + 20, legend_y + 6, right + 50, legend_y + 6, colour, 3, mean ? 6 : 0);
+      img.Text(right + 58, legend_y, name + (mean ? " mean" : " worst"), 0x000000);
+      legend_y += 24;
+    }
+  }
+
+  int size = 0;
+  unsigned char* png = stbi_write_png_to_mem(img.rgb.data(), img.w * 3, img.w, img.h, 3, &size);
+  if (!png) throw InputError(path.string() + ": cannot encode the PNG");
+  std::string bytes(reinterpret_cast<const char*>(png), static_cast<std::size_t>(size));
+  STBIW_FREE(png);
+  WriteFileAtomically(path, bytes);
+}
+
+}  // namespace fabatlas::precompute

@@ -1,0 +1,180 @@
+// The artifact end to end, as a user runs it: `fabatlas run` publishes
+// <design>.fabatlas, byte-identical for 1 and 2 workers and for the in-process
+// `fabatlas sample`; `fabatlas inspect` reports its Table 3 and Fig. 14 rows;
+// damaged files give one-line errors and exit status 2; the checked-in
+// version-1 artifact keeps reading. The design is the closed-form tube
+// (valid iff wall >= 1 + 0.01 radius^2 and radius - wall >= 2), so every
+// sample's validity is checked against the formula, not against a recording.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <array>
+#include <cstdio>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <random>
+
+#include "fabatlas/error.h"
+#include "fabatlas/sampling/form.h"
+#include "fabatlas/storage/artifact.h"
+#include "fabatlas/testing/paths.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+using fabatlas::testing::BinDir;
+using fabatlas::testing::FreshTempDir;
+using fabatlas::testing::SourceDir;
+
+struct CommandRun {
+  int status = -1;
+  std::string out, err;
+};
+
+CommandRun Fabatlas(const std::string& args) {
+  static int counter = 0;
+  const fs::path err_path = fs::temp_directory_path() /
+                            ("fabatlas-artifact-err-" + std::to_string(::getpid()) + "-" + std::to_string(counter++));
+  const std::string cmd = (BinDir() / "fabatlas").string() + " " + args + " 2>" + err_path.string();
+  CommandRun r;
+  FILE* pipe = ::popen(cmd.c_str(), "r");
+  std::array<char, 4096> buf;
+  std::size_t n;
+  while ((n = std::fread(buf.data(), 1, buf.size(), pipe)) > 0) r.out.append(buf.data(), n);
+  const int status = ::pclose(pipe);
+  r.status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  std::ifstream e(err_path);
+  r.err.assign(std::istreambuf_iterator<char>(e), {});
+  fs::remove(err_path);
+  return r;
+}
+
+std::string Bytes(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+fs::path Job() { return SourceDir() / "tests/cluster/data/tube_small.yaml"; }
+
+bool TubeValid(const std::vector<double>& u) {
+  const double radius = u[0], wall = u[1];
+  return wall >= 1 + 0.01 * radius * radius && radius - wall >= 2;
+}
+
+// Every sample's validity agrees with the closed form (up to the constraint
+// solver's tolerance at the boundary: samples within 1e-6 of it are skipped).
+void ExpectTubeForm(const fabatlas::sampling::Form& form) {
+  int checked = 0;
+  for (const auto& s : form.samples) {
+    const double r = s.u[0], w = s.u[1];
+    const double margin = std::min(std::abs(w - (1 + 0.01 * r * r)), std::abs(r - w - 2));
+    if (margin < 1e-6) continue;
+    EXPECT_EQ(s.outcome.valid, TubeValid(s.u)) << "radius " << r << " wall " << w;
+    ++checked;
+  }
+  EXPECT_GT(checked, 20);
+}
+
+TEST(ArtifactCli, RunPublishesTheSameBytesForOneAndTwoWorkersAndInProcess) {
+  const fs::path dir = FreshTempDir("artifact-cli");
+  CommandRun one = Fabatlas("run " + Job().string() + " --workers 1 --quiet --out " + (dir / "one").string());
+  ASSERT_EQ(one.status, 0) << one.err;
+  EXPECT_NE(one.out.find("tube_wall_2d.fabatlas"), std::string::npos) << one.out;
+  CommandRun two = Fabatlas("run " + Job().string() + " --workers 2 --quiet --out " + (dir / "two").string());
+  ASSERT_EQ(two.status, 0) << two.err;
+  CommandRun local = Fabatlas("sample " + Job().string() + " --out " + (dir / "local").string());
+  ASSERT_EQ(local.status, 0) << local.err;
+  const std::string a = Bytes(dir / "one/tube_wall_2d.fabatlas");
+  ASSERT_GT(a.size(), 4096u);
+  EXPECT_TRUE(a == Bytes(dir / "two/tube_wall_2d.fabatlas")) << "1 vs 2 workers";
+  EXPECT_TRUE(a == Bytes(dir / "local/tube_wall_2d.fabatlas")) << "cluster vs in-process";
+
+  const auto artifact = fabatlas::storage::ReadArtifact(dir / "one/tube_wall_2d.fabatlas");
+  ExpectTubeForm(artifact.form);
+  EXPECT_EQ(artifact.manifest.design_name, "tube_wall_2d");
+  EXPECT_EQ(artifact.bundle.job_file_name, "tube_small.yaml");
+  // The form inside is the form.json published beside it.
+  std::ifstream form_json(dir / "one/form.json");
+  const auto j = nlohmann::json::parse(form_json);
+  EXPECT_EQ(j.at("samples").size(), artifact.form.samples.size());
+}
+
+TEST(ArtifactCli, InspectPrintsTable3AndFig14Rows) {
+  const fs::path dir = FreshTempDir("artifact-cli");
+  CommandRun run = Fabatlas("sample " + Job().string() + " --out " + dir.string());
+  ASSERT_EQ(run.status, 0) << run.err;
+  const fs::path art = dir / "tube_wall_2d.fabatlas";
+  CommandRun r = Fabatlas("inspect " + art.string() + " --json --points 20");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  std::ifstream stats_in(dir / "statistics.json");
+  const auto stats = nlohmann::json::parse(stats_in);
+  // Table 3 agrees with what the sampler reported for the same run.
+  EXPECT_EQ(j["table3"]["samples"], stats["samples"]);
+  EXPECT_DOUBLE_EQ(j["table3"]["valid_volume_percent"].get<double>(), stats["valid_volume_percent"].get<double>());
+  EXPECT_DOUBLE_EQ(j["table3"]["cpu_seconds"].get<double>(), stats["evaluator_cpu_seconds"].get<double>());
+  EXPECT_EQ(j["table3"]["failure_shares"], stats["failure_shares"]);
+  // Fig. 14: 20 points of the valid region, all previewed with geometry.
+  EXPECT_EQ(j["fig14"]["points"], 20);
+  ASSERT_TRUE(j["fig14"]["t_nocache"].is_object());
+  EXPECT_EQ(j["fig14"]["t_nocache"]["failures"], 0);
+  EXPECT_GT(j["fig14"]["t_nocache"]["mean_seconds"].get<double>(), 0.0);
+  EXPECT_GE(j["fig14"]["t_nocache"]["worst_seconds"].get<double>(),
+            j["fig14"]["t_nocache"]["mean_seconds"].get<double>());
+
+  CommandRun text = Fabatlas("inspect " + art.string() + " --points 5");
+  ASSERT_EQ(text.status, 0) << text.err;
+  EXPECT_NE(text.out.find("Table 3: tube_wall_2d  |U|=2  samples " + stats["samples"].dump()), std::string::npos)
+      << text.out;
+  EXPECT_NE(text.out.find("Fig. 14:"), std::string::npos) << text.out;
+}
+
+TEST(ArtifactCli, DamagedArtifactsAreOneLineErrorsWithStatus2) {
+  const fs::path dir = FreshTempDir("artifact-cli");
+  CommandRun run = Fabatlas("sample " + Job().string() + " --out " + dir.string());
+  ASSERT_EQ(run.status, 0) << run.err;
+  const std::string bytes = Bytes(dir / "tube_wall_2d.fabatlas");
+  std::ofstream(dir / "cut.fabatlas", std::ios::binary) << bytes.substr(0, bytes.size() - 4096);
+  std::ofstream(dir / "text.fabatlas") << "hello\n";
+  for (const auto& [file, what] : std::vector<std::pair<std::string, std::string>>{
+           {"cut.fabatlas", "truncated"}, {"text.fabatlas", "not a fabatlas artifact"}, {"none.fabatlas", "no such file"}}) {
+    CommandRun r = Fabatlas("inspect " + (dir / file).string());
+    EXPECT_EQ(r.status, 2) << file;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+    EXPECT_NE(r.err.find((dir / file).string() + ": "), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find(what), std::string::npos) << r.err;
+  }
+}
+
+// tests/data/artifact_v1/ holds an artifact written by schema version 1 from
+// a real `fabatlas run` (command in its README). Later readers must read it.
+TEST(ArtifactCli, CheckedInVersion1ArtifactStaysReadable) {
+  const fs::path v1 = SourceDir() / "tests/data/artifact_v1/tube_wall_2d.fabatlas";
+  const auto a = fabatlas::storage::ReadArtifact(v1);
+  EXPECT_EQ(a.manifest.schema_version, 1);
+  EXPECT_EQ(a.manifest.design_name, "tube_wall_2d");
+  EXPECT_EQ(a.manifest.statistics.samples, static_cast<std::int64_t>(a.form.samples.size()));
+  ExpectTubeForm(a.form);
+  // The stored statistics are those of the stored form.
+  const auto recomputed = fabatlas::storage::StatisticsOf(a.form);
+  EXPECT_EQ(recomputed.valid_samples, a.manifest.statistics.valid_samples);
+  EXPECT_DOUBLE_EQ(recomputed.valid_volume_percent, a.manifest.statistics.valid_volume_percent);
+  // The valid region is convex (the epigraph of a parabola cut by a half
+  // plane), so a leaf box whose corners are all valid lies inside it: every
+  // point of the estimated valid region must be truly valid.
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> radius(5, 30), wall(0.5, 12);
+  int inside = 0;
+  for (int i = 0; i < 2000; ++i) {
+    const std::vector<double> u{radius(rng), wall(rng)};
+    if (!fabatlas::sampling::InEstimatedValidRegion(a.form, u)) continue;
+    ++inside;
+    EXPECT_TRUE(TubeValid(u)) << u[0] << " " << u[1];
+  }
+  EXPECT_GT(inside, 100);
+  CommandRun r = Fabatlas("inspect " + v1.string() + " --points 5 --json --png " +
+                          (FreshTempDir("artifact-cli") / "f.png").string());
+  EXPECT_EQ(r.status, 0) << r.err;
+}
+
+}  // namespace
