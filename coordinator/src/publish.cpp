@@ -2,6 +2,14 @@
 #include "fabatlas/coordinator/publish.h"
 
 #include <cctype>
+#include <limits>
+#include <map>
+#include <set>
+
+#include "fabatlas/cache/cost_model.h"
+#include "fabatlas/cache/dependency_graph.h"
+#include "fabatlas/geometry/solid.h"
+#include "fabatlas/storage/glb.h"
 
 #include "fabatlas/protocol/job_bundle.h"
 #include "fabatlas/protocol/tasks.h"
@@ -42,7 +50,99 @@ storage::Artifact ArtifactOf(const v1::JobBundle& bundle, const std::string& des
   m.max_samples = job.sampling.max_samples;
   m.statistics = storage::StatisticsOf(form);
   a.bundle = PlainBundle(bundle);
+  AddStartingPoints(a);
   return a;
+}
+
+CacheAssemblySummary AddCache(storage::Artifact& artifact, const CacheAssembly& a) {
+  CacheAssemblySummary summary;
+  // Model costs (docs/cache.md): op, output bytes, input bytes.
+  std::map<std::string, std::int64_t> bytes_of;
+  std::map<std::string, std::string> op_of;
+  for (const auto& s : a.subtrees) {
+    bytes_of[s.key] = std::max(bytes_of[s.key], s.bytes);
+    op_of.emplace(s.key, s.op);
+  }
+  std::vector<cache::SubtreeNode> nodes;
+  nodes.reserve(a.subtrees.size());
+  for (const auto& s : a.subtrees) {
+    std::uint64_t input = 0;
+    for (const auto& c : s.children) input += static_cast<std::uint64_t>(bytes_of[c]);
+    nodes.push_back({s.key, s.children,
+                     cache::ModelSubtreeSeconds(s.op, static_cast<std::uint64_t>(bytes_of[s.key]), input),
+                     static_cast<std::uint64_t>(bytes_of[s.key]), s.stored});
+  }
+  std::vector<cache::SampleTree> samples;
+  for (const auto& r : a.sample_roots) samples.push_back({r});
+  const cache::DependencyGraph graph = cache::BuildDependencyGraph(nodes, samples);
+
+  cache::CacheOptions options = a.options;
+  options.record_curve = true;
+  const cache::CacheReport report = cache::PlanCache(graph, options);
+  cache::CacheOptions rfree_options = options;
+  rfree_options.strategy = cache::Strategy::kOptMax;
+  rfree_options.budget_bytes = std::numeric_limits<std::uint64_t>::max();
+  const cache::CachePlan rfree = cache::OptimizeCache(graph, rfree_options);
+
+  storage::CacheSummary& m = artifact.manifest.cache;
+  m.strategy = cache::StrategyName(options.strategy);
+  m.budget_bytes = options.budget_bytes == std::numeric_limits<std::uint64_t>::max()
+                       ? 0
+                       : static_cast<std::int64_t>(options.budget_bytes);
+  m.threshold_seconds = options.min_seconds;
+  m.cost_model = "cache::ModelSubtreeSeconds (docs/cache.md)";
+  m.top_entries = report.top.entries;
+  m.top_bytes = static_cast<std::int64_t>(report.top.bytes);
+  m.opt_entries = report.chosen.cost.entries;
+  m.opt_bytes = static_cast<std::int64_t>(report.chosen.cost.bytes);
+  m.rfree_entries = rfree.cost.entries;
+  m.rfree_bytes = static_cast<std::int64_t>(rfree.cost.bytes);
+
+  artifact.cache_curves.clear();
+  for (auto strategy : {cache::Strategy::kNaive, cache::Strategy::kOptAve, cache::Strategy::kOptMax}) {
+    cache::CacheOptions o = options;
+    o.strategy = strategy;
+    const cache::CachePlan plan = cache::OptimizeCache(graph, o);
+    for (std::size_t step = 0; step < plan.curve.size(); ++step) {
+      const auto& p = plan.curve[step];
+      artifact.cache_curves.push_back({cache::StrategyName(strategy), static_cast<std::int64_t>(step), p.entries,
+                                       static_cast<std::int64_t>(p.bytes), p.mean_seconds, p.worst_seconds});
+    }
+  }
+
+  artifact.cache.clear();
+  for (std::int32_t id = 0; id < static_cast<std::int32_t>(graph.node_count()); ++id) {
+    const bool in_opt = report.chosen.cache[id] != 0, in_rfree = rfree.cache[id] != 0;
+    if (!in_opt && !in_rfree) continue;
+    storage::CacheEntry e;
+    e.key = graph.keys[id];
+    e.op = op_of[e.key];
+    for (std::int64_t c = graph.child_begin[id]; c < graph.child_begin[id + 1]; ++c)
+      e.children.push_back(graph.keys[graph.child_ids[c]]);
+    e.bytes = static_cast<std::int64_t>(graph.bytes[id]);
+    e.cost_seconds = graph.seconds[id];
+    e.in_opt = in_opt;
+    e.in_rfree = in_rfree;
+    try {
+      e.grid = a.grid_of ? a.grid_of(e.key) : std::string();
+    } catch (const std::exception&) {
+      e.grid.clear();
+    }
+    if (e.grid.empty()) {
+      ++summary.missing;
+      continue;
+    }
+    e.glb = storage::MeshToGlb(geometry::Solid::Deserialize(e.grid).ToMesh());
+    artifact.cache.push_back(std::move(e));
+    ++summary.entries;
+  }
+  return summary;
+}
+
+void AddStartingPoints(storage::Artifact& artifact, const cache::StartingPointOptions& options) {
+  artifact.starting_points.clear();
+  for (const auto& p : cache::ChooseStartingPoints(artifact.form, options))
+    artifact.starting_points.push_back({p.sample_id, p.component, p.u});
 }
 
 std::string ArtifactFileName(const std::string& design_name) {

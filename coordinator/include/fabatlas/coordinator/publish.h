@@ -2,12 +2,18 @@
 // (DESIGN.md "Artifact", docs/artifact.md): what the coordinator writes as
 // OUT/<design>.fabatlas beside form.json when a job's sampling finishes.
 //
-// The artifact is a pure function of the job bundle and the sampled form (and
-// later the chosen cache), never of measured times, worker count or faults, so
-// the same job always publishes the same bytes.
+// The artifact is a pure function of the job bundle, the sampled form and the
+// subtrees the samples evaluated (costed by a deterministic model), never of
+// measured times, worker count or faults, so the same job always publishes
+// the same bytes.
 #pragma once
 
+#include <functional>
 #include <string>
+#include <vector>
+
+#include "fabatlas/cache/optimize_cache.h"
+#include "fabatlas/cache/starting_points.h"
 
 #include "fabatlas/sampling/adaptive_sampler.h"
 #include "fabatlas/sampling/job_file.h"
@@ -23,9 +29,50 @@ v1::JobBundle ProtoBundle(const storage::JobBundle& bundle);
 
 // The artifact of a job whose sampling finished: manifest (design name and
 // hash, code version, sampling parameters, statistics), the form and the
-// bundle. No cache entries yet (docs/artifact.md: cache.strategy is empty).
+// bundle, and the starting points (AddStartingPoints). No cache: AddCache
+// adds it when the samples' subtrees are known.
 storage::Artifact ArtifactOf(const v1::JobBundle& bundle, const std::string& design_name,
                              const sampling::JobFile& job, const sampling::Form& form);
+
+// One subtree root evaluation reported for a sample (design::SubtreeRecord /
+// storage::SubtreeUse reduced to what the cache plan needs).
+struct CacheSubtree {
+  std::string key;                    // (τ, ρ) cache key
+  std::string op;                     // the root's operation
+  std::vector<std::string> children;  // child keys, in tree order
+  std::int64_t bytes = 0;             // level-set memory
+  bool stored = true;                 // its geometry is available through grid_of
+};
+
+struct CacheAssembly {
+  std::vector<CacheSubtree> subtrees;      // any order, repeated keys allowed
+  std::vector<std::string> sample_roots;   // root subtree key of every valid sample
+  // Strategy, memory budget and threshold (docs/cache.md); record_curve is
+  // forced on.
+  cache::CacheOptions options;
+  // Serialized geometry::Solid of a stored subtree (the blob). Throws or
+  // returns "" when missing (then the entry is left out and counted).
+  std::function<std::string(const std::string& key)> grid_of;
+};
+
+struct CacheAssemblySummary {
+  std::int64_t entries = 0;  // cache entries written (H_opt ∪ H_rfree)
+  std::int64_t missing = 0;  // chosen subtrees whose geometry was missing
+};
+
+// Seed 001 Sec. 6 on the artifact: builds the dependency graph with the
+// deterministic model costs of docs/cache.md (cache::ModelSubtreeSeconds of
+// the op, the subtree's bytes and its children's bytes; never measured
+// times, so the artifact stays byte-identical), plans H_opt with
+// options.strategy under the budget, H_rfree (OPT-MAX, no budget) and H_TOP,
+// records the Fig. 13 curves of NAIVE, OPT-AVE and OPT-MAX, and stores every
+// subtree of H_opt ∪ H_rfree as an entry (grid + glTF binary mesh) with its
+// membership flags. Fills manifest.cache.
+CacheAssemblySummary AddCache(storage::Artifact& artifact, const CacheAssembly& assembly);
+
+// Seed 001 Sec. 7.4 starting points of the artifact's form
+// (cache::ChooseStartingPoints).
+void AddStartingPoints(storage::Artifact& artifact, const cache::StartingPointOptions& options = {});
 
 // "<design name>.fabatlas", with characters other than [A-Za-z0-9._-] as '_'.
 std::string ArtifactFileName(const std::string& design_name);

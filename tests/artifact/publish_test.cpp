@@ -1,0 +1,136 @@
+// The cache part of the artifact (coordinator/publish.h AddCache): a design
+// with two decoupled pieces, like seed 001's chess set (Fig. 8), whose
+// samples share the pieces' subtrees. Real level sets, real plan, real file.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+#include <set>
+
+#include "fabatlas/coordinator/publish.h"
+#include "fabatlas/geometry/solid.h"
+#include "fabatlas/sha256.h"
+#include "fabatlas/storage/artifact.h"
+#include "fabatlas/storage/glb.h"
+#include "fabatlas/testing/paths.h"
+
+namespace fabatlas::coordinator {
+namespace {
+
+namespace fs = std::filesystem;
+
+// 3 x 3 samples: piece A_i (a sphere of radius 3 + i), piece B_j (a box of
+// edge 4 + j), root_ij = union(A_i, B_j translated). Every A_i and B_j is
+// shared by three samples; every root is used once.
+struct ChessLike {
+  std::map<std::string, std::string> grids;
+  CacheAssembly assembly;
+  std::vector<std::string> pieces, roots;
+  std::map<std::string, double> sphere_radius;  // key -> radius of the A pieces
+
+  ChessLike() {
+    geometry::GridSpec g;
+    g.voxel_size = 0.5;
+    std::vector<geometry::Solid> a, b;
+    std::vector<std::string> ka, kb;
+    for (int i = 0; i < 3; ++i) {
+      a.push_back(geometry::Sphere(g, 3.0 + i));
+      ka.push_back(Add(a.back(), "sphere", {}));
+      sphere_radius[ka.back()] = 3.0 + i;
+      b.push_back(geometry::Translate(geometry::Box(g, {4.0 + i, 4.0 + i, 4.0 + i}), {12, 0, 0}));
+      kb.push_back(Add(b.back(), "box", {}));
+    }
+    pieces = ka;
+    pieces.insert(pieces.end(), kb.begin(), kb.end());
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) {
+        // Each sample reports its whole post-order list, as workers do.
+        assembly.subtrees.push_back(Record(ka[i], a[i], "sphere", {}));
+        assembly.subtrees.push_back(Record(kb[j], b[j], "box", {}));
+        roots.push_back(Add(geometry::Union(a[i], b[j]), "union", {ka[i], kb[j]}));
+        assembly.sample_roots.push_back(roots.back());
+      }
+    assembly.options.strategy = cache::Strategy::kOptMax;
+    assembly.options.min_seconds = 0.0;
+    assembly.grid_of = [this](const std::string& key) { return grids.at(key); };
+  }
+
+  CacheSubtree Record(const std::string& key, const geometry::Solid& s, const std::string& op,
+                      std::vector<std::string> children) {
+    return {key, op, std::move(children), static_cast<std::int64_t>(s.MemoryBytes()), true};
+  }
+  std::string Add(const geometry::Solid& s, const std::string& op, std::vector<std::string> children) {
+    std::string grid = s.Serialize();
+    std::string key = Sha256Hex(op + grid);
+    grids[key] = grid;
+    if (op == "union") assembly.subtrees.push_back(Record(key, s, op, std::move(children)));
+    return key;
+  }
+};
+
+TEST(PublishCache, ChessLikeDesignPlansHoptHrfreeHtopAndTheFileHoldsTheCache) {
+  ChessLike chess;
+  storage::Artifact art = storage::ReadArtifact(testing::SourceDir() / "tests/data/artifact_v1/tube_wall_2d.fabatlas");
+  const CacheAssemblySummary summary = AddCache(art, chess.assembly);
+  const auto& m = art.manifest.cache;
+  EXPECT_EQ(m.strategy, "opt_max");
+  EXPECT_EQ(summary.missing, 0);
+  // H_TOP: the 9 roots. H_rfree: OPT-MAX to the end. Which subtrees it keeps
+  // depends on the model costs (docs/cache.md): when a union costs more than
+  // the threshold it is cached and its pieces become redundant (seed 001's
+  // shoe: H_rfree ~ H_TOP); when only the pieces do, H_rfree is the 6 pieces.
+  // Either way it is never larger than H_TOP.
+  EXPECT_EQ(m.top_entries, 9);
+  EXPECT_GT(m.rfree_entries, 0);
+  EXPECT_LE(m.rfree_bytes, m.top_bytes);
+  EXPECT_EQ(m.opt_entries, m.rfree_entries);  // no budget: the chosen cache is H_rfree
+  // Curves: three strategies, each from the empty cache, mean never above worst.
+  std::set<std::string> strategies;
+  for (const auto& p : art.cache_curves) {
+    strategies.insert(p.strategy);
+    EXPECT_LE(p.mean_seconds, p.worst_seconds + 1e-12);
+    if (p.step == 0) EXPECT_EQ(p.entries, 0);
+  }
+  EXPECT_EQ(strategies, (std::set<std::string>{"naive", "opt_ave", "opt_max"}));
+
+  const fs::path path = testing::FreshTempDir("publish") / "chess.fabatlas";
+  storage::WriteArtifact(art, path);
+  const storage::Artifact back = storage::ReadArtifact(path);
+  ASSERT_EQ(back.cache.size(), static_cast<std::size_t>(summary.entries));
+  for (const auto& e : back.cache) {
+    EXPECT_EQ(e.grid, chess.grids.at(e.key));
+    // The glTF mesh is the level set's surface: for a sphere piece, every
+    // vertex lies within a voxel of the radius.
+    const mesh::TriangleMesh mesh = storage::GlbToMesh(e.glb);
+    EXPECT_GT(mesh.triangles.size(), 100u);
+    auto it = chess.sphere_radius.find(e.key);
+    if (it == chess.sphere_radius.end()) continue;
+    for (const auto& v : mesh.vertices)
+      EXPECT_NEAR(std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]), it->second, 0.5);
+  }
+  // A budget below H_rfree chooses less, and only entries that fit.
+  ChessLike tight;
+  tight.assembly.options.budget_bytes = static_cast<std::uint64_t>(m.rfree_bytes / 2);
+  storage::Artifact small = art;
+  AddCache(small, tight.assembly);
+  EXPECT_LE(small.manifest.cache.opt_bytes, m.rfree_bytes / 2);
+  EXPECT_EQ(small.manifest.cache.rfree_bytes, m.rfree_bytes);
+  std::int64_t opt_bytes = 0;
+  for (const auto& e : small.cache)
+    if (e.in_opt) opt_bytes += e.bytes;
+  EXPECT_EQ(opt_bytes, small.manifest.cache.opt_bytes);
+}
+
+TEST(PublishCache, StartingPointsAreValidSamplesOfTheForm) {
+  storage::Artifact art = storage::ReadArtifact(testing::SourceDir() / "tests/data/artifact_v1/tube_wall_2d.fabatlas");
+  AddStartingPoints(art);
+  ASSERT_FALSE(art.starting_points.empty());
+  for (const auto& p : art.starting_points) {
+    ASSERT_GE(p.sample_id, 0);
+    EXPECT_TRUE(art.form.samples[p.sample_id].outcome.valid);
+    EXPECT_EQ(p.u, art.form.samples[p.sample_id].u);
+  }
+}
+
+}  // namespace
+}  // namespace fabatlas::coordinator
