@@ -157,10 +157,13 @@ ExactCacheSummary SolveExactCache(const DependencyGraph& g, const ExactCacheOpti
   }
   if (o.budget_bytes != std::numeric_limits<std::uint64_t>::max() && !h_col.empty()) {
     Row row;
-    for (auto [v, col] : h_col) row.Add(col, static_cast<double>(g.bytes[static_cast<std::size_t>(v)]));
-    AddRow(lp, row, GLP_UP, 0.0, static_cast<double>(o.budget_bytes));
+    // In MiB, so the budget row is on the scale of the others.
+    const double mib = 1.0 / 1048576.0;
+    for (auto [v, col] : h_col) row.Add(col, static_cast<double>(g.bytes[static_cast<std::size_t>(v)]) * mib);
+    AddRow(lp, row, GLP_UP, 0.0, static_cast<double>(o.budget_bytes) * mib);
   }
 
+  glp_scale_prob(lp, GLP_SF_AUTO);
   glp_smcp smcp;
   glp_init_smcp(&smcp);
   smcp.msg_lev = GLP_MSG_OFF;

@@ -33,6 +33,7 @@ const char* StrategyName(Strategy strategy) {
 namespace {
 
 using Id = std::int32_t;
+using ScoreKind = Score;
 
 struct Entry {
   double value;
@@ -52,6 +53,7 @@ class Planner {
     q_.assign(n, 0.0);
     topo_pos_.assign(n, 0);
     stamp_.assign(n, 0);
+    memo_stamp_.assign(n, 0);
     memo_.assign(n, 0.0);
     delta_.assign(n, 0.0);
     for (std::size_t i = 0; i < n; ++i) topo_pos_[static_cast<std::size_t>(g.topological_order[i])] = static_cast<Id>(i);
@@ -90,7 +92,18 @@ class Planner {
     } else {
       while (true) {
         Id x = -1;
-        if (o_.strategy == Strategy::kOptMax) x = WorstSampleChoice();
+        if (o_.strategy == Strategy::kOptMax) {
+          x = WorstSampleChoice();
+          // The worst sample's best node must be worth at least
+          // average_share of the best node overall.
+          if (x >= 0 && o_.average_share > 0) {
+            Id y = AverageChoice();
+            if (y >= 0) {
+              nodes_.push({Score(y), y});
+              if (Score(x) < o_.average_share * Score(y)) x = y;
+            }
+          }
+        }
         if (x < 0) x = AverageChoice();
         if (x < 0) break;
         Add(x, /*drop_redundant=*/true);
@@ -108,7 +121,20 @@ class Planner {
 
  private:
   std::size_t Child(std::int64_t e) const { return static_cast<std::size_t>(g_.child_ids[static_cast<std::size_t>(e)]); }
-  double Score(Id x) const { return g_.seconds[static_cast<std::size_t>(x)] * q_[static_cast<std::size_t>(x)]; }
+  // What a strategy maximises (CacheOptions::score). Every variant only
+  // decreases as H grows (q and the H-free subtree time both do), which the
+  // lazy heap relies on.
+  double Score(Id x) {
+    auto i = static_cast<std::size_t>(x);
+    switch (o_.score) {
+      case ScoreKind::kTimesCount: return g_.seconds[i] * q_[i];
+      case ScoreKind::kPerByte:
+        return g_.seconds[i] * q_[i] / static_cast<double>(std::max<std::uint64_t>(g_.bytes[i], 1));
+      case ScoreKind::kSavedPerByte:
+        return RootTime(x) * q_[i] / static_cast<double>(std::max<std::uint64_t>(g_.bytes[i], 1));
+    }
+    return 0;
+  }
   bool Choosable(Id x) const {
     auto i = static_cast<std::size_t>(x);
     return !in_h_[i] && g_.stored[i] && g_.seconds[i] > 0 && g_.seconds[i] >= o_.min_seconds && q_[i] > 0;
@@ -132,7 +158,7 @@ class Planner {
   // T_H of a sample rooted at r: its H-free tree, children before parents.
   double RootTime(Id r) {
     if (in_h_[static_cast<std::size_t>(r)]) return 0.0;
-    ++epoch_;
+    ++memo_epoch_;
     // Iterative post-order with memo (a subtree used twice is counted twice).
     stack_.clear();
     stack_.push_back({r, false});
@@ -140,23 +166,23 @@ class Planner {
       auto [v, expanded] = stack_.back();
       stack_.pop_back();
       auto vi = static_cast<std::size_t>(v);
-      if (stamp_[vi] == epoch_ && !expanded) continue;
+      if (memo_stamp_[vi] == memo_epoch_ && !expanded) continue;
       if (!expanded) {
         stack_.push_back({v, true});
         for (std::int64_t e = g_.child_begin[v]; e < g_.child_begin[v + 1]; ++e) {
           std::size_t c = Child(e);
-          if (!in_h_[c] && stamp_[c] != epoch_) stack_.push_back({static_cast<Id>(c), false});
+          if (!in_h_[c] && memo_stamp_[c] != memo_epoch_) stack_.push_back({static_cast<Id>(c), false});
         }
         continue;
       }
-      if (stamp_[vi] == epoch_) continue;
+      if (memo_stamp_[vi] == memo_epoch_) continue;
       double sum = g_.seconds[vi];
       for (std::int64_t e = g_.child_begin[v]; e < g_.child_begin[v + 1]; ++e) {
         std::size_t c = Child(e);
         if (!in_h_[c]) sum += memo_[c];
       }
       memo_[vi] = sum;
-      stamp_[vi] = epoch_;
+      memo_stamp_[vi] = memo_epoch_;
     }
     return memo_[static_cast<std::size_t>(r)];
   }
@@ -301,8 +327,8 @@ class Planner {
   CacheSet in_h_;
   std::vector<double> q_;
   std::vector<Id> topo_pos_;
-  std::vector<std::uint64_t> stamp_;
-  std::uint64_t epoch_ = 0;
+  std::vector<std::uint64_t> stamp_, memo_stamp_;  // walks; RootTime's memo
+  std::uint64_t epoch_ = 0, memo_epoch_ = 0;
   std::vector<double> memo_, delta_;
   std::vector<std::pair<Id, bool>> stack_;
   std::vector<Id> walk_, below_;

@@ -30,13 +30,27 @@ namespace fabatlas::cache {
 enum class Strategy { kNaive, kOptAve, kOptMax };
 const char* StrategyName(Strategy strategy);  // "naive", "opt_ave", "opt_max"
 
+// What the greedy strategies maximise when they choose a node.
+enum class Score {
+  kTimesCount,  // t·n_H(X), as seed 001 Sec. 6.3 and Sec. 8 state it
+  kPerByte,     // t·n_H(X) / bytes(X)
+  kSavedPerByte,  // n_H(X)·C_H(X) / bytes(X), C_H(X) = the time to compute X's
+                  // subtree given H: the drop of Σ_r T_H(r) per byte of budget
+};
+
 struct CacheOptions {
   Strategy strategy = Strategy::kOptMax;
+  Score score = Score::kSavedPerByte;
   // Memory budget for H in bytes (default: unlimited).
   std::uint64_t budget_bytes = std::numeric_limits<std::uint64_t>::max();
   // Subtrees whose root took less than this are never chosen (seed 001
   // Sec. 6.1: "otherwise we could just cache the children"). Default 100 ms.
   double min_seconds = 0.1;
+  // OPT-MAX only: take the worst samples' best node only when its score is at
+  // least this share of the best score overall, else the OPT-AVE choice, so
+  // that under a budget the worst case is not bought with a much worse mean
+  // (docs/cache.md). 0 = Alg. 1 as published.
+  double average_share = 0.9;
   // Record the cost after every step (CachePlan::curve).
   bool record_curve = true;
 };
