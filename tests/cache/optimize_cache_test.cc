@@ -141,7 +141,10 @@ struct SharedVersusSlow {
 TEST(OptimizeCache, OptMaxTakesTheWorstSampleOptAveTheMostUsedPart) {
   SharedVersusSlow d;
   DependencyGraph g = BuildDependencyGraph(d.nodes, d.samples);
+  // Alg. 1 as published: t·n_H, always the worst sample's node.
   CacheOptions o;
+  o.score = Score::kTimesCount;
+  o.average_share = 0;
   o.budget_bytes = 10;
   o.strategy = Strategy::kOptAve;
   CachePlan ave = OptimizeCache(g, o);
@@ -155,6 +158,13 @@ TEST(OptimizeCache, OptMaxTakesTheWorstSampleOptAveTheMostUsedPart) {
   EXPECT_DOUBLE_EQ(ave.cost.worst_seconds, 5.01);
   EXPECT_NEAR(max.cost.mean_seconds, (10 * 1.01 + 0.01) / 11, 1e-12);
   EXPECT_DOUBLE_EQ(max.cost.worst_seconds, 1.01);
+  // Saved time per byte: S saves 10 x 1 s, Z 5 s. With average_share 0.5 Z
+  // is worth taking (5 >= 0.5 x 10); with the default 0.9 it is not.
+  o.score = Score::kSavedPerByte;
+  o.average_share = 0.5;
+  EXPECT_EQ(g.keys[static_cast<std::size_t>(OptimizeCache(g, o).chosen[0])], "Z");
+  o.average_share = 0.9;
+  EXPECT_EQ(g.keys[static_cast<std::size_t>(OptimizeCache(g, o).chosen[0])], "S");
 
   ExactCacheOptions e;
   e.budget_bytes = 10;

@@ -98,6 +98,7 @@ ExactCacheSummary SolveExactCache(const DependencyGraph& g, const ExactCacheOpti
     return out;
   }
 
+  glp_term_out(GLP_OFF);
   Problem p;
   glp_prob* lp = p.lp;
   glp_set_obj_dir(lp, GLP_MIN);
