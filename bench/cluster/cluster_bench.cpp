@@ -1,16 +1,29 @@
 // Cluster benchmarks with plain timers (results in docs/benchmarks.md (Cluster)).
 //   cluster_bench [--tasks N] [--repeats R] [--blob-mb M] [--idle W] [--job JOB.yaml]
+//                 [--speedup-repeats S] [--only noop|overhead|idle|blob|speedup]
 // 1. No-op round trips/s: N no-op tasks through an in-process coordinator to
 //    2 fabatlas-worker processes (64 slots each, leases batched per Sync),
-//    from submission of the batch to the last stored result.
-// 2. Per-task overhead: one no-op task at a time, submit -> result (p50, p99).
+//    from submission of the batch to the last stored result; and the
+//    coordinator's CPU time per task (CPU time of this process, which is the
+//    coordinator, over the run, divided by the tasks).
+// 2. Coordinator overhead per task: one no-op task at a time through one
+//    idle 1-slot worker that is long-polling; the wall time from the driver
+//    adding the task (RunTasks) to its result being handed back, i.e. the
+//    whole round trip of a task that does no work: store insert, wake-up and
+//    lease grant, the Sync answer, the worker's next Sync with the result,
+//    the store update and the hand-over (p50, p99 of 1,000 tasks).
 // 3. The same no-op throughput while W more workers are connected and idle
 //    (each its own TCP connection, syncing with no free slot every 2 s).
 // 4. Blob ingest MB/s on loopback (chunked upload, fsync, SHA-256 verify).
-// 5. Speed-up of 2 workers over 1 (1 slot each) on a CPU-bound sampling job.
-// Medians over R repeats.
+// 5. Speed-up of 2 workers over 1 (1 slot each, so each worker evaluates on
+//    one thread: fabatlas-worker --threads defaults to --slots) on a
+//    CPU-bound sampling job, with fresh coordinator state per run, runs
+//    alternating 1, 2, 1, 2, ...; also the coordinator's CPU time per task
+//    and the workers' CPU time (their rusage after exit).
+// Medians over R (S for the speed-up) repeats.
 #include <signal.h>
 #include <sys/prctl.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -20,6 +33,7 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <random>
 #include <string>
 #include <thread>
@@ -29,6 +43,7 @@
 #include "fabatlas/coordinator/job_client.h"
 #include "fabatlas/protocol/channel.h"
 #include "fabatlas/sha256.h"
+#include "fabatlas/storage/job_store.h"
 #include "fabatlas/v1/worker.grpc.pb.h"
 
 namespace fs = std::filesystem;
@@ -60,10 +75,53 @@ pid_t SpawnWorker(int port, int slots, const fs::path& dir) {
   return pid;
 }
 
-void StopWorkers(std::vector<pid_t>& pids) {
+double CpuSeconds(const rusage& u) {
+  return static_cast<double>(u.ru_utime.tv_sec + u.ru_stime.tv_sec) +
+         1e-6 * static_cast<double>(u.ru_utime.tv_usec + u.ru_stime.tv_usec);
+}
+
+// CPU seconds of this process so far (the in-process coordinator).
+double ProcessCpuSeconds() {
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  return CpuSeconds(u);
+}
+
+// Stops the workers (SIGTERM: finish, return leases, exit); returns their
+// total CPU seconds.
+double StopWorkers(std::vector<pid_t>& pids, double* max_cpu = nullptr) {
   for (pid_t p : pids) kill(p, SIGTERM);
-  for (pid_t p : pids) waitpid(p, nullptr, 0);
+  double cpu = 0;
+  if (max_cpu) *max_cpu = 0;
+  for (pid_t p : pids) {
+    rusage u{};
+    int status = 0;
+    wait4(p, &status, 0, &u);
+    cpu += CpuSeconds(u);
+    if (max_cpu) *max_cpu = std::max(*max_cpu, CpuSeconds(u));
+  }
   pids.clear();
+  return cpu;
+}
+
+// Sum of the thread CPU seconds the workers measured inside sample and ΔG
+// tasks (TaskResult.cpu_seconds) of a job.
+std::pair<double, double> TaskCpuSeconds(storage::JobStore& store, const std::string& job_id) {
+  double samples = 0, changes = 0;
+  for (const auto& t : store.Tasks(job_id)) {
+    v1::TaskResult r;
+    r.ParseFromString(t.result);
+    (t.kind == v1::TASK_KIND_SAMPLE ? samples : changes) += r.cpu_seconds();
+  }
+  return {samples, changes};
+}
+
+std::string LastLine(const fs::path& file) {
+  std::ifstream in(file);
+  std::string line, last;
+  while (std::getline(in, line))
+    if (!line.empty()) last = line;
+  return last;
 }
 
 std::vector<std::string> NoopPayloads(int n, int salt, std::vector<std::string>* keys) {
@@ -94,16 +152,23 @@ int Arg(int argc, char** argv, const char* name, int fallback) {
   return fallback;
 }
 
+std::string only;  // --only: run one section
+bool Run(const char* section) { return only.empty() || only == section; }
+
 }  // namespace
 
 int main(int argc, char** argv) {
+  std::setvbuf(stdout, nullptr, _IOLBF, 0);
   int tasks = Arg(argc, argv, "--tasks", 20000);
   int repeats = Arg(argc, argv, "--repeats", 3);
   int blob_mb = Arg(argc, argv, "--blob-mb", 128);
   int idle = Arg(argc, argv, "--idle", 1000);
+  int speedup_repeats = Arg(argc, argv, "--speedup-repeats", repeats);
   fs::path job = fs::path(FABATLAS_BENCH_SOURCE_DIR) / "bench/cluster/data/pawn_small.yaml";
-  for (int i = 1; i + 1 < argc; ++i)
+  for (int i = 1; i + 1 < argc; ++i) {
     if (std::strcmp(argv[i], "--job") == 0) job = argv[i + 1];
+    if (std::strcmp(argv[i], "--only") == 0) only = argv[i + 1];
+  }
   fs::path dir = fs::temp_directory_path() / ("fabatlas_cluster_bench_" + std::to_string(getpid()));
   fs::remove_all(dir);
   fs::create_directories(dir);
@@ -115,30 +180,59 @@ int main(int argc, char** argv) {
   c.Start();
   std::string target = "127.0.0.1:" + std::to_string(c.port());
   std::vector<pid_t> workers;
-  for (int i = 0; i < 2; ++i) workers.push_back(SpawnWorker(c.port(), 64, dir / ("noop" + std::to_string(i))));
-  NoopThroughput(c, 500, 999);  // warm-up: workers connected
-
-  std::vector<double> rates;
-  for (int r = 0; r < repeats; ++r) rates.push_back(NoopThroughput(c, tasks, r));
-  std::printf("noop round trips: %d tasks x %d repeats, 2 workers x 64 slots: median %.0f tasks/s (runs:", tasks,
-              repeats, Median(rates));
-  for (double x : rates) std::printf(" %.0f", x);
-  std::printf(")\n");
-
-  std::vector<double> latencies;
-  for (int i = 0; i < 300; ++i) {
-    std::vector<std::string> keys;
-    auto payloads = NoopPayloads(1, 100000 + i, &keys);
-    auto t0 = Clock::now();
-    c.RunTasks("noop-bench", payloads, keys);
-    latencies.push_back(1000.0 * Seconds(t0, Clock::now()));
+  if (Run("noop") || Run("idle")) {
+    for (int i = 0; i < 2; ++i) workers.push_back(SpawnWorker(c.port(), 64, dir / ("noop" + std::to_string(i))));
+    NoopThroughput(c, 500, 999);  // warm-up: workers connected
   }
-  std::sort(latencies.begin(), latencies.end());
-  std::printf("single no-op task round trip (submit -> stored result), 300 tasks: p50 %.2f ms, p99 %.2f ms\n",
-              latencies[latencies.size() / 2], latencies[latencies.size() * 99 / 100]);
+
+  if (Run("noop")) {
+    std::vector<double> rates, cpu_us;
+    for (int r = 0; r < repeats; ++r) {
+      double cpu0 = ProcessCpuSeconds();
+      rates.push_back(NoopThroughput(c, tasks, r));
+      cpu_us.push_back(1e6 * (ProcessCpuSeconds() - cpu0) / tasks);
+    }
+    std::printf("noop round trips: %d tasks x %d repeats, 2 workers x 64 slots: median %.0f tasks/s (runs:", tasks,
+                repeats, Median(rates));
+    for (double x : rates) std::printf(" %.0f", x);
+    std::printf("); coordinator CPU per task: median %.0f us\n", Median(cpu_us));
+  }
+
+  if (Run("overhead")) {
+    // One idle 1-slot worker, long-polling; one no-op task at a time.
+    coordinator::CoordinatorOptions o = options;
+    o.state_dir = dir / "overhead";
+    coordinator::Coordinator oc(o);
+    oc.Start();
+    std::vector<pid_t> one{SpawnWorker(oc.port(), 1, dir / "overhead_worker")};
+    {
+      std::vector<std::string> keys;
+      auto payloads = NoopPayloads(20, 99999, &keys);
+      oc.RunTasks("noop-overhead", payloads, keys);  // warm-up: the worker is connected
+    }
+    const int n = 1000;
+    std::vector<double> latencies;
+    double cpu0 = ProcessCpuSeconds();
+    for (int i = 0; i < n; ++i) {
+      std::vector<std::string> keys;
+      auto payloads = NoopPayloads(1, 100000 + i, &keys);
+      auto t0 = Clock::now();
+      oc.RunTasks("noop-overhead", payloads, keys);
+      latencies.push_back(1000.0 * Seconds(t0, Clock::now()));
+    }
+    double cpu_us = 1e6 * (ProcessCpuSeconds() - cpu0) / n;
+    double worker_cpu = StopWorkers(one);
+    oc.Shutdown();
+    std::sort(latencies.begin(), latencies.end());
+    std::printf("coordinator overhead per task (one no-op task at a time, RunTasks -> result, 1 idle worker x 1 "
+                "slot), %d tasks: p50 %.2f ms, p90 %.2f ms, p99 %.2f ms, max %.2f ms; coordinator CPU %.0f us/task, "
+                "worker CPU %.0f us/task\n",
+                n, latencies[n / 2], latencies[n * 9 / 10], latencies[n * 99 / 100], latencies.back(), cpu_us,
+                1e6 * worker_cpu / n);
+  }
 
   // Idle workers: own connections (local subchannel pools), Sync with no free slot.
-  if (idle > 0) {
+  if (idle > 0 && Run("idle")) {
     std::atomic<bool> stop{false};
     std::atomic<long> syncs{0}, failures{0};
     std::vector<std::thread> threads;
@@ -192,7 +286,7 @@ int main(int argc, char** argv) {
   StopWorkers(workers);
 
   // Blob ingest.
-  {
+  if (Run("blob")) {
     coordinator::JobClient client(target, {}, std::chrono::seconds(120));
     std::vector<double> mbps;
     std::mt19937_64 rng(1);
@@ -212,26 +306,66 @@ int main(int argc, char** argv) {
   c.Shutdown();
 
   // Speed-up on CPU-bound samples: fresh coordinator state per run.
-  if (fs::exists(job)) {
-    double wall[3] = {0, 0, 0};
-    for (int n : {1, 2}) {
-      coordinator::CoordinatorOptions o = options;
-      o.state_dir = dir / ("speedup" + std::to_string(n));
-      coordinator::Coordinator sc(o);
-      sc.Start();
-      std::vector<pid_t> pids;
-      for (int i = 0; i < n; ++i) pids.push_back(SpawnWorker(sc.port(), 1, dir / ("cpu" + std::to_string(n) + "_" + std::to_string(i))));
-      coordinator::JobClient client("127.0.0.1:" + std::to_string(sc.port()), {});
-      auto t0 = Clock::now();
-      std::string id = client.Submit(job);
-      auto s = client.Watch(id, [](const v1::JobStatus&) { return true; });
-      wall[n] = Seconds(t0, Clock::now());
-      std::printf("%s on %d worker(s) x 1 slot: %.2f s, %lld tasks, state %s\n", job.filename().c_str(), n, wall[n],
-                  static_cast<long long>(s.tasks_total()), coordinator::JobStateName(s.state()).c_str());
-      StopWorkers(pids);
-      sc.Shutdown();
+  if (fs::exists(job) && Run("speedup")) {
+    std::vector<double> wall[3], coordinator_cpu[3], worker_cpu[3], busiest_cpu[3];
+    long long task_count = 0;
+    for (int r = 0; r < speedup_repeats; ++r) {
+      for (int n : {1, 2}) {
+        coordinator::CoordinatorOptions o = options;
+        std::string name = std::to_string(n) + "_" + std::to_string(r);
+        o.state_dir = dir / ("speedup" + name);
+        coordinator::Coordinator sc(o);
+        sc.Start();
+        std::vector<pid_t> pids;
+        std::vector<fs::path> caches;
+        for (int i = 0; i < n; ++i) {
+          caches.push_back(dir / ("cpu" + name + "_" + std::to_string(i)));
+          pids.push_back(SpawnWorker(sc.port(), 1, caches.back()));
+        }
+        coordinator::JobClient client("127.0.0.1:" + std::to_string(sc.port()), {});
+        double cpu0 = ProcessCpuSeconds();
+        auto t0 = Clock::now();
+        std::string id = client.Submit(job);
+        auto s = client.Watch(id, [](const v1::JobStatus&) { return true; });
+        wall[n].push_back(Seconds(t0, Clock::now()));
+        coordinator_cpu[n].push_back(ProcessCpuSeconds() - cpu0);
+        double busiest = 0;
+        worker_cpu[n].push_back(StopWorkers(pids, &busiest));
+        busiest_cpu[n].push_back(busiest);
+        task_count = s.tasks_total();
+        auto [sample_cpu, change_cpu] = TaskCpuSeconds(sc.store(), id);
+        double subtree_seconds = 0;
+        std::int64_t subtree_computations = 0;
+        for (const auto& row : sc.store().Subtrees(id)) {
+          subtree_seconds += row.seconds_sum;
+          subtree_computations += row.seconds_count;
+        }
+        std::printf("    subtrees computed: %lld (%.2f s wall inside tasks)\n",
+                    static_cast<long long>(subtree_computations), subtree_seconds);
+        std::printf("  run %d, %d worker(s) x 1 slot: %.2f s wall, coordinator CPU %.2f s, workers CPU %.2f s "
+                    "(busiest %.2f s; inside tasks: samples %.2f s, ΔG %.2f s), %lld tasks, state %s\n",
+                    r, n, wall[n].back(), coordinator_cpu[n].back(), worker_cpu[n].back(), busiest, sample_cpu,
+                    change_cpu, static_cast<long long>(s.tasks_total()), coordinator::JobStateName(s.state()).c_str());
+        std::fflush(stdout);
+        for (const auto& cache : caches)
+          std::printf("    %s\n", LastLine(cache.parent_path() / (cache.filename().string() + ".log")).c_str());
+        sc.Shutdown();
+      }
     }
-    std::printf("speed-up of 2 workers over 1: %.2fx\n", wall[1] / wall[2]);
+    std::vector<double> ratios;
+    for (int r = 0; r < speedup_repeats; ++r) ratios.push_back(wall[1][r] / wall[2][r]);
+    std::vector<double> cpu_ratios;
+    for (int r = 0; r < speedup_repeats; ++r) cpu_ratios.push_back(busiest_cpu[1][r] / busiest_cpu[2][r]);
+    std::printf("CPU-time speed-up (CPU of the 1-worker run / CPU of the busier worker of the 2-worker run; what "
+                "the wall-time ratio tends to on 2 idle cores when barriers cost nothing): median %.2fx\n",
+                Median(cpu_ratios));
+    std::printf("%s, %lld tasks, medians of %d runs: 1 worker %.2f s, 2 workers %.2f s; speed-up of 2 workers "
+                "over 1: median of per-pair ratios %.2fx (ratio of medians %.2fx); coordinator CPU per task %.2f ms "
+                "(1 worker) / %.2f ms (2 workers); workers CPU %.1f s / %.1f s\n",
+                job.filename().c_str(), task_count, speedup_repeats, Median(wall[1]), Median(wall[2]), Median(ratios),
+                Median(wall[1]) / Median(wall[2]), 1000.0 * Median(coordinator_cpu[1]) / std::max(1LL, task_count),
+                1000.0 * Median(coordinator_cpu[2]) / std::max(1LL, task_count), Median(worker_cpu[1]),
+                Median(worker_cpu[2]));
   }
   fs::remove_all(dir);
   return 0;

@@ -193,6 +193,8 @@ struct Coordinator::Impl {
       std::vector<sampling::SampleOutcome> out;
       if (timings) timings->assign(tasks.size(), {});
       for (std::size_t i = 0; i < results.size(); ++i) {
+        if (!results[i].sample().solid_digest().empty())
+          solid_digests_[tasks[i].point.key] = results[i].sample().solid_digest();
         out.push_back(protocol::SampleOutcomeOf(results[i]));
         if (timings) (*timings)[i].wall_seconds = results[i].wall_seconds();
       }
@@ -203,7 +205,14 @@ struct Coordinator::Impl {
         const std::vector<sampling::GeometryChangeTask>& tasks, sampling::SampleEvaluator&,
         std::vector<sampling::TaskTiming>* timings) override {
       std::vector<v1::TaskPayload> payloads;
-      for (const auto& t : tasks) payloads.push_back(protocol::GeometryChangePayload(t));
+      for (const auto& t : tasks) {
+        // The samples' root solids, so that any worker can skip evaluating
+        // them again (tasks.proto "Geometry blobs").
+        v1::TaskPayload p = protocol::GeometryChangePayload(t);
+        if (auto it = solid_digests_.find(t.point_a.key); it != solid_digests_.end()) p.set_solid_digest_a(it->second);
+        if (auto it = solid_digests_.find(t.point_b.key); it != solid_digests_.end()) p.set_solid_digest_b(it->second);
+        payloads.push_back(std::move(p));
+      }
       auto results = Run(payloads);
       std::vector<sampling::GeometryChangeResult> out;
       if (timings) timings->assign(tasks.size(), {});
@@ -232,6 +241,8 @@ struct Coordinator::Impl {
     Impl& impl_;
     std::string job_id_, digest_;
     int subdivisions_;
+    // Root solid blob of each valid sample seen (SampleResult.solid_digest).
+    std::map<sampling::PointKey, std::string> solid_digests_;
   };
 
   void Event(const std::string& job_id, const std::string& kind, const std::string& message) {
@@ -497,6 +508,29 @@ class WorkerServiceImpl final : public v1::WorkerService::Service {
  public:
   explicit WorkerServiceImpl(Coordinator::Impl& impl) : impl_(impl) {}
 
+  // A sample result's point key and subtree records, for the store's
+  // subtree tables (JobStore::Subtrees).
+  void SubtreesOf(const v1::CompletedTask& c, storage::Completion* done) {
+    const v1::SampleResult& sample = c.result().sample();
+    if (sample.subtrees_size() == 0) return;
+    v1::TaskPayload payload;
+    if (auto task = impl_.store->FindTask(c.task_key()); task && payload.ParseFromString(task->payload))
+      for (int i = 0; i < payload.point_a().key_size(); ++i)
+        done->point_key += (i ? "," : "") + std::to_string(payload.point_a().key(i));
+    for (const auto& r : sample.subtrees()) {
+      storage::SubtreeUse u;
+      u.key = r.key();
+      u.topology = r.topology();
+      u.op = r.op();
+      u.seconds = r.seconds();
+      u.measured = !r.from_cache();
+      u.bytes = r.bytes();
+      u.children.assign(r.children().begin(), r.children().end());
+      u.blob_digest = r.blob_digest();
+      done->subtrees.push_back(std::move(u));
+    }
+  }
+
   Status Sync(ServerContext* ctx, const v1::SyncRequest* req, v1::SyncResponse* resp) override {
     if (Status s = protocol::CheckToken(*ctx, impl_.options.token); !s.ok()) return s;
     if (req->worker_id().empty()) return Invalid("worker_id is empty");
@@ -514,6 +548,7 @@ class WorkerServiceImpl final : public v1::WorkerService::Service {
         done.failed = !c.error().empty();
         done.result = c.result().SerializeAsString();
         done.sample_valid = c.result().has_sample() ? (c.result().sample().valid() ? 1 : 0) : -1;
+        if (c.result().has_sample()) SubtreesOf(c, &done);
         completions.push_back(std::move(done));
         known.push_back(c.lease_id());
       }

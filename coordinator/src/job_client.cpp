@@ -1,9 +1,12 @@
 // The operator's client (see job_client.h).
 #include "fabatlas/coordinator/job_client.h"
 
+#include <algorithm>
 #include <cstdio>
+#include <thread>
 
 #include "fabatlas/error.h"
+#include "fabatlas/protocol/blob_transfer.h"
 #include "fabatlas/protocol/job_bundle.h"
 #include "fabatlas/sha256.h"
 #include "fabatlas/v1/blob.grpc.pb.h"
@@ -31,54 +34,19 @@ void JobClient::Fail(const std::string& what, const grpc::Status& status) const 
 }
 
 std::string JobClient::UploadBlob(const std::string& bytes) {
-  std::string digest = Sha256Hex(bytes);
   auto stub = v1::BlobService::NewStub(channel_);
-  std::int64_t offset = 0;
-  {
-    grpc::ClientContext ctx;
-    protocol::Prepare(ctx, security_, timeout_);
-    v1::QueryWriteStatusRequest req;
-    req.set_digest(digest);
-    v1::QueryWriteStatusResponse resp;
-    grpc::Status s = stub->QueryWriteStatus(&ctx, req, &resp);
-    if (!s.ok()) Fail("blob status", s);
-    if (resp.complete()) return digest;
-    offset = resp.committed_size();
-  }
-  grpc::ClientContext ctx;
-  protocol::Prepare(ctx, security_, timeout_ + std::chrono::milliseconds(bytes.size() / 1000));
-  v1::WriteResponse resp;
-  auto writer = stub->Write(&ctx, &resp);
-  do {
-    v1::WriteChunk chunk;
-    chunk.set_digest(digest);
-    chunk.set_size(static_cast<std::int64_t>(bytes.size()));
-    chunk.set_offset(offset);
-    std::size_t n = std::min<std::size_t>(protocol::kBlobChunkBytes, bytes.size() - static_cast<std::size_t>(offset));
-    chunk.set_data(bytes.substr(static_cast<std::size_t>(offset), n));
-    offset += static_cast<std::int64_t>(n);
-    chunk.set_finish(offset >= static_cast<std::int64_t>(bytes.size()));
-    if (!writer->Write(chunk)) break;
-  } while (offset < static_cast<std::int64_t>(bytes.size()));
-  writer->WritesDone();
-  grpc::Status s = writer->Finish();
+  std::string digest;
+  grpc::Status s = protocol::UploadBlob(*stub, security_, bytes, timeout_, &digest);
   if (!s.ok()) Fail("blob upload", s);
   return digest;
 }
 
 std::string JobClient::DownloadBlob(const std::string& digest) {
   auto stub = v1::BlobService::NewStub(channel_);
-  grpc::ClientContext ctx;
-  protocol::Prepare(ctx, security_, timeout_ * 10);
-  v1::ReadRequest req;
-  req.set_digest(digest);
-  auto reader = stub->Read(&ctx, req);
   std::string out;
-  v1::ReadChunk chunk;
-  while (reader->Read(&chunk)) out += chunk.data();
-  grpc::Status s = reader->Finish();
+  grpc::Status s = protocol::DownloadBlob(*stub, security_, digest, timeout_ * 10, &out);
+  if (s.error_code() == grpc::StatusCode::DATA_LOSS) throw InputError(s.error_message());
   if (!s.ok()) Fail("blob download", s);
-  if (Sha256Hex(out) != digest) throw InputError("blob " + digest + ": downloaded bytes do not match");
   return out;
 }
 
@@ -110,26 +78,51 @@ v1::JobStatus JobClient::Status(const std::string& job_id) {
 }
 
 v1::JobStatus JobClient::Watch(const std::string& job_id,
-                               const std::function<bool(const v1::JobStatus&)>& on_status) {
+                               const std::function<bool(const v1::JobStatus&)>& on_status,
+                               std::chrono::milliseconds reconnect_for) {
   auto stub = v1::JobService::NewStub(channel_);
-  grpc::ClientContext ctx;
-  protocol::Prepare(ctx, security_, std::chrono::hours(24 * 30));
   v1::GetStatusRequest req;
   req.set_job_id(job_id);
-  auto reader = stub->Watch(&ctx, req);
-  v1::JobStatus status, last;
-  bool stopped = false;
-  while (reader->Read(&status)) {
-    last = status;
-    if (!on_status(status)) {
-      stopped = true;
-      ctx.TryCancel();
-      break;
+  v1::JobStatus last;
+  auto last_heard = std::chrono::steady_clock::now();
+  std::chrono::milliseconds backoff(200);
+  while (true) {
+    grpc::ClientContext ctx;
+    protocol::Prepare(ctx, security_, std::chrono::hours(24 * 30));
+    auto reader = stub->Watch(&ctx, req);
+    v1::JobStatus status;
+    bool stopped = false;
+    while (reader->Read(&status)) {
+      last = status;
+      last_heard = std::chrono::steady_clock::now();
+      backoff = std::chrono::milliseconds(200);
+      if (!on_status(status)) {
+        stopped = true;
+        ctx.TryCancel();
+        break;
+      }
     }
+    grpc::Status s = reader->Finish();
+    if (stopped || last.state() >= v1::JOB_STATE_SUCCEEDED) return last;
+    // The stream broke before the job ended (coordinator restarted, network
+    // blip): watch again with backoff; answers that cannot change by waiting
+    // end the watch at once.
+    switch (s.error_code()) {
+      case grpc::StatusCode::NOT_FOUND:
+      case grpc::StatusCode::INVALID_ARGUMENT:
+      case grpc::StatusCode::UNAUTHENTICATED:
+      case grpc::StatusCode::PERMISSION_DENIED:
+      case grpc::StatusCode::UNIMPLEMENTED:
+        Fail("watch " + job_id, s);
+      default: break;
+    }
+    if (std::chrono::steady_clock::now() - last_heard > reconnect_for) {
+      if (s.ok()) s = grpc::Status(grpc::StatusCode::UNAVAILABLE, "the watch stream ended before the job did");
+      Fail("watch " + job_id, s);
+    }
+    std::this_thread::sleep_for(backoff);
+    backoff = std::min(backoff * 2, std::chrono::milliseconds(5000));
   }
-  grpc::Status s = reader->Finish();
-  if (!s.ok() && !stopped) Fail("watch " + job_id, s);
-  return last;
 }
 
 v1::JobStatus JobClient::Cancel(const std::string& job_id) {

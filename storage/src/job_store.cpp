@@ -39,6 +39,16 @@ CREATE INDEX IF NOT EXISTS leases_worker ON leases (worker_id, state);
 CREATE TABLE IF NOT EXISTS workers (
   id TEXT PRIMARY KEY, slots INTEGER NOT NULL, first_seen_ms INTEGER NOT NULL,
   last_seen_ms INTEGER NOT NULL);
+CREATE TABLE IF NOT EXISTS subtrees (
+  job_id TEXT NOT NULL, key TEXT NOT NULL, topology TEXT NOT NULL, op TEXT NOT NULL,
+  digest TEXT NOT NULL DEFAULT '', bytes INTEGER NOT NULL, children TEXT NOT NULL,
+  seconds_sum REAL NOT NULL DEFAULT 0, seconds_count INTEGER NOT NULL DEFAULT 0,
+  last_seconds REAL NOT NULL DEFAULT 0, uses INTEGER NOT NULL DEFAULT 0,
+  PRIMARY KEY (job_id, key));
+CREATE TABLE IF NOT EXISTS sample_subtrees (
+  task_key TEXT NOT NULL, position INTEGER NOT NULL, job_id TEXT NOT NULL,
+  point_key TEXT NOT NULL, subtree_key TEXT NOT NULL, PRIMARY KEY (task_key, position));
+CREATE INDEX IF NOT EXISTS sample_subtrees_job ON sample_subtrees (job_id);
 CREATE TABLE IF NOT EXISTS events (
   id INTEGER PRIMARY KEY AUTOINCREMENT, time_ms INTEGER NOT NULL, job_id TEXT NOT NULL,
   kind TEXT NOT NULL, message TEXT NOT NULL);
@@ -84,6 +94,10 @@ class Stmt {
     sqlite3_bind_int64(stmt_, i, v);
     return *this;
   }
+  Stmt& BindReal(int i, double v) {
+    sqlite3_bind_double(stmt_, i, v);
+    return *this;
+  }
   // True while a row is available.
   bool Step() {
     int rc = sqlite3_step(stmt_);
@@ -100,6 +114,7 @@ class Stmt {
     sqlite3_clear_bindings(stmt_);
   }
   std::int64_t Int(int c) const { return sqlite3_column_int64(stmt_, c); }
+  double Real(int c) const { return sqlite3_column_double(stmt_, c); }
   std::string Text(int c) const {
     const void* p = sqlite3_column_blob(stmt_, c);
     int n = sqlite3_column_bytes(stmt_, c);
@@ -340,8 +355,19 @@ std::vector<CompletionOutcome> JobStore::Complete(const std::vector<Completion>&
   if (completions.empty()) return outcomes;
   std::lock_guard lock(mutex_);
   Transaction t(*db_);
-  Stmt task(*db_, "SELECT state, attempt FROM tasks WHERE key = ?");
+  Stmt task(*db_, "SELECT state, attempt, job_id FROM tasks WHERE key = ?");
   Stmt lease(*db_, "SELECT state FROM leases WHERE lease_id = ? AND task_key = ? AND attempt = ?");
+  Stmt subtree(*db_,
+               "INSERT INTO subtrees (job_id, key, topology, op, digest, bytes, children, seconds_sum, "
+               "seconds_count, last_seconds, uses) VALUES (?,?,?,?,?,?,?,?,?,?,1) "
+               "ON CONFLICT (job_id, key) DO UPDATE SET "
+               "digest = CASE WHEN digest = '' THEN excluded.digest ELSE digest END, "
+               "seconds_sum = seconds_sum + excluded.seconds_sum, "
+               "seconds_count = seconds_count + excluded.seconds_count, "
+               "last_seconds = excluded.last_seconds, uses = uses + 1");
+  Stmt use(*db_,
+           "INSERT OR IGNORE INTO sample_subtrees (task_key, position, job_id, point_key, subtree_key) "
+           "VALUES (?,?,?,?,?)");
   Stmt set_lease(*db_, "UPDATE leases SET state = ? WHERE lease_id = ? AND state = 'active'");
   Stmt done(*db_,
             "UPDATE tasks SET state = 2, result = ?, completions = completions + 1, "
@@ -357,6 +383,7 @@ std::vector<CompletionOutcome> JobStore::Complete(const std::vector<Completion>&
     }
     auto state = static_cast<TaskState>(task.Int(0));
     std::int64_t attempt = task.Int(1);
+    std::string job_id = task.Text(2);
     task.Reset();
     lease.BindText(1, c.lease_id).BindText(2, c.task_key).Bind(3, c.attempt);
     bool active = lease.Step() && lease.Text(0) == "active";
@@ -384,6 +411,21 @@ std::vector<CompletionOutcome> JobStore::Complete(const std::vector<Completion>&
       done.Bind(1, c.result).Bind(2, std::int64_t{c.sample_valid}).BindText(3, c.task_key);
       done.Run();
       done.Reset();
+      std::int64_t position = 0;
+      for (const SubtreeUse& u : c.subtrees) {
+        std::string children;
+        for (const auto& child : u.children) children += (children.empty() ? "" : ",") + child;
+        subtree.BindText(1, job_id).BindText(2, u.key).BindText(3, u.topology).BindText(4, u.op);
+        subtree.BindText(5, u.blob_digest).Bind(6, u.bytes).BindText(7, children);
+        subtree.BindReal(8, u.measured ? u.seconds : 0.0).Bind(9, std::int64_t{u.measured ? 1 : 0});
+        subtree.BindReal(10, u.seconds);
+        subtree.Run();
+        subtree.Reset();
+        use.BindText(1, c.task_key).Bind(2, position++).BindText(3, job_id).BindText(4, c.point_key);
+        use.BindText(5, u.key);
+        use.Run();
+        use.Reset();
+      }
     }
     set_lease.BindText(1, lease_state).BindText(2, c.lease_id);
     set_lease.Run();
@@ -541,6 +583,50 @@ std::int64_t JobStore::ActiveLeases() {
   Stmt s(*db_, "SELECT COUNT(*) FROM leases WHERE state = 'active'");
   s.Step();
   return s.Int(0);
+}
+
+std::vector<SubtreeRow> JobStore::Subtrees(const std::string& job_id) {
+  std::lock_guard lock(mutex_);
+  Stmt s(*db_,
+         "SELECT key, topology, op, digest, bytes, children, seconds_sum, seconds_count, last_seconds, uses "
+         "FROM subtrees WHERE job_id = ? ORDER BY key");
+  s.BindText(1, job_id);
+  std::vector<SubtreeRow> out;
+  while (s.Step()) {
+    SubtreeRow r;
+    r.key = s.Text(0);
+    r.topology = s.Text(1);
+    r.op = s.Text(2);
+    r.blob_digest = s.Text(3);
+    r.bytes = s.Int(4);
+    std::string children = s.Text(5);
+    for (std::size_t at = 0; at < children.size();) {
+      std::size_t comma = children.find(',', at);
+      if (comma == std::string::npos) comma = children.size();
+      r.children.push_back(children.substr(at, comma - at));
+      at = comma + 1;
+    }
+    r.seconds_sum = s.Real(6);
+    r.seconds_count = s.Int(7);
+    r.last_seconds = s.Real(8);
+    r.uses = s.Int(9);
+    out.push_back(std::move(r));
+  }
+  return out;
+}
+
+std::vector<SampleSubtrees> JobStore::SampleSubtreeKeys(const std::string& job_id) {
+  std::lock_guard lock(mutex_);
+  Stmt s(*db_,
+         "SELECT u.task_key, u.point_key, u.subtree_key FROM sample_subtrees u JOIN tasks t ON t.key = "
+         "u.task_key WHERE u.job_id = ? ORDER BY t.seq, u.position");
+  s.BindText(1, job_id);
+  std::vector<SampleSubtrees> out;
+  while (s.Step()) {
+    if (out.empty() || out.back().task_key != s.Text(0)) out.push_back({s.Text(0), s.Text(1), {}});
+    out.back().subtree_keys.push_back(s.Text(2));
+  }
+  return out;
 }
 
 void JobStore::TouchWorker(const std::string& worker_id, int slots, std::int64_t now_ms) {

@@ -6,20 +6,27 @@
 // every task key completed once, no orphaned lease, every blob verifies.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <map>
 #include <random>
+#include <set>
+#include <sstream>
 
 #include "cluster_process.h"
 #include "fabatlas/coordinator/job_client.h"
 #include "fabatlas/coordinator/publish.h"
 #include "fabatlas/design/design.h"
 #include "fabatlas/error.h"
+#include "fabatlas/geometry/solid.h"
 #include "fabatlas/precompute/design_evaluator.h"
+#include "fabatlas/protocol/blob_transfer.h"
 #include "fabatlas/sampling/adaptive_sampler.h"
 #include "fabatlas/sampling/executor.h"
 #include "fabatlas/sampling/form_json.h"
 #include "fabatlas/sampling/job_file.h"
 #include "fabatlas/protocol/job_bundle.h"
 #include "fabatlas/storage/artifact.h"
+#include "fabatlas/sha256.h"
 #include "fabatlas/storage/blob_store.h"
 #include "fabatlas/storage/job_store.h"
 
@@ -103,6 +110,43 @@ void StopAndCheckStore(const CoordinatorProcess& c, const fs::path& state, const
   auto digests = blobs.List();
   EXPECT_GE(digests.size(), 3u);  // bundle, form.json, statistics.json
   for (const auto& d : digests) EXPECT_TRUE(blobs.Verify(d)) << d;
+
+  // Subtree records (tasks.proto SubtreeRecord, JobStore::Subtrees): every
+  // valid sample has its subtrees, root last; the dependency graph is closed;
+  // each use is counted once; every named blob is a level set.
+  std::map<std::string, storage::SubtreeRow> rows;
+  for (auto& row : store.Subtrees(job_id)) rows[row.key] = row;
+  auto samples = store.SampleSubtreeKeys(job_id);
+  EXPECT_GE(static_cast<std::int64_t>(samples.size()), counts.samples_valid);
+  EXPECT_LE(static_cast<std::int64_t>(samples.size()), counts.samples_done);
+  std::map<std::string, std::int64_t> uses;
+  for (const auto& sample : samples) {
+    ASSERT_FALSE(sample.subtree_keys.empty());
+    EXPECT_FALSE(sample.point_key.empty());
+    std::set<std::string> seen;
+    for (const auto& key : sample.subtree_keys) {
+      ASSERT_TRUE(rows.count(key)) << key;
+      for (const auto& child : rows[key].children) EXPECT_TRUE(seen.count(child)) << "post-order: " << child;
+      seen.insert(key);
+      ++uses[key];
+    }
+  }
+  for (const auto& [key, row] : rows) {
+    EXPECT_EQ(row.uses, uses[key]) << key;
+    for (const auto& child : row.children) EXPECT_TRUE(rows.count(child)) << child;
+    if (row.blob_digest.empty()) continue;
+    ASSERT_TRUE(blobs.Verify(row.blob_digest)) << row.blob_digest;
+    EXPECT_NO_THROW(geometry::Solid::Deserialize(blobs.Read(row.blob_digest))) << key;
+  }
+}
+
+// The last line a worker wrote (its summary on exit).
+std::string WorkerSummary(const fs::path& worker_dir) {
+  std::istringstream in(ReadText(worker_dir / "worker.log"));
+  std::string line, last;
+  while (std::getline(in, line))
+    if (!line.empty()) last = line;
+  return last;
 }
 
 std::string RunJobOnWorkers(const std::string& name, int workers, int slots, std::string* job_id = nullptr) {
@@ -120,7 +164,25 @@ std::string RunJobOnWorkers(const std::string& name, int workers, int slots, std
   EXPECT_TRUE(outputs[kArtifactName] == ReferenceArtifact()) << name << ": the artifact differs from the in-process one";
   for (pid_t p : pids) ::kill(p, SIGTERM);
   for (pid_t p : pids) EXPECT_EQ(WaitExit(p, std::chrono::seconds(30)), 0);
+  // ΔG tasks take the samples' solids from memory or from the blob another
+  // worker uploaded, never by evaluating a sample again.
+  for (int i = 0; i < workers; ++i) {
+    std::string summary = WorkerSummary(dir / ("w" + std::to_string(i)));
+    EXPECT_NE(summary.find("re-evaluated 0 samples"), std::string::npos) << summary;
+  }
   StopAndCheckStore(c, dir / "state", id);
+  {
+    // tube_small.yaml sets cache.min_subtree_seconds: 0, so every subtree
+    // was uploaded, and without faults every key was measured once at least.
+    storage::JobStore store(dir / "state/state.db");
+    auto rows = store.Subtrees(id);
+    EXPECT_FALSE(rows.empty());
+    for (const auto& row : rows) {
+      EXPECT_FALSE(row.blob_digest.empty()) << row.key;
+      EXPECT_GE(row.seconds_count, 1) << row.key;
+      EXPECT_GT(row.bytes, 0) << row.key;
+    }
+  }
   if (job_id) *job_id = id;
   return form;
 }
@@ -482,4 +544,146 @@ TEST(ClusterFaults, TaskThatKillsThreeWorkersIsQuarantinedAndTheJobFinishes) {
   int quarantine_events = 0;
   for (const auto& e : store.Events(id)) quarantine_events += e.kind == "quarantined";
   EXPECT_EQ(quarantine_events, 1);
+}
+
+// `fabatlas run JOB --workers N --out DIR`: an embedded coordinator and N
+// worker processes give the in-process form.
+TEST(ClusterCli, RunWritesTheSameFormAsTheInProcessRun) {
+  fs::path dir = FreshDir("cli_run");
+  pid_t pid = Spawn({(BinDir() / "fabatlas").string(), "run", JobPath().string(), "--workers", "2", "--out",
+                     (dir / "out").string(), "--quiet"},
+                    dir / "run.log");
+  ASSERT_EQ(WaitExit(pid, std::chrono::seconds(240)), 0) << ReadText(dir / "run.log");
+  EXPECT_EQ(ReadText(dir / "out/form.json"), ReferenceForm());
+  std::string statistics = ReadText(dir / "out/statistics.json");
+  EXPECT_NE(statistics.find("samples"), std::string::npos) << statistics;
+  storage::JobStore store(dir / "out/cluster-state/state.db");
+  EXPECT_EQ(store.CheckConsistency(), std::vector<std::string>{});
+  EXPECT_EQ(store.ActiveLeases(), 0);
+}
+
+// `fabatlas cancel` over gRPC: the job ends CANCELLED and its tasks are no
+// longer leased to anyone; an unknown job is a one-line error, exit 2.
+TEST(ClusterCli, CancelStopsTheJobOverGrpc) {
+  fs::path dir = FreshDir("cli_cancel");
+  CoordinatorProcess c = StartCoordinator(dir / "state", 0);
+  ASSERT_GT(c.port, 0);
+  std::string target = "127.0.0.1:" + std::to_string(c.port);
+  std::string id = Client(c.port).Submit(JobPath());
+  // No worker yet: wait until the driver has queued the bootstrap samples.
+  v1::JobStatus s;
+  for (int i = 0; i < 200 && s.tasks_queued() == 0; ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    s = Client(c.port).Status(id);
+  }
+  ASSERT_GT(s.tasks_queued(), 0);
+  pid_t cancel = Spawn({(BinDir() / "fabatlas").string(), "cancel", id, "--coordinator", target}, dir / "cancel.log");
+  ASSERT_EQ(WaitExit(cancel, std::chrono::seconds(30)), 0) << ReadText(dir / "cancel.log");
+  EXPECT_NE(ReadText(dir / "cancel.log").find("CANCELLED"), std::string::npos) << ReadText(dir / "cancel.log");
+  EXPECT_EQ(Client(c.port).Status(id).state(), v1::JOB_STATE_CANCELLED);
+  pid_t worker = StartWorker(c.port, dir / "w0");
+  std::this_thread::sleep_for(std::chrono::seconds(2));
+  ::kill(worker, SIGTERM);
+  EXPECT_EQ(WaitExit(worker, std::chrono::seconds(30)), 0);
+  EXPECT_NE(WorkerSummary(dir / "w0").find("ran 0 tasks"), std::string::npos) << WorkerSummary(dir / "w0");
+  v1::JobStatus after = Client(c.port).Status(id);
+  EXPECT_EQ(after.state(), v1::JOB_STATE_CANCELLED);
+  EXPECT_EQ(after.tasks_done(), 0);
+  pid_t unknown =
+      Spawn({(BinDir() / "fabatlas").string(), "cancel", "0123456789abcdef", "--coordinator", target}, dir / "unknown.log");
+  EXPECT_EQ(WaitExit(unknown, std::chrono::seconds(30)), 2);
+  std::string message = ReadText(dir / "unknown.log");
+  EXPECT_NE(message.find("NOT_FOUND"), std::string::npos) << message;
+  EXPECT_EQ(std::count(message.begin(), message.end(), '\n'), 1) << message;
+  ::kill(c.pid, SIGTERM);
+  EXPECT_EQ(WaitExit(c.pid, std::chrono::seconds(30)), 0);
+}
+
+// A blob upload cut off by a kill -9 of the coordinator resumes where the
+// server's partial file ends, and the published blob is the uploaded bytes.
+TEST(ClusterBlobs, UploadInterruptedByACoordinatorKillResumes) {
+  fs::path dir = FreshDir("blob_resume");
+  CoordinatorProcess c = StartCoordinator(dir / "state", 0);
+  ASSERT_GT(c.port, 0);
+  const int port = c.port;
+  std::mt19937_64 rng(3);
+  std::string data((5 << 20) + 123, '\0');
+  for (char& ch : data) ch = static_cast<char>(rng());
+  const std::string digest = Sha256Hex(data);
+  auto stub = [&] {
+    return v1::BlobService::NewStub(protocol::MakeChannel("127.0.0.1:" + std::to_string(port), {}));
+  };
+  auto committed = [&] {
+    grpc::ClientContext ctx;
+    protocol::Prepare(ctx, {}, std::chrono::seconds(5));
+    v1::QueryWriteStatusRequest req;
+    req.set_digest(digest);
+    v1::QueryWriteStatusResponse resp;
+    EXPECT_TRUE(stub()->QueryWriteStatus(&ctx, req, &resp).ok());
+    EXPECT_FALSE(resp.complete());
+    return resp.committed_size();
+  };
+  {
+    // Three 1 MiB chunks of six, then the coordinator dies mid-stream.
+    auto writer_stub = stub();
+    grpc::ClientContext ctx;
+    protocol::Prepare(ctx, {}, std::chrono::seconds(30));
+    v1::WriteResponse resp;
+    auto writer = writer_stub->Write(&ctx, &resp);
+    for (int i = 0; i < 3; ++i) {
+      v1::WriteChunk chunk;
+      chunk.set_digest(digest);
+      chunk.set_size(static_cast<std::int64_t>(data.size()));
+      chunk.set_offset(std::int64_t{i} << 20);
+      chunk.set_data(data.substr(static_cast<std::size_t>(i) << 20, 1 << 20));
+      ASSERT_TRUE(writer->Write(chunk));
+    }
+    for (int i = 0; i < 250 && committed() < (3 << 20); ++i) std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    ASSERT_EQ(committed(), 3 << 20);
+    KillAndReap(c.pid);
+    EXPECT_FALSE(writer->Finish().ok());
+  }
+  c = StartCoordinator(dir / "state", port);
+  ASSERT_EQ(c.port, port) << ReadText(dir / "state/coordinator.log");
+  EXPECT_EQ(committed(), 3 << 20);  // the partial upload survived the kill
+  std::string uploaded;
+  auto s = protocol::UploadBlob(*stub(), {}, data, std::chrono::seconds(30), &uploaded);
+  ASSERT_TRUE(s.ok()) << s.error_message();
+  EXPECT_EQ(uploaded, digest);
+  std::string back;
+  s = protocol::DownloadBlob(*stub(), {}, digest, std::chrono::seconds(30), &back);
+  ASSERT_TRUE(s.ok()) << s.error_message();
+  EXPECT_TRUE(back == data);
+  ::kill(c.pid, SIGTERM);
+  EXPECT_EQ(WaitExit(c.pid, std::chrono::seconds(30)), 0);
+  storage::BlobStore blobs(dir / "state/blobs");
+  EXPECT_TRUE(blobs.Verify(digest));
+}
+
+// `fabatlas watch` keeps following the job across a kill -9 and restart of
+// the coordinator and exits 0 when the job succeeds.
+TEST(ClusterCli, WatchReconnectsAfterACoordinatorRestart) {
+  fs::path dir = FreshDir("cli_watch");
+  CoordinatorProcess c = StartCoordinator(dir / "state", 0);
+  ASSERT_GT(c.port, 0);
+  const int port = c.port;
+  std::string target = "127.0.0.1:" + std::to_string(port);
+  std::string id = Client(port).Submit(JobPath());
+  pid_t watch = Spawn({(BinDir() / "fabatlas").string(), "watch", id, "--coordinator", target}, dir / "watch.log");
+  // No worker yet, so the job cannot end before the restart.
+  for (int i = 0; i < 250 && ReadText(dir / "watch.log").find("RUNNING") == std::string::npos; ++i)
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  ASSERT_NE(ReadText(dir / "watch.log").find("RUNNING"), std::string::npos) << ReadText(dir / "watch.log");
+  KillAndReap(c.pid);
+  std::this_thread::sleep_for(std::chrono::milliseconds(1500));
+  EXPECT_EQ(WaitExit(watch, std::chrono::milliseconds(0)), -1) << ReadText(dir / "watch.log");  // still watching
+  c = StartCoordinator(dir / "state", port);
+  ASSERT_EQ(c.port, port) << ReadText(dir / "state/coordinator.log");
+  std::vector<pid_t> workers;
+  for (int i = 0; i < 2; ++i) workers.push_back(StartWorker(port, dir / ("w" + std::to_string(i))));
+  EXPECT_EQ(WaitExit(watch, std::chrono::seconds(240)), 0) << ReadText(dir / "watch.log");
+  EXPECT_NE(ReadText(dir / "watch.log").find("SUCCEEDED"), std::string::npos) << ReadText(dir / "watch.log");
+  for (pid_t p : workers) ::kill(p, SIGTERM);
+  for (pid_t p : workers) EXPECT_EQ(WaitExit(p, std::chrono::seconds(30)), 0);
+  StopAndCheckStore(c, dir / "state", id);
 }

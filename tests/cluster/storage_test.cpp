@@ -199,3 +199,67 @@ TEST(ClusterStorage, CorruptUploadIsRejectedAndCorruptBlobFailsVerify) {
   EXPECT_FALSE(blobs.Verify(digest));
   EXPECT_THROW(blobs.Append("not-a-digest", 0, "x"), fabatlas::InputError);
 }
+
+TEST(ClusterStorage, SubtreeRecordsOfAcceptedSamplesOnly) {
+  fs::path dir = FreshDir("subtrees");
+  auto use = [](const std::string& key, double seconds, bool measured, std::vector<std::string> children,
+                const std::string& digest) {
+    SubtreeUse u;
+    u.key = key;
+    u.topology = "t" + key;
+    u.op = children.empty() ? "sphere" : "union";
+    u.seconds = seconds;
+    u.measured = measured;
+    u.bytes = 1000;
+    u.children = std::move(children);
+    u.blob_digest = digest;
+    return u;
+  };
+  {
+    JobStore store(dir / "state.db");
+    AddRunningJob(store, 3);
+    auto grants = store.GrantLeases("w1", 3, 1000, 500);
+    ASSERT_EQ(grants.size(), 3u);
+    // Sample 0 computes leaf "a" (0.5 s, uploaded) and root "r0" over it.
+    Completion c0{grants[0].lease_id, grants[0].task_key, 1, "r0", false, 1};
+    c0.point_key = "0,0";
+    c0.subtrees = {use("a", 0.5, true, {}, "dA"), use("r0", 0.25, true, {"a"}, "")};
+    // Sample 1 finds "a" in its cache (carried 0.5 s, not a measurement).
+    Completion c1{grants[1].lease_id, grants[1].task_key, 1, "r1", false, 1};
+    c1.point_key = "0,1";
+    c1.subtrees = {use("a", 0.5, false, {}, "dA"), use("r1", 0.125, true, {"a"}, "dR1")};
+    // A duplicate of sample 0 and a fenced result of sample 2 add nothing.
+    Completion dup = c0;
+    dup.subtrees = {use("a", 9.0, true, {}, "other"), use("x", 1.0, true, {}, "")};
+    Completion fenced{grants[2].lease_id, grants[2].task_key, 7, "r2", false, 1};
+    fenced.point_key = "1,1";
+    fenced.subtrees = {use("y", 1.0, true, {}, "")};
+    auto outcomes = store.Complete({c0, c1, dup, fenced}, 1100, 100);
+    EXPECT_EQ(outcomes[0], CompletionOutcome::kAccepted);
+    EXPECT_EQ(outcomes[1], CompletionOutcome::kAccepted);
+    EXPECT_EQ(outcomes[2], CompletionOutcome::kDuplicate);
+    EXPECT_EQ(outcomes[3], CompletionOutcome::kFenced);
+  }
+  JobStore store(dir / "state.db");  // durable across reopen
+  auto rows = store.Subtrees("job1");
+  ASSERT_EQ(rows.size(), 3u);  // a, r0, r1 (ordered by key)
+  EXPECT_EQ(rows[0].key, "a");
+  EXPECT_EQ(rows[0].uses, 2);
+  EXPECT_EQ(rows[0].seconds_count, 1);  // the cache hit is no measurement
+  EXPECT_DOUBLE_EQ(rows[0].seconds_sum, 0.5);
+  EXPECT_DOUBLE_EQ(rows[0].seconds(), 0.5);
+  EXPECT_EQ(rows[0].blob_digest, "dA");
+  EXPECT_TRUE(rows[0].children.empty());
+  EXPECT_EQ(rows[1].key, "r0");
+  EXPECT_EQ(rows[1].children, std::vector<std::string>{"a"});
+  EXPECT_EQ(rows[1].blob_digest, "");
+  EXPECT_EQ(rows[2].blob_digest, "dR1");
+  EXPECT_DOUBLE_EQ(rows[2].seconds(), 0.125);
+  auto samples = store.SampleSubtreeKeys("job1");
+  ASSERT_EQ(samples.size(), 2u);
+  EXPECT_EQ(samples[0].point_key, "0,0");
+  EXPECT_EQ(samples[0].subtree_keys, (std::vector<std::string>{"a", "r0"}));
+  EXPECT_EQ(samples[1].point_key, "0,1");
+  EXPECT_EQ(samples[1].subtree_keys, (std::vector<std::string>{"a", "r1"}));
+  EXPECT_TRUE(store.Subtrees("other-job").empty());
+}

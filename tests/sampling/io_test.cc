@@ -50,6 +50,10 @@ TEST(SamplingJobFile, ParsesAllSections) {
   EXPECT_EQ(minimal.subdivisions, 5);
   EXPECT_EQ(minimal.sampling.max_depth, SamplingOptions{}.max_depth);
   EXPECT_EQ(minimal.threads, 1);
+  EXPECT_DOUBLE_EQ(minimal.cache_min_subtree_seconds, 0.1);
+  const JobFile cached = ParseJobFile("design: a.yaml\ncache: {min_subtree_seconds: 0.25}\n", "job.yaml");
+  EXPECT_DOUBLE_EQ(cached.cache_min_subtree_seconds, 0.25);
+  EXPECT_EQ(cached.reserved_sections.count("cache"), 1u);
 }
 
 TEST(SamplingJobFile, ErrorsNameFileLineAndColumn) {
@@ -61,6 +65,8 @@ TEST(SamplingJobFile, ErrorsNameFileLineAndColumn) {
   EXPECT_EQ(ErrorOf("design: a.yaml\nthreads: two\n"),
             "jobs/vase.yaml:2:10: threads must be an integer, got 'two'");
   EXPECT_EQ(ErrorOf("sampling: {max_depth: 3}\n"), "jobs/vase.yaml:1:1: missing required key 'design'");
+  EXPECT_EQ(ErrorOf("design: a.yaml\ncache:\n  min_subtree_seconds: -1\n"),
+            "jobs/vase.yaml:3:24: cache.min_subtree_seconds must be in [0.000000, 1000000000.000000], got -1");
   EXPECT_EQ(ErrorOf("design: a.yaml\nwhatever: 1\n"),
             "jobs/vase.yaml:2:1: unknown key 'whatever' (expected design, sampling, threads, cluster, cache)");
   const std::string syntax = ErrorOf("design: [a.yaml\n");

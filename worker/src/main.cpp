@@ -1,5 +1,5 @@
 // fabatlas-worker — one process per worker machine (worker.h).
-//   fabatlas-worker --coordinator HOST:PORT [--slots N] [--token T | --token-file F]
+//   fabatlas-worker --coordinator HOST:PORT [--slots N] [--threads T] [--token T | --token-file F]
 //                   [--tls-ca ca.pem [--tls-cert c.pem --tls-key c.key]]
 // SIGTERM / SIGINT: finish the running tasks, report them, return the leases
 // not started, exit 0. Exit 2 with one line on stderr when the coordinator
@@ -23,6 +23,8 @@ int main(int argc, char** argv) {
   double connect_timeout = 30;
   app.add_option("--coordinator", o.coordinator, "coordinator HOST:PORT")->required();
   app.add_option("--slots", o.slots, "tasks run at once (default 1)");
+  app.add_option("--threads", o.threads,
+                 "threads the evaluations may keep busy in total (default: --slots, one per slot)");
   app.add_option("--token", o.security.token, "bearer token");
   app.add_option("--token-file", token_file, "file holding the bearer token");
   app.add_option("--tls-ca", o.security.tls_ca, "CA certificate of the deployment (PEM); enables TLS");
@@ -56,7 +58,9 @@ int main(int argc, char** argv) {
         o.security.token.pop_back();
     }
     auto summary = fabatlas::worker::RunWorker(o, stop);
-    std::cerr << "fabatlas-worker: ran " << summary.tasks_run << " tasks\n";
+    std::cerr << "fabatlas-worker: ran " << summary.tasks_run << " tasks, uploaded " << summary.blobs_uploaded
+              << " blobs, downloaded " << summary.solids_downloaded << " solids, re-evaluated "
+              << summary.samples_reevaluated << " samples\n";
     return 0;
   } catch (const fabatlas::InputError& e) {
     std::cerr << "fabatlas-worker: " << e.what() << "\n";

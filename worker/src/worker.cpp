@@ -15,11 +15,17 @@
 #include <set>
 #include <thread>
 
+#include <tbb/global_control.h>
+
 #include "fabatlas/design/design.h"
+#include "fabatlas/design/evaluate_sample.h"
 #include "fabatlas/error.h"
+#include "fabatlas/geometry/solid.h"
 #include "fabatlas/precompute/design_evaluator.h"
+#include "fabatlas/protocol/blob_transfer.h"
 #include "fabatlas/protocol/job_bundle.h"
 #include "fabatlas/protocol/tasks.h"
+#include "fabatlas/sampling/job_file.h"
 #include "fabatlas/sha256.h"
 #include "fabatlas/v1/blob.grpc.pb.h"
 #include "fabatlas/v1/worker.grpc.pb.h"
@@ -49,6 +55,13 @@ std::string DefaultWorkerId() {
 struct JobContext {
   std::unique_ptr<precompute::DesignSampleEvaluator> evaluator;
   std::string error;  // set when the job could not be loaded
+  double min_subtree_seconds = 0.1;  // job file cache.min_subtree_seconds
+  std::mutex mu;
+  // Subtree key -> seconds its root took when this worker last computed it
+  // (cache hits report 0; tasks.proto SubtreeRecord.seconds wants this).
+  std::map<std::string, double> last_seconds;
+  // Subtree key -> blob digest, for the subtrees this worker uploaded.
+  std::map<std::string, std::string> subtree_blobs;
 };
 
 class Worker {
@@ -65,6 +78,12 @@ class Worker {
   }
 
   WorkerSummary Run() {
+    // Each slot thread takes part in its evaluation's TBB loops; TBB may add
+    // max_allowed_parallelism - 1 helper threads, so this bounds the busy
+    // threads at max(slots, threads).
+    int threads = o_.threads > 0 ? o_.threads : o_.slots;
+    tbb::global_control parallelism(tbb::global_control::max_allowed_parallelism,
+                                    static_cast<std::size_t>(std::max(1, threads - o_.slots + 1)));
     for (int i = 0; i < o_.slots; ++i) slots_.emplace_back([this] { SlotLoop(); });
     heartbeat_ = std::thread([this] { HeartbeatLoop(); });
     try {
@@ -74,6 +93,9 @@ class Worker {
       throw;
     }
     Finish();
+    summary_.blobs_uploaded = blobs_uploaded_;
+    summary_.solids_downloaded = solids_downloaded_;
+    summary_.samples_reevaluated = samples_reevaluated_;
     return summary_;
   }
 
@@ -246,7 +268,24 @@ class Worker {
       v1::JobBundle bundle;
       if (!bundle.ParseFromString(bytes)) throw InputError("job bundle does not parse");
       auto files = protocol::Materialize(bundle, o_.cache_dir / lease.job_bundle_digest().substr(0, 16));
-      ctx->evaluator = std::make_unique<precompute::DesignSampleEvaluator>(design::LoadDesign(files.design_file));
+      ctx->min_subtree_seconds =
+          sampling::ParseJobFile(bundle.job_file(), files.job_file.string()).cache_min_subtree_seconds;
+      precompute::DesignEvaluatorOptions options;
+      JobContext* job = ctx.get();
+      options.on_subtree_computed = [this, job](const std::string& key, const geometry::Solid& solid,
+                                                double seconds) {
+        {
+          std::lock_guard lock(job->mu);
+          job->last_seconds[key] = seconds;
+          if (seconds < job->min_subtree_seconds || job->subtree_blobs.count(key)) return;
+        }
+        std::string digest = Upload(solid.Serialize());
+        if (digest.empty()) return;
+        std::lock_guard lock(job->mu);
+        job->subtree_blobs.emplace(key, digest);
+      };
+      ctx->evaluator = std::make_unique<precompute::DesignSampleEvaluator>(design::LoadDesign(files.design_file),
+                                                                           std::move(options));
     } catch (const std::exception& e) {
       ctx->error = e.what();
       auto failed = ctx;
@@ -276,10 +315,11 @@ class Worker {
       }
       try {
         if (p.kind() == v1::TASK_KIND_SAMPLE) {
-          result = protocol::SampleResultOf(ctx->evaluator->EvaluateSample(protocol::PointOf(p.point_a())));
+          result = EvaluateSample(*ctx, protocol::PointOf(p.point_a()));
         } else if (p.kind() == v1::TASK_KIND_GEOMETRY_CHANGE) {
-          result.set_geometry_change(
-              ctx->evaluator->GeometryChange(protocol::PointOf(p.point_a()), protocol::PointOf(p.point_b())));
+          geometry::Solid a = SolidOf(*ctx, protocol::PointOf(p.point_a()), p.solid_digest_a());
+          geometry::Solid b = SolidOf(*ctx, protocol::PointOf(p.point_b()), p.solid_digest_b());
+          result.set_geometry_change(geometry::DeltaG(a, b));
         } else {
           done.set_error("unknown task kind " + std::to_string(p.kind()));
           return done;
@@ -293,6 +333,69 @@ class Worker {
     result.set_wall_seconds(std::chrono::duration<double>(Clock::now() - wall0).count());
     *done.mutable_result() = std::move(result);
     return done;
+  }
+
+  // Uploads a blob (resuming a partial upload); its digest, or "" when the
+  // upload failed (the result then names no blob; tasks.proto "Geometry
+  // blobs").
+  std::string Upload(const std::string& bytes) {
+    std::string digest;
+    grpc::Status s = protocol::UploadBlob(*blob_stub_, o_.security, bytes, std::chrono::seconds(30), &digest);
+    if (!s.ok()) return "";
+    ++blobs_uploaded_;
+    return digest;
+  }
+
+  // EvaluateSample (seed 001 Alg. 2) with the root solid of a valid sample
+  // uploaded and the sample's subtree records (tasks.proto SampleResult).
+  v1::TaskResult EvaluateSample(JobContext& ctx, const sampling::SamplePoint& point) {
+    design::SampleResult r = ctx.evaluator->Evaluate(point);
+    sampling::SampleOutcome outcome;
+    outcome.valid = r.valid;
+    outcome.failure_type = r.failure;
+    outcome.properties = r.properties;
+    v1::TaskResult result = protocol::SampleResultOf(outcome);
+    v1::SampleResult* sample = result.mutable_sample();
+    if (r.valid) sample->set_solid_digest(Upload(r.solid.Serialize()));
+    std::lock_guard lock(ctx.mu);
+    for (const design::SubtreeRecord& rec : r.subtrees) {
+      v1::SubtreeRecord* out = sample->add_subtrees();
+      out->set_key(rec.key);
+      out->set_topology(rec.topology);
+      out->set_op(rec.op);
+      double seconds = rec.seconds;
+      if (rec.from_cache) {
+        auto it = ctx.last_seconds.find(rec.key);
+        if (it != ctx.last_seconds.end()) seconds = it->second;
+      }
+      out->set_seconds(seconds);
+      out->set_from_cache(rec.from_cache);
+      out->set_bytes(static_cast<std::int64_t>(rec.bytes));
+      for (const auto& child : rec.children) out->add_children(child);
+      if (auto it = ctx.subtree_blobs.find(rec.key); it != ctx.subtree_blobs.end()) out->set_blob_digest(it->second);
+    }
+    return result;
+  }
+
+  // The root solid of a sample for ΔG: from this worker's memory, else the
+  // blob another worker uploaded, else evaluated again (deterministic, so all
+  // three are the same level set).
+  geometry::Solid SolidOf(JobContext& ctx, const sampling::SamplePoint& point, const std::string& digest) {
+    if (auto solid = ctx.evaluator->RememberedSolid(point.key)) return *solid;
+    if (!digest.empty()) {
+      std::string bytes;
+      if (protocol::DownloadBlob(*blob_stub_, o_.security, digest, std::chrono::seconds(60), &bytes).ok()) {
+        try {
+          geometry::Solid solid = geometry::Solid::Deserialize(bytes);
+          ctx.evaluator->Remember(point.key, solid);
+          ++solids_downloaded_;
+          return solid;
+        } catch (const InputError&) {
+        }
+      }
+    }
+    ++samples_reevaluated_;
+    return ctx.evaluator->SolidOf(point);
   }
 
   WorkerOptions o_;
@@ -316,6 +419,7 @@ class Worker {
   std::mutex jobs_mu_;
   std::map<std::string, std::shared_ptr<JobContext>> jobs_;
   WorkerSummary summary_;
+  std::atomic<std::int64_t> blobs_uploaded_{0}, solids_downloaded_{0}, samples_reevaluated_{0};
 };
 
 }  // namespace

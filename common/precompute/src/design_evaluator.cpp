@@ -33,14 +33,33 @@ design::Point DesignPointOf(const design::Design& d, const std::vector<double>& 
   return p;
 }
 
+// The evaluator's subtree cache, telling on_subtree_computed about every
+// subtree offered to it (EvaluateSample offers exactly what it computed).
+class DesignSampleEvaluator::ObservedCache final : public design::SubtreeCache {
+ public:
+  ObservedCache(design::SubtreeCache& inner, const DesignEvaluatorOptions& options)
+      : inner_(inner), options_(options) {}
+  std::optional<geometry::Solid> Find(const std::string& key) override { return inner_.Find(key); }
+  void Offer(const std::string& key, const geometry::Solid& solid, double seconds) override {
+    options_.on_subtree_computed(key, solid, seconds);
+    inner_.Offer(key, solid, seconds);
+  }
+
+ private:
+  design::SubtreeCache& inner_;
+  const DesignEvaluatorOptions& options_;
+};
+
 DesignSampleEvaluator::DesignSampleEvaluator(design::Design design, DesignEvaluatorOptions options)
     : design_(std::move(design)),
-      options_(options),
-      subtrees_(design::InMemorySubtreeCache::Options{options.min_subtree_seconds, options.subtree_memory_bytes}) {}
+      options_(std::move(options)),
+      subtrees_(design::InMemorySubtreeCache::Options{options_.min_subtree_seconds, options_.subtree_memory_bytes}) {
+  if (options_.on_subtree_computed) observed_ = std::make_unique<ObservedCache>(subtrees_, options_);
+}
 
 design::SampleResult DesignSampleEvaluator::Evaluate(const sampling::SamplePoint& point) {
   design::EvaluateOptions eval;
-  eval.cache = &subtrees_;
+  eval.cache = observed_ ? observed_.get() : static_cast<design::SubtreeCache*>(&subtrees_);
   design::SampleResult r = design::EvaluateSample(design_, DesignPointOf(design_, point.u), eval);
   if (r.valid) Remember(point.key, r.solid);
   return r;
@@ -62,6 +81,14 @@ double DesignSampleEvaluator::GeometryChange(const sampling::SamplePoint& a, con
 std::size_t DesignSampleEvaluator::reevaluations() const {
   std::lock_guard<std::mutex> lock(mutex_);
   return reevaluations_;
+}
+
+std::optional<geometry::Solid> DesignSampleEvaluator::RememberedSolid(const sampling::PointKey& key) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  auto it = index_.find(key);
+  if (it == index_.end()) return std::nullopt;
+  lru_.splice(lru_.begin(), lru_, it->second);
+  return it->second->second;
 }
 
 geometry::Solid DesignSampleEvaluator::SolidOf(const sampling::SamplePoint& point) {

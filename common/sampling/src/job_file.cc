@@ -104,6 +104,9 @@ JobFile ParseJobFile(const std::string& yaml_text, const std::string& path) {
     } else if (key == "threads") {
       job.threads = static_cast<int>(Integer(path, value, "threads", 1, 4096));
     } else if (key == "cluster" || key == "cache") {
+      if (key == "cache" && value.IsMap() && value["min_subtree_seconds"])
+        job.cache_min_subtree_seconds =
+            Real(path, value["min_subtree_seconds"], "cache.min_subtree_seconds", 0.0, 1e9);
       YAML::Emitter out;
       out << value;
       job.reserved_sections[key] = out.c_str();

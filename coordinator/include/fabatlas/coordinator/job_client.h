@@ -35,9 +35,13 @@ class JobClient {
   std::string Submit(const std::filesystem::path& job_file, bool* created = nullptr);
   v1::JobStatus Status(const std::string& job_id);
   // Calls on_status for every update until the job ends (returns its final
-  // status) or on_status returns false.
+  // status) or on_status returns false. When the stream breaks before the
+  // job ends (e.g. the coordinator restarts), watches again with backoff
+  // (200 ms doubling to 5 s) and fails only after nothing was heard for
+  // reconnect_for; NOT_FOUND and refused credentials fail at once.
   v1::JobStatus Watch(const std::string& job_id,
-                      const std::function<bool(const v1::JobStatus&)>& on_status);
+                      const std::function<bool(const v1::JobStatus&)>& on_status,
+                      std::chrono::milliseconds reconnect_for = std::chrono::minutes(5));
   v1::JobStatus Cancel(const std::string& job_id);
   std::vector<v1::JobStatus> List();
   // File name -> bytes of a finished job's outputs.

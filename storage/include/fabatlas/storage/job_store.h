@@ -75,12 +75,30 @@ struct LeaseGrant {
   std::int64_t deadline_ms = 0;
 };
 
+// One subtree root of a sample (fabatlas.v1.SubtreeRecord).
+struct SubtreeUse {
+  std::string key;          // cache key: hex SHA-256 of (τ, ρ, voxel size)
+  std::string topology;     // hex SHA-256 of τ
+  std::string op;
+  double seconds = 0;       // root compute time on the worker (for a cache hit:
+                            // the worker's last measurement of the key)
+  bool measured = true;     // false for a cache hit
+  std::int64_t bytes = 0;   // memory of the level set
+  std::vector<std::string> children;  // child keys, in tree order
+  std::string blob_digest;  // serialized Solid in the blob store, or ""
+};
+
 struct Completion {
   std::string lease_id, task_key;
   std::int64_t attempt = 0;
   std::string result;      // serialized TaskResult; ignored when failed
   bool failed = false;     // the worker could not run the task: requeue
   int sample_valid = -1;   // sample tasks: 1 valid, 0 invalid; -1 otherwise
+  // Sample tasks: the point key ("k0,k1,..." as in the task key) and the
+  // sample's subtrees, post-order (root last); stored only when the result
+  // is accepted, in the same transaction.
+  std::string point_key;
+  std::vector<SubtreeUse> subtrees;
 };
 
 enum class CompletionOutcome {
@@ -100,6 +118,28 @@ struct TaskCounts {
   std::int64_t total = 0, queued = 0, leased = 0, done = 0, quarantined = 0;
   std::int64_t samples_done = 0, samples_valid = 0;
   std::int64_t lease_expiries = 0, fenced_results = 0;
+};
+
+// A subtree of a job, over all its accepted sample results (the geometry
+// cache's dependency graph, seed 001 Sec. 6).
+struct SubtreeRow {
+  std::string key, topology, op;
+  std::string blob_digest;  // first non-empty digest reported, or ""
+  std::int64_t bytes = 0;
+  std::vector<std::string> children;
+  double seconds_sum = 0;          // over measured (not cached) evaluations
+  std::int64_t seconds_count = 0;  // how many measured evaluations
+  double last_seconds = 0;         // latest reported seconds (measured or carried)
+  std::int64_t uses = 0;           // accepted samples containing it
+  // Mean measured seconds, or last_seconds when none was measured.
+  double seconds() const { return seconds_count ? seconds_sum / seconds_count : last_seconds; }
+};
+
+// The subtrees of one accepted sample, post-order (root last).
+struct SampleSubtrees {
+  std::string task_key;
+  std::string point_key;  // "k0,k1,..." (sampling::PointKey in decimal)
+  std::vector<std::string> subtree_keys;
 };
 
 struct Event {
@@ -165,6 +205,16 @@ class JobStore {
   // Counts for one job, or for all jobs when job_id is empty.
   TaskCounts CountTasks(const std::string& job_id);
   std::int64_t ActiveLeases();
+
+  // --- subtrees (geometry cache records, tasks.proto SubtreeRecord) ---
+  // Every subtree of the job's accepted sample results, by key. Recorded
+  // when a sample result is accepted (first accepted result of a task key
+  // wins; duplicates and fenced results add nothing), so a job re-run after
+  // a restart never counts a sample twice.
+  std::vector<SubtreeRow> Subtrees(const std::string& job_id);
+  // Sample -> subtree keys for the job's accepted sample results, in task
+  // order.
+  std::vector<SampleSubtrees> SampleSubtreeKeys(const std::string& job_id);
 
   // --- workers ---
   void TouchWorker(const std::string& worker_id, int slots, std::int64_t now_ms);

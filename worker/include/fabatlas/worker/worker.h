@@ -4,7 +4,9 @@
 // leases from a separate thread (DESIGN.md "Cluster and reliability").
 //
 // Jobs are fetched once per job bundle digest from BlobService and unpacked
-// under cache_dir. Reconnects with exponential backoff (200 ms doubling to
+// under cache_dir. Valid samples' root solids and slow subtrees are uploaded
+// as blobs and ΔG tasks download the solids they lack (tasks.proto "Geometry
+// blobs"). Reconnects with exponential backoff (200 ms doubling to
 // 5 s) when the coordinator goes away, and keeps reporting its in-flight
 // leases and unsent results, so a restarted coordinator accepts them.
 #pragma once
@@ -22,6 +24,10 @@ struct WorkerOptions {
   std::string coordinator;             // HOST:PORT
   protocol::ClientSecurity security;
   int slots = 1;                       // tasks run at once
+  // Threads the evaluations may keep busy in total (TBB/OpenVDB inside a
+  // task included); 0 = slots, i.e. each slot evaluates on its own thread
+  // only, so a worker with N slots uses at most N cores for evaluation.
+  int threads = 0;
   std::filesystem::path cache_dir;     // job bundles; default: a temp dir
   std::string worker_id;               // default: host-pid-start time
   // Give up (InputError) when the coordinator has not answered once within
@@ -33,6 +39,9 @@ struct WorkerOptions {
 struct WorkerSummary {
   std::int64_t tasks_run = 0;
   std::int64_t results_acknowledged = 0;
+  std::int64_t blobs_uploaded = 0;       // solids and subtrees (tasks.proto "Geometry blobs")
+  std::int64_t solids_downloaded = 0;    // ΔG inputs another worker evaluated
+  std::int64_t samples_reevaluated = 0;  // ΔG inputs evaluated again (no blob, or it failed)
 };
 
 // Runs until `stop` becomes true, then finishes the running tasks, reports

@@ -5,10 +5,13 @@
 #pragma once
 
 #include <cstddef>
+#include <functional>
 #include <list>
 #include <map>
 #include <memory>
 #include <mutex>
+#include <optional>
+#include <string>
 
 #include "fabatlas/design/design.h"
 #include "fabatlas/design/evaluate_sample.h"
@@ -36,6 +39,11 @@ struct DesignEvaluatorOptions {
   // root took at least min_subtree_seconds are kept.
   std::size_t subtree_memory_bytes = std::size_t{512} << 20;
   double min_subtree_seconds = 0.0;
+  // Called on the evaluating thread for every subtree this evaluator computes
+  // (not for cache hits), with its cache key, geometry and the seconds its
+  // root took from its children. Cluster workers upload slow subtrees from
+  // here (tasks.proto "Geometry blobs"). Must be thread-safe.
+  std::function<void(const std::string& key, const geometry::Solid& solid, double seconds)> on_subtree_computed;
 };
 
 // Thread-safe: the executor calls it from several threads at once.
@@ -46,19 +54,30 @@ class DesignSampleEvaluator final : public sampling::SampleEvaluator {
   sampling::SampleOutcome EvaluateSample(const sampling::SamplePoint& point) override;
   double GeometryChange(const sampling::SamplePoint& a, const sampling::SamplePoint& b) override;
 
+  // EvaluateSample of seed 001 Alg. 2 through the subtree cache, with the
+  // whole result (root solid, subtree records, checks); remembers the root
+  // solid of a valid sample for later ΔG.
+  design::SampleResult Evaluate(const sampling::SamplePoint& point);
+  // The remembered root solid of the valid sample at `key`, if still in
+  // memory (no evaluation).
+  std::optional<geometry::Solid> RememberedSolid(const sampling::PointKey& key);
+  // Remembers a root solid obtained elsewhere (e.g. downloaded from the
+  // coordinator's blob store) for later ΔG.
+  void Remember(const sampling::PointKey& key, const geometry::Solid& solid);
+  // The root solid of the sample at `point`: remembered, else evaluated again
+  // (empty for an invalid sample).
+  geometry::Solid SolidOf(const sampling::SamplePoint& point);
+
   const design::Design& design() const { return design_; }
   std::size_t reevaluations() const;
 
  private:
-  // EvaluateSample of seed 001 Alg. 2 through the subtree cache; remembers
-  // the root solid of a valid sample for later ΔG.
-  design::SampleResult Evaluate(const sampling::SamplePoint& point);
-  geometry::Solid SolidOf(const sampling::SamplePoint& point);
-  void Remember(const sampling::PointKey& key, const geometry::Solid& solid);
+  class ObservedCache;
 
   design::Design design_;
   DesignEvaluatorOptions options_;
   design::InMemorySubtreeCache subtrees_;
+  std::unique_ptr<design::SubtreeCache> observed_;  // subtrees_ + on_subtree_computed
   mutable std::mutex mutex_;
   std::list<std::pair<sampling::PointKey, geometry::Solid>> lru_;  // front = most recent
   std::map<sampling::PointKey, decltype(lru_)::iterator> index_;

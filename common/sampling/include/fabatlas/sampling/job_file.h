@@ -9,7 +9,8 @@
 //     max_samples: 100000
 //   threads: 2                     # optional, local executor threads
 //   cluster: {...}                 # reserved, kept as YAML text
-//   cache: {...}                   # reserved, kept as YAML text
+//   cache:                         # kept as YAML text too
+//     min_subtree_seconds: 0.1     # cluster workers upload subtrees this slow
 #pragma once
 
 #include <map>
@@ -25,6 +26,10 @@ struct JobFile {
   int subdivisions = 5;
   SamplingOptions sampling;
   int threads = 1;
+  // cache.min_subtree_seconds: cluster workers upload the geometry of every
+  // subtree whose root took at least this long to compute (wall seconds) as
+  // a blob for the geometry cache artifact (seed 001 Sec. 6).
+  double cache_min_subtree_seconds = 0.1;
   // Reserved sections ("cluster", "cache") as YAML text, for later readers.
   std::map<std::string, std::string> reserved_sections;
 };
