@@ -4,7 +4,7 @@
 // under a budget of a quarter of H_rfree; median of --repeats runs, process
 // CPU time and wall time.
 //
-//   bench_cache_opt_max [--samples 1200000] [--repeats 3]
+//   bench_cache_opt_max [--samples 650000] [--repeats 3]
 #include <time.h>
 
 #include <algorithm>
@@ -34,7 +34,7 @@ double Median(std::vector<double> v) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  int samples = 1200000, repeats = 3;
+  int samples = 650000, repeats = 3;
   for (int i = 1; i + 1 < argc; i += 2) {
     std::string a = argv[i];
     if (a == "--samples") samples = std::stoi(argv[i + 1]);
@@ -43,7 +43,7 @@ int main(int argc, char** argv) {
   testing::SyntheticDesign d;
   d.parameters = 6;
   d.values = 10;
-  d.parts = 3;
+  d.parts = 4;
   d.samples = samples;
   d.seed = 7;
   testing::SyntheticGraph s = testing::MakeSyntheticGraph(d);

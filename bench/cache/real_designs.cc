@@ -98,6 +98,22 @@ int main(int argc, char** argv) {
       std::printf("     %-8s %s (%lld)  mean %.3f s  worst %.3f s\n", cache::StrategyName(s), Mb(p.cost.bytes).c_str(),
                   static_cast<long long>(p.cost.entries), p.cost.mean_seconds, p.cost.worst_seconds);
     }
+    // Equal budgets from 10 % to 100 % of H_rfree: OPT-MAX against OPT-AVE.
+    int worse = 0, better = 0;
+    double worst_mean_ratio = 0;
+    for (int k = 1; k <= 10; ++k) {
+      cache::CacheOptions q = o;
+      q.budget_bytes = static_cast<std::uint64_t>(0.1 * k * static_cast<double>(report.rfree.bytes));
+      q.strategy = cache::Strategy::kOptAve;
+      cache::CacheCost ave = cache::OptimizeCache(g, q).cost;
+      q.strategy = cache::Strategy::kOptMax;
+      cache::CacheCost max = cache::OptimizeCache(g, q).cost;
+      if (max.worst_seconds > ave.worst_seconds + 1e-12) ++worse;
+      if (max.worst_seconds < ave.worst_seconds - 1e-12) ++better;
+      if (ave.mean_seconds > 0) worst_mean_ratio = std::max(worst_mean_ratio, max.mean_seconds / ave.mean_seconds);
+    }
+    std::printf("   budgets 10..100%% of H_rfree: OPT-MAX worst lower in %d, higher in %d of 10; mean at most %.3fx OPT-AVE's\n",
+                better, worse, worst_mean_ratio);
     cache::ExactCacheOptions eo;
     eo.budget_bytes = o.budget_bytes;
     eo.min_seconds = min_seconds;

@@ -2,6 +2,7 @@
 // preview times follow from seed 001 Sec. 6.2 by hand.
 #include <gtest/gtest.h>
 
+#include "fabatlas/cache/cost_model.h"
 #include "fabatlas/cache/dependency_graph.h"
 #include "fabatlas/cache/exact_cache.h"
 #include "fabatlas/cache/optimize_cache.h"
@@ -206,5 +207,17 @@ TEST(OptimizeCache, RedundantNodesAreDroppedAsTheyBecomeRedundant) {
   EXPECT_EQ(naive.cost.worst_seconds, 0);
 }
 
+}  // namespace
+}  // namespace fabatlas::cache
+
+namespace fabatlas::cache {
+namespace {
+TEST(CostModel, DeterministicAndGrowingWithGeometry) {
+  EXPECT_EQ(ModelSubtreeSeconds("offset", 3000000, 4000000), ModelSubtreeSeconds("offset", 3000000, 4000000));
+  EXPECT_GT(ModelSubtreeSeconds("offset", 3000000, 4000000), ModelSubtreeSeconds("offset", 1000000, 1000000));
+  // An offset of a 3 MB pawn from 3 MB of input: about the 0.7 s measured.
+  EXPECT_NEAR(ModelSubtreeSeconds("offset", 3000000, 3000000), 0.58, 0.01);
+  EXPECT_GT(ModelSubtreeSeconds("no_such_op", 0, 0), 0);
+}
 }  // namespace
 }  // namespace fabatlas::cache

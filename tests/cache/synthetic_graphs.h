@@ -10,6 +10,7 @@
 #pragma once
 
 #include <cstdint>
+#include <fstream>
 #include <map>
 #include <random>
 #include <string>
@@ -79,6 +80,35 @@ inline SyntheticGraph MakeSyntheticGraph(const SyntheticDesign& d) {
       below = join;
     }
     g.samples.push_back({below});
+  }
+  return g;
+}
+
+// Reads a graph saved by `bench_cache_real_designs --graphs DIR`: lines
+// "N key seconds bytes op child,child,..." ("-" for no children), one per
+// subtree record of every valid sample, and "S rootkey" per sample.
+inline SyntheticGraph ReadGraphFile(const std::string& path) {
+  std::ifstream in(path);
+  SyntheticGraph g;
+  std::string tag;
+  while (in >> tag) {
+    if (tag == "S") {
+      SampleTree t;
+      in >> t.root;
+      g.samples.push_back(t);
+      continue;
+    }
+    SubtreeNode n;
+    std::string op, children;
+    in >> n.key >> n.seconds >> n.bytes >> op >> children;
+    if (children != "-")
+      for (std::size_t at = 0; at <= children.size();) {
+        std::size_t comma = children.find(',', at);
+        if (comma == std::string::npos) comma = children.size();
+        n.children.push_back(children.substr(at, comma - at));
+        at = comma + 1;
+      }
+    g.nodes.push_back(n);
   }
   return g;
 }

@@ -6,7 +6,7 @@
 // model costs instead: a function of facts every run computes identically —
 // the operation and the sizes of its output and input geometry. Measured
 // times are still reported beside the plan. Coefficients were fitted to
-// measured times of the example designs (docs/cache.md).
+// measured times of the example designs (docs/cache.md "Cost model").
 #pragma once
 
 #include <cstdint>

@@ -1,0 +1,84 @@
+// Cache plans on the real dependency graphs of the example designs
+// (configs/designs), recorded by `bench_cache_real_designs --graphs` with
+// measured root times (tests/cache/data/*.graph; docs/cache.md says how).
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cstdio>
+
+#include "fabatlas/cache/exact_cache.h"
+#include "fabatlas/cache/optimize_cache.h"
+#include "fabatlas/testing/paths.h"
+#include "synthetic_graphs.h"
+
+namespace fabatlas::cache {
+namespace {
+
+DependencyGraph Load(const std::string& name) {
+  auto s = testing::ReadGraphFile((fabatlas::testing::SourceDir() / "tests/cache/data" / (name + ".graph")).string());
+  return BuildDependencyGraph(s.nodes, s.samples);
+}
+
+class ExampleDesign : public ::testing::TestWithParam<const char*> {};
+INSTANTIATE_TEST_SUITE_P(Graphs, ExampleDesign,
+                         ::testing::Values("chess_pair", "cup", "pawn", "tube_wall_2d", "tube_wall_3d", "vase"));
+
+// OPT-MAX's worst case is never above OPT-AVE's at equal budget (10 % .. 100 %
+// of H_rfree, storage thresholds 100 ms and 10 ms), and its mean stays close.
+TEST_P(ExampleDesign, OptMaxWorstCaseNeverAboveOptAve) {
+  DependencyGraph g = Load(GetParam());
+  ASSERT_GT(g.sample_count(), 10);
+  for (double min_seconds : {0.1, 0.01}) {
+    CacheOptions o;
+    o.min_seconds = min_seconds;
+    CacheReport r = PlanCache(g, o);
+    for (int k = 1; k <= 10; ++k) {
+      o.budget_bytes = r.rfree.bytes * static_cast<std::uint64_t>(k) / 10;
+      o.strategy = Strategy::kOptAve;
+      CacheCost ave = OptimizeCache(g, o).cost;
+      o.strategy = Strategy::kOptMax;
+      CacheCost max = OptimizeCache(g, o).cost;
+      EXPECT_LE(max.worst_seconds, ave.worst_seconds + 1e-12) << GetParam() << " budget " << k * 10 << "%";
+      EXPECT_LE(max.mean_seconds, 1.11 * ave.mean_seconds + 1e-12) << GetParam() << " budget " << k * 10 << "%";
+    }
+  }
+}
+
+// The decoupled chess pair: pieces are stored, the 1 ms union is not, so the
+// redundancy-free cache holds pieces only and is several times smaller than
+// the top-level cache (seed 001 Fig. 14 "H_rfree" vs "H_TOP").
+TEST(ExampleDesigns, ChessPairRedundancyFreeCacheIsSeveralTimesSmallerThanTopLevel) {
+  DependencyGraph g = Load("chess_pair");
+  CacheReport r = PlanCache(g);
+  std::printf("chess_pair: H_TOP %.1f MB, H_rfree %.1f MB (%lld entries)\n", r.top.bytes / 1e6, r.rfree.bytes / 1e6,
+              static_cast<long long>(r.rfree.entries));
+  EXPECT_GE(static_cast<double>(r.top.bytes), 5.0 * static_cast<double>(r.rfree.bytes));
+  EXPECT_LT(r.rfree.worst_seconds, 0.2 * r.none.worst_seconds);
+  // Every sample's top-level geometry is in H_TOP: nothing left to compute.
+  EXPECT_EQ(r.top.worst_seconds, 0);
+  EXPECT_EQ(r.top.entries, g.sample_count());
+}
+
+// The exact optimum of the worst case (GLPK) bounds OPT-MAX from below.
+TEST_P(ExampleDesign, ExactOptimumIsNoWorseThanOptMax) {
+  DependencyGraph g = Load(GetParam());
+  CacheOptions o;
+  o.min_seconds = 0.01;
+  CacheReport r = PlanCache(g, o);
+  o.budget_bytes = r.rfree.bytes / 2;
+  CachePlan max = OptimizeCache(g, o);
+  ExactCacheOptions e;
+  e.min_seconds = 0.01;
+  e.budget_bytes = o.budget_bytes;
+  e.time_limit_seconds = 5;
+  ExactCacheSummary ex = SolveExactCache(g, e);
+  ASSERT_TRUE(ex.solved) << ex.message;
+  EXPECT_LE(ex.cost.bytes, o.budget_bytes);
+  EXPECT_LE(ex.bound, max.cost.worst_seconds + 1e-9);
+  if (ex.optimal) EXPECT_LE(ex.cost.worst_seconds, max.cost.worst_seconds + 1e-9);
+  std::printf("%s: OPT-MAX worst %.3f s, exact %.3f s (%s), gap %.1f %%\n", GetParam(), max.cost.worst_seconds,
+              ex.cost.worst_seconds, ex.optimal ? "optimal" : "time limit", 100 * (max.cost.worst_seconds / ex.cost.worst_seconds - 1));
+}
+
+}  // namespace
+}  // namespace fabatlas::cache
