@@ -32,6 +32,7 @@
 #include "fabatlas/precompute/design_evaluator.h"
 #include "fabatlas/sampling/adaptive_sampler.h"
 #include "fabatlas/sampling/executor.h"
+#include "synthetic_graphs.h"
 
 using namespace fabatlas;
 
@@ -127,35 +128,18 @@ int main(int argc, char** argv) {
       std::printf("     exact    not solved: %s\n", ex.message.c_str());
   };
   for (const std::string& path : saved) {
-    std::ifstream in(path);
-    std::vector<cache::SubtreeNode> nodes;
-    std::vector<cache::SampleTree> samples;
-    std::string tag;
-    while (in >> tag) {
-      if (tag == "S") {
-        cache::SampleTree t;
-        in >> t.root;
-        samples.push_back(t);
-        continue;
+    auto read = cache::testing::ReadGraphFile(path);
+    if (costs == "model") {
+      std::map<std::string, std::uint64_t> bytes_of;
+      for (const auto& n : read.nodes) bytes_of[n.key] = n.bytes;
+      for (std::size_t i = 0; i < read.nodes.size(); ++i) {
+        std::uint64_t input = 0;
+        for (const auto& c : read.nodes[i].children) input += bytes_of[c];
+        read.nodes[i].seconds = cache::ModelSubtreeSeconds(read.ops[i], read.nodes[i].bytes, input);
       }
-      cache::SubtreeNode n;
-      std::string op, children;
-      in >> n.key >> n.seconds >> n.bytes >> op >> children;
-      if (children != "-")
-        for (std::size_t at = 0; at <= children.size();) {
-          std::size_t comma = children.find(',', at);
-          if (comma == std::string::npos) comma = children.size();
-          n.children.push_back(children.substr(at, comma - at));
-          at = comma + 1;
-        }
-      if (costs == "model") {
-        // Input bytes are not in the file: the model sees output bytes only.
-        n.seconds = cache::ModelSubtreeSeconds(op, n.bytes, 0);
-      }
-      nodes.push_back(n);
     }
     std::printf("== %s\n", path.c_str());
-    plan_and_print(path, nodes, samples);
+    plan_and_print(path, read.nodes, read.samples);
   }
   for (const std::string& path : designs) {
     design::Design d = design::LoadDesign(path);

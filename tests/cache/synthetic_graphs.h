@@ -31,6 +31,7 @@ struct SyntheticDesign {
 struct SyntheticGraph {
   std::vector<SubtreeNode> nodes;
   std::vector<SampleTree> samples;
+  std::vector<std::string> ops;  // per node, when read from a file
 };
 
 inline SyntheticGraph MakeSyntheticGraph(const SyntheticDesign& d) {
@@ -109,6 +110,7 @@ inline SyntheticGraph ReadGraphFile(const std::string& path) {
         at = comma + 1;
       }
     g.nodes.push_back(n);
+    g.ops.push_back(op);
   }
   return g;
 }
