@@ -1,6 +1,6 @@
 // Cluster benchmarks with plain timers (results in docs/benchmarks.md (Cluster)).
 //   cluster_bench [--tasks N] [--repeats R] [--blob-mb M] [--idle W] [--job JOB.yaml]
-//                 [--speedup-repeats S] [--only noop|overhead|idle|blob|speedup]
+//                 [--speedup-repeats S] [--only noop|overhead|idle|blob|speedup] [--fsync-commits]
 // 1. No-op round trips/s: N no-op tasks through an in-process coordinator to
 //    2 fabatlas-worker processes (64 slots each, leases batched per Sync),
 //    from submission of the batch to the last stored result; and the
@@ -176,6 +176,8 @@ int main(int argc, char** argv) {
   coordinator::CoordinatorOptions options;
   options.listen = "127.0.0.1:0";
   options.state_dir = dir / "state";
+  for (int i = 1; i < argc; ++i)
+    if (std::strcmp(argv[i], "--fsync-commits") == 0) options.fsync_commits = true;  // synchronous=FULL
   coordinator::Coordinator c(options);
   c.Start();
   std::string target = "127.0.0.1:" + std::to_string(c.port());

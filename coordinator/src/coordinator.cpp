@@ -364,10 +364,15 @@ struct Coordinator::Impl {
     auto quarantine = [](int kind) {
       return protocol::QuarantineResult(static_cast<v1::TaskKind>(kind)).SerializeAsString();
     };
+    std::int64_t last_checkpoint_ms = NowMs();
     while (!stopping) {
       std::this_thread::sleep_for(std::chrono::milliseconds(100));
       try {
         std::int64_t now = NowMs();
+        if (now - last_checkpoint_ms >= 1000) {
+          store->Checkpoint();
+          last_checkpoint_ms = now;
+        }
         auto expired = store->ExpireLeases(now, options.retry_backoff_ms, options.quarantine_after, quarantine);
         for (const auto& e : expired) {
           if (!e.quarantined) continue;
@@ -737,7 +742,10 @@ void Coordinator::Start() {
                        " (give --tls-cert/--tls-key, see ops/tls/make-certs.sh)");
     credentials = grpc::InsecureServerCredentials();
   }
-  m.store = std::make_unique<storage::JobStore>(o.state_dir / "state.db");
+  storage::JobStoreOptions store_options;
+  store_options.fsync_every_commit = o.fsync_commits;
+  store_options.background_checkpoints = true;  // Sweep() checkpoints, off the request path
+  m.store = std::make_unique<storage::JobStore>(o.state_dir / "state.db", store_options);
   m.blobs = std::make_unique<storage::BlobStore>(o.state_dir / "blobs");
   m.store->ExtendAllLeases(NowMs() + o.lease_ms);
 

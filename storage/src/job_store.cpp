@@ -59,6 +59,16 @@ CREATE TABLE IF NOT EXISTS events (
 struct JobStore::Db {
   sqlite3* handle = nullptr;
   std::string path;
+  // Prepared statements by SQL text, reused across calls (preparing costs
+  // more than running most of them); the flag marks one in use.
+  std::map<std::string, std::pair<sqlite3_stmt*, bool>> statements;
+
+  void Close() {
+    for (auto& [sql, entry] : statements) sqlite3_finalize(entry.first);
+    statements.clear();
+    if (handle) sqlite3_close(handle);
+    handle = nullptr;
+  }
 
   [[noreturn]] void Fail(const std::string& what) const {
     throw ResourceError(path + ": " + what + ": " + sqlite3_errmsg(handle));
@@ -79,9 +89,29 @@ namespace {
 class Stmt {
  public:
   Stmt(JobStore::Db& db, const char* sql) : db_(db) {
+    auto it = db.statements.find(sql);
+    if (it != db.statements.end() && !it->second.second) {
+      stmt_ = it->second.first;
+      it->second.second = true;
+      cached_ = &it->second.second;
+      return;
+    }
     if (sqlite3_prepare_v2(db.handle, sql, -1, &stmt_, nullptr) != SQLITE_OK) db.Fail("prepare");
+    if (it == db.statements.end()) {
+      auto& entry = db.statements[sql];
+      entry = {stmt_, true};
+      cached_ = &entry.second;
+    }
   }
-  ~Stmt() { sqlite3_finalize(stmt_); }
+  ~Stmt() {
+    if (!cached_) {
+      sqlite3_finalize(stmt_);
+      return;
+    }
+    sqlite3_reset(stmt_);
+    sqlite3_clear_bindings(stmt_);
+    *cached_ = false;
+  }
   Stmt& Bind(int i, const std::string& v) {
     sqlite3_bind_blob(stmt_, i, v.data(), static_cast<int>(v.size()), SQLITE_TRANSIENT);
     return *this;
@@ -125,6 +155,7 @@ class Stmt {
  private:
   JobStore::Db& db_;
   sqlite3_stmt* stmt_ = nullptr;
+  bool* cached_ = nullptr;  // the cache entry's in-use flag, if cached
 };
 
 // BEGIN IMMEDIATE ... COMMIT, rolled back if an exception escapes.
@@ -162,7 +193,8 @@ std::string LeaseIdOf(const std::string& key, std::int64_t attempt) {
 
 }  // namespace
 
-JobStore::JobStore(const std::filesystem::path& path) : path_(path), db_(std::make_unique<Db>()) {
+JobStore::JobStore(const std::filesystem::path& path, JobStoreOptions options)
+    : path_(path), options_(options), db_(std::make_unique<Db>()) {
   db_->path = path.string();
   std::error_code ec;
   if (path.has_parent_path()) std::filesystem::create_directories(path.parent_path(), ec);
@@ -177,7 +209,8 @@ JobStore::JobStore(const std::filesystem::path& path) : path_(path), db_(std::ma
   sqlite3_busy_timeout(db_->handle, 10000);
   try {
     db_->Exec("PRAGMA journal_mode=WAL");
-    db_->Exec("PRAGMA synchronous=NORMAL");
+    db_->Exec(options_.fsync_every_commit ? "PRAGMA synchronous=FULL" : "PRAGMA synchronous=NORMAL");
+    if (options_.background_checkpoints) sqlite3_wal_autocheckpoint(db_->handle, 0);
     db_->Exec(kSchema);
   } catch (...) {
     sqlite3_close(db_->handle);
@@ -187,7 +220,29 @@ JobStore::JobStore(const std::filesystem::path& path) : path_(path), db_(std::ma
 }
 
 JobStore::~JobStore() {
-  if (db_ && db_->handle) sqlite3_close(db_->handle);
+  if (checkpoint_db_) checkpoint_db_->Close();
+  if (db_) db_->Close();
+}
+
+int JobStore::Checkpoint() {
+  std::lock_guard lock(checkpoint_mutex_);
+  if (!checkpoint_db_) {
+    auto db = std::make_unique<Db>();
+    db->path = db_->path;
+    if (sqlite3_open_v2(db->path.c_str(), &db->handle, SQLITE_OPEN_READWRITE | SQLITE_OPEN_FULLMUTEX, nullptr) !=
+        SQLITE_OK) {
+      std::string message = db->handle ? sqlite3_errmsg(db->handle) : "cannot open";
+      sqlite3_close(db->handle);
+      throw ResourceError(db->path + ": cannot open the job store for checkpoints: " + message);
+    }
+    sqlite3_busy_timeout(db->handle, 1000);
+    db->Exec(options_.fsync_every_commit ? "PRAGMA synchronous=FULL" : "PRAGMA synchronous=NORMAL");
+    checkpoint_db_ = std::move(db);
+  }
+  int log = 0, done = 0;
+  int rc = sqlite3_wal_checkpoint_v2(checkpoint_db_->handle, nullptr, SQLITE_CHECKPOINT_PASSIVE, &log, &done);
+  if (rc != SQLITE_OK && rc != SQLITE_BUSY) checkpoint_db_->Fail("checkpoint");
+  return done;
 }
 
 bool JobStore::CreateJob(const JobRecord& job) {
@@ -306,7 +361,8 @@ std::vector<LeaseGrant> JobStore::GrantLeases(const std::string& worker_id, int 
   std::vector<LeaseGrant> grants;
   if (max <= 0) return grants;
   std::lock_guard lock(mutex_);
-  Transaction t(*db_);
+  // Pick first (this connection is the only writer and mutex_ is held), so an
+  // empty queue costs one read and no write transaction.
   {
     Stmt pick(*db_,
               "SELECT t.key, t.job_id, j.bundle_digest, t.attempt, t.kind, t.payload FROM tasks t "
@@ -326,6 +382,8 @@ std::vector<LeaseGrant> JobStore::GrantLeases(const std::string& worker_id, int 
       grants.push_back(std::move(g));
     }
   }
+  if (grants.empty()) return grants;
+  Transaction t(*db_);
   Stmt update(*db_, "UPDATE tasks SET state = 1, attempt = ? WHERE key = ?");
   Stmt lease(*db_,
              "INSERT OR REPLACE INTO leases (lease_id, task_key, attempt, worker_id, granted_ms, "
@@ -440,6 +498,7 @@ std::vector<std::string> JobStore::ExtendLeases(const std::string& worker_id,
                                                 const std::vector<std::string>& lease_ids,
                                                 std::int64_t deadline_ms) {
   std::vector<std::string> revoked;
+  if (lease_ids.empty()) return revoked;
   std::lock_guard lock(mutex_);
   Transaction t(*db_);
   Stmt s(*db_,
@@ -631,6 +690,10 @@ std::vector<SampleSubtrees> JobStore::SampleSubtreeKeys(const std::string& job_i
 
 void JobStore::TouchWorker(const std::string& worker_id, int slots, std::int64_t now_ms) {
   std::lock_guard lock(mutex_);
+  // At most one write per worker and second (last_seen_ms is precise to 1 s).
+  auto& touched = touched_[worker_id];
+  if (touched.second != 0 && touched.second <= now_ms && now_ms - touched.second < 1000) return;
+  touched = {slots, now_ms};
   Stmt s(*db_,
          "INSERT INTO workers (id, slots, first_seen_ms, last_seen_ms) VALUES (?,?,?,?) "
          "ON CONFLICT(id) DO UPDATE SET slots = excluded.slots, last_seen_ms = excluded.last_seen_ms");

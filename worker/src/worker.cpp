@@ -173,9 +173,11 @@ class Worker {
       cv_.notify_all();
       // Nothing new: wait for a result (or briefly for free slots to be worth
       // asking for more work again).
+      // Also right after new leases filled every slot: asking again at once
+      // could only extend leases, which the heartbeat thread does.
       std::unique_lock lock(mu_);
-      if (resp.leases_size() == 0 && !in_flight_.empty()) {
-        bool full = static_cast<int>(queue_.size()) + running_ >= o_.slots;
+      bool full = static_cast<int>(queue_.size()) + running_ >= o_.slots;
+      if ((resp.leases_size() == 0 || full) && !in_flight_.empty()) {
         cv_.wait_for(lock, std::chrono::milliseconds(full ? 1000 : 200),
                      [&] { return !done_.empty() || stop_; });
       }

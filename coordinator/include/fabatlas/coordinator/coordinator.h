@@ -63,6 +63,11 @@ struct CoordinatorOptions {
   int max_leases_per_sync = 256;
   // Longest long poll of an idle worker.
   std::int64_t max_poll_ms = 5000;
+  // fsync the store's WAL on every commit (storage::JobStoreOptions): every
+  // acknowledged result then survives a power loss too. Off by default: a
+  // kill -9 of the coordinator loses nothing either way, and a power loss
+  // can only make the last acknowledged tasks run again (same results).
+  bool fsync_commits = false;
 };
 
 class Coordinator {

@@ -147,10 +147,30 @@ struct Event {
   std::string job_id, kind, message;
 };
 
+// Durability. The store runs in WAL mode. With synchronous=NORMAL (the
+// default) a commit is written to the WAL but not fsynced: it survives a
+// kill -9 or crash of the coordinator at any moment, but a power loss or OS
+// crash may roll back the transactions committed since the last WAL sync
+// (at the latest, the last checkpoint). The store stays consistent either
+// way (SQLite rolls back whole transactions), and what a rollback undoes is
+// only recorded progress: the tasks it un-finishes are leased again and
+// recomputed with the same result (tasks are deterministic), so a job's
+// outputs are never lost or wrong, only some work is redone. To have every
+// acknowledged result survive a power loss too, set fsync_every_commit
+// (synchronous=FULL: one WAL fsync per commit).
+struct JobStoreOptions {
+  bool fsync_every_commit = false;
+  // No checkpoints inside commits (SQLite's automatic checkpoint every 1000
+  // WAL pages fsyncs the database in whichever call commits): the owner
+  // calls Checkpoint() periodically from a thread of its own instead.
+  bool background_checkpoints = false;
+};
+
 class JobStore {
  public:
-  // Opens or creates the database (WAL, synchronous=NORMAL, foreign keys).
-  explicit JobStore(const std::filesystem::path& path);
+  // Opens or creates the database (WAL, synchronous=NORMAL or FULL, see
+  // JobStoreOptions).
+  explicit JobStore(const std::filesystem::path& path, JobStoreOptions options = {});
   ~JobStore();
   JobStore(const JobStore&) = delete;
   JobStore& operator=(const JobStore&) = delete;
@@ -217,6 +237,8 @@ class JobStore {
   std::vector<SampleSubtrees> SampleSubtreeKeys(const std::string& job_id);
 
   // --- workers ---
+  // Records that the worker was seen (at most one write per worker and second:
+  // last_seen_ms is precise to 1 s).
   void TouchWorker(const std::string& worker_id, int slots, std::int64_t now_ms);
   // Workers seen since since_ms.
   std::int64_t CountWorkers(std::int64_t since_ms);
@@ -231,12 +253,21 @@ class JobStore {
   // per violation (empty = consistent).
   std::vector<std::string> CheckConsistency();
 
+  // Copies committed WAL pages into the database file (a PASSIVE checkpoint
+  // on a second connection, so commits go on meanwhile). Returns the pages
+  // checkpointed. For background_checkpoints.
+  int Checkpoint();
+
   struct Db;  // the SQLite connection (src/job_store.cpp)
 
  private:
   std::filesystem::path path_;
+  JobStoreOptions options_;
   std::unique_ptr<Db> db_;
   std::mutex mutex_;
+  std::map<std::string, std::pair<int, std::int64_t>> touched_;  // worker -> (slots, last write ms)
+  std::mutex checkpoint_mutex_;
+  std::unique_ptr<Db> checkpoint_db_;
 };
 
 }  // namespace fabatlas::storage
