@@ -130,10 +130,13 @@ class Planner {
       case ScoreKind::kTimesCount: return g_.seconds[i] * q_[i];
       case ScoreKind::kPerByte:
         return g_.seconds[i] * q_[i] / static_cast<double>(std::max<std::uint64_t>(g_.bytes[i], 1));
-      case ScoreKind::kSavedPerByte:
-        return RootTime(x) * q_[i] / static_cast<double>(std::max<std::uint64_t>(g_.bytes[i], 1));
+      case ScoreKind::kSavedPerByte: return SavedPerByte(x, RootTime(x));
     }
     return 0;
+  }
+  double SavedPerByte(Id x, double subtree_seconds) const {
+    auto i = static_cast<std::size_t>(x);
+    return subtree_seconds * q_[i] / static_cast<double>(std::max<std::uint64_t>(g_.bytes[i], 1));
   }
   bool Choosable(Id x) const {
     auto i = static_cast<std::size_t>(x);
@@ -219,6 +222,9 @@ class Planner {
     Id best = -1;
     double best_score = 0;
     for (Id r : tied) {
+      // One post-order pass gives C_H of every node below r (memo_), so the
+      // saved-time scores need no walk of their own.
+      RootTime(r);
       walk_.clear();
       if (stamp_[static_cast<std::size_t>(r)] != epoch_) {
         stamp_[static_cast<std::size_t>(r)] = epoch_;
@@ -228,7 +234,7 @@ class Planner {
         Id v = walk_.back();
         walk_.pop_back();
         if (Choosable(v) && Fits(v)) {
-          double s = Score(v);
+          double s = o_.score == ScoreKind::kSavedPerByte ? SavedPerByte(v, memo_[static_cast<std::size_t>(v)]) : Score(v);
           if (s > best_score || (s == best_score && best >= 0 && v < best)) {
             best = v;
             best_score = s;
