@@ -78,6 +78,31 @@ TEST(OptMaxProperty, PublishedAlgorithmTradesMeanForWorstCase) {
   EXPECT_GT(t.mean_ratio_sum / t.cases, 1.05);
 }
 
+// The Fig. 13 curves: preview times never rise along a run, the first point is
+// the empty cache and the last one the plan's exactly recomputed cost.
+TEST(Curves, MonotoneAndEndingAtThePlan) {
+  for (std::uint64_t seed = 1; seed <= 20; ++seed) {
+    DependencyGraph g = RandomGraph(seed, 100);
+    for (Strategy s : {Strategy::kNaive, Strategy::kOptAve, Strategy::kOptMax}) {
+      CacheOptions o;
+      o.strategy = s;
+      CachePlan p = OptimizeCache(g, o);
+      ASSERT_EQ(p.curve.size(), static_cast<std::size_t>(p.steps) + 1);
+      CacheCost none = EvaluateCache(g, CacheSet(static_cast<std::size_t>(g.node_count()), 0));
+      EXPECT_NEAR(p.curve.front().mean_seconds, none.mean_seconds, 1e-9);
+      EXPECT_DOUBLE_EQ(p.curve.front().worst_seconds, none.worst_seconds);
+      for (std::size_t i = 1; i < p.curve.size(); ++i) {
+        EXPECT_LE(p.curve[i].mean_seconds, p.curve[i - 1].mean_seconds + 1e-9);
+        EXPECT_LE(p.curve[i].worst_seconds, p.curve[i - 1].worst_seconds + 1e-12);
+      }
+      EXPECT_NEAR(p.curve.back().mean_seconds, p.cost.mean_seconds, 1e-9);
+      EXPECT_DOUBLE_EQ(p.curve.back().worst_seconds, p.cost.worst_seconds);
+      EXPECT_EQ(p.curve.back().bytes, p.cost.bytes);
+      EXPECT_EQ(p.curve.back().entries, p.cost.entries);
+    }
+  }
+}
+
 // The exact optimum of the worst case never loses to OPT-MAX, and its
 // reported objective is what EvaluateCache measures for its cache.
 TEST(ExactCache, GapOfOptMaxToTheOptimumOnSmallGraphs) {
