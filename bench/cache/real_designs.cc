@@ -119,6 +119,8 @@ int main(int argc, char** argv) {
     eo.budget_bytes = o.budget_bytes;
     eo.min_seconds = min_seconds;
     eo.time_limit_seconds = 30;
+    o.strategy = cache::Strategy::kOptMax;
+    eo.start = cache::OptimizeCache(g, o).cache;
     cache::ExactCacheSummary ex = cache::SolveExactCache(g, eo);
     if (ex.solved)
       std::printf("     exact    %s (%lld)  mean %.3f s  worst %.3f s  (%s, %lld variables)\n", Mb(ex.cost.bytes).c_str(),

@@ -173,8 +173,51 @@ ExactCacheSummary SolveExactCache(const DependencyGraph& g, const ExactCacheOpti
     return out;
   }
   const double lp_bound = glp_get_obj_val(lp);
+  // The starting solution as a full column vector (1-based): h from the
+  // start set, k the exact evaluation counts given it, z the largest T.
+  std::vector<double> start;
+  if (o.start.size() == n) {
+    const int cols = glp_get_num_cols(lp);
+    start.assign(static_cast<std::size_t>(cols) + 1, 0.0);
+    std::uint64_t bytes = 0;
+    for (auto [v, col] : h_col)
+      if (o.start[static_cast<std::size_t>(v)]) {
+        start[static_cast<std::size_t>(col)] = 1;
+        bytes += g.bytes[static_cast<std::size_t>(v)];
+      }
+    double z = 0;
+    for (const SampleDag& d : dags) {
+      std::map<Id, double> q;
+      q[d.root] = 1;
+      double t = 0;
+      for (Id v : d.nodes) {
+        bool cached = h_col.count(v) && o.start[static_cast<std::size_t>(v)];
+        double k = cached ? 0.0 : q[v];
+        start[static_cast<std::size_t>(d.column.at(v))] = k;
+        t += g.seconds[static_cast<std::size_t>(v)] * k;
+        for (std::int64_t e = g.child_begin[v]; e < g.child_begin[v + 1]; ++e) q[g.child_ids[static_cast<std::size_t>(e)]] += k;
+      }
+      z = std::max(z, t);
+    }
+    if (z_col) start[static_cast<std::size_t>(z_col)] = z;
+    if (bytes > o.budget_bytes) start.clear();  // not feasible: no start
+  }
+  struct Callback {
+    std::vector<double>* start;
+    bool given = false;
+  } callback{&start};
   glp_iocp iocp;
   glp_init_iocp(&iocp);
+  if (!start.empty()) {
+    iocp.cb_info = &callback;
+    iocp.cb_func = [](glp_tree* tree, void* info) {
+      auto* c = static_cast<Callback*>(info);
+      if (glp_ios_reason(tree) == GLP_IHEUR && !c->given) {
+        c->given = true;
+        glp_ios_heur_sol(tree, c->start->data());
+      }
+    };
+  }
   iocp.msg_lev = GLP_MSG_OFF;
   iocp.tm_lim = static_cast<int>(std::min(o.time_limit_seconds * 1000.0, 2.0e9));
   iocp.gmi_cuts = GLP_ON;

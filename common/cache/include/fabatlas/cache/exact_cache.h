@@ -28,6 +28,10 @@ struct ExactCacheOptions {
   double time_limit_seconds = 60;  // branch and bound stops here (not optimal then)
   // Refuse (solved = false) when the program would have more k variables.
   std::int64_t max_variables = 200000;
+  // Optional starting solution (e.g. OPT-MAX's CachePlan::cache, within the
+  // budget): handed to branch and bound as its first incumbent, so a time
+  // limit never returns anything worse. Empty: none.
+  CacheSet start;
 };
 
 struct ExactCacheSummary {
