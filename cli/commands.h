@@ -23,4 +23,7 @@ void AddJobCommands(CLI::App& app, int& exit_code);
 // (cli/inspect_commands.cpp).
 void AddInspectCommands(CLI::App& app, int& exit_code);
 
+// prototype: solve a works-like prototype, export STL (cli/prototype_commands.cpp).
+void AddPrototypeCommands(CLI::App& app, int& exit_code);
+
 }  // namespace fabatlas::cli

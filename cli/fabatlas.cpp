@@ -16,6 +16,7 @@ int main(int argc, char** argv) {
   fabatlas::cli::AddSampleCommands(app, exit_code);
   fabatlas::cli::AddJobCommands(app, exit_code);
   fabatlas::cli::AddInspectCommands(app, exit_code);
+  fabatlas::cli::AddPrototypeCommands(app, exit_code);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -1,0 +1,110 @@
+// fabatlas/prototype/prototype.h — works-like prototypes (seed 003): cuboid
+// parts, joints, configurations and functional relationships, read from YAML
+// (docs/prototype.md).
+//
+// Coordinates are millimetres, z up, angles degrees. A cuboid is stored as its
+// base-configuration box [x0, x1, y0, y1, z0, z1] (seed 003 Sec. 6: "left,
+// right, bottom, top, near and far coordinates"). Numbers in a file may be
+// expressions over the file's `parameters`, which callers can override.
+#pragma once
+
+#include <array>
+#include <filesystem>
+#include <map>
+#include <string>
+#include <vector>
+
+namespace fabatlas::prototype {
+
+struct Cuboid {
+  std::string name;              // part name, or "part.cavity" for a cavity
+  std::array<double, 6> box{};   // x0 x1 y0 y1 z0 z1, base configuration
+  std::string open;              // cavity only: face ("y0", ...) that lies on the part's face
+};
+
+struct Part {
+  std::string name;
+  Cuboid cuboid;
+  std::vector<Cuboid> cavities;      // user cavities, move with the part
+  std::vector<int> held;             // coordinates (0..5) held at their base value (a user edit)
+  double min_size = 1.0;             // every extent >= this, mm
+  std::string where;                 // file:line:col
+};
+
+enum class JointType { kHinge, kSlide, kSlidingHinge, kDoublePivot };
+
+// A joint moves `child` relative to `parent` (seed 003 Sec. 3, Fig. 2).
+struct Joint {
+  std::string name;
+  JointType type = JointType::kHinge;
+  std::string child, parent;
+  int axis = 2;                                // hinge / sliding hinge rotation axis; slide direction
+  int slide_axis = 0;                          // sliding hinge: translation direction
+  // Hinge edge: for the two axes other than `axis` (in increasing order), the
+  // coordinate refs ("door.x0"); the first of each list places the edge, the
+  // others are held equal to it (the joint stays attached).
+  std::vector<std::vector<std::string>> at;
+  // Double pivot: the pivot plane's normal axis, the face side both parts
+  // share ("x0" or "x1" of the child), and the initial pivot positions as
+  // fractions of each cuboid's extent along the two in-plane axes.
+  int normal = 0;
+  std::string face = "x0";
+  std::array<double, 2> pivot_child{0.5, 0.5}, pivot_parent{0.5, 0.5};
+  std::string where;
+};
+
+// A joint's pose in one configuration (seed 003: j(θ)).
+struct JointValue {
+  double angle = 0;          // degrees (hinge, sliding hinge, double pivot)
+  std::string slide = "0";   // mm, an expression over coordinates; "free" = solved for
+  double slide_guess = 0;    // free slide: the value it is kept near
+  // Double pivot: translation of the child (about its centre, after the
+  // rotation); `offset_free` components are solved for and kept near `offset`.
+  std::array<double, 3> offset{0, 0, 0};
+  bool offset_free = false;
+};
+
+struct Configuration {
+  std::string name;
+  std::map<std::string, JointValue> values;  // joint name -> value; others at 0
+};
+
+enum class RelationType { kCover, kFit, kSupport, kFlush, kGeometric };
+
+struct Relationship {
+  RelationType type = RelationType::kCover;
+  std::string name;
+  std::string configuration = "base";
+  std::vector<std::string> a, b;          // cover: covering/covered faces; fit: inner parts, {outer}; flush: 2 faces
+  std::vector<std::pair<std::string, std::string>> pairs;  // support: (supporting face, supported face)
+  std::vector<std::string> just;          // cover: "true"; fit: sides that just fit ("x0", ...)
+  std::vector<int> axes{0, 1, 2};         // fit: axes that are constrained ("fit partially inside")
+  double min_overlap = 1.0;               // support: faces overlap by at least this, mm
+  std::string expression;                 // geometric: "lhs == rhs" / "<=" / ">="
+  std::string where;
+};
+
+struct Fabrication {
+  double voxel = 0.5;   // level-set voxel, mm
+  double gap = 1.0;     // print gap between touching parts and around moving joint pieces, mm
+};
+
+struct Prototype {
+  std::string file, name;
+  std::map<std::string, double> parameters;
+  std::vector<Part> parts;
+  std::vector<Joint> joints;
+  std::vector<Configuration> configurations;  // "base" first (all joints at 0)
+  std::vector<Relationship> relationships;
+  Fabrication fabrication;
+
+  int PartIndex(const std::string& name) const;  // -1 if absent
+};
+
+// Reads a prototype file; `overrides` replace parameter values (unknown names
+// are an error). Throws fabatlas::InputError "file:line:col: message".
+Prototype LoadPrototype(const std::filesystem::path& path, const std::map<std::string, double>& overrides = {});
+Prototype ParsePrototype(const std::string& text, const std::string& file,
+                         const std::map<std::string, double>& overrides = {});
+
+}  // namespace fabatlas::prototype

@@ -1,0 +1,229 @@
+// Seed 003 Sec. 7: cavities, joint geometry and gaps, on OpenVDB level sets
+// (common/geometry) with swept volumes from common/swept.
+#include "fabatlas/prototype/fabricate.h"
+
+#include <chrono>
+#include <cmath>
+
+#include "fabatlas/error.h"
+#include "fabatlas/swept/swept_volume.h"
+#include "model.h"
+
+namespace fabatlas::prototype {
+namespace {
+
+using geometry::Solid;
+using geometry::Vec3;
+
+Solid BoxAt(const geometry::GridSpec& g, const Vec3& lo, const Vec3& hi) {
+  Vec3 size{hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]};
+  for (double s : size)
+    if (!(s > 0)) return Solid();
+  return geometry::Translate(geometry::Box(g, size), {(lo[0] + hi[0]) / 2, (lo[1] + hi[1]) / 2, (lo[2] + hi[2]) / 2});
+}
+
+// Cylinder of `radius` along `axis` over [a0, a1], through `p` (other coordinates).
+Solid CylinderAlong(const geometry::GridSpec& g, int axis, double radius, double a0, double a1, const Vec3& p) {
+  if (!(a1 > a0) || !(radius > 0)) return Solid();
+  Solid c = geometry::Cylinder(g, radius, a1 - a0);
+  if (axis == 0) c = geometry::Rotate(c, {0, 90, 0});
+  if (axis == 1) c = geometry::Rotate(c, {90, 0, 0});
+  Vec3 centre = p;
+  centre[axis] = (a0 + a1) / 2;
+  return geometry::Translate(c, centre);
+}
+
+Solid Add(const Solid& a, const Solid& b) { return a.empty() ? b : b.empty() ? a : geometry::Union(a, b); }
+Solid Cut(const Solid& a, const Solid& b) { return a.empty() || b.empty() ? a : geometry::Difference(a, b); }
+
+mesh::TriangleMesh BoxMesh(const std::array<double, 6>& b) {
+  mesh::TriangleMesh m;
+  for (int i = 0; i < 8; ++i) m.vertices.push_back({b[i & 1], b[2 + ((i >> 1) & 1)], b[4 + ((i >> 2) & 1)]});
+  m.triangles = {{0, 2, 3}, {0, 3, 1}, {4, 5, 7}, {4, 7, 6}, {0, 1, 5}, {0, 5, 4},
+                 {2, 6, 7}, {2, 7, 3}, {0, 4, 6}, {0, 6, 2}, {1, 3, 7}, {1, 7, 5}};
+  return m;
+}
+
+}  // namespace
+
+Solid Fabricate(const Prototype& p, const SolveSummary& sol, const geometry::GridSpec& g, FabricateSummary* summary) {
+  auto start = std::chrono::steady_clock::now();
+  if (!sol.satisfiable) throw InputError(p.file + ": cannot fabricate: " + sol.Explain());
+  internal::Model model(p);
+  Eigen::VectorXd x(model.variables);
+  for (std::size_t c = 0; c < model.cuboids.size(); ++c)
+    for (int k = 0; k < 6; ++k) x[6 * c + k] = sol.cuboids.at(model.cuboid_names[c])[k];
+  for (std::size_t i = 0; i < model.free_names.size(); ++i)
+    x[6 * model.cuboids.size() + i] = sol.free_values.at(model.free_names[i]);
+  const double gap = p.fabrication.gap, h = g.voxel_size;
+  FabricateSummary fs;
+  const std::size_t np = p.parts.size();
+  std::vector<Solid> solids(np);
+  auto box_of = [&](const std::string& name) { return sol.cuboids.at(name); };
+
+  // Parts shrunk by gap/2 on every face, so touching faces end up a gap apart;
+  // cavities grown by gap/2 and pushed through their open face.
+  for (std::size_t i = 0; i < np; ++i) {
+    auto b = box_of(p.parts[i].name);
+    solids[i] = BoxAt(g, {b[0] + gap / 2, b[2] + gap / 2, b[4] + gap / 2}, {b[1] - gap / 2, b[3] - gap / 2, b[5] - gap / 2});
+    for (const Cuboid& cav : p.parts[i].cavities) {
+      auto c = box_of(cav.name);
+      Vec3 lo{c[0] - gap / 2, c[2] - gap / 2, c[4] - gap / 2}, hi{c[1] + gap / 2, c[3] + gap / 2, c[5] + gap / 2};
+      if (!cav.open.empty()) {
+        int ax = cav.open[0] - 'x';
+        if (cav.open[1] == '0') lo[ax] -= 2 * gap + 2 * h;
+        else hi[ax] += 2 * gap + 2 * h;
+      }
+      solids[i] = Cut(solids[i], BoxAt(g, lo, hi));
+    }
+  }
+
+  // Cavities by swept volume: each inner part moves from the base to the
+  // fitting configuration relative to the outer part; the sweep, offset by
+  // gap/2, is subtracted from the outer part.
+  for (const Relationship& r : p.relationships) {
+    if (r.type != RelationType::kFit) continue;
+    int outer = p.PartIndex(r.b[0]);
+    if (outer < 0) continue;  // into a user cavity: already hollow
+    const Configuration& c = model.Config(r.configuration);
+    for (const std::string& in : r.a) {
+      int ip = p.PartIndex(in);
+      if (ip < 0) continue;
+      auto pose = [&](double t) {
+        internal::Pose pa = model.PoseOf(ip, c, t), pb = model.PoseOf(outer, c, t);
+        swept::Transform tr;
+        Eigen::Matrix3d R = pb.R.transpose() * pa.R;
+        Eigen::Vector3d ta, tb;
+        for (int k = 0; k < 3; ++k) {
+          ta[k] = pa.t[k].Eval(x);
+          tb[k] = pb.t[k].Eval(x);
+        }
+        Eigen::Vector3d t3 = pb.R.transpose() * (ta - tb);
+        for (int a = 0; a < 3; ++a) {
+          for (int b = 0; b < 3; ++b) tr.rotation[a][b] = R(a, b);
+          tr.translation[a] = t3[a];
+        }
+        return tr;
+      };
+      mesh::TriangleMesh body = BoxMesh(box_of(in));
+      swept::SweptVolumeOptions so;
+      so.voxel_size = h;
+      so.offset = gap / 2;
+      so.time_steps = 2;
+      so.max_step_displacement = 2 * h;
+      std::vector<swept::Transform> poses = swept::SamplePoses(body, pose, so);
+      swept::SweptDistanceField field = swept::ComputeSweptDistance(body, poses, so);
+      mesh::TriangleMesh surface = field.Surface(gap / 2);
+      if (surface.empty()) continue;
+      solids[outer] = Cut(solids[outer], geometry::FromMesh(g, surface));
+      ++fs.swept_cavities;
+    }
+  }
+
+  // Joint geometry.
+  std::vector<Solid> extra;  // free pieces (links)
+  for (const Joint& j : p.joints) {
+    int ci = p.PartIndex(j.child), pi = p.PartIndex(j.parent);
+    auto cb = box_of(j.child), pb = box_of(j.parent);
+    double thin = 1e9;
+    for (int a = 0; a < 3; ++a) thin = std::min({thin, cb[2 * a + 1] - cb[2 * a], pb[2 * a + 1] - pb[2 * a]});
+    if (j.type == JointType::kHinge || j.type == JointType::kSlidingHinge) {
+      // Pin on the edge, radius half the thinnest part's thickness (Sec. 7).
+      double r = std::max(thin / 2, 2 * h);
+      Vec3 e{0, 0, 0};
+      int k = 0;
+      for (int a = 0; a < 3; ++a)
+        if (a != j.axis) e[a] = model.Resolve(j.at[k++][0], j.where).Eval(x);
+      double lo = cb[2 * j.axis], hi = cb[2 * j.axis + 1], len = hi - lo;
+      if (j.type == JointType::kHinge) {
+        double ro = r + gap + std::max(r / 2, 2 * h), yl = len / 5;
+        solids[ci] = Add(solids[ci], CylinderAlong(g, j.axis, r, lo + gap / 2, hi - gap / 2, e));
+        solids[pi] = Cut(solids[pi], CylinderAlong(g, j.axis, r + gap, lo - gap, hi + gap, e));
+        for (double y0 : {lo, hi - yl}) {
+          Solid yoke = Cut(CylinderAlong(g, j.axis, ro, y0, y0 + yl, e), CylinderAlong(g, j.axis, r + gap, y0 - h, y0 + yl + h, e));
+          solids[ci] = Cut(solids[ci], CylinderAlong(g, j.axis, ro + gap, y0 - gap, y0 + yl + gap, e));
+          solids[ci] = Add(solids[ci], CylinderAlong(g, j.axis, r, lo + gap / 2, hi - gap / 2, e));
+          solids[pi] = Add(solids[pi], yoke);
+          fs.joint_pieces += 1;
+        }
+        // The pin runs through the yokes' holes only: cut it back where the yoke sits.
+        fs.joint_pieces += 1;
+      } else {
+        // Sliding hinge: a longer pin whose ends run in slots of the parent
+        // along the slide vector over the range of slide values used.
+        double ext = r + 2 * gap;
+        solids[ci] = Add(solids[ci], CylinderAlong(g, j.axis, r, lo - ext, hi + ext, e));
+        solids[pi] = Cut(solids[pi], CylinderAlong(g, j.axis, r + gap, lo - ext - gap, hi + ext + gap, e));
+        double dmin = 0, dmax = 0;
+        for (const Configuration& c : p.configurations) {
+          auto it = c.values.find(j.name);
+          if (it == c.values.end()) continue;
+          double d = it->second.slide == "free" ? sol.free_values.at(j.name + "@" + c.name + ".s")
+                                                : model.ParseExpression(it->second.slide, j.where).Eval(x);
+          dmin = std::min(dmin, d);
+          dmax = std::max(dmax, d);
+        }
+        int s = j.slide_axis, w = 3 - j.axis - s;
+        for (int end = 0; end < 2; ++end) {
+          Vec3 slo, shi;
+          slo[j.axis] = end ? hi - gap : lo - ext - gap;
+          shi[j.axis] = end ? hi + ext + gap : lo + gap;
+          slo[s] = e[s] - r - gap + dmin;
+          shi[s] = e[s] + r + gap + dmax;
+          slo[w] = e[w] - r - gap;
+          shi[w] = e[w] + r + gap;
+          solids[pi] = Cut(solids[pi], BoxAt(g, slo, shi));
+        }
+        fs.joint_pieces += 1;
+      }
+    } else if (j.type == JointType::kDoublePivot) {
+      const PivotSolution* ps = nullptr;
+      for (const auto& q : sol.pivots)
+        if (q.joint == j.name) ps = &q;
+      if (!ps) continue;
+      int n = j.normal;
+      double sigma = j.face.back() == '1' ? 1 : -1;
+      double P = cb[2 * n + (sigma > 0 ? 1 : 0)];
+      double rp = std::max(2 * h, std::min(thin / 4, 4.0));
+      double tl = std::max(4 * h, rp), R = rp + gap + std::max(rp, 2 * h);
+      auto along = [&](double a, double b) { return std::pair{std::min(P + sigma * a, P + sigma * b), std::max(P + sigma * a, P + sigma * b)}; };
+      Vec3 ua{ps->child_pivot[0], ps->child_pivot[1], ps->child_pivot[2]};
+      Vec3 ub{ps->parent_pivot[0], ps->parent_pivot[1], ps->parent_pivot[2]};
+      auto [p0, p1] = along(-2 * rp, 2 * gap + tl + tl);
+      auto [c0, c1] = along(2 * gap + tl, 2 * gap + 2 * tl);
+      auto [l0, l1] = along(gap, gap + tl);
+      for (auto [part, u] : {std::pair{ci, ua}, std::pair{pi, ub}}) {
+        solids[part] = Add(solids[part], CylinderAlong(g, n, rp, p0, p1, u));
+        solids[part] = Add(solids[part], CylinderAlong(g, n, R - h, c0, c1, u));
+        fs.joint_pieces += 2;
+      }
+      Vec3 a = ua, b = ub;
+      a[n] = b[n] = (l0 + l1) / 2;
+      Vec3 slo{-1e4, -1e4, -1e4}, shi{1e4, 1e4, 1e4};
+      slo[n] = l0;
+      shi[n] = l1;
+      Vec3 bl{std::min(a[0], b[0]) - R, std::min(a[1], b[1]) - R, std::min(a[2], b[2]) - R};
+      Vec3 bh{std::max(a[0], b[0]) + R, std::max(a[1], b[1]) + R, std::max(a[2], b[2]) + R};
+      bl[n] = l0;
+      bh[n] = l1;
+      Solid link = geometry::Intersection(geometry::Capsule(g, a, b, R), BoxAt(g, bl, bh));
+      for (const Vec3& u : {ua, ub}) link = Cut(link, CylinderAlong(g, n, rp + gap, l0 - h, l1 + h, u));
+      extra.push_back(link);
+      fs.joint_pieces += 1;
+    }
+    // Slide joints: the parts slide in a cavity (fit inside) or against
+    // each other; no rails are generated (docs/prototype.md).
+  }
+
+  Solid all;
+  for (std::size_t i = 0; i < np; ++i) {
+    fs.part_volumes[p.parts[i].name] = solids[i].empty() ? 0 : solids[i].Volume();
+    all = Add(all, solids[i]);
+  }
+  for (const Solid& s : extra) all = Add(all, s);
+  fs.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  if (summary) *summary = fs;
+  return all;
+}
+
+}  // namespace fabatlas::prototype

@@ -1,0 +1,491 @@
+#include "model.h"
+
+#include <algorithm>
+#include <cmath>
+#include <set>
+
+#include "fabatlas/error.h"
+
+namespace fabatlas::prototype::internal {
+namespace {
+
+const char* kCoord[6] = {"x0", "x1", "y0", "y1", "z0", "z1"};
+
+Affine3 Point(const Affine& x, const Affine& y, const Affine& z) { return {x, y, z}; }
+
+}  // namespace
+
+Eigen::Matrix3d AxisRotation(int axis, double degrees) {
+  Eigen::Vector3d a = Eigen::Vector3d::Zero();
+  a[axis] = 1;
+  Eigen::Matrix3d r = Eigen::AngleAxisd(degrees * M_PI / 180, a).toRotationMatrix();
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) {
+      double v = r(i, j);
+      for (double k : {-1.0, 0.0, 1.0})
+        if (std::abs(v - k) < 1e-12) r(i, j) = k;
+    }
+  return r;
+}
+
+Model::Model(const Prototype& p) : proto(p) {
+  for (std::size_t i = 0; i < p.parts.size(); ++i) {
+    cuboid_names.push_back(p.parts[i].name);
+    cuboid_part.push_back(static_cast<int>(i));
+    cuboids.push_back(&p.parts[i].cuboid);
+  }
+  for (std::size_t i = 0; i < p.parts.size(); ++i)
+    for (const Cuboid& c : p.parts[i].cavities) {
+      cuboid_names.push_back(c.name);
+      cuboid_part.push_back(static_cast<int>(i));
+      cuboids.push_back(&c);
+    }
+  std::vector<double> guesses;
+  for (const Configuration& c : p.configurations)
+    for (const auto& [jn, v] : c.values) {
+      const Joint& j = *std::find_if(p.joints.begin(), p.joints.end(), [&](const Joint& k) { return k.name == jn; });
+      const Joint& first = *std::find_if(p.joints.begin(), p.joints.end(), [&](const Joint& k) { return k.child == j.child; });
+      if (first.name != j.name) continue;  // a second double pivot on the same part: the first one places it
+      if ((j.type == JointType::kSlide || j.type == JointType::kSlidingHinge) && v.slide == "free") {
+        free_names.push_back(jn + "@" + c.name + ".s");
+        guesses.push_back(v.slide_guess);
+      }
+      if (j.type == JointType::kDoublePivot && v.offset_free)
+        for (int k = 0; k < 3; ++k)
+          if (k != j.normal) {
+            free_names.push_back(jn + "@" + c.name + "." + std::to_string(k));
+            guesses.push_back(v.offset[k]);
+          }
+    }
+  int nc = static_cast<int>(cuboids.size());
+  variables = 6 * nc + static_cast<int>(free_names.size());
+  base.resize(variables);
+  weight.resize(variables);
+  for (int c = 0; c < nc; ++c)
+    for (int k = 0; k < 6; ++k) {
+      base[6 * c + k] = cuboids[c]->box[k];
+      weight[6 * c + k] = 1;
+    }
+  // Free joint values are not part geometry (Eq. 4 has only B and L); a weak
+  // pull towards the user's arrangement makes the solution unique.
+  for (std::size_t i = 0; i < guesses.size(); ++i) {
+    base[6 * nc + i] = guesses[i];
+    weight[6 * nc + i] = 1e-4;
+  }
+}
+
+int Model::FreeIndex(const std::string& key) const {
+  auto it = std::find(free_names.begin(), free_names.end(), key);
+  return 6 * static_cast<int>(cuboids.size()) + static_cast<int>(it - free_names.begin());
+}
+
+int Model::CuboidIndex(const std::string& name, const std::string& where) const {
+  for (std::size_t i = 0; i < cuboid_names.size(); ++i)
+    if (cuboid_names[i] == name) return static_cast<int>(i);
+  throw InputError(where + ": unknown part or cavity '" + name + "'");
+}
+
+Affine Model::Resolve(const std::string& name, const std::string& where) const {
+  if (auto it = proto.parameters.find(name); it != proto.parameters.end()) return Affine::Const(it->second);
+  auto dot = name.rfind('.');
+  if (dot == std::string::npos) throw InputError(where + ": unknown name '" + name + "' (write part.x0, part.w, ...)");
+  int c = CuboidIndex(name.substr(0, dot), where);
+  std::string k = name.substr(dot + 1);
+  for (int i = 0; i < 6; ++i)
+    if (k == kCoord[i]) return Affine::Var(6 * c + i);
+  const char* ext[3] = {"w", "d", "h"};
+  const char* mid[3] = {"cx", "cy", "cz"};
+  for (int i = 0; i < 3; ++i) {
+    if (k == ext[i]) return Affine::Var(6 * c + 2 * i + 1) - Affine::Var(6 * c + 2 * i);
+    if (k == mid[i]) return 0.5 * (Affine::Var(6 * c + 2 * i + 1) + Affine::Var(6 * c + 2 * i));
+  }
+  throw InputError(where + ": '" + k + "' is not x0 x1 y0 y1 z0 z1 w d h cx cy cz in '" + name + "'");
+}
+
+Affine Model::ParseExpression(const std::string& text, const std::string& where) const {
+  return ParseAffine(text, [&](const std::string& n) { return Resolve(n, where); }, where);
+}
+
+const Configuration& Model::Config(const std::string& name) const {
+  for (const auto& c : proto.configurations)
+    if (c.name == name) return c;
+  throw InputError(proto.file + ": unknown configuration '" + name + "'");
+}
+
+Pose Model::JointMotion(int ji, const Configuration& c, double s) const {
+  const Joint& j = proto.joints[ji];
+  JointValue v;
+  auto it = c.values.find(j.name);
+  bool set = it != c.values.end();
+  if (set) v = it->second;
+  Pose m;
+  auto slide_value = [&]() -> Affine {
+    if (!set) return Affine::Const(0);
+    if (v.slide == "free") return s * Affine::Var(FreeIndex(j.name + "@" + c.name + ".s"));
+    return s * ParseExpression(v.slide, j.where);
+  };
+  auto rotate_about = [&](const Affine3& p) {
+    m.t = Sub(p, Mul(m.R, p));
+  };
+  auto edge = [&]() {
+    Affine3 p;
+    int k = 0;
+    for (int ax = 0; ax < 3; ++ax) {
+      if (ax == j.axis) continue;
+      p[ax] = Resolve(j.at[k++][0], j.where);
+    }
+    return p;
+  };
+  switch (j.type) {
+    case JointType::kHinge:
+      m.R = AxisRotation(j.axis, s * v.angle);
+      rotate_about(edge());
+      break;
+    case JointType::kSlide:
+      m.t[j.axis] = slide_value();
+      break;
+    case JointType::kSlidingHinge:
+      m.R = AxisRotation(j.axis, s * v.angle);
+      rotate_about(edge());
+      m.t[j.slide_axis] = m.t[j.slide_axis] + slide_value();
+      break;
+    case JointType::kDoublePivot: {
+      m.R = AxisRotation(j.normal, s * v.angle);
+      int cu = CuboidIndex(j.child, j.where);
+      Affine3 centre;
+      for (int ax = 0; ax < 3; ++ax) centre[ax] = 0.5 * (Affine::Var(6 * cu + 2 * ax) + Affine::Var(6 * cu + 2 * ax + 1));
+      rotate_about(centre);
+      if (set)
+        for (int ax = 0; ax < 3; ++ax) {
+          Affine o = (v.offset_free && ax != j.normal) ? Affine::Var(FreeIndex(j.name + "@" + c.name + "." + std::to_string(ax)))
+                                                      : Affine::Const(v.offset[ax]);
+          m.t[ax] = m.t[ax] + s * o;
+        }
+      break;
+    }
+  }
+  return m;
+}
+
+Pose Model::PoseOf(int part, const Configuration& c, double s) const {
+  const std::string& name = proto.parts[part].name;
+  for (std::size_t ji = 0; ji < proto.joints.size(); ++ji) {
+    if (proto.joints[ji].child != name) continue;
+    Pose m = JointMotion(static_cast<int>(ji), c, s);
+    Pose pp = PoseOf(proto.PartIndex(proto.joints[ji].parent), c, s);
+    Pose out;
+    out.R = pp.R * m.R;
+    out.t = Add(Mul(pp.R, m.t), pp.t);
+    return out;
+  }
+  return Pose{};
+}
+
+Box Model::BoxIn(int cuboid, const Configuration& c, int frame_part) const {
+  Pose p = PoseOf(cuboid_part[cuboid], c);
+  Eigen::Matrix3d R = p.R;
+  Affine3 t = p.t;
+  if (frame_part >= 0) {
+    Pose f = PoseOf(frame_part, c);
+    R = f.R.transpose() * p.R;
+    t = Mul(f.R.transpose(), Sub(p.t, f.t));
+  }
+  Affine3 centre, half;
+  for (int ax = 0; ax < 3; ++ax) {
+    centre[ax] = 0.5 * (Affine::Var(6 * cuboid + 2 * ax) + Affine::Var(6 * cuboid + 2 * ax + 1));
+    half[ax] = 0.5 * (Affine::Var(6 * cuboid + 2 * ax + 1) - Affine::Var(6 * cuboid + 2 * ax));
+  }
+  Affine3 cw = Add(Mul(R, centre), t);
+  Affine3 hw = Mul(R.cwiseAbs(), half);
+  Box b;
+  for (int ax = 0; ax < 3; ++ax) {
+    b.lo[ax] = cw[ax] - hw[ax];
+    b.hi[ax] = cw[ax] + hw[ax];
+  }
+  return b;
+}
+
+Face Model::FaceIn(const std::string& ref, const Configuration& c, const std::string& where) const {
+  auto dot = ref.rfind('.');
+  if (dot == std::string::npos) throw InputError(where + ": '" + ref + "' is not a face (part.x0, part.cavity.y1, ...)");
+  int cu = CuboidIndex(ref.substr(0, dot), where);
+  std::string k = ref.substr(dot + 1);
+  int coord = -1;
+  for (int i = 0; i < 6; ++i)
+    if (k == kCoord[i]) coord = i;
+  if (coord < 0) throw InputError(where + ": '" + ref + "': a face is x0 x1 y0 y1 z0 z1");
+  Pose p = PoseOf(cuboid_part[cu], c);
+  Eigen::Vector3d n = Eigen::Vector3d::Zero();
+  n[coord / 2] = coord % 2 ? 1 : -1;
+  Eigen::Vector3d rn = p.R * n;
+  Face f;
+  f.name = ref;
+  f.axis = -1;
+  for (int ax = 0; ax < 3; ++ax)
+    if (std::abs(std::abs(rn[ax]) - 1) < 1e-9) f.axis = ax;
+  if (f.axis < 0)
+    throw InputError(where + ": face " + ref + " is not axis-aligned in configuration '" + c.name +
+                     "' (use multiples of 90 degrees there)");
+  f.box = BoxIn(cu, c);
+  f.plane = rn[f.axis] > 0 ? f.box.hi[f.axis] : f.box.lo[f.axis];
+  f.box.lo[f.axis] = f.box.hi[f.axis] = f.plane;
+  return f;
+}
+
+namespace {
+
+struct Builder {
+  const Model& m;
+  std::vector<LinearConstraint>& out;
+  std::vector<std::string>& groups;
+  int group = 0;
+
+  void Group(const std::string& name) {
+    groups.push_back(name);
+    group = static_cast<int>(groups.size()) - 1;
+  }
+  void Eq(const Affine& g, const std::string& label) { out.push_back({g, true, group, label}); }
+  void Ge(const Affine& g, const std::string& label) { out.push_back({g, false, group, label}); }
+  double V(const Affine& f) const { return f.Eval(m.base); }
+
+  // Packing of a set of faces in their plane (seed 003 Sec. 5.1, Fig. 6):
+  // consecutive faces along an in-plane axis touch; the first faces along
+  // it share their low coordinate, the last ones their high coordinate.
+  void Pack(const std::vector<Face>& faces, int normal, const std::string& what) {
+    if (faces.size() < 2) return;
+    const double thr = 0.5;  // mm: overlaps below this are ignored, as the seed's threshold
+    for (int u = 0; u < 3; ++u) {
+      if (u == normal) continue;
+      int v = 3 - u - normal;
+      std::vector<bool> has_prev(faces.size()), has_next(faces.size());
+      for (std::size_t i = 0; i < faces.size(); ++i) {
+        int best = -1;
+        double best_gap = 1e18;
+        for (std::size_t j = 0; j < faces.size(); ++j) {
+          if (i == j) continue;
+          double overlap_v = std::min(V(faces[i].box.hi[v]), V(faces[j].box.hi[v])) -
+                             std::max(V(faces[i].box.lo[v]), V(faces[j].box.lo[v]));
+          double gap = V(faces[j].box.lo[u]) - V(faces[i].box.hi[u]);
+          if (overlap_v > thr && gap > -thr && gap < best_gap) {
+            best_gap = gap;
+            best = static_cast<int>(j);
+          }
+        }
+        if (best >= 0) {
+          has_next[i] = has_prev[best] = true;
+          Eq(faces[best].box.lo[u] - faces[i].box.hi[u], what + ": " + faces[i].name + " touches " + faces[best].name);
+        }
+      }
+      int first = -1, last = -1;
+      for (std::size_t i = 0; i < faces.size(); ++i) {
+        if (!has_prev[i]) {
+          if (first < 0) first = static_cast<int>(i);
+          else Eq(faces[i].box.lo[u] - faces[first].box.lo[u], what + ": " + faces[i].name + " aligned with " + faces[first].name);
+        }
+        if (!has_next[i]) {
+          if (last < 0) last = static_cast<int>(i);
+          else Eq(faces[i].box.hi[u] - faces[last].box.hi[u], what + ": " + faces[i].name + " aligned with " + faces[last].name);
+        }
+      }
+    }
+  }
+
+  // The face of a set with the smallest low (or largest high) coordinate
+  // along u, by the base values.
+  const Face& Extreme(const std::vector<Face>& faces, int u, bool high) const {
+    std::size_t best = 0;
+    for (std::size_t i = 1; i < faces.size(); ++i) {
+      double a = V(high ? faces[i].box.hi[u] : faces[i].box.lo[u]);
+      double b = V(high ? faces[best].box.hi[u] : faces[best].box.lo[u]);
+      if (high ? a > b : a < b) best = i;
+    }
+    return faces[best];
+  }
+
+  void Cover(const Relationship& r) {
+    const Configuration& c = m.Config(r.configuration);
+    std::vector<Face> fa, fb;
+    for (const auto& s : r.a) fa.push_back(m.FaceIn(s, c, r.where));
+    for (const auto& s : r.b) fb.push_back(m.FaceIn(s, c, r.where));
+    if (fa.empty() || fb.empty()) throw InputError(r.where + ": cover needs covering and covered faces");
+    int n = fb[0].axis;
+    for (const auto* set : {&fa, &fb})
+      for (const Face& f : *set) {
+        if (f.axis != n)
+          throw InputError(r.where + ": faces " + f.name + " and " + fb[0].name + " are not parallel in '" + c.name + "'");
+        if (&f != &fb[0]) Eq(f.plane - fb[0].plane, r.name + ": " + f.name + " in the plane of " + fb[0].name);
+      }
+    Pack(fa, n, r.name);
+    Pack(fb, n, r.name);
+    bool just = !r.just.empty();
+    for (int u = 0; u < 3; ++u) {
+      if (u == n) continue;
+      Affine lo = Extreme(fb, u, false).box.lo[u] - Extreme(fa, u, false).box.lo[u];
+      Affine hi = Extreme(fa, u, true).box.hi[u] - Extreme(fb, u, true).box.hi[u];
+      std::string ax(1, "xyz"[u]);
+      if (just) {
+        Eq(lo, r.name + ": covering " + ax + "0 = covered " + ax + "0");
+        Eq(hi, r.name + ": covering " + ax + "1 = covered " + ax + "1");
+      } else {
+        Ge(lo, r.name + ": covering " + ax + "0 <= covered " + ax + "0");
+        Ge(hi, r.name + ": covering " + ax + "1 >= covered " + ax + "1");
+      }
+    }
+  }
+
+  void Fit(const Relationship& r) {
+    const Configuration& c = m.Config(r.configuration);
+    int outer = m.CuboidIndex(r.b[0], r.where);
+    int frame = m.cuboid_part[outer];
+    Box ob = m.BoxIn(outer, c, frame);
+    std::vector<Box> boxes;
+    for (const auto& s : r.a) {
+      int ci = m.CuboidIndex(s, r.where);
+      if (m.cuboid_part[ci] == frame) throw InputError(r.where + ": '" + s + "' cannot fit inside its own part");
+      boxes.push_back(m.BoxIn(ci, c, frame));
+    }
+    for (int u : r.axes) {
+      std::string ax(1, "xyz"[u]);
+      for (int side = 0; side < 2; ++side) {
+        std::string sname = ax + (side ? "1" : "0");
+        bool just = std::find(r.just.begin(), r.just.end(), sname) != r.just.end();
+        std::size_t extreme = 0;
+        for (std::size_t i = 0; i < boxes.size(); ++i) {
+          Affine g = side ? ob.hi[u] - boxes[i].hi[u] : boxes[i].lo[u] - ob.lo[u];
+          Ge(g, r.name + ": " + r.a[i] + " " + sname + " inside " + r.b[0]);
+          double vi = V(side ? boxes[i].hi[u] : boxes[i].lo[u]), ve = V(side ? boxes[extreme].hi[u] : boxes[extreme].lo[u]);
+          if (side ? vi > ve : vi < ve) extreme = i;
+        }
+        if (just) {
+          Affine g = side ? ob.hi[u] - boxes[extreme].hi[u] : boxes[extreme].lo[u] - ob.lo[u];
+          Eq(g, r.name + ": " + r.a[extreme] + " just fits " + r.b[0] + " at " + sname);
+        }
+      }
+    }
+    // Inner parts do not overlap: each pair is kept apart along the axis
+    // where the user's arrangement separates them most (seed 003 Sec. 5.2).
+    for (std::size_t i = 0; i < boxes.size(); ++i)
+      for (std::size_t j = i + 1; j < boxes.size(); ++j) {
+        int best_u = 0;
+        bool j_after = true;
+        double best = -1e18;
+        for (int u = 0; u < 3; ++u) {
+          double s1 = V(boxes[j].lo[u]) - V(boxes[i].hi[u]), s2 = V(boxes[i].lo[u]) - V(boxes[j].hi[u]);
+          if (s1 > best) { best = s1; best_u = u; j_after = true; }
+          if (s2 > best) { best = s2; best_u = u; j_after = false; }
+        }
+        const Box& first = j_after ? boxes[i] : boxes[j];
+        const Box& second = j_after ? boxes[j] : boxes[i];
+        Ge(second.lo[best_u] - first.hi[best_u], r.name + ": " + r.a[i] + " and " + r.a[j] + " apart along " + "xyz"[best_u]);
+      }
+  }
+
+  void Support(const Relationship& r) {
+    const Configuration& c = m.Config(r.configuration);
+    std::set<int> supporting, supported;
+    for (const auto& [sa, sb] : r.pairs) {
+      Face a = m.FaceIn(sa, c, r.where), b = m.FaceIn(sb, c, r.where);
+      if (a.axis != 2 || b.axis != 2)
+        throw InputError(r.where + ": support faces must be horizontal in '" + c.name + "' (" + sa + ", " + sb + ")");
+      std::string pair = sa + " under " + sb;
+      Eq(a.plane - b.plane, r.name + ": " + pair + " at the same height");
+      for (int u = 0; u < 2; ++u) {
+        std::string ax(1, "xy"[u]);
+        Ge(b.box.hi[u] - a.box.lo[u] - Affine::Const(r.min_overlap), r.name + ": " + pair + " overlap in " + ax);
+        Ge(a.box.hi[u] - b.box.lo[u] - Affine::Const(r.min_overlap), r.name + ": " + pair + " overlap in " + ax);
+      }
+      supporting.insert(m.cuboid_part[m.CuboidIndex(sa.substr(0, sa.rfind('.')), r.where)]);
+      supported.insert(m.cuboid_part[m.CuboidIndex(sb.substr(0, sb.rfind('.')), r.where)]);
+    }
+    // Parts that only support stand on one ground plane (Sec. 4.3).
+    int first = -1;
+    for (int p : supporting) {
+      if (supported.count(p)) continue;
+      if (first < 0) { first = p; continue; }
+      Eq(m.BoxIn(p, c).lo[2] - m.BoxIn(first, c).lo[2],
+         r.name + ": " + m.proto.parts[p].name + " on the ground with " + m.proto.parts[first].name);
+    }
+  }
+
+  void Flush(const Relationship& r) {
+    const Configuration& c = m.Config(r.configuration);
+    Face a = m.FaceIn(r.a[0], c, r.where), b = m.FaceIn(r.a[1], c, r.where);
+    if (a.axis != b.axis) throw InputError(r.where + ": flush faces " + r.a[0] + " and " + r.a[1] + " are not parallel");
+    Eq(a.plane - b.plane, r.name + ": " + r.a[0] + " flush with " + r.a[1]);
+  }
+
+  void Geometric(const Relationship& r) {
+    const std::string& e = r.expression;
+    for (const char* op : {"==", ">=", "<="}) {
+      auto at = e.find(op);
+      if (at == std::string::npos) continue;
+      Affine l = m.ParseExpression(e.substr(0, at), r.where), rr = m.ParseExpression(e.substr(at + 2), r.where);
+      if (std::string(op) == "==") Eq(l - rr, r.name + ": " + e);
+      else if (std::string(op) == ">=") Ge(l - rr, r.name + ": " + e);
+      else Ge(rr - l, r.name + ": " + e);
+      return;
+    }
+    throw InputError(r.where + ": geometric constraint '" + e + "' needs ==, >= or <=");
+  }
+};
+
+}  // namespace
+
+void Model::Build(std::vector<LinearConstraint>& out, std::vector<std::string>& groups) const {
+  Builder b{*this, out, groups};
+  for (std::size_t c = 0; c < cuboids.size(); ++c) {
+    const Part& part = proto.parts[cuboid_part[c]];
+    b.Group("sizes of " + cuboid_names[c] + " (" + part.where + ")");
+    for (int ax = 0; ax < 3; ++ax)
+      b.Ge(Affine::Var(6 * c + 2 * ax + 1) - Affine::Var(6 * c + 2 * ax) - Affine::Const(part.min_size),
+           cuboid_names[c] + " " + "xyz"[ax] + " extent >= " + std::to_string(part.min_size));
+    if (static_cast<int>(c) != cuboid_part[c]) {  // a cavity: inside its part, open face on the part's face
+      int p = cuboid_part[c];
+      for (int k = 0; k < 6; ++k) {
+        Affine g = Affine::Var(6 * c + k) - Affine::Var(6 * p + k);
+        bool open = cuboids[c]->open == kCoord[k];
+        if (open) b.Eq(g, cuboid_names[c] + " opens at " + kCoord[k]);
+        else b.Ge(k % 2 ? (-1.0) * g : g, cuboid_names[c] + " " + kCoord[k] + " inside " + part.name);
+      }
+    }
+  }
+  for (const Part& part : proto.parts) {
+    if (part.held.empty()) continue;
+    int c = proto.PartIndex(part.name);
+    b.Group("held coordinates of " + part.name + " (" + part.where + ")");
+    for (int k : part.held)
+      b.Eq(Affine::Var(6 * c + k) - Affine::Const(part.cuboid.box[k]),
+           part.name + "." + kCoord[k] + " held at " + std::to_string(part.cuboid.box[k]));
+  }
+  for (const Joint& j : proto.joints) {
+    if (j.type == JointType::kDoublePivot) {
+      // The pivots sit on two coplanar faces (Sec. 3), one per part.
+      int k = 0;
+      while (kCoord[k] != j.face) ++k;
+      int c = proto.PartIndex(j.child), pa = proto.PartIndex(j.parent);
+      b.Group("attachment of joint " + j.name + " (" + j.where + ")");
+      b.Eq(Affine::Var(6 * c + k) - Affine::Var(6 * pa + k),
+           j.name + ": " + j.child + "." + j.face + " coplanar with " + j.parent + "." + j.face);
+      continue;
+    }
+    bool any = false;
+    for (const auto& refs : j.at) any |= refs.size() > 1;
+    if (!any) continue;
+    b.Group("attachment of joint " + j.name + " (" + j.where + ")");
+    for (const auto& refs : j.at)
+      for (std::size_t i = 1; i < refs.size(); ++i)
+        b.Eq(Resolve(refs[i], j.where) - Resolve(refs[0], j.where), j.name + ": " + refs[0] + " = " + refs[i]);
+  }
+  for (const Relationship& r : proto.relationships) {
+    b.Group(r.name + " (" + r.where + ")");
+    switch (r.type) {
+      case RelationType::kCover: b.Cover(r); break;
+      case RelationType::kFit: b.Fit(r); break;
+      case RelationType::kSupport: b.Support(r); break;
+      case RelationType::kFlush: b.Flush(r); break;
+      case RelationType::kGeometric: b.Geometric(r); break;
+    }
+  }
+}
+
+}  // namespace fabatlas::prototype::internal
