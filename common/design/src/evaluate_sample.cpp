@@ -204,6 +204,7 @@ SampleResult EvaluateSample(const Design& design, const Point& u, const Evaluate
     for (const auto& [name, value] : solve.values) scope.Set(name, value);
     auto tree_start = Clock::now();
     CheckOutcome geometry_check{"geometry", true, "", "", 0};
+    std::string geometry_failure = kNoGeometry;
     try {
       TreeEvaluation tree(design, scope, options, r.subtrees);
       r.solid = tree.Evaluate(design.tree, "root").solid;
@@ -214,6 +215,7 @@ SampleResult EvaluateSample(const Design& design, const Point& u, const Evaluate
     } catch (const SampleFailure& e) {
       geometry_check.passed = false;
       geometry_check.reason = e.what();
+      geometry_failure = e.type();  // e.g. unsat_constraints from a prototype node
     } catch (const ResourceError&) {
       throw;
     } catch (const DesignFault&) {
@@ -225,8 +227,8 @@ SampleResult EvaluateSample(const Design& design, const Point& u, const Evaluate
     }
     geometry_check.seconds = r.timings["tree"] = Since(tree_start);
     if (!geometry_check.passed) {
-      geometry_check.failure = kNoGeometry;
-      fail(kNoGeometry, geometry_check.reason);
+      geometry_check.failure = geometry_failure;
+      fail(geometry_failure, geometry_check.reason);
       r.solid = geometry::Solid();
     }
     r.checks.push_back(geometry_check);

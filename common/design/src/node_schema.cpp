@@ -26,6 +26,9 @@ const std::map<std::string, OpSchema>& OperationSchemas() {
         0}},
       {"mesh", {{{"file", S::kString}}, 0, 0}},
       {"openscad", {{{"file", S::kString}, {"set", S::kNumberMap, false}}, 0, 0}},
+      // A works-like prototype (seed 003, docs/prototype.md): solved, then
+      // its printable geometry; unsatisfiable constraints fail the sample.
+      {"prototype", {{{"file", S::kString}, {"set", S::kNumberMap, false}}, 0, 0}},
       // Transforms: several children are unioned first.
       {"translate", {{{"by", S::kVec3}}, 1, -1}},
       {"rotate", {{{"degrees", S::kVec3}}, 1, -1}},

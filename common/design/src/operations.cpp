@@ -11,7 +11,10 @@
 
 #include "exact_boolean.h"
 #include "fabatlas/error.h"
+#include "fabatlas/design/evaluate_sample.h"
 #include "fabatlas/mesh/read_mesh.h"
+#include "fabatlas/prototype/fabricate.h"
+#include "fabatlas/prototype/solve.h"
 
 namespace fabatlas::design {
 namespace {
@@ -131,6 +134,23 @@ Solid OpenScad(const geometry::GridSpec& g, const ResolvedArgs& a, const Node& n
   return geometry::FromMesh(g, m);
 }
 
+// A works-like prototype file with its parameters set from the design: the
+// two-stage solve, then the printable geometry on this evaluation's grid.
+Solid PrototypeNode(const geometry::GridSpec& g, const ResolvedArgs& a, const Node& node, const std::filesystem::path& dir) {
+  std::map<std::string, double> set;
+  if (auto it = a.values.find("set"); it != a.values.end())
+    for (std::size_t i = 0; i < it->second.keys.size(); ++i) set[it->second.keys[i]] = it->second.numbers[i];
+  prototype::Prototype p;
+  try {
+    p = prototype::LoadPrototype(dir / a.Text("file"), set);
+  } catch (const InputError& e) {
+    throw DesignFault(node.place.str() + ": " + e.what());
+  }
+  prototype::SolveSummary s = prototype::SolvePrototype(p);
+  if (!s.satisfiable) throw SampleFailure(kUnsatConstraints, node.place.str() + ": " + s.Explain());
+  return prototype::Fabricate(p, s, g);
+}
+
 }  // namespace
 
 Solid ApplyOperation(const Node& node, const ResolvedArgs& a, std::vector<Solid>& children,
@@ -165,6 +185,7 @@ Solid ApplyOperation(const Node& node, const ResolvedArgs& a, std::vector<Solid>
     return geometry::FromMesh(g, m);
   }
   if (op == "openscad") return OpenScad(g, a, node, dir);
+  if (op == "prototype") return PrototypeNode(g, a, node, dir);
 
   // Operations over children. Transforms union several children first.
   if (op == "union" || op == "difference" || op == "intersection") {
