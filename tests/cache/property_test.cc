@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <random>
 
 #include "fabatlas/cache/exact_cache.h"
 #include "fabatlas/cache/optimize_cache.h"
@@ -99,6 +100,45 @@ TEST(Curves, MonotoneAndEndingAtThePlan) {
       EXPECT_DOUBLE_EQ(p.curve.back().worst_seconds, p.cost.worst_seconds);
       EXPECT_EQ(p.curve.back().bytes, p.cost.bytes);
       EXPECT_EQ(p.curve.back().entries, p.cost.entries);
+    }
+  }
+}
+
+// A plan depends on the records, not on the order they arrive in (workers
+// finish in any order): shuffled records and samples give the same keys.
+TEST(Determinism, PlanIndependentOfRecordOrder) {
+  for (std::uint64_t seed = 1; seed <= 10; ++seed) {
+    testing::SyntheticDesign d;
+    d.seed = seed;
+    d.samples = 60;
+    auto s = testing::MakeSyntheticGraph(d);
+    // Every record twice with different times, as two workers might report.
+    auto doubled = s.nodes;
+    for (auto n : s.nodes) {
+      n.seconds *= 1.5;
+      doubled.push_back(n);
+    }
+    DependencyGraph a = BuildDependencyGraph(doubled, s.samples);
+    std::mt19937_64 rng(seed);
+    std::shuffle(doubled.begin(), doubled.end(), rng);
+    std::shuffle(s.samples.begin(), s.samples.end(), rng);
+    DependencyGraph b = BuildDependencyGraph(doubled, s.samples);
+    EXPECT_EQ(a.seconds, b.seconds);
+    for (Strategy st : {Strategy::kNaive, Strategy::kOptAve, Strategy::kOptMax}) {
+      CacheOptions o;
+      o.strategy = st;
+      CachePlan pa = OptimizeCache(a, o), pb = OptimizeCache(b, o);
+      o.budget_bytes = pa.cost.bytes / 3;
+      CachePlan qa = OptimizeCache(a, o), qb = OptimizeCache(b, o);
+      std::vector<std::string> ka, kb, la, lb;
+      for (auto id : pa.chosen) ka.push_back(a.keys[static_cast<std::size_t>(id)]);
+      for (auto id : pb.chosen) kb.push_back(b.keys[static_cast<std::size_t>(id)]);
+      for (auto id : qa.chosen) la.push_back(a.keys[static_cast<std::size_t>(id)]);
+      for (auto id : qb.chosen) lb.push_back(b.keys[static_cast<std::size_t>(id)]);
+      EXPECT_EQ(ka, kb);
+      EXPECT_EQ(la, lb);
+      EXPECT_EQ(qa.cost.worst_seconds, qb.cost.worst_seconds);
+      EXPECT_EQ(qa.cost.mean_seconds, qb.cost.mean_seconds);
     }
   }
 }

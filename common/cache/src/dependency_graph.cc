@@ -147,6 +147,8 @@ std::vector<double> PreviewSeconds(const DependencyGraph& graph, const CacheSet&
 CacheCost EvaluateCache(const DependencyGraph& graph, const CacheSet& cache) {
   CacheCost cost;
   std::vector<double> t = PreviewSeconds(graph, cache);
+  // Summed in ascending order: the mean does not depend on sample order.
+  std::sort(t.begin(), t.end());
   double sum = 0;
   for (double x : t) {
     sum += x;
