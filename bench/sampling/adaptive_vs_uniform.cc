@@ -127,6 +127,15 @@ int main(int argc, char** argv) {
     }
   }
   if (points > 0) {
+    BudgetCylinder2D ev;
+    Reach u{0, 1, 0}, a{0, 0, 0};
+    for (double target : {0.95, 0.98}) {
+      u = UniformToTarget(ev, BudgetCylinder2D::TrulyValid, target, points, u.setting, 400);
+      a = AdaptiveToTarget(ev, BudgetCylinder2D::TrulyValid, target, points, threshold, subdivisions, a.setting);
+      row("budget cylinder 2-D", target, u, a);
+    }
+  }
+  if (points > 0) {
     HollowCylinder3D ev;
     Reach u{0, 1, 0}, a{0, 0, 0};
     for (double target : {0.95, 0.97}) {

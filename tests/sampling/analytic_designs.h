@@ -58,6 +58,35 @@ class HollowCylinder2D : public SampleEvaluator {
   }
 };
 
+// (a') 2-D with a material budget: as (a), plus the wall's cross-section
+// pi (R^2 - (R - t)^2) must not exceed 150 mm^2 (else "over_budget"), so the
+// valid region is the curved sliver between t_min(R) = 0.5 + 0.01 R^2 and
+// t_max(R) = R - sqrt(R^2 - 150 / pi): about 25.6 % of the bounded space
+// (seed 001 Table 3's designs range from 3 % to 100 % valid).
+class BudgetCylinder2D : public SampleEvaluator {
+ public:
+  static constexpr double kMaxSection = 150.0;  // mm^2
+  static std::vector<Dimension> Dimensions() { return HollowCylinder2D::Dimensions(); }
+  static const char* Failure(const std::vector<double>& u) {
+    if (u[1] < 0.5 + 0.01 * u[0] * u[0]) return "min_thickness";
+    const double r = u[0] - u[1];
+    if (std::numbers::pi * (u[0] * u[0] - r * r) > kMaxSection) return "over_budget";
+    return nullptr;
+  }
+  static bool TrulyValid(const std::vector<double>& u) { return Failure(u) == nullptr; }
+  SampleOutcome EvaluateSample(const SamplePoint& p) override {
+    SampleOutcome o;
+    const char* f = Failure(p.u);
+    o.valid = f == nullptr;
+    if (f) o.failure_type = f;
+    else o.properties["volume_mm3"] = HollowCylinderVolume(p.u[0], p.u[1], 10.0);
+    return o;
+  }
+  double GeometryChange(const SamplePoint& a, const SamplePoint& b) override {
+    return HollowCylinderChange(a.u[0], a.u[1], 10.0, b.u[0], b.u[1], 10.0);
+  }
+};
+
 // (b) 3-D: R in [5, 20], t in [0.5, 5], height h in [10, 60] mm. Valid iff
 // t >= 0.5 + R h / 300 (else "min_thickness") and h <= 6 R (else "tips_over").
 class HollowCylinder3D : public SampleEvaluator {
