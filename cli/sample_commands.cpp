@@ -23,11 +23,13 @@ namespace {
 struct SampleArgs {
   std::string job, out;
   int threads = 0;
+  bool cache = false;
 };
 
 void Sample(const SampleArgs& args) {
   sampling::JobFile job = sampling::ReadJobFile(args.job);
   design::Design design = design::LoadDesign(job.design_path);
+  const cache::CacheOptions cache_options = coordinator::CacheOptionsOf(job);  // bad input before the work
   int threads = args.threads > 0 ? args.threads : job.threads;
   sampling::DesignSpace space = precompute::DesignSpaceOf(design, job.subdivisions);
   precompute::DesignSampleEvaluator evaluator(design);
@@ -36,8 +38,21 @@ void Sample(const SampleArgs& args) {
   precompute::WriteFormOutputs(design, summary, args.out);
   // The same artifact the cluster publishes for this job (docs/artifact.md).
   const std::string artifact = coordinator::ArtifactFileName(design.name);
-  storage::WriteArtifact(coordinator::ArtifactOf(protocol::MakeJobBundle(args.job), design.name, job, summary.form),
-                         std::filesystem::path(args.out) / artifact);
+  storage::Artifact published = coordinator::ArtifactOf(protocol::MakeJobBundle(args.job), design.name, job, summary.form);
+  if (args.cache) {
+    // The geometry cache (seed 001 Sec. 6): re-evaluate the valid samples'
+    // geometry, keep every subtree as a blob, plan and store H_opt / H_rfree.
+    const std::filesystem::path blobs = std::filesystem::path(args.out) / "subtree-blobs";
+    coordinator::CacheAssembly assembly = coordinator::CollectSubtreesInProcess(design, summary.form, blobs);
+    assembly.options = cache_options;
+    const auto added = coordinator::AddCache(published, assembly);
+    std::filesystem::remove_all(blobs);
+    const auto& c = published.manifest.cache;
+    std::cout << "cache " << c.strategy << ": H_TOP " << c.top_entries << " subtrees / " << c.top_bytes
+              << " B, H_opt " << c.opt_entries << " / " << c.opt_bytes << " B, H_rfree " << c.rfree_entries << " / "
+              << c.rfree_bytes << " B (" << added.entries << " entries stored)\n";
+  }
+  storage::WriteArtifact(published, std::filesystem::path(args.out) / artifact);
   std::cout << precompute::Table3Row(design, summary.statistics) << "\n";
   std::cout << "wrote " << args.out << "/" << artifact << ", form.json, statistics.json and validity maps\n";
 }
@@ -51,6 +66,8 @@ void AddSampleCommands(CLI::App& app, int& exit_code) {
   sample->add_option("job", args->job, "job YAML (docs/job-format.md)")->required();
   sample->add_option("--out", args->out, "output directory")->required();
   sample->add_option("--threads", args->threads, "threads (default: the job file's)");
+  sample->add_flag("--cache", args->cache,
+                   "also plan the geometry cache and store it in the artifact (re-evaluates the valid samples' geometry)");
   sample->callback([args] { Sample(*args); });
 }
 

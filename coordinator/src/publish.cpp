@@ -2,13 +2,21 @@
 #include "fabatlas/coordinator/publish.h"
 
 #include <cctype>
+#include <cmath>
 #include <limits>
 #include <map>
+#include <memory>
+#include <mutex>
+#include <yaml-cpp/yaml.h>
 #include <set>
 
 #include "fabatlas/cache/cost_model.h"
 #include "fabatlas/cache/dependency_graph.h"
+#include "fabatlas/design/evaluate_sample.h"
+#include "fabatlas/error.h"
 #include "fabatlas/geometry/solid.h"
+#include "fabatlas/precompute/design_evaluator.h"
+#include "fabatlas/storage/blob_store.h"
 #include "fabatlas/storage/glb.h"
 
 #include "fabatlas/protocol/job_bundle.h"
@@ -137,6 +145,107 @@ CacheAssemblySummary AddCache(storage::Artifact& artifact, const CacheAssembly& 
     ++summary.entries;
   }
   return summary;
+}
+
+cache::CacheOptions CacheOptionsOf(const sampling::JobFile& job) {
+  cache::CacheOptions o;
+  auto it = job.reserved_sections.find("cache");
+  if (it == job.reserved_sections.end()) return o;
+  const std::string where = job.path + ": cache: ";
+  YAML::Node node;
+  try {
+    node = YAML::Load(it->second);
+  } catch (const YAML::Exception& e) {
+    throw InputError(where + e.msg);
+  }
+  if (!node || node.IsNull()) return o;
+  if (!node.IsMap()) throw InputError(where + "expected a mapping");
+  for (const auto& kv : node) {
+    const std::string key = kv.first.as<std::string>();
+    try {
+      if (key == "strategy") {
+        const std::string v = kv.second.as<std::string>();
+        if (v == "naive") o.strategy = cache::Strategy::kNaive;
+        else if (v == "opt_ave") o.strategy = cache::Strategy::kOptAve;
+        else if (v == "opt_max") o.strategy = cache::Strategy::kOptMax;
+        else throw InputError(where + "strategy '" + v + "' is not naive, opt_ave or opt_max");
+      } else if (key == "budget_mb") {
+        const double v = kv.second.as<double>();
+        if (!(v > 0) || !std::isfinite(v)) throw InputError(where + "budget_mb must be a positive number");
+        o.budget_bytes = static_cast<std::uint64_t>(v * 1024 * 1024);
+      } else if (key == "min_subtree_seconds") {
+        const double v = kv.second.as<double>();
+        if (!(v >= 0) || !std::isfinite(v)) throw InputError(where + "min_subtree_seconds must be >= 0");
+        o.min_seconds = v;
+      } else {
+        throw InputError(where + "unknown key '" + key + "' (strategy, budget_mb, min_subtree_seconds)");
+      }
+    } catch (const YAML::Exception&) {
+      throw InputError(where + "'" + key + "' has the wrong type");
+    }
+  }
+  return o;
+}
+
+namespace {
+
+// Serves subtrees computed before (kept in memory up to a budget, else read
+// back from the blob store) and keeps every new one as a blob.
+class CollectingCache final : public design::SubtreeCache {
+ public:
+  explicit CollectingCache(storage::BlobStore& blobs) : blobs_(blobs) {}
+  std::optional<geometry::Solid> Find(const std::string& key) override {
+    std::lock_guard lock(mutex_);
+    auto it = digests_.find(key);
+    if (it == digests_.end()) return std::nullopt;
+    return geometry::Solid::Deserialize(blobs_.Read(it->second));
+  }
+  void Offer(const std::string& key, const geometry::Solid& solid, double) override {
+    {
+      std::lock_guard lock(mutex_);
+      if (digests_.count(key)) return;
+    }
+    std::string digest = blobs_.Put(solid.Serialize());
+    std::lock_guard lock(mutex_);
+    digests_.emplace(key, digest);
+  }
+  std::string DigestOf(const std::string& key) {
+    std::lock_guard lock(mutex_);
+    auto it = digests_.find(key);
+    return it == digests_.end() ? std::string() : it->second;
+  }
+
+ private:
+  storage::BlobStore& blobs_;
+  std::mutex mutex_;
+  std::map<std::string, std::string> digests_;
+};
+
+}  // namespace
+
+CacheAssembly CollectSubtreesInProcess(const design::Design& design, const sampling::Form& form,
+                                       const std::filesystem::path& blob_dir) {
+  auto blobs = std::make_shared<storage::BlobStore>(blob_dir);
+  auto collecting = std::make_shared<CollectingCache>(*blobs);
+  CacheAssembly a;
+  design::EvaluateOptions options;
+  options.cache = collecting.get();
+  options.keep_solid = false;
+  options.run_checks = false;
+  for (const auto& sample : form.samples) {
+    if (!sample.outcome.valid) continue;
+    const design::SampleResult r =
+        design::EvaluateSample(design, precompute::DesignPointOf(design, sample.u), options);
+    if (r.subtrees.empty()) continue;
+    for (const auto& s : r.subtrees)
+      a.subtrees.push_back({s.key, s.op, s.children, static_cast<std::int64_t>(s.bytes), true});
+    a.sample_roots.push_back(r.subtrees.back().key);
+  }
+  a.grid_of = [blobs, collecting](const std::string& key) {
+    const std::string digest = collecting->DigestOf(key);
+    return digest.empty() ? std::string() : blobs->Read(digest);
+  };
+  return a;
 }
 
 void AddStartingPoints(storage::Artifact& artifact, const cache::StartingPointOptions& options) {

@@ -17,6 +17,7 @@
 #include "fabatlas/error.h"
 #include "fabatlas/sampling/form.h"
 #include "fabatlas/storage/artifact.h"
+#include "fabatlas/storage/glb.h"
 #include "fabatlas/testing/paths.h"
 
 namespace {
@@ -144,6 +145,47 @@ TEST(ArtifactCli, DamagedArtifactsAreOneLineErrorsWithStatus2) {
     EXPECT_NE(r.err.find((dir / file).string() + ": "), std::string::npos) << r.err;
     EXPECT_NE(r.err.find(what), std::string::npos) << r.err;
   }
+}
+
+TEST(ArtifactCli, SampleWithCacheStoresHoptAndHrfreeEntriesThatInspectReloads) {
+  const fs::path dir = FreshTempDir("artifact-cli");
+  const fs::path job = dir / "tube_cache.yaml";
+  std::ofstream(job) << "design: " << (SourceDir() / "configs/designs/tube_wall_2d.yaml").string()
+                     << "\nsampling: {subdivisions: 3, max_depth: 1, dg_threshold: 0.05}\n"
+                     << "cache: {strategy: opt_max, min_subtree_seconds: 0}\n";
+  CommandRun run = Fabatlas("sample " + job.string() + " --cache --out " + (dir / "out").string());
+  ASSERT_EQ(run.status, 0) << run.err;
+  EXPECT_NE(run.out.find("cache opt_max: H_TOP"), std::string::npos) << run.out;
+  const auto a = fabatlas::storage::ReadArtifact(dir / "out/tube_wall_2d.fabatlas");
+  const auto& c = a.manifest.cache;
+  EXPECT_EQ(c.strategy, "opt_max");
+  // H_TOP is one root per valid sample.
+  EXPECT_EQ(c.top_entries, a.manifest.statistics.valid_samples);
+  EXPECT_GT(c.rfree_entries, 0);
+  EXPECT_LE(c.rfree_bytes, c.top_bytes);
+  std::int64_t rfree = 0;
+  for (const auto& e : a.cache) {
+    rfree += e.in_rfree;
+    EXPECT_FALSE(fabatlas::storage::GlbToMesh(e.glb).empty()) << e.key;
+  }
+  EXPECT_EQ(rfree, c.rfree_entries);
+  EXPECT_FALSE(a.cache_curves.empty());
+  EXPECT_FALSE(a.starting_points.empty());
+  CommandRun r = Fabatlas("inspect " + (dir / "out/tube_wall_2d.fabatlas").string() + " --json --points 10");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  ASSERT_TRUE(j["fig14"]["t_rfree"].is_object()) << r.out;
+  EXPECT_EQ(j["fig14"]["t_rfree"]["failures"], 0);
+  EXPECT_EQ(j["fig14"]["h_rfree"]["entries"], c.rfree_entries);
+  ASSERT_TRUE(j["fig13_png"].is_string());
+  EXPECT_TRUE(fs::file_size(j["fig13_png"].get<std::string>()) > 1000);
+
+  // A bad cache section is a one-line error naming the job file.
+  std::ofstream(dir / "bad.yaml") << "design: " << (SourceDir() / "configs/designs/tube_wall_2d.yaml").string()
+                                  << "\ncache: {strategy: fastest}\n";
+  CommandRun bad = Fabatlas("sample " + (dir / "bad.yaml").string() + " --cache --out " + (dir / "bad").string());
+  EXPECT_EQ(bad.status, 2);
+  EXPECT_NE(bad.err.find("bad.yaml: cache: strategy 'fastest'"), std::string::npos) << bad.err;
 }
 
 // tests/data/artifact_v1/ holds an artifact written by schema version 1 from

@@ -8,12 +8,14 @@
 // the same bytes.
 #pragma once
 
+#include <filesystem>
 #include <functional>
 #include <string>
 #include <vector>
 
 #include "fabatlas/cache/optimize_cache.h"
 #include "fabatlas/cache/starting_points.h"
+#include "fabatlas/design/design.h"
 
 #include "fabatlas/sampling/adaptive_sampler.h"
 #include "fabatlas/sampling/job_file.h"
@@ -69,6 +71,25 @@ struct CacheAssemblySummary {
 // subtree of H_opt ∪ H_rfree as an entry (grid + glTF binary mesh) with its
 // membership flags. Fills manifest.cache.
 CacheAssemblySummary AddCache(storage::Artifact& artifact, const CacheAssembly& assembly);
+
+// The job file's `cache:` section (docs/job-format.md):
+//   cache:
+//     strategy: opt_max     # naive | opt_ave | opt_max
+//     budget_mb: 512        # memory budget of H_opt (default: none)
+//     min_subtree_seconds: 0.1  # subtrees whose model root cost (docs/cache.md)
+//                               # is lower are never cached; cluster workers
+//                               # also upload only subtrees this slow
+// Throws InputError "<job file>: cache: ..." for unknown keys or bad values.
+cache::CacheOptions CacheOptionsOf(const sampling::JobFile& job);
+
+// The subtrees of a form's valid samples evaluated in this process (for
+// `fabatlas sample --cache`; the cluster gets them from its workers):
+// every valid sample is re-evaluated as a preview (geometry only) through a
+// cache that serves subtrees computed before, and every subtree's geometry
+// is kept as a blob under blob_dir (content addressed, once per key).
+// `grid_of` of the result reads those blobs.
+CacheAssembly CollectSubtreesInProcess(const design::Design& design, const sampling::Form& form,
+                                       const std::filesystem::path& blob_dir);
 
 // Seed 001 Sec. 7.4 starting points of the artifact's form
 // (cache::ChooseStartingPoints).
