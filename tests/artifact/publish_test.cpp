@@ -8,6 +8,9 @@
 #include <set>
 
 #include "fabatlas/coordinator/publish.h"
+#include "fabatlas/design/evaluate_sample.h"
+#include "fabatlas/precompute/design_evaluator.h"
+#include "fabatlas/precompute/preview_times.h"
 #include "fabatlas/geometry/solid.h"
 #include "fabatlas/sha256.h"
 #include "fabatlas/storage/artifact.h"
@@ -130,6 +133,49 @@ TEST(PublishCache, StartingPointsAreValidSamplesOfTheForm) {
     EXPECT_TRUE(art.form.samples[p.sample_id].outcome.valid);
     EXPECT_EQ(p.u, art.form.samples[p.sample_id].u);
   }
+}
+
+}  // namespace
+}  // namespace fabatlas::coordinator
+
+namespace fabatlas::coordinator {
+namespace {
+
+// A preview through a cache holding a sample's root looks it up before its
+// children (EvaluateOptions::lookup_before_children): one record, the same
+// key and geometry as the full evaluation, and nothing evaluated below it.
+TEST(PreviewCache, CachedRootSkipsItsChildren) {
+  const design::Design d = design::LoadDesign(testing::SourceDir() / "configs/designs/tube_wall_2d.yaml");
+  const design::Point u = precompute::DesignPointOf(d, {15.0, 6.0});
+  design::InMemorySubtreeCache full_cache;
+  design::EvaluateOptions full;
+  full.cache = &full_cache;
+  full.run_checks = false;
+  const design::SampleResult first = design::EvaluateSample(d, u, full);
+  ASSERT_TRUE(first.valid) << first.failure_reason;
+  ASSERT_EQ(first.subtrees.size(), 3u);  // two cylinders and their difference
+
+  precompute::FrozenSubtreeCache roots;
+  roots.Add(first.subtrees.back().key, first.solid);
+  design::EvaluateOptions preview = full;
+  preview.cache = &roots;
+  preview.lookup_before_children = true;
+  const design::SampleResult second = design::EvaluateSample(d, u, preview);
+  ASSERT_EQ(second.subtrees.size(), 1u);
+  EXPECT_TRUE(second.subtrees[0].from_cache);
+  EXPECT_EQ(second.subtrees[0].key, first.subtrees.back().key);
+  EXPECT_EQ(second.subtrees[0].children, first.subtrees.back().children);
+  EXPECT_EQ(second.solid.Serialize(), first.solid.Serialize());
+
+  // Without the root, a cached child is used and the other child evaluated.
+  precompute::FrozenSubtreeCache child;
+  child.Add(first.subtrees[0].key, geometry::Solid::Deserialize(full_cache.Find(first.subtrees[0].key)->Serialize()));
+  preview.cache = &child;
+  const design::SampleResult third = design::EvaluateSample(d, u, preview);
+  ASSERT_EQ(third.subtrees.size(), 3u);
+  EXPECT_TRUE(third.subtrees[0].from_cache);
+  EXPECT_FALSE(third.subtrees[1].from_cache);
+  EXPECT_EQ(third.solid.Serialize(), first.solid.Serialize());
 }
 
 }  // namespace

@@ -53,7 +53,50 @@ class TreeEvaluation {
     std::string key, tau;
   };
 
+  // The key and topology of a subtree and its children's keys, computed from the
+  // resolved arguments alone (no geometry); memoised per node.
+  struct Identity {
+    std::string key, topology;  // topology = SHA-256 of τ, as Result::tau
+    std::vector<std::string> children;
+  };
+  const Identity& IdentityOf(const Node& node) {
+    auto it = identities_.find(&node);
+    if (it != identities_.end()) return it->second;
+    ResolvedArgs args = Resolve(node);
+    std::vector<const Identity*> kids;
+    for (const Node& child : node.children) kids.push_back(&IdentityOf(child));
+    Identity id;
+    std::string tau = node.op + "(";
+    for (const auto& [name, _] : node.args) tau += name + ",";
+    for (const auto* c : kids) tau += c->topology + ";";
+    tau += ")";
+    std::string rho = "voxel=" + Format(design_.voxel_size) + ";" + args.Canonical();
+    for (const auto* c : kids) rho += "child=" + c->key + ";";
+    id.key = Sha256Hex(tau + "|" + rho);
+    id.topology = Sha256Hex(tau);
+    for (const auto* c : kids) id.children.push_back(c->key);
+    return identities_.emplace(&node, std::move(id)).first->second;
+  }
+
   Result Evaluate(const Node& node, const std::string& path) {
+    // Previews look a subtree up before evaluating its children, so a cached
+    // subtree costs nothing below it (seed 001 Sec. 6.2: traversal stops at
+    // nodes in H).
+    if (options_.cache && options_.lookup_before_children) {
+      const Identity& id = IdentityOf(node);
+      if (auto hit = options_.cache->Find(id.key)) {
+        SubtreeRecord record;
+        record.path = path;
+        record.op = node.op;
+        record.topology = id.topology;
+        record.key = id.key;
+        record.children = id.children;
+        record.from_cache = true;
+        record.bytes = hit->MemoryBytes();
+        records_.push_back(std::move(record));
+        return {*hit, id.key, id.topology};
+      }
+    }
     ResolvedArgs args = Resolve(node);
     std::vector<Result> children;
     for (std::size_t i = 0; i < node.children.size(); ++i)
@@ -141,6 +184,7 @@ class TreeEvaluation {
   const EvaluateOptions& options_;
   std::vector<SubtreeRecord>& records_;
   geometry::GridSpec grid_;
+  std::map<const Node*, Identity> identities_;
 };
 
 }  // namespace

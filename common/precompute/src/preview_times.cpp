@@ -53,6 +53,7 @@ PreviewTimes MeasurePreviewTimes(const design::Design& design, const std::vector
   options.cache = cache;
   options.keep_solid = false;
   options.run_checks = false;
+  options.lookup_before_children = true;
   for (const auto& u : points) {
     const design::Point p = DesignPointOf(design, u);
     const auto start = std::chrono::steady_clock::now();

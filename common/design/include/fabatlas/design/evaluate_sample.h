@@ -54,6 +54,12 @@ struct EvaluateOptions {
   // skip the checks and properties (the sample is then valid iff it has
   // geometry).
   bool run_checks = true;
+  // true: look every subtree up in `cache` before evaluating its children
+  // (computing its key from the resolved arguments alone), so a hit skips the
+  // whole subtree below it, as a preview with cache H does (seed 001
+  // Sec. 6.2). The records of a hit's descendants are then absent. false
+  // (sampling): children are always evaluated, every subtree is recorded.
+  bool lookup_before_children = false;
 };
 
 struct SampleResult {
