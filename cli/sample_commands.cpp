@@ -39,7 +39,7 @@ void Sample(const SampleArgs& args) {
   // The same artifact the cluster publishes for this job (docs/artifact.md).
   const std::string artifact = coordinator::ArtifactFileName(design.name);
   storage::Artifact published = coordinator::ArtifactOf(protocol::MakeJobBundle(args.job), design.name, job, summary.form);
-  if (args.cache) {
+  if (args.cache || coordinator::WantsCache(job)) {
     // The geometry cache (seed 001 Sec. 6): re-evaluate the valid samples'
     // geometry, keep every subtree as a blob, plan and store H_opt / H_rfree.
     const std::filesystem::path blobs = std::filesystem::path(args.out) / "subtree-blobs";
@@ -67,7 +67,7 @@ void AddSampleCommands(CLI::App& app, int& exit_code) {
   sample->add_option("--out", args->out, "output directory")->required();
   sample->add_option("--threads", args->threads, "threads (default: the job file's)");
   sample->add_flag("--cache", args->cache,
-                   "also plan the geometry cache and store it in the artifact (re-evaluates the valid samples' geometry)");
+                   "plan the geometry cache and store it in the artifact even without a cache strategy in the job file (re-evaluates the valid samples' geometry)");
   sample->callback([args] { Sample(*args); });
 }
 

@@ -272,8 +272,17 @@ struct Coordinator::Impl {
       fs::path out = dir / "out";
       precompute::WriteFormOutputs(design, summary, out);
       // The published artifact (docs/artifact.md): deterministic, atomic.
-      storage::WriteArtifact(ArtifactOf(bundle, design.name, job_file, summary.form),
-                             out / ArtifactFileName(design.name));
+      storage::Artifact artifact = ArtifactOf(bundle, design.name, job_file, summary.form);
+      if (WantsCache(job_file)) {
+        // The geometry cache from the subtrees the workers reported (docs/artifact.md).
+        CacheAssembly assembly = CollectSubtreesFromStore(*store, *blobs, job_id, design, summary.form);
+        assembly.options = CacheOptionsOf(job_file);
+        const auto added = AddCache(artifact, assembly);
+        Event(job_id, "cache", "geometry cache " + artifact.manifest.cache.strategy + ": " +
+                                   std::to_string(added.entries) + " entries, " + std::to_string(added.missing) +
+                                   " without geometry");
+      }
+      storage::WriteArtifact(artifact, out / ArtifactFileName(design.name));
       for (const auto& entry : fs::directory_iterator(out)) {
         if (!entry.is_regular_file()) continue;
         std::string name = entry.path().filename().string();

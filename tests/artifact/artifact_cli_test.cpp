@@ -100,6 +100,26 @@ TEST(ArtifactCli, RunPublishesTheSameBytesForOneAndTwoWorkersAndInProcess) {
   EXPECT_EQ(j.at("samples").size(), artifact.form.samples.size());
 }
 
+// A job with a cache section: the cluster plans the cache from what its
+// workers reported (subtree records, uploaded blobs) and publishes the same
+// bytes as the in-process run that collects the subtrees itself.
+TEST(ArtifactCli, CachedJobPublishesTheSameBytesOnTheClusterAndInProcess) {
+  const fs::path dir = FreshTempDir("artifact-cli");
+  const fs::path job = dir / "tube_cache.yaml";
+  std::ofstream(job) << "design: " << (SourceDir() / "configs/designs/tube_wall_2d.yaml").string()
+                     << "\nsampling: {subdivisions: 2, max_depth: 0}\n"
+                     << "cache: {strategy: opt_max, min_subtree_seconds: 0}\n";
+  CommandRun run = Fabatlas("run " + job.string() + " --workers 2 --quiet --out " + (dir / "run").string());
+  ASSERT_EQ(run.status, 0) << run.err;
+  CommandRun local = Fabatlas("sample " + job.string() + " --out " + (dir / "local").string());
+  ASSERT_EQ(local.status, 0) << local.err;
+  const auto a = fabatlas::storage::ReadArtifact(dir / "run/tube_wall_2d.fabatlas");
+  EXPECT_EQ(a.manifest.cache.strategy, "opt_max");
+  EXPECT_GT(a.cache.size(), 0u);
+  EXPECT_EQ(a.manifest.cache.top_entries, a.manifest.statistics.valid_samples);
+  EXPECT_TRUE(Bytes(dir / "run/tube_wall_2d.fabatlas") == Bytes(dir / "local/tube_wall_2d.fabatlas"));
+}
+
 TEST(ArtifactCli, InspectPrintsTable3AndFig14Rows) {
   const fs::path dir = FreshTempDir("artifact-cli");
   CommandRun run = Fabatlas("sample " + Job().string() + " --out " + dir.string());

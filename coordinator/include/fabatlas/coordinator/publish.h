@@ -22,6 +22,11 @@
 #include "fabatlas/storage/artifact.h"
 #include "fabatlas/v1/job.pb.h"
 
+namespace fabatlas::storage {
+class JobStore;
+class BlobStore;
+}  // namespace fabatlas::storage
+
 namespace fabatlas::coordinator {
 
 // The job's inputs as the artifact stores them.
@@ -90,6 +95,22 @@ cache::CacheOptions CacheOptionsOf(const sampling::JobFile& job);
 // `grid_of` of the result reads those blobs.
 CacheAssembly CollectSubtreesInProcess(const design::Design& design, const sampling::Form& form,
                                        const std::filesystem::path& blob_dir);
+
+// The same from a cluster job's store: every subtree the workers reported
+// for the job's accepted sample results (JobStore::Subtrees,
+// SampleSubtreeKeys), the valid samples' roots in sample-id order, and
+// geometry from the blobs the workers uploaded; a chosen subtree without a
+// blob (its measured time was under the upload threshold) is computed here by
+// re-evaluating a sample that contains it (geometry is deterministic, so the
+// artifact does not depend on which worker measured what).
+CacheAssembly CollectSubtreesFromStore(storage::JobStore& store, storage::BlobStore& blobs,
+                                       const std::string& job_id, const design::Design& design,
+                                       const sampling::Form& form);
+
+// Whether a job asks for a geometry cache: its job file has a `cache:`
+// section with a strategy or budget (`min_subtree_seconds` alone only sets
+// what workers upload).
+bool WantsCache(const sampling::JobFile& job);
 
 // Seed 001 Sec. 7.4 starting points of the artifact's form
 // (cache::ChooseStartingPoints).
