@@ -151,7 +151,7 @@ Solid Fabricate(const Prototype& p, const SolveSummary& sol, const geometry::Gri
       } else {
         // Sliding hinge: a longer pin whose ends run in slots of the parent
         // along the slide vector over the range of slide values used.
-        double ext = r + 2 * gap;
+        double ext = r + gap;
         solids[ci] = Add(solids[ci], CylinderAlong(g, j.axis, r, lo - ext, hi + ext, e));
         solids[pi] = Cut(solids[pi], CylinderAlong(g, j.axis, r + gap, lo - ext - gap, hi + ext + gap, e));
         double dmin = 0, dmax = 0;
