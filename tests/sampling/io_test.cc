@@ -68,7 +68,7 @@ TEST(SamplingJobFile, ErrorsNameFileLineAndColumn) {
   EXPECT_EQ(ErrorOf("design: a.yaml\ncache:\n  min_subtree_seconds: -1\n"),
             "jobs/vase.yaml:3:24: cache.min_subtree_seconds must be in [0.000000, 1000000000.000000], got -1");
   EXPECT_EQ(ErrorOf("design: a.yaml\nwhatever: 1\n"),
-            "jobs/vase.yaml:2:1: unknown key 'whatever' (expected design, sampling, threads, cluster, cache)");
+            "jobs/vase.yaml:2:1: unknown key 'whatever' (expected design, sampling, threads, materials, cluster, cache)");
   const std::string syntax = ErrorOf("design: [a.yaml\n");
   EXPECT_EQ(syntax.rfind("jobs/vase.yaml:", 0), 0u) << syntax;
   EXPECT_EQ(syntax.find('\n'), std::string::npos);

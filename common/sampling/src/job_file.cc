@@ -103,6 +103,33 @@ JobFile ParseJobFile(const std::string& yaml_text, const std::string& path) {
       }
     } else if (key == "threads") {
       job.threads = static_cast<int>(Integer(path, value, "threads", 1, 4096));
+    } else if (key == "materials") {
+      if (!value.IsSequence()) Fail(path, value.Mark(), "materials must be a list of {name, density, price_per_kg}");
+      for (const auto& m : value) {
+        if (!m.IsMap()) Fail(path, m.Mark(), "a material must be a mapping {name, density, price_per_kg}");
+        Material material;
+        bool have_name = false, have_density = false;
+        for (const auto& f : m) {
+          const std::string fkey = f.first.as<std::string>();
+          if (fkey == "name") {
+            material.name = Scalar(path, f.second, "materials.name");
+            have_name = !material.name.empty();
+          } else if (fkey == "density") {
+            material.density_g_per_cm3 = Real(path, f.second, "materials.density", 1e-6, 1e6);
+            have_density = true;
+          } else if (fkey == "price_per_kg") {
+            material.price_per_kg = Real(path, f.second, "materials.price_per_kg", 0.0, 1e12);
+          } else {
+            Fail(path, f.first.Mark(),
+                 "unknown key 'materials." + fkey + "' (expected name, density, price_per_kg)");
+          }
+        }
+        if (!have_name) Fail(path, m.Mark(), "a material needs a non-empty name");
+        if (!have_density) Fail(path, m.Mark(), "material '" + material.name + "' needs a density (g/cm^3)");
+        for (const Material& other : job.materials)
+          if (other.name == material.name) Fail(path, m.Mark(), "duplicate material '" + material.name + "'");
+        job.materials.push_back(material);
+      }
     } else if (key == "cluster" || key == "cache") {
       if (key == "cache" && value.IsMap() && value["min_subtree_seconds"])
         job.cache_min_subtree_seconds =
@@ -112,7 +139,7 @@ JobFile ParseJobFile(const std::string& yaml_text, const std::string& path) {
       job.reserved_sections[key] = out.c_str();
     } else {
       Fail(path, entry.first.Mark(),
-           "unknown key '" + key + "' (expected design, sampling, threads, cluster, cache)");
+           "unknown key '" + key + "' (expected design, sampling, threads, materials, cluster, cache)");
     }
   }
   if (!have_design) Fail(path, root.Mark(), "missing required key 'design'");

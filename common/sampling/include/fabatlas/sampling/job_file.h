@@ -8,6 +8,8 @@
 //     dg_threshold: 0.1
 //     max_samples: 100000
 //   threads: 2                     # optional, local executor threads
+//   materials:                     # optional, for the viewer's cost/weight
+//     - {name: PLA, density: 1.24, price_per_kg: 20}
 //   cluster: {...}                 # reserved, kept as YAML text
 //   cache:                         # kept as YAML text too
 //     min_subtree_seconds: 0.1     # cluster workers upload subtrees this slow
@@ -15,10 +17,20 @@
 
 #include <map>
 #include <string>
+#include <vector>
 
 #include "fabatlas/sampling/adaptive_sampler.h"
 
 namespace fabatlas::sampling {
+
+// A fabrication material for the viewer's cost and weight readout (seed 001
+// Sec. 7.2: "live updates on the model cost and weight in different
+// materials"): weight = volume * density, cost = weight * price_per_kg.
+struct Material {
+  std::string name;
+  double density_g_per_cm3 = 0.0;  // > 0
+  double price_per_kg = 0.0;       // >= 0, in the job's currency
+};
 
 struct JobFile {
   std::string path;          // the job file as given
@@ -30,6 +42,7 @@ struct JobFile {
   // subtree whose root took at least this long to compute (wall seconds) as
   // a blob for the geometry cache artifact (seed 001 Sec. 6).
   double cache_min_subtree_seconds = 0.1;
+  std::vector<Material> materials;  // in file order; names unique
   // Reserved sections ("cluster", "cache") as YAML text, for later readers.
   std::map<std::string, std::string> reserved_sections;
 };
