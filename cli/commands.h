@@ -26,4 +26,7 @@ void AddInspectCommands(CLI::App& app, int& exit_code);
 // prototype: solve a works-like prototype, export STL (cli/prototype_commands.cpp).
 void AddPrototypeCommands(CLI::App& app, int& exit_code);
 
+// serve: the web customiser and its API over HTTP (cli/viewer_commands.cpp).
+void AddViewerCommands(CLI::App& app, int& exit_code);
+
 }  // namespace fabatlas::cli

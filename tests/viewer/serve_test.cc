@@ -1,0 +1,213 @@
+// `fabatlas serve` as a real process over a real run of the tube design
+// (tests/viewer/data/tube_wall_2d.yaml, run by the viewer_tube_run fixture):
+// the API's answers are checked against the design's closed-form region
+// (valid where wall >= 1 + 0.01 radius^2 and radius - wall >= 2) and volume,
+// bad requests get 400 with one line, and no path outside the page and the
+// API is reachable.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+#include <regex>
+
+#include <httplib.h>
+#include <nlohmann/json.hpp>
+
+#include "../cluster/cluster_process.h"
+#include "fabatlas/testing/paths.h"
+
+namespace fabatlas::viewer {
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+using cluster_test::KillAndReap;
+using cluster_test::ReadText;
+using cluster_test::Spawn;
+using cluster_test::WaitExit;
+
+fs::path RunDir() {
+  const char* dir = std::getenv("FABATLAS_VIEWER_RUN");
+  return dir ? fs::path(dir) : testing::BinDir().parent_path() / "test-fixtures" / "viewer-tube";
+}
+fs::path JobFile() { return testing::SourceDir() / "tests/viewer/data/tube_wall_2d.yaml"; }
+
+class Server : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    ASSERT_TRUE(fs::exists(RunDir() / "form.json")) << "run the viewer_tube_run fixture first: " << RunDir();
+    dir_ = testing::FreshTempDir("viewer-serve");
+    // A page of our own with a secret beside it: the secret must stay unreachable.
+    fs::create_directories(dir_ / "web/assets");
+    std::ofstream(dir_ / "web/index.html") << "<!doctype html><title>page</title>";
+    std::ofstream(dir_ / "web/assets/app.js") << "console.log('app')";
+    std::ofstream(dir_ / "secret.txt") << "SECRET-OUTSIDE-THE-PAGE";
+    const fs::path log = dir_ / "serve.log";
+    pid_ = Spawn({(testing::BinDir() / "fabatlas").string(), "serve", RunDir().string(), "--job",
+                  JobFile().string(), "--port", "0", "--web", (dir_ / "web").string()},
+                 log);
+    const std::regex listening(R"(at http://127\.0\.0\.1:(\d+)/)");
+    for (int i = 0; i < 1000 && port_ == 0; ++i) {
+      std::smatch m;
+      const std::string text = ReadText(log);
+      if (std::regex_search(text, m, listening)) port_ = std::stoi(m[1]);
+      else if (WaitExit(pid_, std::chrono::milliseconds(20)) != -1) break;
+    }
+    ASSERT_GT(port_, 0) << ReadText(log);
+    client_ = std::make_unique<httplib::Client>("127.0.0.1", port_);
+  }
+  void TearDown() override {
+    if (pid_ > 0) KillAndReap(pid_);
+  }
+  httplib::Result Get(const std::string& path) { return client_->Get(path); }
+  json GetJson(const std::string& path) {
+    auto r = Get(path);
+    EXPECT_TRUE(r);
+    if (!r) return {};
+    EXPECT_EQ(r->status, 200) << path << ": " << r->body;
+    return json::parse(r->body);
+  }
+
+  fs::path dir_;
+  pid_t pid_ = -1;
+  int port_ = 0;
+  std::unique_ptr<httplib::Client> client_;
+};
+
+bool TrulyValid(double radius, double wall) { return wall >= 1 + 0.01 * radius * radius && radius - wall >= 2; }
+
+TEST_F(Server, FormDescribesTheDesignAndItsStartingPoints) {
+  const json form = GetJson("/api/form");
+  EXPECT_EQ(form["name"], "tube_wall_2d");
+  ASSERT_EQ(form["dimensions"].size(), 2u);
+  EXPECT_EQ(form["dimensions"][0]["name"], "radius");
+  EXPECT_EQ(form["dimensions"][0]["lo"], 5.0);
+  EXPECT_EQ(form["dimensions"][0]["hi"], 30.0);
+  EXPECT_EQ(form["dimensions"][1]["name"], "wall");
+  ASSERT_EQ(form["materials"].size(), 2u);
+  EXPECT_GE(form["starting_points"].size(), 1u);
+  for (const auto& s : form["starting_points"]) {
+    EXPECT_TRUE(s["valid"].get<bool>());
+    EXPECT_TRUE(TrulyValid(s["u"][0], s["u"][1])) << s.dump();
+  }
+}
+
+TEST_F(Server, IntervalsAreConservativeAgainstTheClosedFormRegion) {
+  // At radius 15 the true valid walls are [3.25, 12] (the upper bound 13 from
+  // radius - wall >= 2 is beyond the range); at wall 6 the true radii are
+  // [8, sqrt(500) = 22.36].
+  const json j = GetJson("/api/intervals?u=15,6");
+  EXPECT_TRUE(j["valid"].get<bool>());
+  const auto check = [](const json& stretches, double true_lo, double true_hi, double lo_bound, double hi_bound) {
+    int valid = 0;
+    for (const auto& s : stretches) {
+      if (!s["valid"].get<bool>()) {
+        EXPECT_EQ(s["failures"], json::array({"unsat_constraints"})) << s.dump();
+        continue;
+      }
+      ++valid;
+      EXPECT_GE(s["lo"].get<double>(), true_lo - 1e-9);
+      EXPECT_LE(s["hi"].get<double>(), true_hi + 1e-9);
+      // No worse than one bootstrap cell (this run splits at most twice).
+      EXPECT_LE(s["lo"].get<double>(), lo_bound);
+      EXPECT_GE(s["hi"].get<double>(), hi_bound);
+    }
+    EXPECT_EQ(valid, 1);
+  };
+  check(j["dimensions"][1], 3.25, 12.0, 3.25 + 11.5 / 5, 12.0);
+  check(j["dimensions"][0], 8.0, std::sqrt(500.0), 8.0 + 25.0 / 5, std::sqrt(500.0) - 25.0 / 5);
+  // Every valid interval end is itself valid and truly valid.
+  for (int d = 0; d < 2; ++d)
+    for (const auto& s : j["dimensions"][d])
+      if (s["valid"].get<bool>())
+        for (double end : {s["lo"].get<double>(), s["hi"].get<double>()}) {
+          std::vector<double> u = {15.0, 6.0};
+          u[d] = end;
+          EXPECT_TRUE(TrulyValid(u[0], u[1])) << d << " " << end;
+          const json at = GetJson("/api/intervals?u=" + std::to_string(u[0]) + "," + std::to_string(u[1]));
+          EXPECT_TRUE(at["valid"].get<bool>()) << d << " " << end;
+        }
+  // Outside the region: invalid, with the recorded reason.
+  const json bad = GetJson("/api/intervals?u=29,1");
+  EXPECT_FALSE(bad["valid"].get<bool>());
+  EXPECT_EQ(bad["failures"], json::array({"unsat_constraints"}));
+}
+
+TEST_F(Server, SnapAndPropertiesGiveAValidSampleWithTheTubesVolume) {
+  const json p = GetJson("/api/properties?u=15,6");
+  ASSERT_TRUE(p["valid"].get<bool>());
+  const double r = p["u"][0], w = p["u"][1];
+  EXPECT_TRUE(TrulyValid(r, w));
+  // Hollow cylinder of height 20: pi (r^2 - (r - w)^2) 20, within 2 % (0.5 mm voxels).
+  const double exact = std::numbers::pi * (r * r - (r - w) * (r - w)) * 20.0;
+  EXPECT_NEAR(p["properties"]["volume"].get<double>(), exact, 0.02 * exact);
+  ASSERT_EQ(p["materials"].size(), 2u);
+  EXPECT_EQ(p["materials"][0]["name"], "PLA");
+  EXPECT_NEAR(p["materials"][0]["weight_g"].get<double>(), p["properties"]["volume"].get<double>() / 1000 * 1.24, 1e-9);
+  const json s = GetJson("/api/snap?u=15,6");
+  EXPECT_EQ(s["sample"], p["sample"]);
+}
+
+TEST_F(Server, PreviewIsGlbOfTheSnappedSampleAndChangesWithU) {
+  auto a = Get("/api/preview.glb?u=15,6");
+  auto b = Get("/api/preview.glb?u=20,9");
+  ASSERT_TRUE(a && b);
+  ASSERT_EQ(a->status, 200);
+  ASSERT_EQ(b->status, 200);
+  EXPECT_EQ(a->get_header_value("Content-Type"), "model/gltf-binary");
+  EXPECT_EQ(a->body.substr(0, 4), "glTF");
+  EXPECT_GT(a->body.size(), 1000u);
+  EXPECT_NE(a->get_header_value("X-Sample"), b->get_header_value("X-Sample"));
+  EXPECT_NE(a->body, b->body);
+}
+
+TEST_F(Server, BadRequestsGet400WithOneLine) {
+  for (const std::string q : {"/api/intervals?u=nan,1", "/api/intervals?u=1", "/api/intervals?u=15,6,1",
+                              "/api/intervals?u=15,100", "/api/snap?u=abc,1", "/api/intervals?u=inf,1",
+                              "/api/intervals", "/api/preview.glb?u=4,6", "/api/map?a=0&b=0&u=15,6",
+                              "/api/map?a=0&b=1&n=100000&u=15,6"}) {
+    auto r = Get(q);
+    ASSERT_TRUE(r) << q;
+    EXPECT_EQ(r->status, 400) << q;
+    EXPECT_FALSE(r->body.empty()) << q;
+    EXPECT_EQ(r->body.find('\n'), r->body.size() - 1) << q << ": " << r->body;
+  }
+  auto r = Get("/api/nothing");
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->status, 404);
+}
+
+TEST_F(Server, OnlyThePageAndTheApiAreReachable) {
+  auto page = Get("/");
+  ASSERT_TRUE(page);
+  EXPECT_EQ(page->status, 200);
+  EXPECT_NE(page->body.find("<title>page</title>"), std::string::npos);
+  auto asset = Get("/assets/app.js");
+  ASSERT_TRUE(asset);
+  EXPECT_EQ(asset->status, 200);
+  // Traversal attempts, raw and encoded, toward files that do exist.
+  httplib::Client raw("127.0.0.1", port_);
+  for (const std::string& path : std::vector<std::string>{"/../secret.txt", "/assets/../../secret.txt", "/%2e%2e/secret.txt", "/..%2fsecret.txt",
+        "/assets/%2e%2e/%2e%2e/secret.txt", "/api/../../secret.txt", "//etc/passwd", "/../../../../etc/passwd",
+        "/index.html/../../secret.txt", "/form.json", "/" + RunDir().string() + "/form.json"}) {
+    auto r = raw.Get(path);
+    if (!r) continue;  // refused outright is fine too
+    EXPECT_NE(r->status, 200) << path;
+    EXPECT_EQ(r->body.find("SECRET"), std::string::npos) << path;
+    EXPECT_EQ(r->body.find("root:"), std::string::npos) << path;
+  }
+}
+
+TEST_F(Server, MapMarksTheCurrentPointsCellValid) {
+  const json m = GetJson("/api/map?a=0&b=1&n=25&u=15,6");
+  ASSERT_EQ(m["cells"].size(), 625u);
+  // Cell centres: radius 5.5 + i, wall 0.73 + 0.46 j. (15.5, 5.79) is well
+  // inside; (29.5, 0.73) is far outside.
+  EXPECT_EQ(m["cells"][11 * 25 + 10], -1);
+  const int bad = m["cells"][0 * 25 + 24];
+  ASSERT_GE(bad, 0);
+  EXPECT_EQ(m["failures"][bad], "unsat_constraints");
+}
+
+}  // namespace
+}  // namespace fabatlas::viewer

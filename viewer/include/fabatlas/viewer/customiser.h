@@ -1,0 +1,99 @@
+// fabatlas/viewer/customiser.h — the runtime over one computed form (seed 001,
+// Sec. 7): validity lookups, snapping, properties with material cost/weight,
+// starting points and previews evaluated with cached subtrees.
+//
+// A Customiser owns what it was loaded from (CustomiserSource) and is
+// read-only afterwards; lookups are thread-safe, Preview() is too (each call
+// evaluates the design on its own; the subtree cache is read-only).
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "fabatlas/design/design.h"
+#include "fabatlas/design/subtree_cache.h"
+#include "fabatlas/geometry/solid.h"
+#include "fabatlas/sampling/form.h"
+#include "fabatlas/sampling/job_file.h"
+#include "fabatlas/viewer/snap.h"
+#include "fabatlas/viewer/valid_region.h"
+
+namespace fabatlas::viewer {
+
+// Everything the runtime needs from a computed job.
+struct CustomiserSource {
+  std::string name;                            // shown to users (the design's name)
+  sampling::Form form;
+  std::optional<design::Design> design;        // needed for previews
+  std::vector<sampling::Material> materials;   // cost/weight table
+  std::vector<std::int64_t> starting_points;   // sample ids; empty: computed (starting_points.h)
+  // Cached subtree geometry by cache key (design::SubtreeRecord::key), with
+  // the root compute time t_i in seconds (seed 001 Sec. 6).
+  std::map<std::string, std::pair<geometry::Solid, double>> cache;
+  std::string cache_name = "none";             // e.g. "H_opt", "H_rfree", "none"
+};
+
+// A run's output directory as `fabatlas run/sample --out DIR` writes it
+// (DIR/form.json) plus the job file that produced it (design and materials).
+// No cache entries: previews evaluate the whole tree. Throws InputError
+// naming the file for a missing or malformed form.json / job / design, or a
+// form whose dimensions differ from the design's exposed parameters.
+CustomiserSource LoadRunDirectory(const std::filesystem::path& out_dir, const std::filesystem::path& job_file);
+
+// Weight and cost of one sample in one material (seed 001 Sec. 7.2).
+struct MaterialReadout {
+  std::string name;
+  double weight_g = 0;  // volume_mm3 / 1000 * density
+  double cost = 0;      // weight_g / 1000 * price_per_kg
+};
+std::vector<MaterialReadout> MaterialReadouts(double volume_mm3, const std::vector<sampling::Material>& materials);
+
+struct PreviewResult {
+  std::int64_t sample = -1;
+  bool valid = false;           // the evaluation's verdict at the snapped sample
+  std::string failure;
+  geometry::Solid solid;
+  double seconds = 0;           // wall time of EvaluateSample (constraints and tree; checks skipped)
+  int subtrees = 0, cache_hits = 0;
+};
+
+class Customiser {
+ public:
+  explicit Customiser(CustomiserSource source);
+  ~Customiser();
+  Customiser(const Customiser&) = delete;  // the cache refers into source_
+  Customiser& operator=(const Customiser&) = delete;
+
+  const CustomiserSource& source() const { return source_; }
+  const sampling::Form& form() const { return source_.form; }
+  const sampling::DesignSpace& space() const { return space_; }
+  int dimension_count() const { return space_.dimension_count(); }
+  const std::vector<std::int64_t>& starting_points() const { return starting_points_; }
+
+  bool IsValid(const std::vector<double>& u) const { return IsValidPoint(source_.form, space_, u); }
+  std::vector<Stretch> Stretches(const std::vector<double>& u, int dimension) const {
+    return LineStretches(source_.form, space_, u, dimension);
+  }
+  std::optional<Snap> SnapTo(const std::vector<double>& u) const { return SnapToValidSample(source_.form, space_, u); }
+  // The sample's recorded properties (seed 001 P_F) and, when it has a
+  // "volume" property, its weight and cost per material.
+  std::vector<MaterialReadout> Materials(std::int64_t sample) const;
+
+  // Evaluates the design at the sample (seed 001 Sec. 7.3) through the
+  // source's subtree cache. Throws InputError when the source has no design.
+  // with_cache = false ignores the cache (the "no cache" baseline).
+  PreviewResult Preview(std::int64_t sample, bool with_cache = true) const;
+
+ private:
+  CustomiserSource source_;
+  sampling::DesignSpace space_;
+  std::vector<std::int64_t> starting_points_;
+  std::unique_ptr<design::SubtreeCache> cache_;
+};
+
+}  // namespace fabatlas::viewer

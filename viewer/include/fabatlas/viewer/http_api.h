@@ -1,0 +1,34 @@
+// fabatlas/viewer/http_api.h — the customiser's JSON/glTF API, independent of
+// the HTTP library so tests call it directly (docs/viewer.md lists the routes).
+//
+//   GET /api/form                  parameters, materials, starting points, statistics
+//   GET /api/intervals?u=a,b,..    validity of u and every dimension's stretches through u
+//   GET /api/snap?u=..             the snapped sample and its ΔG-weighted distance
+//   GET /api/properties?u=..       the snapped sample's properties and material cost/weight
+//   GET /api/preview.glb?u=..      the snapped sample's geometry as glTF binary
+//   GET /api/map?a=i&b=j&n=N&u=..  N x N validity map over parameters i and j through u
+//
+// u lists one value per parameter in the form's order (enumerated: the value
+// index). Bad requests (unparsable or non-finite numbers, wrong arity, a value
+// outside its range, unknown route) answer 400/404 with a one-line reason.
+#pragma once
+
+#include <map>
+#include <string>
+
+#include "fabatlas/viewer/customiser.h"
+
+namespace fabatlas::viewer {
+
+struct ApiResponse {
+  int status = 200;
+  std::string content_type = "application/json";
+  std::string body;
+  std::map<std::string, std::string> headers;
+};
+
+// path: the request path ("/api/..."); query: decoded query parameters.
+ApiResponse HandleApiRequest(const Customiser& customiser, const std::string& path,
+                             const std::map<std::string, std::string>& query);
+
+}  // namespace fabatlas::viewer

@@ -1,0 +1,109 @@
+#include "fabatlas/viewer/customiser.h"
+
+#include <chrono>
+#include <fstream>
+#include <sstream>
+
+#include "fabatlas/design/evaluate_sample.h"
+#include "fabatlas/error.h"
+#include "fabatlas/precompute/design_evaluator.h"
+#include "fabatlas/sampling/form_json.h"
+#include "fabatlas/viewer/starting_points.h"
+
+namespace fabatlas::viewer {
+
+namespace {
+
+// The source's cache entries, read-only: previews look subtrees up but never
+// add to the cache, so every preview costs what the chosen cache H allows.
+class FixedSubtreeCache final : public design::SubtreeCache {
+ public:
+  explicit FixedSubtreeCache(const std::map<std::string, std::pair<geometry::Solid, double>>& entries)
+      : entries_(entries) {}
+  std::optional<geometry::Solid> Find(const std::string& key) override {
+    const auto it = entries_.find(key);
+    if (it == entries_.end()) return std::nullopt;
+    return it->second.first;
+  }
+  void Offer(const std::string&, const geometry::Solid&, double) override {}
+
+ private:
+  const std::map<std::string, std::pair<geometry::Solid, double>>& entries_;
+};
+
+std::string ReadText(const std::filesystem::path& path, const std::string& what) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path.string() + ": cannot read " + what);
+  std::ostringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+}  // namespace
+
+CustomiserSource LoadRunDirectory(const std::filesystem::path& out_dir, const std::filesystem::path& job_file) {
+  CustomiserSource source;
+  const std::filesystem::path form_path = out_dir / "form.json";
+  source.form = sampling::FormFromJson(ReadText(form_path, "the form (run `fabatlas run JOB --out DIR` first)"),
+                                       form_path.string());
+  const sampling::JobFile job = sampling::ReadJobFile(job_file.string());
+  source.materials = job.materials;
+  source.design = design::LoadDesign(job.design_path);
+  source.name = source.design->name;
+  const auto& exposed = source.design->exposed;
+  bool same = exposed.size() == source.form.dimensions.size();
+  for (size_t i = 0; same && i < exposed.size(); ++i) same = exposed[i].name == source.form.dimensions[i].name;
+  if (!same)
+    throw InputError(form_path.string() + ": the form's parameters differ from the exposed parameters of " +
+                     job.design_path);
+  return source;
+}
+
+std::vector<MaterialReadout> MaterialReadouts(double volume_mm3, const std::vector<sampling::Material>& materials) {
+  std::vector<MaterialReadout> out;
+  for (const auto& m : materials) {
+    MaterialReadout r;
+    r.name = m.name;
+    r.weight_g = volume_mm3 / 1000.0 * m.density_g_per_cm3;
+    r.cost = r.weight_g / 1000.0 * m.price_per_kg;
+    out.push_back(r);
+  }
+  return out;
+}
+
+Customiser::Customiser(CustomiserSource source)
+    : source_(std::move(source)), space_(source_.form.space()) {
+  starting_points_ = source_.starting_points.empty() ? StartingPoints(source_.form) : source_.starting_points;
+  cache_ = std::make_unique<FixedSubtreeCache>(source_.cache);
+}
+
+Customiser::~Customiser() = default;
+
+std::vector<MaterialReadout> Customiser::Materials(std::int64_t sample) const {
+  const auto& properties = source_.form.samples.at(sample).outcome.properties;
+  const auto it = properties.find("volume");
+  if (it == properties.end()) return {};
+  return MaterialReadouts(it->second, source_.materials);
+}
+
+PreviewResult Customiser::Preview(std::int64_t sample, bool with_cache) const {
+  if (!source_.design) throw InputError("this form has no design to preview");
+  const auto& s = source_.form.samples.at(sample);
+  design::EvaluateOptions options;
+  options.cache = with_cache ? cache_.get() : nullptr;
+  options.run_checks = false;  // the sample was checked during sampling
+  const auto start = std::chrono::steady_clock::now();
+  design::SampleResult r =
+      design::EvaluateSample(*source_.design, precompute::DesignPointOf(*source_.design, s.u), options);
+  PreviewResult out;
+  out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  out.sample = sample;
+  out.valid = r.valid;
+  out.failure = r.failure;
+  out.solid = std::move(r.solid);
+  out.subtrees = static_cast<int>(r.subtrees.size());
+  for (const auto& t : r.subtrees) out.cache_hits += t.from_cache;
+  return out;
+}
+
+}  // namespace fabatlas::viewer

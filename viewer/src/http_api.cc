@@ -1,0 +1,232 @@
+#include "fabatlas/viewer/http_api.h"
+
+#include <charconv>
+#include <cmath>
+#include <set>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+
+#include "fabatlas/error.h"
+#include "fabatlas/viewer/gltf.h"
+
+namespace fabatlas::viewer {
+
+namespace {
+
+using nlohmann::json;
+
+struct BadRequest {
+  std::string reason;
+};
+
+double ParseNumber(const std::string& text, const std::string& what) {
+  double v = 0;
+  const char* end = text.data() + text.size();
+  auto [ptr, ec] = std::from_chars(text.data(), end, v);
+  if (text.empty() || ec != std::errc() || ptr != end) throw BadRequest{what + ": '" + text + "' is not a number"};
+  if (!std::isfinite(v)) throw BadRequest{what + ": " + text + " is not finite"};
+  return v;
+}
+
+int ParseIndex(const std::map<std::string, std::string>& query, const std::string& name, int lo, int hi, int fallback) {
+  const auto it = query.find(name);
+  if (it == query.end()) {
+    if (fallback >= lo) return fallback;
+    throw BadRequest{"missing query parameter '" + name + "'"};
+  }
+  const double v = ParseNumber(it->second, name);
+  if (v != std::floor(v) || v < lo || v > hi)
+    throw BadRequest{name + " must be an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) + "], got " +
+                     it->second};
+  return static_cast<int>(v);
+}
+
+// u: one value per dimension, inside its range.
+std::vector<double> ParsePoint(const Customiser& c, const std::map<std::string, std::string>& query) {
+  const auto it = query.find("u");
+  if (it == query.end()) throw BadRequest{"missing query parameter 'u' (one value per parameter, comma-separated)"};
+  std::vector<double> u;
+  std::string item;
+  std::istringstream in(it->second);
+  while (std::getline(in, item, ',')) u.push_back(ParseNumber(item, "u[" + std::to_string(u.size()) + "]"));
+  if (!it->second.empty() && it->second.back() == ',') throw BadRequest{"u ends with a comma"};
+  const int n = c.dimension_count();
+  if (static_cast<int>(u.size()) != n)
+    throw BadRequest{"u has " + std::to_string(u.size()) + " values, the form has " + std::to_string(n) + " parameters"};
+  for (int d = 0; d < n; ++d) {
+    const auto& dim = c.space().dimension(d);
+    const double lo = c.space().value(d, c.space().key_lo(d)), hi = c.space().value(d, c.space().key_hi(d));
+    if (u[d] < lo || u[d] > hi) {
+      std::ostringstream msg;
+      msg << "u[" << d << "] = " << u[d] << " is outside " << dim.name << "'s range [" << lo << ", " << hi << "]";
+      throw BadRequest{msg.str()};
+    }
+  }
+  return u;
+}
+
+const char* KindName(sampling::DimensionKind kind) {
+  switch (kind) {
+    case sampling::DimensionKind::kReal: return "real";
+    case sampling::DimensionKind::kInteger: return "integer";
+    case sampling::DimensionKind::kEnumerated: return "enumerated";
+  }
+  return "real";
+}
+
+json SampleJson(const Customiser& c, std::int64_t id) {
+  const auto& s = c.form().samples.at(id);
+  json properties = json::object();
+  for (const auto& [name, value] : s.outcome.properties) properties[name] = value;
+  json materials = json::array();
+  for (const auto& m : c.Materials(id)) materials.push_back({{"name", m.name}, {"weight_g", m.weight_g}, {"cost", m.cost}});
+  return {{"sample", id}, {"u", s.u}, {"valid", s.outcome.valid}, {"properties", properties}, {"materials", materials}};
+}
+
+json FormJson(const Customiser& c) {
+  json dims = json::array();
+  for (int d = 0; d < c.dimension_count(); ++d) {
+    const auto& dim = c.space().dimension(d);
+    json j = {{"name", dim.name},
+              {"kind", KindName(dim.kind)},
+              {"lo", c.space().value(d, c.space().key_lo(d))},
+              {"hi", c.space().value(d, c.space().key_hi(d))}};
+    if (dim.kind == sampling::DimensionKind::kEnumerated) j["values"] = dim.values;
+    if (c.source().design) j["default"] = c.source().design->exposed.at(d).default_value;
+    dims.push_back(j);
+  }
+  json starts = json::array();
+  for (std::int64_t id : c.starting_points()) starts.push_back(SampleJson(c, id));
+  json materials = json::array();
+  for (const auto& m : c.source().materials)
+    materials.push_back({{"name", m.name}, {"density_g_per_cm3", m.density_g_per_cm3}, {"price_per_kg", m.price_per_kg}});
+  std::int64_t valid = 0;
+  for (const auto& s : c.form().samples) valid += s.outcome.valid;
+  return {{"name", c.source().name},
+          {"dimensions", dims},
+          {"materials", materials},
+          {"starting_points", starts},
+          {"samples", c.form().samples.size()},
+          {"valid_samples", valid},
+          {"cache", c.source().cache_name},
+          {"preview", c.source().design.has_value()}};
+}
+
+json StretchesJson(const std::vector<Stretch>& stretches) {
+  json out = json::array();
+  for (const Stretch& s : stretches) {
+    json j = {{"lo", s.lo}, {"hi", s.hi}, {"valid", s.valid}};
+    if (!s.valid) j["failures"] = s.failures;
+    out.push_back(j);
+  }
+  return out;
+}
+
+std::int64_t SnapOrFail(const Customiser& c, const std::vector<double>& u) {
+  const auto snap = c.SnapTo(u);
+  if (!snap) throw BadRequest{"the form has no valid sample to snap to"};
+  return snap->sample;
+}
+
+ApiResponse Json(const json& j) {
+  ApiResponse r;
+  r.body = j.dump();
+  return r;
+}
+
+ApiResponse Route(const Customiser& c, const std::string& path, const std::map<std::string, std::string>& query) {
+  if (path == "/api/form") return Json(FormJson(c));
+  if (path == "/api/intervals") {
+    const auto u = ParsePoint(c, query);
+    json dims = json::array();
+    for (int d = 0; d < c.dimension_count(); ++d) dims.push_back(StretchesJson(c.Stretches(u, d)));
+    json j = {{"u", u}, {"valid", c.IsValid(u)}, {"dimensions", dims}};
+    if (!c.IsValid(u)) j["failures"] = FailuresAt(c.form(), c.space(), u);
+    return Json(j);
+  }
+  if (path == "/api/snap") {
+    const auto u = ParsePoint(c, query);
+    const auto snap = c.SnapTo(u);
+    if (!snap) throw BadRequest{"the form has no valid sample to snap to"};
+    return Json({{"u", u},
+                 {"sample", snap->sample},
+                 {"sample_u", c.form().samples[snap->sample].u},
+                 {"distance", snap->distance},
+                 {"inside_leaf", snap->inside_leaf}});
+  }
+  if (path == "/api/properties") {
+    const auto u = ParsePoint(c, query);
+    return Json(SampleJson(c, SnapOrFail(c, u)));
+  }
+  if (path == "/api/preview.glb") {
+    const auto u = ParsePoint(c, query);
+    if (!c.source().design) throw BadRequest{"this form has no design to preview"};
+    const PreviewResult p = c.Preview(SnapOrFail(c, u));
+    ApiResponse r;
+    r.content_type = "model/gltf-binary";
+    r.body = MeshToGlb(p.solid.ToMesh());
+    r.headers["X-Sample"] = std::to_string(p.sample);
+    r.headers["X-Preview-Seconds"] = std::to_string(p.seconds);
+    r.headers["X-Cache-Hits"] = std::to_string(p.cache_hits) + "/" + std::to_string(p.subtrees);
+    return r;
+  }
+  if (path == "/api/map") {
+    const int n_dims = c.dimension_count();
+    const int a = ParseIndex(query, "a", 0, n_dims - 1, -1), b = ParseIndex(query, "b", 0, n_dims - 1, -1);
+    if (a == b) throw BadRequest{"a and b must name two different parameters"};
+    const int n = ParseIndex(query, "n", 2, 256, 64);
+    const auto u = ParsePoint(c, query);
+    const auto& space = c.space();
+    const double alo = space.value(a, space.key_lo(a)), ahi = space.value(a, space.key_hi(a));
+    const double blo = space.value(b, space.key_lo(b)), bhi = space.value(b, space.key_hi(b));
+    std::vector<std::string> failure_names;
+    std::map<std::string, int> failure_index;
+    json cells = json::array();  // row-major, row 0 = lowest b; -1 valid, else failure index
+    std::vector<double> p = u;
+    for (int j = 0; j < n; ++j) {
+      p[b] = blo + (bhi - blo) * (j + 0.5) / n;
+      for (int i = 0; i < n; ++i) {
+        p[a] = alo + (ahi - alo) * (i + 0.5) / n;
+        if (c.IsValid(p)) {
+          cells.push_back(-1);
+          continue;
+        }
+        const auto f = FailuresAt(c.form(), c.space(), p);
+        const std::string name = f.empty() ? "invalid" : f.front();
+        auto [it, inserted] = failure_index.insert({name, static_cast<int>(failure_names.size())});
+        if (inserted) failure_names.push_back(name);
+        cells.push_back(it->second);
+      }
+    }
+    return Json({{"a", a}, {"b", b}, {"n", n}, {"a_range", {alo, ahi}}, {"b_range", {blo, bhi}},
+                 {"failures", failure_names}, {"cells", cells}});
+  }
+  ApiResponse r;
+  r.status = 404;
+  r.content_type = "text/plain";
+  r.body = "no such API route: " + path + "\n";
+  return r;
+}
+
+}  // namespace
+
+ApiResponse HandleApiRequest(const Customiser& c, const std::string& path, const std::map<std::string, std::string>& query) {
+  try {
+    return Route(c, path, query);
+  } catch (const BadRequest& e) {
+    ApiResponse r;
+    r.status = 400;
+    r.content_type = "text/plain";
+    r.body = e.reason + "\n";
+    return r;
+  } catch (const InputError& e) {
+    ApiResponse r;
+    r.status = 400;
+    r.content_type = "text/plain";
+    r.body = std::string(e.what()) + "\n";
+    return r;
+  }
+}
+
+}  // namespace fabatlas::viewer

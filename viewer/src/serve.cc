@@ -1,0 +1,87 @@
+#include "fabatlas/viewer/serve.h"
+
+#include <fstream>
+#include <sstream>
+#include <thread>
+
+#include <httplib.h>
+
+#include "fabatlas/error.h"
+#include "fabatlas/viewer/http_api.h"
+
+namespace fabatlas::viewer {
+
+namespace {
+
+std::string ContentType(const std::filesystem::path& p) {
+  const std::string ext = p.extension().string();
+  if (ext == ".html") return "text/html; charset=utf-8";
+  if (ext == ".js" || ext == ".mjs") return "text/javascript";
+  if (ext == ".css") return "text/css";
+  if (ext == ".svg") return "image/svg+xml";
+  if (ext == ".png") return "image/png";
+  if (ext == ".json") return "application/json";
+  return "application/octet-stream";
+}
+
+}  // namespace
+
+std::map<std::string, std::string> ReadWebFiles(const std::filesystem::path& web_dir) {
+  if (!std::filesystem::is_regular_file(web_dir / "index.html"))
+    throw InputError(web_dir.string() + ": no index.html (build the page: `ninja -C build fabatlas_web`)");
+  std::map<std::string, std::string> files;
+  for (const auto& entry : std::filesystem::recursive_directory_iterator(web_dir)) {
+    if (!entry.is_regular_file()) continue;
+    std::ifstream in(entry.path(), std::ios::binary);
+    std::ostringstream bytes;
+    bytes << in.rdbuf();
+    files["/" + std::filesystem::relative(entry.path(), web_dir).generic_string()] = bytes.str();
+  }
+  files["/"] = files.at("/index.html");
+  return files;
+}
+
+void Serve(const Customiser& customiser, const ServeOptions& options, const std::atomic<bool>& stop,
+           const std::function<void(int port)>& on_listening) {
+  const std::map<std::string, std::string> files = ReadWebFiles(options.web_dir);
+  httplib::Server server;
+  server.Get(R"(/api/.*)", [&](const httplib::Request& req, httplib::Response& res) {
+    std::map<std::string, std::string> query;
+    for (const auto& [k, v] : req.params) query[k] = v;
+    const ApiResponse r = HandleApiRequest(customiser, req.path, query);
+    res.status = r.status;
+    for (const auto& [k, v] : r.headers) res.set_header(k, v);
+    res.set_header("Cache-Control", "no-store");
+    res.set_content(r.body, r.content_type);
+  });
+  // Everything else: only the page's own files, looked up by exact path.
+  server.Get(R"(.*)", [&](const httplib::Request& req, httplib::Response& res) {
+    const auto it = files.find(req.path);
+    if (it == files.end()) {
+      res.status = 404;
+      res.set_content("not found\n", "text/plain");
+      return;
+    }
+    res.set_content(it->second, ContentType(it->first == "/" ? "/index.html" : it->first).c_str());
+  });
+  server.set_error_handler([](const httplib::Request&, httplib::Response& res) {
+    if (res.body.empty()) res.set_content("error " + std::to_string(res.status) + "\n", "text/plain");
+  });
+  int port = options.port;
+  if (port == 0) {
+    port = server.bind_to_any_port(options.host);
+  } else if (!server.bind_to_port(options.host, port)) {
+    port = -1;
+  }
+  if (port <= 0) throw ResourceError("cannot listen on " + options.host + ":" + std::to_string(options.port));
+  std::thread watcher([&] {
+    while (!stop.load() && !server.is_running()) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    if (on_listening) on_listening(port);
+    while (!stop.load()) std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    server.stop();
+  });
+  server.listen_after_bind();
+  watcher.join();
+}
+
+}  // namespace fabatlas::viewer

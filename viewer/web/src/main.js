@@ -1,0 +1,381 @@
+// The fabatlas web customiser (seed 001 Sec. 7, Fig. 9): one slider per
+// exposed parameter confined to the valid region through the current point,
+// a live preview of the snapped sample, cost/weight readout, starting points
+// and a 2-D validity map. Talks only to the API of `fabatlas serve`
+// (docs/viewer.md).
+import * as THREE from 'three';
+import { OrbitControls } from 'three/examples/jsm/controls/OrbitControls.js';
+import { GLTFLoader } from 'three/examples/jsm/loaders/GLTFLoader.js';
+
+// State shared with tests (tests/viewer/browser_test.mjs reads it).
+const state = {
+  ready: false,
+  form: null,
+  u: [],
+  stretches: [],       // per dimension: [{lo, hi, valid, failures}]
+  previewCount: 0,     // previews shown so far
+  previewSample: -1,   // sample id of the preview on screen
+  properties: null,
+  error: null,
+};
+window.fabatlas = state;
+
+const $ = (id) => document.getElementById(id);
+const query = (u) => 'u=' + u.map((v) => String(v)).join(',');
+
+async function api(path) {
+  const res = await fetch(path);
+  if (!res.ok) throw new Error(`${path}: ${res.status} ${(await res.text()).trim()}`);
+  return res;
+}
+const apiJson = async (path) => (await api(path)).json();
+
+function setStatus(text) { $('status').textContent = text; }
+
+// ---------------------------------------------------------------- sliders
+const sliders = [];  // {input, segments, valueLabel}
+
+function formatValue(d, v) {
+  const dim = state.form.dimensions[d];
+  if (dim.kind === 'enumerated') return dim.values[Math.round(v)] ?? String(v);
+  if (dim.kind === 'integer') return String(Math.round(v));
+  return v.toFixed(2);
+}
+
+function buildSliders() {
+  const root = $('sliders');
+  root.textContent = '';
+  state.form.dimensions.forEach((dim, d) => {
+    const box = document.createElement('div');
+    box.className = 'slider';
+    box.innerHTML = `<div class="label"><span>${dim.name}</span><span class="value"></span></div>
+      <div class="track"><div class="segments"></div><input type="range"></div>`;
+    const input = box.querySelector('input');
+    input.min = dim.lo;
+    input.max = dim.hi;
+    input.step = dim.kind === 'real' ? 'any' : '1';
+    input.dataset.dimension = d;
+    input.setAttribute('aria-label', dim.name);
+    const track = box.querySelector('.track');
+    input.addEventListener('input', () => onSlide(d));
+    input.addEventListener('change', () => onSlide(d));
+    track.addEventListener('mousemove', (e) => onHover(d, e));
+    track.addEventListener('mouseleave', () => { $('tooltip').hidden = true; });
+    root.appendChild(box);
+    sliders.push({ input, segments: box.querySelector('.segments'), valueLabel: box.querySelector('.value'), track });
+  });
+}
+
+function stretchAt(d, v) {
+  return state.stretches[d].find((s) => v >= s.lo && v <= s.hi && (s.valid || (v > s.lo && v < s.hi)))
+    ?? state.stretches[d].find((s) => v >= s.lo && v <= s.hi);
+}
+
+// The closest value to v inside a valid stretch along d (seed 001 Sec. 7.2:
+// the slider is confined to the valid intervals through the current point).
+function clampToValid(d, v) {
+  let best = null;
+  for (const s of state.stretches[d]) {
+    if (!s.valid) continue;
+    const c = Math.min(Math.max(v, s.lo), s.hi);
+    if (best === null || Math.abs(c - v) < Math.abs(best - v)) best = c;
+  }
+  return best;
+}
+
+function onSlide(d) {
+  const input = sliders[d].input;
+  let v = parseFloat(input.value);
+  const dim = state.form.dimensions[d];
+  if (dim.kind !== 'real') v = Math.round(v);
+  const c = clampToValid(d, v);
+  if (c === null) return;
+  if (c !== v || String(c) !== input.value) input.value = String(c);
+  if (c === state.u[d]) return;
+  state.u[d] = c;
+  sliders[d].valueLabel.textContent = formatValue(d, c);
+  requestUpdate();
+}
+
+function onHover(d, e) {
+  const rect = sliders[d].segments.getBoundingClientRect();
+  const dim = state.form.dimensions[d];
+  const t = Math.min(Math.max((e.clientX - rect.left) / rect.width, 0), 1);
+  const v = dim.lo + t * (dim.hi - dim.lo);
+  const s = stretchAt(d, v);
+  const tip = $('tooltip');
+  if (!s) { tip.hidden = true; return; }
+  tip.textContent = s.valid
+    ? `${dim.name} ${formatValue(d, v)}: valid`
+    : `${dim.name} ${formatValue(d, v)}: not fabricable — ${(s.failures ?? []).join(', ') || 'invalid'}`;
+  tip.dataset.failures = s.valid ? '' : (s.failures ?? []).join(',');
+  tip.hidden = false;
+  tip.style.left = `${e.clientX + 12}px`;
+  tip.style.top = `${e.clientY + 12}px`;
+  sliders[d].track.title = tip.textContent;
+}
+
+function drawTracks() {
+  state.form.dimensions.forEach((dim, d) => {
+    const { input, segments, valueLabel } = sliders[d];
+    segments.textContent = '';
+    const span = dim.hi - dim.lo;
+    for (const s of state.stretches[d]) {
+      const el = document.createElement('div');
+      el.className = 'segment ' + (s.valid ? 'valid' : 'invalid') + (s.valid && s.hi === s.lo ? ' point' : '');
+      el.style.left = `${((s.lo - dim.lo) / span) * 100}%`;
+      el.style.width = `${((s.hi - s.lo) / span) * 100}%`;
+      el.dataset.lo = s.lo;
+      el.dataset.hi = s.hi;
+      if (!s.valid) el.title = `not fabricable: ${(s.failures ?? []).join(', ')}`;
+      segments.appendChild(el);
+    }
+    input.value = String(state.u[d]);
+    valueLabel.textContent = formatValue(d, state.u[d]);
+  });
+}
+
+// ------------------------------------------------------------- updates
+let updating = false;
+let pending = false;
+
+function requestUpdate() {
+  if (updating) { pending = true; return; }
+  updating = true;
+  update().catch(showError).finally(() => {
+    updating = false;
+    if (pending) { pending = false; requestUpdate(); }
+  });
+}
+
+function showError(e) {
+  state.error = String(e.message ?? e);
+  setStatus(state.error);
+}
+
+async function update() {
+  const u = state.u.slice();
+  const [intervals, properties] = await Promise.all([
+    apiJson('/api/intervals?' + query(u)),
+    apiJson('/api/properties?' + query(u)),
+  ]);
+  state.stretches = intervals.dimensions;
+  state.valid = intervals.valid;
+  state.properties = properties;
+  drawTracks();
+  drawReadout(properties);
+  await Promise.all([loadPreview(u, properties.sample), drawMap()]);
+}
+
+function drawReadout(p) {
+  const rows = [];
+  const volume = p.properties.volume;
+  if (volume !== undefined) rows.push(['volume', `${(volume / 1000).toFixed(2)} cm³`]);
+  for (const [k, v] of Object.entries(p.properties)) if (k !== 'volume') rows.push([k, v.toFixed(2)]);
+  let html = rows.map(([k, v]) => `<tr><th>${k}</th><td>${v}</td></tr>`).join('');
+  if (p.materials.length) {
+    html += '<tr><th>material</th><th>weight</th><th>cost</th></tr>';
+    html += p.materials.map((m) => `<tr class="material"><td>${m.name}</td><td>${m.weight_g.toFixed(1)} g</td><td>${m.cost.toFixed(2)}</td></tr>`).join('');
+  }
+  $('readout').innerHTML = html;
+}
+
+// ------------------------------------------------------------- preview
+let renderer, scene, camera, controls, modelGroup, fitted = false;
+const loader = new GLTFLoader();
+const material = new THREE.MeshStandardMaterial({ color: 0xd9b38c, roughness: 0.6, metalness: 0.05 });
+
+function initView() {
+  const host = $('preview');
+  renderer = new THREE.WebGLRenderer({ antialias: true, preserveDrawingBuffer: true });
+  renderer.setPixelRatio(window.devicePixelRatio);
+  renderer.setSize(host.clientWidth, host.clientHeight);
+  host.appendChild(renderer.domElement);
+  scene = new THREE.Scene();
+  scene.background = new THREE.Color(0xffffff);
+  camera = new THREE.PerspectiveCamera(40, host.clientWidth / host.clientHeight, 0.1, 10000);
+  scene.add(new THREE.HemisphereLight(0xffffff, 0x888888, 1.6));
+  const sun = new THREE.DirectionalLight(0xffffff, 1.8);
+  sun.position.set(1, 2, 1.5);
+  scene.add(sun);
+  controls = new OrbitControls(camera, renderer.domElement);
+  controls.addEventListener('change', render);
+  modelGroup = new THREE.Group();
+  modelGroup.rotation.x = -Math.PI / 2;  // designs are z-up, three.js is y-up
+  scene.add(modelGroup);
+  window.addEventListener('resize', () => {
+    renderer.setSize(host.clientWidth, host.clientHeight);
+    camera.aspect = host.clientWidth / host.clientHeight;
+    camera.updateProjectionMatrix();
+    render();
+  });
+}
+
+function render() { renderer.render(scene, camera); }
+
+function parseGlb(buffer) {
+  return new Promise((resolve, reject) => loader.parse(buffer, '', resolve, reject));
+}
+
+async function meshFromGlb(buffer) {
+  const gltf = await parseGlb(buffer);
+  const group = new THREE.Group();
+  gltf.scene.traverse((o) => {
+    if (o.isMesh) {
+      o.geometry.computeVertexNormals();
+      o.material = material;
+      group.add(o.clone());
+    }
+  });
+  return group;
+}
+
+function fitCamera(object, cam, ctl) {
+  const box = new THREE.Box3().setFromObject(object);
+  const size = box.getSize(new THREE.Vector3()).length() || 1;
+  const centre = box.getCenter(new THREE.Vector3());
+  cam.position.copy(centre).add(new THREE.Vector3(0.6, 0.45, 0.9).multiplyScalar(size * 1.1));
+  cam.near = size / 100;
+  cam.far = size * 100;
+  cam.updateProjectionMatrix();
+  if (ctl) { ctl.target.copy(centre); ctl.update(); } else cam.lookAt(centre);
+}
+
+let previewSeq = 0;
+async function loadPreview(u, sample) {
+  if (!state.form.preview) return;
+  if (sample === state.previewSample) return;
+  const seq = ++previewSeq;
+  const res = await api('/api/preview.glb?' + query(u));
+  const buffer = await res.arrayBuffer();
+  if (seq !== previewSeq) return;
+  const group = await meshFromGlb(buffer);
+  if (seq !== previewSeq) return;
+  modelGroup.clear();
+  modelGroup.add(group);
+  if (!fitted) { fitCamera(modelGroup, camera, controls); fitted = true; }
+  render();
+  state.previewSample = Number(res.headers.get('X-Sample'));
+  state.previewCount += 1;
+  setStatus(`sample #${state.previewSample} · preview ${(Number(res.headers.get('X-Preview-Seconds')) * 1000).toFixed(0)} ms` +
+    ` · cached subtrees ${res.headers.get('X-Cache-Hits')} (${state.form.cache})`);
+}
+
+// ------------------------------------------------------ starting points
+async function buildStarts() {
+  const host = $('starts');
+  host.textContent = '';
+  if (!state.form.preview) return;
+  const thumb = new THREE.WebGLRenderer({ antialias: true, preserveDrawingBuffer: true });
+  thumb.setSize(120, 120);
+  const tScene = new THREE.Scene();
+  tScene.background = new THREE.Color(0xf4f4f4);
+  tScene.add(new THREE.HemisphereLight(0xffffff, 0x888888, 1.6));
+  const sun = new THREE.DirectionalLight(0xffffff, 1.8);
+  sun.position.set(1, 2, 1.5);
+  tScene.add(sun);
+  const tCamera = new THREE.PerspectiveCamera(40, 1, 0.1, 10000);
+  for (const [i, start] of state.form.starting_points.entries()) {
+    const button = document.createElement('button');
+    button.dataset.index = i;
+    button.title = start.u.map((v, d) => `${state.form.dimensions[d].name} ${formatValue(d, v)}`).join(', ');
+    const img = document.createElement('img');
+    img.alt = `starting point ${i + 1}`;
+    button.appendChild(img);
+    button.addEventListener('click', () => { state.u = start.u.slice(); requestUpdate(); });
+    host.appendChild(button);
+    try {
+      const buffer = await (await api('/api/preview.glb?' + query(start.u))).arrayBuffer();
+      const group = await meshFromGlb(buffer);
+      const holder = new THREE.Group();
+      holder.rotation.x = -Math.PI / 2;
+      holder.add(group);
+      tScene.add(holder);
+      fitCamera(holder, tCamera, null);
+      thumb.render(tScene, tCamera);
+      img.src = thumb.domElement.toDataURL('image/png');
+      tScene.remove(holder);
+    } catch (e) { img.alt = String(e); }
+  }
+  thumb.dispose();
+}
+
+// ----------------------------------------------------------- validity map
+const palette = ['#2b2b2b', '#8a3b3b', '#7a6a2a', '#4a4a7a', '#3b7a5a', '#7a3b7a'];
+let mapData = null;
+
+function buildMapControls() {
+  const a = $('map-a'), b = $('map-b');
+  state.form.dimensions.forEach((dim, d) => {
+    a.add(new Option(dim.name, d));
+    b.add(new Option(dim.name, d));
+  });
+  a.value = 0;
+  b.value = Math.min(1, state.form.dimensions.length - 1);
+  a.addEventListener('change', () => drawMap().catch(showError));
+  b.addEventListener('change', () => drawMap().catch(showError));
+  $('map').addEventListener('click', onMapClick);
+  if (state.form.dimensions.length < 2) $('map').hidden = true;
+}
+
+async function drawMap() {
+  const a = Number($('map-a').value), b = Number($('map-b').value);
+  const canvas = $('map');
+  const ctx = canvas.getContext('2d');
+  if (a === b || state.form.dimensions.length < 2) {
+    ctx.clearRect(0, 0, canvas.width, canvas.height);
+    $('map-legend').textContent = 'pick two different parameters';
+    mapData = null;
+    return;
+  }
+  const n = 64;
+  const m = await apiJson(`/api/map?a=${a}&b=${b}&n=${n}&` + query(state.u));
+  mapData = m;
+  const cw = canvas.width / n, ch = canvas.height / n;
+  for (let j = 0; j < n; ++j)
+    for (let i = 0; i < n; ++i) {
+      const c = m.cells[j * n + i];
+      ctx.fillStyle = c < 0 ? '#2f7de1' : palette[c % palette.length];
+      ctx.fillRect(i * cw, canvas.height - (j + 1) * ch, Math.ceil(cw), Math.ceil(ch));
+    }
+  const x = ((state.u[a] - m.a_range[0]) / (m.a_range[1] - m.a_range[0])) * canvas.width;
+  const y = canvas.height - ((state.u[b] - m.b_range[0]) / (m.b_range[1] - m.b_range[0])) * canvas.height;
+  ctx.strokeStyle = '#fff';
+  ctx.lineWidth = 2;
+  ctx.strokeRect(x - 4, y - 4, 8, 8);
+  $('map-legend').innerHTML = '<span class="swatch valid"></span> valid ' +
+    m.failures.map((f, k) => `<span class="swatch" style="background:${palette[k % palette.length]}"></span> ${f}`).join(' ');
+}
+
+function onMapClick(e) {
+  if (!mapData) return;
+  const canvas = $('map');
+  const rect = canvas.getBoundingClientRect();
+  const n = mapData.n;
+  const i = Math.min(n - 1, Math.floor(((e.clientX - rect.left) / rect.width) * n));
+  const j = Math.min(n - 1, Math.floor(((rect.bottom - e.clientY) / rect.height) * n));
+  const cell = mapData.cells[j * n + i];
+  if (cell >= 0) { setStatus(`not fabricable there: ${mapData.failures[cell]}`); return; }
+  const u = state.u.slice();
+  u[mapData.a] = mapData.a_range[0] + ((i + 0.5) / n) * (mapData.a_range[1] - mapData.a_range[0]);
+  u[mapData.b] = mapData.b_range[0] + ((j + 0.5) / n) * (mapData.b_range[1] - mapData.b_range[0]);
+  state.u = u;
+  requestUpdate();
+}
+
+// ------------------------------------------------------------------ start
+async function main() {
+  state.form = await apiJson('/api/form');
+  $('title').textContent = `${state.form.name} — fabatlas customiser`;
+  document.title = $('title').textContent;
+  const start = state.form.starting_points[0];
+  state.u = start ? start.u.slice() : state.form.dimensions.map((d) => d.default ?? (d.lo + d.hi) / 2);
+  buildSliders();
+  buildMapControls();
+  initView();
+  await update();
+  state.ready = true;
+  buildStarts().catch(showError);
+}
+
+main().catch(showError);
