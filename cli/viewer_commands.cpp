@@ -1,10 +1,11 @@
-// fabatlas serve ART [--job JOB] [--port P] — the web customiser of a computed
-// form (seed 001 Sec. 7) over HTTP; docs/viewer.md.
+// fabatlas serve ART [--port P] [--cache opt|rfree|none] — the web customiser
+// of a published artifact (seed 001 Sec. 7) over HTTP; docs/viewer.md.
 #include <atomic>
 #include <csignal>
 #include <filesystem>
 #include <iostream>
 #include <memory>
+#include <vector>
 
 #include "commands.h"
 #include "fabatlas/error.h"
@@ -20,16 +21,32 @@ std::atomic<bool> g_stop{false};
 extern "C" void StopServing(int) { g_stop.store(true); }
 
 struct ServeArgs {
-  std::string art, job, host = "127.0.0.1", web = FABATLAS_WEB_DIR;
+  std::string art, job, host = "127.0.0.1", web = FABATLAS_WEB_DIR, cache = "opt";
   int port = 8080;
 };
 
+// ART: an artifact file, a run directory holding exactly one artifact, or
+// (with --job) a run directory with only form.json.
+viewer::CustomiserSource Load(const ServeArgs& a) {
+  namespace fs = std::filesystem;
+  const fs::path art(a.art);
+  const viewer::CacheChoice cache = a.cache == "rfree"  ? viewer::CacheChoice::kRfree
+                                    : a.cache == "none" ? viewer::CacheChoice::kNone
+                                                        : viewer::CacheChoice::kOpt;
+  if (fs::is_regular_file(art)) return viewer::LoadArtifact(art, cache);
+  if (!fs::is_directory(art)) throw InputError(a.art + ": no such artifact or run directory");
+  std::vector<fs::path> artifacts;
+  for (const auto& e : fs::directory_iterator(art))
+    if (e.is_regular_file() && e.path().extension() == ".fabatlas") artifacts.push_back(e.path());
+  if (artifacts.size() == 1 && a.job.empty()) return viewer::LoadArtifact(artifacts[0], cache);
+  if (artifacts.size() > 1 && a.job.empty())
+    throw InputError(a.art + ": holds " + std::to_string(artifacts.size()) + " artifacts; name one");
+  if (a.job.empty()) throw InputError(a.art + ": no *.fabatlas artifact (a form.json alone needs --job JOB)");
+  return viewer::LoadRunDirectory(art, a.job);
+}
+
 void Serve(const ServeArgs& a) {
-  const std::filesystem::path art(a.art);
-  if (!std::filesystem::is_directory(art))
-    throw InputError(a.art + ": not a run directory (expected the --out DIR of `fabatlas run` holding form.json)");
-  if (a.job.empty()) throw InputError(a.art + ": a run directory needs --job JOB (the job file that produced it)");
-  viewer::Customiser customiser(viewer::LoadRunDirectory(art, a.job));
+  viewer::Customiser customiser(Load(a));
   viewer::ServeOptions options;
   options.host = a.host;
   options.port = a.port;
@@ -48,8 +65,10 @@ void AddViewerCommands(CLI::App& app, int& exit_code) {
   (void)exit_code;
   auto a = std::make_shared<ServeArgs>();
   auto* serve = app.add_subcommand("serve", "serve the web customiser and its JSON/glTF API for a computed form");
-  serve->add_option("art", a->art, "the form: a run's --out directory (form.json)")->required();
-  serve->add_option("--job", a->job, "the job file that produced it (design, materials)");
+  serve->add_option("art", a->art, "an artifact (<design>.fabatlas) or the run directory holding it")->required();
+  serve->add_option("--cache", a->cache, "subtrees previews load: opt (H_opt, default), rfree (H_rfree) or none")
+      ->check(CLI::IsMember({"opt", "rfree", "none"}));
+  serve->add_option("--job", a->job, "serve a run directory's form.json alone, with this job file's design");
   serve->add_option("--port", a->port, "TCP port (0: any free port, printed)")->check(CLI::Range(0, 65535));
   serve->add_option("--host", a->host, "address to listen on (default 127.0.0.1)");
   serve->add_option("--web", a->web, "the built page (default: build/web)");

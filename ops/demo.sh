@@ -3,9 +3,21 @@
 # precomputes the chess pawn of seed 001 (configs/jobs/pawn.yaml) on a local
 # coordinator with two worker processes talking gRPC over loopback: bootstrap
 # grid, adaptive ΔG subdivision, every sample's checks and properties. The
-# form, its Table-3 statistics and a validity map land in out/pawn/.
+# form, its Table-3 statistics, a validity map and the artifact land in
+# out/pawn/. It ends with the web customiser for that artifact: in an
+# interactive terminal `fabatlas serve` runs in the foreground (Ctrl-C stops
+# it); otherwise (CI, pipes) it only prints the command, so it never blocks.
+# FABATLAS_SERVE=1 / 0 forces either; FABATLAS_PORT picks the port (8080).
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 bash "$root/ops/build.sh"
 "$root/build/bin/fabatlas" run "$root/configs/jobs/pawn.yaml" --workers 2 --out "$root/out/pawn"
 echo "validity map: $root/out/pawn/map_head_height.png"
+port="${FABATLAS_PORT:-8080}"
+serve=("$root/build/bin/fabatlas" serve "$root/out/pawn" --port "$port")
+if [ "${FABATLAS_SERVE:-$([ -t 0 ] && [ -t 1 ] && echo 1 || echo 0)}" = 1 ]; then
+  echo "customiser: open http://127.0.0.1:$port/ (Ctrl-C stops the server)"
+  exec "${serve[@]}"
+else
+  echo "customiser: run  ${serve[*]}  then open http://127.0.0.1:$port/"
+fi

@@ -16,6 +16,7 @@ APT_PACKAGES=(
   libcpp-httplib-dev libtinygltf-dev libstb-dev libpng-dev libzstd-dev libssl-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   openscad
+  chromium
   libglpk-dev
 )
 # Node.js and npm: the machine's own if present, else Debian's.

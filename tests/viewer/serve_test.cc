@@ -1,5 +1,6 @@
 // `fabatlas serve` as a real process over a real run of the tube design
-// (tests/viewer/data/tube_wall_2d.yaml, run by the viewer_tube_run fixture):
+// (tests/viewer/data/tube_wall_2d.yaml, run by the viewer_tube_run fixture,
+// served from the artifact it published):
 // the API's answers are checked against the design's closed-form region
 // (valid where wall >= 1 + 0.01 radius^2 and radius - wall >= 2) and volume,
 // bad requests get 400 with one line, and no path outside the page and the
@@ -30,7 +31,6 @@ fs::path RunDir() {
   const char* dir = std::getenv("FABATLAS_VIEWER_RUN");
   return dir ? fs::path(dir) : testing::BinDir().parent_path() / "test-fixtures" / "viewer-tube";
 }
-fs::path JobFile() { return testing::SourceDir() / "tests/viewer/data/tube_wall_2d.yaml"; }
 
 class Server : public ::testing::Test {
  protected:
@@ -43,8 +43,9 @@ class Server : public ::testing::Test {
     std::ofstream(dir_ / "web/assets/app.js") << "console.log('app')";
     std::ofstream(dir_ / "secret.txt") << "SECRET-OUTSIDE-THE-PAGE";
     const fs::path log = dir_ / "serve.log";
-    pid_ = Spawn({(testing::BinDir() / "fabatlas").string(), "serve", RunDir().string(), "--job",
-                  JobFile().string(), "--port", "0", "--web", (dir_ / "web").string()},
+    // The run directory holds the published artifact <design>.fabatlas.
+    pid_ = Spawn({(testing::BinDir() / "fabatlas").string(), "serve", RunDir().string(), "--port", "0", "--web",
+                  (dir_ / "web").string()},
                  log);
     const std::regex listening(R"(at http://127\.0\.0\.1:(\d+)/)");
     for (int i = 0; i < 1000 && port_ == 0; ++i) {

@@ -1,13 +1,17 @@
 #include "fabatlas/viewer/customiser.h"
 
+#include <atomic>
 #include <chrono>
 #include <fstream>
 #include <sstream>
+
+#include <unistd.h>
 
 #include "fabatlas/design/evaluate_sample.h"
 #include "fabatlas/error.h"
 #include "fabatlas/precompute/design_evaluator.h"
 #include "fabatlas/sampling/form_json.h"
+#include "fabatlas/storage/artifact.h"
 #include "fabatlas/viewer/starting_points.h"
 
 namespace fabatlas::viewer {
@@ -59,6 +63,58 @@ CustomiserSource LoadRunDirectory(const std::filesystem::path& out_dir, const st
   return source;
 }
 
+namespace {
+
+// Writes one bundled file under dir; names that would leave it are refused.
+void WriteBundled(const std::filesystem::path& dir, const std::string& name, const std::string& bytes,
+                  const std::filesystem::path& artifact) {
+  const std::filesystem::path rel = std::filesystem::path(name).lexically_normal();
+  if (name.empty() || rel.is_absolute() || *rel.begin() == "..")
+    throw InputError(artifact.string() + ": bundled file name '" + name + "' leaves the bundle");
+  const std::filesystem::path path = dir / rel;
+  std::filesystem::create_directories(path.parent_path());
+  std::ofstream out(path, std::ios::binary);
+  out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+  if (!out) throw InputError(path.string() + ": cannot write the bundled file");
+}
+
+}  // namespace
+
+CustomiserSource LoadArtifact(const std::filesystem::path& artifact, CacheChoice cache) {
+  storage::Artifact art = storage::ReadArtifact(artifact);
+  CustomiserSource source;
+  source.form = std::move(art.form);
+  source.name = art.manifest.design_name;
+  for (const auto& p : art.starting_points) source.starting_points.push_back(p.sample_id);
+
+  static std::atomic<int> counter{0};
+  source.bundle_dir = std::filesystem::temp_directory_path() /
+                      ("fabatlas-serve-" + std::to_string(::getpid()) + "-" + std::to_string(counter++));
+  std::filesystem::remove_all(source.bundle_dir);
+  const std::filesystem::path design_dir = source.bundle_dir / "design";
+  WriteBundled(design_dir, art.bundle.design_file_name, art.bundle.design_file, artifact);
+  for (const auto& [name, bytes] : art.bundle.files) WriteBundled(design_dir, name, bytes, artifact);
+  source.design = design::LoadDesign(design_dir / std::filesystem::path(art.bundle.design_file_name).lexically_normal());
+  if (!art.bundle.job_file.empty()) {
+    // The job's design path points elsewhere; only its materials matter here.
+    source.materials = sampling::ParseJobFile(art.bundle.job_file, artifact.string() + ":" + art.bundle.job_file_name).materials;
+  }
+  const auto& exposed = source.design->exposed;
+  bool same = exposed.size() == source.form.dimensions.size();
+  for (size_t i = 0; same && i < exposed.size(); ++i) same = exposed[i].name == source.form.dimensions[i].name;
+  if (!same) throw InputError(artifact.string() + ": the form's parameters differ from the bundled design's");
+
+  const bool has_cache = !art.manifest.cache.strategy.empty();
+  source.cache_name = !has_cache || cache == CacheChoice::kNone ? "none"
+                      : cache == CacheChoice::kOpt               ? "H_opt"
+                                                                 : "H_rfree";
+  if (has_cache && cache != CacheChoice::kNone)
+    for (auto& e : art.cache)
+      if (cache == CacheChoice::kOpt ? e.in_opt : e.in_rfree)
+        source.cache.emplace(e.key, std::make_pair(geometry::Solid::Deserialize(e.grid), e.cost_seconds));
+  return source;
+}
+
 std::vector<MaterialReadout> MaterialReadouts(double volume_mm3, const std::vector<sampling::Material>& materials) {
   std::vector<MaterialReadout> out;
   for (const auto& m : materials) {
@@ -77,7 +133,12 @@ Customiser::Customiser(CustomiserSource source)
   cache_ = std::make_unique<FixedSubtreeCache>(source_.cache);
 }
 
-Customiser::~Customiser() = default;
+Customiser::~Customiser() {
+  if (!source_.bundle_dir.empty()) {
+    std::error_code ec;
+    std::filesystem::remove_all(source_.bundle_dir, ec);
+  }
+}
 
 std::vector<MaterialReadout> Customiser::Materials(std::int64_t sample) const {
   const auto& properties = source_.form.samples.at(sample).outcome.properties;

@@ -181,7 +181,7 @@ function drawReadout(p) {
 }
 
 // ------------------------------------------------------------- preview
-let renderer, scene, camera, controls, modelGroup, fitted = false;
+let renderer, scene, camera, controls, modelGroup, fittedSize = 0;
 const loader = new GLTFLoader();
 const material = new THREE.MeshStandardMaterial({ color: 0xd9b38c, roughness: 0.6, metalness: 0.05 });
 
@@ -253,7 +253,13 @@ async function loadPreview(u, sample) {
   if (seq !== previewSeq) return;
   modelGroup.clear();
   modelGroup.add(group);
-  if (!fitted) { fitCamera(modelGroup, camera, controls); fitted = true; }
+  // Refit the camera when the model's size changes a lot (keeps the user's
+  // orbit otherwise).
+  const size = new THREE.Box3().setFromObject(modelGroup).getSize(new THREE.Vector3()).length();
+  if (!fittedSize || size > 1.25 * fittedSize || size < 0.5 * fittedSize) {
+    fitCamera(modelGroup, camera, controls);
+    fittedSize = size;
+  }
   render();
   state.previewSample = Number(res.headers.get('X-Sample'));
   state.previewCount += 1;

@@ -36,7 +36,22 @@ struct CustomiserSource {
   // the root compute time t_i in seconds (seed 001 Sec. 6).
   std::map<std::string, std::pair<geometry::Solid, double>> cache;
   std::string cache_name = "none";             // e.g. "H_opt", "H_rfree", "none"
+  // Where the artifact's job bundle was written for evaluation (removed with
+  // the Customiser); empty when the design came from the file system.
+  std::filesystem::path bundle_dir;
 };
+
+// Which subtrees of an artifact's geometry cache previews load (seed 001
+// Sec. 6 / Fig. 14): the chosen cache H_opt, the redundancy-free H_rfree, or
+// none (every preview evaluates the whole tree).
+enum class CacheChoice { kOpt, kRfree, kNone };
+
+// A published artifact (storage/artifact.h, docs/artifact.md): its form,
+// starting points, the chosen cache entries and, from its job bundle, the
+// design (written to a fresh scratch directory so mesh and OpenSCAD files
+// resolve) and the job file's materials. Throws InputError naming the file
+// for anything unreadable or inconsistent.
+CustomiserSource LoadArtifact(const std::filesystem::path& artifact, CacheChoice cache = CacheChoice::kOpt);
 
 // A run's output directory as `fabatlas run/sample --out DIR` writes it
 // (DIR/form.json) plus the job file that produced it (design and materials).
