@@ -153,6 +153,7 @@ PreviewResult Customiser::Preview(std::int64_t sample, bool with_cache) const {
   design::EvaluateOptions options;
   options.cache = with_cache ? cache_.get() : nullptr;
   options.run_checks = false;  // the sample was checked during sampling
+  options.lookup_before_children = true;  // a cached subtree skips everything below it
   const auto start = std::chrono::steady_clock::now();
   design::SampleResult r =
       design::EvaluateSample(*source_.design, precompute::DesignPointOf(*source_.design, s.u), options);
