@@ -506,8 +506,12 @@ class JobServiceImpl final : public v1::JobService::Service {
       return Status(StatusCode::FAILED_PRECONDITION,
                     "job " + job->id + " is " + v1::JobState_Name(static_cast<v1::JobState>(job->state)));
     try {
-      for (const auto& [name, digest] : impl_.store->JobOutputs(job->id))
-        (*resp->mutable_files())[name] = impl_.blobs->Read(digest);
+      for (const auto& [name, digest] : impl_.store->JobOutputs(job->id)) {
+        v1::JobOutput* out = resp->add_outputs();
+        out->set_name(name);
+        out->set_digest(digest);
+        out->set_size_bytes(static_cast<std::int64_t>(impl_.blobs->Size(digest)));
+      }
     } catch (const std::exception& e) {
       return FromException(e);
     }

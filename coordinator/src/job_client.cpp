@@ -156,7 +156,9 @@ std::map<std::string, std::string> JobClient::Fetch(const std::string& job_id) {
   v1::FetchResultResponse resp;
   grpc::Status s = stub->FetchResult(&ctx, req, &resp);
   if (!s.ok()) Fail("fetch " + job_id, s);
-  return {resp.files().begin(), resp.files().end()};
+  std::map<std::string, std::string> files;
+  for (const auto& out : resp.outputs()) files[out.name()] = DownloadBlob(out.digest());
+  return files;
 }
 
 std::string JobStateName(v1::JobState state) {
