@@ -90,5 +90,24 @@ TEST(SpacetimeCollision, BadInputIsInputError) {
   EXPECT_THROW(DetectCollisions(parts, o), InputError);
 }
 
+TEST(SpacetimeCollision, StillPartsAreTestedOnceAndCollideThroughout) {
+  // Two overlapping cubes that never move, and a third far away sliding by:
+  // the still pair collides over the whole transition after one exact test.
+  std::vector<MovingPart> parts(3);
+  parts[0].mesh = testing::BoxMesh({0, 0, 0}, {1, 1, 1});
+  parts[1].mesh = testing::BoxMesh({0.5, 0.5, 0.5}, {1.5, 1.5, 1.5});
+  parts[2].mesh = testing::BoxMesh({0, 0, 10}, {1, 1, 11});
+  parts[2].motion = RigidMotion::Line({0, -5, 0}, {0, 5, 0});
+  SpacetimeOptions o;
+  o.time_steps = 51;
+  const CollisionReport r = DetectCollisions(parts, o);
+  ASSERT_EQ(r.intervals.size(), 1u);
+  EXPECT_EQ(r.intervals[0].t_begin, 0.0);
+  EXPECT_EQ(r.intervals[0].t_end, 1.0);
+  EXPECT_EQ(r.exact_tests, 1u);
+  EXPECT_NEAR(r.intervals[0].where.min[0], 0.5, 1e-12);
+  EXPECT_NEAR(r.intervals[0].where.max[0], 1.0, 1e-12);
+}
+
 }  // namespace
 }  // namespace fabatlas::swept

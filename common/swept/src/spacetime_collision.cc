@@ -2,14 +2,18 @@
 // bounding volume hierarchy, exact confirmation at samples.
 #include "fabatlas/swept/spacetime_collision.h"
 
+#include <CGAL/AABB_face_graph_triangle_primitive.h>
+#include <CGAL/AABB_traits.h>
+#include <CGAL/AABB_tree.h>
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
-#include <CGAL/Polygon_mesh_processing/intersection.h>
+#include <CGAL/Side_of_triangle_mesh.h>
 #include <CGAL/Surface_mesh.h>
 
 #include <algorithm>
 #include <cmath>
 #include <tuple>
 #include <map>
+#include <memory>
 #include <numeric>
 #include <set>
 #include <string>
@@ -22,6 +26,17 @@ namespace {
 using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
 using Point = Kernel::Point_3;
 using Surface = CGAL::Surface_mesh<Point>;
+using FaceTree = CGAL::AABB_tree<CGAL::AABB_traits<Kernel, CGAL::AABB_face_graph_triangle_primitive<Surface>>>;
+using Inside = CGAL::Side_of_triangle_mesh<Surface, Kernel>;
+
+// A part in its body frame, built once: its surface, a tree over its faces
+// and a point-in-volume test. Exact tests at every sample pose the other
+// part's triangles into this frame instead of rebuilding trees per sample.
+struct BodyIndex {
+  Surface surface;
+  std::unique_ptr<FaceTree> faces;
+  std::unique_ptr<Inside> inside;
+};
 
 using Box4 = std::array<std::array<double, 4>, 2>;  // [min, max] over (x, y, z, t)
 
@@ -170,6 +185,13 @@ CollisionReport DetectCollisions(const std::vector<MovingPart>& parts, const Spa
   report.proxies = boxes.size();
   const ProxyTree tree(boxes);
 
+  // Parts that hold one pose throughout: a pair of them is tested once, at
+  // the first sample, and a collision spans the whole transition.
+  std::vector<bool> still(np, true);
+  for (std::size_t p = 0; p < np; ++p)
+    for (int i = 1; i < n && still[p]; ++i)
+      still[p] = pose[p][i].rotation == pose[p][0].rotation && pose[p][i].translation == pose[p][0].translation;
+
   // Candidate (pair, sample) from overlapping proxies of different parts in the same interval.
   std::set<std::tuple<int, int, int>> candidates;  // (a, b, sample)
   auto consider = [&](std::size_t q, std::size_t r) {
@@ -177,6 +199,10 @@ CollisionReport DetectCollisions(const std::vector<MovingPart>& parts, const Spa
     const auto [pb, ib] = owner[r];
     if (pa >= pb || ia != ib) return;  // each pair once; same time interval
     ++report.candidate_pairs;
+    if (still[pa] && still[pb]) {
+      candidates.emplace(pa, pb, 0);
+      return;
+    }
     candidates.emplace(pa, pb, ia);
     candidates.emplace(pa, pb, ia + 1);
   };
@@ -187,12 +213,46 @@ CollisionReport DetectCollisions(const std::vector<MovingPart>& parts, const Spa
       for (std::size_t r = 0; r < boxes.size(); ++r)
         if (Overlap(boxes[q], boxes[r])) consider(q, r);
   }
-  // Exact test at candidate samples (posed meshes built on demand).
-  std::map<std::pair<int, int>, Surface> posed;
-  auto get = [&](int p, int i) -> const Surface& {
-    auto it = posed.find({p, i});
-    if (it == posed.end()) it = posed.emplace(std::make_pair(p, i), Posed(parts[p].mesh, pose[p][i], p)).first;
-    return it->second;
+  // Exact test at candidate samples. Both parts in their body frames (built
+  // on first use); B's triangles posed into A's frame by f_A^-1 f_B.
+  std::map<int, BodyIndex> index;
+  auto body = [&](int p) -> const BodyIndex& {
+    auto it = index.find(p);
+    if (it != index.end()) return it->second;
+    BodyIndex& b = index[p];
+    b.surface = Posed(parts[p].mesh, Transform{}, p);
+    b.faces = std::make_unique<FaceTree>(faces(b.surface).first, faces(b.surface).second, b.surface);
+    b.inside = std::make_unique<Inside>(b.surface);
+    return b;
+  };
+  // Surfaces touching or crossing, or one part inside the other (the
+  // bounded-side semantics of PMP::do_intersect).
+  auto collide = [&](int a, int b, int i) {
+    const BodyIndex& ia = body(a);
+    const BodyIndex& ib = body(b);
+    // Pose the smaller part's triangles into the larger part's frame.
+    const bool a_small = parts[a].mesh.triangles.size() <= parts[b].mesh.triangles.size();
+    const int small = a_small ? a : b, large = a_small ? b : a;
+    const BodyIndex& il = a_small ? ib : ia;
+    const Transform into = pose[large][i].Inverse().Compose(pose[small][i]);
+    const auto& m = parts[small].mesh;
+    std::vector<Point> q(m.vertices.size());
+    for (std::size_t v = 0; v < q.size(); ++v) {
+      const Vec3 x = into.Apply(m.vertices[v]);
+      q[v] = Point(x[0], x[1], x[2]);
+    }
+    const CGAL::Bbox_3 box = il.faces->bbox();
+    for (const auto& t : m.triangles) {
+      const Kernel::Triangle_3 tri(q[t[0]], q[t[1]], q[t[2]]);
+      if (!CGAL::do_overlap(tri.bbox(), box)) continue;
+      if (tri.is_degenerate()) continue;
+      if (il.faces->do_intersect(tri)) return true;
+    }
+    // No surface contact: one contains the other, or they are apart.
+    if ((*il.inside)(q[0]) != CGAL::ON_UNBOUNDED_SIDE) return true;
+    const BodyIndex& is = a_small ? ia : ib;
+    const Vec3 y = into.Inverse().Apply(parts[large].mesh.vertices[0]);
+    return (*is.inside)(Point(y[0], y[1], y[2])) != CGAL::ON_UNBOUNDED_SIDE;
   };
   std::map<std::pair<int, int>, std::vector<int>> hits;  // pair -> colliding samples, ascending
   for (const auto& [a, b, i] : candidates) {
@@ -202,9 +262,14 @@ CollisionReport DetectCollisions(const std::vector<MovingPart>& parts, const Spa
     for (int k = 0; k < 3; ++k) apart |= ba.min[k] > bb.max[k] || bb.min[k] > ba.max[k];
     if (apart) continue;
     ++report.exact_tests;
-    // Bounded-side test on: a part wholly inside another collides too.
-    const auto closed = CGAL::parameters::do_overlap_test_of_bounded_sides(true);
-    if (CGAL::Polygon_mesh_processing::do_intersect(get(a, i), get(b, i), closed, closed)) hits[{a, b}].push_back(i);
+    // A part wholly inside another collides too.
+    if (collide(a, b, i)) {
+      if (still[a] && still[b]) {
+        for (int j = 0; j < n; ++j) hits[{a, b}].push_back(j);
+      } else {
+        hits[{a, b}].push_back(i);
+      }
+    }
   }
   // Runs of consecutive samples -> intervals (when), with their box (where).
   for (const auto& [pair, samples] : hits) {

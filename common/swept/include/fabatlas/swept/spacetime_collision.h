@@ -7,9 +7,12 @@
 // union AABB at t_i+1). The proxies of all parts sit in one bounding volume
 // hierarchy over 4D boxes (median split on the longest axis, time scaled by
 // the scene's spatial extent); overlapping proxies of two parts are candidate
-// pairs, confirmed at the interval's end samples by an exact mesh test (CGAL
-// Polygon_mesh_processing::do_intersect, which counts touching and
-// containment). Consecutive colliding samples of a pair form one interval.
+// pairs, confirmed at the interval's end samples by an exact mesh test:
+// the smaller part's triangles, posed into the larger part's body frame,
+// against a CGAL AABB tree of its faces (built once per part; touching
+// counts), then a point-in-volume test each way (CGAL Side_of_triangle_mesh)
+// so that containment counts too. Two parts that both hold still are tested
+// once. Consecutive colliding samples of a pair form one interval.
 // Collisions strictly between samples are not seen: choose time_steps so that
 // parts move less than their thinnest feature per step.
 #pragma once
