@@ -25,12 +25,13 @@ double Median(std::vector<double> v) {
 struct Row {
   std::vector<double> wall, assembly, linear;
   int elements = 0, dofs = 0, newton = 0;
+  long long cg = 0;  // conjugate-gradient iterations of the last run
   double result = 0;
 };
 
 void Print(const char* name, const Row& r, const char* result_name) {
-  std::printf("| %-28s | %6d | %6d | %8.3f | %8.3f | %8.3f | %3d | %s = %.4f |\n", name, r.elements, r.dofs,
-              Median(r.wall), Median(r.assembly), Median(r.linear), r.newton, result_name, r.result);
+  std::printf("| %-34s | %6d | %6d | %8.3f | %8.3f | %8.3f | %3d | %6lld | %s = %.4f |\n", name, r.elements, r.dofs,
+              Median(r.wall), Median(r.assembly), Median(r.linear), r.newton, r.cg, result_name, r.result);
 }
 
 Row CooksMembrane16(int repeats) {
@@ -65,7 +66,7 @@ Row CooksMembrane16(int repeats) {
 // height falling from 24 voxels (36 mm) at the heel to 12 at the front, with
 // an arch cut 4 voxels high under the middle. Ground contact at both ends
 // (fixed), 700 N (a 71 kg person) on the top of the heel.
-Row SandalHeel(int repeats) {
+Row SandalHeel(int repeats, StaticSolveOptions::LinearSolver solver) {
   VoxelSolid v;
   v.voxel_size = 1.5;
   v.dims = {44, 28, 24};
@@ -84,6 +85,7 @@ Row SandalHeel(int repeats) {
   lc.material = Material::FromYoungPoisson(20.0, 0.4);  // MPa, EVA-like foam
   FemCheckOptions opt;
   opt.max_displacement = 2.0;
+  opt.solve.linear_solver = solver;
   Row row;
   for (int r = 0; r < repeats; ++r) {
     const FemCheckResult res = RunFemCheck(v, lc, opt);
@@ -92,6 +94,7 @@ Row SandalHeel(int repeats) {
     row.assembly.push_back(res.assembly_seconds);
     row.linear.push_back(res.linear_solve_seconds);
     row.newton = res.newton_iterations;
+    row.cg = res.linear_iterations;
     row.elements = res.num_elements;
     row.result = res.max_displacement;
   }
@@ -107,9 +110,14 @@ int main(int argc, char** argv) {
   const int heel_repeats = argc > 2 ? std::max(1, std::atoi(argv[2])) : 3;
   std::printf("median of %d (Cook) and %d (heel) runs; DOFs: free unknowns (Cook), 3 x nodes (heel)\n", cook_repeats,
               heel_repeats);
-  std::printf("| case | elements | DOFs | median wall s | assembly s | linear solve s | Newton its | result |\n");
-  std::printf("|---|---|---|---|---|---|---|---|\n");
+  std::printf("| case | elements | DOFs | median wall s | assembly s | linear solve s | Newton its | CG its | result |\n");
+  std::printf("|---|---|---|---|---|---|---|---|---|\n");
   Print("Cook's membrane 16/edge", CooksMembrane16(cook_repeats), "u_y(48,60) mm");
-  Print("voxel sandal heel", SandalHeel(heel_repeats), "max |u| mm");
+  // The heel with each linear solver, one after the other in the same run.
+  using LS = StaticSolveOptions::LinearSolver;
+  Print("voxel sandal heel, Cholesky", SandalHeel(heel_repeats, LS::kCholesky), "max |u| mm");
+  Print("voxel sandal heel, CG + incomplete Cholesky", SandalHeel(heel_repeats, LS::kConjugateGradientIncompleteCholesky),
+        "max |u| mm");
+  Print("voxel sandal heel, CG + Jacobi", SandalHeel(heel_repeats, LS::kConjugateGradientJacobi), "max |u| mm");
   return 0;
 }

@@ -74,6 +74,7 @@ FemCheckResult RunFemCheck(const VoxelSolid& solid, const FemLoadCase& load,
   r.newton_iterations = s.newton_iterations;
   r.assembly_seconds = s.assembly_seconds;
   r.linear_solve_seconds = s.linear_solve_seconds;
+  r.linear_iterations = s.linear_iterations;
   if (!s.converged) {
     r.reason = "static solve did not converge: " + s.message;
   } else if (s.max_displacement > options.max_displacement) {

@@ -11,6 +11,7 @@
 #include <string>
 
 #include <Eigen/Dense>
+#include <Eigen/IterativeLinearSolvers>
 #include <Eigen/Sparse>
 #ifdef FABATLAS_FEM_HAVE_CHOLMOD
 #include <Eigen/CholmodSupport>
@@ -417,6 +418,17 @@ StaticSolveSummary SolveStatic(const HexMesh& mesh, const Material& material,
   solver.cholmod().print = 0;  // the shift below handles "not positive definite"
 #endif
   bool analysed = false;
+  const bool direct = options.linear_solver == StaticSolveOptions::LinearSolver::kCholesky;
+  // Iterative alternatives (static_solve.h): K is stored in full, so both
+  // triangles are used in the products.
+  Eigen::ConjugateGradient<SpMat, Eigen::Lower | Eigen::Upper,
+                           Eigen::IncompleteCholesky<double, Eigen::Lower, Eigen::AMDOrdering<int>>>
+      cg_ic;
+  Eigen::ConjugateGradient<SpMat, Eigen::Lower | Eigen::Upper, Eigen::DiagonalPreconditioner<double>> cg_jacobi;
+  cg_ic.setTolerance(options.cg_relative_tolerance);
+  cg_ic.setMaxIterations(options.cg_max_iterations);
+  cg_jacobi.setTolerance(options.cg_relative_tolerance);
+  cg_jacobi.setMaxIterations(options.cg_max_iterations);
 
   Eigen::VectorXd u = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(ndof));
   Eigen::VectorXd f_int;
@@ -463,7 +475,7 @@ StaticSolveSummary SolveStatic(const HexMesh& mesh, const Material& material,
       // Newton direction: K d = -r, K shifted until positive definite.
       const auto ts = Clock::now();
       SpMat& K = problem.K();
-      if (!analysed) {
+      if (!analysed && direct) {
         solver.analyzePattern(K);
         analysed = true;
       }
@@ -471,19 +483,45 @@ StaticSolveSummary SolveStatic(const HexMesh& mesh, const Material& material,
       for (int j = 0; j < num_free; ++j) mean_diag += std::abs(K.valuePtr()[problem.diagonal_slots()[j]]);
       mean_diag /= num_free;
       double shift = 0;
-      solver.factorize(K);
-      while (solver.info() != Eigen::Success && shift < 1e6 * mean_diag) {
+      Eigen::VectorXd d;
+      // One attempt at K d = -r with the current shift; false if K is not
+      // (numerically) positive definite or the solve did not converge.
+      auto attempt = [&]() -> bool {
+        if (direct) {
+          solver.factorize(K);
+          if (solver.info() != Eigen::Success) return false;
+          d = solver.solve(-r);
+          return true;
+        }
+        bool ok = false;
+        if (options.linear_solver == StaticSolveOptions::LinearSolver::kConjugateGradientJacobi) {
+          cg_jacobi.compute(K);
+          d = cg_jacobi.solve(-r);
+          summary.linear_iterations += cg_jacobi.iterations();
+          ok = cg_jacobi.info() == Eigen::Success;
+        } else {
+          cg_ic.compute(K);
+          if (cg_ic.preconditioner().info() != Eigen::Success) return false;
+          d = cg_ic.solve(-r);
+          summary.linear_iterations += cg_ic.iterations();
+          ok = cg_ic.info() == Eigen::Success;
+        }
+        return ok && d.allFinite() && r.dot(d) < 0;
+      };
+      bool solved = attempt();
+      while (!solved && shift < 1e6 * mean_diag) {
         const double next = shift == 0 ? 1e-6 * mean_diag : shift * 10;
         for (int j = 0; j < num_free; ++j) K.valuePtr()[problem.diagonal_slots()[j]] += next - shift;
         shift = next;
-        solver.factorize(K);
+        solved = attempt();
       }
-      if (solver.info() != Eigen::Success) {
+      if (!solved) {
         summary.linear_solve_seconds += Seconds(ts, Clock::now());
-        failure = "tangent stiffness could not be factorised (a part not held by the fixed region?)";
+        failure = direct ? "tangent stiffness could not be factorised (a part not held by the fixed region?)"
+                         : "conjugate gradients did not converge on the tangent stiffness (a part not held by "
+                           "the fixed region?)";
         break;
       }
-      const Eigen::VectorXd d = solver.solve(-r);
       summary.linear_solve_seconds += Seconds(ts, Clock::now());
       ++summary.newton_iterations;
 

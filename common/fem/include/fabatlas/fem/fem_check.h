@@ -53,6 +53,7 @@ struct FemCheckResult {
   double seconds = 0;            // wall time of the whole check
   double assembly_seconds = 0;   // of which element assembly
   double linear_solve_seconds = 0;  // of which sparse factorisation + solves
+  long long linear_iterations = 0;  // conjugate-gradient iterations (iterative solvers only)
   std::string reason;           // one line when !passed, empty otherwise
 };
 

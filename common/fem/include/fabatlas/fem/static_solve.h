@@ -84,6 +84,22 @@ struct StaticSolveOptions {
   double armijo_c = 1e-4;           // sufficient decrease constant
   int max_line_search_halvings = 30;
   bool verbose = false;             // log Newton progress to stderr
+
+  // How each Newton system K d = -r is solved.
+  //  kCholesky: sparse direct (CHOLMOD supernodal, else Eigen SimplicialLLT).
+  //  kConjugateGradientIncompleteCholesky: Eigen ConjugateGradient
+  //    preconditioned by an incomplete Cholesky factor (Eigen
+  //    IncompleteCholesky, AMD ordering, zero fill-in beyond K's pattern).
+  //  kConjugateGradientJacobi: Eigen ConjugateGradient with the diagonal
+  //    (Jacobi) preconditioner.
+  // The iterative solves are inexact Newton steps: they stop at
+  // ||K d + r|| <= cg_relative_tolerance * ||r||. A step that fails to reach
+  // it, or is not a descent direction, is retried with K shifted by a
+  // multiple of its mean diagonal, as for the direct solver.
+  enum class LinearSolver { kCholesky, kConjugateGradientIncompleteCholesky, kConjugateGradientJacobi };
+  LinearSolver linear_solver = LinearSolver::kCholesky;
+  double cg_relative_tolerance = 1e-8;
+  int cg_max_iterations = 20000;
 };
 
 struct StaticSolveSummary {
@@ -100,6 +116,7 @@ struct StaticSolveSummary {
   int num_free_dofs = 0;
   double assembly_seconds = 0;      // wall time in element assembly
   double linear_solve_seconds = 0;  // wall time in factorisation + solves
+  long long linear_iterations = 0;  // conjugate-gradient iterations (iterative solvers only)
   double total_seconds = 0;
 };
 
