@@ -322,6 +322,16 @@ class Worker {
           geometry::Solid a = SolidOf(*ctx, protocol::PointOf(p.point_a()), p.solid_digest_a());
           geometry::Solid b = SolidOf(*ctx, protocol::PointOf(p.point_b()), p.solid_digest_b());
           result.set_geometry_change(geometry::DeltaG(a, b));
+        } else if (p.kind() == v1::TASK_KIND_SWEPT_VOLUME) {
+          const design::Design& d = ctx->evaluator->design();
+          const design::SweptVolumeResult s = design::ComputeSweptVolume(
+              d, precompute::DesignPointOf(d, protocol::PointOf(p.point_a()).u), p.swept().node_path());
+          auto* out = result.mutable_swept_volume();
+          out->set_volume(s.volume);
+          out->set_triangles(s.triangles);
+          out->set_time_steps(s.time_steps);
+          out->set_active_voxels(s.active_voxels);
+          out->set_surface_sha256(s.surface_sha256);
         } else {
           done.set_error("unknown task kind " + std::to_string(p.kind()));
           return done;

@@ -1,11 +1,13 @@
 // Internal: the validity checks W_F of a design (seed 001 Sec. 4).
 #pragma once
 
+#include <functional>
 #include <optional>
 
 #include "expression.h"
 #include "fabatlas/design/evaluate_sample.h"
 #include "fabatlas/mesh/triangle_mesh.h"
+#include "reconfigurable.h"
 
 namespace fabatlas::design {
 
@@ -18,6 +20,11 @@ class CheckContext {
   const geometry::Solid& solid() const { return solid_; }
   const mesh::TriangleMesh& Mesh();
   double Number(const CheckSpec& spec, const std::string& name, double fallback);
+
+  // Reconfigurables: an object's solid (body frame) and the resolved
+  // transitions, provided by the sample evaluation.
+  std::function<geometry::Solid(const std::string&)> object_solid;
+  std::function<const std::vector<ResolvedTransition>&()> transitions;
 
  private:
   const Design& design_;

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <fstream>
 #include <mutex>
+#include <optional>
 #include <sstream>
 
 #include "checks.h"
@@ -13,6 +14,8 @@
 #include "fabatlas/sha256.h"
 #include "node_schema.h"
 #include "operations.h"
+#include "reconfigurable.h"
+#include "fabatlas/swept/swept_volume.h"
 
 namespace fabatlas::design {
 namespace {
@@ -44,7 +47,7 @@ std::string FileDigest(const std::filesystem::path& p) {
 class TreeEvaluation {
  public:
   TreeEvaluation(const Design& d, Scope& scope, const EvaluateOptions& options, std::vector<SubtreeRecord>& records)
-      : design_(d), scope_(scope), options_(options), records_(records) {
+      : design_(d), scope_(scope), options_(options), records_(&records) {
     grid_.voxel_size = d.voxel_size;
   }
 
@@ -53,6 +56,27 @@ class TreeEvaluation {
     std::string key, tau;
   };
 
+  // An object of a reconfigurable in its body frame, evaluated once per sample.
+  Result EvaluateObject(const std::string& name) {
+    auto it = objects_.find(name);
+    if (it != objects_.end()) return it->second;
+    const DesignObject* object = design_.FindObject(name);
+    Result r = Evaluate(object->tree, "object:" + name);
+    objects_[name] = r;
+    return r;
+  }
+
+  const geometry::GridSpec& grid() const { return grid_; }
+
+  // Where subtree records go from now on.
+  void RecordInto(std::vector<SubtreeRecord>* records) { records_ = records; }
+
+  // The transitions' motions at this sample (resolved once).
+  const std::vector<ResolvedTransition>& Transitions() {
+    if (!transitions_) transitions_ = ResolveTransitions(design_, scope_);
+    return *transitions_;
+  }
+
   // The key and topology of a subtree and its children's keys, computed from the
   // resolved arguments alone (no geometry); memoised per node.
   struct Identity {
@@ -60,6 +84,8 @@ class TreeEvaluation {
     std::vector<std::string> children;
   };
   const Identity& IdentityOf(const Node& node) {
+    // An object node is its object's tree (as in Evaluate).
+    if (node.op == "object") return IdentityOf(design_.FindObject(node.args.at("object").text)->tree);
     auto it = identities_.find(&node);
     if (it != identities_.end()) return it->second;
     ResolvedArgs args = Resolve(node);
@@ -72,6 +98,16 @@ class TreeEvaluation {
     tau += ")";
     std::string rho = "voxel=" + Format(design_.voxel_size) + ";" + args.Canonical();
     for (const auto* c : kids) rho += "child=" + c->key + ";";
+    if (node.op == "carve_swept") {  // the same extras as Evaluate
+      const Identity& moving = IdentityOf(design_.FindObject(args.Text("moving"))->tree);
+      const ResolvedTransition* transition = nullptr;
+      for (const auto& t : Transitions())
+        if (t.name == args.Text("transition")) transition = &t;
+      tau += "[moving:" + moving.topology + "]";
+      rho += "moving=" + moving.key + ";motion=" + transition->canonical[ObjectIndex(design_, args.Text("moving"))] + ";";
+      if (!args.Text("frame").empty())
+        rho += "frame_motion=" + transition->canonical[ObjectIndex(design_, args.Text("frame"))] + ";";
+    }
     id.key = Sha256Hex(tau + "|" + rho);
     id.topology = Sha256Hex(tau);
     for (const auto* c : kids) id.children.push_back(c->key);
@@ -79,6 +115,7 @@ class TreeEvaluation {
   }
 
   Result Evaluate(const Node& node, const std::string& path) {
+    if (node.op == "object") return EvaluateObject(node.args.at("object").text);
     // Previews look a subtree up before evaluating its children, so a cached
     // subtree costs nothing below it (seed 001 Sec. 6.2: traversal stops at
     // nodes in H).
@@ -93,7 +130,7 @@ class TreeEvaluation {
         record.children = id.children;
         record.from_cache = true;
         record.bytes = hit->MemoryBytes();
-        records_.push_back(std::move(record));
+        records_->push_back(std::move(record));
         return {*hit, id.key, id.topology};
       }
     }
@@ -109,6 +146,23 @@ class TreeEvaluation {
     tau += ")";
     std::string rho = "voxel=" + Format(design_.voxel_size) + ";" + args.Canonical();
     for (const auto& c : children) rho += "child=" + c.key + ";";
+    // carve_swept also depends on the moving object's geometry and on the
+    // resolved motions of the moving and frame objects.
+    Result moving;
+    const ResolvedTransition* transition = nullptr;
+    std::size_t moving_index = 0, frame_index = 0;
+    bool has_frame = false;
+    if (node.op == "carve_swept") {
+      moving = EvaluateObject(args.Text("moving"));
+      for (const auto& t : Transitions())
+        if (t.name == args.Text("transition")) transition = &t;
+      moving_index = ObjectIndex(design_, args.Text("moving"));
+      has_frame = !args.Text("frame").empty();
+      if (has_frame) frame_index = ObjectIndex(design_, args.Text("frame"));
+      tau += "[moving:" + moving.tau + "]";
+      rho += "moving=" + moving.key + ";motion=" + transition->canonical[moving_index] + ";";
+      if (has_frame) rho += "frame_motion=" + transition->canonical[frame_index] + ";";
+    }
 
     SubtreeRecord record;
     record.path = path;
@@ -128,12 +182,21 @@ class TreeEvaluation {
       std::vector<geometry::Solid> inputs;
       for (auto& c : children) inputs.push_back(std::move(c.solid));
       auto start = Clock::now();
-      out.solid = ApplyOperation(node, args, inputs, grid_, design_.file.parent_path());
+      if (node.op == "carve_swept") {
+        geometry::Solid target = inputs.size() == 1 ? inputs[0] : inputs[0];
+        for (std::size_t i = 1; i < inputs.size(); ++i) target = geometry::Union(target, inputs[i]);
+        const swept::RigidMotion still;
+        out.solid = CarveSwept(target, moving.solid, transition->motions[moving_index],
+                               has_frame ? transition->motions[frame_index] : still, args.Number("offset", 0),
+                               static_cast<int>(args.Number("time_steps", 2)), grid_, node.place);
+      } else {
+        out.solid = ApplyOperation(node, args, inputs, grid_, design_.file.parent_path());
+      }
       record.seconds = Since(start);
       if (options_.cache) options_.cache->Offer(record.key, out.solid, record.seconds);
     }
     record.bytes = out.solid.MemoryBytes();
-    records_.push_back(std::move(record));
+    records_->push_back(std::move(record));
     return out;
   }
 
@@ -182,9 +245,11 @@ class TreeEvaluation {
   const Design& design_;
   Scope& scope_;
   const EvaluateOptions& options_;
-  std::vector<SubtreeRecord>& records_;
+  std::vector<SubtreeRecord>* records_;
   geometry::GridSpec grid_;
   std::map<const Node*, Identity> identities_;
+  std::map<std::string, Result> objects_;
+  std::optional<std::vector<ResolvedTransition>> transitions_;
 };
 
 }  // namespace
@@ -249,8 +314,9 @@ SampleResult EvaluateSample(const Design& design, const Point& u, const Evaluate
     auto tree_start = Clock::now();
     CheckOutcome geometry_check{"geometry", true, "", "", 0};
     std::string geometry_failure = kNoGeometry;
+    // Kept for the checks: collision_free evaluates the objects (cached).
+    TreeEvaluation tree(design, scope, options, r.subtrees);
     try {
-      TreeEvaluation tree(design, scope, options, r.subtrees);
       r.solid = tree.Evaluate(design.tree, "root").solid;
       if (r.solid.empty()) {
         geometry_check.passed = false;
@@ -281,6 +347,12 @@ SampleResult EvaluateSample(const Design& design, const Point& u, const Evaluate
     if (geometry_check.passed && options.run_checks) {
       auto checks_start = Clock::now();
       CheckContext context(design, r.solid, scope);
+      // Objects first evaluated by a check are recorded apart: the subtree
+      // records stay the tree's, root last.
+      std::vector<SubtreeRecord> check_records;
+      tree.RecordInto(&check_records);
+      context.object_solid = [&](const std::string& name) { return tree.EvaluateObject(name).solid; };
+      context.transitions = [&]() -> const std::vector<ResolvedTransition>& { return tree.Transitions(); };
       for (const CheckSpec& spec : design.checks) {
         CheckOutcome outcome = RunCheck(spec, context);
         if (!outcome.passed) fail(outcome.failure, outcome.reason);
@@ -313,6 +385,85 @@ SampleResult EvaluateSample(const Design& design, const Point& u, const Evaluate
   if (!options.keep_solid) r.solid = geometry::Solid();
   r.timings["total"] = Since(start);
   return r;
+}
+
+
+SweptVolumeResult ComputeSweptVolume(const Design& design, const Point& u, const std::string& node_path) {
+  const std::string where = design.file.string() + ": swept volume task '" + node_path + "'";
+  // Find the node: "root/i/j" or "object:NAME/i/j".
+  const Node* node = nullptr;
+  std::string rest;
+  if (node_path.rfind("root", 0) == 0) {
+    node = &design.tree;
+    rest = node_path.substr(4);
+  } else if (node_path.rfind("object:", 0) == 0) {
+    const std::size_t slash = node_path.find('/');
+    const DesignObject* object = design.FindObject(node_path.substr(7, slash == std::string::npos ? std::string::npos : slash - 7));
+    if (object) node = &object->tree;
+    rest = slash == std::string::npos ? "" : node_path.substr(slash);
+  }
+  while (node && !rest.empty()) {
+    if (rest[0] != '/') {
+      node = nullptr;
+      break;
+    }
+    std::size_t next = rest.find('/', 1);
+    const std::string index = rest.substr(1, next == std::string::npos ? std::string::npos : next - 1);
+    if (index.empty() || index.find_first_not_of("0123456789") != std::string::npos || index.size() > 6 ||
+        std::stoul(index) >= node->children.size()) {
+      node = nullptr;
+      break;
+    }
+    node = &node->children[std::stoul(index)];
+    rest = next == std::string::npos ? "" : rest.substr(next);
+  }
+  if (!node || node->op != "carve_swept") throw InputError(where + ": no carve_swept node at that path");
+
+  ConstraintSolveSummary solve = SolveConstraints(design, u);
+  if (!solve.satisfiable) throw InputError(where + ": constraint '" + solve.worst_constraint + "' is not satisfiable here");
+  Scope scope(ParameterNames(design));
+  for (const auto& [name, value] : solve.values) scope.Set(name, value);
+  std::vector<SubtreeRecord> records;
+  EvaluateOptions options;
+  TreeEvaluation tree(design, scope, options, records);
+  auto text = [&](const char* key) {
+    auto it = node->args.find(key);
+    return it == node->args.end() ? std::string() : it->second.text;
+  };
+  auto number = [&](const char* key, double fallback) {
+    auto it = node->args.find(key);
+    return it == node->args.end() ? fallback : Expression(it->second.text, scope, it->second.place).Evaluate();
+  };
+  try {
+    const geometry::Solid moving = tree.EvaluateObject(text("moving")).solid;
+    const ResolvedTransition* transition = nullptr;
+    for (const auto& t : tree.Transitions())
+      if (t.name == text("transition")) transition = &t;
+    const swept::RigidMotion still;
+    const swept::RigidMotion& f_frame =
+        text("frame").empty() ? still : transition->motions[ObjectIndex(design, text("frame"))];
+    swept::SweptVolumeSummary summary;
+    const mesh::TriangleMesh surface =
+        SweptCutter(moving, transition->motions[ObjectIndex(design, text("moving"))], f_frame, number("offset", 0),
+                    static_cast<int>(number("time_steps", 2)), tree.grid(), node->place, &summary);
+    SweptVolumeResult r;
+    r.volume = swept::EnclosedVolume(surface);
+    r.triangles = surface.triangles.size();
+    r.time_steps = summary.time_steps;
+    r.active_voxels = summary.active_voxels;
+    std::string bytes;
+    for (const auto& v : surface.vertices) bytes.append(reinterpret_cast<const char*>(v.data()), sizeof(double) * 3);
+    for (const auto& t : surface.triangles) {
+      for (int k = 0; k < 3; ++k) {
+        const std::int32_t i = t[k];
+        bytes.append(reinterpret_cast<const char*>(&i), sizeof i);
+      }
+    }
+    r.surface_sha256 = Sha256Hex(bytes);
+    return r;
+  } catch (const SampleFailure& e) {
+    throw InputError(where + ": " + e.what());
+  }
 }
 
 double DeltaG(const SampleResult& a, const SampleResult& b) {

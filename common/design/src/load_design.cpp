@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <functional>
 #include <set>
 #include <sstream>
 
@@ -22,6 +23,18 @@ std::string SourcePlace::str() const {
 const ExposedParameter* Design::FindExposed(const std::string& name) const {
   for (const auto& p : exposed)
     if (p.name == name) return &p;
+  return nullptr;
+}
+
+const DesignObject* Design::FindObject(const std::string& name) const {
+  for (const auto& o : objects)
+    if (o.name == name) return &o;
+  return nullptr;
+}
+
+const Transition* Design::FindTransition(const std::string& name) const {
+  for (const auto& t : transitions)
+    if (t.name == name) return &t;
   return nullptr;
 }
 
@@ -210,6 +223,156 @@ void CheckUnique(const Reader& r, std::set<std::string>& seen, const std::string
   if (!seen.insert(name).second) r.Fail(at, "parameter '" + name + "' is declared twice");
 }
 
+
+// A list of points each with `n` expressions (motions: [x, y, z] or
+// [ax, ay, az, degrees]); every expression must compile.
+void LintTuples(const Argument& a, std::size_t n, const std::string& what, Scope& scope) {
+  if (a.kind != Argument::Kind::kList) throw InputError(a.place.str() + ": " + what + " must be a list");
+  for (const auto& p : a.items) {
+    if (p.kind != Argument::Kind::kList || p.items.size() != n)
+      throw InputError(p.place.str() + ": " + what + " needs entries of " + std::to_string(n) + " numbers");
+    for (const auto& x : p.items) {
+      if (x.kind != Argument::Kind::kScalar) throw InputError(x.place.str() + ": " + what + " must hold numbers or expressions");
+      Expression(x.text, scope, x.place);
+    }
+  }
+}
+
+// The objects, states and transitions of a reconfigurable (seed 004).
+void ReadReconfigurable(const Reader& r, const YAML::Node& root, Design& d, Scope& scope,
+                        const std::filesystem::path& dir) {
+  std::set<std::string> object_names;
+  if (root["objects"]) {
+    const YAML::Node objects = root["objects"];
+    if (!objects.IsMap() || objects.size() == 0) r.Fail(objects, "'objects' must be a map of name: tree node");
+    for (auto it = objects.begin(); it != objects.end(); ++it) {
+      DesignObject o;
+      o.name = it->first.Scalar();
+      o.place = r.At(it->first);
+      if (!object_names.insert(o.name).second) r.Fail(it->first, "object '" + o.name + "' is declared twice");
+      o.tree = ReadNode(r, it->second, scope, dir, 1);
+      d.objects.push_back(std::move(o));
+    }
+  }
+  std::set<std::string> states;
+  if (root["states"]) {
+    const YAML::Node list = root["states"];
+    if (!list.IsSequence() || list.size() == 0) r.Fail(list, "'states' must be a list of state names");
+    for (const auto& s : list) {
+      std::string name = r.String(s, "state");
+      if (!states.insert(name).second) r.Fail(s, "state '" + name + "' is listed twice");
+      d.states.push_back(name);
+    }
+  }
+  if (root["transitions"]) {
+    const YAML::Node list = root["transitions"];
+    if (!list.IsSequence()) r.Fail(list, "'transitions' must be a list");
+    if (d.states.empty()) r.Fail(list, "transitions need a 'states' list");
+    std::set<std::string> reached = {d.states.front()}, names;
+    for (const auto& y : list) {
+      if (!y.IsMap()) r.Fail(y, "a transition is a map with from, to and motions");
+      r.OnlyKeys(y, {"name", "from", "to", "motions"}, "transition");
+      Transition t;
+      t.place = r.At(y);
+      if (!y["from"] || !y["to"]) r.Fail(y, "a transition needs 'from' and 'to'");
+      t.from = r.String(y["from"], "from");
+      t.to = r.String(y["to"], "to");
+      if (!states.count(t.from)) r.Fail(y["from"], "unknown state '" + t.from + "'");
+      if (!states.count(t.to)) r.Fail(y["to"], "unknown state '" + t.to + "'");
+      if (!reached.count(t.from))
+        r.Fail(y["from"], "state '" + t.from + "' is not the first state nor reached by an earlier transition");
+      reached.insert(t.to);
+      t.name = y["name"] ? r.String(y["name"], "name") : t.from + "->" + t.to;
+      if (!names.insert(t.name).second) r.Fail(y, "transition '" + t.name + "' is declared twice");
+      if (y["motions"]) {
+        const YAML::Node motions = y["motions"];
+        if (!motions.IsMap()) r.Fail(motions, "'motions' must be a map of object: motion");
+        for (auto it = motions.begin(); it != motions.end(); ++it) {
+          ObjectMotion m;
+          m.object = it->first.Scalar();
+          m.place = r.At(it->first);
+          if (!object_names.count(m.object)) r.Fail(it->first, "unknown object '" + m.object + "'");
+          const YAML::Node spec = it->second;
+          if (!spec.IsMap()) r.Fail(spec, "the motion of '" + m.object + "' must be a map");
+          r.OnlyKeys(spec, {"translation", "rotation", "pivot"}, "motion of '" + m.object + "'");
+          if (spec["translation"]) {
+            m.translation = r.ToArgument(spec["translation"]);
+            m.has_translation = true;
+            LintTuples(m.translation, 3, "'translation'", scope);
+            std::size_t n = m.translation.items.size();
+            if (n != 2 && n != 4)
+              r.Fail(spec["translation"], "'translation' needs 2 points (a line) or 4 Bezier control points");
+          }
+          if (spec["rotation"]) {
+            m.rotation = r.ToArgument(spec["rotation"]);
+            m.has_rotation = true;
+            LintTuples(m.rotation, 4, "'rotation' keys [axis x, axis y, axis z, degrees]", scope);
+            if (m.rotation.items.empty()) r.Fail(spec["rotation"], "'rotation' needs at least one key");
+          }
+          if (spec["pivot"]) {
+            m.pivot = r.ToArgument(spec["pivot"]);
+            m.has_pivot = true;
+            Argument wrapped;
+            wrapped.kind = Argument::Kind::kList;
+            wrapped.items = {m.pivot};
+            LintTuples(wrapped, 3, "'pivot'", scope);
+          }
+          t.motions.push_back(std::move(m));
+        }
+      }
+      d.transitions.push_back(std::move(t));
+    }
+  }
+}
+
+// Every `object` and `carve_swept` node names a declared object and
+// transition, and no object contains itself (through object nodes or the
+// moving object of a carve).
+void LintReferences(const Design& d) {
+  std::map<std::string, std::set<std::string>> uses;  // object -> objects its tree needs
+  std::function<void(const Node&, std::set<std::string>&)> walk = [&](const Node& n, std::set<std::string>& out) {
+    auto text = [&](const char* key) -> const Argument* {
+      auto it = n.args.find(key);
+      return it == n.args.end() ? nullptr : &it->second;
+    };
+    if (n.op == "object") {
+      const Argument* a = text("object");
+      if (!d.FindObject(a->text)) throw InputError(a->place.str() + ": unknown object '" + a->text + "'");
+      out.insert(a->text);
+    }
+    if (n.op == "carve_swept") {
+      const Argument* moving = text("moving");
+      if (!d.FindObject(moving->text)) throw InputError(moving->place.str() + ": unknown object '" + moving->text + "'");
+      out.insert(moving->text);
+      if (const Argument* frame = text("frame")) {
+        if (!d.FindObject(frame->text)) throw InputError(frame->place.str() + ": unknown object '" + frame->text + "'");
+        if (frame->text == moving->text)
+          throw InputError(frame->place.str() + ": carve_swept 'frame' and 'moving' are the same object");
+      }
+      const Argument* t = text("transition");
+      if (!d.FindTransition(t->text)) throw InputError(t->place.str() + ": unknown transition '" + t->text + "'");
+    }
+    for (const auto& c : n.children) walk(c, out);
+  };
+  for (const auto& o : d.objects) walk(o.tree, uses[o.name]);
+  std::set<std::string> root_uses;
+  walk(d.tree, root_uses);
+  // Depth-first search for a cycle among objects.
+  std::map<std::string, int> state;  // 0 new, 1 on the stack, 2 done
+  std::function<void(const std::string&)> visit = [&](const std::string& name) {
+    state[name] = 1;
+    for (const auto& next : uses[name]) {
+      if (state[next] == 1)
+        throw InputError(d.FindObject(name)->place.str() + ": object '" + name + "' depends on itself through '" +
+                         next + "'");
+      if (state[next] == 0) visit(next);
+    }
+    state[name] = 2;
+  };
+  for (const auto& o : d.objects)
+    if (state[o.name] == 0) visit(o.name);
+}
+
 }  // namespace
 
 Design LoadDesign(const std::filesystem::path& path) {
@@ -236,7 +399,8 @@ Design ParseDesign(const std::string& text, const std::filesystem::path& path) {
                      ": malformed YAML: " + e.msg);
   }
   if (!root.IsMap()) throw InputError(file + ": a design file must be a YAML map (name, parameters, tree, ...)");
-  r.OnlyKeys(root, {"name", "voxel_size", "parameters", "variables", "constraints", "tree", "checks", "properties", "description"},
+  r.OnlyKeys(root, {"name", "voxel_size", "parameters", "variables", "constraints", "tree", "checks", "properties", "description",
+                   "objects", "states", "transitions"},
              "design");
 
   d.name = root["name"] ? r.String(root["name"], "name") : path.stem().string();
@@ -338,8 +502,10 @@ Design ParseDesign(const std::string& text, const std::filesystem::path& path) {
     }
   }
 
+  ReadReconfigurable(r, root, d, scope, path.parent_path());
   if (!root["tree"]) r.Fail(root, "design has no 'tree'");
   d.tree = ReadNode(r, root["tree"], scope, path.parent_path(), 0);
+  LintReferences(d);
 
   if (root["checks"]) {
     if (!root["checks"].IsSequence()) r.Fail(root["checks"], "'checks' must be a list");

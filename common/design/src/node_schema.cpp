@@ -41,6 +41,19 @@ const std::map<std::string, OpSchema>& OperationSchemas() {
       {"shell", {{{"thickness", S::kNumber}}, 1, -1}},
       {"linear_array", {{{"count", S::kNumber}, {"step", S::kVec3}}, 1, -1}},
       {"polar_array", {{{"count", S::kNumber}, {"angle", S::kNumber, false}}, 1, -1}},
+      // Reconfigurables (seed 004): an object of the design, in its body
+      // frame; and the children minus the eps-offset swept volume of object
+      // `moving` along `transition`, observed in object `frame`'s body frame
+      // (the world if no frame is given).
+      {"object", {{{"object", S::kString}}, 0, 0}},
+      {"carve_swept",
+       {{{"moving", S::kString},
+         {"transition", S::kString},
+         {"frame", S::kString, false},
+         {"offset", S::kNumber, false},
+         {"time_steps", S::kNumber, false}},
+        1,
+        -1}},
   };
   return schemas;
 }
@@ -64,6 +77,7 @@ const std::map<std::string, OpSchema>& CheckSchemas() {
          {"max_strain", S::kNumber, false}},
         0,
         0}},
+      {"collision_free", {{{"time_steps", S::kNumber, false}, {"clearance", S::kNumber, false}}, 0, 0}},
   };
   return schemas;
 }

@@ -53,6 +53,7 @@ std::string TaskKey(const v1::TaskPayload& payload, const std::string& evaluatio
   text += evaluation_digest + "\n" + std::to_string(subdivisions) + "\n" + kCodeVersion + "\n";
   AppendKey(text, payload.point_a());
   if (payload.kind() == v1::TASK_KIND_GEOMETRY_CHANGE) AppendKey(text, payload.point_b());
+  if (payload.kind() == v1::TASK_KIND_SWEPT_VOLUME) text += payload.swept().node_path() + "\n";
   return Sha256Hex(text);
 }
 
@@ -81,6 +82,8 @@ v1::TaskResult QuarantineResult(v1::TaskKind kind) {
     r.set_geometry_change(1.0);
   } else if (kind == v1::TASK_KIND_NOOP) {
     r.set_noop(true);
+  } else if (kind == v1::TASK_KIND_SWEPT_VOLUME) {
+    r.mutable_swept_volume();  // empty digest: no cutter
   } else {
     r.mutable_sample()->set_valid(false);
     r.mutable_sample()->set_failure_type("quarantined");

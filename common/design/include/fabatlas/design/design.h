@@ -84,6 +84,40 @@ struct CheckSpec {
   SourcePlace place;
 };
 
+// Reconfigurables (seed 004, section 3): named objects moved by keyframed
+// rigid motions along the transitions of a state graph.
+//
+// An object is a tree modelled in its pose in the first state (its body
+// frame). A motion maps body to world coordinates for t in [0, 1]:
+//   f(t) x = R(t) (x - pivot) + pivot + T(t)
+// with T a cubic Bezier curve (4 control points; 2 points = a straight line
+// at constant speed) and R the slerp between rotation keys evenly spaced in t
+// (each key [axis_x, axis_y, axis_z, degrees], absolute rotations). Every
+// number is an expression; they are resolved per sample.
+struct ObjectMotion {
+  std::string object;
+  Argument translation;  // list of 2 or 4 [x, y, z]; empty list = none
+  Argument rotation;     // list of [ax, ay, az, deg]; empty list = none
+  Argument pivot;        // [x, y, z]; empty = origin
+  bool has_translation = false, has_rotation = false, has_pivot = false;
+  SourcePlace place;
+};
+
+// An edge of the state graph. Objects without a motion stay where they are
+// in `from` (the pose the transitions leading there left them in).
+struct Transition {
+  std::string name;  // defaults to "from->to"
+  std::string from, to;
+  std::vector<ObjectMotion> motions;
+  SourcePlace place;
+};
+
+struct DesignObject {
+  std::string name;
+  Node tree;
+  SourcePlace place;
+};
+
 struct Design {
   std::filesystem::path file;               // where it was loaded from
   std::string name;
@@ -94,9 +128,17 @@ struct Design {
   Node tree;
   std::vector<CheckSpec> checks;
   std::vector<std::string> properties;      // volume, area, bbox
+  // Reconfigurables (optional; see ObjectMotion). Transitions are listed so
+  // that each one's `from` state is the first state or the `to` of an earlier
+  // transition (the state poses are propagated in that order).
+  std::vector<DesignObject> objects;
+  std::vector<std::string> states;
+  std::vector<Transition> transitions;
   std::string canonical_text;               // the file's bytes, for hashing
 
   const ExposedParameter* FindExposed(const std::string& name) const;
+  const DesignObject* FindObject(const std::string& name) const;
+  const Transition* FindTransition(const std::string& name) const;
 };
 
 // Reads and lints a design file. Throws fabatlas::InputError with a one-line

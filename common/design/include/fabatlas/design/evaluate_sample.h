@@ -23,6 +23,8 @@ inline constexpr const char* kThinParts = "thin_parts";
 inline constexpr const char* kUnstable = "unstable";
 inline constexpr const char* kTooMuchMaterial = "too_much_material";
 inline constexpr const char* kTooMuchDeformation = "too_much_deformation";  // fem check
+inline constexpr const char* kCollision = "collision";                         // collision_free check
+inline constexpr const char* kTooLittleClearance = "too_little_clearance";     // collision_free check
 
 struct CheckOutcome {
   std::string name;     // check name (constraints, geometry, then the design's)
@@ -79,6 +81,26 @@ struct SampleResult {
 // make the sample invalid with a reason; InputError is thrown only for
 // problems of the design itself (e.g. a resource limit, an unreadable mesh).
 SampleResult EvaluateSample(const Design& design, const Point& u, const EvaluateOptions& options = {});
+
+// One carve_swept node's cutter on its own (worker task kind
+// TASK_KIND_SWEPT_VOLUME, common/protocol/fabatlas/v1/tasks.proto): at point
+// u, the eps-offset swept volume of the node's moving object along its
+// transition, in the frame object's body coordinates (seed 004, Sec. 6.7).
+struct SweptVolumeResult {
+  double volume = 0;              // mm^3 enclosed by the offset surface
+  std::size_t triangles = 0;      // of the offset surface
+  int time_steps = 0;             // time samples used
+  std::size_t active_voxels = 0;  // of the sparse swept distance grid
+  // SHA-256 (hex) of the surface: vertex coordinates as little-endian
+  // doubles, then triangle indices as little-endian int32.
+  std::string surface_sha256;
+};
+
+// `node_path` addresses the node as subtree records do: "root/1/0" in the
+// tree, "object:NAME/0" in an object's tree. Throws InputError for a path
+// that names no carve_swept node, unsatisfiable constraints, or a value that
+// makes the sweep impossible (the one-line reason).
+SweptVolumeResult ComputeSweptVolume(const Design& design, const Point& u, const std::string& node_path);
 
 // ΔG(u1,u2) = |V(G1) xor V(G2)| / |V(G1) union V(G2)| (seed 001 Eq. 2), with
 // invalid samples taken as empty: ΔG(invalid, invalid) = 0 and
