@@ -44,6 +44,12 @@ root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 if [ -f "$root/package.json" ]; then
   if [ ! -d "$root/node_modules" ] || [ "$root/package-lock.json" -nt "$root/node_modules/.package-lock.json" ]; then
     echo "install-deps: installing npm packages"
-    (cd "$root" && npm ci --no-audit --no-fund --loglevel=error)
+    # npm ci refuses a lock file that lacks any platform's optional package;
+    # when the registry mirror changes under us, fall back to a resolving
+    # install (same pinned top-level versions) rather than fail the set-up.
+    if ! (cd "$root" && npm ci --no-audit --no-fund --loglevel=error); then
+      echo "install-deps: npm ci failed; resolving with npm install instead" >&2
+      (cd "$root" && npm install --no-audit --no-fund --no-save --loglevel=error)
+    fi
   fi
 fi
