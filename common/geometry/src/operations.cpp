@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <memory>
 #include <numbers>
 
 #include "solid_impl.h"
@@ -49,6 +50,38 @@ FloatGrid::ConstPtr OnSpecOf(const Solid& a, const Solid& b) {
   return Rebuild(*b.impl()->grid, target).impl()->grid;
 }
 
+// Builds a narrow-band level set leaf by leaf, in parallel over leaves (TBB):
+// `fill(i, emit)` visits the candidate voxels of the leaf at origins[i] and
+// calls emit(pos, v, candidate). A voxel becomes active with value v when it
+// is a candidate and |v| is inside the band half width `bg` (world units);
+// every other visited voxel is stored inactive at +bg or -bg by the sign of
+// v. Leaves with no active voxel are dropped; the result is sign-flooded.
+// `fill` runs concurrently for different i and must be thread-safe.
+template <class Fill>
+Solid AssembleNarrowBand(const GridSpec& spec, double bg, const std::vector<openvdb::Coord>& origins, Fill fill) {
+  std::vector<LeafT*> out_leaves(origins.size(), nullptr);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, origins.size()), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t i = r.begin(); i != r.end(); ++i) {
+      auto leaf = std::make_unique<LeafT>(origins[i], static_cast<float>(bg), false);
+      bool any = false;
+      fill(i, [&](openvdb::Index pos, double v, bool candidate) {
+        if (candidate && std::abs(v) < bg) {
+          leaf->setValueOn(pos, static_cast<float>(v));
+          any = true;
+        } else {
+          leaf->setValueOff(pos, static_cast<float>(v > 0 ? bg : -bg));
+        }
+      });
+      if (any) out_leaves[i] = leaf.release();
+    }
+  });
+  FloatGrid::Ptr out = EmptyGrid(spec);
+  for (LeafT* leaf : out_leaves)
+    if (leaf) out->tree().addLeaf(leaf);
+  openvdb::tools::signedFloodFill(out->tree());
+  return detail::MakeSolid(out, spec);
+}
+
 // Resample s after mapping its geometry by `post` (applied after s's
 // canonical index-to-world map). For rigid maps and enlargements the signed
 // distances themselves are interpolated (triquadratic) at the new voxel
@@ -82,35 +115,15 @@ Solid MapAndRebuild(const Solid& s, Fn post, double scale = 1.0) {
                                      openvdb::tools::NN_FACE_EDGE_VERTEX, openvdb::tools::IGNORE_TILES);
   std::vector<openvdb::MaskTree::LeafNodeType*> mleaves;
   mask->tree().getNodes(mleaves);
-  std::vector<LeafT*> out_leaves(mleaves.size(), nullptr);
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, mleaves.size()), [&](const tbb::blocked_range<size_t>& r) {
-    auto acc = in.getConstAccessor();  // one accessor per task (not thread-safe)
-    for (size_t i = r.begin(); i != r.end(); ++i) {
-      auto* leaf = new LeafT(mleaves[i]->origin(), static_cast<float>(bg), false);
-      bool any = false;
-      for (auto it = mleaves[i]->cbeginValueOn(); it; ++it) {
-        const openvdb::Vec3d w = out_xform->indexToWorld(it.getCoord());
-        const openvdb::Vec3d src_index = xform->worldToIndex(w);
-        const double v = scale * openvdb::tools::QuadraticSampler::sample(acc, src_index);
-        if (std::abs(v) < bg) {
-          leaf->setValueOn(it.pos(), static_cast<float>(v));
-          any = true;
-        } else {
-          leaf->setValueOff(it.pos(), static_cast<float>(v > 0 ? bg : -bg));
-        }
-      }
-      if (any) {
-        out_leaves[i] = leaf;
-      } else {
-        delete leaf;
-      }
+  std::vector<openvdb::Coord> origins;
+  for (const auto* m : mleaves) origins.push_back(m->origin());
+  return AssembleNarrowBand(spec, bg, origins, [&](size_t i, auto&& emit) {
+    auto acc = in.getConstAccessor();  // one accessor per leaf (not thread-safe)
+    for (auto it = mleaves[i]->cbeginValueOn(); it; ++it) {
+      const openvdb::Vec3d w = out_xform->indexToWorld(it.getCoord());
+      emit(it.pos(), scale * openvdb::tools::QuadraticSampler::sample(acc, xform->worldToIndex(w)), true);
     }
   });
-  FloatGrid::Ptr out = EmptyGrid(spec);
-  for (LeafT* leaf : out_leaves)
-    if (leaf) out->tree().addLeaf(leaf);
-  openvdb::tools::signedFloodFill(out->tree());
-  return detail::MakeSolid(out, spec);
 }
 
 bool IsLatticeShift(const Vec3& t, double vs, openvdb::Coord& shift) {
@@ -226,32 +239,12 @@ Solid Offset(const Solid& s, double distance) {
   const double bg = spec.half_width_voxels * vs;
   std::vector<LeafT*> wide_leaves;
   wide->tree().getNodes(wide_leaves);
-  std::vector<LeafT*> out_leaves(wide_leaves.size(), nullptr);
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, wide_leaves.size()), [&](const tbb::blocked_range<size_t>& r) {
-    for (size_t i = r.begin(); i != r.end(); ++i) {
-      auto* leaf = new LeafT(wide_leaves[i]->origin(), static_cast<float>(bg), false);
-      bool any = false;
-      for (auto it = wide_leaves[i]->cbeginValueAll(); it; ++it) {
-        const double v = static_cast<double>(*it) - distance;
-        if (it.isValueOn() && std::abs(v) < bg) {
-          leaf->setValueOn(it.pos(), static_cast<float>(v));
-          any = true;
-        } else {
-          leaf->setValueOff(it.pos(), static_cast<float>(v > 0 ? bg : -bg));
-        }
-      }
-      if (any) {
-        out_leaves[i] = leaf;
-      } else {
-        delete leaf;
-      }
-    }
+  std::vector<openvdb::Coord> origins;
+  for (const auto* l : wide_leaves) origins.push_back(l->origin());
+  return AssembleNarrowBand(spec, bg, origins, [&](size_t i, auto&& emit) {
+    for (auto it = wide_leaves[i]->cbeginValueAll(); it; ++it)
+      emit(it.pos(), static_cast<double>(*it) - distance, it.isValueOn());
   });
-  FloatGrid::Ptr out = EmptyGrid(spec);
-  for (LeafT* leaf : out_leaves)
-    if (leaf) out->tree().addLeaf(leaf);
-  openvdb::tools::signedFloodFill(out->tree());
-  return detail::MakeSolid(out, spec);
 }
 
 Solid Shell(const Solid& s, double thickness) {

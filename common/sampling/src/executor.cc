@@ -34,45 +34,46 @@ ThreadPoolExecutor::ThreadPoolExecutor(int threads) : threads_(threads) {
 
 ThreadPoolExecutor::~ThreadPoolExecutor() = default;
 
-std::vector<SampleOutcome> ThreadPoolExecutor::RunSampleTasks(const std::vector<SampleTask>& tasks,
-                                                              SampleEvaluator& evaluator,
-                                                              std::vector<TaskTiming>* timings) {
-  std::vector<SampleOutcome> results(tasks.size());
-  std::vector<TaskTiming> local(tasks.size());
-  arena_->arena.execute([&] {
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, tasks.size(), 1),
-                      [&](const tbb::blocked_range<size_t>& r) {
-                        for (size_t i = r.begin(); i != r.end(); ++i) {
-                          const double c0 = ThreadCpuSeconds(), w0 = WallSeconds();
-                          results[i] = evaluator.EvaluateSample(tasks[i].point);
-                          results[i].cpu_seconds = ThreadCpuSeconds() - c0;
-                          local[i].wall_seconds = WallSeconds() - w0;
-                        }
-                      });
+namespace {
+// Runs run(i) for every i in [0, n) on the executor's arena, one task per
+// TBB chunk, and stores each call's thread CPU time in results[i].cpu_seconds
+// and its wall time in the timings.
+template <class Result, class Run>
+std::vector<Result> RunTimed(tbb::task_arena& arena, size_t n, Run run, std::vector<TaskTiming>* timings) {
+  std::vector<Result> results(n);
+  std::vector<TaskTiming> local(n);
+  arena.execute([&] {
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1), [&](const tbb::blocked_range<size_t>& r) {
+      for (size_t i = r.begin(); i != r.end(); ++i) {
+        const double c0 = ThreadCpuSeconds(), w0 = WallSeconds();
+        run(i, results[i]);
+        results[i].cpu_seconds = ThreadCpuSeconds() - c0;
+        local[i].wall_seconds = WallSeconds() - w0;
+      }
+    });
   });
   if (timings) *timings = std::move(local);
   return results;
+}
+}  // namespace
+
+std::vector<SampleOutcome> ThreadPoolExecutor::RunSampleTasks(const std::vector<SampleTask>& tasks,
+                                                              SampleEvaluator& evaluator,
+                                                              std::vector<TaskTiming>* timings) {
+  return RunTimed<SampleOutcome>(
+      arena_->arena, tasks.size(),
+      [&](size_t i, SampleOutcome& out) { out = evaluator.EvaluateSample(tasks[i].point); }, timings);
 }
 
 std::vector<GeometryChangeResult> ThreadPoolExecutor::RunGeometryChangeTasks(
     const std::vector<GeometryChangeTask>& tasks, SampleEvaluator& evaluator,
     std::vector<TaskTiming>* timings) {
-  std::vector<GeometryChangeResult> results(tasks.size());
-  std::vector<TaskTiming> local(tasks.size());
-  arena_->arena.execute([&] {
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, tasks.size(), 1),
-                      [&](const tbb::blocked_range<size_t>& r) {
-                        for (size_t i = r.begin(); i != r.end(); ++i) {
-                          const double c0 = ThreadCpuSeconds(), w0 = WallSeconds();
-                          results[i].geometry_change =
-                              evaluator.GeometryChange(tasks[i].point_a, tasks[i].point_b);
-                          results[i].cpu_seconds = ThreadCpuSeconds() - c0;
-                          local[i].wall_seconds = WallSeconds() - w0;
-                        }
-                      });
-  });
-  if (timings) *timings = std::move(local);
-  return results;
+  return RunTimed<GeometryChangeResult>(
+      arena_->arena, tasks.size(),
+      [&](size_t i, GeometryChangeResult& out) {
+        out.geometry_change = evaluator.GeometryChange(tasks[i].point_a, tasks[i].point_b);
+      },
+      timings);
 }
 
 }  // namespace fabatlas::sampling
