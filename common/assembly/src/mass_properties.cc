@@ -5,6 +5,8 @@
 #include <cstdint>
 #include <cstring>
 #include <fstream>
+#include <map>
+#include <mutex>
 #include <sstream>
 #include <vector>
 
@@ -101,7 +103,7 @@ Soup ReadStl(const std::string& path, const std::string& data) {
 
 }  // namespace
 
-MassProperties ComputeMassProperties(const std::string& path) {
+PartMesh ReadPartMesh(const std::string& path) {
   std::ifstream file(path, std::ios::binary);
   if (!file) throw InputError(path + ": cannot open mesh");
   std::stringstream buf;
@@ -121,27 +123,43 @@ MassProperties ComputeMassProperties(const std::string& path) {
     throw InputError(path + ": unsupported mesh extension '" + ext + "'");
   }
   if (s.f.empty()) throw InputError(path + ": mesh has no faces");
-  MassProperties m;
-  m.bbox_min = m.bbox_max = s.v[0];
-  for (const auto& p : s.v) {
+  for (const auto& p : s.v)
     if (!p.allFinite()) throw InputError(path + ": non-finite vertex coordinate");
+  return {std::move(s.v), std::move(s.f)};
+}
+
+MassProperties ComputeMassProperties(const std::string& path) {
+  // Parts share meshes and every generated program reloads its library:
+  // remember the result per path for the process lifetime.
+  static std::mutex mutex;
+  static std::map<std::string, MassProperties> known;
+  {
+    std::lock_guard<std::mutex> lock(mutex);
+    if (auto it = known.find(path); it != known.end()) return it->second;
+  }
+  const PartMesh s = ReadPartMesh(path);
+  MassProperties m;
+  m.bbox_min = m.bbox_max = s.vertices[0];
+  for (const auto& p : s.vertices) {
     m.bbox_min = m.bbox_min.cwiseMin(p);
     m.bbox_max = m.bbox_max.cwiseMax(p);
   }
   double vol6 = 0;
   Eigen::Vector3d moment = Eigen::Vector3d::Zero();
-  for (const auto& t : s.f) {
-    const double d = s.v[t[0]].dot(s.v[t[1]].cross(s.v[t[2]]));
+  for (const auto& t : s.triangles) {
+    const double d = s.vertices[t[0]].dot(s.vertices[t[1]].cross(s.vertices[t[2]]));
     vol6 += d;
-    moment += d * (s.v[t[0]] + s.v[t[1]] + s.v[t[2]]);
+    moment += d * (s.vertices[t[0]] + s.vertices[t[1]] + s.vertices[t[2]]);
   }
-  m.triangles = static_cast<int>(s.f.size());
+  m.triangles = static_cast<int>(s.triangles.size());
   m.volume_mm3 = std::abs(vol6) / 6.0;
   const double diag = (m.bbox_max - m.bbox_min).norm();
   if (m.volume_mm3 > 1e-6 * diag * diag * diag)
     m.centre_of_mass = moment / (4.0 * vol6);
   else
     m.centre_of_mass = 0.5 * (m.bbox_min + m.bbox_max);
+  std::lock_guard<std::mutex> lock(mutex);
+  known[path] = m;
   return m;
 }
 

@@ -428,11 +428,16 @@ SolveSummary SolveAssembly(const Program& prog, const SolveOptions& opt) {
   std::vector<Block> best;
   double best_obj = std::numeric_limits<double>::infinity();
   int objective_starts = 0;
+  std::vector<Block> closest;  // infeasible: the start that came closest to closing
+  double closest_c = std::numeric_limits<double>::infinity();
   for (int k = 0; k < opt.restarts; ++k) {
     ++out.starts_tried;
     solver.SetStart(k);
     if (solver.ConstraintResidual() >= opt.feasibility_tolerance) solver.Run(Phase::kFeasibility, 1.0);
-    if (solver.ConstraintResidual() >= opt.feasibility_tolerance) continue;
+    if (const double c = solver.ConstraintResidual(); c >= opt.feasibility_tolerance) {
+      if (c < closest_c) closest_c = c, closest = solver.blocks();
+      continue;
+    }
     out.feasible = true;
     // Step 1: user objective with penalty σ doubling (seed 000, 4.3.3).
     double sigma = opt.penalty_start;
@@ -453,6 +458,9 @@ SolveSummary SolveAssembly(const Program& prog, const SolveOptions& opt) {
   }
   if (!out.feasible) {
     out.messages.push_back(prog.file + ": cycles do not close after " + std::to_string(out.starts_tried) + " starts");
+    solver.blocks() = closest;
+    out.constraint_residual = closest_c;
+    out.poses = solver.Poses();
     return finish();
   }
   solver.blocks() = best;

@@ -4,6 +4,7 @@
 #include <functional>
 #include <optional>
 
+#include "assembly_node.h"
 #include "expression.h"
 #include "fabatlas/design/evaluate_sample.h"
 #include "fabatlas/mesh/triangle_mesh.h"
@@ -25,6 +26,8 @@ class CheckContext {
   // transitions, provided by the sample evaluation.
   std::function<geometry::Solid(const std::string&)> object_solid;
   std::function<const std::vector<ResolvedTransition>&()> transitions;
+  // Assemblies: the design's `assembly` node solved at this sample.
+  std::function<std::shared_ptr<const AssemblyOutcome>()> assembly;
 
  private:
   const Design& design_;

@@ -8,6 +8,7 @@
 #include <optional>
 #include <sstream>
 
+#include "assembly_node.h"
 #include "checks.h"
 #include "expression.h"
 #include "fabatlas/error.h"
@@ -67,6 +68,20 @@ class TreeEvaluation {
   }
 
   const geometry::GridSpec& grid() const { return grid_; }
+
+  // The design's first `assembly` node (depth first) solved at this sample.
+  std::shared_ptr<const AssemblyOutcome> Assembly() {
+    const Node* found = nullptr;
+    std::vector<const Node*> stack{&design_.tree};
+    while (!stack.empty() && !found) {
+      const Node* n = stack.back();
+      stack.pop_back();
+      if (n->op == "assembly") found = n;
+      for (auto it = n->children.rbegin(); it != n->children.rend(); ++it) stack.push_back(&*it);
+    }
+    if (!found) throw DesignFault(design_.file.string() + ": assembly checks need an 'assembly' node in the tree");
+    return SolveAssemblyNode(Resolve(*found), *found, design_.file.parent_path());
+  }
 
   // Where subtree records go from now on.
   void RecordInto(std::vector<SubtreeRecord>* records) { records_ = records; }
@@ -353,6 +368,7 @@ SampleResult EvaluateSample(const Design& design, const Point& u, const Evaluate
       tree.RecordInto(&check_records);
       context.object_solid = [&](const std::string& name) { return tree.EvaluateObject(name).solid; };
       context.transitions = [&]() -> const std::vector<ResolvedTransition>& { return tree.Transitions(); };
+      context.assembly = [&]() { return tree.Assembly(); };
       for (const CheckSpec& spec : design.checks) {
         CheckOutcome outcome = RunCheck(spec, context);
         if (!outcome.passed) fail(outcome.failure, outcome.reason);

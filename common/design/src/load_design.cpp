@@ -531,6 +531,15 @@ Design ParseDesign(const std::string& text, const std::filesystem::path& path) {
       if (it == schemas.end()) r.Fail(c, "unknown check type '" + check.type + "'");
       if (check.name.empty()) check.name = check.type;
       LintArgs(check.args, it->second, check.place, "check '" + check.type + "'", scope, path.parent_path());
+      if (check.type == "assembly_feasible" || check.type == "assembly_stable" || check.type == "target_reached") {
+        std::function<bool(const Node&)> has = [&](const Node& n) {
+          if (n.op == "assembly") return true;
+          for (const auto& k : n.children)
+            if (has(k)) return true;
+          return false;
+        };
+        if (!has(d.tree)) r.Fail(c, "check '" + check.type + "' needs an 'assembly' node in the tree");
+      }
       d.checks.push_back(check);
     }
   }

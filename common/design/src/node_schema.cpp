@@ -29,6 +29,13 @@ const std::map<std::string, OpSchema>& OperationSchemas() {
       // A works-like prototype (seed 003, docs/prototype.md): solved, then
       // its printable geometry; unsatisfiable constraints fail the sample.
       {"prototype", {{{"file", S::kString}, {"set", S::kNumberMap, false}}, 0, 0}},
+      // A FabHacks assembly (seed 000, docs/assembly.md): a program file, or a
+      // generated family (`family`, its part library as `file`, parameters in
+      // `set`), solved; its parts placed at the solved poses.
+      {"assembly",
+       {{{"file", S::kString}, {"family", S::kString, false}, {"set", S::kNumberMap, false}, {"meshes", S::kString, false}},
+        0,
+        0}},
       // Transforms: several children are unioned first.
       {"translate", {{{"by", S::kVec3}}, 1, -1}},
       {"rotate", {{{"degrees", S::kVec3}}, 1, -1}},
@@ -78,6 +85,10 @@ const std::map<std::string, OpSchema>& CheckSchemas() {
         0,
         0}},
       {"collision_free", {{{"time_steps", S::kNumber, false}, {"clearance", S::kNumber, false}}, 0, 0}},
+      // Assemblies (seed 000): the design's `assembly` node solved at the sample.
+      {"assembly_feasible", {{}, 0, 0}},
+      {"assembly_stable", {{}, 0, 0}},
+      {"target_reached", {{{"tolerance", S::kNumber, false}, {"tolerance_deg", S::kNumber, false}}, 0, 0}},
   };
   return schemas;
 }

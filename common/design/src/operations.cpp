@@ -9,6 +9,7 @@
 #include <cstring>
 #include <fstream>
 
+#include "assembly_node.h"
 #include "exact_boolean.h"
 #include "fabatlas/error.h"
 #include "fabatlas/design/evaluate_sample.h"
@@ -186,6 +187,7 @@ Solid ApplyOperation(const Node& node, const ResolvedArgs& a, std::vector<Solid>
   }
   if (op == "openscad") return OpenScad(g, a, node, dir);
   if (op == "prototype") return PrototypeNode(g, a, node, dir);
+  if (op == "assembly") return AssemblyGeometry(g, *SolveAssemblyNode(a, node, dir), a, node, dir);
 
   // Operations over children. Transforms union several children first.
   if (op == "union" || op == "difference" || op == "intersection") {

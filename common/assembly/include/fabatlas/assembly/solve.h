@@ -68,7 +68,9 @@ struct SolveSummary {
   std::vector<std::string> messages;     // pre-check issues and solver notes
   int starts_tried = 0;
   double seconds = 0;  // wall time of the whole solve
-  std::vector<Eigen::Isometry3d> step1_poses, poses;  // per instance (mm)
+  // Per instance (mm). Infeasible: `poses` are those of the start that came
+  // closest to closing the cycles (tree connections hold), `step1_poses` empty.
+  std::vector<Eigen::Isometry3d> step1_poses, poses;
   std::vector<std::vector<double>> params;             // per connection: s_a then s_b
 };
 

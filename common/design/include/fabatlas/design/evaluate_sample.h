@@ -25,6 +25,9 @@ inline constexpr const char* kTooMuchMaterial = "too_much_material";
 inline constexpr const char* kTooMuchDeformation = "too_much_deformation";  // fem check
 inline constexpr const char* kCollision = "collision";                         // collision_free check
 inline constexpr const char* kTooLittleClearance = "too_little_clearance";     // collision_free check
+inline constexpr const char* kInfeasible = "infeasible";                       // assembly_feasible check
+inline constexpr const char* kFallsApart = "falls_apart";                      // assembly_stable check
+inline constexpr const char* kTargetMissed = "target_missed";                  // target_reached check
 
 struct CheckOutcome {
   std::string name;     // check name (constraints, geometry, then the design's)
