@@ -2,10 +2,14 @@
 // on (1) Cook's membrane, 16 Q1 elements per edge (DESIGN.md "FEM check"),
 // and (2) a ~20k-element voxel wedge-sandal heel under a person's weight
 // (seed 001 sandal check). Prints one table row per case with the median of
-// the runs. Usage: fem_bench [cook_repeats=5] [heel_repeats=3]
+// the runs, wall and process CPU (user + system, all threads). Usage:
+// fem_bench [cook_repeats=5] [heel_repeats=3] [solvers=cholesky,ichol,jacobi]
+#include <sys/resource.h>
+
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
+#include <string>
 #include <vector>
 
 #include "fabatlas/fem/fem_check.h"
@@ -22,16 +26,28 @@ double Median(std::vector<double> v) {
   return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
 
+// Process CPU seconds so far (user + system, summed over threads).
+double CpuSeconds() {
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  return u.ru_utime.tv_sec + u.ru_stime.tv_sec + 1e-6 * (u.ru_utime.tv_usec + u.ru_stime.tv_usec);
+}
+
 struct Row {
-  std::vector<double> wall, assembly, linear;
+  std::vector<double> wall, cpu, assembly, linear;
   int elements = 0, dofs = 0, newton = 0;
   long long cg = 0;  // conjugate-gradient iterations of the last run
   double result = 0;
 };
 
 void Print(const char* name, const Row& r, const char* result_name) {
-  std::printf("| %-34s | %6d | %6d | %8.3f | %8.3f | %8.3f | %3d | %6lld | %s = %.4f |\n", name, r.elements, r.dofs,
-              Median(r.wall), Median(r.assembly), Median(r.linear), r.newton, r.cg, result_name, r.result);
+  std::string walls, cpus;
+  for (double w : r.wall) walls += (walls.empty() ? "" : " ") + std::to_string(w).substr(0, 7);
+  for (double c : r.cpu) cpus += (cpus.empty() ? "" : " ") + std::to_string(c).substr(0, 7);
+  std::printf("| %-34s | %6d | %6d | %8.3f | %8.3f | %8.3f | %8.3f | %3d | %6lld | %s = %.4f |\n", name, r.elements,
+              r.dofs, Median(r.wall), Median(r.cpu), Median(r.assembly), Median(r.linear), r.newton, r.cg, result_name,
+              r.result);
+  std::printf("  runs: wall %s; cpu %s\n", walls.c_str(), cpus.c_str());
 }
 
 Row CooksMembrane16(int repeats) {
@@ -50,7 +66,9 @@ Row CooksMembrane16(int repeats) {
   Row row;
   row.elements = static_cast<int>(mesh.elements.size());
   for (int r = 0; r < repeats; ++r) {
+    const double c0 = CpuSeconds();
     const StaticSolveSummary s = SolveStatic(mesh, Material::FromShearPoisson(0.4225, 0.3), bc);
+    row.cpu.push_back(CpuSeconds() - c0);
     if (!s.converged) std::fprintf(stderr, "cook: %s\n", s.message.c_str());
     row.wall.push_back(s.total_seconds);
     row.assembly.push_back(s.assembly_seconds);
@@ -88,7 +106,9 @@ Row SandalHeel(int repeats, StaticSolveOptions::LinearSolver solver) {
   opt.solve.linear_solver = solver;
   Row row;
   for (int r = 0; r < repeats; ++r) {
+    const double c0 = CpuSeconds();
     const FemCheckResult res = RunFemCheck(v, lc, opt);
+    row.cpu.push_back(CpuSeconds() - c0);
     if (!res.converged) std::fprintf(stderr, "heel: %s\n", res.reason.c_str());
     row.wall.push_back(res.seconds);
     row.assembly.push_back(res.assembly_seconds);
@@ -106,18 +126,23 @@ Row SandalHeel(int repeats, StaticSolveOptions::LinearSolver solver) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  std::setvbuf(stdout, nullptr, _IOLBF, 0);
   const int cook_repeats = argc > 1 ? std::max(1, std::atoi(argv[1])) : 5;
   const int heel_repeats = argc > 2 ? std::max(1, std::atoi(argv[2])) : 3;
+  const std::string solvers = argc > 3 ? argv[3] : "cholesky,ichol,jacobi";
+  auto wanted = [&](const char* s) { return ("," + solvers + ",").find("," + std::string(s) + ",") != std::string::npos; };
   std::printf("median of %d (Cook) and %d (heel) runs; DOFs: free unknowns (Cook), 3 x nodes (heel)\n", cook_repeats,
               heel_repeats);
-  std::printf("| case | elements | DOFs | median wall s | assembly s | linear solve s | Newton its | CG its | result |\n");
-  std::printf("|---|---|---|---|---|---|---|---|---|\n");
+  std::printf("| case | elements | DOFs | median wall s | median CPU s | assembly s | linear solve s | Newton its | CG its | result |\n");
+  std::printf("|---|---|---|---|---|---|---|---|---|---|\n");
   Print("Cook's membrane 16/edge", CooksMembrane16(cook_repeats), "u_y(48,60) mm");
   // The heel with each linear solver, one after the other in the same run.
   using LS = StaticSolveOptions::LinearSolver;
-  Print("voxel sandal heel, Cholesky", SandalHeel(heel_repeats, LS::kCholesky), "max |u| mm");
-  Print("voxel sandal heel, CG + incomplete Cholesky", SandalHeel(heel_repeats, LS::kConjugateGradientIncompleteCholesky),
-        "max |u| mm");
-  Print("voxel sandal heel, CG + Jacobi", SandalHeel(heel_repeats, LS::kConjugateGradientJacobi), "max |u| mm");
+  if (wanted("cholesky")) Print("voxel sandal heel, Cholesky", SandalHeel(heel_repeats, LS::kCholesky), "max |u| mm");
+  if (wanted("ichol"))
+    Print("voxel sandal heel, CG + incomplete Cholesky",
+          SandalHeel(heel_repeats, LS::kConjugateGradientIncompleteCholesky), "max |u| mm");
+  if (wanted("jacobi"))
+    Print("voxel sandal heel, CG + Jacobi", SandalHeel(heel_repeats, LS::kConjugateGradientJacobi), "max |u| mm");
   return 0;
 }

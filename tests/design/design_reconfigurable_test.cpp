@@ -8,6 +8,11 @@
 #include <cmath>
 #include <string>
 
+#include <fstream>
+#include <sstream>
+
+#include "../../common/design/src/exact_boolean.h"
+#include "../../common/design/src/operations.h"
 #include "design_files.h"
 #include "fabatlas/design/evaluate_sample.h"
 #include "fabatlas/error.h"
@@ -233,6 +238,103 @@ TEST(DesignReconfigurable, CabinetInsertIsCarvedCollisionFree) {
   EXPECT_EQ(tall.failure, design::kCollision);
   EXPECT_NE(Outcome(tall, "collision_free").reason.find("'cabinet' and 'mug'"), std::string::npos)
       << Outcome(tall, "collision_free").reason;
+}
+
+// The cabinet insert (configs/designs/cabinet_insert.yaml) with its foam
+// block uncarved, carved exactly (the default) and carved by level-set
+// difference (exact: false).
+std::string CabinetInsert(const std::string& carve) {
+  std::ifstream in(fabatlas::testing::SourceDir() / "configs/designs/cabinet_insert.yaml");
+  std::stringstream text;
+  text << in.rdbuf();
+  std::string s = text.str();
+  const std::string node = "    op: carve_swept\n    moving: mug\n    transition: stow\n    offset: 3\n";
+  const std::size_t at = s.find(node);
+  if (at == std::string::npos) return "cabinet_insert.yaml no longer has the expected carve_swept node";
+  if (carve == "none") s.replace(at, node.size(), "    op: translate\n    by: [0, 0, 0]\n");
+  if (carve == "level_set") s.replace(at, node.size(), node + "    exact: false\n");
+  return s;
+}
+
+// Before carving, the mug runs into the foam block while it is stowed; after
+// exact carving the same transition is collision-free with about the 3 mm
+// offset as clearance, and the exactly carved foam holds the same volume as
+// the level-set carving (both re-voxelised on the 3 mm grid).
+TEST(DesignReconfigurable, ExactCarvingRemovesTheCabinetInsertCollision) {
+  const design::SampleResult before = Evaluate(design::LoadDesign(TempDesign(CabinetInsert("none"))));
+  ASSERT_FALSE(before.valid);
+  EXPECT_EQ(before.failure, design::kCollision);
+  EXPECT_NE(Outcome(before, "collision_free").reason.find("'mug' and 'foam'"), std::string::npos)
+      << Outcome(before, "collision_free").reason;
+  const design::SampleResult exact = Evaluate(design::LoadDesign(TempDesign(CabinetInsert("exact"))));
+  ASSERT_TRUE(exact.valid) << exact.failure << ": " << exact.failure_reason;
+  EXPECT_NEAR(exact.properties.at("min_clearance"), 3.0, 1.5);
+  const design::SampleResult level_set = Evaluate(design::LoadDesign(TempDesign(CabinetInsert("level_set"))));
+  ASSERT_TRUE(level_set.valid) << level_set.failure << ": " << level_set.failure_reason;
+  // The carve removed more than the mug's own volume (pi 40^2 100 plus the
+  // handle), as the pocket is the mug swept in from the front. Uncarved:
+  // cabinet 260 x 220 x 15 + 2 x 10 x 220 x 200, foam 200 x 200 x 150.
+  const double uncarved = 260.0 * 220 * 15 + 2 * 10.0 * 220 * 200 + 200.0 * 200 * 150;
+  const double removed = uncarved - exact.properties.at("volume");
+  EXPECT_GT(removed, M_PI * 40 * 40 * 100);
+  EXPECT_NEAR(exact.properties.at("volume"), level_set.properties.at("volume"), 0.01 * removed);
+}
+
+// Exact booleans reject bad meshes with a one-line sample failure, never a
+// crash: two cubes sharing only an edge (not a manifold), two overlapping
+// cubes in one mesh (self-intersecting), an open box.
+TEST(DesignReconfigurable, ExactSubtractionRejectsBadMeshes) {
+  auto cube = [](double x0, double y0, double z0, double s, mesh::TriangleMesh* m) {
+    const auto base = static_cast<std::int32_t>(m->vertices.size());
+    for (int k = 0; k < 8; ++k)
+      m->vertices.push_back({x0 + s * (k & 1), y0 + s * ((k >> 1) & 1), z0 + s * ((k >> 2) & 1)});
+    const int f[12][3] = {{0, 2, 1}, {1, 2, 3}, {4, 5, 6}, {5, 7, 6}, {0, 1, 4}, {1, 5, 4},
+                          {2, 6, 3}, {3, 6, 7}, {0, 4, 2}, {2, 4, 6}, {1, 3, 5}, {3, 7, 5}};
+    for (const auto& t : f) m->triangles.push_back({base + t[0], base + t[1], base + t[2]});
+  };
+  mesh::TriangleMesh good;
+  cube(0, 0, 0, 2, &good);
+  mesh::TriangleMesh cutter;
+  cube(1, 1, 1, 2, &cutter);
+  const mesh::TriangleMesh carved = design::ExactMeshBoolean("difference", {good, cutter});
+  double volume = 0;  // 8 - 1 (the corner cube the cutter takes)
+  for (const auto& t : carved.triangles) {
+    const auto &a = carved.vertices[t[0]], &b = carved.vertices[t[1]], &c = carved.vertices[t[2]];
+    volume += (a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) +
+               a[2] * (b[0] * c[1] - b[1] * c[0])) / 6;
+  }
+  EXPECT_NEAR(volume, 7.0, 1e-9);
+
+  auto failure_of = [&](const mesh::TriangleMesh& bad) {
+    try {
+      design::ExactMeshBoolean("difference", {good, bad});
+    } catch (const design::SampleFailure& e) {
+      EXPECT_EQ(e.type(), "no_geometry");
+      return std::string(e.what());
+    }
+    return std::string("no failure");
+  };
+  mesh::TriangleMesh edge_pair;  // two cubes sharing the edge x = 1, y = 1
+  cube(-1, -1, 0, 2, &edge_pair);
+  cube(1, 1, 0, 2, &edge_pair);
+  // Merge the shared edge's vertices so the mesh is non-manifold there.
+  mesh::TriangleMesh merged = edge_pair;
+  for (auto& t : merged.triangles)
+    for (auto& i : t)
+      for (std::int32_t j = 0; j < i; ++j)
+        if (merged.vertices[j] == merged.vertices[i]) {
+          i = j;
+          break;
+        }
+  EXPECT_NE(failure_of(merged).find("operand 1 is not a manifold mesh"), std::string::npos) << failure_of(merged);
+  mesh::TriangleMesh overlapping;
+  cube(0, 0, 0, 2, &overlapping);
+  cube(1, 1, 1, 2, &overlapping);
+  EXPECT_NE(failure_of(overlapping).find("operand 1 intersects itself"), std::string::npos)
+      << failure_of(overlapping);
+  mesh::TriangleMesh open = cutter;
+  open.triangles.pop_back();
+  EXPECT_NE(failure_of(open).find("operand 1 is not closed"), std::string::npos) << failure_of(open);
 }
 
 }  // namespace

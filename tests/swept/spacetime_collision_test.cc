@@ -67,14 +67,20 @@ TEST(SpacetimeCollision, TwoSeparateIntervalsAreReportedInTimeOrder) {
   EXPECT_GT(r.intervals[1].t_end, 0.5);
   EXPECT_NEAR(r.intervals[1].t_end - 0.5, 0.5 - r.intervals[1].t_begin, 1.0 / 360 + 1e-12);  // symmetric
   EXPECT_DOUBLE_EQ(r.intervals[2].t_end, 1.0);
-  // The all-pairs broad phase finds the same intervals from the same candidates.
-  o.broad_phase = SpacetimeOptions::BroadPhase::kAllPairs;
-  const CollisionReport all = DetectCollisions(parts, o);
-  ASSERT_EQ(all.intervals.size(), r.intervals.size());
-  EXPECT_EQ(all.candidate_pairs, r.candidate_pairs);
-  for (std::size_t i = 0; i < r.intervals.size(); ++i) {
-    EXPECT_EQ(all.intervals[i].t_begin, r.intervals[i].t_begin);
-    EXPECT_EQ(all.intervals[i].t_end, r.intervals[i].t_end);
+  // The all-pairs and Embree broad phases find the same intervals from the
+  // same candidates.
+  for (auto b : {SpacetimeOptions::BroadPhase::kAllPairs, SpacetimeOptions::BroadPhase::kEmbree}) {
+    o.broad_phase = b;
+    const CollisionReport all = DetectCollisions(parts, o);
+    ASSERT_EQ(all.intervals.size(), r.intervals.size());
+    EXPECT_EQ(all.candidate_pairs, r.candidate_pairs);
+    EXPECT_EQ(all.exact_tests, r.exact_tests);
+    for (std::size_t i = 0; i < r.intervals.size(); ++i) {
+      EXPECT_EQ(all.intervals[i].t_begin, r.intervals[i].t_begin);
+      EXPECT_EQ(all.intervals[i].t_end, r.intervals[i].t_end);
+      EXPECT_EQ(all.intervals[i].part_a, r.intervals[i].part_a);
+      EXPECT_EQ(all.intervals[i].part_b, r.intervals[i].part_b);
+    }
   }
 }
 

@@ -203,7 +203,8 @@ class TreeEvaluation {
         const swept::RigidMotion still;
         out.solid = CarveSwept(target, moving.solid, transition->motions[moving_index],
                                has_frame ? transition->motions[frame_index] : still, args.Number("offset", 0),
-                               static_cast<int>(args.Number("time_steps", 2)), grid_, node.place);
+                               static_cast<int>(args.Number("time_steps", 2)), grid_, node.place,
+                               args.Text("exact", "true") != "false");
       } else {
         out.solid = ApplyOperation(node, args, inputs, grid_, design_.file.parent_path());
       }

@@ -61,9 +61,14 @@ mesh::TriangleMesh ExactMeshBoolean(const std::string& op, const std::vector<mes
   for (std::size_t i = 1; i < operands.size(); ++i) {
     SurfaceMesh other = ToSurfaceMesh(operands[i], i);
     SurfaceMesh result;
-    bool ok = op == "union"        ? PMP::corefine_and_compute_union(acc, other, result)
-              : op == "difference" ? PMP::corefine_and_compute_difference(acc, other, result)
-                                   : PMP::corefine_and_compute_intersection(acc, other, result);
+    bool ok = false;
+    try {
+      ok = op == "union"        ? PMP::corefine_and_compute_union(acc, other, result)
+           : op == "difference" ? PMP::corefine_and_compute_difference(acc, other, result)
+                                : PMP::corefine_and_compute_intersection(acc, other, result);
+    } catch (const std::exception& e) {  // CGAL's own checks (degenerate or inconsistent input)
+      throw SampleFailure("no_geometry", "exact " + op + " with operand " + std::to_string(i) + " failed: " + e.what());
+    }
     if (!ok) throw SampleFailure("no_geometry", "exact " + op + " with operand " + std::to_string(i) + " has no manifold result");
     acc = std::move(result);
   }
@@ -117,7 +122,10 @@ geometry::Solid ExactBoolean(const std::string& op, const std::vector<geometry::
                              const geometry::GridSpec& grid) {
   std::vector<mesh::TriangleMesh> meshes;
   for (const auto& c : children) meshes.push_back(c.ToMesh());
-  mesh::TriangleMesh result = ExactMeshBoolean(op, meshes);
+  return SolidOfExactResult(ExactMeshBoolean(op, meshes), grid);
+}
+
+geometry::Solid SolidOfExactResult(const mesh::TriangleMesh& result, const geometry::GridSpec& grid) {
   if (result.triangles.empty()) return geometry::Solid();
   // OpenVDB signs a mesh's level set by flood fill from outside, so a cavity
   // (an inward-facing inner shell, as a difference leaves) would be filled.

@@ -15,6 +15,11 @@ namespace fabatlas::design {
 // SampleFailure of type no_geometry names which operand is at fault.
 mesh::TriangleMesh ExactMeshBoolean(const std::string& op, const std::vector<mesh::TriangleMesh>& operands);
 
+// The level set on `grid` of a closed triangle mesh that an exact boolean
+// produced: outward shells are material, inward shells (cavities) are
+// subtracted from it.
+geometry::Solid SolidOfExactResult(const mesh::TriangleMesh& result, const geometry::GridSpec& grid);
+
 // Meshes every child, runs ExactMeshBoolean, and returns the level set of the
 // exact result on the design's grid.
 geometry::Solid ExactBoolean(const std::string& op, const std::vector<geometry::Solid>& children,

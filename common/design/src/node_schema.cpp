@@ -58,7 +58,8 @@ const std::map<std::string, OpSchema>& OperationSchemas() {
          {"transition", S::kString},
          {"frame", S::kString, false},
          {"offset", S::kNumber, false},
-         {"time_steps", S::kNumber, false}},
+         {"time_steps", S::kNumber, false},
+         {"exact", S::kString, false}},
         1,
         -1}},
   };

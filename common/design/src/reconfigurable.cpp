@@ -1,5 +1,6 @@
 #include "reconfigurable.h"
 
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <map>
@@ -7,6 +8,7 @@
 #include "fabatlas/design/evaluate_sample.h"
 #include "fabatlas/error.h"
 #include "fabatlas/swept/swept_volume.h"
+#include "exact_boolean.h"
 #include "operations.h"
 
 namespace fabatlas::design {
@@ -150,10 +152,38 @@ mesh::TriangleMesh SweptCutter(const geometry::Solid& moving, const swept::Rigid
 
 geometry::Solid CarveSwept(const geometry::Solid& target, const geometry::Solid& moving,
                            const swept::RigidMotion& f_moving, const swept::RigidMotion& f_frame, double offset,
-                           int time_steps, const geometry::GridSpec& g, const SourcePlace& place) {
+                           int time_steps, const geometry::GridSpec& g, const SourcePlace& place, bool exact,
+                           CarveSweptSummary* summary) {
+  using Clock = std::chrono::steady_clock;
+  auto since = [](Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); };
+  CarveSweptSummary s;
+  auto t0 = Clock::now();
   const mesh::TriangleMesh cutter = SweptCutter(moving, f_moving, f_frame, offset, time_steps, g, place, nullptr);
-  if (target.empty() || cutter.triangles.empty()) return target;
-  return geometry::Difference(target, geometry::FromMesh(g, cutter));
+  s.sweep_seconds = since(t0);
+  s.cutter_triangles = cutter.triangles.size();
+  geometry::Solid out = target;
+  t0 = Clock::now();
+  if (!target.empty() && !cutter.triangles.empty()) {
+    if (exact) {
+      // Seed 004, Eq. 4 with an exact subtraction: the target's level-set
+      // surface minus the cutter surface by CGAL corefinement. Both are
+      // meshed on the design's grid, so the cutter is as dense as the
+      // target and is subtracted as it is (docs/swept.md "Carving").
+      const mesh::TriangleMesh a = target.ToMesh();
+      s.target_triangles = a.triangles.size();
+      try {
+        out = SolidOfExactResult(ExactMeshBoolean("difference", {a, cutter}), g);
+      } catch (const SampleFailure& e) {
+        throw SampleFailure(e.type(), place.str() + ": carve_swept: " + e.what() +
+                                          " (operand 0: the carved object, 1: the swept cutter)");
+      }
+    } else {
+      out = geometry::Difference(target, geometry::FromMesh(g, cutter));
+    }
+  }
+  s.subtract_seconds = since(t0);
+  if (summary) *summary = s;
+  return out;
 }
 
 }  // namespace fabatlas::design

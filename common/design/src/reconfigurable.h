@@ -39,12 +39,26 @@ mesh::TriangleMesh SweptCutter(const geometry::Solid& moving, const swept::Rigid
                                const geometry::GridSpec& g, const SourcePlace& place,
                                swept::SweptVolumeSummary* summary);
 
-// Seed 004, Eq. 4 on level sets: `target` minus the eps-offset swept volume
-// of `moving` (body frame) under f_frame^-1 o f_moving, on grid g. At least
-// `time_steps` samples, more until no point moves more than a voxel per step
-// (swept::SamplePoses). Throws SampleFailure when moving is empty or offset < 0.
+// What one carve did (for benchmarks and tests).
+struct CarveSweptSummary {
+  std::size_t cutter_triangles = 0;  // of the eps-offset swept surface
+  std::size_t target_triangles = 0;  // of the meshed target (exact carving only)
+  double sweep_seconds = 0;          // swept distance field and its surface
+  double subtract_seconds = 0;       // the subtraction, back to a level set
+};
+
+// Seed 004, Eq. 4: `target` minus the eps-offset swept volume of `moving`
+// (body frame) under f_frame^-1 o f_moving, on grid g. At least `time_steps`
+// samples, more until no point moves more than a voxel per step
+// (swept::SamplePoses). exact = true (the default of the carve_swept node):
+// the target's mesh minus the cutter mesh by CGAL corefinement
+// (ExactMeshBoolean), the result re-voxelised on g; exact = false: the
+// level-set difference of the cutter re-voxelised on g. Throws SampleFailure
+// when moving is empty, offset < 0, or (exact) a mesh is not closed and
+// manifold, intersects itself, or CGAL finds no manifold result.
 geometry::Solid CarveSwept(const geometry::Solid& target, const geometry::Solid& moving,
                            const swept::RigidMotion& f_moving, const swept::RigidMotion& f_frame, double offset,
-                           int time_steps, const geometry::GridSpec& g, const SourcePlace& place);
+                           int time_steps, const geometry::GridSpec& g, const SourcePlace& place, bool exact = true,
+                           CarveSweptSummary* summary = nullptr);
 
 }  // namespace fabatlas::design

@@ -9,8 +9,12 @@
 #include <CGAL/Side_of_triangle_mesh.h>
 #include <CGAL/Surface_mesh.h>
 
+#include <embree3/rtcore.h>
+
 #include <algorithm>
+#include <chrono>
 #include <cmath>
+#include <mutex>
 #include <tuple>
 #include <map>
 #include <memory>
@@ -44,6 +48,67 @@ bool Overlap(const Box4& a, const Box4& b) {
   for (int k = 0; k < 4; ++k)
     if (a[0][k] > b[1][k] || b[0][k] > a[1][k]) return false;
   return true;
+}
+
+// Proxy pairs (q < r) whose boxes may overlap, from Embree's rtcCollide
+// (a BVH over user geometry, built and traversed by Embree). The 4D boxes
+// are flattened to 3D: interval i is shifted along x by i * (x range + gap),
+// so boxes of different intervals never meet; the float boxes are rounded
+// outward, so every overlapping pair is reported (the caller re-checks the
+// double boxes).
+std::vector<std::pair<int, int>> EmbreeOverlaps(const std::vector<Box4>& boxes, const std::vector<int>& interval) {
+  std::vector<std::pair<int, int>> out;
+  if (boxes.empty()) return out;
+  double lo = 1e300, hi = -1e300;
+  for (const Box4& b : boxes) lo = std::min(lo, b[0][0]), hi = std::max(hi, b[1][0]);
+  const double slab = (hi - lo) * 1.5 + 1.0;
+  struct Data {
+    std::vector<RTCBounds> bounds;
+    std::mutex mu;
+    std::vector<std::pair<int, int>>* out;
+  } data;
+  data.out = &out;
+  data.bounds.resize(boxes.size());
+  for (std::size_t q = 0; q < boxes.size(); ++q) {
+    const double shift = (interval[q]) * slab - lo;
+    RTCBounds& r = data.bounds[q];
+    auto down = [](double v) { return std::nextafter(static_cast<float>(v), -INFINITY); };
+    auto up = [](double v) { return std::nextafter(static_cast<float>(v), INFINITY); };
+    r.lower_x = down(boxes[q][0][0] + shift), r.upper_x = up(boxes[q][1][0] + shift);
+    r.lower_y = down(boxes[q][0][1]), r.upper_y = up(boxes[q][1][1]);
+    r.lower_z = down(boxes[q][0][2]), r.upper_z = up(boxes[q][1][2]);
+  }
+  // One device per process (creating one starts Embree's thread pool).
+  static const RTCDevice device = rtcNewDevice(nullptr);
+  if (!device) throw ResourceError("collision: cannot create an Embree device");
+  RTCScene scene = rtcNewScene(device);
+  RTCGeometry geometry = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_USER);
+  rtcSetGeometryUserPrimitiveCount(geometry, static_cast<unsigned>(boxes.size()));
+  rtcSetGeometryUserData(geometry, &data);
+  rtcSetGeometryBoundsFunction(
+      geometry,
+      [](const RTCBoundsFunctionArguments* args) {
+        *args->bounds_o = static_cast<Data*>(args->geometryUserPtr)->bounds[args->primID];
+      },
+      nullptr);
+  rtcCommitGeometry(geometry);
+  rtcAttachGeometry(scene, geometry);
+  rtcReleaseGeometry(geometry);
+  rtcCommitScene(scene);
+  rtcCollide(
+      scene, scene,
+      [](void* user, RTCCollision* c, unsigned n) {
+        auto* d = static_cast<Data*>(user);
+        std::lock_guard lock(d->mu);
+        for (unsigned k = 0; k < n; ++k)
+          if (c[k].primID0 != c[k].primID1)
+            d->out->emplace_back(std::min(c[k].primID0, c[k].primID1), std::max(c[k].primID0, c[k].primID1));
+      },
+      &data);
+  rtcReleaseScene(scene);
+  std::sort(out.begin(), out.end());
+  out.erase(std::unique(out.begin(), out.end()), out.end());
+  return out;
 }
 
 // A bounding volume hierarchy over 4D boxes; leaves hold up to 4 proxies.
@@ -183,7 +248,6 @@ CollisionReport DetectCollisions(const std::vector<MovingPart>& parts, const Spa
   }
   CollisionReport report;
   report.proxies = boxes.size();
-  const ProxyTree tree(boxes);
 
   // Parts that hold one pose throughout: a pair of them is tested once, at
   // the first sample, and a collision spans the whole transition.
@@ -206,13 +270,25 @@ CollisionReport DetectCollisions(const std::vector<MovingPart>& parts, const Spa
     candidates.emplace(pa, pb, ia);
     candidates.emplace(pa, pb, ia + 1);
   };
+  const auto broad0 = std::chrono::steady_clock::now();
   if (options.broad_phase == SpacetimeOptions::BroadPhase::kHierarchy) {
+    const ProxyTree tree(boxes);
     for (std::size_t q = 0; q < boxes.size(); ++q) tree.Query(boxes[q], [&](int r) { consider(q, r); });
+  } else if (options.broad_phase == SpacetimeOptions::BroadPhase::kEmbree) {
+    std::vector<int> interval;
+    for (const auto& o : owner) interval.push_back(o.second);
+    for (const auto& [q, r] : EmbreeOverlaps(boxes, interval)) {
+      if (!Overlap(boxes[q], boxes[r])) continue;  // float rounding only widened the boxes
+      consider(q, r);
+      consider(r, q);
+    }
   } else {
     for (std::size_t q = 0; q < boxes.size(); ++q)
       for (std::size_t r = 0; r < boxes.size(); ++r)
         if (Overlap(boxes[q], boxes[r])) consider(q, r);
   }
+  report.broad_phase_seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - broad0).count();
   // Exact test at candidate samples. Both parts in their body frames (built
   // on first use); B's triangles posed into A's frame by f_A^-1 f_B.
   std::map<int, BodyIndex> index;
