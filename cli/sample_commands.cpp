@@ -51,6 +51,10 @@ void Sample(const SampleArgs& args) {
     std::cout << "cache " << c.strategy << ": H_TOP " << c.top_entries << " subtrees / " << c.top_bytes
               << " B, H_opt " << c.opt_entries << " / " << c.opt_bytes << " B, H_rfree " << c.rfree_entries << " / "
               << c.rfree_bytes << " B (" << added.entries << " entries stored)\n";
+    if (added.exact.solved())
+      std::cout << "cache plan: exact worst case " << added.exact.worst_seconds() << " s ("
+                << (added.exact.optimal() ? "optimal" : "time limit") << "), H_opt gap "
+                << 100.0 * added.exact.gap() << " %\n";
   }
   storage::WriteArtifact(published, std::filesystem::path(args.out) / artifact);
   std::cout << precompute::Table3Row(design, summary.statistics) << "\n";

@@ -9,6 +9,7 @@
 
 #include <atomic>
 #include <condition_variable>
+#include <cstdio>
 #include <deque>
 #include <fstream>
 #include <map>
@@ -252,6 +253,43 @@ struct Coordinator::Impl {
     }
   }
 
+  // The geometry cache plan of a job whose sampling finished, as one
+  // TASK_KIND_CACHE_PLAN task (tasks.proto): the input goes into the blob
+  // store, a worker leases the task, runs protocol::RunCachePlan and uploads
+  // the report. Retried like any task; a replayed job finds the stored
+  // result. Throws InputError when the task was quarantined.
+  v1::CachePlanReport PlanCacheOnWorkers(const std::string& job_id, const std::string& evaluation_digest,
+                                         int subdivisions, const CacheAssembly& assembly) {
+    const v1::CachePlanInput input = CachePlanInputOf(assembly);
+    v1::TaskPayload payload;
+    payload.set_kind(v1::TASK_KIND_CACHE_PLAN);
+    payload.mutable_cache_plan()->set_input_digest(blobs->Put(input.SerializeAsString()));
+    const std::string key = protocol::TaskKey(payload, evaluation_digest, subdivisions);
+    Event(job_id, "cache_plan", "cache plan task " + key.substr(0, 16) + ": " +
+                                    std::to_string(input.subtrees_size()) + " subtree records, " +
+                                    std::to_string(input.sample_roots_size()) + " samples");
+    const auto results = RunTasks(job_id, {payload.SerializeAsString()}, {key}, {v1::TASK_KIND_CACHE_PLAN});
+    v1::TaskResult result;
+    result.ParseFromString(results.at(0));
+    const std::string& digest = result.cache_plan().report_digest();
+    if (digest.empty())
+      throw InputError("job " + job_id + ": the geometry cache plan task " + key.substr(0, 16) +
+                       " was quarantined (it lost too many workers)");
+    v1::CachePlanReport report;
+    if (!blobs->Contains(digest) || !report.ParseFromString(blobs->Read(digest)))
+      throw InputError("job " + job_id + ": cache plan report " + digest + " is missing or not a CachePlanReport");
+    return report;
+  }
+
+  static std::string ExactText(const v1::CachePlanExact& exact) {
+    if (!exact.solved()) return "exact optimum: " + exact.message();
+    char text[160];
+    std::snprintf(text, sizeof text, "exact worst case %.6g s (%s, %lld variables), H_opt gap %.2f %%",
+                  exact.worst_seconds(), exact.optimal() ? "optimal" : "time limit",
+                  static_cast<long long>(exact.variables()), 100.0 * exact.gap());
+    return text;
+  }
+
   void Drive(const std::string& job_id) {
     try {
       auto job = store->FindJob(job_id);
@@ -277,10 +315,12 @@ struct Coordinator::Impl {
         // The geometry cache from the subtrees the workers reported (docs/artifact.md).
         CacheAssembly assembly = CollectSubtreesFromStore(*store, *blobs, job_id, design, summary.form);
         assembly.options = CacheOptionsOf(job_file);
-        const auto added = AddCache(artifact, assembly);
+        const v1::CachePlanReport report =
+            PlanCacheOnWorkers(job_id, protocol::EvaluationDigest(bundle), job_file.subdivisions, assembly);
+        const auto added = AddCache(artifact, assembly, report);
         Event(job_id, "cache", "geometry cache " + artifact.manifest.cache.strategy + ": " +
                                    std::to_string(added.entries) + " entries, " + std::to_string(added.missing) +
-                                   " without geometry");
+                                   " without geometry; " + ExactText(added.exact));
       }
       storage::WriteArtifact(artifact, out / ArtifactFileName(design.name));
       for (const auto& entry : fs::directory_iterator(out)) {

@@ -11,8 +11,6 @@
 #include <yaml-cpp/yaml.h>
 #include <set>
 
-#include "fabatlas/cache/cost_model.h"
-#include "fabatlas/cache/dependency_graph.h"
 #include "fabatlas/design/evaluate_sample.h"
 #include "fabatlas/error.h"
 #include "fabatlas/geometry/solid.h"
@@ -21,6 +19,7 @@
 #include "fabatlas/storage/job_store.h"
 #include "fabatlas/storage/glb.h"
 
+#include "fabatlas/protocol/cache_plan.h"
 #include "fabatlas/protocol/job_bundle.h"
 #include "fabatlas/protocol/tasks.h"
 
@@ -64,36 +63,28 @@ storage::Artifact ArtifactOf(const v1::JobBundle& bundle, const std::string& des
   return a;
 }
 
-CacheAssemblySummary AddCache(storage::Artifact& artifact, const CacheAssembly& a) {
+v1::CachePlanInput CachePlanInputOf(const CacheAssembly& a) {
+  v1::CachePlanInput input;
+  for (const auto& s : a.subtrees) {
+    v1::CachePlanSubtree* out = input.add_subtrees();
+    out->set_key(s.key);
+    out->set_op(s.op);
+    for (const auto& c : s.children) out->add_children(c);
+    out->set_bytes(s.bytes);
+    out->set_stored(s.stored);
+  }
+  for (const auto& r : a.sample_roots) input.add_sample_roots(r);
+  *input.mutable_options() = protocol::CachePlanOptionsOf(a.options);
+  input.mutable_options()->set_exact_max_variables(a.exact_max_variables);
+  input.mutable_options()->set_exact_time_limit_seconds(a.exact_time_limit_seconds);
+  return input;
+}
+
+CacheAssemblySummary AddCache(storage::Artifact& artifact, const CacheAssembly& a,
+                              const v1::CachePlanReport& report) {
   CacheAssemblySummary summary;
-  // Model costs (docs/cache.md): op, output bytes, input bytes.
-  std::map<std::string, std::int64_t> bytes_of;
-  std::map<std::string, std::string> op_of;
-  for (const auto& s : a.subtrees) {
-    bytes_of[s.key] = std::max(bytes_of[s.key], s.bytes);
-    op_of.emplace(s.key, s.op);
-  }
-  std::vector<cache::SubtreeNode> nodes;
-  nodes.reserve(a.subtrees.size());
-  for (const auto& s : a.subtrees) {
-    std::uint64_t input = 0;
-    for (const auto& c : s.children) input += static_cast<std::uint64_t>(bytes_of[c]);
-    nodes.push_back({s.key, s.children,
-                     cache::ModelSubtreeSeconds(s.op, static_cast<std::uint64_t>(bytes_of[s.key]), input),
-                     static_cast<std::uint64_t>(bytes_of[s.key]), s.stored});
-  }
-  std::vector<cache::SampleTree> samples;
-  for (const auto& r : a.sample_roots) samples.push_back({r});
-  const cache::DependencyGraph graph = cache::BuildDependencyGraph(nodes, samples);
-
-  cache::CacheOptions options = a.options;
-  options.record_curve = true;
-  const cache::CacheReport report = cache::PlanCache(graph, options);
-  cache::CacheOptions rfree_options = options;
-  rfree_options.strategy = cache::Strategy::kOptMax;
-  rfree_options.budget_bytes = std::numeric_limits<std::uint64_t>::max();
-  const cache::CachePlan rfree = cache::OptimizeCache(graph, rfree_options);
-
+  summary.exact = report.exact();
+  const cache::CacheOptions& options = a.options;
   storage::CacheSummary& m = artifact.manifest.cache;
   m.strategy = cache::StrategyName(options.strategy);
   m.budget_bytes = options.budget_bytes == std::numeric_limits<std::uint64_t>::max()
@@ -101,38 +92,31 @@ CacheAssemblySummary AddCache(storage::Artifact& artifact, const CacheAssembly& 
                        : static_cast<std::int64_t>(options.budget_bytes);
   m.threshold_seconds = options.min_seconds;
   m.cost_model = "cache::ModelSubtreeSeconds (docs/cache.md)";
-  m.top_entries = report.top.entries;
-  m.top_bytes = static_cast<std::int64_t>(report.top.bytes);
-  m.opt_entries = report.chosen.cost.entries;
-  m.opt_bytes = static_cast<std::int64_t>(report.chosen.cost.bytes);
-  m.rfree_entries = rfree.cost.entries;
-  m.rfree_bytes = static_cast<std::int64_t>(rfree.cost.bytes);
+  m.top_entries = report.top().entries();
+  m.top_bytes = static_cast<std::int64_t>(report.top().bytes());
+  m.opt_entries = report.opt().entries();
+  m.opt_bytes = static_cast<std::int64_t>(report.opt().bytes());
+  m.rfree_entries = report.rfree().entries();
+  m.rfree_bytes = static_cast<std::int64_t>(report.rfree().bytes());
 
   artifact.cache_curves.clear();
-  for (auto strategy : {cache::Strategy::kNaive, cache::Strategy::kOptAve, cache::Strategy::kOptMax}) {
-    cache::CacheOptions o = options;
-    o.strategy = strategy;
-    const cache::CachePlan plan = cache::OptimizeCache(graph, o);
-    for (std::size_t step = 0; step < plan.curve.size(); ++step) {
-      const auto& p = plan.curve[step];
-      artifact.cache_curves.push_back({cache::StrategyName(strategy), static_cast<std::int64_t>(step), p.entries,
-                                       static_cast<std::int64_t>(p.bytes), p.mean_seconds, p.worst_seconds});
+  for (const auto& curve : report.curves())
+    for (int step = 0; step < curve.points_size(); ++step) {
+      const auto& p = curve.points(step);
+      artifact.cache_curves.push_back({curve.strategy(), static_cast<std::int64_t>(step), p.entries(),
+                                       static_cast<std::int64_t>(p.bytes()), p.mean_seconds(), p.worst_seconds()});
     }
-  }
 
   artifact.cache.clear();
-  for (std::int32_t id = 0; id < static_cast<std::int32_t>(graph.node_count()); ++id) {
-    const bool in_opt = report.chosen.cache[id] != 0, in_rfree = rfree.cache[id] != 0;
-    if (!in_opt && !in_rfree) continue;
+  for (const auto& r : report.entries()) {
     storage::CacheEntry e;
-    e.key = graph.keys[id];
-    e.op = op_of[e.key];
-    for (std::int64_t c = graph.child_begin[id]; c < graph.child_begin[id + 1]; ++c)
-      e.children.push_back(graph.keys[graph.child_ids[c]]);
-    e.bytes = static_cast<std::int64_t>(graph.bytes[id]);
-    e.cost_seconds = graph.seconds[id];
-    e.in_opt = in_opt;
-    e.in_rfree = in_rfree;
+    e.key = r.key();
+    e.op = r.op();
+    e.children.assign(r.children().begin(), r.children().end());
+    e.bytes = r.bytes();
+    e.cost_seconds = r.cost_seconds();
+    e.in_opt = r.in_opt();
+    e.in_rfree = r.in_rfree();
     try {
       e.grid = a.grid_of ? a.grid_of(e.key) : std::string();
     } catch (const std::exception&) {
@@ -147,6 +131,10 @@ CacheAssemblySummary AddCache(storage::Artifact& artifact, const CacheAssembly& 
     ++summary.entries;
   }
   return summary;
+}
+
+CacheAssemblySummary AddCache(storage::Artifact& artifact, const CacheAssembly& assembly) {
+  return AddCache(artifact, assembly, protocol::RunCachePlan(CachePlanInputOf(assembly)));
 }
 
 cache::CacheOptions CacheOptionsOf(const sampling::JobFile& job) {

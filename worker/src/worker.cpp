@@ -23,6 +23,7 @@
 #include "fabatlas/geometry/solid.h"
 #include "fabatlas/precompute/design_evaluator.h"
 #include "fabatlas/protocol/blob_transfer.h"
+#include "fabatlas/protocol/cache_plan.h"
 #include "fabatlas/protocol/job_bundle.h"
 #include "fabatlas/protocol/tasks.h"
 #include "fabatlas/sampling/job_file.h"
@@ -75,6 +76,7 @@ class Worker {
     stub_ = v1::WorkerService::NewStub(channel_);
     blob_stub_ = v1::BlobService::NewStub(channel_);
     if (const char* crash = std::getenv("FABATLAS_WORKER_CRASH_KEY_PREFIX")) crash_prefix_ = crash;
+    crash_mid_cache_plan_ = std::getenv("FABATLAS_WORKER_CRASH_MID_CACHE_PLAN") != nullptr;
   }
 
   WorkerSummary Run() {
@@ -309,6 +311,13 @@ class Worker {
     v1::TaskResult result;
     if (p.kind() == v1::TASK_KIND_NOOP) {
       result.set_noop(true);
+    } else if (p.kind() == v1::TASK_KIND_CACHE_PLAN) {
+      try {
+        result = PlanCache(p.cache_plan());  // needs no design: the job is not loaded
+      } catch (const std::exception& e) {
+        done.set_error(e.what());
+        return done;
+      }
     } else {
       auto ctx = ContextFor(lease);
       if (!ctx->evaluator) {
@@ -356,6 +365,28 @@ class Worker {
     if (!s.ok()) return "";
     ++blobs_uploaded_;
     return digest;
+  }
+
+  // TASK_KIND_CACHE_PLAN (tasks.proto): the input blob, the plan
+  // (protocol::RunCachePlan), the report uploaded before it is named.
+  v1::TaskResult PlanCache(const v1::CachePlanTask& task) {
+    std::string bytes;
+    grpc::Status s = protocol::DownloadBlob(*blob_stub_, o_.security, task.input_digest(), std::chrono::seconds(300), &bytes);
+    if (!s.ok()) throw InputError("cache plan input " + task.input_digest() + ": " + s.error_message());
+    v1::CachePlanInput input;
+    if (!input.ParseFromString(bytes)) throw InputError("cache plan input " + task.input_digest() + " does not parse");
+    bytes.clear();
+    const v1::CachePlanReport report = protocol::RunCachePlan(input);
+    // Fault injection for the cluster tests: die with the plan computed but
+    // not reported.
+    if (crash_mid_cache_plan_) std::raise(SIGKILL);
+    const std::string digest = Upload(report.SerializeAsString());
+    if (digest.empty()) throw InputError("cache plan report upload failed");
+    v1::TaskResult result;
+    result.mutable_cache_plan()->set_report_digest(digest);
+    result.mutable_cache_plan()->set_opt_entries(report.opt().entries());
+    result.mutable_cache_plan()->set_rfree_entries(report.rfree().entries());
+    return result;
   }
 
   // EvaluateSample (seed 001 Alg. 2) with the root solid of a valid sample
@@ -416,6 +447,7 @@ class Worker {
   std::unique_ptr<v1::WorkerService::Stub> stub_;
   std::unique_ptr<v1::BlobService::Stub> blob_stub_;
   std::string crash_prefix_;
+  bool crash_mid_cache_plan_ = false;
 
   std::mutex mu_;
   std::condition_variable cv_;

@@ -54,6 +54,7 @@ std::string TaskKey(const v1::TaskPayload& payload, const std::string& evaluatio
   AppendKey(text, payload.point_a());
   if (payload.kind() == v1::TASK_KIND_GEOMETRY_CHANGE) AppendKey(text, payload.point_b());
   if (payload.kind() == v1::TASK_KIND_SWEPT_VOLUME) text += payload.swept().node_path() + "\n";
+  if (payload.kind() == v1::TASK_KIND_CACHE_PLAN) text += payload.cache_plan().input_digest() + "\n";
   return Sha256Hex(text);
 }
 
@@ -84,6 +85,8 @@ v1::TaskResult QuarantineResult(v1::TaskKind kind) {
     r.set_noop(true);
   } else if (kind == v1::TASK_KIND_SWEPT_VOLUME) {
     r.mutable_swept_volume();  // empty digest: no cutter
+  } else if (kind == v1::TASK_KIND_CACHE_PLAN) {
+    r.mutable_cache_plan();  // empty report digest: no plan
   } else {
     r.mutable_sample()->set_valid(false);
     r.mutable_sample()->set_failure_type("quarantined");

@@ -21,6 +21,7 @@
 #include "fabatlas/sampling/job_file.h"
 #include "fabatlas/storage/artifact.h"
 #include "fabatlas/v1/job.pb.h"
+#include "fabatlas/v1/tasks.pb.h"
 
 namespace fabatlas::storage {
 class JobStore;
@@ -57,6 +58,10 @@ struct CacheAssembly {
   // Strategy, memory budget and threshold (docs/cache.md); record_curve is
   // forced on.
   cache::CacheOptions options;
+  // The exact integer program is solved (and H_opt's gap to it reported,
+  // never published) when it has at most this many variables; 0 = never.
+  std::int64_t exact_max_variables = 5000;
+  double exact_time_limit_seconds = 10;
   // Serialized geometry::Solid of a stored subtree (the blob). Throws or
   // returns "" when missing (then the entry is left out and counted).
   std::function<std::string(const std::string& key)> grid_of;
@@ -65,16 +70,26 @@ struct CacheAssembly {
 struct CacheAssemblySummary {
   std::int64_t entries = 0;  // cache entries written (H_opt ∪ H_rfree)
   std::int64_t missing = 0;  // chosen subtrees whose geometry was missing
+  v1::CachePlanExact exact;  // the report's exact optimum (not in the artifact)
 };
 
-// Seed 001 Sec. 6 on the artifact: builds the dependency graph with the
-// deterministic model costs of docs/cache.md (cache::ModelSubtreeSeconds of
-// the op, the subtree's bytes and its children's bytes; never measured
-// times, so the artifact stays byte-identical), plans H_opt with
-// options.strategy under the budget, H_rfree (OPT-MAX, no budget) and H_TOP,
-// records the Fig. 13 curves of NAIVE, OPT-AVE and OPT-MAX, and stores every
-// subtree of H_opt ∪ H_rfree as an entry (grid + glTF binary mesh) with its
-// membership flags. Fills manifest.cache.
+// The input of the cache plan task (tasks.proto CachePlanInput): the
+// assembly's subtrees, sample roots and options. Deterministic bytes for
+// equal assemblies.
+v1::CachePlanInput CachePlanInputOf(const CacheAssembly& assembly);
+
+// Seed 001 Sec. 6 on the artifact, from a plan the cache plan task computed
+// (protocol::RunCachePlan on CachePlanInputOf(assembly), on a worker or in
+// process): fills manifest.cache (strategy, budget, threshold, H_TOP, H_opt,
+// H_rfree), the Fig. 13 curves of NAIVE, OPT-AVE and OPT-MAX, and stores
+// every subtree of H_opt ∪ H_rfree as an entry (grid from assembly.grid_of +
+// glTF binary mesh) with its membership flags. The plan's costs are the
+// deterministic model of docs/cache.md, so the artifact stays byte-identical.
+CacheAssemblySummary AddCache(storage::Artifact& artifact, const CacheAssembly& assembly,
+                              const v1::CachePlanReport& report);
+
+// The same with the plan computed here, in process (`fabatlas sample`):
+// AddCache(artifact, assembly, protocol::RunCachePlan(CachePlanInputOf(assembly))).
 CacheAssemblySummary AddCache(storage::Artifact& artifact, const CacheAssembly& assembly);
 
 // The job file's `cache:` section (docs/job-format.md):
