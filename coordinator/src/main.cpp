@@ -8,20 +8,11 @@
 #include <csignal>
 #include <fstream>
 #include <iostream>
-#include <sstream>
 #include <thread>
 
 #include "fabatlas/coordinator/coordinator.h"
 #include "fabatlas/error.h"
-
-namespace {
-
-std::string Trimmed(std::string s) {
-  while (!s.empty() && (s.back() == '\n' || s.back() == '\r' || s.back() == ' ')) s.pop_back();
-  return s;
-}
-
-}  // namespace
+#include "fabatlas/protocol/channel.h"
 
 int main(int argc, char** argv) {
   CLI::App app{"fabatlas coordinator: jobs, leases and blobs over gRPC"};
@@ -53,13 +44,7 @@ int main(int argc, char** argv) {
   sigaddset(&signals, SIGINT);
   pthread_sigmask(SIG_BLOCK, &signals, nullptr);  // every thread inherits the mask
   try {
-    if (!token_file.empty()) {
-      std::ifstream in(token_file);
-      if (!in) throw fabatlas::InputError(token_file + ": cannot read the token file");
-      std::stringstream ss;
-      ss << in.rdbuf();
-      o.token = Trimmed(ss.str());
-    }
+    if (!token_file.empty()) o.token = fabatlas::protocol::ReadTokenFile(token_file);
     fabatlas::coordinator::Coordinator coordinator(o);
     coordinator.Start();
     std::cerr << "fabatlas-coordinator listening on port " << coordinator.port() << "\n";

@@ -8,12 +8,11 @@
 
 #include <atomic>
 #include <csignal>
-#include <fstream>
 #include <iostream>
-#include <sstream>
 #include <thread>
 
 #include "fabatlas/error.h"
+#include "fabatlas/protocol/channel.h"
 #include "fabatlas/worker/worker.h"
 
 int main(int argc, char** argv) {
@@ -48,15 +47,7 @@ int main(int argc, char** argv) {
     stop = true;
   }).detach();
   try {
-    if (!token_file.empty()) {
-      std::ifstream in(token_file);
-      if (!in) throw fabatlas::InputError(token_file + ": cannot read the token file");
-      std::stringstream ss;
-      ss << in.rdbuf();
-      o.security.token = ss.str();
-      while (!o.security.token.empty() && (o.security.token.back() == '\n' || o.security.token.back() == ' '))
-        o.security.token.pop_back();
-    }
+    if (!token_file.empty()) o.security.token = fabatlas::protocol::ReadTokenFile(token_file);
     auto summary = fabatlas::worker::RunWorker(o, stop);
     std::cerr << "fabatlas-worker: ran " << summary.tasks_run << " tasks, uploaded " << summary.blobs_uploaded
               << " blobs, downloaded " << summary.solids_downloaded << " solids, re-evaluated "

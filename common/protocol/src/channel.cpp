@@ -16,6 +16,13 @@ std::string ReadPemFile(const std::string& path, const std::string& what) {
   return out.str();
 }
 
+std::string ReadTokenFile(const std::string& path) {
+  std::string token = ReadPemFile(path, "token file");
+  while (!token.empty() && (token.back() == '\n' || token.back() == '\r' || token.back() == ' ')) token.pop_back();
+  if (token.empty()) throw InputError(path + ": the token file is empty");
+  return token;
+}
+
 bool IsLoopback(const std::string& address) {
   std::string host = address;
   if (host.rfind("dns:", 0) == 0) host = host.substr(4);

@@ -41,4 +41,8 @@ grpc::Status CheckToken(const grpc::ServerContext& context, const std::string& t
 // Reads a whole file; InputError naming it when unreadable.
 std::string ReadPemFile(const std::string& path, const std::string& what);
 
+// The bearer token stored in `path`, without trailing line breaks or spaces.
+// InputError naming the file when it is unreadable or holds no token.
+std::string ReadTokenFile(const std::string& path);
+
 }  // namespace fabatlas::protocol
