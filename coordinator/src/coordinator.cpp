@@ -10,7 +10,9 @@
 #include <atomic>
 #include <condition_variable>
 #include <cstdio>
+#include <cstring>
 #include <deque>
+#include <functional>
 #include <fstream>
 #include <map>
 #include <set>
@@ -21,6 +23,7 @@
 #include "fabatlas/coordinator/publish.h"
 #include "fabatlas/design/design.h"
 #include "fabatlas/error.h"
+#include "fabatlas/mesh/write_mesh.h"
 #include "fabatlas/precompute/design_evaluator.h"
 #include "fabatlas/precompute/form_outputs.h"
 #include "fabatlas/protocol/channel.h"
@@ -224,7 +227,7 @@ struct Coordinator::Impl {
       return out;
     }
 
-   private:
+    // Any tasks (here TASK_KIND_SWEPT_VOLUME), run by the workers; results in order.
     std::vector<v1::TaskResult> Run(const std::vector<v1::TaskPayload>& payloads) {
       std::vector<std::string> bytes, keys;
       std::vector<int> kinds;
@@ -239,12 +242,80 @@ struct Coordinator::Impl {
       return out;
     }
 
+   private:
     Impl& impl_;
     std::string job_id_, digest_;
     int subdivisions_;
     // Root solid blob of each valid sample seen (SampleResult.solid_digest).
     std::map<sampling::PointKey, std::string> solid_digests_;
   };
+
+  // Seed 004, Sec. 6.7: the cutter of every carve_swept node of the design,
+  // each computed once by a worker as a TASK_KIND_SWEPT_VOLUME task at the
+  // centre of the design space (the middle key of every dimension). Writes
+  // out/swept_volumes.json (per node: volume, triangles, time steps, active
+  // voxels, surface digest) and the cutter surfaces the workers uploaded as
+  // out/swept_<k>.ply, in the frame object's body coordinates. No file when
+  // the design has no carve_swept node.
+  void PublishSweptVolumes(const design::Design& design, const sampling::DesignSpace& space,
+                           RemoteExecutor& executor, const fs::path& out) {
+    std::vector<std::string> paths;
+    std::function<void(const design::Node&, const std::string&)> walk = [&](const design::Node& n,
+                                                                              const std::string& path) {
+      if (n.op == "carve_swept") paths.push_back(path);
+      for (std::size_t i = 0; i < n.children.size(); ++i) walk(n.children[i], path + "/" + std::to_string(i));
+    };
+    walk(design.tree, "root");
+    for (const auto& o : design.objects) walk(o.tree, "object:" + o.name);
+    if (paths.empty()) return;
+    sampling::SampleTask centre;
+    for (int d = 0; d < space.dimension_count(); ++d) {
+      const auto lo = space.key_lo(d), hi = space.key_hi(d);
+      centre.point.key.push_back(space.can_split(d, lo, hi) ? space.split_key(d, lo, hi) : lo);
+    }
+    centre.point.u = space.point(centre.point.key);
+    std::vector<v1::TaskPayload> payloads;
+    for (const auto& path : paths) {
+      v1::TaskPayload p = protocol::SamplePayload(centre);
+      p.set_kind(v1::TASK_KIND_SWEPT_VOLUME);
+      p.mutable_swept()->set_node_path(path);
+      payloads.push_back(std::move(p));
+    }
+    const std::vector<v1::TaskResult> results = executor.Run(payloads);
+    auto number = [](double v) {
+      char buf[40];
+      std::snprintf(buf, sizeof buf, "%.17g", v);
+      return std::string(buf);
+    };
+    std::string json = "{\n  \"point\": {";
+    for (int d = 0; d < space.dimension_count(); ++d)
+      json += std::string(d ? ", " : "") + "\"" + space.dimension(d).name + "\": " + number(centre.point.u[d]);
+    json += "},\n  \"swept_volumes\": [";
+    for (std::size_t k = 0; k < results.size(); ++k) {
+      const v1::SweptVolumeResult& r = results[k].swept_volume();
+      std::string mesh_file;
+      if (!r.surface_blob().empty() && r.surface_blob() == r.surface_sha256()) {
+        const std::string bytes = blobs->Read(r.surface_blob());
+        const std::size_t nt = r.triangles();
+        if (bytes.size() >= 12 * nt && (bytes.size() - 12 * nt) % 24 == 0) {
+          mesh::TriangleMesh m;
+          m.vertices.resize((bytes.size() - 12 * nt) / 24);
+          m.triangles.resize(nt);
+          std::memcpy(m.vertices.data(), bytes.data(), 24 * m.vertices.size());
+          std::memcpy(m.triangles.data(), bytes.data() + 24 * m.vertices.size(), 12 * nt);
+          mesh_file = "swept_" + std::to_string(k) + ".ply";
+          mesh::WriteMesh(m, out / mesh_file);
+        }
+      }
+      json += std::string(k ? "," : "") + "\n    {\"node\": \"" + paths[k] + "\", \"computed\": " +
+              (r.surface_sha256().empty() ? "false" : "true") + ", \"volume_mm3\": " + number(r.volume()) +
+              ", \"triangles\": " + std::to_string(r.triangles()) + ", \"time_steps\": " +
+              std::to_string(r.time_steps()) + ", \"active_voxels\": " + std::to_string(r.active_voxels()) +
+              ", \"surface_sha256\": \"" + r.surface_sha256() + "\", \"mesh\": \"" + mesh_file + "\"}";
+    }
+    json += "\n  ]\n}\n";
+    precompute::WriteFileAtomically(out / "swept_volumes.json", json);
+  }
 
   void Event(const std::string& job_id, const std::string& kind, const std::string& message) {
     try {
@@ -309,6 +380,7 @@ struct Coordinator::Impl {
           sampling::SampleDesignSpace(space, unused_local, executor, job_file.sampling);
       fs::path out = dir / "out";
       precompute::WriteFormOutputs(design, summary, out);
+      PublishSweptVolumes(design, space, executor, out);
       // The published artifact (docs/artifact.md): deterministic, atomic.
       storage::Artifact artifact = ArtifactOf(bundle, design.name, job_file, summary.form);
       if (WantsCache(job_file)) {

@@ -18,6 +18,8 @@
 #include "fabatlas/design/design.h"
 #include "fabatlas/error.h"
 #include "fabatlas/geometry/solid.h"
+#include "fabatlas/mesh/read_mesh.h"
+#include "fabatlas/v1/tasks.pb.h"
 #include "fabatlas/precompute/design_evaluator.h"
 #include "fabatlas/protocol/blob_transfer.h"
 #include "fabatlas/sampling/adaptive_sampler.h"
@@ -686,4 +688,58 @@ TEST(ClusterCli, WatchReconnectsAfterACoordinatorRestart) {
   for (pid_t p : workers) ::kill(p, SIGTERM);
   for (pid_t p : workers) EXPECT_EQ(WaitExit(p, std::chrono::seconds(30)), 0);
   StopAndCheckStore(c, dir / "state", id);
+}
+
+// The coordinator dispatches the cutter of a design's carve_swept node as a
+// TASK_KIND_SWEPT_VOLUME task; a worker process computes it and uploads the
+// surface, which comes back among the job's outputs. The sphere (r = 10 at
+// the centre of [9, 11]) moved 40 mm along z with a 0.5 mm offset sweeps a
+// capsule of radius 10.5: pi R^2 L + 4/3 pi R^3.
+TEST(ClusterSwept, WorkerComputesTheCapsuleOfASphereAlongASegment) {
+  fs::path dir = FreshDir("swept");
+  CoordinatorProcess c = StartCoordinator(dir / "state", 0);
+  ASSERT_GT(c.port, 0) << ReadText(dir / "state/coordinator.log");
+  const pid_t worker = StartWorker(c.port, dir / "w0");
+  const std::string id = Client(c.port).Submit(SourceDir() / "tests/cluster/data/swept_capsule.yaml");
+  const v1::JobStatus s = WaitForJob([&] { return c.port; }, id, std::chrono::seconds(240));
+  ASSERT_EQ(s.state(), v1::JOB_STATE_SUCCEEDED) << s.error() << ReadText(dir / "w0/worker.log");
+  auto outputs = Client(c.port).Fetch(id);
+  const std::string json = outputs["swept_volumes.json"];
+  ASSERT_NE(json.find("\"node\": \"object:plate\""), std::string::npos) << json;
+  EXPECT_NE(json.find("\"point\": {\"r\": 10}"), std::string::npos) << json;
+  const std::size_t at = json.find("\"volume_mm3\": ");
+  ASSERT_NE(at, std::string::npos) << json;
+  const double volume = std::strtod(json.c_str() + at + 14, nullptr);
+  const double R = 10.5, L = 40;
+  const double capsule = M_PI * R * R * L + 4.0 / 3.0 * M_PI * R * R * R;
+  EXPECT_NEAR(volume, capsule, 0.01 * capsule) << json;
+  // The published cutter surface encloses the reported volume.
+  ASSERT_FALSE(outputs["swept_0.ply"].empty()) << json;
+  const fs::path ply = dir / "swept_0.ply";
+  { std::ofstream(ply, std::ios::binary) << outputs["swept_0.ply"]; }
+  const mesh::TriangleMesh m = mesh::ReadMesh(ply);
+  double enclosed = 0;
+  for (const auto& t : m.triangles) {
+    const auto &a = m.vertices[t[0]], &b = m.vertices[t[1]], &e = m.vertices[t[2]];
+    enclosed += (a[0] * (b[1] * e[2] - b[2] * e[1]) - a[1] * (b[0] * e[2] - b[2] * e[0]) +
+                 a[2] * (b[0] * e[1] - b[1] * e[0])) / 6;
+  }
+  EXPECT_NEAR(enclosed, volume, 1e-9 * volume);
+  ::kill(worker, SIGTERM);
+  EXPECT_EQ(WaitExit(worker, std::chrono::seconds(30)), 0);
+  ::kill(c.pid, SIGTERM);
+  EXPECT_EQ(WaitExit(c.pid, std::chrono::seconds(30)), 0);
+  // Exactly one swept-volume task, done once, by the worker.
+  storage::JobStore store(dir / "state/state.db");
+  int swept = 0;
+  for (const auto& task : store.Tasks(id)) {
+    if (task.kind != v1::TASK_KIND_SWEPT_VOLUME) continue;
+    ++swept;
+    EXPECT_EQ(task.completions, 1);
+    v1::TaskResult r;
+    ASSERT_TRUE(r.ParseFromString(task.result));
+    EXPECT_GT(r.cpu_seconds(), 0);
+    EXPECT_EQ(r.swept_volume().surface_blob(), r.swept_volume().surface_sha256());
+  }
+  EXPECT_EQ(swept, 1);
 }

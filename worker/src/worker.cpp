@@ -341,6 +341,8 @@ class Worker {
           out->set_time_steps(s.time_steps);
           out->set_active_voxels(s.active_voxels);
           out->set_surface_sha256(s.surface_sha256);
+          // The cutter itself, for the coordinator to publish (tasks.proto).
+          out->set_surface_blob(Upload(s.surface_bytes));
         } else {
           done.set_error("unknown task kind " + std::to_string(p.kind()));
           return done;

@@ -477,6 +477,7 @@ SweptVolumeResult ComputeSweptVolume(const Design& design, const Point& u, const
       }
     }
     r.surface_sha256 = Sha256Hex(bytes);
+    r.surface_bytes = std::move(bytes);
     return r;
   } catch (const SampleFailure& e) {
     throw InputError(where + ": " + e.what());

@@ -97,6 +97,8 @@ struct SweptVolumeResult {
   // SHA-256 (hex) of the surface: vertex coordinates as little-endian
   // doubles, then triangle indices as little-endian int32.
   std::string surface_sha256;
+  // The bytes hashed above (vertex count = (size - 12 triangles) / 24).
+  std::string surface_bytes;
 };
 
 // `node_path` addresses the node as subtree records do: "root/1/0" in the
