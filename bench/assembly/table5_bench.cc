@@ -1,7 +1,7 @@
 // Full-solve time of each seed 000 Table 5 example (pre-checks + two-step
 // solve), median of N runs, side by side with the published Python times
 // (data/fabhacks/EXAMPLES.md). Usage:
-//   assembly_table5_bench [--runs N] [--configs DIR]
+//   assembly_table5_bench [--runs N] [--configs DIR] [--only NAME] [--poses]
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
@@ -16,8 +16,12 @@ using namespace fabatlas::assembly;
 
 int main(int argc, char** argv) {
   int runs = 5;
-  std::string dir = "configs/assemblies";
+  std::string dir = "configs/assemblies", only;
+  bool poses = false;
+  for (int i = 1; i < argc; ++i)
+    if (std::string(argv[i]) == "--poses") poses = true;  // print every part's step-1 and relaxed position
   for (int i = 1; i + 1 < argc; i += 2) {
+    if (std::string(argv[i]) == "--only") only = argv[i + 1];
     if (std::string(argv[i]) == "--runs") runs = std::atoi(argv[i + 1]);
     if (std::string(argv[i]) == "--configs") dir = argv[i + 1];
   }
@@ -38,6 +42,7 @@ int main(int argc, char** argv) {
   std::printf("|---|---|---|---|---|---|---|---|---|\n");
   try {
     for (const auto& ex : examples) {
+      if (!only.empty() && only != ex.file) continue;
       const Program prog = LoadProgram(dir + "/" + ex.file + ".yaml");
       std::vector<double> t;
       SolveSummary s;
@@ -53,6 +58,12 @@ int main(int argc, char** argv) {
                   s.starts_tried, med, ex.published_s, ex.published_s / med);
       for (const auto& m : s.messages) std::printf("    note: %s\n", m.c_str());
       for (const auto& f : s.falls_apart) std::printf("    falls apart: %s\n", f.c_str());
+      for (std::size_t i = 0; poses && i < s.poses.size(); ++i) {
+        const auto a = s.step1_poses.empty() ? s.poses[i].translation() : s.step1_poses[i].translation();
+        const auto b = s.poses[i].translation();
+        std::printf("    %s: step 1 [%.1f, %.1f, %.1f] relaxed [%.1f, %.1f, %.1f]\n", prog.instances[i].name.c_str(), a.x(),
+                    a.y(), a.z(), b.x(), b.y(), b.z());
+      }
     }
   } catch (const fabatlas::InputError& e) {
     std::fprintf(stderr, "%s\n", e.what());

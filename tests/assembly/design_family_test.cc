@@ -1,4 +1,4 @@
-// Assemblies as a design family for precompute: configs/designs/clip_lights.yaml
+// Assemblies as a design family for precompute: configs/assemblies/clip_lights_family.yaml
 // evaluated through the design model (op `assembly`, checks
 // assembly_feasible / assembly_stable / target_reached).
 #include <filesystem>
@@ -16,7 +16,7 @@ using namespace fabatlas;
 
 namespace {
 
-design::Design ClipLights() { return design::LoadDesign(fabatlas::testing::SourceDir() / "configs/designs/clip_lights.yaml"); }
+design::Design ClipLights() { return design::LoadDesign(fabatlas::testing::SourceDir() / "configs/assemblies/clip_lights_family.yaml"); }
 
 const design::CheckOutcome& Check(const design::SampleResult& r, const std::string& name) {
   for (const auto& c : r.checks)

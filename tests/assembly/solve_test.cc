@@ -49,9 +49,9 @@ TEST(AssemblySolve, TableFiveExamplesLoadPrecheckAndSolve) {
     EXPECT_TRUE(pre.ok) << name << ": " << (pre.issues.empty() ? "" : pre.issues[0].message);
     const SolveSummary s = SolveAssembly(p);
     feasible += s.feasible;
-    if (std::string(name) != "bird_feeder") EXPECT_TRUE(s.feasible) << name;  // see docs/assembly.md
+    EXPECT_TRUE(s.feasible) << name;
   }
-  EXPECT_GE(feasible, 12);
+  EXPECT_EQ(feasible, 13);
 }
 
 TEST(AssemblySolve, ReachableTargetsAreReached) {

@@ -21,9 +21,9 @@ Program BuildClipLights(const ClipLightsParams& p, const std::string& library_pa
   if (!(p.extension >= 0 && p.extension <= 45.7))
     throw InputError("clip lights: extension must be in [0, 45.7] mm, got " + std::to_string(p.extension));
   std::ostringstream y;
-  y << "start_with: {name: ceiling, part: Ceiling, frame: [[0, 0, 0], [0, 0, 0]]}\n"
+  y << "start_with: {name: ceiling, part: Ceiling, frame: [[0, 0, 1000], [0, 0, 0]]}\n"
     << "parts: {hanger: FabricHanger";
-  for (int k = 1; k <= p.pairs; ++k) y << ", tb" << k << ": Turnbuckle25, ring" << k << ": Ring" << ToString(p.ring);
+  for (int k = 1; k <= p.pairs; ++k) y << ", tb" << k << ": Turnbuckle, ring" << k << ": Ring" << ToString(p.ring);
   y << "}\nend_with: {name: light, part: ClipLight, frame: [[0, 0, 0], [180, 90, 0]], match_rotation: false}\n"
     << "connect:\n  - {a: tb1.hook1, b: ceiling.hook}\n";
   for (int k = 1; k <= p.pairs; ++k) {
@@ -32,10 +32,10 @@ Program BuildClipLights(const ClipLightsParams& p, const std::string& library_pa
   }
   y << "  - {a: ring" << p.pairs << ".ring, b: hanger.hook}\n  - {a: light.clip, b: hanger.rod}\n";
   Program prog = ParseProgram(y.str(), "clip_lights(n=" + std::to_string(p.pairs) + ")", library_path, mesh_dir);
-  // Turnbuckle with extension l: hook centres 130.1 + l apart.
-  Part& tb = prog.library.parts.at("Turnbuckle25");
-  const double h = (130.1 + p.extension) / 2;
-  for (auto& prim : tb.primitives) prim.frame.position.z() = prim.name == "hook1" ? h : -h;
+  // Turnbuckle with extension l: the library's frames are fitted on the
+  // closed turnbuckle (long axis y); each hook moves out by l/2.
+  Part& tb = prog.library.parts.at("Turnbuckle");
+  for (auto& prim : tb.primitives) prim.frame.position.y() += (prim.frame.position.y() > 0 ? 0.5 : -0.5) * p.extension;
   return prog;
 }
 

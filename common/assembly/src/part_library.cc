@@ -1,9 +1,13 @@
 #include "fabatlas/assembly/part_library.h"
 
 #include <filesystem>
+#include <map>
+#include <mutex>
+#include <sstream>
 #include <stdexcept>
 
 #include "connector_frames.h"
+#include "fabatlas/assembly/fit_primitive.h"
 #include "fabatlas/assembly/mass_properties.h"
 #include "yaml_errors.h"
 
@@ -199,6 +203,53 @@ const std::map<PT, std::vector<std::string>>& RequiredShape() {
   return k;
 }
 
+Eigen::Vector3d AsVector(const std::string& file, const YAML::Node& n, const std::string& what) {
+  if (!n.IsSequence() || n.size() != 3) internal::Fail(file, n, what + " must be [x, y, z]");
+  return {internal::AsDouble(file, n[0], what), internal::AsDouble(file, n[1], what), internal::AsDouble(file, n[2], what)};
+}
+
+// fit: {select: [[x0,y0,z0],[x1,y1,z1]], up: [x,y,z], down: [x,y,z], shift: [x,y,z]} — the
+// primitive frame derived from the mesh vertices inside the box (hook/ring:
+// FitArc + ArcFrame; rod: FitAxis + AxisFrame; fabatlas/assembly/fit_primitive.h).
+// Remembered per (mesh, arguments): generated families reload the library.
+Frame FitFrame(const std::string& file, const YAML::Node& n, const Primitive& p, const std::string& mesh) {
+  using internal::Fail;
+  if (!n.IsMap() || !n["select"] || !n["select"].IsSequence() || n["select"].size() != 2)
+    Fail(file, n, "fit needs select: [[xmin, ymin, zmin], [xmax, ymax, zmax]]");
+  for (const auto& kv : n)
+    if (const auto k = kv.first.as<std::string>(); k != "select" && k != "up" && k != "down" && k != "shift")
+      Fail(file, kv.first, "unknown key '" + k + "' in fit (expected select, up, down, shift)");
+  const Eigen::Vector3d lo = AsVector(file, n["select"][0], "select"), hi = AsVector(file, n["select"][1], "select");
+  const Eigen::Vector3d up = n["up"] ? AsVector(file, n["up"], "up") : Eigen::Vector3d::UnitZ();
+  const Eigen::Vector3d down = n["down"] ? AsVector(file, n["down"], "down") : Eigen::Vector3d(-Eigen::Vector3d::UnitZ());
+  const bool arc = p.type == PrimitiveType::kHook || p.type == PrimitiveType::kRing;
+  if (!arc && p.type != PrimitiveType::kRod) Fail(file, n, "fit is implemented for hooks, rings and rods");
+  const double arc_angle = p.type == PrimitiveType::kHook ? p.Shape("arc_angle") : 360;
+  std::ostringstream key;
+  key.precision(17);
+  key << mesh << "|" << static_cast<int>(p.type) << "|" << arc_angle << "|" << lo.transpose() << "|" << hi.transpose()
+      << "|" << up.transpose() << "|" << down.transpose() << "|"
+      << (n["shift"] ? AsVector(file, n["shift"], "shift") : Eigen::Vector3d::Zero()).transpose();
+  static std::mutex mutex;
+  static std::map<std::string, Frame> known;
+  {
+    std::lock_guard<std::mutex> lock(mutex);
+    if (auto it = known.find(key.str()); it != known.end()) return it->second;
+  }
+  Frame f;
+  try {
+    const auto points = MeshPointsIn(mesh, lo, hi);
+    f = arc ? ArcFrame(FitArc(points), arc_angle, down) : AxisFrame(FitAxis(points), up);
+  } catch (const InputError& e) {
+    Fail(file, n, "primitive '" + p.name + "': " + e.what());
+  }
+  // shift: a translation (mm, part frame) added to the fitted frame, e.g.
+  // a turnbuckle hook moved out by half the extension.
+  if (n["shift"]) f.position += AsVector(file, n["shift"], "shift");
+  std::lock_guard<std::mutex> lock(mutex);
+  return known[key.str()] = f;
+}
+
 }  // namespace
 
 PartLibrary LoadPartLibrary(const std::string& file, const std::string& mesh_dir) {
@@ -241,6 +292,7 @@ PartLibrary LoadPartLibrary(const std::string& file, const std::string& mesh_dir
         const std::string k = e.first.as<std::string>();
         if (k == "type") continue;
         if (k == "frame") p.frame = AsFrame(file, e.second, "frame");
+        else if (k == "fit") continue;  // after the shape, below
         else if (k == "closed") p.closed = e.second.as<bool>();
         else if (k == "flex") p.flex = e.second.as<bool>();
         else if (k == "clamped") p.clamped = e.second.as<bool>();
@@ -250,6 +302,11 @@ PartLibrary LoadPartLibrary(const std::string& file, const std::string& mesh_dir
       for (const auto& req : RequiredShape().at(p.type))
         if (!p.shape.count(req)) Fail(file, pn, std::string(ToString(p.type)) + " '" + p.name + "' lacks '" + req + "'");
       if (p.type == PT::kRing) p.closed = true;  // rings are always closed (seed 000, 4.1)
+      if (pn["fit"]) {
+        if (pn["frame"]) Fail(file, pn["fit"], "primitive '" + p.name + "' has both 'frame' and 'fit'");
+        if (part.mesh.empty()) Fail(file, pn["fit"], "primitive '" + p.name + "': 'fit' needs the part's 'mesh'");
+        p.frame = FitFrame(file, pn["fit"], p, (std::filesystem::path(mesh_dir) / part.mesh).string());
+      }
       if ((p.type == PT::kHook || p.type == PT::kRing) && p.CriticalDimension() <= 0)
         Fail(file, pn, "primitive '" + p.name + "' has thickness >= arc_radius");
       part.primitives.push_back(p);

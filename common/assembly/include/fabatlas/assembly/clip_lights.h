@@ -34,7 +34,7 @@ struct ClipLightsResult {
 };
 
 // Builds the program for `p` from the part library at `library_path` (the
-// library's Turnbuckle hooks sit (130.1 + l)/2 either side of its centre).
+// library's Turnbuckle hooks, fitted on the closed turnbuckle, move out by l/2).
 // Throws InputError for parameters outside their ranges.
 Program BuildClipLights(const ClipLightsParams& p, const std::string& library_path,
                         const std::string& mesh_dir = "");
