@@ -17,9 +17,16 @@
 // 4. Blob ingest MB/s on loopback (chunked upload, fsync, SHA-256 verify).
 // 5. Speed-up of 2 workers over 1 (1 slot each, so each worker evaluates on
 //    one thread: fabatlas-worker --threads defaults to --slots) on a
-//    CPU-bound sampling job, with fresh coordinator state per run, runs
-//    alternating 1, 2, 1, 2, ...; also the coordinator's CPU time per task
-//    and the workers' CPU time (their rusage after exit).
+//    CPU-bound sampling job (--job, default pawn_small.yaml), with fresh
+//    coordinator state per run, runs alternating 1, 2, 1, 2, ...; the
+//    workers are connected before the job is submitted. Per pair and as
+//    medians: the wall-time ratio, and the CPU-time ratio = CPU of the
+//    1-worker run / CPU of the busier worker of the 2-worker run, both
+//    counted from submission to the job's end (/proc/PID/stat; process
+//    start and exit excluded). Also the coordinator's CPU time per task,
+//    the workers' whole-process CPU (rusage after exit), solids downloaded
+//    and subtrees computed. --no-lease-affinity turns lease affinity off
+//    (docs/protocol.md) for comparison.
 // Medians over R (S for the speed-up) repeats.
 #include <signal.h>
 #include <sys/prctl.h>
@@ -35,6 +42,7 @@
 #include <filesystem>
 #include <fstream>
 #include <random>
+#include <sstream>
 #include <string>
 #include <thread>
 #include <vector>
@@ -102,6 +110,20 @@ double StopWorkers(std::vector<pid_t>& pids, double* max_cpu = nullptr) {
   }
   pids.clear();
   return cpu;
+}
+
+// CPU seconds (user + system, all threads) a live process has used so far.
+double LiveCpuSeconds(pid_t pid) {
+  std::ifstream in("/proc/" + std::to_string(pid) + "/stat");
+  std::string stat((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  std::size_t paren = stat.rfind(')');
+  if (paren == std::string::npos) return 0;
+  std::istringstream fields(stat.substr(paren + 2));
+  std::string field;
+  double ticks = 0;
+  for (int i = 3; i <= 15 && fields >> field; ++i)
+    if (i == 14 || i == 15) ticks += std::stod(field);  // utime, stime
+  return ticks / static_cast<double>(sysconf(_SC_CLK_TCK));
 }
 
 // Sum of the thread CPU seconds the workers measured inside sample and ΔG
@@ -176,8 +198,10 @@ int main(int argc, char** argv) {
   coordinator::CoordinatorOptions options;
   options.listen = "127.0.0.1:0";
   options.state_dir = dir / "state";
-  for (int i = 1; i < argc; ++i)
+  for (int i = 1; i < argc; ++i) {
     if (std::strcmp(argv[i], "--fsync-commits") == 0) options.fsync_commits = true;  // synchronous=FULL
+    if (std::strcmp(argv[i], "--no-lease-affinity") == 0) options.lease_affinity = false;
+  }
   coordinator::Coordinator c(options);
   c.Start();
   std::string target = "127.0.0.1:" + std::to_string(c.port());
@@ -309,8 +333,10 @@ int main(int argc, char** argv) {
 
   // Speed-up on CPU-bound samples: fresh coordinator state per run.
   if (fs::exists(job) && Run("speedup")) {
-    std::vector<double> wall[3], coordinator_cpu[3], worker_cpu[3], busiest_cpu[3];
+    std::vector<double> wall[3], coordinator_cpu[3], worker_cpu[3], busiest_cpu[3], process_cpu[3];
     long long task_count = 0;
+    std::printf("speed-up of 2 workers over 1 x 1 slot, %s, lease affinity %s\n", job.filename().c_str(),
+                options.lease_affinity ? "on" : "off");
     for (int r = 0; r < speedup_repeats; ++r) {
       for (int n : {1, 2}) {
         coordinator::CoordinatorOptions o = options;
@@ -320,20 +346,33 @@ int main(int argc, char** argv) {
         sc.Start();
         std::vector<pid_t> pids;
         std::vector<fs::path> caches;
+        std::int64_t spawned_ms = std::chrono::duration_cast<std::chrono::milliseconds>(
+                                      std::chrono::system_clock::now().time_since_epoch()).count();
         for (int i = 0; i < n; ++i) {
           caches.push_back(dir / ("cpu" + name + "_" + std::to_string(i)));
           pids.push_back(SpawnWorker(sc.port(), 1, caches.back()));
         }
+        // Connected (one Sync each) before the job starts.
+        while (sc.store().CountWorkers(spawned_ms - 1000) < n)
+          std::this_thread::sleep_for(std::chrono::milliseconds(20));
         coordinator::JobClient client("127.0.0.1:" + std::to_string(sc.port()), {});
+        std::vector<double> cpu_start;
+        for (pid_t p : pids) cpu_start.push_back(LiveCpuSeconds(p));
         double cpu0 = ProcessCpuSeconds();
         auto t0 = Clock::now();
         std::string id = client.Submit(job);
         auto s = client.Watch(id, [](const v1::JobStatus&) { return true; });
         wall[n].push_back(Seconds(t0, Clock::now()));
         coordinator_cpu[n].push_back(ProcessCpuSeconds() - cpu0);
-        double busiest = 0;
-        worker_cpu[n].push_back(StopWorkers(pids, &busiest));
+        double job_cpu = 0, busiest = 0;
+        for (std::size_t i = 0; i < pids.size(); ++i) {
+          double used = LiveCpuSeconds(pids[i]) - cpu_start[i];
+          job_cpu += used;
+          busiest = std::max(busiest, used);
+        }
+        worker_cpu[n].push_back(job_cpu);
         busiest_cpu[n].push_back(busiest);
+        process_cpu[n].push_back(StopWorkers(pids));
         task_count = s.tasks_total();
         auto [sample_cpu, change_cpu] = TaskCpuSeconds(sc.store(), id);
         double subtree_seconds = 0;
@@ -342,32 +381,32 @@ int main(int argc, char** argv) {
           subtree_seconds += row.seconds_sum;
           subtree_computations += row.seconds_count;
         }
-        std::printf("    subtrees computed: %lld (%.2f s wall inside tasks)\n",
-                    static_cast<long long>(subtree_computations), subtree_seconds);
-        std::printf("  run %d, %d worker(s) x 1 slot: %.2f s wall, coordinator CPU %.2f s, workers CPU %.2f s "
-                    "(busiest %.2f s; inside tasks: samples %.2f s, ΔG %.2f s), %lld tasks, state %s\n",
-                    r, n, wall[n].back(), coordinator_cpu[n].back(), worker_cpu[n].back(), busiest, sample_cpu,
-                    change_cpu, static_cast<long long>(s.tasks_total()), coordinator::JobStateName(s.state()).c_str());
-        std::fflush(stdout);
+        std::printf("  run %d, %d worker(s): %.2f s wall; workers CPU during the job %.2f s (busiest %.2f s; "
+                    "inside tasks: samples %.2f s, ΔG %.2f s; whole processes %.2f s); coordinator CPU %.2f s; "
+                    "%lld subtrees computed; %lld tasks, %s\n",
+                    r, n, wall[n].back(), job_cpu, busiest, sample_cpu, change_cpu, process_cpu[n].back(),
+                    coordinator_cpu[n].back(), static_cast<long long>(subtree_computations),
+                    static_cast<long long>(s.tasks_total()), coordinator::JobStateName(s.state()).c_str());
         for (const auto& cache : caches)
           std::printf("    %s\n", LastLine(cache.parent_path() / (cache.filename().string() + ".log")).c_str());
+        std::fflush(stdout);
         sc.Shutdown();
       }
+      std::printf("  pair %d: wall ratio %.2fx, CPU ratio %.2fx\n", r, wall[1][r] / wall[2][r],
+                  busiest_cpu[1][r] / busiest_cpu[2][r]);
     }
-    std::vector<double> ratios;
-    for (int r = 0; r < speedup_repeats; ++r) ratios.push_back(wall[1][r] / wall[2][r]);
-    std::vector<double> cpu_ratios;
-    for (int r = 0; r < speedup_repeats; ++r) cpu_ratios.push_back(busiest_cpu[1][r] / busiest_cpu[2][r]);
-    std::printf("CPU-time speed-up (CPU of the 1-worker run / CPU of the busier worker of the 2-worker run; what "
-                "the wall-time ratio tends to on 2 idle cores when barriers cost nothing): median %.2fx\n",
-                Median(cpu_ratios));
-    std::printf("%s, %lld tasks, medians of %d runs: 1 worker %.2f s, 2 workers %.2f s; speed-up of 2 workers "
-                "over 1: median of per-pair ratios %.2fx (ratio of medians %.2fx); coordinator CPU per task %.2f ms "
-                "(1 worker) / %.2f ms (2 workers); workers CPU %.1f s / %.1f s\n",
-                job.filename().c_str(), task_count, speedup_repeats, Median(wall[1]), Median(wall[2]), Median(ratios),
-                Median(wall[1]) / Median(wall[2]), 1000.0 * Median(coordinator_cpu[1]) / std::max(1LL, task_count),
-                1000.0 * Median(coordinator_cpu[2]) / std::max(1LL, task_count), Median(worker_cpu[1]),
-                Median(worker_cpu[2]));
+    std::vector<double> ratios, cpu_ratios;
+    for (int r = 0; r < speedup_repeats; ++r) {
+      ratios.push_back(wall[1][r] / wall[2][r]);
+      cpu_ratios.push_back(busiest_cpu[1][r] / busiest_cpu[2][r]);
+    }
+    std::printf("%s, %lld tasks, %d pairs: wall-time speed-up median %.2fx (1 worker %.2f s, 2 workers %.2f s); "
+                "CPU-time speed-up median %.2fx (1 worker %.2f s, busier of 2 %.2f s, both %.2f s); coordinator "
+                "CPU per task %.2f ms (1 worker) / %.2f ms (2 workers)\n",
+                job.filename().c_str(), task_count, speedup_repeats, Median(ratios), Median(wall[1]),
+                Median(wall[2]), Median(cpu_ratios), Median(busiest_cpu[1]), Median(busiest_cpu[2]),
+                Median(worker_cpu[2]), 1000.0 * Median(coordinator_cpu[1]) / std::max(1LL, task_count),
+                1000.0 * Median(coordinator_cpu[2]) / std::max(1LL, task_count));
   }
   fs::remove_all(dir);
   return 0;

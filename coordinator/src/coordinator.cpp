@@ -7,6 +7,7 @@
 #include <grpcpp/health_check_service_interface.h>
 #include <httplib.h>
 
+#include <algorithm>
 #include <atomic>
 #include <condition_variable>
 #include <cstdio>
@@ -90,8 +91,18 @@ struct Coordinator::Impl {
   struct Waiter {
     std::string job_id;
     std::map<std::string, std::string> results;
+    std::map<std::string, std::string> workers;  // key -> worker that produced it ("" = from the store)
     std::size_t pending = 0;
   };
+  // Connected workers for lease affinity: slots (free + in flight) and the
+  // last Sync. A worker silent for a lease period, or leaving, loses its
+  // task preferences (JobStore::ForgetAffinity).
+  struct WorkerSeen {
+    int slots = 0;
+    std::int64_t last_ms = 0;
+  };
+  std::mutex workers_mu;
+  std::map<std::string, WorkerSeen> workers_seen;
   std::mutex results_mu;
   std::condition_variable results_cv;
   std::unordered_multimap<std::string, Waiter*> waiting;
@@ -123,24 +134,57 @@ struct Coordinator::Impl {
     work_cv.notify_all();
   }
 
-  void Deliver(const std::string& key, const std::string& result) {
+  struct Delivery {
+    const std::string* key;
+    const std::string* result;
+  };
+  // Hands results to the waiting drivers; wakes them only when one has all
+  // its results (one wake-up per batch, not per task).
+  void Deliver(const std::vector<Delivery>& results, const std::string& worker = "") {
+    bool complete = false;
     {
       std::lock_guard lock(results_mu);
-      auto range = waiting.equal_range(key);
-      for (auto it = range.first; it != range.second; ++it)
-        if (it->second->results.emplace(key, result).second) --it->second->pending;
+      for (const Delivery& d : results) {
+        auto range = waiting.equal_range(*d.key);
+        for (auto it = range.first; it != range.second; ++it)
+          if (it->second->results.emplace(*d.key, *d.result).second) {
+            it->second->workers.emplace(*d.key, worker);
+            if (--it->second->pending == 0) complete = true;
+          }
+      }
     }
-    results_cv.notify_all();
+    if (complete) results_cv.notify_all();
+  }
+  void Deliver(const std::string& key, const std::string& result) { Deliver({{&key, &result}}); }
+
+  // Workers that synced within the last lease period with at least one
+  // slot, by id.
+  std::vector<std::pair<std::string, int>> ConnectedWorkers() {
+    std::vector<std::pair<std::string, int>> out;
+    std::int64_t since = NowMs() - options.lease_ms;
+    std::lock_guard lock(workers_mu);
+    for (const auto& [id, seen] : workers_seen)
+      if (seen.slots > 0 && seen.last_ms >= since) out.emplace_back(id, seen.slots);
+    return out;
   }
 
+  // Runs the tasks (serialized payloads) through the workers; results in
+  // order. preferred[i]: workers task i prefers (lease affinity; may be
+  // empty). workers_out[i]: the worker whose result was accepted, or "" for
+  // a result already in the store.
   std::vector<std::string> RunTasks(const std::string& job_id, const std::vector<std::string>& payloads,
-                                    const std::vector<std::string>& keys, const std::vector<int>& kinds) {
+                                    const std::vector<std::string>& keys, const std::vector<int>& kinds,
+                                    const std::vector<std::vector<std::string>>& preferred = {},
+                                    std::vector<std::string>* workers_out = nullptr) {
     Waiter waiter;
     waiter.job_id = job_id;
     std::vector<storage::NewTask> tasks;
     std::set<std::string> unique;
     for (std::size_t i = 0; i < keys.size(); ++i)
-      if (unique.insert(keys[i]).second) tasks.push_back({keys[i], job_id, kinds[i], payloads[i]});
+      if (unique.insert(keys[i]).second) {
+        tasks.push_back({keys[i], job_id, kinds[i], payloads[i], {}});
+        if (options.lease_affinity && i < preferred.size()) tasks.back().preferred_workers = preferred[i];
+      }
     {
       std::lock_guard lock(results_mu);
       waiter.pending = unique.size();
@@ -164,7 +208,9 @@ struct Coordinator::Impl {
       unregister();
       throw;
     }
-    for (const auto& [key, result] : finished) Deliver(key, result);
+    std::vector<Delivery> stored;
+    for (const auto& [key, result] : finished) stored.push_back({&key, &result});
+    Deliver(stored);
     SignalWork();
     std::unique_lock lock(results_mu);
     results_cv.wait(lock, [&] {
@@ -178,6 +224,10 @@ struct Coordinator::Impl {
     std::vector<std::string> out;
     out.reserve(keys.size());
     for (const auto& key : keys) out.push_back(waiter.results.at(key));
+    if (workers_out) {
+      workers_out->clear();
+      for (const auto& key : keys) workers_out->push_back(waiter.workers[key]);
+    }
     return out;
   }
 
@@ -193,10 +243,29 @@ struct Coordinator::Impl {
                                                         std::vector<sampling::TaskTiming>* timings) override {
       std::vector<v1::TaskPayload> payloads;
       for (const auto& t : tasks) payloads.push_back(protocol::SamplePayload(t));
-      auto results = Run(payloads);
+      // Lease affinity: the batch (sorted by point key) cut into contiguous
+      // runs, one per connected worker in proportion to its slots, so that
+      // neighbouring samples, which share subtrees and ΔG edges, mostly
+      // land on one worker.
+      std::vector<std::vector<std::string>> preferred(tasks.size());
+      auto workers = impl_.ConnectedWorkers();
+      if (workers.size() >= 2) {
+        std::size_t total = 0;
+        for (const auto& w : workers) total += static_cast<std::size_t>(w.second);
+        std::size_t begin = 0, slots_before = 0;
+        for (const auto& [id, slots] : workers) {
+          slots_before += static_cast<std::size_t>(slots);
+          std::size_t end = tasks.size() * slots_before / total;
+          for (std::size_t i = begin; i < end; ++i) preferred[i] = {id};
+          begin = end;
+        }
+      }
+      std::vector<std::string> producers;
+      auto results = Run(payloads, preferred, &producers);
       std::vector<sampling::SampleOutcome> out;
       if (timings) timings->assign(tasks.size(), {});
       for (std::size_t i = 0; i < results.size(); ++i) {
+        if (!producers[i].empty()) holders_[tasks[i].point.key] = producers[i];
         if (!results[i].sample().solid_digest().empty())
           solid_digests_[tasks[i].point.key] = results[i].sample().solid_digest();
         out.push_back(protocol::SampleOutcomeOf(results[i]));
@@ -209,6 +278,7 @@ struct Coordinator::Impl {
         const std::vector<sampling::GeometryChangeTask>& tasks, sampling::SampleEvaluator&,
         std::vector<sampling::TaskTiming>* timings) override {
       std::vector<v1::TaskPayload> payloads;
+      std::vector<std::vector<std::string>> preferred;
       for (const auto& t : tasks) {
         // The samples' root solids, so that any worker can skip evaluating
         // them again (tasks.proto "Geometry blobs").
@@ -216,8 +286,15 @@ struct Coordinator::Impl {
         if (auto it = solid_digests_.find(t.point_a.key); it != solid_digests_.end()) p.set_solid_digest_a(it->second);
         if (auto it = solid_digests_.find(t.point_b.key); it != solid_digests_.end()) p.set_solid_digest_b(it->second);
         payloads.push_back(std::move(p));
+        // Lease affinity: the workers holding the solids in memory.
+        std::vector<std::string> holders;
+        for (const auto* key : {&t.point_a.key, &t.point_b.key})
+          if (auto it = holders_.find(*key); it != holders_.end() &&
+              std::find(holders.begin(), holders.end(), it->second) == holders.end())
+            holders.push_back(it->second);
+        preferred.push_back(std::move(holders));
       }
-      auto results = Run(payloads);
+      auto results = Run(payloads, preferred);
       std::vector<sampling::GeometryChangeResult> out;
       if (timings) timings->assign(tasks.size(), {});
       for (std::size_t i = 0; i < results.size(); ++i) {
@@ -227,8 +304,12 @@ struct Coordinator::Impl {
       return out;
     }
 
-    // Any tasks (here TASK_KIND_SWEPT_VOLUME), run by the workers; results in order.
-    std::vector<v1::TaskResult> Run(const std::vector<v1::TaskPayload>& payloads) {
+    // Any tasks (here TASK_KIND_SWEPT_VOLUME), run by the workers; results in
+    // order. preferred: lease affinity per task (may be empty); producers:
+    // the worker whose result was accepted ("" = already in the store).
+    std::vector<v1::TaskResult> Run(const std::vector<v1::TaskPayload>& payloads,
+                                    const std::vector<std::vector<std::string>>& preferred = {},
+                                    std::vector<std::string>* producers = nullptr) {
       std::vector<std::string> bytes, keys;
       std::vector<int> kinds;
       for (const auto& p : payloads) {
@@ -236,7 +317,7 @@ struct Coordinator::Impl {
         keys.push_back(protocol::TaskKey(p, digest_, subdivisions_));
         kinds.push_back(static_cast<int>(p.kind()));
       }
-      auto results = impl_.RunTasks(job_id_, bytes, keys, kinds);
+      auto results = impl_.RunTasks(job_id_, bytes, keys, kinds, preferred, producers);
       std::vector<v1::TaskResult> out(results.size());
       for (std::size_t i = 0; i < results.size(); ++i) out[i].ParseFromString(results[i]);
       return out;
@@ -248,6 +329,9 @@ struct Coordinator::Impl {
     int subdivisions_;
     // Root solid blob of each valid sample seen (SampleResult.solid_digest).
     std::map<sampling::PointKey, std::string> solid_digests_;
+    // The worker that evaluated each sample in this run of the driver (it
+    // holds the root solid in memory), for ΔG lease affinity.
+    std::map<sampling::PointKey, std::string> holders_;
   };
 
   // Seed 004, Sec. 6.7: the cutter of every carve_swept node of the design,
@@ -500,6 +584,19 @@ struct Coordinator::Impl {
           if (auto task = store->FindTask(e.task_key)) Deliver(e.task_key, task->result);
         }
         if (!expired.empty()) last_retry_ms = now;
+        std::vector<std::string> silent;
+        {
+          std::lock_guard lock(workers_mu);
+          for (auto it = workers_seen.begin(); it != workers_seen.end();)
+            if (it->second.last_ms < now - options.lease_ms) {
+              silent.push_back(it->first);
+              it = workers_seen.erase(it);
+            } else {
+              ++it;
+            }
+        }
+        for (const auto& id : silent)
+          if (store->ForgetAffinity(id) > 0) SignalWork();
         if (!expired.empty() || now - last_retry_ms < 31000) SignalWork();
       } catch (const std::exception&) {
       }
@@ -668,6 +765,17 @@ class WorkerServiceImpl final : public v1::WorkerService::Service {
     try {
       std::int64_t now = NowMs();
       impl_.store->TouchWorker(req->worker_id(), req->free_slots(), now);
+      {
+        std::lock_guard lock(impl_.workers_mu);
+        if (req->leaving()) {
+          impl_.workers_seen.erase(req->worker_id());
+        } else {
+          auto& seen = impl_.workers_seen[req->worker_id()];
+          seen.slots = req->free_slots() + req->in_flight_lease_ids_size();
+          seen.last_ms = now;
+        }
+      }
+      if (req->leaving() && impl_.store->ForgetAffinity(req->worker_id()) > 0) impl_.SignalWork();
       std::vector<storage::Completion> completions;
       std::vector<std::string> known(req->in_flight_lease_ids().begin(), req->in_flight_lease_ids().end());
       for (const auto& c : req->completed()) {
@@ -684,12 +792,13 @@ class WorkerServiceImpl final : public v1::WorkerService::Service {
       }
       auto outcomes = impl_.store->Complete(completions, now, o.retry_backoff_ms);
       bool requeued = false;
+      std::vector<Coordinator::Impl::Delivery> accepted;
       for (std::size_t i = 0; i < outcomes.size(); ++i) {
         resp->add_acknowledged_lease_ids(completions[i].lease_id);
         switch (outcomes[i]) {
           case storage::CompletionOutcome::kAccepted:
             ++impl_.completed_total;
-            impl_.Deliver(completions[i].task_key, completions[i].result);
+            accepted.push_back({&completions[i].task_key, &completions[i].result});
             break;
           case storage::CompletionOutcome::kFenced: ++impl_.fenced_total; break;
           case storage::CompletionOutcome::kDuplicate: ++impl_.duplicate_total; break;
@@ -697,10 +806,13 @@ class WorkerServiceImpl final : public v1::WorkerService::Service {
           case storage::CompletionOutcome::kUnknown: break;
         }
       }
+      if (!accepted.empty()) impl_.Deliver(accepted, req->worker_id());
       if (requeued) impl_.last_retry_ms = now;
       if (impl_.store->ReturnUnknownLeases(req->worker_id(), known) > 0) impl_.SignalWork();
       std::vector<std::string> in_flight(req->in_flight_lease_ids().begin(), req->in_flight_lease_ids().end());
-      for (const auto& id : impl_.store->ExtendLeases(req->worker_id(), in_flight, now + o.lease_ms))
+      // Heartbeats extend leases fully; a Sync only tops up those with less
+      // than half a lease period left (no write on most Syncs).
+      for (const auto& id : impl_.store->ExtendLeases(req->worker_id(), in_flight, now + o.lease_ms, o.lease_ms / 2))
         resp->add_revoked_lease_ids(id);
       resp->set_heartbeat_interval_ms(static_cast<int>(o.heartbeat_ms));
       if (impl_.draining || impl_.stopping || req->leaving()) {
@@ -873,6 +985,7 @@ void Coordinator::Start() {
   m.store = std::make_unique<storage::JobStore>(o.state_dir / "state.db", store_options);
   m.blobs = std::make_unique<storage::BlobStore>(o.state_dir / "blobs");
   m.store->ExtendAllLeases(NowMs() + o.lease_ms);
+  m.store->ClearAffinity();  // which workers are alive is not known yet
 
   grpc::EnableDefaultHealthCheckService(true);
   grpc::ServerBuilder builder;

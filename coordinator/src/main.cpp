@@ -35,9 +35,13 @@ int main(int argc, char** argv) {
   app.add_option("--quarantine-after", o.quarantine_after, "lease expiries before a task is quarantined");
   app.add_option("--drain-seconds", drain_seconds, "how long SIGTERM waits for running leases");
   app.add_option("--port-file", port_file, "write the bound port here once listening");
+  bool no_affinity = false;
+  app.add_flag("--no-lease-affinity", no_affinity,
+               "lease tasks oldest first to whoever asks, ignoring which worker holds their inputs");
   app.add_flag("--fsync-commits", o.fsync_commits,
                "fsync the store on every commit, so acknowledged results also survive a power loss");
   CLI11_PARSE(app, argc, argv);
+  o.lease_affinity = !no_affinity;
   sigset_t signals;
   sigemptyset(&signals);
   sigaddset(&signals, SIGTERM);

@@ -28,7 +28,10 @@ CREATE TABLE IF NOT EXISTS tasks (
   completions INTEGER NOT NULL DEFAULT 0, fenced INTEGER NOT NULL DEFAULT 0,
   not_before_ms INTEGER NOT NULL DEFAULT 0, sample_valid INTEGER NOT NULL DEFAULT -1,
   result BLOB);
-CREATE INDEX IF NOT EXISTS tasks_state ON tasks (state, seq);
+CREATE TABLE IF NOT EXISTS task_affinity (
+  worker_id TEXT NOT NULL, rank INTEGER NOT NULL, task_seq INTEGER NOT NULL,
+  PRIMARY KEY (worker_id, rank, task_seq));
+CREATE INDEX IF NOT EXISTS task_affinity_task ON task_affinity (task_seq);
 CREATE INDEX IF NOT EXISTS tasks_job ON tasks (job_id, state);
 CREATE TABLE IF NOT EXISTS leases (
   lease_id TEXT PRIMARY KEY, task_key TEXT NOT NULL, attempt INTEGER NOT NULL,
@@ -212,6 +215,21 @@ JobStore::JobStore(const std::filesystem::path& path, JobStoreOptions options)
     db_->Exec(options_.fsync_every_commit ? "PRAGMA synchronous=FULL" : "PRAGMA synchronous=NORMAL");
     if (options_.background_checkpoints) sqlite3_wal_autocheckpoint(db_->handle, 0);
     db_->Exec(kSchema);
+    // Stores made before lease affinity lack tasks.affine (1 while the task
+    // has task_affinity rows).
+    bool has_affine = false;
+    {
+      sqlite3_stmt* info = nullptr;
+      sqlite3_prepare_v2(db_->handle, "PRAGMA table_info(tasks)", -1, &info, nullptr);
+      while (info && sqlite3_step(info) == SQLITE_ROW)
+        if (std::string(reinterpret_cast<const char*>(sqlite3_column_text(info, 1))) == "affine") has_affine = true;
+      sqlite3_finalize(info);
+    }
+    if (!has_affine) db_->Exec("ALTER TABLE tasks ADD COLUMN affine INTEGER NOT NULL DEFAULT 0");
+    // The queue index; it replaces (state, seq), so a task's state change
+    // still updates as many indexes as before.
+    db_->Exec("CREATE INDEX IF NOT EXISTS tasks_neutral ON tasks (state, affine, seq)");
+    db_->Exec("DROP INDEX IF EXISTS tasks_state");
   } catch (...) {
     sqlite3_close(db_->handle);
     db_->handle = nullptr;
@@ -305,14 +323,24 @@ std::map<std::string, std::string> JobStore::JobOutputs(const std::string& job_i
 std::map<std::string, std::string> JobStore::AddTasks(const std::vector<NewTask>& tasks) {
   std::lock_guard lock(mutex_);
   Transaction t(*db_);
-  Stmt insert(*db_, "INSERT OR IGNORE INTO tasks (key, job_id, kind, payload) VALUES (?,?,?,?)");
+  Stmt insert(*db_, "INSERT OR IGNORE INTO tasks (key, job_id, kind, payload, affine) VALUES (?,?,?,?,?)");
   Stmt find(*db_, "SELECT result FROM tasks WHERE key = ? AND state IN (2, 3)");
+  Stmt prefer(*db_, "INSERT OR IGNORE INTO task_affinity (worker_id, rank, task_seq) VALUES (?,?,?)");
   std::map<std::string, std::string> finished;
   for (const NewTask& task : tasks) {
     insert.BindText(1, task.key).BindText(2, task.job_id).Bind(3, std::int64_t{task.kind});
-    insert.Bind(4, task.payload);
+    insert.Bind(4, task.payload).Bind(5, std::int64_t{task.preferred_workers.empty() ? 0 : 1});
     insert.Run();
     insert.Reset();
+    if (!task.preferred_workers.empty() && sqlite3_changes(db_->handle) == 1) {
+      // rank: how many workers share the preference (fewer = more this worker's own)
+      std::int64_t seq = sqlite3_last_insert_rowid(db_->handle);
+      for (const auto& worker : task.preferred_workers) {
+        prefer.BindText(1, worker).Bind(2, static_cast<std::int64_t>(task.preferred_workers.size())).Bind(3, seq);
+        prefer.Run();
+        prefer.Reset();
+      }
+    }
     find.BindText(1, task.key);
     if (find.Step()) finished[task.key] = find.Text(0);
     find.Reset();
@@ -362,14 +390,28 @@ std::vector<LeaseGrant> JobStore::GrantLeases(const std::string& worker_id, int 
   if (max <= 0) return grants;
   std::lock_guard lock(mutex_);
   // Pick first (this connection is the only writer and mutex_ is held), so an
-  // empty queue costs one read and no write transaction.
-  {
-    Stmt pick(*db_,
-              "SELECT t.key, t.job_id, j.bundle_digest, t.attempt, t.kind, t.payload FROM tasks t "
-              "JOIN jobs j ON j.id = t.job_id WHERE t.state = 0 AND j.state = 2 AND "
-              "t.not_before_ms <= ? ORDER BY t.seq LIMIT ?");
-    pick.Bind(1, now_ms).Bind(2, std::int64_t{max});
-    while (pick.Step()) {
+  // empty queue costs reads and no write transaction. Lease affinity
+  // (worker.proto): this worker's preferred tasks, then tasks preferring
+  // nobody, then other workers' preferred tasks from the newest.
+  constexpr const char* kColumns =
+      "SELECT t.key, t.job_id, j.bundle_digest, t.attempt, t.kind, t.payload, t.seq, t.affine FROM ";
+  static const std::string own = std::string(kColumns) +
+                                 "task_affinity a JOIN tasks t ON t.seq = a.task_seq JOIN jobs j ON j.id = t.job_id "
+                                 "WHERE a.worker_id = ? AND t.state = 0 AND j.state = 2 AND t.not_before_ms <= ? "
+                                 "ORDER BY a.rank, a.task_seq LIMIT ?";
+  static const std::string neutral = std::string(kColumns) +
+                                     "tasks t JOIN jobs j ON j.id = t.job_id WHERE t.state = 0 AND t.affine = 0 AND "
+                                     "j.state = 2 AND t.not_before_ms <= ? ORDER BY t.seq LIMIT ?";
+  static const std::string others = std::string(kColumns) +
+                                    "tasks t JOIN jobs j ON j.id = t.job_id WHERE t.state = 0 AND t.affine = 1 AND "
+                                    "j.state = 2 AND t.not_before_ms <= ? ORDER BY t.seq DESC LIMIT ?";
+  std::set<std::int64_t> picked;
+  std::vector<std::int64_t> unprefer;  // seq of granted tasks that had a preference
+  auto take = [&](Stmt& pick) {
+    while (static_cast<int>(grants.size()) < max && pick.Step()) {
+      std::int64_t seq = pick.Int(6);
+      if (!picked.insert(seq).second) continue;
+      if (pick.Int(7) != 0) unprefer.push_back(seq);
       LeaseGrant g;
       g.task_key = pick.Text(0);
       g.job_id = pick.Text(1);
@@ -381,6 +423,22 @@ std::vector<LeaseGrant> JobStore::GrantLeases(const std::string& worker_id, int 
       g.deadline_ms = now_ms + lease_ms;
       grants.push_back(std::move(g));
     }
+  };
+  {
+    Stmt pick(*db_, own.c_str());
+    pick.BindText(1, worker_id).Bind(2, now_ms).Bind(3, std::int64_t{max});
+    take(pick);
+  }
+  if (static_cast<int>(grants.size()) < max) {
+    Stmt pick(*db_, neutral.c_str());
+    pick.Bind(1, now_ms).Bind(2, std::int64_t{max - static_cast<int>(grants.size())});
+    take(pick);
+  }
+  if (static_cast<int>(grants.size()) < max) {
+    // Own preferred tasks were all taken above and may come again here.
+    Stmt pick(*db_, others.c_str());
+    pick.Bind(1, now_ms).Bind(2, std::int64_t{max - static_cast<int>(grants.size()) + static_cast<int>(unprefer.size())});
+    take(pick);
   }
   if (grants.empty()) return grants;
   Transaction t(*db_);
@@ -397,6 +455,18 @@ std::vector<LeaseGrant> JobStore::GrantLeases(const std::string& worker_id, int 
     lease.Run();
     lease.Reset();
   }
+  if (!unprefer.empty()) {
+    Stmt drop(*db_, "DELETE FROM task_affinity WHERE task_seq = ?");
+    Stmt neutral_again(*db_, "UPDATE tasks SET affine = 0 WHERE seq = ?");
+    for (std::int64_t seq : unprefer) {
+      drop.Bind(1, seq);
+      drop.Run();
+      drop.Reset();
+      neutral_again.Bind(1, seq);
+      neutral_again.Run();
+      neutral_again.Reset();
+    }
+  }
   if (!grants.empty()) {
     Stmt w(*db_, "UPDATE workers SET last_seen_ms = ? WHERE id = ?");
     w.Bind(1, now_ms).BindText(2, worker_id);
@@ -404,6 +474,41 @@ std::vector<LeaseGrant> JobStore::GrantLeases(const std::string& worker_id, int 
   }
   t.Commit();
   return grants;
+}
+
+int JobStore::ForgetAffinity(const std::string& worker_id) {
+  std::lock_guard lock(mutex_);
+  std::vector<std::int64_t> seqs;
+  {
+    Stmt s(*db_, "SELECT task_seq FROM task_affinity WHERE worker_id = ?");
+    s.BindText(1, worker_id);
+    while (s.Step()) seqs.push_back(s.Int(0));
+  }
+  if (seqs.empty()) return 0;
+  Transaction t(*db_);
+  Stmt drop(*db_, "DELETE FROM task_affinity WHERE worker_id = ?");
+  drop.BindText(1, worker_id);
+  drop.Run();
+  Stmt neutral_again(*db_,
+                     "UPDATE tasks SET affine = 0 WHERE seq = ? AND NOT EXISTS (SELECT 1 FROM task_affinity a "
+                     "WHERE a.task_seq = ?)");
+  int lost = 0;
+  for (std::int64_t seq : seqs) {
+    neutral_again.Bind(1, seq).Bind(2, seq);
+    neutral_again.Run();
+    lost += sqlite3_changes(db_->handle);
+    neutral_again.Reset();
+  }
+  t.Commit();
+  return lost;
+}
+
+void JobStore::ClearAffinity() {
+  std::lock_guard lock(mutex_);
+  Transaction t(*db_);
+  db_->Exec("DELETE FROM task_affinity");
+  db_->Exec("UPDATE tasks SET affine = 0 WHERE affine != 0");
+  t.Commit();
 }
 
 std::vector<CompletionOutcome> JobStore::Complete(const std::vector<Completion>& completions,
@@ -496,18 +601,31 @@ std::vector<CompletionOutcome> JobStore::Complete(const std::vector<Completion>&
 
 std::vector<std::string> JobStore::ExtendLeases(const std::string& worker_id,
                                                 const std::vector<std::string>& lease_ids,
-                                                std::int64_t deadline_ms) {
+                                                std::int64_t deadline_ms, std::int64_t slack_ms) {
   std::vector<std::string> revoked;
   if (lease_ids.empty()) return revoked;
   std::lock_guard lock(mutex_);
+  // Read first: a Sync that lists leases extended moments ago writes nothing.
+  std::map<std::string, std::int64_t> active;  // lease id -> deadline
+  {
+    Stmt s(*db_, "SELECT lease_id, deadline_ms FROM leases WHERE worker_id = ? AND state = 'active'");
+    s.BindText(1, worker_id);
+    while (s.Step()) active.emplace(s.Text(0), s.Int(1));
+  }
+  std::vector<const std::string*> extend;
+  for (const std::string& id : lease_ids) {
+    auto it = active.find(id);
+    if (it == active.end()) revoked.push_back(id);
+    else if (it->second < deadline_ms - slack_ms) extend.push_back(&id);
+  }
+  if (extend.empty()) return revoked;
   Transaction t(*db_);
   Stmt s(*db_,
          "UPDATE leases SET deadline_ms = MAX(deadline_ms, ?) WHERE lease_id = ? AND worker_id = ? "
          "AND state = 'active'");
-  for (const std::string& id : lease_ids) {
-    s.Bind(1, deadline_ms).BindText(2, id).BindText(3, worker_id);
+  for (const std::string* id : extend) {
+    s.Bind(1, deadline_ms).BindText(2, *id).BindText(3, worker_id);
     s.Run();
-    if (sqlite3_changes(db_->handle) == 0) revoked.push_back(id);
     s.Reset();
   }
   t.Commit();

@@ -5,6 +5,7 @@
 // kill -9 of the coordinator). After each run the durable store is checked:
 // every task key completed once, no orphaned lease, every blob verifies.
 #include <gtest/gtest.h>
+#include <sqlite3.h>
 
 #include <algorithm>
 #include <map>
@@ -27,6 +28,7 @@
 #include "fabatlas/sampling/form_json.h"
 #include "fabatlas/sampling/job_file.h"
 #include "fabatlas/protocol/job_bundle.h"
+#include "fabatlas/v1/tasks.pb.h"
 #include "fabatlas/storage/artifact.h"
 #include "fabatlas/sha256.h"
 #include "fabatlas/storage/blob_store.h"
@@ -151,13 +153,20 @@ std::string WorkerSummary(const fs::path& worker_dir) {
   return last;
 }
 
-std::string RunJobOnWorkers(const std::string& name, int workers, int slots, std::string* job_id = nullptr) {
+std::string RunJobOnWorkers(const std::string& name, int workers, int slots, std::string* job_id = nullptr,
+                            const std::vector<std::string>& coordinator_args = {}) {
   fs::path dir = FreshDir(name);
-  CoordinatorProcess c = StartCoordinator(dir / "state", 0);
+  CoordinatorProcess c = StartCoordinator(dir / "state", 0, coordinator_args);
   EXPECT_GT(c.port, 0) << ReadText(dir / "state/coordinator.log");
   std::vector<pid_t> pids;
   for (int i = 0; i < workers; ++i)
     pids.push_back(StartWorker(c.port, dir / ("w" + std::to_string(i)), {"--slots", std::to_string(slots)}));
+  {
+    // Every worker connected (one Sync) before the job starts.
+    storage::JobStore store(dir / "state/state.db");
+    for (int i = 0; i < 500 && store.CountWorkers(0) < workers; ++i)
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
   std::string id = Client(c.port).Submit(JobPath());
   v1::JobStatus s = WaitForJob([&] { return c.port; }, id, std::chrono::seconds(240));
   EXPECT_EQ(s.state(), v1::JOB_STATE_SUCCEEDED) << s.error();
@@ -198,6 +207,92 @@ TEST(ClusterLoopback, FormIsIdenticalForOneWorkerSeveralWorkersAndInProcess) {
   EXPECT_EQ(one, reference);
   std::string three = RunJobOnWorkers("three", 3, 2);
   EXPECT_EQ(three, reference);
+}
+
+namespace {
+
+// The directory FreshDir(name) made in this process.
+fs::path RunDir(const std::string& name) {
+  return fs::temp_directory_path() / ("fabatlas_cluster_" + name + "_" + std::to_string(::getpid()));
+}
+
+// Solids a worker downloaded for ΔG ("downloaded N solids" in its summary).
+int SolidsDownloaded(const fs::path& worker_dir) {
+  std::string summary = WorkerSummary(worker_dir);
+  auto at = summary.find(" blobs, downloaded ");
+  return at == std::string::npos ? -1 : std::atoi(summary.c_str() + at + 19);
+}
+
+struct Placement {
+  int total = 0, both = 0, neither = 0;
+};
+
+// Of the job's ΔG tasks, how many were run by a worker that had evaluated
+// both of their samples, and by one that had evaluated neither (from the
+// completed leases in the store).
+Placement GeometryChangesWithTheirSamples(const fs::path& state, const std::string& job_id) {
+  std::map<std::string, std::string> runner;  // task key -> worker of its completed lease
+  {
+    sqlite3* db = nullptr;
+    EXPECT_EQ(sqlite3_open_v2((state / "state.db").c_str(), &db, SQLITE_OPEN_READONLY, nullptr), SQLITE_OK);
+    sqlite3_stmt* s = nullptr;
+    sqlite3_prepare_v2(db, "SELECT task_key, worker_id FROM leases WHERE state = 'completed'", -1, &s, nullptr);
+    while (s && sqlite3_step(s) == SQLITE_ROW)
+      runner[reinterpret_cast<const char*>(sqlite3_column_text(s, 0))] =
+          reinterpret_cast<const char*>(sqlite3_column_text(s, 1));
+    sqlite3_finalize(s);
+    sqlite3_close(db);
+  }
+  storage::JobStore store(state / "state.db");
+  auto tasks = store.Tasks(job_id);
+  auto point = [](const v1::SamplePoint& p) { return std::vector<std::int64_t>(p.key().begin(), p.key().end()); };
+  std::map<std::vector<std::int64_t>, std::string> evaluated_by;
+  for (const auto& t : tasks) {
+    v1::TaskPayload p;
+    p.ParseFromString(t.payload);
+    if (p.kind() == v1::TASK_KIND_SAMPLE) evaluated_by[point(p.point_a())] = runner[t.key];
+  }
+  Placement placed;
+  for (const auto& t : tasks) {
+    v1::TaskPayload p;
+    p.ParseFromString(t.payload);
+    if (p.kind() != v1::TASK_KIND_GEOMETRY_CHANGE) continue;
+    const std::string& w = runner[t.key];
+    int held = (evaluated_by[point(p.point_a())] == w) + (evaluated_by[point(p.point_b())] == w);
+    ++placed.total;
+    placed.both += held == 2;
+    placed.neither += held == 0;
+  }
+  return placed;
+}
+
+}  // namespace
+
+// Lease affinity (worker.proto): with two 1-slot workers, ΔG tasks go to the
+// worker that evaluated their samples, so far fewer solids cross between
+// workers than when leases go oldest-first to whoever asks; the artifact is
+// the same byte for byte either way (RunJobOnWorkers checks it).
+TEST(ClusterLoopback, LeaseAffinityKeepsGeometryChangesWithTheirSolids) {
+  std::string on_id, off_id;
+  EXPECT_EQ(RunJobOnWorkers("affinity_on", 2, 1, &on_id), ReferenceForm());
+  EXPECT_EQ(RunJobOnWorkers("affinity_off", 2, 1, &off_id, {"--no-lease-affinity"}), ReferenceForm());
+  int downloads_on = 0, downloads_off = 0;
+  for (int i = 0; i < 2; ++i) {
+    downloads_on += SolidsDownloaded(RunDir("affinity_on") / ("w" + std::to_string(i)));
+    downloads_off += SolidsDownloaded(RunDir("affinity_off") / ("w" + std::to_string(i)));
+  }
+  Placement on = GeometryChangesWithTheirSamples(RunDir("affinity_on") / "state", on_id);
+  Placement off = GeometryChangesWithTheirSamples(RunDir("affinity_off") / "state", off_id);
+  std::cerr << "solids downloaded: " << downloads_on << " with affinity, " << downloads_off << " without; of "
+            << on.total << " ΔG tasks, run on the worker holding both samples: " << on.both << " / " << off.both
+            << ", holding neither: " << on.neither << " / " << off.neither << "\n";
+  ASSERT_GT(on.total, 20);
+  EXPECT_EQ(on.total, off.total);
+  EXPECT_GT(downloads_off, 0);
+  EXPECT_LT(downloads_on, downloads_off);
+  EXPECT_GT(on.both, off.both);
+  EXPECT_LE(on.neither, off.neither);
+  EXPECT_LE(4 * on.neither, on.total);  // mostly with a holder: only steals at a batch's end
 }
 
 TEST(ClusterFaults, TwentyWorkerKillsMidTaskLoseNothing) {

@@ -1,6 +1,7 @@
 // The durable job store and the blob store: leases, fencing, quarantine,
 // durability across reopen, content addresses and resumable uploads.
 #include <gtest/gtest.h>
+#include <sqlite3.h>
 #include <unistd.h>
 
 #include <filesystem>
@@ -262,4 +263,70 @@ TEST(ClusterStorage, SubtreeRecordsOfAcceptedSamplesOnly) {
   EXPECT_EQ(samples[1].point_key, "0,1");
   EXPECT_EQ(samples[1].subtree_keys, (std::vector<std::string>{"a", "r1"}));
   EXPECT_TRUE(store.Subtrees("other-job").empty());
+}
+
+// Lease affinity (worker.proto): a worker gets the tasks preferring it alone,
+// then those it shares, then tasks preferring nobody (oldest first), then
+// other workers' tasks from the newest; a granted task loses its preference,
+// and forgetting a worker makes its tasks nobody's.
+TEST(ClusterStorage, LeaseAffinityOrderAndForgetting) {
+  fs::path dir = FreshDir("affinity");
+  JobStore store(dir / "state.db");
+  ASSERT_TRUE(store.CreateJob({"job1", std::string(64, 'a'), "d", JobState::kRunning, "", 1, 0}));
+  std::vector<NewTask> batch;
+  auto add = [&](int i, std::vector<std::string> preferred) {
+    batch.push_back({Key(i), "job1", 2, "p" + std::to_string(i), std::move(preferred)});
+  };
+  add(0, {});            // nobody's
+  add(1, {"w2"});        // w2's alone
+  add(2, {"w1", "w2"});  // shared
+  add(3, {"w1"});        // w1's alone
+  add(4, {});            // nobody's
+  add(5, {"w2"});        // w2's alone
+  add(6, {"gone"});      // a worker that will leave
+  store.AddTasks(batch);
+  // w1: its own task, the shared one, then the nobody's in order, then the
+  // newest task of another worker.
+  auto grants = store.GrantLeases("w1", 5, 1000, 500);
+  std::vector<std::string> got;
+  for (const auto& g : grants) got.push_back(g.task_key);
+  EXPECT_EQ(got, (std::vector<std::string>{Key(3), Key(2), Key(0), Key(4), Key(6)}));
+  // w2 gets its own two, oldest first.
+  grants = store.GrantLeases("w2", 5, 1000, 500);
+  got.clear();
+  for (const auto& g : grants) got.push_back(g.task_key);
+  EXPECT_EQ(got, (std::vector<std::string>{Key(1), Key(5)}));
+  EXPECT_TRUE(store.CheckConsistency().empty());
+
+  // A requeued task prefers nobody; forgetting a worker frees its tasks.
+  store.AddTasks({{Key(7), "job1", 2, "p7", {"w3"}}, {Key(8), "job1", 2, "p8", {"w3", "w4"}}});
+  EXPECT_EQ(store.ForgetAffinity("w3"), 1);  // task 8 still prefers w4
+  grants = store.GrantLeases("w5", 1, 1000, 500);
+  ASSERT_EQ(grants.size(), 1u);
+  EXPECT_EQ(grants[0].task_key, Key(7));  // nobody's now, before w4's task 8
+  store.ClearAffinity();
+  grants = store.GrantLeases("w5", 1, 1000, 500);
+  ASSERT_EQ(grants.size(), 1u);
+  EXPECT_EQ(grants[0].task_key, Key(8));
+}
+
+// A store written before lease affinity (no tasks.affine column) opens and
+// schedules.
+TEST(ClusterStorage, StoreWithoutAffinityColumnIsMigrated) {
+  fs::path dir = FreshDir("migrate");
+  {
+    JobStore store(dir / "state.db");
+    AddRunningJob(store, 2);
+  }
+  {
+    sqlite3* db = nullptr;
+    ASSERT_EQ(sqlite3_open((dir / "state.db").string().c_str(), &db), SQLITE_OK);
+    EXPECT_EQ(sqlite3_exec(db, "DROP INDEX tasks_neutral; ALTER TABLE tasks DROP COLUMN affine;", nullptr,
+                           nullptr, nullptr),
+              SQLITE_OK);
+    sqlite3_close(db);
+  }
+  JobStore store(dir / "state.db");
+  auto grants = store.GrantLeases("w1", 5, 1000, 500);
+  EXPECT_EQ(grants.size(), 2u);
 }

@@ -21,7 +21,11 @@
 // exponential backoff (retry_backoff_ms, doubling, capped at 30 s); the
 // quarantine_after-th expiry of one task quarantines it (an invalid sample
 // with failure type "quarantined"). Results carry the lease attempt and are
-// fenced when stale.
+// fenced when stale. Lease affinity (worker.proto, docs/protocol.md): a ΔG
+// task prefers the workers that evaluated its samples, and with two or more
+// connected workers each sample batch is cut into contiguous runs of point
+// keys, one per worker; a worker takes its own preferred tasks first, then
+// unclaimed ones, then steals, so no slot idles while work is queued.
 //
 // Threading: all public methods are thread-safe.
 #pragma once
@@ -61,6 +65,9 @@ struct CoordinatorOptions {
   int quarantine_after = 3;
   // Most leases handed to one worker per Sync.
   int max_leases_per_sync = 256;
+  // Lease affinity (see above). Off: every task is leased oldest first to
+  // whoever asks (results are the same either way; only work moves).
+  bool lease_affinity = true;
   // Longest long poll of an idle worker.
   std::int64_t max_poll_ms = 5000;
   // fsync the store's WAL on every commit (storage::JobStoreOptions): every

@@ -54,6 +54,10 @@ struct NewTask {
   std::string job_id;
   int kind = 0;          // fabatlas.v1.TaskKind
   std::string payload;   // serialized fabatlas.v1.TaskPayload
+  // Workers this task prefers (lease affinity, worker.proto): GrantLeases
+  // hands it to one of them before anyone else. Empty = no preference.
+  // Ignored when the task already exists.
+  std::vector<std::string> preferred_workers;
 };
 
 struct TaskRecord {
@@ -195,19 +199,30 @@ class JobStore {
   std::vector<TaskRecord> Tasks(const std::string& job_id);
 
   // --- scheduling ---
-  // Leases up to `max` queued tasks of running jobs whose backoff has passed,
-  // oldest first, to `worker_id` until now_ms + lease_ms.
+  // Leases up to `max` queued tasks of running jobs whose backoff has passed
+  // to `worker_id` until now_ms + lease_ms, in the order of lease affinity
+  // (worker.proto): tasks preferring this worker (fewest preferred workers
+  // first, then oldest), then tasks preferring nobody (oldest first), then
+  // tasks preferring other workers (newest first). A granted task's
+  // preference is dropped.
   std::vector<LeaseGrant> GrantLeases(const std::string& worker_id, int max, std::int64_t now_ms,
                                       std::int64_t lease_ms);
+  // Drops every preference for the worker (it left or went silent); tasks
+  // left without a preferred worker prefer nobody. Returns how many tasks
+  // lost it.
+  int ForgetAffinity(const std::string& worker_id);
+  // Drops every preference (coordinator start: worker liveness is unknown).
+  void ClearAffinity();
   // Applies the results (one transaction); outcomes in input order.
   // retry_backoff_ms: delay before a failed task may be leased again.
   std::vector<CompletionOutcome> Complete(const std::vector<Completion>& completions,
                                           std::int64_t now_ms, std::int64_t retry_backoff_ms);
-  // Moves the deadline of the worker's listed active leases to deadline_ms.
-  // Returns the listed ids that are not active leases of this worker.
+  // Moves the deadline of the worker's listed active leases to deadline_ms,
+  // leaving (not writing) those already due at deadline_ms - slack_ms or
+  // later. Returns the listed ids that are not active leases of this worker.
   std::vector<std::string> ExtendLeases(const std::string& worker_id,
                                         const std::vector<std::string>& lease_ids,
-                                        std::int64_t deadline_ms);
+                                        std::int64_t deadline_ms, std::int64_t slack_ms = 0);
   // Active leases of the worker that are not in `known` (lost in transit or
   // forgotten by a restarted worker) go back to the queue at once, without
   // counting as an expiry. Returns how many.
