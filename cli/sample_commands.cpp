@@ -45,18 +45,21 @@ void Sample(const SampleArgs& args) {
     const std::filesystem::path blobs = std::filesystem::path(args.out) / "subtree-blobs";
     coordinator::CacheAssembly assembly = coordinator::CollectSubtreesInProcess(design, summary.form, blobs);
     assembly.options = cache_options;
+    assembly.stream_geometry = true;  // one entry's geometry in memory at a time
     const auto added = coordinator::AddCache(published, assembly);
+    const auto written = storage::WriteArtifact(published, std::filesystem::path(args.out) / artifact);
     std::filesystem::remove_all(blobs);
     const auto& c = published.manifest.cache;
     std::cout << "cache " << c.strategy << ": H_TOP " << c.top_entries << " subtrees / " << c.top_bytes
               << " B, H_opt " << c.opt_entries << " / " << c.opt_bytes << " B, H_rfree " << c.rfree_entries << " / "
-              << c.rfree_bytes << " B (" << added.entries << " entries stored)\n";
+              << c.rfree_bytes << " B (" << written.cache_entries << " entries stored)\n";
     if (added.exact.solved())
       std::cout << "cache plan: exact worst case " << added.exact.worst_seconds() << " s ("
                 << (added.exact.optimal() ? "optimal" : "time limit") << "), H_opt gap "
                 << 100.0 * added.exact.gap() << " %\n";
+  } else {
+    storage::WriteArtifact(published, std::filesystem::path(args.out) / artifact);
   }
-  storage::WriteArtifact(published, std::filesystem::path(args.out) / artifact);
   std::cout << precompute::Table3Row(design, summary.statistics) << "\n";
   std::cout << "wrote " << args.out << "/" << artifact << ", form.json, statistics.json and validity maps\n";
 }

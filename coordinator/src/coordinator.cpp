@@ -62,13 +62,6 @@ bool Terminal(storage::JobState s) {
          s == storage::JobState::kCancelled;
 }
 
-std::string ReadFile(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream out;
-  out << in.rdbuf();
-  return out.str();
-}
-
 }  // namespace
 
 struct Coordinator::Impl {
@@ -471,19 +464,23 @@ struct Coordinator::Impl {
         // The geometry cache from the subtrees the workers reported (docs/artifact.md).
         CacheAssembly assembly = CollectSubtreesFromStore(*store, *blobs, job_id, design, summary.form);
         assembly.options = CacheOptionsOf(job_file);
+        assembly.stream_geometry = true;  // one entry's geometry in memory at a time
         const v1::CachePlanReport report =
             PlanCacheOnWorkers(job_id, protocol::EvaluationDigest(bundle), job_file.subdivisions, assembly);
         const auto added = AddCache(artifact, assembly, report);
+        const auto written = storage::WriteArtifact(artifact, out / ArtifactFileName(design.name));
         Event(job_id, "cache", "geometry cache " + artifact.manifest.cache.strategy + ": " +
-                                   std::to_string(added.entries) + " entries, " + std::to_string(added.missing) +
-                                   " without geometry; " + ExactText(added.exact));
+                                   std::to_string(written.cache_entries) + " entries, " +
+                                   std::to_string(written.cache_entries_left_out) + " without geometry; " +
+                                   ExactText(added.exact));
+      } else {
+        storage::WriteArtifact(artifact, out / ArtifactFileName(design.name));
       }
-      storage::WriteArtifact(artifact, out / ArtifactFileName(design.name));
       for (const auto& entry : fs::directory_iterator(out)) {
         if (!entry.is_regular_file()) continue;
         std::string name = entry.path().filename().string();
         if (name.find(".tmp") != std::string::npos) continue;
-        store->PutJobOutput(job_id, name, blobs->Put(ReadFile(entry.path())));
+        store->PutJobOutput(job_id, name, blobs->PutFile(entry.path()));
       }
       store->SetJobState(job_id, storage::JobState::kSucceeded, "", NowMs());
       Event(job_id, "succeeded", precompute::Table3Row(design, summary.statistics));

@@ -108,6 +108,19 @@ CacheAssemblySummary AddCache(storage::Artifact& artifact, const CacheAssembly& 
     }
 
   artifact.cache.clear();
+  artifact.cache_geometry = nullptr;
+  // The geometry of an entry: the subtree's grid and its zero iso-surface.
+  auto fill = [grid_of = a.grid_of](storage::CacheEntry& e) {
+    try {
+      e.grid = grid_of ? grid_of(e.key) : std::string();
+    } catch (const std::exception&) {
+      e.grid.clear();
+    }
+    if (e.grid.empty()) return false;
+    e.glb = storage::MeshToGlb(geometry::Solid::Deserialize(e.grid).ToMesh());
+    return true;
+  };
+  if (a.stream_geometry) artifact.cache_geometry = fill;
   for (const auto& r : report.entries()) {
     storage::CacheEntry e;
     e.key = r.key();
@@ -117,16 +130,10 @@ CacheAssemblySummary AddCache(storage::Artifact& artifact, const CacheAssembly& 
     e.cost_seconds = r.cost_seconds();
     e.in_opt = r.in_opt();
     e.in_rfree = r.in_rfree();
-    try {
-      e.grid = a.grid_of ? a.grid_of(e.key) : std::string();
-    } catch (const std::exception&) {
-      e.grid.clear();
-    }
-    if (e.grid.empty()) {
+    if (!a.stream_geometry && !fill(e)) {
       ++summary.missing;
       continue;
     }
-    e.glb = storage::MeshToGlb(geometry::Solid::Deserialize(e.grid).ToMesh());
     artifact.cache.push_back(std::move(e));
     ++summary.entries;
   }

@@ -3,6 +3,7 @@
 #include "fabatlas/storage/artifact.h"
 
 #include <fcntl.h>
+#include <openssl/evp.h>
 #include <sqlite3.h>
 #include <unistd.h>
 
@@ -158,10 +159,48 @@ class Stmt {
   sqlite3_stmt* stmt_ = nullptr;
 };
 
-// SHA-256 of a table's rows in primary-key order (docs/artifact.md).
+// SHA-256 fed in pieces (the canonical content of a table with cache
+// entries is as large as the artifact; only ~1 MiB of it is held at a time).
+class Sha256Stream {
+ public:
+  Sha256Stream() : ctx_(EVP_MD_CTX_new()) {
+    if (!ctx_ || EVP_DigestInit_ex(ctx_, EVP_sha256(), nullptr) != 1) throw Corrupt("SHA-256 init failed");
+  }
+  ~Sha256Stream() { EVP_MD_CTX_free(ctx_); }
+  Sha256Stream(const Sha256Stream&) = delete;
+  Sha256Stream& operator=(const Sha256Stream&) = delete;
+  std::string& buffer() { return buffer_; }
+  // Hashes the buffer when it holds at least `min_bytes`.
+  void Flush(std::size_t min_bytes = 1 << 20) {
+    if (buffer_.size() < min_bytes) return;
+    if (EVP_DigestUpdate(ctx_, buffer_.data(), buffer_.size()) != 1) throw Corrupt("SHA-256 update failed");
+    buffer_.clear();
+  }
+  std::string Hex() {
+    Flush(0);
+    unsigned char digest[EVP_MAX_MD_SIZE];
+    unsigned int length = 0;
+    if (EVP_DigestFinal_ex(ctx_, digest, &length) != 1) throw Corrupt("SHA-256 final failed");
+    static const char* hex = "0123456789abcdef";
+    std::string out(2 * length, '0');
+    for (unsigned int i = 0; i < length; ++i) {
+      out[2 * i] = hex[digest[i] >> 4];
+      out[2 * i + 1] = hex[digest[i] & 15];
+    }
+    return out;
+  }
+
+ private:
+  EVP_MD_CTX* ctx_;
+  std::string buffer_;
+};
+
+// SHA-256 of a table's rows in primary-key order (docs/artifact.md), read
+// and hashed row by row.
 std::string TableChecksum(Db& db, const TableOrder& t) {
   Stmt s(db, std::string("SELECT * FROM ") + t.table + " ORDER BY " + t.order);
-  std::string canonical;
+  Sha256Stream sha;
+  std::string& canonical = sha.buffer();
   auto put64 = [&](std::uint64_t v) {
     for (int i = 0; i < 8; ++i) canonical.push_back(static_cast<char>((v >> (8 * i)) & 0xff));
   };
@@ -189,8 +228,9 @@ std::string TableChecksum(Db& db, const TableOrder& t) {
         }
       }
     }
+    sha.Flush();
   }
-  return Sha256Hex(canonical);
+  return sha.Hex();
 }
 
 // ---- text encodings -------------------------------------------------------------
@@ -363,7 +403,7 @@ std::map<std::string, std::string> ManifestRows(const Artifact& a) {
   return r;
 }
 
-void InsertContent(Db& db, const Artifact& a) {
+void InsertContent(Db& db, const Artifact& a, ArtifactWriteSummary& summary) {
   const sampling::Form& form = a.form;
   const int n = static_cast<int>(form.dimensions.size());
   if (n < 1 || n > kMaxDimensions)
@@ -426,8 +466,19 @@ void InsertContent(Db& db, const Artifact& a) {
     std::sort(entries.begin(), entries.end(), [](auto* x, auto* y) { return x->key < y->key; });
     Stmt s(db, "INSERT INTO cache_entries VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?)");
     for (std::size_t i = 0; i < entries.size(); ++i) {
-      const CacheEntry& e = *entries[i];
-      if (i > 0 && entries[i - 1]->key == e.key) throw InputError("artifact: cache entry " + e.key + " appears twice");
+      if (i > 0 && entries[i - 1]->key == entries[i]->key)
+        throw InputError("artifact: cache entry " + entries[i]->key + " appears twice");
+      // Geometry on demand (Artifact::cache_geometry): held for this row only.
+      CacheEntry streamed;
+      if (entries[i]->grid.empty() && a.cache_geometry) {
+        streamed = *entries[i];
+        if (!a.cache_geometry(streamed)) {
+          ++summary.cache_entries_left_out;
+          continue;
+        }
+      }
+      const CacheEntry& e = streamed.grid.empty() ? *entries[i] : streamed;
+      ++summary.cache_entries;
       s.Text(1, e.key).Text(2, e.op).Text(3, JoinStrings(e.children)).Int(4, e.bytes).Real(5, e.cost_seconds);
       s.Int(6, e.in_opt ? 1 : 0).Int(7, e.in_rfree ? 1 : 0).Blob(8, e.grid).Text(9, Sha256Hex(e.grid)).Blob(10, e.glb);
       s.Run();
@@ -761,27 +812,29 @@ ArtifactStatistics StatisticsOf(const sampling::Form& form) {
   return s;
 }
 
-void WriteArtifact(const Artifact& artifact, const fs::path& path) {
+ArtifactWriteSummary WriteArtifact(const Artifact& artifact, const fs::path& path) {
   fs::path tmp = path;
   tmp += ".tmp-" + std::to_string(::getpid());
   std::error_code ec;
   fs::remove(tmp, ec);
+  ArtifactWriteSummary summary;
   try {
     {
-      Db db(":memory:", SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE);
-      db.Exec("PRAGMA page_size = " + std::to_string(kPageSize) + "; PRAGMA application_id = " +
-              std::to_string(kArtifactApplicationId) + "; PRAGMA user_version = " +
-              std::to_string(kArtifactSchemaVersion) + "; PRAGMA encoding = 'UTF-8';");
+      // Straight into the temporary file, one transaction, no journal (a
+      // failed write only leaves the temporary file, which is removed), so
+      // memory holds SQLite's page cache and one cache entry, not the file.
+      Db db(tmp.string(), SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE);
+      db.Exec("PRAGMA page_size = " + std::to_string(kPageSize) +
+              "; PRAGMA journal_mode = OFF; PRAGMA synchronous = OFF; PRAGMA cache_size = -16384;"
+              " PRAGMA application_id = " + std::to_string(kArtifactApplicationId) +
+              "; PRAGMA user_version = " + std::to_string(kArtifactSchemaVersion) + "; PRAGMA encoding = 'UTF-8';");
       db.Exec("BEGIN");
       db.Exec(kSchemaV1);
-      InsertContent(db, artifact);
+      InsertContent(db, artifact, summary);
       auto rows = ManifestRows(artifact);
       for (const auto& t : kTablesV1) rows[std::string("checksum.") + t.table] = TableChecksum(db, t);
       InsertManifest(db, rows);
       db.Exec("COMMIT");
-      Stmt vacuum(db, "VACUUM INTO ?");
-      vacuum.Text(1, tmp.string());
-      vacuum.Run();
     }
     FsyncPath(tmp, false);
   } catch (const Corrupt& e) {
@@ -800,6 +853,7 @@ void WriteArtifact(const Artifact& artifact, const fs::path& path) {
   }
   fs::path dir = path.parent_path().empty() ? fs::path(".") : path.parent_path();
   FsyncPath(dir, true);
+  return summary;
 }
 
 Artifact ReadArtifact(const fs::path& path, const ArtifactReadOptions& options) {

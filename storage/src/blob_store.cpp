@@ -197,6 +197,29 @@ std::string BlobStore::Put(const std::string& bytes) {
   return digest;
 }
 
+std::string BlobStore::PutFile(const fs::path& path) {
+  std::string digest = Sha256OfFile(path);
+  if (Contains(digest)) return digest;
+  {
+    std::lock_guard lock(mutex_);
+    std::error_code ec;
+    fs::remove(PartialPath(digest), ec);
+  }
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw ResourceError(path.string() + ": cannot read");
+  std::string chunk(std::size_t{4} << 20, '\0');
+  std::int64_t offset = 0;
+  while (in) {
+    in.read(chunk.data(), static_cast<std::streamsize>(chunk.size()));
+    const std::streamsize n = in.gcount();
+    if (n <= 0) break;
+    offset = Append(digest, offset, chunk.substr(0, static_cast<std::size_t>(n)));
+  }
+  if (in.bad()) throw ResourceError(path.string() + ": read failed");
+  Finish(digest);
+  return digest;
+}
+
 std::string BlobStore::Read(const std::string& digest, std::int64_t offset,
                             std::int64_t max_bytes) const {
   CheckDigest(digest);

@@ -65,11 +65,19 @@ struct CacheAssembly {
   // Serialized geometry::Solid of a stored subtree (the blob). Throws or
   // returns "" when missing (then the entry is left out and counted).
   std::function<std::string(const std::string& key)> grid_of;
+  // Leave the entries' geometry out of memory: AddCache sets
+  // Artifact::cache_geometry (grid_of + glTF per entry when it is written),
+  // so the writer holds one entry at a time; grid_of must then stay valid
+  // until WriteArtifact, which counts the entries and the missing ones.
+  bool stream_geometry = false;
 };
 
 struct CacheAssemblySummary {
-  std::int64_t entries = 0;  // cache entries written (H_opt ∪ H_rfree)
-  std::int64_t missing = 0;  // chosen subtrees whose geometry was missing
+  // Cache entries with geometry (H_opt ∪ H_rfree) and chosen subtrees whose
+  // geometry was missing; with stream_geometry: the entries planned and 0
+  // (storage::ArtifactWriteSummary has the counts).
+  std::int64_t entries = 0;
+  std::int64_t missing = 0;
   v1::CachePlanExact exact;  // the report's exact optimum (not in the artifact)
 };
 

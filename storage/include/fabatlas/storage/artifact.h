@@ -13,8 +13,9 @@
 // previews.
 //
 // Determinism: the file is a pure function of the Artifact value. No
-// timestamps, rows inserted in key order, fixed page size, written with
-// VACUUM INTO; equal content gives byte-identical files. Measured times
+// timestamps, rows inserted in key order, fixed page size, written straight
+// into the file in one transaction (no journal); equal content gives
+// byte-identical files. Measured times
 // (evaluator CPU seconds, measured subtree times) are *not* part of it: they
 // differ between runs and would break byte-identity across worker counts;
 // the job's statistics.json beside the artifact keeps them.
@@ -30,6 +31,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <map>
 #include <string>
 #include <vector>
@@ -135,6 +137,17 @@ struct Artifact {
   std::vector<CacheCurvePoint> cache_curves;     // sorted by (strategy, step) on write
   std::vector<StartingPoint> starting_points;    // in the given order
   JobBundle bundle;
+  // Optional, for caches too large to hold in memory: WriteArtifact calls it
+  // for every entry of `cache` whose grid is empty, just before writing its
+  // row, to fill in grid and glb; the geometry is dropped once the row is
+  // written, so the writer holds one entry's geometry at a time. Returning
+  // false leaves the entry out of the file (ArtifactWriteSummary counts it).
+  std::function<bool(CacheEntry& entry)> cache_geometry;
+};
+
+struct ArtifactWriteSummary {
+  std::int64_t cache_entries = 0;           // cache entry rows written
+  std::int64_t cache_entries_left_out = 0;  // cache_geometry returned false
 };
 
 struct ArtifactReadOptions {
@@ -154,7 +167,7 @@ Artifact ReadArtifact(const std::filesystem::path& path, const ArtifactReadOptio
 // Writes the artifact atomically (see above). Throws InputError naming the
 // path for an inconsistent Artifact (e.g. a starting point that names no
 // sample) and ResourceError on I/O failure (a full disk).
-void WriteArtifact(const Artifact& artifact, const std::filesystem::path& path);
+ArtifactWriteSummary WriteArtifact(const Artifact& artifact, const std::filesystem::path& path);
 
 // The manifest's statistics computed from a form (valid volume %, failure
 // shares, counts), as sampling::SampleDesignSpace reports them.

@@ -49,6 +49,9 @@ class BlobStore {
 
   // Whole-blob convenience: stores `bytes`, returns the digest.
   std::string Put(const std::string& bytes);
+  // Stores a file's bytes as a blob, reading it in 4 MiB chunks (a
+  // published artifact is up to a few GB), returns the digest.
+  std::string PutFile(const std::filesystem::path& path);
   // Reads [offset, offset + max_bytes) of a finished blob (max_bytes < 0:
   // to the end). Throws InputError when the blob is missing.
   std::string Read(const std::string& digest, std::int64_t offset = 0,
