@@ -230,6 +230,10 @@ JobStore::JobStore(const std::filesystem::path& path, JobStoreOptions options)
     // still updates as many indexes as before.
     db_->Exec("CREATE INDEX IF NOT EXISTS tasks_neutral ON tasks (state, affine, seq)");
     db_->Exec("DROP INDEX IF EXISTS tasks_state");
+    sqlite3_stmt* count = nullptr;
+    sqlite3_prepare_v2(db_->handle, "SELECT COUNT(*) FROM tasks WHERE affine = 1", -1, &count, nullptr);
+    if (count && sqlite3_step(count) == SQLITE_ROW) preferring_tasks_ = sqlite3_column_int64(count, 0);
+    sqlite3_finalize(count);
   } catch (...) {
     sqlite3_close(db_->handle);
     db_->handle = nullptr;
@@ -335,6 +339,7 @@ std::map<std::string, std::string> JobStore::AddTasks(const std::vector<NewTask>
     if (!task.preferred_workers.empty() && sqlite3_changes(db_->handle) == 1) {
       // rank: how many workers share the preference (fewer = more this worker's own)
       std::int64_t seq = sqlite3_last_insert_rowid(db_->handle);
+      ++preferring_tasks_;
       for (const auto& worker : task.preferred_workers) {
         prefer.BindText(1, worker).Bind(2, static_cast<std::int64_t>(task.preferred_workers.size())).Bind(3, seq);
         prefer.Run();
@@ -424,7 +429,7 @@ std::vector<LeaseGrant> JobStore::GrantLeases(const std::string& worker_id, int 
       grants.push_back(std::move(g));
     }
   };
-  {
+  if (preferring_tasks_ > 0) {  // skipped while no task prefers anyone (no-op jobs)
     Stmt pick(*db_, own.c_str());
     pick.BindText(1, worker_id).Bind(2, now_ms).Bind(3, std::int64_t{max});
     take(pick);
@@ -434,7 +439,7 @@ std::vector<LeaseGrant> JobStore::GrantLeases(const std::string& worker_id, int 
     pick.Bind(1, now_ms).Bind(2, std::int64_t{max - static_cast<int>(grants.size())});
     take(pick);
   }
-  if (static_cast<int>(grants.size()) < max) {
+  if (static_cast<int>(grants.size()) < max) {  // never skipped: no preferred task can starve
     // Own preferred tasks were all taken above and may come again here.
     Stmt pick(*db_, others.c_str());
     pick.Bind(1, now_ms).Bind(2, std::int64_t{max - static_cast<int>(grants.size()) + static_cast<int>(unprefer.size())});
@@ -473,6 +478,7 @@ std::vector<LeaseGrant> JobStore::GrantLeases(const std::string& worker_id, int 
     w.Run();
   }
   t.Commit();
+  preferring_tasks_ -= static_cast<std::int64_t>(unprefer.size());
   return grants;
 }
 
@@ -490,7 +496,7 @@ int JobStore::ForgetAffinity(const std::string& worker_id) {
   drop.BindText(1, worker_id);
   drop.Run();
   Stmt neutral_again(*db_,
-                     "UPDATE tasks SET affine = 0 WHERE seq = ? AND NOT EXISTS (SELECT 1 FROM task_affinity a "
+                     "UPDATE tasks SET affine = 0 WHERE seq = ? AND affine = 1 AND NOT EXISTS (SELECT 1 FROM task_affinity a "
                      "WHERE a.task_seq = ?)");
   int lost = 0;
   for (std::int64_t seq : seqs) {
@@ -500,6 +506,7 @@ int JobStore::ForgetAffinity(const std::string& worker_id) {
     neutral_again.Reset();
   }
   t.Commit();
+  preferring_tasks_ -= lost;
   return lost;
 }
 
@@ -509,6 +516,7 @@ void JobStore::ClearAffinity() {
   db_->Exec("DELETE FROM task_affinity");
   db_->Exec("UPDATE tasks SET affine = 0 WHERE affine != 0");
   t.Commit();
+  preferring_tasks_ = 0;
 }
 
 std::vector<CompletionOutcome> JobStore::Complete(const std::vector<Completion>& completions,

@@ -281,6 +281,7 @@ class JobStore {
   std::unique_ptr<Db> db_;
   std::mutex mutex_;
   std::map<std::string, std::pair<int, std::int64_t>> touched_;  // worker -> (slots, last write ms)
+  std::int64_t preferring_tasks_ = 0;  // tasks with tasks.affine = 1 (lease affinity)
   std::mutex checkpoint_mutex_;
   std::unique_ptr<Db> checkpoint_db_;
 };
