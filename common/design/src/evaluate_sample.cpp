@@ -129,6 +129,16 @@ class TreeEvaluation {
     return identities_.emplace(&node, std::move(id)).first->second;
   }
 
+  static SubtreeRecord RecordOf(const Node& node, const Identity& id, const std::string& path) {
+    SubtreeRecord record;
+    record.path = path;
+    record.op = node.op;
+    record.topology = id.topology;
+    record.key = id.key;
+    record.children = id.children;
+    return record;
+  }
+
   Result Evaluate(const Node& node, const std::string& path) {
     if (node.op == "object") return EvaluateObject(node.args.at("object").text);
     // Previews look a subtree up before evaluating its children, so a cached
@@ -137,12 +147,7 @@ class TreeEvaluation {
     if (options_.cache && options_.lookup_before_children) {
       const Identity& id = IdentityOf(node);
       if (auto hit = options_.cache->Find(id.key)) {
-        SubtreeRecord record;
-        record.path = path;
-        record.op = node.op;
-        record.topology = id.topology;
-        record.key = id.key;
-        record.children = id.children;
+        SubtreeRecord record = RecordOf(node, id, path);
         record.from_cache = true;
         record.bytes = hit->MemoryBytes();
         records_->push_back(std::move(record));
@@ -154,15 +159,8 @@ class TreeEvaluation {
     for (std::size_t i = 0; i < node.children.size(); ++i)
       children.push_back(Evaluate(node.children[i], path + "/" + std::to_string(i)));
 
-    // τ: operation, argument names and child topologies. ρ: resolved values.
-    std::string tau = node.op + "(";
-    for (const auto& [name, _] : node.args) tau += name + ",";
-    for (const auto& c : children) tau += c.tau + ";";
-    tau += ")";
-    std::string rho = "voxel=" + Format(design_.voxel_size) + ";" + args.Canonical();
-    for (const auto& c : children) rho += "child=" + c.key + ";";
-    // carve_swept also depends on the moving object's geometry and on the
-    // resolved motions of the moving and frame objects.
+    // carve_swept also needs the moving object's geometry and the resolved
+    // motions of the moving and frame objects (IdentityOf keys them too).
     Result moving;
     const ResolvedTransition* transition = nullptr;
     std::size_t moving_index = 0, frame_index = 0;
@@ -174,17 +172,9 @@ class TreeEvaluation {
       moving_index = ObjectIndex(design_, args.Text("moving"));
       has_frame = !args.Text("frame").empty();
       if (has_frame) frame_index = ObjectIndex(design_, args.Text("frame"));
-      tau += "[moving:" + moving.tau + "]";
-      rho += "moving=" + moving.key + ";motion=" + transition->canonical[moving_index] + ";";
-      if (has_frame) rho += "frame_motion=" + transition->canonical[frame_index] + ";";
     }
 
-    SubtreeRecord record;
-    record.path = path;
-    record.op = node.op;
-    record.topology = Sha256Hex(tau);
-    record.key = Sha256Hex(tau + "|" + rho);
-    for (const auto& c : children) record.children.push_back(c.key);
+    SubtreeRecord record = RecordOf(node, IdentityOf(node), path);
 
     Result out{{}, record.key, record.topology};
     if (options_.cache) {
