@@ -5,8 +5,10 @@
 #include <google/protobuf/io/zero_copy_stream_impl_lite.h>
 
 #include <fstream>
+#include <algorithm>
 #include <functional>
 #include <sstream>
+#include <vector>
 
 #include "fabatlas/design/design.h"
 #include "fabatlas/error.h"
@@ -50,20 +52,21 @@ v1::JobBundle MakeJobBundle(const fs::path& job_file) {
   sampling::JobFile job = sampling::ParseJobFile(job_text, job_file.string());
   fs::path design_path = job.design_path;
   design::Design design = design::LoadDesign(design_path);
-  v1::JobBundle bundle;
-  bundle.set_job_file_name(job_file.filename().string());
-  bundle.set_job_file(job_text);
-  bundle.set_design_file_name(design_path.filename().string());
-  bundle.set_design_file(ReadFile(design_path));
-  // Files named by node arguments (meshes, OpenSCAD models), relative to the
-  // design file.
-  fs::path base = design_path.parent_path();
+  // Files named by node arguments (meshes, OpenSCAD models, prototype and
+  // assembly programs) of the tree and of every object's tree, relative to
+  // the design file. A file up to kMaxParentLevels directories above the
+  // design (e.g. ../prototypes/x.yaml) is bundled too: the design is then
+  // stored under as many of its own parent directories (designs/x.yaml), so
+  // the relative reference resolves in the materialized bundle as it did here.
+  constexpr int kMaxParentLevels = 2;
+  const fs::path base = design_path.parent_path();
+  std::vector<fs::path> referenced;
   std::function<void(const design::Argument&)> visit_argument = [&](const design::Argument& a) {
     if (a.kind == design::Argument::Kind::kScalar) {
-      fs::path rel(a.text);
+      const fs::path rel = fs::path(a.text).lexically_normal();
       std::error_code ec;
-      if (StaysInside(rel) && rel.has_extension() && fs::is_regular_file(base / rel, ec))
-        (*bundle.mutable_files())[rel.generic_string()] = ReadFile(base / rel);
+      if (!rel.empty() && rel.is_relative() && rel.has_extension() && fs::is_regular_file(base / rel, ec))
+        referenced.push_back(rel);
     }
     for (const auto& item : a.items) visit_argument(item);
   };
@@ -72,6 +75,34 @@ v1::JobBundle MakeJobBundle(const fs::path& job_file) {
     for (const auto& child : node.children) visit(child);
   };
   visit(design.tree);
+  for (const auto& object : design.objects) visit(object.tree);
+  int levels = 0;  // how many parent directories the references climb
+  for (const auto& rel : referenced) {
+    int up = 0;
+    for (const auto& part : rel) {
+      if (part != "..") break;
+      ++up;
+    }
+    if (up <= kMaxParentLevels) levels = std::max(levels, up);
+  }
+  fs::path prefix;  // the design's directory relative to the bundle's root
+  {
+    const fs::path dir = fs::absolute(base).lexically_normal();
+    std::vector<fs::path> parts;
+    for (const auto& part : dir.relative_path()) parts.push_back(part);
+    levels = std::min<int>(levels, static_cast<int>(parts.size()));
+    for (std::size_t i = parts.size() - static_cast<std::size_t>(levels); i < parts.size(); ++i) prefix /= parts[i];
+  }
+
+  v1::JobBundle bundle;
+  bundle.set_job_file_name(job_file.filename().string());
+  bundle.set_job_file(job_text);
+  bundle.set_design_file_name((prefix / design_path.filename()).generic_string());
+  bundle.set_design_file(ReadFile(design_path));
+  for (const auto& rel : referenced) {
+    const fs::path name = (prefix / rel).lexically_normal();
+    if (StaysInside(name)) (*bundle.mutable_files())[name.generic_string()] = ReadFile(base / rel);
+  }
   return bundle;
 }
 

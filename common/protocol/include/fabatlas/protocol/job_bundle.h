@@ -10,7 +10,10 @@
 namespace fabatlas::protocol {
 
 // Reads the job file, the design it names and every file a node argument of
-// the design names that exists beside the design (meshes, .scad files).
+// the design (or of one of its objects) names that exists relative to the
+// design (meshes, .scad files, prototype programs), including files up to two
+// directories above it; the design's file name then keeps that many of its
+// parent directories ("designs/sofa_bunk.yaml") so references still resolve.
 // Throws InputError (one line naming the file) when a file is unreadable or
 // the job file is invalid.
 v1::JobBundle MakeJobBundle(const std::filesystem::path& job_file);
