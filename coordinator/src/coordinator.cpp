@@ -54,6 +54,12 @@ std::int64_t NowMs() {
       .count();
 }
 
+// The result a quarantined task finishes with (an invalid sample of failure
+// type "quarantined" for sample tasks), as stored bytes.
+std::string QuarantineBytes(int kind) {
+  return protocol::QuarantineResult(static_cast<v1::TaskKind>(kind)).SerializeAsString();
+}
+
 struct Stopping {};
 struct JobCancelled {};
 
@@ -563,9 +569,6 @@ struct Coordinator::Impl {
   }
 
   void Sweep() {
-    auto quarantine = [](int kind) {
-      return protocol::QuarantineResult(static_cast<v1::TaskKind>(kind)).SerializeAsString();
-    };
     std::int64_t last_checkpoint_ms = NowMs();
     while (!stopping) {
       std::this_thread::sleep_for(std::chrono::milliseconds(100));
@@ -575,7 +578,7 @@ struct Coordinator::Impl {
           store->Checkpoint();
           last_checkpoint_ms = now;
         }
-        auto expired = store->ExpireLeases(now, options.retry_backoff_ms, options.quarantine_after, quarantine);
+        auto expired = store->ExpireLeases(now, options.retry_backoff_ms, options.quarantine_after, QuarantineBytes);
         for (const auto& e : expired) {
           if (!e.quarantined) continue;
           if (auto task = store->FindTask(e.task_key)) Deliver(e.task_key, task->result);
@@ -781,13 +784,14 @@ class WorkerServiceImpl final : public v1::WorkerService::Service {
         done.task_key = c.task_key();
         done.attempt = c.attempt();
         done.failed = !c.error().empty();
+        done.error = c.error();
         done.result = c.result().SerializeAsString();
         done.sample_valid = c.result().has_sample() ? (c.result().sample().valid() ? 1 : 0) : -1;
         if (c.result().has_sample()) SubtreesOf(c, &done);
         completions.push_back(std::move(done));
         known.push_back(c.lease_id());
       }
-      auto outcomes = impl_.store->Complete(completions, now, o.retry_backoff_ms);
+      auto outcomes = impl_.store->Complete(completions, now, o.retry_backoff_ms, o.quarantine_after, QuarantineBytes);
       bool requeued = false;
       std::vector<Coordinator::Impl::Delivery> accepted;
       for (std::size_t i = 0; i < outcomes.size(); ++i) {
@@ -800,6 +804,10 @@ class WorkerServiceImpl final : public v1::WorkerService::Service {
           case storage::CompletionOutcome::kFenced: ++impl_.fenced_total; break;
           case storage::CompletionOutcome::kDuplicate: ++impl_.duplicate_total; break;
           case storage::CompletionOutcome::kRequeued: requeued = true; break;
+          case storage::CompletionOutcome::kQuarantined:
+            if (auto task = impl_.store->FindTask(completions[i].task_key))
+              impl_.Deliver(completions[i].task_key, task->result);
+            break;
           case storage::CompletionOutcome::kUnknown: break;
         }
       }

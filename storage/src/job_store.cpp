@@ -520,13 +520,14 @@ void JobStore::ClearAffinity() {
 }
 
 std::vector<CompletionOutcome> JobStore::Complete(const std::vector<Completion>& completions,
-                                                  std::int64_t now_ms,
-                                                  std::int64_t retry_backoff_ms) {
+                                                  std::int64_t now_ms, std::int64_t retry_backoff_ms,
+                                                  int quarantine_after,
+                                                  const std::function<std::string(int kind)>& quarantine_result) {
   std::vector<CompletionOutcome> outcomes;
   if (completions.empty()) return outcomes;
   std::lock_guard lock(mutex_);
   Transaction t(*db_);
-  Stmt task(*db_, "SELECT state, attempt, job_id FROM tasks WHERE key = ?");
+  Stmt task(*db_, "SELECT state, attempt, job_id, kind FROM tasks WHERE key = ?");
   Stmt lease(*db_, "SELECT state FROM leases WHERE lease_id = ? AND task_key = ? AND attempt = ?");
   Stmt subtree(*db_,
                "INSERT INTO subtrees (job_id, key, topology, op, digest, bytes, children, seconds_sum, "
@@ -545,6 +546,13 @@ std::vector<CompletionOutcome> JobStore::Complete(const std::vector<Completion>&
             "sample_valid = ? WHERE key = ?");
   Stmt fenced(*db_, "UPDATE tasks SET fenced = fenced + 1 WHERE key = ?");
   Stmt requeue(*db_, "UPDATE tasks SET state = 0, not_before_ms = ? WHERE key = ?");
+  Stmt failures(*db_,
+                "SELECT COUNT(*), COUNT(DISTINCT worker_id) FROM leases WHERE task_key = ? AND "
+                "(state = 'failed' OR lease_id = ?)");
+  Stmt quarantine(*db_,
+                  "UPDATE tasks SET state = 3, result = ?, completions = completions + 1, "
+                  "sample_valid = CASE WHEN kind = 1 THEN 0 ELSE -1 END WHERE key = ?");
+  Stmt event(*db_, "INSERT INTO events (time_ms, job_id, kind, message) VALUES (?,?,?,?)");
   for (const Completion& c : completions) {
     task.BindText(1, c.task_key);
     if (!task.Step()) {
@@ -555,6 +563,7 @@ std::vector<CompletionOutcome> JobStore::Complete(const std::vector<Completion>&
     auto state = static_cast<TaskState>(task.Int(0));
     std::int64_t attempt = task.Int(1);
     std::string job_id = task.Text(2);
+    const int kind = static_cast<int>(task.Int(3));
     task.Reset();
     lease.BindText(1, c.lease_id).BindText(2, c.task_key).Bind(3, c.attempt);
     bool active = lease.Step() && lease.Text(0) == "active";
@@ -571,11 +580,31 @@ std::vector<CompletionOutcome> JobStore::Complete(const std::vector<Completion>&
       fenced.Run();
       fenced.Reset();
     } else if (c.failed) {
-      outcome = CompletionOutcome::kRequeued;
       lease_state = "failed";
-      requeue.Bind(1, now_ms + retry_backoff_ms).BindText(2, c.task_key);
-      requeue.Run();
-      requeue.Reset();
+      failures.BindText(1, c.task_key).BindText(2, c.lease_id);
+      failures.Step();
+      const std::int64_t failed_leases = failures.Int(0), failed_workers = failures.Int(1);
+      failures.Reset();
+      std::string kind_name = "task_failed";
+      if (quarantine_after > 0 && quarantine_result && failed_workers >= quarantine_after) {
+        outcome = CompletionOutcome::kQuarantined;
+        kind_name = "quarantined";
+        quarantine.Bind(1, quarantine_result(kind)).BindText(2, c.task_key);
+        quarantine.Run();
+        quarantine.Reset();
+      } else {
+        outcome = CompletionOutcome::kRequeued;
+        std::int64_t delay = retry_backoff_ms << std::min<std::int64_t>(std::max<std::int64_t>(failed_leases - 1, 0), 20);
+        requeue.Bind(1, now_ms + std::min<std::int64_t>(delay, 30000)).BindText(2, c.task_key);
+        requeue.Run();
+        requeue.Reset();
+      }
+      event.Bind(1, now_ms).BindText(2, job_id).BindText(3, kind_name);
+      event.BindText(4, "task " + c.task_key.substr(0, 16) + " lease " + c.lease_id + " failed (" +
+                            std::to_string(failed_workers) + " worker(s) so far): " +
+                            (c.error.empty() ? std::string("no reason given") : c.error));
+      event.Run();
+      event.Reset();
     } else {
       outcome = CompletionOutcome::kAccepted;
       lease_state = "completed";

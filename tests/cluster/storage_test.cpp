@@ -330,3 +330,35 @@ TEST(ClusterStorage, StoreWithoutAffinityColumnIsMigrated) {
   auto grants = store.GrantLeases("w1", 5, 1000, 500);
   EXPECT_EQ(grants.size(), 2u);
 }
+
+// A task that fails (the worker reports an error instead of a result) is
+// retried with a growing backoff while one worker fails it again and again,
+// and quarantined once quarantine_after different workers have failed it.
+TEST(ClusterStorage, FailuresBackOffAndQuarantineAfterThreeWorkers) {
+  fs::path dir = FreshDir("failures");
+  JobStore store(dir / "state.db");
+  AddRunningJob(store, 1);
+  auto quarantine = [](int kind) { return "quarantined kind " + std::to_string(kind); };
+  std::int64_t now = 1000;
+  auto fail_once = [&](const std::string& worker) {
+    auto grants = store.GrantLeases(worker, 1, now, 500);
+    EXPECT_EQ(grants.size(), 1u);
+    if (grants.empty()) return CompletionOutcome::kUnknown;
+    Completion c{grants[0].lease_id, grants[0].task_key, grants[0].attempt, "", true, -1};
+    c.error = "cannot load the design";
+    return store.Complete({c}, now, 100, 3, quarantine)[0];
+  };
+  // One worker failing four times: requeued each time, backoff 100, 200, 400, 800 ms.
+  for (std::int64_t backoff : {100, 200, 400, 800}) {
+    EXPECT_EQ(fail_once("w1"), CompletionOutcome::kRequeued);
+    EXPECT_TRUE(store.GrantLeases("w1", 1, now + backoff - 1, 500).empty()) << backoff;
+    now += backoff;
+  }
+  EXPECT_EQ(store.CountTasks("job1").queued, 1);
+  EXPECT_EQ(fail_once("w2"), CompletionOutcome::kRequeued);
+  now += 30000;
+  EXPECT_EQ(fail_once("w3"), CompletionOutcome::kQuarantined);  // the third different worker
+  EXPECT_EQ(store.CountTasks("job1").quarantined, 1);
+  EXPECT_EQ(store.FindTask(Key(0))->result, "quarantined kind 1");
+  EXPECT_TRUE(store.CheckConsistency().empty());
+}

@@ -103,6 +103,7 @@ struct Completion {
   // is accepted, in the same transaction.
   std::string point_key;
   std::vector<SubtreeUse> subtrees;
+  std::string error;       // when failed: the worker's one-line reason (events)
 };
 
 enum class CompletionOutcome {
@@ -111,6 +112,8 @@ enum class CompletionOutcome {
   kFenced,     // the lease is no longer current (expired, returned): ignored
   kUnknown,    // no such task
   kRequeued,   // failed: the task goes back to the queue
+  kQuarantined,  // failed on quarantine_after different workers: finished
+                 // with the quarantine result, like an expiry quarantine
 };
 
 struct ExpiredLease {
@@ -214,9 +217,16 @@ class JobStore {
   // Drops every preference (coordinator start: worker liveness is unknown).
   void ClearAffinity();
   // Applies the results (one transaction); outcomes in input order.
-  // retry_backoff_ms: delay before a failed task may be leased again.
+  // A failed task is queued again after retry_backoff_ms * 2^(earlier
+  // failures) (capped at 30 s) and an event records the worker's reason;
+  // once quarantine_after different workers have failed it (0 = never), it
+  // is finished with quarantine_result(kind) instead, so a task no worker
+  // can run ends the job's wait rather than cycling forever, while one
+  // misconfigured worker failing everything quarantines nothing.
   std::vector<CompletionOutcome> Complete(const std::vector<Completion>& completions,
-                                          std::int64_t now_ms, std::int64_t retry_backoff_ms);
+                                          std::int64_t now_ms, std::int64_t retry_backoff_ms,
+                                          int quarantine_after = 0,
+                                          const std::function<std::string(int kind)>& quarantine_result = {});
   // Moves the deadline of the worker's listed active leases to deadline_ms,
   // leaving (not writing) those already due at deadline_ms - slack_ms or
   // later. Returns the listed ids that are not active leases of this worker.
