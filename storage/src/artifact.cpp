@@ -3,7 +3,6 @@
 #include "fabatlas/storage/artifact.h"
 
 #include <fcntl.h>
-#include <openssl/evp.h>
 #include <sqlite3.h>
 #include <unistd.h>
 
@@ -163,35 +162,20 @@ class Stmt {
 // entries is as large as the artifact; only ~1 MiB of it is held at a time).
 class Sha256Stream {
  public:
-  Sha256Stream() : ctx_(EVP_MD_CTX_new()) {
-    if (!ctx_ || EVP_DigestInit_ex(ctx_, EVP_sha256(), nullptr) != 1) throw Corrupt("SHA-256 init failed");
-  }
-  ~Sha256Stream() { EVP_MD_CTX_free(ctx_); }
-  Sha256Stream(const Sha256Stream&) = delete;
-  Sha256Stream& operator=(const Sha256Stream&) = delete;
   std::string& buffer() { return buffer_; }
   // Hashes the buffer when it holds at least `min_bytes`.
   void Flush(std::size_t min_bytes = 1 << 20) {
     if (buffer_.size() < min_bytes) return;
-    if (EVP_DigestUpdate(ctx_, buffer_.data(), buffer_.size()) != 1) throw Corrupt("SHA-256 update failed");
+    sha_.Update(buffer_);
     buffer_.clear();
   }
   std::string Hex() {
     Flush(0);
-    unsigned char digest[EVP_MAX_MD_SIZE];
-    unsigned int length = 0;
-    if (EVP_DigestFinal_ex(ctx_, digest, &length) != 1) throw Corrupt("SHA-256 final failed");
-    static const char* hex = "0123456789abcdef";
-    std::string out(2 * length, '0');
-    for (unsigned int i = 0; i < length; ++i) {
-      out[2 * i] = hex[digest[i] >> 4];
-      out[2 * i + 1] = hex[digest[i] & 15];
-    }
-    return out;
+    return sha_.Hex();
   }
 
  private:
-  EVP_MD_CTX* ctx_;
+  Sha256 sha_;
   std::string buffer_;
 };
 

@@ -2,7 +2,6 @@
 #include "fabatlas/storage/blob_store.h"
 
 #include <fcntl.h>
-#include <openssl/evp.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -61,8 +60,7 @@ bool IsDigest(const std::string& digest) {
 std::string Sha256OfFile(const fs::path& path) {
   int fd = ::open(path.c_str(), O_RDONLY);
   if (fd < 0) IoFail(path, "open", errno);
-  std::unique_ptr<EVP_MD_CTX, decltype(&EVP_MD_CTX_free)> ctx(EVP_MD_CTX_new(), EVP_MD_CTX_free);
-  EVP_DigestInit_ex(ctx.get(), EVP_sha256(), nullptr);
+  Sha256 sha;
   std::string buffer(1 << 20, '\0');
   while (true) {
     ssize_t n = ::read(fd, buffer.data(), buffer.size());
@@ -73,19 +71,10 @@ std::string Sha256OfFile(const fs::path& path) {
       IoFail(path, "read", err);
     }
     if (n == 0) break;
-    EVP_DigestUpdate(ctx.get(), buffer.data(), static_cast<std::size_t>(n));
+    sha.Update(std::string_view(buffer.data(), static_cast<std::size_t>(n)));
   }
   ::close(fd);
-  unsigned char md[EVP_MAX_MD_SIZE];
-  unsigned int len = 0;
-  EVP_DigestFinal_ex(ctx.get(), md, &len);
-  static const char* hex = "0123456789abcdef";
-  std::string out;
-  for (unsigned int i = 0; i < len; ++i) {
-    out += hex[md[i] >> 4];
-    out += hex[md[i] & 15];
-  }
-  return out;
+  return sha.Hex();
 }
 
 BlobStore::BlobStore(fs::path root) : root_(std::move(root)) {
