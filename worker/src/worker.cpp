@@ -107,7 +107,9 @@ class Worker {
       std::lock_guard lock(mu_);
       exiting_ = true;
     }
-    cv_.notify_all();
+    queue_cv_.notify_all();
+    done_cv_.notify_all();
+    exit_cv_.notify_all();
     for (auto& t : slots_) t.join();
     if (heartbeat_.joinable()) heartbeat_.join();
   }
@@ -172,7 +174,7 @@ class Worker {
           queue_.push_back(std::move(lease));
         }
       }
-      cv_.notify_all();
+      if (resp.leases_size() > 0) queue_cv_.notify_all();
       // Nothing new: wait for a result (or briefly for free slots to be worth
       // asking for more work again).
       // Also right after new leases filled every slot: asking again at once
@@ -180,11 +182,11 @@ class Worker {
       std::unique_lock lock(mu_);
       bool full = static_cast<int>(queue_.size()) + running_ >= o_.slots;
       if ((resp.leases_size() == 0 || full) && !in_flight_.empty()) {
-        cv_.wait_for(lock, std::chrono::milliseconds(full ? 1000 : 200),
+        done_cv_.wait_for(lock, std::chrono::milliseconds(full ? 1000 : 200),
                      [&] { return !done_.empty() || stop_; });
       }
       if (stop_ && running_ > 0)
-        cv_.wait_for(lock, std::chrono::milliseconds(200), [&] { return !done_.empty(); });
+        done_cv_.wait_for(lock, std::chrono::milliseconds(200), [&] { return !done_.empty(); });
     }
   }
 
@@ -205,7 +207,7 @@ class Worker {
       v1::HeartbeatRequest req;
       {
         std::unique_lock lock(mu_);
-        cv_.wait_for(lock, std::chrono::milliseconds(heartbeat_ms_), [&] { return exiting_; });
+        exit_cv_.wait_for(lock, std::chrono::milliseconds(heartbeat_ms_), [&] { return exiting_; });
         if (exiting_) return;
         if (in_flight_.empty()) continue;
         req.set_worker_id(o_.worker_id);
@@ -234,7 +236,7 @@ class Worker {
       v1::Lease lease;
       {
         std::unique_lock lock(mu_);
-        cv_.wait(lock, [&] { return exiting_ || (!queue_.empty() && !stop_); });
+        queue_cv_.wait(lock, [&] { return exiting_ || (!queue_.empty() && !stop_); });
         if (exiting_) return;
         lease = std::move(queue_.front());
         queue_.pop_front();
@@ -248,7 +250,7 @@ class Worker {
         in_flight_.erase(lease.lease_id());
         done_.push_back(std::move(done));
       }
-      cv_.notify_all();
+      done_cv_.notify_one();  // only the sync loop waits for results
     }
   }
 
@@ -452,7 +454,11 @@ class Worker {
   bool crash_mid_cache_plan_ = false;
 
   std::mutex mu_;
-  std::condition_variable cv_;
+  // One condition per waiter, so a hand-off wakes only the thread it is for
+  // (each wake-up costs a context switch in the task's round trip):
+  std::condition_variable queue_cv_;  // slot threads: leases queued, or exiting
+  std::condition_variable done_cv_;   // the sync loop: a result to report
+  std::condition_variable exit_cv_;   // the heartbeat thread: exiting
   std::deque<v1::Lease> queue_;
   std::set<std::string> in_flight_;
   std::vector<v1::CompletedTask> done_;
