@@ -8,7 +8,7 @@
 #include <nlohmann/json.hpp>
 
 #include "fabatlas/error.h"
-#include "fabatlas/viewer/gltf.h"
+#include "fabatlas/storage/glb.h"
 
 namespace fabatlas::viewer {
 
@@ -165,7 +165,7 @@ ApiResponse Route(const Customiser& c, const std::string& path, const std::map<s
     const PreviewResult p = c.Preview(SnapOrFail(c, u));
     ApiResponse r;
     r.content_type = "model/gltf-binary";
-    r.body = MeshToGlb(p.solid.ToMesh());
+    r.body = storage::MeshToGlb(p.solid.ToMesh());
     r.headers["X-Sample"] = std::to_string(p.sample);
     r.headers["X-Preview-Seconds"] = std::to_string(p.seconds);
     r.headers["X-Cache-Hits"] = std::to_string(p.cache_hits) + "/" + std::to_string(p.subtrees);
