@@ -35,6 +35,16 @@ inline double HollowCylinderChange(double R1, double t1, double h1, double R2, d
   return uni > 0 ? (uni - inter) / uni : 0.0;
 }
 
+// A hollow cylinder's sample outcome: invalid with `failure` when it is set,
+// else valid with its volume (mm^3) as the property.
+inline SampleOutcome HollowCylinderOutcome(const char* failure, double R, double t, double h) {
+  SampleOutcome o;
+  o.valid = failure == nullptr;
+  if (failure) o.failure_type = failure;
+  else o.properties["volume_mm3"] = HollowCylinderVolume(R, t, h);
+  return o;
+}
+
 // (a) 2-D: outer radius R in [5, 20] mm, wall t in [0.5, 5] mm, height 10 mm.
 // Valid iff t >= t_min(R) = 0.5 + 0.01 R^2 (a curved boundary), failure
 // "min_thickness". True valid area = 67.5 - 0.01 (20^3 - 5^3) / 3 = 41.25 of
@@ -47,11 +57,7 @@ class HollowCylinder2D : public SampleEvaluator {
   }
   static bool TrulyValid(const std::vector<double>& u) { return u[1] >= 0.5 + 0.01 * u[0] * u[0]; }
   SampleOutcome EvaluateSample(const SamplePoint& p) override {
-    SampleOutcome o;
-    o.valid = TrulyValid(p.u);
-    if (!o.valid) o.failure_type = "min_thickness";
-    else o.properties["volume_mm3"] = HollowCylinderVolume(p.u[0], p.u[1], 10.0);
-    return o;
+    return HollowCylinderOutcome(TrulyValid(p.u) ? nullptr : "min_thickness", p.u[0], p.u[1], 10.0);
   }
   double GeometryChange(const SamplePoint& a, const SamplePoint& b) override {
     return HollowCylinderChange(a.u[0], a.u[1], 10.0, b.u[0], b.u[1], 10.0);
@@ -75,12 +81,7 @@ class BudgetCylinder2D : public SampleEvaluator {
   }
   static bool TrulyValid(const std::vector<double>& u) { return Failure(u) == nullptr; }
   SampleOutcome EvaluateSample(const SamplePoint& p) override {
-    SampleOutcome o;
-    const char* f = Failure(p.u);
-    o.valid = f == nullptr;
-    if (f) o.failure_type = f;
-    else o.properties["volume_mm3"] = HollowCylinderVolume(p.u[0], p.u[1], 10.0);
-    return o;
+    return HollowCylinderOutcome(Failure(p.u), p.u[0], p.u[1], 10.0);
   }
   double GeometryChange(const SamplePoint& a, const SamplePoint& b) override {
     return HollowCylinderChange(a.u[0], a.u[1], 10.0, b.u[0], b.u[1], 10.0);
@@ -103,12 +104,7 @@ class HollowCylinder3D : public SampleEvaluator {
   }
   static bool TrulyValid(const std::vector<double>& u) { return Failure(u) == nullptr; }
   SampleOutcome EvaluateSample(const SamplePoint& p) override {
-    SampleOutcome o;
-    const char* f = Failure(p.u);
-    o.valid = f == nullptr;
-    if (f) o.failure_type = f;
-    else o.properties["volume_mm3"] = HollowCylinderVolume(p.u[0], p.u[1], p.u[2]);
-    return o;
+    return HollowCylinderOutcome(Failure(p.u), p.u[0], p.u[1], p.u[2]);
   }
   double GeometryChange(const SamplePoint& a, const SamplePoint& b) override {
     return HollowCylinderChange(a.u[0], a.u[1], a.u[2], b.u[0], b.u[1], b.u[2]);
