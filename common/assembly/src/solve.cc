@@ -14,6 +14,7 @@
 
 #include "connector_frames.h"
 #include "fabatlas/assembly/precheck.h"
+#include "solve_internal.h"
 
 namespace fabatlas::assembly {
 namespace {
@@ -21,8 +22,6 @@ namespace {
 using internal::Mat4;
 
 constexpr double kEnergyDatum = 1e5;  // mm; see AssemblyResidual
-// Derivatives per pass of the dynamic autodiff (fewer passes over the chain).
-constexpr int kJetStride = 16;
 
 template <typename T>
 Mat4<T> RigidInverse(const Mat4<T>& m) {
@@ -138,6 +137,196 @@ struct AssemblyResidual {
     }
     return true;
   }
+};
+
+// Connector frame M = base·M_local(s) and its partial derivatives dM/ds_i of
+// one parameter block (i = 0..3), from one pass of 4-wide forward-mode Jets
+// through the local frame only (the constant base frame stays in double).
+struct FrameDerivatives {
+  Eigen::Matrix4d m;
+  std::array<Eigen::Matrix4d, internal::kParamBlock> d;
+};
+
+FrameDerivatives ConnectorFrameDerivatives(const Eigen::Matrix4d& base, const Primitive& p, const double* s) {
+  using J = ceres::Jet<double, internal::kParamBlock>;
+  J sj[internal::kParamBlock];
+  for (int i = 0; i < internal::kParamBlock; ++i) sj[i] = J(s[i], i);
+  const Mat4<J> local = internal::SymmetricConnectorFrame<J>(p, sj);
+  FrameDerivatives out;
+  Eigen::Matrix4d v;
+  for (int r = 0; r < 4; ++r)
+    for (int c = 0; c < 4; ++c) v(r, c) = local(r, c).a;
+  out.m = base * v;
+  for (int i = 0; i < internal::kParamBlock; ++i) {
+    Eigen::Matrix4d d;
+    for (int r = 0; r < 4; ++r)
+      for (int c = 0; c < 4; ++c) d(r, c) = local(r, c).v[i];
+    out.d[i] = base * d;
+  }
+  return out;
+}
+
+// Derivative of RigidInverse(m) along dm: [dRᵀ, −(dRᵀ t + Rᵀ dt)].
+Eigen::Matrix4d RigidInverseDerivative(const Eigen::Matrix4d& m, const Eigen::Matrix4d& dm) {
+  Eigen::Matrix4d r = Eigen::Matrix4d::Zero();
+  r.topLeftCorner<3, 3>() = dm.topLeftCorner<3, 3>().transpose();
+  r.topRightCorner<3, 1>() = -(dm.topLeftCorner<3, 3>().transpose() * m.topRightCorner<3, 1>() +
+                               m.topLeftCorner<3, 3>().transpose() * dm.topRightCorner<3, 1>());
+  return r;
+}
+
+// AssemblyResidual with analytic Jacobians (same residuals). Forward
+// kinematics makes each part pose a product of per-connection frames, so a
+// parameter s of tree connection e (child c) changes every pose of c's
+// subtree by the same world-frame factor: dP_d/ds = G·P_d with
+// G = (dP_c/ds)·P_c⁻¹. A parameter of a closing connection only enters its
+// own closure residual. Costs a few 4×4 double products per parameter instead
+// of carrying derivative vectors through the whole chain (autodiff).
+class AssemblyCost : public ceres::CostFunction {
+ public:
+  explicit AssemblyCost(AssemblyResidual f) : f_(std::move(f)) {
+    const Kinematics& kin = *f_.kin;
+    const int n = static_cast<int>(kin.prog->instances.size());
+    for (size_t b = 0; b < 2 * kin.prog->connections.size(); ++b)
+      mutable_parameter_block_sizes()->push_back(internal::kParamBlock);
+    set_num_residuals(f_.NumResiduals());
+    // subtree_[t][d]: part d lies in the subtree below tree edge t.
+    std::vector<int> edge_of(n, -1), parent(n, -1);
+    for (size_t t = 0; t < kin.tree.size(); ++t) {
+      const auto [e, child] = kin.tree[t];
+      const auto& c = kin.prog->connections[e];
+      edge_of[child] = static_cast<int>(t);
+      parent[child] = child == c.part_b ? c.part_a : c.part_b;
+    }
+    subtree_.assign(kin.tree.size(), std::vector<char>(n, 0));
+    for (int d = 0; d < n; ++d)
+      for (int u = d; u > 0 && edge_of[u] >= 0; u = parent[u]) subtree_[edge_of[u]][d] = 1;
+    for (size_t b = 0; b < 2 * kin.prog->connections.size(); ++b) {
+      const auto& c = kin.prog->connections[b / 2];
+      const Primitive& p = b % 2 == 0 ? kin.prog->PrimitiveA(c) : kin.prog->PrimitiveB(c);
+      std::array<bool, internal::kParamBlock> used{};
+      for (size_t i = 0; i < p.Params().size(); ++i) used[i] = true;
+      if (internal::SymmetryAxis(p.type) >= 0) used[3] = true;
+      used_.push_back(used);
+    }
+  }
+
+  bool Evaluate(double const* const* params, double* residuals, double** jacobians) const override {
+    f_(params, residuals);
+    if (!jacobians) return true;
+    const Kinematics& kin = *f_.kin;
+    const Program& prog = *kin.prog;
+    const int nr = num_residuals(), m = static_cast<int>(prog.connections.size());
+    for (int b = 0; b < 2 * m; ++b)
+      if (jacobians[b]) std::fill(jacobians[b], jacobians[b] + nr * internal::kParamBlock, 0.0);
+    // Frames (values; derivatives only where a Jacobian is asked for).
+    std::vector<FrameDerivatives> fr(2 * m);
+    for (int e = 0; e < m; ++e) {
+      const auto& c = prog.connections[e];
+      for (int side = 0; side < 2; ++side) {
+        const int b = 2 * e + side;
+        const Primitive& p = side == 0 ? prog.PrimitiveA(c) : prog.PrimitiveB(c);
+        const Eigen::Matrix4d& base = side == 0 ? kin.base_a[e] : kin.base_b[e];
+        if (jacobians[b]) {
+          fr[b] = ConnectorFrameDerivatives(base, p, params[b]);
+        } else {
+          fr[b].m = base * internal::SymmetricConnectorFrame<double>(p, params[b]);
+        }
+      }
+    }
+    const std::vector<Mat4<double>> pose = kin.Poses<double>(params);
+    // Closure frames fa = P_a·M_a·A, fb = P_b·M_b of every closing connection.
+    std::vector<Eigen::Matrix4d> fa, fb;
+    for (int e : kin.closing) {
+      const auto& c = prog.connections[e];
+      fa.push_back(pose[c.part_a] * fr[2 * e].m * kin.align[e]);
+      fb.push_back(pose[c.part_b] * fr[2 * e + 1].m);
+    }
+    const double wc = f_.closure_weight, wr = f_.closure_weight * f_.rot_scale;
+    const int spacing_row = 12 * static_cast<int>(kin.closing.size());
+    const int objective_row = spacing_row + static_cast<int>(f_.spacing.size());
+    auto put12 = [&](double* jac, int row, int i, const Eigen::Matrix4d& d, double wt, double wrot) {
+      for (int a = 0; a < 3; ++a) jac[(row + a) * internal::kParamBlock + i] = wt * d(a, 3);
+      for (int a = 0; a < 3; ++a)
+        for (int bb = 0; bb < 3; ++bb) jac[(row + 3 + 3 * a + bb) * internal::kParamBlock + i] = wrot * d(a, bb);
+    };
+    // Tree parameters: world-frame factor G on the child's subtree.
+    for (size_t t = 0; t < kin.tree.size(); ++t) {
+      const auto [e, child] = kin.tree[t];
+      const auto& c = prog.connections[e];
+      const bool child_is_b = child == c.part_b;
+      const int parent = child_is_b ? c.part_a : c.part_b;
+      // P_child = P_parent·F1·F2·F3.
+      const Eigen::Matrix4d& m1 = child_is_b ? fr[2 * e].m : fr[2 * e + 1].m;
+      const Eigen::Matrix4d& m3 = child_is_b ? fr[2 * e + 1].m : fr[2 * e].m;
+      const Eigen::Matrix4d f2 = child_is_b ? kin.align[e] : RigidInverse<double>(kin.align[e]);
+      const Eigen::Matrix4d inv3 = RigidInverse<double>(m3);
+      const Eigen::Matrix4d inv_child = RigidInverse<double>(pose[child]);
+      const std::vector<char>& sub = subtree_[t];
+      for (int side = 0; side < 2; ++side) {
+        const int b = 2 * e + side;
+        if (!jacobians[b]) continue;
+        const bool first = (side == 0) == child_is_b;  // this side's frame is F1
+        for (int i = 0; i < internal::kParamBlock; ++i) {
+          if (!used_[b][i]) continue;
+          const Eigen::Matrix4d dchild = first ? Eigen::Matrix4d(pose[parent] * fr[b].d[i] * f2 * inv3)
+                                               : Eigen::Matrix4d(pose[parent] * m1 * f2 *
+                                                                 RigidInverseDerivative(m3, fr[b].d[i]));
+          const Eigen::Matrix4d g = dchild * inv_child;
+          double* jac = jacobians[b];
+          for (size_t k = 0; k < kin.closing.size(); ++k) {
+            const auto& cc = prog.connections[kin.closing[k]];
+            const bool ina = sub[cc.part_a], inb = sub[cc.part_b];
+            if (!ina && !inb) continue;
+            Eigen::Matrix4d d = Eigen::Matrix4d::Zero();
+            if (ina) d += g * fa[k];
+            if (inb) d -= g * fb[k];
+            put12(jac, 12 * static_cast<int>(k), i, d, wc, wr);
+          }
+          if (f_.phase == Phase::kObjective && sub[prog.target])
+            put12(jac, objective_row, i, g * pose[prog.target], 1.0, f_.target_rot_scale);
+          if (f_.phase == Phase::kRelaxation)
+            for (size_t k = 0; k < f_.energy.size(); ++k) {
+              const EnergyTerm& en = f_.energy[k];
+              if (!sub[en.part]) continue;
+              const Eigen::Vector4d com_world = pose[en.part] * en.com.homogeneous();
+              jac[(objective_row + static_cast<int>(k)) * internal::kParamBlock + i] = en.scale * g.row(2).dot(com_world);
+            }
+        }
+      }
+    }
+    // Closing-connection parameters: only their own closure residual.
+    for (size_t k = 0; k < kin.closing.size(); ++k) {
+      const int e = kin.closing[k];
+      const auto& c = prog.connections[e];
+      for (int side = 0; side < 2; ++side) {
+        const int b = 2 * e + side;
+        if (!jacobians[b]) continue;
+        for (int i = 0; i < internal::kParamBlock; ++i) {
+          if (!used_[b][i]) continue;
+          const Eigen::Matrix4d d = side == 0 ? Eigen::Matrix4d(pose[c.part_a] * fr[b].d[i] * kin.align[e])
+                                              : Eigen::Matrix4d(-(pose[c.part_b] * fr[b].d[i]));
+          put12(jacobians[b], 12 * static_cast<int>(k), i, d, wc, wr);
+        }
+      }
+    }
+    // Spacing f = |t1 − t2|·L − (w1 + w2)/2 (active when f < 0).
+    for (size_t k = 0; k < f_.spacing.size(); ++k) {
+      const SpacingTerm& s = f_.spacing[k];
+      const double diff = params[s.block1][0] - params[s.block2][0];
+      if (std::abs(diff) * s.length - s.half_widths >= 0) continue;
+      const double sign = diff < 0 ? -1.0 : 1.0;
+      const int row = spacing_row + static_cast<int>(k);
+      if (jacobians[s.block1]) jacobians[s.block1][row * internal::kParamBlock] += wc * sign * s.length;
+      if (jacobians[s.block2]) jacobians[s.block2][row * internal::kParamBlock] -= wc * sign * s.length;
+    }
+    return true;
+  }
+
+ private:
+  AssemblyResidual f_;
+  std::vector<std::vector<char>> subtree_;  // per tree edge, per part
+  std::vector<std::array<bool, internal::kParamBlock>> used_;
 };
 
 // Stall prevention (seed 000, 4.3.2): linear regression of log10(cost) over a
@@ -342,6 +531,33 @@ class Solver {
 
   std::vector<Block>& blocks() { return blocks_; }
 
+  // Analytic Jacobian of one phase against autodiff at the current parameters.
+  internal::JacobianCheck CheckJacobian(Phase phase, double sigma) {
+    internal::JacobianCheck out;
+    AssemblyCost analytic(Residual(phase, sigma));
+    if (analytic.num_residuals() == 0) return out;  // no cycles: nothing to close
+    ceres::DynamicAutoDiffCostFunction<AssemblyResidual, 16> autodiff(new AssemblyResidual(Residual(phase, sigma)));
+    for (size_t b = 0; b < blocks_.size(); ++b) autodiff.AddParameterBlock(internal::kParamBlock);
+    autodiff.SetNumResiduals(analytic.num_residuals());
+    const int nr = analytic.num_residuals();
+    out.residuals = nr;
+    out.parameters = internal::kParamBlock * static_cast<int>(blocks_.size());
+    std::vector<std::vector<double>> j1(blocks_.size(), std::vector<double>(nr * internal::kParamBlock)), j2 = j1;
+    std::vector<double*> p1, p2;
+    for (size_t b = 0; b < blocks_.size(); ++b) p1.push_back(j1[b].data()), p2.push_back(j2[b].data());
+    std::vector<double> r1(nr), r2(nr);
+    const std::vector<double*> x = Pointers();
+    analytic.Evaluate(x.data(), r1.data(), p1.data());
+    autodiff.Evaluate(x.data(), r2.data(), p2.data());
+    for (size_t b = 0; b < blocks_.size(); ++b)
+      for (size_t i = 0; i < j1[b].size(); ++i) {
+        out.max_error = std::max(out.max_error, std::abs(j1[b][i] - j2[b][i]));
+        out.max_entry = std::max(out.max_entry, std::abs(j2[b][i]));
+      }
+    for (int i = 0; i < nr; ++i) out.max_residual_error = std::max(out.max_residual_error, std::abs(r1[i] - r2[i]));
+    return out;
+  }
+
  private:
   const Primitive& Prim(int b) const {
     const auto& c = prog_.connections[b / 2];
@@ -374,11 +590,7 @@ class Solver {
   }
 
   void Build(ceres::Problem& problem, Phase phase, double sigma) {
-    auto* f = new ceres::DynamicAutoDiffCostFunction<AssemblyResidual, kJetStride>(
-        new AssemblyResidual(Residual(phase, sigma)));
-    for (size_t b = 0; b < blocks_.size(); ++b) f->AddParameterBlock(internal::kParamBlock);
-    f->SetNumResiduals(Residual(phase, sigma).NumResiduals());
-    problem.AddResidualBlock(f, nullptr, Pointers());
+    problem.AddResidualBlock(new AssemblyCost(Residual(phase, sigma)), nullptr, Pointers());
     for (size_t b = 0; b < blocks_.size(); ++b) {
       const auto& c = prog_.connections[b / 2];
       const Primitive& p = Prim(static_cast<int>(b));
@@ -411,6 +623,16 @@ void TargetErrors(const Program& prog, const Eigen::Isometry3d& pose, double& mm
 }
 
 }  // namespace
+
+internal::JacobianCheck internal::CheckJacobian(const Program& program, int start, int phase,
+                                                const SolveOptions& options) {
+  Solver solver(program, options);
+  solver.SetStart(start);
+  const Phase p = static_cast<Phase>(phase);
+  return solver.CheckJacobian(p, p == Phase::kObjective    ? options.penalty_start
+                                 : p == Phase::kRelaxation ? options.relaxation_penalty
+                                                           : 1.0);
+}
 
 SolveSummary SolveAssembly(const Program& prog, const SolveOptions& opt) {
   const auto t0 = std::chrono::steady_clock::now();
