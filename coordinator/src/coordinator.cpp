@@ -866,6 +866,17 @@ class WorkerServiceImpl final : public v1::WorkerService::Service {
     if (Status s = protocol::CheckToken(*ctx, impl_.options.token); !s.ok()) return s;
     try {
       std::int64_t now = NowMs();
+      // A heartbeat shows the worker alive as a Sync does (a 1-slot worker
+      // does not Sync while its task runs).
+      int slots = -1;
+      {
+        std::lock_guard lock(impl_.workers_mu);
+        if (auto it = impl_.workers_seen.find(req->worker_id()); it != impl_.workers_seen.end()) {
+          it->second.last_ms = now;
+          slots = it->second.slots;
+        }
+      }
+      if (slots >= 0) impl_.store->TouchWorker(req->worker_id(), slots, now);
       std::vector<std::string> ids(req->lease_ids().begin(), req->lease_ids().end());
       for (const auto& id : impl_.store->ExtendLeases(req->worker_id(), ids, now + impl_.options.lease_ms))
         resp->add_revoked_lease_ids(id);

@@ -12,6 +12,7 @@
 #include <map>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <set>
 #include <thread>
 
@@ -86,7 +87,10 @@ class Worker {
     int threads = o_.threads > 0 ? o_.threads : o_.slots;
     tbb::global_control parallelism(tbb::global_control::max_allowed_parallelism,
                                     static_cast<std::size_t>(std::max(1, threads - o_.slots + 1)));
-    for (int i = 0; i < o_.slots; ++i) slots_.emplace_back([this] { SlotLoop(); });
+    // A 1-slot worker runs its task on the sync loop's thread (SyncLoop);
+    // more slots get a thread each.
+    if (o_.slots > 1)
+      for (int i = 0; i < o_.slots; ++i) slots_.emplace_back([this] { SlotLoop(); });
     heartbeat_ = std::thread([this] { HeartbeatLoop(); });
     try {
       SyncLoop();
@@ -174,14 +178,25 @@ class Worker {
           queue_.push_back(std::move(lease));
         }
       }
-      if (resp.leases_size() > 0) queue_cv_.notify_all();
+      if (slots_.empty()) {
+        // One slot: run the task here. Nothing is due to the coordinator
+        // while it runs (the heartbeat thread keeps its lease), and the
+        // result goes out on the next Sync from this thread: two thread
+        // hand-offs fewer per task than through a slot thread.
+        if (std::optional<v1::Lease> lease = TakeLease()) {
+          RunLease(*lease);
+          continue;
+        }
+      } else if (resp.leases_size() > 0) {
+        queue_cv_.notify_all();
+      }
       // Nothing new: wait for a result (or briefly for free slots to be worth
       // asking for more work again).
       // Also right after new leases filled every slot: asking again at once
       // could only extend leases, which the heartbeat thread does.
       std::unique_lock lock(mu_);
       bool full = static_cast<int>(queue_.size()) + running_ >= o_.slots;
-      if ((resp.leases_size() == 0 || full) && !in_flight_.empty()) {
+      if (!slots_.empty() && (resp.leases_size() == 0 || full) && !in_flight_.empty()) {
         done_cv_.wait_for(lock, std::chrono::milliseconds(full ? 1000 : 200),
                      [&] { return !done_.empty() || stop_; });
       }
@@ -242,16 +257,29 @@ class Worker {
         queue_.pop_front();
         ++running_;
       }
-      v1::CompletedTask done = Execute(lease);
-      {
-        std::lock_guard lock(mu_);
-        --running_;
-        ++summary_.tasks_run;
-        in_flight_.erase(lease.lease_id());
-        done_.push_back(std::move(done));
-      }
+      RunLease(lease);
       done_cv_.notify_one();  // only the sync loop waits for results
     }
+  }
+
+  // The next queued lease, counted as running; none while stopping.
+  std::optional<v1::Lease> TakeLease() {
+    std::lock_guard lock(mu_);
+    if (queue_.empty() || stop_) return std::nullopt;
+    v1::Lease lease = std::move(queue_.front());
+    queue_.pop_front();
+    ++running_;
+    return lease;
+  }
+
+  // Runs a lease taken from the queue and files its result for the next Sync.
+  void RunLease(const v1::Lease& lease) {
+    v1::CompletedTask done = Execute(lease);
+    std::lock_guard lock(mu_);
+    --running_;
+    ++summary_.tasks_run;
+    in_flight_.erase(lease.lease_id());
+    done_.push_back(std::move(done));
   }
 
   std::shared_ptr<JobContext> ContextFor(const v1::Lease& lease) {

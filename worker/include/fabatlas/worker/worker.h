@@ -1,5 +1,6 @@
 // fabatlas/worker/worker.h — a cluster worker: pulls leases from the
 // coordinator (WorkerService.Sync long polls), runs them on `slots` threads
+// (one slot: on the thread that sends Sync)
 // with a DesignSampleEvaluator per job, reports results, and heartbeats its
 // leases from a separate thread (DESIGN.md "Cluster and reliability").
 //
