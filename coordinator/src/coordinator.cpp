@@ -835,8 +835,9 @@ class WorkerServiceImpl final : public v1::WorkerService::Service {
           epoch = impl_.work_epoch;
         }
         grants = impl_.store->GrantLeases(req->worker_id(), want, NowMs(), o.lease_ms);
-        if (!grants.empty() || !completions.empty() || impl_.stopping || impl_.draining || ctx->IsCancelled())
-          break;
+        // A Sync that reports results may wait too (worker.proto Sync): the
+        // results were stored and handed on above.
+        if (!grants.empty() || wait_ms <= 0 || impl_.stopping || impl_.draining || ctx->IsCancelled()) break;
         std::unique_lock lock(impl_.work_mu);
         auto slice = std::min(until, std::chrono::steady_clock::now() + std::chrono::milliseconds(250));
         impl_.work_cv.wait_until(lock, slice, [&] { return impl_.work_epoch != epoch || impl_.stopping.load(); });

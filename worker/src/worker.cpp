@@ -141,7 +141,8 @@ class Worker {
         for (auto& c : done_) *req.add_completed() = std::move(c);
         done_.clear();
         req.set_leaving(leaving);
-        bool idle = in_flight_.empty() && req.completed_size() == 0 && !stop_;
+        // Nothing left running: results go out in the long poll itself.
+        bool idle = in_flight_.empty() && !stop_;
         req.set_max_wait_ms(idle ? static_cast<int>(o_.poll_ms) : 0);
       }
       grpc::ClientContext ctx;
