@@ -1,5 +1,6 @@
 #include "fabatlas/assembly/solve.h"
 
+#include <algorithm>
 #include <array>
 #include <chrono>
 #include <cstdio>
@@ -20,8 +21,6 @@ namespace fabatlas::assembly {
 namespace {
 
 using internal::Mat4;
-
-constexpr double kEnergyDatum = 1e5;  // mm; see AssemblyResidual
 
 template <typename T>
 Mat4<T> RigidInverse(const Mat4<T>& m) {
@@ -80,7 +79,8 @@ struct SpacingTerm {
 struct EnergyTerm {
   int part;
   Eigen::Vector3d com;
-  double scale;  // sqrt(m g / (1000 D))
+  double scale;         // sqrt(m g / (1000 D))
+  double datum;         // −D (mm), see AssemblyResidual
 };
 
 // All residuals of one phase as one cost over all parameter blocks.
@@ -132,7 +132,7 @@ struct AssemblyResidual {
         const Mat4<T>& q = p[en.part];
         T z = q(2, 3);
         for (int i = 0; i < 3; ++i) z += q(2, i) * T(en.com[i]);
-        r[k++] = T(en.scale) * (z + T(kEnergyDatum));
+        r[k++] = T(en.scale) * (z - T(en.datum));
       }
     }
     return true;
@@ -329,6 +329,31 @@ class AssemblyCost : public ceres::CostFunction {
   std::vector<std::array<bool, internal::kParamBlock>> used_;
 };
 
+// Gauge fix of the relaxation: ½k‖s − s₀‖² for one parameter block, s₀ the
+// parameters the relaxation starts from (step 1). A hanging part whose centre
+// of mass is below its support may turn about the vertical at no energy cost;
+// without this term that turn is left to round-off and the relaxed pose is
+// not reproducible. k (J per unit², degrees for angles; default 1e-9) is far
+// below the gravity stiffness of a swing, m g L/1000·(π/180)² (5e-7 J/deg²
+// for 5 g on a 30 mm lever), so it picks one of equivalent equilibria and
+// moves a true one by a relative ≲ k / that stiffness.
+class AnchorCost : public ceres::SizedCostFunction<internal::kParamBlock, internal::kParamBlock> {
+ public:
+  AnchorCost(const std::array<double, internal::kParamBlock>& anchor, double stiffness)
+      : anchor_(anchor), w_(std::sqrt(stiffness)) {}
+  bool Evaluate(double const* const* x, double* r, double** jac) const override {
+    for (int i = 0; i < internal::kParamBlock; ++i) r[i] = w_ * (x[0][i] - anchor_[i]);
+    if (jac && jac[0])
+      for (int i = 0; i < internal::kParamBlock * internal::kParamBlock; ++i)
+        jac[0][i] = i % (internal::kParamBlock + 1) == 0 ? w_ : 0.0;
+    return true;
+  }
+
+ private:
+  std::array<double, internal::kParamBlock> anchor_;
+  double w_;
+};
+
 // Stall prevention (seed 000, 4.3.2): linear regression of log10(cost) over a
 // sliding window; abort when it decreases slower than `slope` per iteration.
 class StallCallback : public ceres::IterationCallback {
@@ -429,7 +454,8 @@ class Solver {
       const Part& part = prog.PartOf(i);
       if (part.mass <= 0) continue;
       const double mass_kg = part.mass * 1e-6;  // mm³ × 1 g/cm³
-      energy_.push_back({i, part.centre_of_mass, std::sqrt(mass_kg * opt.gravity / (1000.0 * kEnergyDatum))});
+      energy_.push_back({i, part.centre_of_mass, std::sqrt(mass_kg * opt.gravity / (1000.0 * opt.relaxation_datum_mm)),
+                         -opt.relaxation_datum_mm});
     }
   }
 
@@ -463,18 +489,28 @@ class Solver {
     Build(*problem, phase, sigma);
     ceres::Solver::Options o;
     o.linear_solver_type = ceres::DENSE_QR;
-    o.max_num_iterations = opt_.max_iterations;
+    o.max_num_iterations = phase == Phase::kRelaxation ? opt_.relaxation_max_iterations : opt_.max_iterations;
     o.num_threads = 1;
     o.logging_type = ceres::SILENT;
     o.function_tolerance = 1e-12;
     o.gradient_tolerance = 1e-12;
     o.parameter_tolerance = 1e-10;
+    if (phase == Phase::kRelaxation) {
+      // The energy landscape along a hanging chain is flat (see SolveOptions):
+      // stop on the projected gradient and on the step, not on a relative
+      // cost change (the cost carries the energy datum, so 1e-12 of it is
+      // far above the energy differences still being resolved).
+      o.function_tolerance = opt_.relaxation_function_tolerance;
+      o.gradient_tolerance = opt_.relaxation_gradient_tolerance;
+      o.parameter_tolerance = opt_.relaxation_parameter_tolerance;
+    }
     StallCallback stall(opt_.stall_window, opt_.stall_slope, opt_.feasibility_tolerance);
     if (phase == Phase::kFeasibility) o.callbacks.push_back(&stall);
     ceres::Solver::Summary s;
     ceres::Solve(o, problem.get(), &s);
     if (std::getenv("FABATLAS_ASSEMBLY_DEBUG"))
-      std::fprintf(stderr, "phase %d sigma %g: %s\n", static_cast<int>(phase), sigma, s.BriefReport().c_str());
+      std::fprintf(stderr, "phase %d sigma %g: %s (%s)\n", static_cast<int>(phase), sigma, s.BriefReport().c_str(),
+                   s.message.c_str());
     if (keep) *keep = std::move(problem);
     return s;
   }
@@ -509,6 +545,7 @@ class Solver {
     std::vector<std::string> out;
     ceres::Problem::EvaluateOptions eo;
     for (auto& b : blocks_) eo.parameter_blocks.push_back(b.data());
+    eo.residual_blocks = {assembly_block_};  // gravity + closure, not the gauge anchor
     double cost = 0;
     std::vector<double> grad;
     problem.Evaluate(eo, &cost, nullptr, &grad, nullptr);
@@ -530,6 +567,25 @@ class Solver {
   }
 
   std::vector<Block>& blocks() { return blocks_; }
+
+  // Step 2 starts here: the gauge anchor is the current parameters.
+  void SetRelaxationAnchor() { anchor_ = blocks_; }
+
+  // Adds `delta` to every parameter that is not held by `fixed_a/b`, clamped
+  // to the parameter's bounds (SolvePerturbedRelaxation).
+  void Perturb(double delta) {
+    for (size_t b = 0; b < blocks_.size(); ++b) {
+      if (!Fixed(static_cast<int>(b)).empty()) continue;
+      const Primitive& p = Prim(static_cast<int>(b));
+      const auto specs = p.Params();
+      for (size_t i = 0; i < specs.size(); ++i) {
+        double& x = blocks_[b][i];
+        x += delta;
+        if (specs[i].kind != ParamKind::kUnbounded) x = std::clamp(x, specs[i].min, specs[i].max);
+      }
+      if (internal::SymmetryAxis(p.type) >= 0) blocks_[b][3] += delta;
+    }
+  }
 
   // Analytic Jacobian of one phase against autodiff at the current parameters.
   internal::JacobianCheck CheckJacobian(Phase phase, double sigma) {
@@ -590,7 +646,7 @@ class Solver {
   }
 
   void Build(ceres::Problem& problem, Phase phase, double sigma) {
-    problem.AddResidualBlock(new AssemblyCost(Residual(phase, sigma)), nullptr, Pointers());
+    assembly_block_ = problem.AddResidualBlock(new AssemblyCost(Residual(phase, sigma)), nullptr, Pointers());
     for (size_t b = 0; b < blocks_.size(); ++b) {
       const auto& c = prog_.connections[b / 2];
       const Primitive& p = Prim(static_cast<int>(b));
@@ -606,6 +662,8 @@ class Solver {
       const bool clip = prog_.PrimitiveA(c).type == PrimitiveType::kClip || prog_.PrimitiveB(c).type == PrimitiveType::kClip;
       const bool hold = !Fixed(static_cast<int>(b)).empty() || (phase == Phase::kRelaxation && (c.is_fixed || clip));
       if (hold) problem.SetParameterBlockConstant(s);
+      else if (phase == Phase::kRelaxation && opt_.relaxation_anchor_stiffness > 0)
+        problem.AddResidualBlock(new AnchorCost(anchor_[b], opt_.relaxation_anchor_stiffness), nullptr, s);
     }
   }
 
@@ -615,6 +673,8 @@ class Solver {
   std::vector<Block> blocks_;
   std::vector<SpacingTerm> spacing_;
   std::vector<EnergyTerm> energy_;
+  ceres::ResidualBlockId assembly_block_ = nullptr;  // of the last Build
+  std::vector<Block> anchor_;                       // gauge anchor of the relaxation
 };
 
 void TargetErrors(const Program& prog, const Eigen::Isometry3d& pose, double& mm, double& deg) {
@@ -634,7 +694,8 @@ internal::JacobianCheck internal::CheckJacobian(const Program& program, int star
                                                            : 1.0);
 }
 
-SolveSummary SolveAssembly(const Program& prog, const SolveOptions& opt) {
+namespace {
+SolveSummary Solve(const Program& prog, const SolveOptions& opt, double perturbation) {
   const auto t0 = std::chrono::steady_clock::now();
   SolveSummary out;
   const PrecheckSummary pre = Precheck(prog);
@@ -690,8 +751,12 @@ SolveSummary SolveAssembly(const Program& prog, const SolveOptions& opt) {
   out.step1_poses = solver.Poses();
   TargetErrors(prog, out.step1_poses[prog.target], out.step1_target_error_mm, out.step1_target_error_deg);
   if (opt.relax) {
+    if (perturbation != 0) solver.Perturb(perturbation);
+    solver.SetRelaxationAnchor();
     std::unique_ptr<ceres::Problem> problem;
-    solver.Run(Phase::kRelaxation, opt.relaxation_penalty, &problem);
+    const ceres::Solver::Summary rs = solver.Run(Phase::kRelaxation, opt.relaxation_penalty, &problem);
+    out.relaxation_termination = ceres::TerminationTypeToString(rs.termination_type);
+    out.relaxation_iterations = static_cast<int>(rs.iterations.size()) - 1;
     out.falls_apart = solver.FallsApart(*problem);
   }
   out.poses = solver.Poses();
@@ -711,6 +776,14 @@ SolveSummary SolveAssembly(const Program& prog, const SolveOptions& opt) {
   out.target_reached = out.final_target_error_mm <= opt.target_tolerance_mm &&
                        (!prog.target_match_rotation || out.final_target_error_deg <= opt.target_tolerance_deg);
   return finish();
+}
+
+}  // namespace
+
+SolveSummary SolveAssembly(const Program& prog, const SolveOptions& opt) { return Solve(prog, opt, 0.0); }
+
+SolveSummary internal::SolvePerturbedRelaxation(const Program& prog, double delta, const SolveOptions& opt) {
+  return Solve(prog, opt, delta);
 }
 
 }  // namespace fabatlas::assembly

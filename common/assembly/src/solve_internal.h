@@ -18,4 +18,10 @@ struct JacobianCheck {
 };
 JacobianCheck CheckJacobian(const Program& program, int start, int phase, const SolveOptions& options = {});
 
+// SolveAssembly with every free connection parameter of the step-1 solution
+// moved by `delta` (degrees for angles, the parameter's own unit otherwise;
+// clamped to its bounds) before the relaxation: a converged relaxation must
+// not depend on it beyond the solver tolerances.
+SolveSummary SolvePerturbedRelaxation(const Program& program, double delta, const SolveOptions& options = {});
+
 }  // namespace fabatlas::assembly::internal

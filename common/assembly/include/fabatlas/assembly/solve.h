@@ -17,8 +17,10 @@
 //  2. Relaxation under gravity (4.3.3 step 2): minimise Σ m_i g z_i +
 //     σ_r Σ‖g_j‖² over all poses and parameters (clip parameters and is_fixed
 //     connections held), mass = mesh volume × 1 g/cm³, g = 9.8 m/s² along −z.
-//     Then every BOUNDED_AND_OPEN parameter pinned at a bound whose energy
-//     gradient points out of its interval is reported as falling apart.
+//     A weak anchor ½k‖s − s_step1‖² fixes the gauge of parts free to turn
+//     about the vertical. Then every BOUNDED_AND_OPEN parameter pinned at a
+//     bound whose energy gradient points out of its interval is reported as
+//     falling apart.
 // Single-threaded (Ceres with one thread); deterministic.
 #pragma once
 
@@ -39,7 +41,25 @@ struct SolveOptions {
   double relaxation_penalty = 1e4;      // σ_r of step 2 (EXAMPLES.md: 1e4)
   double gravity = 9.8;                 // m/s²
   double rotation_scale_mm = 20;        // mm per unit of rotation-matrix difference
-  int max_iterations = 200;             // Ceres iterations per solve
+  int max_iterations = 200;             // Ceres iterations per feasibility / objective solve
+  // Step 2 (relaxation). Levenberg-Marquardt sees the gravity potential only
+  // through its gradient (the least-squares form has no curvature along a
+  // swing), so it converges linearly along hanging chains: it gets its own
+  // iteration cap and stops on absolute criteria, not on the cost change.
+  int relaxation_max_iterations = 5000;
+  double relaxation_function_tolerance = 1e-16;   // relative cost change
+  double relaxation_gradient_tolerance = 1e-14;   // projected gradient, J per unit
+  double relaxation_parameter_tolerance = 1e-14;  // relative step
+  // Gauge fix: ½k‖s − s_step1‖² over the free parameters (J per unit², degrees
+  // for angles) so a part free to turn about the vertical stays where step 1
+  // put it; 0 disables. See AnchorCost in solve.cc.
+  double relaxation_anchor_stiffness = 1e-9;
+  // The potential m g z is the least-squares term m g (z + D)²/(2000 D),
+  // exact in gradient up to |z|/D. The cost (≈ m g D/2000 J) bounds the
+  // energy resolution to ~1e-16 of it; a smaller D adds curvature that
+  // changes the path and with it the equilibrium reached (not a tuning knob
+  // for the examples; kept as an option for experiments).
+  double relaxation_datum_mm = 1e5;
   int stall_window = 10;                // iterations in the stall regression
   double stall_slope = 1e-3;            // abort if log10(C) falls slower than this per iteration
   bool relax = true;                    // run step 2
@@ -67,6 +87,10 @@ struct SolveSummary {
   std::vector<std::string> falls_apart;  // "hook1.hook.theta at max" ...
   std::vector<std::string> messages;     // pre-check issues and solver notes
   int starts_tried = 0;
+  // Step 2 as Ceres ended it: "CONVERGENCE", "NO_CONVERGENCE" (iteration cap),
+  // ... ; empty if step 2 did not run.
+  std::string relaxation_termination;
+  int relaxation_iterations = 0;
   double seconds = 0;  // wall time of the whole solve
   // Per instance (mm). Infeasible: `poses` are those of the start that came
   // closest to closing the cycles (tree connections hold), `step1_poses` empty.
