@@ -1,13 +1,16 @@
 // Cluster benchmarks with plain timers (results in docs/benchmarks.md (Cluster)).
 //   cluster_bench [--tasks N] [--repeats R] [--blob-mb M] [--idle W] [--job JOB.yaml]
 //                 [--speedup-repeats S] [--only noop|overhead|idle|blob|speedup] [--fsync-commits]
+//                 [--overhead-slots K]
 // 1. No-op round trips/s: N no-op tasks through an in-process coordinator to
 //    2 fabatlas-worker processes (64 slots each, leases batched per Sync),
 //    from submission of the batch to the last stored result; and the
 //    coordinator's CPU time per task (CPU time of this process, which is the
 //    coordinator, over the run, divided by the tasks).
 // 2. Coordinator overhead per task: one no-op task at a time through one
-//    idle 1-slot worker that is long-polling; the wall time from the driver
+//    idle worker that is long-polling (--overhead-slots, default 1: a
+//    1-slot worker runs the task on its sync thread, more slots on slot
+//    threads, docs/protocol.md); the wall time from the driver
 //    adding the task (RunTasks) to its result being handed back, i.e. the
 //    whole round trip of a task that does no work: store insert, wake-up and
 //    lease grant, the Sync answer, the worker's next Sync with the result,
@@ -186,6 +189,7 @@ int main(int argc, char** argv) {
   int blob_mb = Arg(argc, argv, "--blob-mb", 128);
   int idle = Arg(argc, argv, "--idle", 1000);
   int speedup_repeats = Arg(argc, argv, "--speedup-repeats", repeats);
+  int overhead_slots = Arg(argc, argv, "--overhead-slots", 1);
   fs::path job = fs::path(FABATLAS_BENCH_SOURCE_DIR) / "bench/cluster/data/pawn_small.yaml";
   for (int i = 1; i + 1 < argc; ++i) {
     if (std::strcmp(argv[i], "--job") == 0) job = argv[i + 1];
@@ -230,7 +234,7 @@ int main(int argc, char** argv) {
     o.state_dir = dir / "overhead";
     coordinator::Coordinator oc(o);
     oc.Start();
-    std::vector<pid_t> one{SpawnWorker(oc.port(), 1, dir / "overhead_worker")};
+    std::vector<pid_t> one{SpawnWorker(oc.port(), overhead_slots, dir / "overhead_worker")};
     {
       std::vector<std::string> keys;
       auto payloads = NoopPayloads(20, 99999, &keys);
@@ -250,10 +254,10 @@ int main(int argc, char** argv) {
     double worker_cpu = StopWorkers(one);
     oc.Shutdown();
     std::sort(latencies.begin(), latencies.end());
-    std::printf("coordinator overhead per task (one no-op task at a time, RunTasks -> result, 1 idle worker x 1 "
-                "slot), %d tasks: p50 %.2f ms, p90 %.2f ms, p99 %.2f ms, max %.2f ms; coordinator CPU %.0f us/task, "
+    std::printf("coordinator overhead per task (one no-op task at a time, RunTasks -> result, 1 idle worker x %d "
+                "slot(s)), %d tasks: p50 %.2f ms, p90 %.2f ms, p99 %.2f ms, max %.2f ms; coordinator CPU %.0f us/task, "
                 "worker CPU %.0f us/task\n",
-                n, latencies[n / 2], latencies[n * 9 / 10], latencies[n * 99 / 100], latencies.back(), cpu_us,
+                overhead_slots, n, latencies[n / 2], latencies[n * 9 / 10], latencies[n * 99 / 100], latencies.back(), cpu_us,
                 1e6 * worker_cpu / n);
   }
 
