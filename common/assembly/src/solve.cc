@@ -559,6 +559,8 @@ class Solver {
         if (specs[i].kind != ParamKind::kBoundedAndOpen) continue;
         const double x = blocks_[b][i], g = grad[internal::kParamBlock * b + i];
         const double eps = 1e-6 * (specs[i].max - specs[i].min);
+        if (std::getenv("FABATLAS_ASSEMBLY_DEBUG") && (x <= specs[i].min + eps || x >= specs[i].max - eps))
+          std::fprintf(stderr, "at bound: %s.%s = %g, gradient %g\n", where.c_str(), specs[i].name.c_str(), x, g);
         if (x <= specs[i].min + eps && g > 1e-9) out.push_back(where + "." + specs[i].name + " at min");
         else if (x >= specs[i].max - eps && g < -1e-9) out.push_back(where + "." + specs[i].name + " at max");
       }
