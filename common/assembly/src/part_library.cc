@@ -3,6 +3,7 @@
 #include <filesystem>
 #include <map>
 #include <mutex>
+#include <set>
 #include <sstream>
 #include <stdexcept>
 
@@ -314,6 +315,16 @@ PartLibrary LoadPartLibrary(const std::string& file, const std::string& mesh_dir
     lib.parts[part.name] = part;
   }
   return lib;
+}
+
+std::vector<std::string> PartLibraryMeshes(const std::string& file) {
+  using namespace internal;
+  const YAML::Node root = LoadYamlFile(file);
+  if (!root.IsMap() || !root["parts"] || !root["parts"].IsMap()) Fail(file, root, "expected a map 'parts:'");
+  std::set<std::string> names;
+  for (const auto& kv : root["parts"])
+    if (kv.second.IsMap() && kv.second["mesh"]) names.insert(AsString(file, kv.second["mesh"], "mesh"));
+  return {names.begin(), names.end()};
 }
 
 }  // namespace fabatlas::assembly

@@ -14,6 +14,12 @@ std::string DefaultMeshDir() {
   return "../shared/data/fabhacks/meshes";
 }
 
+std::string ProgramLibraryPath(const std::string& file) {
+  const YAML::Node root = internal::LoadYamlFile(file);
+  if (!root.IsMap() || !root["library"]) internal::Fail(file, root, "missing 'library:'");
+  return (std::filesystem::path(file).parent_path() / internal::AsString(file, root["library"], "library")).string();
+}
+
 namespace {
 
 using internal::AsString;

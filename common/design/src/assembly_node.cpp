@@ -13,8 +13,7 @@ namespace fabatlas::design {
 namespace {
 
 std::string MeshDir(const ResolvedArgs& a, const std::filesystem::path& dir) {
-  const std::string m = a.Text("meshes");
-  return m.empty() ? assembly::DefaultMeshDir() : (dir / m).string();
+  return AssemblyMeshDir(a.Text("meshes"), dir).string();
 }
 
 double SetValue(const ResolvedArgs& a, const std::string& key, const Node& node) {
@@ -68,6 +67,13 @@ const mesh::TriangleMesh& PartMeshAt(const std::string& path) {
 }
 
 }  // namespace
+
+std::filesystem::path AssemblyMeshDir(const std::string& meshes, const std::filesystem::path& design_dir) {
+  if (!meshes.empty()) return design_dir / meshes;
+  std::error_code ec;
+  if (std::filesystem::is_directory(design_dir / kBundledMeshDir, ec)) return design_dir / kBundledMeshDir;
+  return assembly::DefaultMeshDir();
+}
 
 std::shared_ptr<const AssemblyOutcome> SolveAssemblyNode(const ResolvedArgs& args, const Node& node,
                                                          const std::filesystem::path& design_dir) {

@@ -6,6 +6,7 @@
 
 #include <filesystem>
 #include <memory>
+#include <string>
 
 #include "fabatlas/assembly/program.h"
 #include "fabatlas/assembly/solve.h"
@@ -20,10 +21,20 @@ struct AssemblyOutcome {
   assembly::SolveSummary summary;
 };
 
+// Where a job bundle puts an assembly's part meshes when the node has no
+// `meshes:` (design/data_files.h), relative to the design file.
+inline constexpr const char* kBundledMeshDir = "assembly_meshes";
+
+// The part mesh directory of an assembly node: its `meshes:` argument
+// relative to the design file; else kBundledMeshDir beside the design when
+// that directory exists (a materialized job bundle); else
+// assembly::DefaultMeshDir().
+std::filesystem::path AssemblyMeshDir(const std::string& meshes, const std::filesystem::path& design_dir);
+
 // Builds and solves the node's program: `file` is a program YAML, or with
 // `family: clip_lights` the part library and `set` holds pairs, extension
-// (mm) and ring (0..3 = XS, S, M, L). Part meshes are read from `meshes`
-// (relative to the design file; default assembly::DefaultMeshDir()).
+// (mm) and ring (0..3 = XS, S, M, L). Part meshes are read from
+// AssemblyMeshDir().
 // Solves are deterministic and remembered per resolved arguments (the node
 // and the checks of one sample, and repeated samples, share one solve).
 // A bad program or family argument is a DesignFault naming the node.

@@ -10,6 +10,7 @@
 #include <sstream>
 #include <vector>
 
+#include "fabatlas/design/data_files.h"
 #include "fabatlas/design/design.h"
 #include "fabatlas/error.h"
 #include "fabatlas/sampling/job_file.h"
@@ -59,27 +60,31 @@ v1::JobBundle MakeJobBundle(const fs::path& job_file) {
   // stored under as many of its own parent directories (designs/x.yaml), so
   // the relative reference resolves in the materialized bundle as it did here.
   constexpr int kMaxParentLevels = 2;
+  // Files the nodes need without naming them (an assembly's part library
+  // and meshes, design/data_files.h) come along too, read from where this
+  // machine has them.
   const fs::path base = design_path.parent_path();
-  std::vector<fs::path> referenced;
+  std::vector<design::DataFile> referenced;  // relative to the design; where to read it
   std::function<void(const design::Argument&)> visit_argument = [&](const design::Argument& a) {
     if (a.kind == design::Argument::Kind::kScalar) {
       const fs::path rel = fs::path(a.text).lexically_normal();
       std::error_code ec;
       if (!rel.empty() && rel.is_relative() && rel.has_extension() && fs::is_regular_file(base / rel, ec))
-        referenced.push_back(rel);
+        referenced.push_back({rel, base / rel});
     }
     for (const auto& item : a.items) visit_argument(item);
   };
   std::function<void(const design::Node&)> visit = [&](const design::Node& node) {
     for (const auto& [name, arg] : node.args) visit_argument(arg);
+    for (auto& file : design::IndirectDataFiles(node, base)) referenced.push_back(std::move(file));
     for (const auto& child : node.children) visit(child);
   };
   visit(design.tree);
   for (const auto& object : design.objects) visit(object.tree);
   int levels = 0;  // how many parent directories the references climb
-  for (const auto& rel : referenced) {
+  for (const auto& file : referenced) {
     int up = 0;
-    for (const auto& part : rel) {
+    for (const auto& part : file.relative) {
       if (part != "..") break;
       ++up;
     }
@@ -99,9 +104,9 @@ v1::JobBundle MakeJobBundle(const fs::path& job_file) {
   bundle.set_job_file(job_text);
   bundle.set_design_file_name((prefix / design_path.filename()).generic_string());
   bundle.set_design_file(ReadFile(design_path));
-  for (const auto& rel : referenced) {
-    const fs::path name = (prefix / rel).lexically_normal();
-    if (StaysInside(name)) (*bundle.mutable_files())[name.generic_string()] = ReadFile(base / rel);
+  for (const auto& file : referenced) {
+    const fs::path name = (prefix / file.relative).lexically_normal();
+    if (StaysInside(name)) (*bundle.mutable_files())[name.generic_string()] = ReadFile(file.source);
   }
   return bundle;
 }

@@ -83,4 +83,9 @@ struct PartLibrary {
 // Throws InputError("file:line:col: message").
 PartLibrary LoadPartLibrary(const std::string& yaml_path, const std::string& mesh_dir);
 
+// The mesh file names (each part's `mesh:`, a name inside the mesh
+// directory) a part library YAML names, sorted, each once; for job bundles,
+// which carry them to workers. Throws InputError("file:line:col: message").
+std::vector<std::string> PartLibraryMeshes(const std::string& yaml_path);
+
 }  // namespace fabatlas::assembly

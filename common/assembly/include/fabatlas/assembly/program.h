@@ -56,6 +56,10 @@ Program LoadProgram(const std::string& yaml_path, const std::string& mesh_dir = 
 Program ParseProgram(const std::string& yaml_text, const std::string& name,
                      const std::string& library_path, const std::string& mesh_dir = "");
 
+// The part library a program YAML names (`library:`, relative to the
+// program file), as a path. Throws InputError("file:line:col: message").
+std::string ProgramLibraryPath(const std::string& program_yaml);
+
 // Default mesh directory: $FABATLAS_SHARED_DIR/data/fabhacks/meshes, else
 // ../shared/data/fabhacks/meshes relative to the working directory.
 // ($FABATLAS_SOURCE_DIR/../shared/... when only the source dir is known.)
