@@ -118,32 +118,81 @@ class Worker {
     if (heartbeat_.joinable()) heartbeat_.join();
   }
 
+  // The next Sync, built under mu_: finished results, in-flight leases and
+  // free slots; a stopping worker returns the leases it has not started and,
+  // once nothing runs, says it is leaving. A worker with nothing running
+  // reports its results in the long poll itself (worker.proto Sync).
+  v1::SyncRequest NextSyncRequest(bool* leaving) {
+    v1::SyncRequest req;
+    *leaving = false;
+    if (stop_) {
+      // The coordinator requeues leases missing from in_flight at once.
+      for (const auto& l : queue_) in_flight_.erase(l.lease_id());
+      queue_.clear();
+      *leaving = running_ == 0;
+    }
+    req.set_worker_id(o_.worker_id);
+    int busy = static_cast<int>(queue_.size()) + running_;
+    req.set_free_slots(stop_ ? 0 : std::max(0, o_.slots - busy));
+    for (const auto& id : in_flight_) req.add_in_flight_lease_ids(id);
+    for (auto& c : done_) *req.add_completed() = std::move(c);
+    done_.clear();
+    req.set_leaving(*leaving);
+    bool idle = in_flight_.empty() && !stop_;
+    req.set_max_wait_ms(idle ? static_cast<int>(o_.poll_ms) : 0);
+    return req;
+  }
+
+  // Takes a Sync answer in, under mu_: new leases queued, revoked ones dropped.
+  void TakeSyncResponse(v1::SyncResponse& resp) {
+    summary_.results_acknowledged += resp.acknowledged_lease_ids_size();
+    if (resp.heartbeat_interval_ms() > 0) heartbeat_ms_ = resp.heartbeat_interval_ms();
+    Revoke(resp.revoked_lease_ids());
+    for (auto& lease : *resp.mutable_leases()) {
+      in_flight_.insert(lease.lease_id());
+      queue_.push_back(std::move(lease));
+    }
+  }
+
+  // Ends a Sync: wakes the sync loop if it waits for one a slot thread made.
+  void EndSync(std::unique_lock<std::mutex>& lock) {
+    syncing_ = false;
+    bool wake = sync_loop_waits_;
+    lock.unlock();
+    if (wake) done_cv_.notify_one();
+  }
+
   void SyncLoop() {
     auto started = Clock::now();
     std::int64_t backoff_ms = 200;
-    bool connected = false;
+    bool patient = false;  // wait for a result (or a while) before the next Sync
     while (true) {
       v1::SyncRequest req;
       bool leaving = false;
       {
-        std::lock_guard lock(mu_);
-        if (stop_) {
-          // Return the leases not started yet: the coordinator requeues
-          // leases missing from in_flight at once.
-          for (const auto& l : queue_) in_flight_.erase(l.lease_id());
-          queue_.clear();
-          leaving = running_ == 0;
+        std::unique_lock lock(mu_);
+        while (true) {
+          // Nothing new: wait for a result (or briefly for free slots to be
+          // worth asking for more work again). Also right after new leases
+          // filled every slot: asking again at once could only extend
+          // leases, which the heartbeat thread does.
+          if (patient && !slots_.empty() && !in_flight_.empty()) {
+            bool full = static_cast<int>(queue_.size()) + running_ >= o_.slots;
+            done_cv_.wait_for(lock, std::chrono::milliseconds(full ? 1000 : 200),
+                              [&] { return !done_.empty() || stop_ || syncing_; });
+          }
+          if (stop_ && running_ > 0)
+            done_cv_.wait_for(lock, std::chrono::milliseconds(200), [&] { return !done_.empty(); });
+          if (!syncing_) break;
+          // A slot thread is reporting the worker's last task and waits for
+          // work itself (ReportLastTask); after it, wait for results again.
+          sync_loop_waits_ = true;
+          done_cv_.wait(lock, [&] { return !syncing_; });
+          sync_loop_waits_ = false;
+          patient = true;
         }
-        req.set_worker_id(o_.worker_id);
-        int busy = static_cast<int>(queue_.size()) + running_;
-        req.set_free_slots(stop_ ? 0 : std::max(0, o_.slots - busy));
-        for (const auto& id : in_flight_) req.add_in_flight_lease_ids(id);
-        for (auto& c : done_) *req.add_completed() = std::move(c);
-        done_.clear();
-        req.set_leaving(leaving);
-        // Nothing left running: results go out in the long poll itself.
-        bool idle = in_flight_.empty() && !stop_;
-        req.set_max_wait_ms(idle ? static_cast<int>(o_.poll_ms) : 0);
+        syncing_ = true;
+        req = NextSyncRequest(&leaving);
       }
       grpc::ClientContext ctx;
       protocol::Prepare(ctx, o_.security, std::chrono::milliseconds(req.max_wait_ms() + 15000));
@@ -151,34 +200,32 @@ class Worker {
       grpc::Status status = stub_->Sync(&ctx, req, &resp);
       if (!status.ok()) {
         {
-          std::lock_guard lock(mu_);
+          std::unique_lock lock(mu_);
           for (auto& c : *req.mutable_completed()) done_.push_back(std::move(c));
+          EndSync(lock);
         }
         if (status.error_code() == grpc::StatusCode::UNAUTHENTICATED ||
             status.error_code() == grpc::StatusCode::PERMISSION_DENIED)
           throw InputError("coordinator " + o_.coordinator + " refused this worker: " + status.error_message());
         auto waited = std::chrono::duration_cast<std::chrono::milliseconds>(Clock::now() - started).count();
-        if (!connected && waited > o_.connect_timeout_ms)
+        if (!connected_ && waited > o_.connect_timeout_ms)
           throw InputError("cannot reach coordinator " + o_.coordinator + ": " + status.error_message());
         if (stop_ && waited > o_.connect_timeout_ms) return;  // leaving and nobody listens
         std::this_thread::sleep_for(std::chrono::milliseconds(backoff_ms));
         backoff_ms = std::min<std::int64_t>(backoff_ms * 2, 5000);
+        patient = false;
         continue;
       }
-      if (!connected) started = Clock::now();
-      connected = true;
       backoff_ms = 200;
-      summary_.results_acknowledged += resp.acknowledged_lease_ids_size();
-      if (leaving) return;
       {
-        std::lock_guard lock(mu_);
-        if (resp.heartbeat_interval_ms() > 0) heartbeat_ms_ = resp.heartbeat_interval_ms();
-        Revoke(resp.revoked_lease_ids());
-        for (auto& lease : *resp.mutable_leases()) {
-          in_flight_.insert(lease.lease_id());
-          queue_.push_back(std::move(lease));
-        }
+        std::unique_lock lock(mu_);
+        if (!connected_) started = Clock::now();
+        connected_ = true;
+        TakeSyncResponse(resp);
+        patient = resp.leases_size() == 0 || static_cast<int>(queue_.size()) + running_ >= o_.slots;
+        EndSync(lock);
       }
+      if (leaving) return;
       if (slots_.empty()) {
         // One slot: run the task here. Nothing is due to the coordinator
         // while it runs (the heartbeat thread keeps its lease), and the
@@ -186,24 +233,46 @@ class Worker {
         // hand-offs fewer per task than through a slot thread.
         if (std::optional<v1::Lease> lease = TakeLease()) {
           RunLease(*lease);
+          patient = false;
           continue;
         }
       } else if (resp.leases_size() > 0) {
         queue_cv_.notify_all();
       }
-      // Nothing new: wait for a result (or briefly for free slots to be worth
-      // asking for more work again).
-      // Also right after new leases filled every slot: asking again at once
-      // could only extend leases, which the heartbeat thread does.
-      std::unique_lock lock(mu_);
-      bool full = static_cast<int>(queue_.size()) + running_ >= o_.slots;
-      if (!slots_.empty() && (resp.leases_size() == 0 || full) && !in_flight_.empty()) {
-        done_cv_.wait_for(lock, std::chrono::milliseconds(full ? 1000 : 200),
-                     [&] { return !done_.empty() || stop_; });
-      }
-      if (stop_ && running_ > 0)
-        done_cv_.wait_for(lock, std::chrono::milliseconds(200), [&] { return !done_.empty(); });
     }
+  }
+
+  // Called by a slot thread after its task: when that was the worker's last
+  // running task and no Sync is under way, this thread reports it itself in
+  // the long poll and keeps the first lease that comes back (its loop takes
+  // it from the queue), two thread hand-offs fewer than through the sync
+  // loop. False when the sync loop is to report the result.
+  bool ReportLastTask() {
+    std::unique_lock lock(mu_);
+    if (syncing_ || stop_ || exiting_ || !connected_ || !in_flight_.empty() || !queue_.empty()) return false;
+    syncing_ = true;
+    bool leaving = false;
+    v1::SyncRequest req = NextSyncRequest(&leaving);
+    lock.unlock();
+    grpc::ClientContext ctx;
+    protocol::Prepare(ctx, o_.security, std::chrono::milliseconds(req.max_wait_ms() + 15000));
+    v1::SyncResponse resp;
+    grpc::Status status = stub_->Sync(&ctx, req, &resp);
+    lock.lock();
+    if (!status.ok()) {
+      // The sync loop retries, with its backoff.
+      for (auto& c : *req.mutable_completed()) done_.push_back(std::move(c));
+      EndSync(lock);
+      done_cv_.notify_one();
+      return true;
+    }
+    TakeSyncResponse(resp);
+    const bool others = queue_.size() > 1;
+    const bool idle = queue_.empty();
+    EndSync(lock);
+    if (others) queue_cv_.notify_all();
+    if (idle) done_cv_.notify_one();  // nothing came: the sync loop long-polls again
+    return true;
   }
 
   template <typename Ids>
@@ -259,7 +328,7 @@ class Worker {
         ++running_;
       }
       RunLease(lease);
-      done_cv_.notify_one();  // only the sync loop waits for results
+      if (!ReportLastTask()) done_cv_.notify_one();  // only the sync loop waits for results
     }
   }
 
@@ -493,6 +562,9 @@ class Worker {
   std::vector<v1::CompletedTask> done_;
   int running_ = 0;
   bool exiting_ = false;
+  bool connected_ = false;         // the coordinator has answered a Sync
+  bool syncing_ = false;           // a Sync is under way (one at a time)
+  bool sync_loop_waits_ = false;   // the sync loop waits for a slot thread's Sync
   std::int64_t heartbeat_ms_ = 2000;
   std::vector<std::thread> slots_;
   std::thread heartbeat_;
