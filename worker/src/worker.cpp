@@ -154,6 +154,19 @@ class Worker {
     }
   }
 
+  // Sends a Sync built by NextSyncRequest (mu_ not held). When it fails,
+  // its results go back to done_ for the next Sync.
+  grpc::Status CallSync(v1::SyncRequest& req, v1::SyncResponse* resp) {
+    grpc::ClientContext ctx;
+    protocol::Prepare(ctx, o_.security, std::chrono::milliseconds(req.max_wait_ms() + 15000));
+    grpc::Status status = stub_->Sync(&ctx, req, resp);
+    if (!status.ok()) {
+      std::lock_guard lock(mu_);
+      for (auto& c : *req.mutable_completed()) done_.push_back(std::move(c));
+    }
+    return status;
+  }
+
   // Ends a Sync: wakes the sync loop if it waits for one a slot thread made.
   void EndSync(std::unique_lock<std::mutex>& lock) {
     syncing_ = false;
@@ -194,14 +207,11 @@ class Worker {
         syncing_ = true;
         req = NextSyncRequest(&leaving);
       }
-      grpc::ClientContext ctx;
-      protocol::Prepare(ctx, o_.security, std::chrono::milliseconds(req.max_wait_ms() + 15000));
       v1::SyncResponse resp;
-      grpc::Status status = stub_->Sync(&ctx, req, &resp);
+      grpc::Status status = CallSync(req, &resp);
       if (!status.ok()) {
         {
           std::unique_lock lock(mu_);
-          for (auto& c : *req.mutable_completed()) done_.push_back(std::move(c));
           EndSync(lock);
         }
         if (status.error_code() == grpc::StatusCode::UNAUTHENTICATED ||
@@ -254,14 +264,11 @@ class Worker {
     bool leaving = false;
     v1::SyncRequest req = NextSyncRequest(&leaving);
     lock.unlock();
-    grpc::ClientContext ctx;
-    protocol::Prepare(ctx, o_.security, std::chrono::milliseconds(req.max_wait_ms() + 15000));
     v1::SyncResponse resp;
-    grpc::Status status = stub_->Sync(&ctx, req, &resp);
+    grpc::Status status = CallSync(req, &resp);
     lock.lock();
     if (!status.ok()) {
       // The sync loop retries, with its backoff.
-      for (auto& c : *req.mutable_completed()) done_.push_back(std::move(c));
       EndSync(lock);
       done_cv_.notify_one();
       return true;
@@ -323,23 +330,26 @@ class Worker {
         std::unique_lock lock(mu_);
         queue_cv_.wait(lock, [&] { return exiting_ || (!queue_.empty() && !stop_); });
         if (exiting_) return;
-        lease = std::move(queue_.front());
-        queue_.pop_front();
-        ++running_;
+        lease = PopLease();
       }
       RunLease(lease);
       if (!ReportLastTask()) done_cv_.notify_one();  // only the sync loop waits for results
     }
   }
 
-  // The next queued lease, counted as running; none while stopping.
-  std::optional<v1::Lease> TakeLease() {
-    std::lock_guard lock(mu_);
-    if (queue_.empty() || stop_) return std::nullopt;
+  // The front of the queue, counted as running (mu_ held, queue not empty).
+  v1::Lease PopLease() {
     v1::Lease lease = std::move(queue_.front());
     queue_.pop_front();
     ++running_;
     return lease;
+  }
+
+  // The next queued lease, counted as running; none while stopping.
+  std::optional<v1::Lease> TakeLease() {
+    std::lock_guard lock(mu_);
+    if (queue_.empty() || stop_) return std::nullopt;
+    return PopLease();
   }
 
   // Runs a lease taken from the queue and files its result for the next Sync.
