@@ -156,6 +156,23 @@ struct Coordinator::Impl {
   }
   void Deliver(const std::string& key, const std::string& result) { Deliver({{&key, &result}}); }
 
+  // A worker showed it is alive, by a Sync (slots: free and in flight) or a
+  // Heartbeat (slots = -1: it carries none, and refreshes only a worker a
+  // Sync introduced): the workers table behind the `workers` metric and
+  // workers_seen for lease affinity.
+  void WorkerAlive(const std::string& id, int slots, std::int64_t now) {
+    {
+      std::lock_guard lock(workers_mu);
+      auto it = workers_seen.find(id);
+      if (slots < 0) {
+        if (it == workers_seen.end()) return;
+        slots = it->second.slots;
+      }
+      workers_seen[id] = {slots, now};
+    }
+    store->TouchWorker(id, slots, now);
+  }
+
   // Workers that synced within the last lease period with at least one
   // slot, by id.
   std::vector<std::pair<std::string, int>> ConnectedWorkers() {
@@ -764,18 +781,16 @@ class WorkerServiceImpl final : public v1::WorkerService::Service {
     const auto& o = impl_.options;
     try {
       std::int64_t now = NowMs();
-      impl_.store->TouchWorker(req->worker_id(), req->free_slots(), now);
-      {
-        std::lock_guard lock(impl_.workers_mu);
-        if (req->leaving()) {
+      if (req->leaving()) {
+        {
+          std::lock_guard lock(impl_.workers_mu);
           impl_.workers_seen.erase(req->worker_id());
-        } else {
-          auto& seen = impl_.workers_seen[req->worker_id()];
-          seen.slots = req->free_slots() + req->in_flight_lease_ids_size();
-          seen.last_ms = now;
         }
+        impl_.store->TouchWorker(req->worker_id(), 0, now);
+        if (impl_.store->ForgetAffinity(req->worker_id()) > 0) impl_.SignalWork();
+      } else {
+        impl_.WorkerAlive(req->worker_id(), req->free_slots() + req->in_flight_lease_ids_size(), now);
       }
-      if (req->leaving() && impl_.store->ForgetAffinity(req->worker_id()) > 0) impl_.SignalWork();
       std::vector<storage::Completion> completions;
       std::vector<std::string> known(req->in_flight_lease_ids().begin(), req->in_flight_lease_ids().end());
       for (const auto& c : req->completed()) {
@@ -869,15 +884,7 @@ class WorkerServiceImpl final : public v1::WorkerService::Service {
       std::int64_t now = NowMs();
       // A heartbeat shows the worker alive as a Sync does (a 1-slot worker
       // does not Sync while its task runs).
-      int slots = -1;
-      {
-        std::lock_guard lock(impl_.workers_mu);
-        if (auto it = impl_.workers_seen.find(req->worker_id()); it != impl_.workers_seen.end()) {
-          it->second.last_ms = now;
-          slots = it->second.slots;
-        }
-      }
-      if (slots >= 0) impl_.store->TouchWorker(req->worker_id(), slots, now);
+      impl_.WorkerAlive(req->worker_id(), -1, now);
       std::vector<std::string> ids(req->lease_ids().begin(), req->lease_ids().end());
       for (const auto& id : impl_.store->ExtendLeases(req->worker_id(), ids, now + impl_.options.lease_ms))
         resp->add_revoked_lease_ids(id);
