@@ -14,16 +14,16 @@ std::string DefaultMeshDir() {
   return "../shared/data/fabhacks/meshes";
 }
 
-std::string ProgramLibraryPath(const std::string& file) {
-  const YAML::Node root = internal::LoadYamlFile(file);
-  if (!root.IsMap() || !root["library"]) internal::Fail(file, root, "missing 'library:'");
-  return (std::filesystem::path(file).parent_path() / internal::AsString(file, root["library"], "library")).string();
-}
-
 namespace {
 
 using internal::AsString;
 using internal::Fail;
+
+// The part library a parsed program names, relative to the program file.
+std::string LibraryPathOf(const YAML::Node& root, const std::string& file) {
+  if (!root.IsMap() || !root["library"]) Fail(file, root, "missing 'library:'");
+  return (std::filesystem::path(file).parent_path() / AsString(file, root["library"], "library")).string();
+}
 
 Program Build(const YAML::Node& root, const std::string& file, std::string library_path,
               const std::string& mesh_dir_in) {
@@ -35,10 +35,7 @@ Program Build(const YAML::Node& root, const std::string& file, std::string libra
         k != "name" && k != "description")
       Fail(file, kv.first, "unknown key '" + k + "'");
   }
-  if (library_path.empty()) {
-    if (!root["library"]) Fail(file, root, "missing 'library:'");
-    library_path = (std::filesystem::path(file).parent_path() / AsString(file, root["library"], "library")).string();
-  }
+  if (library_path.empty()) library_path = LibraryPathOf(root, file);
   Program prog;
   prog.file = file;
   prog.library = LoadPartLibrary(library_path, mesh_dir);
@@ -147,6 +144,10 @@ Program ParseProgram(const std::string& text, const std::string& name, const std
                      e.msg);
   }
   return Build(root, name, library_path, mesh_dir);
+}
+
+std::string ProgramLibraryPath(const std::string& file) {
+  return LibraryPathOf(internal::LoadYamlFile(file), file);
 }
 
 }  // namespace fabatlas::assembly
