@@ -191,8 +191,10 @@ class Worker {
           // leases, which the heartbeat thread does.
           if (patient && !slots_.empty() && !in_flight_.empty()) {
             bool full = static_cast<int>(queue_.size()) + running_ >= o_.slots;
+            // (Nothing left running: a slot thread reported the last task
+            // and its long poll brought nothing; poll again now.)
             done_cv_.wait_for(lock, std::chrono::milliseconds(full ? 1000 : 200),
-                              [&] { return !done_.empty() || stop_ || syncing_; });
+                              [&] { return !done_.empty() || stop_ || syncing_ || in_flight_.empty(); });
           }
           if (stop_ && running_ > 0)
             done_cv_.wait_for(lock, std::chrono::milliseconds(200), [&] { return !done_.empty(); });
