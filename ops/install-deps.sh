@@ -18,6 +18,11 @@ APT_PACKAGES=(
   openscad
   chromium
   libglpk-dev
+  # peers and operators' tools: CalculiX (FEM side by side), FCL (continuous
+  # collisions), Slurm + munge (the slurm test), Dask (task-throughput peer)
+  calculix-ccx libfcl-dev
+  munge slurmctld slurmd slurm-client
+  python3-distributed
 )
 # Node.js and npm: the machine's own if present, else Debian's.
 command -v npm >/dev/null 2>&1 || APT_PACKAGES+=(nodejs npm)
