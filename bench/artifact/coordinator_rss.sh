@@ -1,5 +1,5 @@
 #!/bin/bash
-# Peak RSS of the coordinator over one job (docs/benchmarks.md, "Streaming
+# Peak RSS of the coordinator over one job (docs/benchmarks.md, "Artifact"; docs/benchmarks-history.md, "Streaming
 # the artifact's cache entries"): fabatlas-coordinator under GNU time, two
 # workers, `fabatlas submit` + `fabatlas watch`, then SIGTERM.
 # usage: bench/artifact/coordinator_rss.sh BIN_DIR OUT_DIR JOB_YAML

@@ -3,7 +3,7 @@
 // >= 0.95 between the estimated valid region (all-valid cells / leaves) and
 // the true one, side by side in one run. Then the sampling overhead (wall
 // time outside evaluator calls) with an evaluator that burns a realistic CPU
-// time per call. Results: docs/benchmarks.md (Sampling (analytic designs)).
+// time per call. Results: docs/benchmarks.md (Sampling).
 //
 // Usage: bench_sampling_adaptive_vs_uniform [--threshold T] [--burn-ms MS]
 //        [--repeats K] [--iou-points P (0: skip)] [--subdivisions S] [--overhead-depth D]
