@@ -211,6 +211,19 @@ JobStore::JobStore(const std::filesystem::path& path, JobStoreOptions options)
   }
   sqlite3_busy_timeout(db_->handle, 10000);
   try {
+    // Schema version (user_version): refuse a store a newer coordinator
+    // wrote before touching it; 0 is a store from before versions existed.
+    int version = 0;
+    {
+      sqlite3_stmt* v = nullptr;
+      sqlite3_prepare_v2(db_->handle, "PRAGMA user_version", -1, &v, nullptr);
+      if (v && sqlite3_step(v) == SQLITE_ROW) version = sqlite3_column_int(v, 0);
+      sqlite3_finalize(v);
+    }
+    if (version > kJobStoreSchemaVersion)
+      throw InputError(db_->path + ": job store written by a newer fabatlas (schema version " +
+                       std::to_string(version) + "; this coordinator knows versions up to " +
+                       std::to_string(kJobStoreSchemaVersion) + ")");
     db_->Exec("PRAGMA journal_mode=WAL");
     db_->Exec(options_.fsync_every_commit ? "PRAGMA synchronous=FULL" : "PRAGMA synchronous=NORMAL");
     if (options_.background_checkpoints) sqlite3_wal_autocheckpoint(db_->handle, 0);
@@ -230,6 +243,8 @@ JobStore::JobStore(const std::filesystem::path& path, JobStoreOptions options)
     // still updates as many indexes as before.
     db_->Exec("CREATE INDEX IF NOT EXISTS tasks_neutral ON tasks (state, affine, seq)");
     db_->Exec("DROP INDEX IF EXISTS tasks_state");
+    if (version < kJobStoreSchemaVersion)
+      db_->Exec(("PRAGMA user_version = " + std::to_string(kJobStoreSchemaVersion)).c_str());
     sqlite3_stmt* count = nullptr;
     sqlite3_prepare_v2(db_->handle, "SELECT COUNT(*) FROM tasks WHERE affine = 1", -1, &count, nullptr);
     if (count && sqlite3_step(count) == SQLITE_ROW) preferring_tasks_ = sqlite3_column_int64(count, 0);

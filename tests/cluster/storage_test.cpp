@@ -331,6 +331,54 @@ TEST(ClusterStorage, StoreWithoutAffinityColumnIsMigrated) {
   EXPECT_EQ(grants.size(), 2u);
 }
 
+// The schema version: an unversioned store (user_version 0) is stamped with
+// the current version on open; a store of a newer version is refused with
+// one line naming the file, and is left as it was.
+TEST(ClusterStorage, SchemaVersionIsStampedAndANewerStoreIsRefused) {
+  fs::path dir = FreshDir("version");
+  auto user_version = [&] {
+    sqlite3* db = nullptr;
+    EXPECT_EQ(sqlite3_open((dir / "state.db").string().c_str(), &db), SQLITE_OK);
+    sqlite3_stmt* s = nullptr;
+    sqlite3_prepare_v2(db, "PRAGMA user_version", -1, &s, nullptr);
+    int v = sqlite3_step(s) == SQLITE_ROW ? sqlite3_column_int(s, 0) : -1;
+    sqlite3_finalize(s);
+    sqlite3_close(db);
+    return v;
+  };
+  auto set_user_version = [&](int v) {
+    sqlite3* db = nullptr;
+    ASSERT_EQ(sqlite3_open((dir / "state.db").string().c_str(), &db), SQLITE_OK);
+    ASSERT_EQ(sqlite3_exec(db, ("PRAGMA user_version = " + std::to_string(v)).c_str(), nullptr, nullptr, nullptr),
+              SQLITE_OK);
+    sqlite3_close(db);
+  };
+  {
+    JobStore store(dir / "state.db");
+    AddRunningJob(store, 2);
+  }
+  EXPECT_EQ(user_version(), kJobStoreSchemaVersion);
+  set_user_version(0);  // as written before versions existed
+  { JobStore store(dir / "state.db"); }
+  EXPECT_EQ(user_version(), kJobStoreSchemaVersion);
+
+  set_user_version(kJobStoreSchemaVersion + 1);
+  try {
+    JobStore store(dir / "state.db");
+    FAIL() << "a newer store opened";
+  } catch (const fabatlas::InputError& e) {
+    const std::string what = e.what();
+    EXPECT_EQ(what.find('\n'), std::string::npos) << what;
+    EXPECT_EQ(what, (dir / "state.db").string() + ": job store written by a newer fabatlas (schema version " +
+                        std::to_string(kJobStoreSchemaVersion + 1) + "; this coordinator knows versions up to " +
+                        std::to_string(kJobStoreSchemaVersion) + ")");
+  }
+  EXPECT_EQ(user_version(), kJobStoreSchemaVersion + 1);
+  set_user_version(kJobStoreSchemaVersion);
+  JobStore store(dir / "state.db");
+  EXPECT_EQ(store.GrantLeases("w1", 5, 1000, 500).size(), 2u);
+}
+
 // A task that fails (the worker reports an error instead of a result) is
 // retried with a growing backoff while one worker fails it again and again,
 // and quarantined once quarantine_after different workers have failed it.

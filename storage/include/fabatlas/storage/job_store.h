@@ -17,6 +17,12 @@
 // Leases. One row per attempt; a lease is active until completed, expired,
 // returned or fenced. Lease ids are "<first 16 hex of the key>.<attempt>".
 //
+// Versions: the schema version is SQLite's user_version. Opening converts a
+// store of an older version (0: written before versions existed) in place
+// and stamps kJobStoreSchemaVersion; a store of a newer version is refused
+// with fabatlas::InputError "<path>: job store written by a newer fabatlas
+// (schema version N; ...)" before anything in it changes.
+//
 // Thread-safe: one connection guarded by a mutex (SQLite serialises writers
 // anyway). Errors: an unopenable or unwritable database, a full disk or a
 // corrupt file throw fabatlas::ResourceError naming the path and SQLite's
@@ -36,6 +42,9 @@
 namespace fabatlas::storage {
 
 // Values match fabatlas.v1.JobState.
+// The schema version JobStore writes (docs/operations.md, "State").
+inline constexpr int kJobStoreSchemaVersion = 1;
+
 enum class JobState { kQueued = 1, kRunning = 2, kSucceeded = 3, kFailed = 4, kCancelled = 5 };
 enum class TaskState { kQueued = 0, kLeased = 1, kDone = 2, kQuarantined = 3 };
 
