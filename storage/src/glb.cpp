@@ -4,6 +4,7 @@
 #include <tiny_gltf.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <limits>
 #include <sstream>
@@ -19,6 +20,12 @@ std::string MeshToGlb(const mesh::TriangleMesh& m) {
   tinygltf::Scene scene;
   tinygltf::Node node;
   node.name = "geometry";  // also keeps an empty node a JSON object
+  // glTF 2.0 (Sec. 3.4 "Coordinate System and Units"): metres, +Y up. The
+  // positions stay the design's millimetres with z up; the node scales them
+  // by 1/1000 and turns z up into +Y up (-90 degrees about x: (x, y, z) ->
+  // (x, z, -y)), so every glTF viewer places the model at its true size.
+  node.scale = {1e-3, 1e-3, 1e-3};
+  node.rotation = {-std::sqrt(0.5), 0.0, 0.0, std::sqrt(0.5)};
   if (!m.empty()) {
     tinygltf::Buffer buffer;
     const std::size_t position_bytes = m.vertices.size() * 3 * sizeof(float);

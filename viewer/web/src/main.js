@@ -200,8 +200,7 @@ function initView() {
   scene.add(sun);
   controls = new OrbitControls(camera, renderer.domElement);
   controls.addEventListener('change', render);
-  modelGroup = new THREE.Group();
-  modelGroup.rotation.x = -Math.PI / 2;  // designs are z-up, three.js is y-up
+  modelGroup = new THREE.Group();  // glTF is metres, +Y up (storage/glb.h)
   scene.add(modelGroup);
   window.addEventListener('resize', () => {
     renderer.setSize(host.clientWidth, host.clientHeight);
@@ -294,7 +293,6 @@ async function buildStarts() {
       const buffer = await (await api('/api/preview.glb?' + query(start.u))).arrayBuffer();
       const group = await meshFromGlb(buffer);
       const holder = new THREE.Group();
-      holder.rotation.x = -Math.PI / 2;
       holder.add(group);
       tScene.add(holder);
       fitCamera(holder, tCamera, null);

@@ -11,13 +11,18 @@
 namespace fabatlas::storage {
 
 // One scene, one node, one mesh with one triangle primitive: POSITION as
-// float32 VEC3 in millimetres (with min/max bounds, as glTF requires) and
-// uint32 indices. No normals, materials or extras. Deterministic: the same
-// mesh gives the same bytes. An empty mesh gives a scene without a mesh.
+// float32 VEC3 in the design's millimetres, z up (with min/max bounds, as
+// glTF requires) and uint32 indices; the node's scale (1/1000) and rotation
+// (-90 degrees about x) place it in glTF's metres with +Y up, so viewers
+// (Blender, three.js) show it at its true size and upright. No normals,
+// materials or extras. Deterministic: the same mesh gives the same bytes. An
+// empty mesh gives a scene without a mesh.
 std::string MeshToGlb(const mesh::TriangleMesh& mesh);
 
 // Reads a GLB written by MeshToGlb (or any GLB whose first mesh primitive is
-// float positions with uint8/16/32 indices). Throws InputError naming
+// float positions with uint8/16/32 indices): the primitive's positions as
+// stored, node transforms not applied (for MeshToGlb's files: millimetres,
+// z up, exactly as written). Throws InputError naming
 // `source` when the bytes are not such a GLB.
 mesh::TriangleMesh GlbToMesh(std::string_view glb, const std::string& source = "glb");
 
