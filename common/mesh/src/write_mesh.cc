@@ -1,5 +1,5 @@
-// Mesh export: STL (binary), OBJ, OFF, PLY (binary little endian), written to a
-// temporary sibling file and renamed into place.
+// Mesh export: STL (binary), OBJ, OFF, PLY (binary little endian), 3MF,
+// encoded in memory and written to a temporary sibling file renamed into place.
 #include "fabatlas/mesh/write_mesh.h"
 
 #include <unistd.h>
@@ -15,6 +15,7 @@
 #include <string>
 
 #include "fabatlas/error.h"
+#include "fabatlas/mesh/encode_3mf.h"
 
 namespace fabatlas::mesh {
 namespace {
@@ -65,15 +66,26 @@ std::string Num(double v) {
   return buf;
 }
 
+// The bytes of a file being encoded.
+class Bytes {
+ public:
+  void Write(const void* data, std::size_t n) { out_.append(static_cast<const char*>(data), n); }
+  void Print(const std::string& s) { out_ += s; }
+  std::string Take() { return std::move(out_); }
+
+ private:
+  std::string out_;
+};
+
 template <typename T>
-void PutLittle(TempFile* f, T value) {
+void PutLittle(Bytes* f, T value) {
   unsigned char b[sizeof(T)];
   std::memcpy(b, &value, sizeof(T));
   if constexpr (std::endian::native == std::endian::big) std::reverse(b, b + sizeof(T));
   f->Write(b, sizeof(T));
 }
 
-void WriteStl(const TriangleMesh& mesh, TempFile* f) {
+void WriteStl(const TriangleMesh& mesh, Bytes* f) {
   char header[80] = {};
   std::snprintf(header, sizeof header, "fabatlas binary STL, millimetres");
   f->Write(header, 80);
@@ -95,7 +107,7 @@ void WriteStl(const TriangleMesh& mesh, TempFile* f) {
   }
 }
 
-void WriteObj(const TriangleMesh& mesh, TempFile* f) {
+void WriteObj(const TriangleMesh& mesh, Bytes* f) {
   f->Print("# fabatlas mesh, millimetres\n");
   for (const auto& p : mesh.vertices) f->Print("v " + Num(p[0]) + " " + Num(p[1]) + " " + Num(p[2]) + "\n");
   for (const auto& t : mesh.triangles) {
@@ -103,7 +115,7 @@ void WriteObj(const TriangleMesh& mesh, TempFile* f) {
   }
 }
 
-void WriteOff(const TriangleMesh& mesh, TempFile* f) {
+void WriteOff(const TriangleMesh& mesh, Bytes* f) {
   f->Print("OFF\n" + std::to_string(mesh.vertices.size()) + " " + std::to_string(mesh.triangles.size()) + " 0\n");
   for (const auto& p : mesh.vertices) f->Print(Num(p[0]) + " " + Num(p[1]) + " " + Num(p[2]) + "\n");
   for (const auto& t : mesh.triangles) {
@@ -111,7 +123,7 @@ void WriteOff(const TriangleMesh& mesh, TempFile* f) {
   }
 }
 
-void WritePly(const TriangleMesh& mesh, TempFile* f) {
+void WritePly(const TriangleMesh& mesh, Bytes* f) {
   f->Print("ply\nformat binary_little_endian 1.0\ncomment fabatlas mesh, millimetres\nelement vertex " +
            std::to_string(mesh.vertices.size()) +
            "\nproperty double x\nproperty double y\nproperty double z\nelement face " +
@@ -125,25 +137,43 @@ void WritePly(const TriangleMesh& mesh, TempFile* f) {
   }
 }
 
+std::string Lower(std::string text) {
+  for (char& c : text) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return text;
+}
+
 }  // namespace
 
-void WriteMesh(const TriangleMesh& mesh, const std::filesystem::path& path) {
-  std::string ext = path.extension().string();
-  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  if (ext != ".stl" && ext != ".obj" && ext != ".off" && ext != ".ply") {
-    Fail(path, "unknown mesh extension '" + path.extension().string() + "' (expected .stl, .obj, .off or .ply)");
-  }
+std::string EncodeMesh(const TriangleMesh& mesh, const std::string& extension) {
+  const std::string ext = Lower(extension);
+  if (ext != ".stl" && ext != ".obj" && ext != ".off" && ext != ".ply" && ext != ".3mf")
+    throw InputError("unknown mesh extension '" + extension + "' (expected .stl, .obj, .off, .ply or .3mf)");
   const auto n = static_cast<std::int64_t>(mesh.vertices.size());
   for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
     for (std::int32_t v : mesh.triangles[t]) {
-      if (v < 0 || v >= n) Fail(path, "cannot write: triangle " + std::to_string(t) + " has vertex index " + std::to_string(v) + " out of range");
+      if (v < 0 || v >= n)
+        throw InputError("cannot write: triangle " + std::to_string(t) + " has vertex index " + std::to_string(v) +
+                         " out of range");
     }
   }
+  if (ext == ".3mf") return Encode3mf(mesh);
+  Bytes bytes;
+  if (ext == ".stl") WriteStl(mesh, &bytes);
+  else if (ext == ".obj") WriteObj(mesh, &bytes);
+  else if (ext == ".off") WriteOff(mesh, &bytes);
+  else WritePly(mesh, &bytes);
+  return bytes.Take();
+}
+
+void WriteMesh(const TriangleMesh& mesh, const std::filesystem::path& path) {
+  std::string bytes;
+  try {
+    bytes = EncodeMesh(mesh, path.extension().string());
+  } catch (const InputError& e) {
+    Fail(path, e.what());
+  }
   TempFile file(path);
-  if (ext == ".stl") WriteStl(mesh, &file);
-  else if (ext == ".obj") WriteObj(mesh, &file);
-  else if (ext == ".off") WriteOff(mesh, &file);
-  else WritePly(mesh, &file);
+  file.Write(bytes.data(), bytes.size());
   file.Commit();
 }
 
