@@ -68,7 +68,7 @@ void AddDesignCommands(CLI::App& app, int& exit_code) {
   eval->add_option("--mesh", args->mesh_out, "write the sample's mesh (.stl, .obj, .off, .ply)");
   eval->callback([args] { Eval(*args); });
 
-  auto* dg = app.add_subcommand("dg", "volumetric change dG between two samples (seed 001 Eq. 2)");
+  auto* dg = app.add_subcommand("dg", "volumetric change dG = vol(A xor B) / vol(A union B) between two samples (0 = the same solid, 1 = disjoint)");
   dg->add_option("design", args->design, "design YAML")->required();
   dg->add_option("--a", args->a, "first point, name=value,...")->required();
   dg->add_option("--b", args->b, "second point, name=value,...")->required();

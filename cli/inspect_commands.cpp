@@ -1,5 +1,5 @@
 // fabatlas inspect ART [--json] [--png PATH] [--points N] — what a published
-// artifact (docs/artifact.md) holds, as the rows of seed 001's evaluation:
+// artifact (docs/artifact.md) holds, as the rows of Fab Forms' evaluation:
 //   Table 3: samples, CPU time, valid volume %, failure shares;
 //   Fig. 14: H_TOP, H_opt and H_rfree sizes, and mean / worst preview time
 //            with no cache, with H_opt and with H_rfree, measured by
@@ -119,7 +119,7 @@ void Inspect(const InspectArgs& a, int& exit_code) {
 
   // Fig. 14: preview times at random valid points.
   // Random points of the valid region, each snapped to its leaf's closest
-  // valid vertex as the customiser previews them (seed 001 Sec. 7.3).
+  // valid vertex as the customiser previews them (Fab Forms Sec. 7.3).
   std::vector<std::vector<double>> points;
   for (const auto& u : precompute::RandomValidPoints(art.form, a.points, a.seed))
     if (auto snapped = precompute::SnapToSample(art.form, u)) points.push_back(*snapped);

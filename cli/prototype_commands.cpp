@@ -1,5 +1,5 @@
 // fabatlas prototype FILE.yaml [--set name=value,...] [--stl OUT.stl] [--json]
-// — solve a works-like prototype (seed 003) and export its printable geometry.
+// — solve a works-like prototype (Koo et al.) and export its printable geometry.
 #include <iostream>
 #include <memory>
 #include <sstream>

@@ -1,5 +1,5 @@
 // fabatlas sample JOB.yaml --out DIR [--threads N] — a precompute job in this
-// process: bootstrap grid, adaptive ΔG subdivision (seed 001 Sec. 5) on a
+// process: bootstrap grid, adaptive ΔG subdivision (Fab Forms Sec. 5) on a
 // local thread pool, then the form, its statistics and validity maps in DIR.
 #include <filesystem>
 #include <iostream>
@@ -40,7 +40,7 @@ void Sample(const SampleArgs& args) {
   const std::string artifact = coordinator::ArtifactFileName(design.name);
   storage::Artifact published = coordinator::ArtifactOf(protocol::MakeJobBundle(args.job), design.name, job, summary.form);
   if (args.cache || coordinator::WantsCache(job)) {
-    // The geometry cache (seed 001 Sec. 6): re-evaluate the valid samples'
+    // The geometry cache (Fab Forms Sec. 6): re-evaluate the valid samples'
     // geometry, keep every subtree as a blob, plan and store H_opt / H_rfree.
     const std::filesystem::path blobs = std::filesystem::path(args.out) / "subtree-blobs";
     coordinator::CacheAssembly assembly = coordinator::CollectSubtreesInProcess(design, summary.form, blobs);

@@ -1,5 +1,5 @@
 // fabatlas serve ART [--port P] [--cache opt|rfree|none] — the web customiser
-// of a published artifact (seed 001 Sec. 7) over HTTP; docs/viewer.md.
+// of a published artifact (Fab Forms Sec. 7) over HTTP; docs/viewer.md.
 #include <atomic>
 #include <csignal>
 #include <filesystem>

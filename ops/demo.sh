@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # The main job on embedded defaults: installs dependencies, builds, then
-# precomputes the chess pawn of seed 001 (configs/jobs/pawn.yaml) on a local
+# precomputes the chess pawn of Fab Forms (configs/jobs/pawn.yaml) on a local
 # coordinator with two worker processes talking gRPC over loopback: bootstrap
 # grid, adaptive ΔG subdivision, every sample's checks and properties. The
 # form, its Table-3 statistics, a validity map and the artifact land in

@@ -20,7 +20,7 @@ int main(int argc, char** argv) {
   for (int i = 1; i + 1 < argc; i += 2)
     if (std::string(argv[i]) == "--library") lib = argv[i + 1];
   const RingSize rings[] = {RingSize::kXS, RingSize::kS, RingSize::kM, RingSize::kL};
-  // Seed 000 Table 5 / Fig. 12: the chosen variation per ring size (n from
+  // FabHacks Table 5 / Fig. 12: the chosen variation per ring size (n from
   // the part counts 11, 11, 9, 9).
   const double paper[] = {25.135, 4.57, 43.415, 27.42};
   const int paper_n[] = {4, 4, 3, 3};

@@ -1,4 +1,4 @@
-// Step-2 relaxation of each seed 000 Table 5 example: how Ceres ended it
+// Step-2 relaxation of each FabHacks Table 5 example: how Ceres ended it
 // (termination type, iterations) and how far the relaxed target moves when
 // every free parameter of the step-1 solution is moved by ±delta before the
 // relaxation (a converged relaxation is reproducible). Usage:

@@ -1,4 +1,4 @@
-// Full-solve time of each seed 000 Table 5 example (pre-checks + two-step
+// Full-solve time of each FabHacks Table 5 example (pre-checks + two-step
 // solve), median of N runs, side by side with the published Python times
 // (data/fabhacks/EXAMPLES.md). Usage:
 //   assembly_table5_bench [--runs N] [--configs DIR] [--only NAME] [--poses]

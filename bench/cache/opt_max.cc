@@ -1,4 +1,4 @@
-// OPT-MAX (seed 001 Alg. 1) on a synthetic design-like dependency graph of
+// OPT-MAX (Fab Forms Alg. 1) on a synthetic design-like dependency graph of
 // about 1e6 subtrees (tests/cache/synthetic_graphs.h). Times graph building
 // and OPT-MAX without a budget (to H_rfree, recording the Fig. 13 curve) and
 // under a budget of a quarter of H_rfree; median of --repeats runs, process

@@ -1,7 +1,7 @@
-// Per-sample evaluation cost of each example design (seed 001 Alg. 2: solve,
+// Per-sample evaluation cost of each example design (Fab Forms Alg. 2: solve,
 // tree, checks, properties) and the cost of one ΔG, at the designs' own
 // resolution. Points are drawn uniformly from each design space with a fixed
-// seed; medians are reported beside seed 001 Table 3's per-sample CPU time.
+// seed; medians are reported beside Fab Forms Table 3's per-sample CPU time.
 //
 // Usage: bench_design_samples [samples per design (default 15)] [design.yaml ...]
 // (defaults to configs/designs/{vase,cup,pawn,tealight}.yaml)

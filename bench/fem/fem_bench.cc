@@ -1,7 +1,7 @@
 // fem_bench: wall time and Newton iterations of the static Neo-Hookean solve
-// on (1) Cook's membrane, 16 Q1 elements per edge (DESIGN.md "FEM check"),
+// on (1) Cook's membrane, 16 Q1 elements per edge (the deal.II program of docs/references.md),
 // and (2) a ~20k-element voxel wedge-sandal heel under a person's weight
-// (seed 001 sandal check). Prints one table row per case with the median of
+// (Fab Forms sandal check). Prints one table row per case with the median of
 // the runs, wall and process CPU (user + system, all threads). Usage:
 // fem_bench [cook_repeats=5] [heel_repeats=3] [solvers=cholesky,ichol,jacobi]
 #include <sys/resource.h>

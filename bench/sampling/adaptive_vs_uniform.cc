@@ -1,4 +1,4 @@
-// Adaptive sampling (seed 001 Sec. 5.2) vs a uniform grid on designs whose
+// Adaptive sampling (Fab Forms Sec. 5.2) vs a uniform grid on designs whose
 // valid region is known in closed form: samples each needs to reach an IoU
 // >= 0.95 between the estimated valid region (all-valid cells / leaves) and
 // the true one, side by side in one run. Then the sampling overhead (wall

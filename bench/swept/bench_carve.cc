@@ -1,5 +1,5 @@
 // Exact (CGAL corefinement) against level-set carving of a swept volume
-// (seed 004, Eq. 4) on the cabinet insert (configs/designs/cabinet_insert.yaml
+// (Reconfigurables, Eq. 4) on the cabinet insert (configs/designs/cabinet_insert.yaml
 // at its default point): the foam block minus the 3 mm offset swept volume of
 // the mug as it is stowed. The two objects come from the design itself
 // (evaluated on its 3 mm grid); the carve is then timed with each method, the

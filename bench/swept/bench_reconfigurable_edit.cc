@@ -1,4 +1,4 @@
-// Collision detection per edit on a reconfigurable design (seed 004, Sec. 5:
+// Collision detection per edit on a reconfigurable design (Reconfigurables, Sec. 5:
 // collisions are re-detected in the background after every edit). Loads a
 // design with a collision_free check (default: configs/designs/bench_table.yaml),
 // applies a fixed sequence of parameter edits (random points of the exposed

@@ -1,5 +1,5 @@
 // Swept-volume SDF: the narrow-band sparse method (fabatlas::swept) side by
-// side with the dense method of seed 004 section 6.7 as libigl implements it
+// side with the dense method of Reconfigurables section 6.7 as libigl implements it
 // (every grid vertex, every time step, one closest-point query on an AABB
 // tree, keep the minimum), on the same lattice.
 //

@@ -1,5 +1,5 @@
 // bench_viewer_runtime ARTIFACT [POINTS=200] [SEED=1] — the viewer's runtime
-// costs on a published artifact, by the method of seed 001 Fig. 14: POINTS
+// costs on a published artifact, by the method of Fab Forms Fig. 14: POINTS
 // random valid points (precompute::RandomValidPoints, uniform in the space,
 // kept when valid), and at each
 //   * lookup: IsValid + the stretches along every dimension (what

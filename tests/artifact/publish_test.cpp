@@ -1,5 +1,5 @@
 // The cache part of the artifact (coordinator/publish.h AddCache): a design
-// with two decoupled pieces, like seed 001's chess set (Fig. 8), whose
+// with two decoupled pieces, like Fab Forms' chess set (Fig. 8), whose
 // samples share the pieces' subtrees. Real level sets, real plan, real file.
 #include <gtest/gtest.h>
 
@@ -80,7 +80,7 @@ TEST(PublishCache, ChessLikeDesignPlansHoptHrfreeHtopAndTheFileHoldsTheCache) {
   EXPECT_EQ(summary.missing, 0);
   // H_TOP: the 9 roots. H_rfree: OPT-MAX to the end. Which subtrees it keeps
   // depends on the model costs (docs/cache.md): when a union costs more than
-  // the threshold it is cached and its pieces become redundant (seed 001's
+  // the threshold it is cached and its pieces become redundant (Fab Forms'
   // shoe: H_rfree ~ H_TOP); when only the pieces do, H_rfree is the 6 pieces.
   // Either way it is never larger than H_TOP.
   EXPECT_EQ(m.top_entries, 9);

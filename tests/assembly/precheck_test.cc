@@ -1,4 +1,4 @@
-// Pre-checks (seed 000, 4.3.1–4.3.2): connectivity, closed primitives, and the
+// Pre-checks (FabHacks, 4.3.1–4.3.2): connectivity, closed primitives, and the
 // polygon-inequality quick reject of cycles before any solve.
 #include <cstdlib>
 #include <string>
@@ -64,7 +64,7 @@ TEST(AssemblyPrecheck, CriticalDimensionExhausted) {
 }
 
 TEST(AssemblyPrecheck, CycleThatCannotCloseIsRejectedBeforeSolving) {
-  // The two-eyehook basket of seed 000 Fig. 7, but the eyehooks hang from two
+  // The two-eyehook basket of FabHacks Fig. 7, but the eyehooks hang from two
   // rods 2 m apart: eyehooks (< 100 mm) + basket (< 300 mm) cannot span them.
   const Program p = ParseProgram(
       "start_with: {name: env, part: ClosetRods, frame: [[0,0,0],[0,0,0]]}\n"

@@ -1,4 +1,4 @@
-// The step-2 relaxation of every seed 000 Table 5 example converges (Ceres
+// The step-2 relaxation of every FabHacks Table 5 example converges (Ceres
 // stops on its tolerances, not on the iteration cap) and its relaxed target
 // pose is reproducible: moving every free parameter of the step-1 solution by
 // ±1e-9 (degrees for angles) before relaxing moves the relaxed target by less

@@ -1,4 +1,4 @@
-// Two-step solve of the seed 000 Table 5 examples and the Fig. 9 behaviour.
+// Two-step solve of the FabHacks Table 5 examples and the Fig. 9 behaviour.
 #include <cstdlib>
 #include <string>
 
@@ -19,7 +19,7 @@ std::string Config(const std::string& name) {
 }  // namespace
 
 TEST(AssemblySolve, SoapBottleOneEyehookFallsTwoHold) {
-  // Seed 000 Fig. 9: same target for both programs; after relaxation under
+  // FabHacks Fig. 9: same target for both programs; after relaxation under
   // gravity the one-eyehook design swings away (top row), the two-eyehook one
   // stays close to its step-1 configuration (bottom row).
   const SolveSummary one = SolveAssembly(LoadProgram(Config("soap_bottle_holder_one_hook")));

@@ -46,7 +46,7 @@ TEST_P(ExampleDesign, OptMaxWorstCaseNeverAboveOptAve) {
 
 // The decoupled chess pair: pieces are stored, the 1 ms union is not, so the
 // redundancy-free cache holds pieces only and is several times smaller than
-// the top-level cache (seed 001 Fig. 14 "H_rfree" vs "H_TOP").
+// the top-level cache (Fab Forms Fig. 14 "H_rfree" vs "H_TOP").
 TEST(ExampleDesigns, ChessPairRedundancyFreeCacheIsSeveralTimesSmallerThanTopLevel) {
   DependencyGraph g = Load("chess_pair");
   CacheReport r = PlanCache(g);

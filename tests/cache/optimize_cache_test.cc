@@ -1,5 +1,5 @@
 // Cache planning on hand-built dependency graphs whose optimal caches and
-// preview times follow from seed 001 Sec. 6.2 by hand.
+// preview times follow from Fab Forms Sec. 6.2 by hand.
 #include <gtest/gtest.h>
 
 #include "fabatlas/cache/cost_model.h"
@@ -15,7 +15,7 @@ SubtreeNode Node(std::string key, double seconds, std::uint64_t bytes, std::vect
   return SubtreeNode{std::move(key), std::move(children), seconds, bytes, true};
 }
 
-// Two chess pieces (seed 001 Fig. 8): piece A driven by one parameter (two
+// Two chess pieces (Fab Forms Fig. 8): piece A driven by one parameter (two
 // values), piece B by the other, a union on top; the 2x2 grid of samples.
 // t(A) = 1 s, t(B) = 2 s, t(union) = 0.5 s; 10 bytes per piece, 20 per union.
 struct Chess {
@@ -64,7 +64,7 @@ TEST(DependencyGraph, RepeatedRecordsAreMergedAndMeanTimed) {
   ASSERT_EQ(g.node_count(), 2);
   EXPECT_DOUBLE_EQ(g.seconds[static_cast<std::size_t>(g.Find("x"))], 2.0);
   EXPECT_EQ(g.bytes[static_cast<std::size_t>(g.Find("x"))], 7u);
-  // x is used twice by r: evaluated twice (seed 001 Fig. 8, subtree E).
+  // x is used twice by r: evaluated twice (Fab Forms Fig. 8, subtree E).
   EXPECT_DOUBLE_EQ(EvaluateCache(g, CacheSet(2, 0)).worst_seconds, 0.5 + 2 * 2.0);
   EXPECT_EQ(EvaluationCounts(g, CacheSet(2, 0))[static_cast<std::size_t>(g.Find("x"))], 2);
 }
@@ -113,7 +113,7 @@ TEST(OptimizeCache, DecoupledPiecesMakeTheRedundancyFreeCacheHalfTheTopLevelCach
   EXPECT_DOUBLE_EQ(r.rfree.worst_seconds, 0.05);
   EXPECT_DOUBLE_EQ(r.none.mean_seconds, 3.05);
   // With the union stored too, caching all four unions makes every piece
-  // redundant: H_rfree = H_TOP (seed 001: the shoe's expensive last union).
+  // redundant: H_rfree = H_TOP (Fab Forms: the shoe's expensive last union).
   CacheOptions o;
   o.min_seconds = 0.01;
   CacheReport all = PlanCache(g, o);

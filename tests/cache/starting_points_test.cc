@@ -1,4 +1,4 @@
-// Starting points (seed 001 Sec. 7.4) on a small sampled form with two
+// Starting points (Fab Forms Sec. 7.4) on a small sampled form with two
 // separate valid regions.
 #include <gtest/gtest.h>
 

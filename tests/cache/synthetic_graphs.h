@@ -3,7 +3,7 @@
 // A design with `parameters` exposed parameters, each taking `values` values;
 // samples are random points of that grid. The tree has `parts` parts, each
 // driven by its own random subset of the parameters (so parts are shared by
-// every sample agreeing on that subset, like seed 001's chess pieces), each
+// every sample agreeing on that subset, like Fab Forms' chess pieces), each
 // part built on a sub-part driven by one of its parameters, and a chain of
 // unions on top (unique per sample). Times: parts 0.1-3 s, sub-parts 0.05-1 s,
 // unions 0.01-0.5 s; bytes 1-100 MB. Deterministic for a given seed.

@@ -1,4 +1,4 @@
-// EvaluateSample (seed 001 Alg. 2), constraint solving, subtree keys and ΔG,
+// EvaluateSample (Fab Forms Alg. 2), constraint solving, subtree keys and ΔG,
 // against analytic values.
 #include <gtest/gtest.h>
 

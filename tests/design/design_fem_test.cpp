@@ -1,4 +1,4 @@
-// The fem check of design files (seed 001 Sec. 8, docs/design-format.md):
+// The fem check of design files (Fab Forms Sec. 8, docs/design-format.md):
 // the sandal example, a cantilever against Euler-Bernoulli beam theory, and
 // one-line errors for bad FEM arguments.
 #include <gtest/gtest.h>

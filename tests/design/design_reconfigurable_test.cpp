@@ -1,4 +1,4 @@
-// Reconfigurable designs (seed 004; docs/design-format.md "Reconfigurables"):
+// Reconfigurable designs (docs/design-format.md "Reconfigurables"):
 // objects with keyframed motions on the transitions of a state graph, the
 // collision_free check (intervals against hand-computed spans, a colliding
 // and a clear configuration, clearance against an analytic gap), the
@@ -205,7 +205,7 @@ TEST(DesignReconfigurable, SweptVolumeTaskGivesTheOffsetCapsule) {
   EXPECT_THROW(design::ComputeSweptVolume(d, u, "root/7"), InputError);
 }
 
-// The two example designs of seed 004 (configs/designs): a known colliding
+// The two example designs of Reconfigurables (configs/designs): a known colliding
 // and a known clear configuration of the folding bench (see the inequality in
 // its header), and the carved cabinet insert at its default point.
 TEST(DesignReconfigurable, BenchTableCollidesWhileFoldingOnlyWithLowArmrests) {

@@ -1,4 +1,4 @@
-// The design-level FEM check (seed 001 sandal; DESIGN.md "FEM check"): a short
+// The design-level FEM check (Fab Forms sandal; docs/fem.md): a short
 // thick block passes, a slender cantilever under the same load fails.
 #include "fabatlas/fem/fem_check.h"
 

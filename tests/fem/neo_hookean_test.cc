@@ -1,4 +1,4 @@
-// The Neo-Hookean energy of DESIGN.md "FEM check": stress and tangent against
+// The Neo-Hookean energy of docs/fem.md (the deal.II program of docs/references.md): stress and tangent against
 // central finite differences, and the small-strain limit against linear
 // elasticity (Hooke's law with lambda = kappa - 2mu/3).
 #include "fabatlas/fem/neo_hookean.h"

@@ -1,5 +1,5 @@
 // Static solve against numbers nobody on the team chose: the Cook's membrane
-// benchmark (DESIGN.md "FEM check"), Euler-Bernoulli beam theory, and the
+// benchmark (the deal.II program of docs/references.md), Euler-Bernoulli beam theory, and the
 // analytic homogeneous Neo-Hookean stretch (patch test).
 #include "fabatlas/fem/static_solve.h"
 
@@ -13,7 +13,7 @@
 namespace fabatlas::fem {
 namespace {
 
-// Cook's membrane (DESIGN.md "FEM check"), n x n Q1 elements, one layer of
+// Cook's membrane (the deal.II program of docs/references.md), n x n Q1 elements, one layer of
 // hexahedra, thickness 1, left edge clamped, 1 N total dead shear traction on
 // the right edge.
 //
@@ -54,7 +54,7 @@ double CornerUy(int n, const StaticSolveSummary& s) { return s.displacements[n +
 
 struct CookCase {
   int n;
-  double reference_uy;  // mm, DESIGN.md table
+  double reference_uy;  // mm, the deal.II program's table
 };
 
 class FemCooksMembrane : public ::testing::TestWithParam<CookCase> {};

@@ -1,4 +1,4 @@
-// Works-like prototypes (seed 003): relationships, joints and conflicts
+// Works-like prototypes (Koo et al.): relationships, joints and conflicts
 // against analytic outcomes.
 #include <gtest/gtest.h>
 

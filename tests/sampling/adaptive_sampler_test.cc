@@ -1,4 +1,4 @@
-// Adaptive sampling (seed 001 Sec. 5.2) against designs with closed-form
+// Adaptive sampling (Fab Forms Sec. 5.2) against designs with closed-form
 // valid regions and exact ΔG (analytic_designs.h).
 #include "fabatlas/sampling/adaptive_sampler.h"
 
@@ -29,7 +29,7 @@ double EdgeChange(const Form& f, std::int64_t a, std::int64_t b) {
   return f.geometry_changes.at({std::min(a, b), std::max(a, b)});
 }
 
-// s(u_d) of a node, recomputed from the stored ΔG values (seed 001 Fig. 7).
+// s(u_d) of a node, recomputed from the stored ΔG values (Fab Forms Fig. 7).
 std::vector<double> ScoreVector(const Form& f, const FormNode& node, int d) {
   const auto ids = CornerSampleIds(f, node);
   std::vector<double> s;
@@ -122,7 +122,7 @@ TEST(SamplingAdaptive, SharedVerticesAndEdgesEvaluatedOnce) {
   EXPECT_EQ(ev.invalid_change_requests_, 0);  // evaluator only sees valid/valid pairs
 }
 
-// DESIGN.md step 4: invalid samples have empty volume.
+// Fab Forms Sec. 5.2: invalid samples have empty volume.
 TEST(SamplingAdaptive, GeometryChangeConventionsAndEveryLeafEdgeKept) {
   testing::HollowCylinder2D ev;
   ThreadPoolExecutor ex(1);
@@ -151,7 +151,7 @@ TEST(SamplingAdaptive, GeometryChangeConventionsAndEveryLeafEdgeKept) {
       for (int d = 0; d < 2; ++d) EXPECT_EQ(ScoreVector(f, n, d).size(), 2u);  // throws if missing
 }
 
-// Seed 001 Sec. 5.2 on a case worked by hand: one bootstrap cell of the 2-D
+// Fab Forms Sec. 5.2 on a case worked by hand: one bootstrap cell of the 2-D
 // cylinder. Corners (R, t): (5, .5) and (20, .5) invalid, (5, 5) and (20, 5)
 // valid. s(R) = [ΔG((5,5),(20,5)) = 1 (disjoint annuli), 0]; s(t) = [1, 1]
 // -> split t at its midpoint 2.75, creating (5, 2.75) valid and (20, 2.75)
@@ -322,7 +322,7 @@ TEST(SamplingAdaptive, ValidVolumeOfKnownFraction) {
   EXPECT_NEAR(coarse.statistics.valid_volume_percent, 60.0, 1e-9);
 }
 
-// Six dimensions (the most DESIGN.md allows): 2^6 corners per leaf. Valid iff
+// Six dimensions (the most sampling::DesignSpace allows): 2^6 corners per leaf. Valid iff
 // |u| <= 0.8 on [0,1]^6 (1/64 of the 6-ball, volume
 // pi^3/6 0.8^6 / 64 = 2.1167 %); geometry a ball of radius 1 + |u|, nested,
 // so ΔG = 1 - (r_small / r_big)^3. The ball is convex: estimate <= 2.1167 %.

@@ -1,5 +1,5 @@
 // Analytic test designs for the sampler: validity known in closed form and ΔG
-// computed exactly from the geometry (seed 001 Eq. 2), so tests and benches
+// computed exactly from the geometry (Fab Forms Eq. 2), so tests and benches
 // compare against numbers nobody tuned.
 #pragma once
 
@@ -68,7 +68,7 @@ class HollowCylinder2D : public SampleEvaluator {
 // pi (R^2 - (R - t)^2) must not exceed 150 mm^2 (else "over_budget"), so the
 // valid region is the curved sliver between t_min(R) = 0.5 + 0.01 R^2 and
 // t_max(R) = R - sqrt(R^2 - 150 / pi): about 25.6 % of the bounded space
-// (seed 001 Table 3's designs range from 3 % to 100 % valid).
+// (Fab Forms Table 3's designs range from 3 % to 100 % valid).
 class BudgetCylinder2D : public SampleEvaluator {
  public:
   static constexpr double kMaxSection = 150.0;  // mm^2

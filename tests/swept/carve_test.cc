@@ -1,4 +1,4 @@
-// Carving (seed 004, Eq. 4): a sphere pushed through a plate collides; after
+// Carving (Reconfigurables, Eq. 4): a sphere pushed through a plate collides; after
 // carving its eps-offset swept volume from the plate, the exact collision
 // check passes and the hole has the capsule's cross-section.
 #include "fabatlas/swept/carve.h"

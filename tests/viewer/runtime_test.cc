@@ -1,4 +1,4 @@
-// The viewer's runtime lookups (seed 001 Sec. 7.2-7.4) on forms sampled from
+// The viewer's runtime lookups (Fab Forms Sec. 7.2-7.4) on forms sampled from
 // analytic designs, so every expected interval, snap and starting point
 // follows from the designs' closed-form validity and ΔG.
 #include <gtest/gtest.h>

@@ -39,7 +39,7 @@ std::vector<Stretch> LineStretches(const Form& form, const DesignSpace& space, c
   const int d = dimension;
   const std::vector<const FormNode*> leaves = internal::LeavesTouching(form, space, *x, d);
 
-  // Every cut along d met by the line (seed 001 Fig. 10 left): the leaf bounds.
+  // Every cut along d met by the line (Fab Forms Fig. 10 left): the leaf bounds.
   std::vector<std::int64_t> cuts;
   for (const FormNode* leaf : leaves) {
     cuts.push_back(leaf->lo[d]);

@@ -302,7 +302,7 @@ PartLibrary LoadPartLibrary(const std::string& file, const std::string& mesh_dir
       }
       for (const auto& req : RequiredShape().at(p.type))
         if (!p.shape.count(req)) Fail(file, pn, std::string(ToString(p.type)) + " '" + p.name + "' lacks '" + req + "'");
-      if (p.type == PT::kRing) p.closed = true;  // rings are always closed (seed 000, 4.1)
+      if (p.type == PT::kRing) p.closed = true;  // rings are always closed (FabHacks, 4.1)
       if (pn["fit"]) {
         if (pn["frame"]) Fail(file, pn["fit"], "primitive '" + p.name + "' has both 'frame' and 'fit'");
         if (part.mesh.empty()) Fail(file, pn["fit"], "primitive '" + p.name + "': 'fit' needs the part's 'mesh'");

@@ -70,7 +70,7 @@ PrecheckSummary Precheck(const Program& prog, const PrecheckOptions& opt) {
     const Primitive& b = prog.PrimitiveB(c);
     if (!CanConnect(a.type, b.type))
       issue(PrecheckFailure::kNotConnectable, c,
-            std::string(ToString(a.type)) + " cannot connect to " + ToString(b.type) + " (seed 000 Table 1)");
+            std::string(ToString(a.type)) + " cannot connect to " + ToString(b.type) + " (FabHacks Table 1)");
     else if (a.closed && b.closed)
       issue(PrecheckFailure::kBothClosed, c, "both primitives are closed; there is no motion path to connect them");
   }

@@ -33,7 +33,7 @@ Mat4<T> RigidInverse(const Mat4<T>& m) {
 
 enum class Phase { kFeasibility, kObjective, kRelaxation };
 
-// Reduced coordinates (seed 000, 4.3: "a reduced representation of a kinematic
+// Reduced coordinates (FabHacks, 4.3: "a reduced representation of a kinematic
 // rigid body chain"): the environment pose is fixed and every other part pose
 // follows from the connection parameters by forward kinematics along a
 // spanning tree, P_b = P_a·M_a(s_a)·A·M_b(s_b)⁻¹. Tree connections therefore
@@ -112,7 +112,7 @@ struct AssemblyResidual {
       for (int i = 0; i < 3; ++i)
         for (int j = 0; j < 3; ++j) r[k++] = T(closure_weight * rot_scale) * (fa(i, j) - fb(i, j));
     }
-    // Multi-connection spacing (seed 000, 4.3.1): f = |t1 − t2|·L − (w1 + w2)/2, f² if f < 0.
+    // Multi-connection spacing (FabHacks, 4.3.1): f = |t1 − t2|·L − (w1 + w2)/2, f² if f < 0.
     for (const auto& s : spacing) {
       T d = params[s.block1][0] - params[s.block2][0];
       if (d < T(0)) d = -d;
@@ -354,7 +354,7 @@ class AnchorCost : public ceres::SizedCostFunction<internal::kParamBlock, intern
   double w_;
 };
 
-// Stall prevention (seed 000, 4.3.2): linear regression of log10(cost) over a
+// Stall prevention (FabHacks, 4.3.2): linear regression of log10(cost) over a
 // sliding window; abort when it decreases slower than `slope` per iteration.
 class StallCallback : public ceres::IterationCallback {
  public:
@@ -540,7 +540,7 @@ class Solver {
   }
 
   // BOUNDED_AND_OPEN parameters at a bound with outward energy gradient
-  // (seed 000, 4.3.3).
+  // (FabHacks, 4.3.3).
   std::vector<std::string> FallsApart(ceres::Problem& problem) {
     std::vector<std::string> out;
     ceres::Problem::EvaluateOptions eo;
@@ -724,7 +724,7 @@ SolveSummary Solve(const Program& prog, const SolveOptions& opt, double perturba
       continue;
     }
     out.feasible = true;
-    // Step 1: user objective with penalty σ doubling (seed 000, 4.3.3).
+    // Step 1: user objective with penalty σ doubling (FabHacks, 4.3.3).
     double sigma = opt.penalty_start;
     for (int d = 0; d <= (solver.HasCycles() ? opt.penalty_doublings : 0); ++d, sigma *= 2) {
       solver.Run(Phase::kObjective, sigma);

@@ -1,4 +1,4 @@
-// Seed 001 Sec. 6.2: the subtree dependency graph and the cost of a cache.
+// Fab Forms Sec. 6.2: the subtree dependency graph and the cost of a cache.
 #include "fabatlas/cache/dependency_graph.h"
 
 #include <algorithm>

@@ -1,4 +1,4 @@
-// The cache optimisation of seed 001 Sec. 6.2 as an integer program ("can be
+// The cache optimisation of Fab Forms Sec. 6.2 as an integer program ("can be
 // formulated as an integer linear program"), solved with GLPK's branch and
 // cut. Formulation in exact_cache.h.
 #include "fabatlas/cache/exact_cache.h"

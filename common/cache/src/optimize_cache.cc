@@ -1,4 +1,4 @@
-// Seed 001 Sec. 6.3 Alg. 1 (OPT-MAX) and the NAIVE and OPT-AVE strategies of
+// Fab Forms Sec. 6.3 Alg. 1 (OPT-MAX) and the NAIVE and OPT-AVE strategies of
 // Sec. 8 / Fig. 13.
 //
 // The greedy runs incrementally so that graphs of millions of subtrees plan in

@@ -1,4 +1,4 @@
-// Customisation starting points, seed 001 Sec. 7.4: randomised farthest-point
+// Customisation starting points, Fab Forms Sec. 7.4: randomised farthest-point
 // sampling on the graph of valid samples (ΔG edge weights) and the graph
 // centroid of each segment.
 #include "fabatlas/cache/starting_points.h"

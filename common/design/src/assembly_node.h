@@ -1,4 +1,4 @@
-// Internal: the `assembly` operation node — a FabHacks assembly (seed 000,
+// Internal: the `assembly` operation node — a FabHacks assembly (FabHacks Sec. 4,
 // docs/assembly.md) solved at the sample, its parts placed as geometry, and
 // the solve's outcome for the assembly checks (feasible, stable,
 // target_reached).

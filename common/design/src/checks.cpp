@@ -44,7 +44,7 @@ CheckOutcome Watertight(CheckContext& c) {
 }
 
 // No excessively thin features. method sdf (default): the shape diameter
-// function of Shapira et al. 2008, as seed 001 Table 2 uses; passes when the
+// function of Shapira et al. 2008, as Fab Forms Table 2 uses; passes when the
 // share of surface area thinner than `value` is at most max_thin_fraction
 // (default 0.01). method opening: morphological opening of the level set by a
 // ball of diameter `value`; passes when the volume lost is at most
@@ -79,7 +79,7 @@ CheckOutcome MinThickness(const CheckSpec& spec, CheckContext& c) {
 // Stands on a flat surface: the centre of mass projects inside the convex
 // support polygon (the lowest points, within a quarter voxel of the minimum
 // z), at least `margin` mm from its boundary (Prévost et al. 2013, as cited by
-// seed 001 for its cups).
+// Fab Forms for its cups).
 CheckOutcome Stands(const CheckSpec& spec, CheckContext& c) {
   double margin = c.Number(spec, "margin", 0.0);
   const mesh::TriangleMesh& m = c.Mesh();
@@ -149,7 +149,7 @@ fem::AxisBox FemBox(CheckContext& c, const CheckSpec& spec, const std::string& n
   return box;
 }
 
-// Static Neo-Hookean FEM on voxel hexahedra (seed 001 Sec. 8, the sandal's
+// Static Neo-Hookean FEM on voxel hexahedra (Fab Forms Sec. 8, the sandal's
 // deformation check; method in docs/fem.md): the solid is resampled at the
 // check's own `voxel` (mm), nodes in `fixed` are clamped, `force` (N, total)
 // is spread over the boundary faces inside `loaded`, and the check passes iff
@@ -223,7 +223,7 @@ CheckOutcome Fem(const CheckSpec& spec, CheckContext& c) {
 }
 
 
-// Seed 004, section 5: every transition of the state graph is collision-free.
+// Reconfigurables, section 5: every transition of the state graph is collision-free.
 // For each transition, every object moves by its resolved motion; collision
 // intervals are found by swept::DetectCollisions (spacetime proxies in a
 // bounding volume hierarchy, exact tests at the samples) and reported first
@@ -325,7 +325,7 @@ CheckOutcome CollisionFree(const CheckSpec& spec, CheckContext& c) {
   return o;
 }
 
-// Assemblies (seed 000, 4.3): the cycles close (pre-checks pass and C below
+// Assemblies (FabHacks, 4.3): the cycles close (pre-checks pass and C below
 // the feasibility tolerance).
 CheckOutcome AssemblyFeasible(CheckContext& c) {
   const auto a = c.assembly();
@@ -345,7 +345,7 @@ CheckOutcome AssemblyFeasible(CheckContext& c) {
   return o;
 }
 
-// Seed 000, 4.3.3 step 2: nothing falls apart under gravity and the target
+// FabHacks, 4.3.3 step 2: nothing falls apart under gravity and the target
 // part moves little during relaxation.
 CheckOutcome AssemblyStable(CheckContext& c) {
   const auto a = c.assembly();

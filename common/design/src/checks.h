@@ -1,4 +1,4 @@
-// Internal: the validity checks W_F of a design (seed 001 Sec. 4).
+// Internal: the validity checks W_F of a design (Fab Forms Sec. 4).
 #pragma once
 
 #include <functional>

@@ -1,4 +1,4 @@
-// EvaluateSample (seed 001 Alg. 2) and ΔG (Eq. 2).
+// EvaluateSample (Fab Forms Alg. 2) and ΔG (Eq. 2).
 #include "fabatlas/design/evaluate_sample.h"
 
 #include <chrono>
@@ -142,7 +142,7 @@ class TreeEvaluation {
   Result Evaluate(const Node& node, const std::string& path) {
     if (node.op == "object") return EvaluateObject(node.args.at("object").text);
     // Previews look a subtree up before evaluating its children, so a cached
-    // subtree costs nothing below it (seed 001 Sec. 6.2: traversal stops at
+    // subtree costs nothing below it (Fab Forms Sec. 6.2: traversal stops at
     // nodes in H).
     if (options_.cache && options_.lookup_before_children) {
       const Identity& id = IdentityOf(node);

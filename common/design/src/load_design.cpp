@@ -238,7 +238,7 @@ void LintTuples(const Argument& a, std::size_t n, const std::string& what, Scope
   }
 }
 
-// The objects, states and transitions of a reconfigurable (seed 004).
+// The objects, states and transitions of a reconfigurable (Reconfigurables).
 void ReadReconfigurable(const Reader& r, const YAML::Node& root, Design& d, Scope& scope,
                         const std::filesystem::path& dir) {
   std::set<std::string> object_names;

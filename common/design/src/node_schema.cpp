@@ -26,10 +26,10 @@ const std::map<std::string, OpSchema>& OperationSchemas() {
         0}},
       {"mesh", {{{"file", S::kString}}, 0, 0}},
       {"openscad", {{{"file", S::kString}, {"set", S::kNumberMap, false}}, 0, 0}},
-      // A works-like prototype (seed 003, docs/prototype.md): solved, then
+      // A works-like prototype (Koo et al., docs/prototype.md): solved, then
       // its printable geometry; unsatisfiable constraints fail the sample.
       {"prototype", {{{"file", S::kString}, {"set", S::kNumberMap, false}}, 0, 0}},
-      // A FabHacks assembly (seed 000, docs/assembly.md): a program file, or a
+      // A FabHacks assembly (docs/assembly.md): a program file, or a
       // generated family (`family`, its part library as `file`, parameters in
       // `set`), solved; its parts placed at the solved poses.
       {"assembly",
@@ -48,7 +48,7 @@ const std::map<std::string, OpSchema>& OperationSchemas() {
       {"shell", {{{"thickness", S::kNumber}}, 1, -1}},
       {"linear_array", {{{"count", S::kNumber}, {"step", S::kVec3}}, 1, -1}},
       {"polar_array", {{{"count", S::kNumber}, {"angle", S::kNumber, false}}, 1, -1}},
-      // Reconfigurables (seed 004): an object of the design, in its body
+      // Reconfigurables: an object of the design, in its body
       // frame; and the children minus the eps-offset swept volume of object
       // `moving` along `transition`, observed in object `frame`'s body frame
       // (the world if no frame is given).
@@ -86,7 +86,7 @@ const std::map<std::string, OpSchema>& CheckSchemas() {
         0,
         0}},
       {"collision_free", {{{"time_steps", S::kNumber, false}, {"clearance", S::kNumber, false}}, 0, 0}},
-      // Assemblies (seed 000): the design's `assembly` node solved at the sample.
+      // Assemblies (FabHacks): the design's `assembly` node solved at the sample.
       {"assembly_feasible", {{}, 0, 0}},
       {"assembly_stable", {{}, 0, 0}},
       {"target_reached", {{{"tolerance", S::kNumber, false}, {"tolerance_deg", S::kNumber, false}}, 0, 0}},

@@ -57,7 +57,7 @@ int Count(const ResolvedArgs& a, const std::string& name, const Node& node) {
   return static_cast<int>(c);
 }
 
-// Arc-length parameterised tentacle of unioned spheres (seed 001 Table 2,
+// Arc-length parameterised tentacle of unioned spheres (Fab Forms Table 2,
 // tea-light holder): a planar curve of constant curvature that starts at the
 // origin heading +z and bends towards `heading` degrees in the xy-plane;
 // sphere radii shrink linearly from base to tip; spheres are spaced by

@@ -44,7 +44,7 @@ struct ResolvedArgs {
   double Number(const std::string& name, double fallback = 0) const;
   geometry::Vec3 Vec3(const std::string& name) const;
   std::string Text(const std::string& name, const std::string& fallback = "") const;
-  // Canonical text of every resolved value: the ρ of seed 001 Sec. 6.
+  // Canonical text of every resolved value: the ρ of Fab Forms Sec. 6.
   std::string Canonical() const;
 };
 

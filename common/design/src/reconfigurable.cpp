@@ -142,7 +142,7 @@ mesh::TriangleMesh SweptCutter(const geometry::Solid& moving, const swept::Rigid
   o.offset = offset;
   o.time_steps = time_steps;
   o.max_active_voxels = g.max_active_voxels;
-  // Seed 004, Eq. 4: the moving object observed in the frame object's body
+  // Reconfigurables, Eq. 4: the moving object observed in the frame object's body
   // coordinates, f_frame^-1 o f_moving.
   const auto poses = swept::SamplePoses(
       body, [&](double t) { return f_frame.At(t).Inverse().Compose(f_moving.At(t)); }, o);
@@ -165,7 +165,7 @@ geometry::Solid CarveSwept(const geometry::Solid& target, const geometry::Solid&
   t0 = Clock::now();
   if (!target.empty() && !cutter.triangles.empty()) {
     if (exact) {
-      // Seed 004, Eq. 4 with an exact subtraction: the target's level-set
+      // Reconfigurables, Eq. 4 with an exact subtraction: the target's level-set
       // surface minus the cutter surface by CGAL corefinement. Both are
       // meshed on the design's grid, so the cutter is as dense as the
       // target and is subtracted as it is (docs/swept.md "Carving").

@@ -1,5 +1,5 @@
 // Internal: the objects, motions and checks of reconfigurable designs
-// (seed 004, sections 3, 5 and 6.7; docs/design-format.md "Reconfigurables").
+// (Reconfigurables Secs. 3, 5 and 6.7; docs/design-format.md "Reconfigurables").
 #pragma once
 
 #include <string>
@@ -47,7 +47,7 @@ struct CarveSweptSummary {
   double subtract_seconds = 0;       // the subtraction, back to a level set
 };
 
-// Seed 004, Eq. 4: `target` minus the eps-offset swept volume of `moving`
+// Reconfigurables, Eq. 4: `target` minus the eps-offset swept volume of `moving`
 // (body frame) under f_frame^-1 o f_moving, on grid g. At least `time_steps`
 // samples, more until no point moves more than a voxel per step
 // (swept::SamplePoses). exact = true (the default of the carve_swept node):

@@ -1,5 +1,5 @@
-// The FEM validity check of seed 001 (sandal): voxel hexahedra, fixed and
-// loaded regions, max displacement under a threshold. DESIGN.md "FEM check".
+// The FEM validity check of Fab Forms (sandal): voxel hexahedra, fixed and
+// loaded regions, max displacement under a threshold. docs/fem.md.
 #include "fabatlas/fem/fem_check.h"
 
 #include <chrono>

@@ -1,5 +1,5 @@
 // operations.cpp — transforms, CSG, offsets, arrays and the measures built on
-// them (ΔG of seed 001 Eq. 2, morphological opening).
+// them (ΔG of Fab Forms Eq. 2, morphological opening).
 #include <openvdb/tools/Composite.h>
 #include <openvdb/tools/LevelSetRebuild.h>
 #include <openvdb/tools/Interpolation.h>

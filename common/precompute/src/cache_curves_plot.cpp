@@ -124,7 +124,7 @@ void WriteCacheCurvesPng(const std::vector<storage::CacheCurvePoint>& points, co
   img.Text(left + (right - left) / 2 - 100, bottom + 40, "cache size (MiB)", 0x000000);
   img.Text(10, top - 30, "preview time (s)", 0x000000);
   const std::string title = (options.title.empty() ? std::string() : options.title + ": ") +
-                            "mean and worst preview time vs cache size (seed 001 Fig. 13)";
+                            "mean and worst preview time vs cache size (Fab Forms Fig. 13)";
   img.Text(left, 12, title, 0x000000);
 
   int legend_y = top + 10;

@@ -1,4 +1,4 @@
-// Seed 003 Sec. 7: cavities, joint geometry and gaps, on OpenVDB level sets
+// Koo et al. Sec. 7: cavities, joint geometry and gaps, on OpenVDB level sets
 // (common/geometry) with swept volumes from common/swept.
 #include "fabatlas/prototype/fabricate.h"
 

@@ -248,7 +248,7 @@ struct Builder {
   void Ge(const Affine& g, const std::string& label) { out.push_back({g, false, group, label}); }
   double V(const Affine& f) const { return f.Eval(m.base); }
 
-  // Packing of a set of faces in their plane (seed 003 Sec. 5.1, Fig. 6):
+  // Packing of a set of faces in their plane (Koo et al. Sec. 5.1, Fig. 6):
   // consecutive faces along an in-plane axis touch; the first faces along
   // it share their low coordinate, the last ones their high coordinate.
   void Pack(const std::vector<Face>& faces, int normal, const std::string& what) {
@@ -363,7 +363,7 @@ struct Builder {
       }
     }
     // Inner parts do not overlap: each pair is kept apart along the axis
-    // where the user's arrangement separates them most (seed 003 Sec. 5.2).
+    // where the user's arrangement separates them most (Koo et al. Sec. 5.2).
     for (std::size_t i = 0; i < boxes.size(); ++i)
       for (std::size_t j = i + 1; j < boxes.size(); ++j) {
         int best_u = 0;

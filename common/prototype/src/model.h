@@ -6,7 +6,7 @@
 // offsets of double-pivot children). With every joint angle fixed per
 // configuration, a part's pose is a constant rotation and a translation that
 // is affine in the variables, so every box, face and relationship constraint
-// below is linear (seed 003 Sec. 5: "a set of equality and inequality
+// below is linear (Koo et al. Sec. 5: "a set of equality and inequality
 // constraints that are linear").
 #pragma once
 

@@ -1,4 +1,4 @@
-// Seed 003 Sec. 6: two stages of constrained least squares (Eq. 4), solved
+// Koo et al. Sec. 6: two stages of constrained least squares (Eq. 4), solved
 // with Ceres by an augmented Lagrangian over equality constraints, with a
 // bounded slack s >= 0 for every inequality g >= 0 (g - s = 0).
 #include "fabatlas/prototype/solve.h"

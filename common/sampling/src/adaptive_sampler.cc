@@ -1,4 +1,4 @@
-// Adaptive sampling, seed 001 Sec. 5.2 (see adaptive_sampler.h for the rounds).
+// Adaptive sampling, Fab Forms Sec. 5.2 (see adaptive_sampler.h for the rounds).
 #include "fabatlas/sampling/adaptive_sampler.h"
 
 #include <algorithm>
@@ -56,7 +56,7 @@ class Sampler {
     return key;
   }
 
-  // Seed 001 Sec. 5: uniform bootstrap grid, one k-d tree per cell.
+  // Fab Forms Sec. 5: uniform bootstrap grid, one k-d tree per cell.
   std::vector<LeafRef> Bootstrap() {
     std::vector<int> cell(n_, 0);
     std::vector<PointKey> keys;
@@ -107,7 +107,7 @@ class Sampler {
     }
   }
 
-  // ΔG on every edge of every frontier leaf (seed 001 Eq. 2 and conventions).
+  // ΔG on every edge of every frontier leaf (Fab Forms Eq. 2 and conventions).
   void ComputeGeometryChanges(const std::vector<LeafRef>& frontier) {
     std::set<Edge> needed;
     for (const LeafRef& ref : frontier) {

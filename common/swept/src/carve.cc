@@ -1,4 +1,4 @@
-// Exact carving of a swept volume with CGAL corefinement (seed 004, Eq. 4).
+// Exact carving of a swept volume with CGAL corefinement (Reconfigurables, Eq. 4).
 #include "fabatlas/swept/carve.h"
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>

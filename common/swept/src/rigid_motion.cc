@@ -1,4 +1,4 @@
-// Keyframed rigid motions (seed 004, section 3): cubic Bezier translation and
+// Keyframed rigid motions (Reconfigurables, section 3): cubic Bezier translation and
 // slerp between quaternion keys.
 #include "fabatlas/swept/rigid_motion.h"
 

@@ -1,4 +1,4 @@
-// Spacetime collision intervals (seed 004, section 5): 4D proxy boxes in a
+// Spacetime collision intervals (Reconfigurables, section 5): 4D proxy boxes in a
 // bounding volume hierarchy, exact confirmation at samples.
 #include "fabatlas/swept/spacetime_collision.h"
 

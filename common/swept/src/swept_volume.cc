@@ -1,5 +1,5 @@
 // Swept-volume signed distance on a sparse OpenVDB grid with narrow-band
-// culling (seed 004, section 6.7, Eq. 5), and its epsilon-offset surface.
+// culling (Reconfigurables, section 6.7, Eq. 5), and its epsilon-offset surface.
 #include "fabatlas/swept/swept_volume.h"
 
 #include <openvdb/openvdb.h>

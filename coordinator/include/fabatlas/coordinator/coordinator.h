@@ -1,6 +1,6 @@
 // fabatlas/coordinator/coordinator.h — the cluster's coordinator: gRPC
 // services for jobs, workers and blobs over a durable SQLite store
-// (DESIGN.md "Cluster and reliability"; protocol in docs/protocol.md).
+// (protocol in docs/protocol.md, operation in docs/operations.md).
 //
 // Sampling driver. Every running job has one driver thread that calls
 // sampling::SampleDesignSpace with a remote executor: each batch of sampling

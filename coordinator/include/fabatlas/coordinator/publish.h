@@ -1,5 +1,5 @@
 // fabatlas/coordinator/publish.h — the published artifact of a finished job
-// (DESIGN.md "Artifact", docs/artifact.md): what the coordinator writes as
+// (docs/artifact.md): what the coordinator writes as
 // OUT/<design>.fabatlas beside form.json when a job's sampling finishes.
 //
 // The artifact is a pure function of the job bundle, the sampled form and the
@@ -86,7 +86,7 @@ struct CacheAssemblySummary {
 // equal assemblies.
 v1::CachePlanInput CachePlanInputOf(const CacheAssembly& assembly);
 
-// Seed 001 Sec. 6 on the artifact, from a plan the cache plan task computed
+// Fab Forms Sec. 6 on the artifact, from a plan the cache plan task computed
 // (protocol::RunCachePlan on CachePlanInputOf(assembly), on a worker or in
 // process): fills manifest.cache (strategy, budget, threshold, H_TOP, H_opt,
 // H_rfree), the Fig. 13 curves of NAIVE, OPT-AVE and OPT-MAX, and stores
@@ -135,7 +135,7 @@ CacheAssembly CollectSubtreesFromStore(storage::JobStore& store, storage::BlobSt
 // what workers upload).
 bool WantsCache(const sampling::JobFile& job);
 
-// Seed 001 Sec. 7.4 starting points of the artifact's form
+// Fab Forms Sec. 7.4 starting points of the artifact's form
 // (cache::ChooseStartingPoints).
 void AddStartingPoints(storage::Artifact& artifact, const cache::StartingPointOptions& options = {});
 

@@ -1,5 +1,5 @@
 // fabatlas/storage/artifact.h — the published artifact of a job: one SQLite
-// database file, `<design>.fabatlas` (DESIGN.md "Artifact"; schema and the
+// database file, `<design>.fabatlas` (schema and the
 // meaning of every column in docs/artifact.md).
 //
 // What it holds: a manifest (schema version, design hash, code version,
@@ -7,8 +7,8 @@
 // every table's canonical content), the sampled form (dimensions, the k-d tree
 // of every bootstrap cell, every sample with validity, failure type and
 // properties, every ΔG), the chosen geometry cache (subtrees as exact level
-// sets and as glTF binary meshes), the cache curves of seed 001 Fig. 13, the
-// customisation starting points (seed 001 Sec. 7.4) and the job bundle (job
+// sets and as glTF binary meshes), the cache curves of Fab Forms Fig. 13, the
+// customisation starting points (Fab Forms Sec. 7.4) and the job bundle (job
 // file, design file and the files it names) so a consumer can re-evaluate
 // previews.
 //
@@ -45,7 +45,7 @@ inline constexpr int kArtifactSchemaVersion = 1;
 // SQLite application_id of artifact files ("FbAt").
 inline constexpr std::int32_t kArtifactApplicationId = 0x46624174;
 
-// Seed 001 Table 3, the deterministic part (no CPU time, see above).
+// Fab Forms Table 3, the deterministic part (no CPU time, see above).
 struct ArtifactStatistics {
   std::int64_t samples = 0;
   std::int64_t valid_samples = 0;
@@ -56,7 +56,7 @@ struct ArtifactStatistics {
   std::map<std::string, double> failure_shares;
 };
 
-// The geometry cache as chosen by the cache task (seed 001 Sec. 6, Fig. 14).
+// The geometry cache as chosen by the cache task (Fab Forms Sec. 6, Fig. 14).
 // Sizes are in entries and bytes of level-set memory (SubtreeRecord::bytes).
 struct CacheSummary {
   std::string strategy;               // "naive", "opt_ave", "opt_max" (cache::StrategyName); empty = no cache
@@ -112,11 +112,11 @@ struct CacheCurvePoint {
   std::int64_t step = 0;  // position along the curve, from 0 (no cache)
   std::int64_t entries = 0;
   std::int64_t bytes = 0;
-  double mean_seconds = 0.0;   // E_H[preview time], seed 001 Eq. 3
+  double mean_seconds = 0.0;   // E_H[preview time], Fab Forms Eq. 3
   double worst_seconds = 0.0;  // max_u T_H(u)
 };
 
-// A customisation starting point (seed 001 Sec. 7.4).
+// A customisation starting point (Fab Forms Sec. 7.4).
 struct StartingPoint {
   std::int64_t sample_id = 0;  // index into form.samples (a valid sample)
   int component = 0;           // connected component of the valid-sample graph

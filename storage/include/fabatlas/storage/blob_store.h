@@ -1,5 +1,5 @@
 // fabatlas/storage/blob_store.h — content-addressed blobs on local disk
-// (DESIGN.md "Cluster and reliability").
+// (docs/protocol.md).
 //
 // A blob is named by the lowercase hex SHA-256 of its bytes and lives at
 // ROOT/ab/abcd... (first two hex digits as a directory). Uploads go to

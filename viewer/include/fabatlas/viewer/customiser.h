@@ -1,4 +1,4 @@
-// fabatlas/viewer/customiser.h — the runtime over one computed form (seed 001,
+// fabatlas/viewer/customiser.h — the runtime over one computed form (Fab Forms,
 // Sec. 7): validity lookups, snapping, properties with material cost/weight,
 // starting points and previews evaluated with cached subtrees.
 //
@@ -33,7 +33,7 @@ struct CustomiserSource {
   std::vector<sampling::Material> materials;   // cost/weight table
   std::vector<std::int64_t> starting_points;   // sample ids; empty: computed (starting_points.h)
   // Cached subtree geometry by cache key (design::SubtreeRecord::key), with
-  // the root compute time t_i in seconds (seed 001 Sec. 6).
+  // the root compute time t_i in seconds (Fab Forms Sec. 6).
   std::map<std::string, std::pair<geometry::Solid, double>> cache;
   std::string cache_name = "none";             // e.g. "H_opt", "H_rfree", "none"
   // Where the artifact's job bundle was written for evaluation (removed with
@@ -41,7 +41,7 @@ struct CustomiserSource {
   std::filesystem::path bundle_dir;
 };
 
-// Which subtrees of an artifact's geometry cache previews load (seed 001
+// Which subtrees of an artifact's geometry cache previews load (Fab Forms
 // Sec. 6 / Fig. 14): the chosen cache H_opt, the redundancy-free H_rfree, or
 // none (every preview evaluates the whole tree).
 enum class CacheChoice { kOpt, kRfree, kNone };
@@ -60,7 +60,7 @@ CustomiserSource LoadArtifact(const std::filesystem::path& artifact, CacheChoice
 // form whose dimensions differ from the design's exposed parameters.
 CustomiserSource LoadRunDirectory(const std::filesystem::path& out_dir, const std::filesystem::path& job_file);
 
-// Weight and cost of one sample in one material (seed 001 Sec. 7.2).
+// Weight and cost of one sample in one material (Fab Forms Sec. 7.2).
 struct MaterialReadout {
   std::string name;
   double weight_g = 0;  // volume_mm3 / 1000 * density
@@ -95,11 +95,11 @@ class Customiser {
     return LineStretches(source_.form, space_, u, dimension);
   }
   std::optional<Snap> SnapTo(const std::vector<double>& u) const { return SnapToValidSample(source_.form, space_, u); }
-  // The sample's recorded properties (seed 001 P_F) and, when it has a
+  // The sample's recorded properties (Fab Forms P_F) and, when it has a
   // "volume" property, its weight and cost per material.
   std::vector<MaterialReadout> Materials(std::int64_t sample) const;
 
-  // Evaluates the design at the sample (seed 001 Sec. 7.3) through the
+  // Evaluates the design at the sample (Fab Forms Sec. 7.3) through the
   // source's subtree cache. Throws InputError when the source has no design.
   // with_cache = false ignores the cache (the "no cache" baseline).
   PreviewResult Preview(std::int64_t sample, bool with_cache = true) const;

@@ -1,5 +1,5 @@
 // fabatlas/viewer/snap.h — snapping a point to the closest valid sample for
-// preview (seed 001, Sec. 7.3 "3D Model Preview Generation").
+// preview (Fab Forms, Sec. 7.3 "3D Model Preview Generation").
 #pragma once
 
 #include <cstdint>

@@ -1,5 +1,5 @@
 // fabatlas/viewer/valid_region.h — runtime validity lookups on a sampled form
-// (seed 001, Sec. 7.2 "Local Validity Ranges").
+// (Fab Forms, Sec. 7.2 "Local Validity Ranges").
 //
 // The valid region is the union of the k-d tree leaves whose 2^n corner
 // samples are all valid, plus the faces and edges of any leaf whose corners
@@ -42,7 +42,7 @@ struct Stretch {
 
 // The whole line through u along `dimension`, from the dimension's lower to
 // upper bound, as alternating valid / invalid stretches in increasing order
-// (seed 001 Sec. 7.2: the line is traced through every cut made along the
+// (Fab Forms Sec. 7.2: the line is traced through every cut made along the
 // direction and the points between them, so non-convex regions give several
 // valid intervals). Stretches are closed for valid ones; an invalid stretch
 // is the open gap between its neighbours. Throws fabatlas::InputError if u is

@@ -3,7 +3,7 @@
 // (one slot: on the thread that sends Sync; with more, the slot thread that
 // finishes the last running task sends the next Sync itself)
 // with a DesignSampleEvaluator per job, reports results, and heartbeats its
-// leases from a separate thread (DESIGN.md "Cluster and reliability").
+// leases from a separate thread (docs/protocol.md).
 //
 // Jobs are fetched once per job bundle digest from BlobService and unpacked
 // under cache_dir. Valid samples' root solids and slow subtrees are uploaded

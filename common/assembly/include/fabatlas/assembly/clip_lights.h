@@ -1,4 +1,4 @@
-// fabatlas/assembly/clip_lights.h — the clip-lights hack (seed 000 Table 5,
+// fabatlas/assembly/clip_lights.h — the clip-lights hack (FabHacks Table 5,
 // "clip lights 1–4") as a design family for precompute.
 //
 // Exposed parameters: n turnbuckle–ring pairs (1..4), turnbuckle extension

@@ -1,4 +1,4 @@
-// fabatlas/assembly/frame.h — rigid frames of FabHaL (seed 000, section 4.1).
+// fabatlas/assembly/frame.h — rigid frames of FabHaL (FabHacks, section 4.1).
 //
 // A Frame is a position (mm) and three Euler angles [a,b,c] in degrees with
 // R = Rz(c)·Ry(b)·Rx(a) (the convention of the FabHacks reference, see

@@ -1,5 +1,5 @@
 // fabatlas/assembly/part_library.h — connector primitives and parts of the
-// FabHacks annotated object library (seed 000, section 4.1; parametrisations
+// FabHacks annotated object library (FabHacks Sec. 4.1; parametrisations
 // from data/fabhacks/EXAMPLES.md).
 #pragma once
 
@@ -15,7 +15,7 @@ namespace fabatlas::assembly {
 
 enum class PrimitiveType { kHook, kRod, kRing, kTube, kHemisphere, kClip, kEdge, kSurface };
 
-// How a connection parameter behaves at its bounds (seed 000, section 4.3.3).
+// How a connection parameter behaves at its bounds (FabHacks, section 4.3.3).
 enum class ParamKind {
   kUnbounded,          // periodic, wraps around (ring angle)
   kBoundedAndClamped,  // geometry keeps it inside [min,max]
@@ -46,7 +46,7 @@ struct Primitive {
   double Shape(const std::string& key) const;  // throws std::out_of_range
   // Connection DoFs s of this primitive, in order (EXAMPLES.md).
   std::vector<ParamSpec> Params() const;
-  // Critical dimension (seed 000, 4.1): length for rod/tube/edge/surface,
+  // Critical dimension (FabHacks, 4.1): length for rod/tube/edge/surface,
   // inner (hoop) radius for hook/ring, gap for clip, 0 for hemisphere.
   double CriticalDimension() const;
   // What this primitive occupies of the critical dimension of a partner:
@@ -60,7 +60,7 @@ Eigen::Isometry3d ConnectorFrame(const Primitive& p, const std::vector<double>& 
 // Alignment offset A for connect(a, b) (EXAMPLES.md table): P_a·M_a·A = P_b·M_b.
 Eigen::Matrix3d AlignmentOffset(const Primitive& a, const Primitive& b, bool flip);
 
-// Table 1 of seed 000: may these two primitive types connect at all?
+// Table 1 of FabHacks: may these two primitive types connect at all?
 bool CanConnect(PrimitiveType a, PrimitiveType b);
 
 const char* ToString(PrimitiveType t);

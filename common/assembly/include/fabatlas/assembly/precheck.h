@@ -1,4 +1,4 @@
-// fabatlas/assembly/precheck.h — verify connect() before solving (seed 000,
+// fabatlas/assembly/precheck.h — verify connect() before solving (FabHacks,
 // sections 4.3.1–4.3.2): connectivity table, closed primitives, critical
 // dimensions, and the geometric quick reject of cycles (polygon inequality).
 #pragma once
@@ -47,7 +47,7 @@ struct PrecheckSummary {
 // Runs all pre-checks on a program; never throws for a well-formed Program.
 PrecheckSummary Precheck(const Program& program, const PrecheckOptions& options = {});
 
-// Polygon inequality (seed 000, 4.3.2, "Geometric Quick Reject"): k rigid links
+// Polygon inequality (FabHacks, 4.3.2, "Geometric Quick Reject"): k rigid links
 // with lengths e_i in [lo_i, hi_i] can close a loop iff the linear program
 //   find e: lo_i <= e_i <= hi_i,  e_k <= sum_{i != k} e_i  for all k
 // is feasible. Closed form used here: feasible iff lo_k <= sum_{i != k} hi_i

@@ -1,4 +1,4 @@
-// fabatlas/assembly/program.h — a FabHaL program (seed 000, section 4.2) in YAML.
+// fabatlas/assembly/program.h — a FabHaL program (FabHacks, section 4.2) in YAML.
 //
 //   library: parts.yaml            # part library, relative to this file
 //   start_with: {name: door, part: DoorRod, frame: [[0,0,500],[90,0,90]]}

@@ -1,4 +1,4 @@
-// fabatlas/assembly/solve.h — the two-step FabHacks solve (seed 000, 4.3.2–4.3.3).
+// fabatlas/assembly/solve.h — the two-step FabHacks solve (FabHacks Sec. 4.3.2–4.3.3).
 //
 // Unknowns: a 6-DoF pose per part (translation mm + rotation) and the
 // connection parameters of both primitives of every connect (bounded as in
@@ -34,9 +34,9 @@
 namespace fabatlas::assembly {
 
 struct SolveOptions {
-  int restarts = 16;                    // starts of the feasibility solve (seed 000 uses T = 16)
-  double feasibility_tolerance = 1e-6;  // C threshold, mm² (seed 000: 1e-6)
-  double penalty_start = 100;           // σ of step 1 (seed 000: 100, doubling)
+  int restarts = 16;                    // starts of the feasibility solve (FabHacks uses T = 16)
+  double feasibility_tolerance = 1e-6;  // C threshold, mm² (FabHacks: 1e-6)
+  double penalty_start = 100;           // σ of step 1 (FabHacks: 100, doubling)
   int penalty_doublings = 5;
   double relaxation_penalty = 1e4;      // σ_r of step 2 (EXAMPLES.md: 1e4)
   double gravity = 9.8;                 // m/s²

@@ -1,5 +1,5 @@
 // fabatlas/cache/dependency_graph.h — the dependency graph of subtrees across
-// all samples (seed 001 Sec. 6.2, Fig. 8) and the cost of a cache H on it:
+// all samples (Fab Forms Sec. 6.2, Fig. 8) and the cost of a cache H on it:
 // n_H(X), T_H(r), E_H[preview] (Eq. 3) and the worst case max_r T_H(r).
 //
 // Plain data in, plain data out: the library knows nothing about geometry,
@@ -78,7 +78,7 @@ struct CacheCost {
 
 CacheCost EvaluateCache(const DependencyGraph& graph, const CacheSet& cache);
 
-// H_TOP: the root subtree of every sample (top-level geometry, seed 001
+// H_TOP: the root subtree of every sample (top-level geometry, Fab Forms
 // Sec. 8 "Subtree cache vs. top-level geometry cache"), stored or not.
 CacheSet TopLevelCache(const DependencyGraph& graph);
 

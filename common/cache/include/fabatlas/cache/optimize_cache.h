@@ -1,5 +1,5 @@
 // fabatlas/cache/optimize_cache.h — choosing the cache H under a memory budget
-// (seed 001 Sec. 6.3, Alg. 1, and the three strategies of Sec. 8, Fig. 13).
+// (Fab Forms Sec. 6.3, Alg. 1, and the three strategies of Sec. 8, Fig. 13).
 //
 // Strategies (n = evaluation count, t = root compute time, Sec. 6.2):
 //  - kNaive: nodes by largest t·n_∅(X) (counts with no cache), fixed order,
@@ -32,7 +32,7 @@ const char* StrategyName(Strategy strategy);  // "naive", "opt_ave", "opt_max"
 
 // What the greedy strategies maximise when they choose a node.
 enum class Score {
-  kTimesCount,  // t·n_H(X), as seed 001 Sec. 6.3 and Sec. 8 state it
+  kTimesCount,  // t·n_H(X), as Fab Forms Sec. 6.3 and Sec. 8 state it
   kPerByte,     // t·n_H(X) / bytes(X)
   kSavedPerByte,  // n_H(X)·C_H(X) / bytes(X), C_H(X) = the time to compute X's
                   // subtree given H: the drop of Σ_r T_H(r) per byte of budget
@@ -43,7 +43,7 @@ struct CacheOptions {
   Score score = Score::kSavedPerByte;
   // Memory budget for H in bytes (default: unlimited).
   std::uint64_t budget_bytes = std::numeric_limits<std::uint64_t>::max();
-  // Subtrees whose root took less than this are never chosen (seed 001
+  // Subtrees whose root took less than this are never chosen (Fab Forms
   // Sec. 6.1: "otherwise we could just cache the children"). Default 100 ms.
   double min_seconds = 0.1;
   // OPT-MAX only: take the worst samples' best node only when its score is at
@@ -76,7 +76,7 @@ struct CachePlan {
 
 CachePlan OptimizeCache(const DependencyGraph& graph, const CacheOptions& options = {});
 
-// What seed 001 Fig. 14 reports for one design, plus the chosen plan.
+// What Fab Forms Fig. 14 reports for one design, plus the chosen plan.
 struct CacheReport {
   CacheCost none;    // empty cache
   CacheCost top;     // H_TOP (TopLevelCache)

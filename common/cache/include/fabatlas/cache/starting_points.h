@@ -1,5 +1,5 @@
-// fabatlas/cache/starting_points.h — customisation starting points (seed 001
-// Sec. 7.4, DESIGN.md pipeline step 7).
+// fabatlas/cache/starting_points.h — customisation starting points (Fab Forms
+// Sec. 7.4).
 //
 // The graph: every valid sample of the form; an edge between two valid
 // samples that are the ends of an edge of a leaf hypercube, weighted by the

@@ -1,5 +1,5 @@
 // fabatlas/design/constraint_solve.h — resolve mutable parameters for a point
-// (seed 001 Alg. 2, lines 1–3: "fix exposed parameters at u; run constraint
+// (Fab Forms Alg. 2, lines 1–3: "fix exposed parameters at u; run constraint
 // solver").
 #pragma once
 

@@ -1,4 +1,4 @@
-// fabatlas/design/design.h — the parametric design model (seed 001, Sec. 4).
+// fabatlas/design/design.h — the parametric design model (Fab Forms, Sec. 4).
 //
 // A design F is: exposed parameters U (what end users move), mutable low-level
 // parameters (solved for), constraints C_F linking them, a tree of operation
@@ -84,7 +84,7 @@ struct CheckSpec {
   SourcePlace place;
 };
 
-// Reconfigurables (seed 004, section 3): named objects moved by keyframed
+// Reconfigurables (the paper, Sec. 3): named objects moved by keyframed
 // rigid motions along the transitions of a state graph.
 //
 // An object is a tree modelled in its pose in the first state (its body

@@ -1,4 +1,4 @@
-// fabatlas/design/evaluate_sample.h — EvaluateSample(u) of seed 001 Alg. 2 and
+// fabatlas/design/evaluate_sample.h — EvaluateSample(u) of Fab Forms Alg. 2 and
 // the volumetric change ΔG of Eq. 2 between two evaluated samples.
 #pragma once
 
@@ -55,13 +55,13 @@ struct SubtreeRecord {
 struct EvaluateOptions {
   SubtreeCache* cache = nullptr;  // optional; subtrees are looked up and offered
   bool keep_solid = true;         // keep the root level set in the result
-  // false: a preview (seed 001 Sec. 7): solve and build the geometry only,
+  // false: a preview (Fab Forms Sec. 7): solve and build the geometry only,
   // skip the checks and properties (the sample is then valid iff it has
   // geometry).
   bool run_checks = true;
   // true: look every subtree up in `cache` before evaluating its children
   // (computing its key from the resolved arguments alone), so a hit skips the
-  // whole subtree below it, as a preview with cache H does (seed 001
+  // whole subtree below it, as a preview with cache H does (Fab Forms
   // Sec. 6.2). The records of a hit's descendants are then absent. false
   // (sampling): children are always evaluated, every subtree is recorded.
   bool lookup_before_children = false;
@@ -80,7 +80,7 @@ struct SampleResult {
   std::map<std::string, double> timings; // solve, tree, checks, properties, total (wall seconds)
 };
 
-// Seed 001 Alg. 2. Bad values at this point (a negative radius after solving)
+// Fab Forms Alg. 2. Bad values at this point (a negative radius after solving)
 // make the sample invalid with a reason; InputError is thrown only for
 // problems of the design itself (e.g. a resource limit, an unreadable mesh).
 SampleResult EvaluateSample(const Design& design, const Point& u, const EvaluateOptions& options = {});
@@ -88,7 +88,7 @@ SampleResult EvaluateSample(const Design& design, const Point& u, const Evaluate
 // One carve_swept node's cutter on its own (worker task kind
 // TASK_KIND_SWEPT_VOLUME, common/protocol/fabatlas/v1/tasks.proto): at point
 // u, the eps-offset swept volume of the node's moving object along its
-// transition, in the frame object's body coordinates (seed 004, Sec. 6.7).
+// transition, in the frame object's body coordinates (Reconfigurables, Sec. 6.7).
 struct SweptVolumeResult {
   double volume = 0;              // mm^3 enclosed by the offset surface
   std::size_t triangles = 0;      // of the offset surface
@@ -107,7 +107,7 @@ struct SweptVolumeResult {
 // makes the sweep impossible (the one-line reason).
 SweptVolumeResult ComputeSweptVolume(const Design& design, const Point& u, const std::string& node_path);
 
-// ΔG(u1,u2) = |V(G1) xor V(G2)| / |V(G1) union V(G2)| (seed 001 Eq. 2), with
+// ΔG(u1,u2) = |V(G1) xor V(G2)| / |V(G1) union V(G2)| (Fab Forms Eq. 2), with
 // invalid samples taken as empty: ΔG(invalid, invalid) = 0 and
 // ΔG(valid, invalid) = 1.
 double DeltaG(const SampleResult& a, const SampleResult& b);

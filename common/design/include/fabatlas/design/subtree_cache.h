@@ -1,4 +1,4 @@
-// fabatlas/design/subtree_cache.h — the geometry cache interface of seed 001
+// fabatlas/design/subtree_cache.h — the geometry cache interface of Fab Forms
 // Sec. 6: subtrees keyed by (topology τ, resolved parameters ρ).
 #pragma once
 

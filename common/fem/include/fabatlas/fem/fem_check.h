@@ -1,9 +1,9 @@
 // fabatlas/fem/fem_check.h — the design-level FEM validity check.
 //
-// Seed 001 (Fab Forms) validates its sandal design by a static finite-element
+// Fab Forms (Sec. 8) validates its sandal design by a static finite-element
 // analysis: the solid is voxelised into hexahedra, a region is fixed, a load
 // is applied to another region, and the sample is invalid if the deformation
-// exceeds a threshold (DESIGN.md "FEM check"). This header runs that check on
+// exceeds a threshold (docs/fem.md). This header runs that check on
 // a VoxelSolid with static_solve.h.
 #pragma once
 

@@ -11,7 +11,7 @@
 //      0-------1
 //
 // so that elements built from axis-aligned boxes have positive Jacobian.
-// The FEM check of seed 001 (sandal heel) meshes the solid as voxel hexes:
+// The FEM check of Fab Forms (sandal heel) meshes the solid as voxel hexes:
 // VoxelSolid is a dense occupancy grid that the geometry library fills from
 // its level set; this header does not depend on OpenVDB.
 #pragma once

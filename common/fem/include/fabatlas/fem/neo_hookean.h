@@ -1,7 +1,7 @@
 // fabatlas/fem/neo_hookean.h — compressible Neo-Hookean hyperelasticity.
 //
-// Strain energy density (DESIGN.md "FEM check", the Cook's membrane
-// benchmark material; seed 001 sandal check), per unit reference volume:
+// Strain energy density (docs/fem.md; the Cook's membrane
+// benchmark material; Fab Forms sandal check), per unit reference volume:
 //   Psi(F) = (mu/2) (J^(-2/3) tr C - 3) + (kappa/4) (J^2 - 1 - 2 ln J),
 //   C = F^T F, J = det F.
 // First Piola-Kirchhoff stress P = dPsi/dF:

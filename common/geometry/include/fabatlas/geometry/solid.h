@@ -93,7 +93,7 @@ Solid Extrude(const GridSpec& g, const std::vector<Vec2>& polygon, double height
 // Revolve a closed profile polygon given as (r, z) points with r >= 0 about the
 // z axis. sides == 0: smooth surface of revolution; sides >= 3: the revolution
 // has a regular n-gon cross-section (profile r is the circumradius), as the
-// chess pieces and vase of seed 001.
+// chess pieces and vase of Fab Forms.
 Solid Revolve(const GridSpec& g, const std::vector<Vec2>& profile, int sides);
 // Level set of a closed triangle mesh (OpenVDB meshToLevelSet; orientation
 // does not matter). Open meshes are signed by OpenVDB's flood fill, which may
@@ -121,7 +121,7 @@ Solid LinearArray(const Solid& s, int count, const Vec3& step);
 Solid PolarArray(const Solid& s, int count, double total_angle_deg);
 
 // ---- Measures -----------------------------------------------------------------
-// Volumetric change of seed 001 Eq. 2: |A xor B| / |A union B|, in [0,1].
+// Volumetric change of Fab Forms Eq. 2: |A xor B| / |A union B|, in [0,1].
 // Both empty -> 0. One empty, other not -> 1.
 double DeltaG(const Solid& a, const Solid& b);
 
@@ -131,7 +131,7 @@ double DeltaG(const Solid& a, const Solid& b);
 double OpeningLossFraction(const Solid& s, double min_thickness);
 
 // Dense inside/outside sampling on a regular grid of cubic cells, e.g. the
-// voxel hexahedra of the FEM check (seed 001 Sec. 8, docs/fem.md), whose
+// voxel hexahedra of the FEM check (Fab Forms Sec. 8, docs/fem.md), whose
 // resolution is independent of the level set's voxel size. Cell (i,j,k) is
 // the box [origin + (i,j,k)*cell_size, origin + (i+1,j+1,k+1)*cell_size] (mm);
 // it is inside iff the level set, trilinearly interpolated at the cell centre,

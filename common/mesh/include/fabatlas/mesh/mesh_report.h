@@ -1,4 +1,4 @@
-// fabatlas/mesh/mesh_report.h — the mesh checks of seed 001 (section 5,
+// fabatlas/mesh/mesh_report.h — the mesh checks of Fab Forms (section 5,
 // "watertight and manifold", "no self-intersection") and basic measures.
 #pragma once
 

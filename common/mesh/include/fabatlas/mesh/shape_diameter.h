@@ -1,7 +1,7 @@
 // fabatlas/mesh/shape_diameter.h — local thickness by the shape diameter
 // function (SDF) of Shapira, Shamir and Cohen-Or 2008 ("Consistent mesh
 // partitioning and skeletonisation using the shape diameter function"), used
-// by seed 001 (section 5) for the "no very thin parts" check.
+// by Fab Forms (section 5) for the "no very thin parts" check.
 #pragma once
 
 #include <cstdint>

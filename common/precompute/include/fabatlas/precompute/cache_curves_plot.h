@@ -1,4 +1,4 @@
-// fabatlas/precompute/cache_curves_plot.h — seed 001 Fig. 13 as a PNG: mean
+// fabatlas/precompute/cache_curves_plot.h — Fab Forms Fig. 13 as a PNG: mean
 // (Eq. 3) and worst preview time against cache size for the cache
 // strategies, from the artifact's cache_curves table (docs/artifact.md).
 #pragma once

@@ -1,5 +1,5 @@
 // fabatlas/precompute/design_evaluator.h — a real design as the sampler's
-// evaluator: EvaluateSample(u) of seed 001 Alg. 2 and ΔG of Eq. 2 on level
+// evaluator: EvaluateSample(u) of Fab Forms Alg. 2 and ΔG of Eq. 2 on level
 // sets, behind the plain-data sampling::SampleEvaluator interface that local
 // thread pools and cluster workers both drive.
 #pragma once
@@ -35,7 +35,7 @@ struct DesignEvaluatorOptions {
   // first. A ΔG whose sample was dropped re-evaluates it (results are
   // deterministic, so only time is lost).
   std::size_t solid_memory_bytes = std::size_t{1} << 30;
-  // Subtree cache shared by all evaluations (seed 001 Sec. 6): subtrees whose
+  // Subtree cache shared by all evaluations (Fab Forms Sec. 6): subtrees whose
   // root took at least min_subtree_seconds are kept.
   std::size_t subtree_memory_bytes = std::size_t{512} << 20;
   double min_subtree_seconds = 0.0;
@@ -54,7 +54,7 @@ class DesignSampleEvaluator final : public sampling::SampleEvaluator {
   sampling::SampleOutcome EvaluateSample(const sampling::SamplePoint& point) override;
   double GeometryChange(const sampling::SamplePoint& a, const sampling::SamplePoint& b) override;
 
-  // EvaluateSample of seed 001 Alg. 2 through the subtree cache, with the
+  // EvaluateSample of Fab Forms Alg. 2 through the subtree cache, with the
   // whole result (root solid, subtree records, checks); remembers the root
   // solid of a valid sample for later ΔG.
   design::SampleResult Evaluate(const sampling::SamplePoint& point);

@@ -21,7 +21,7 @@ namespace fabatlas::precompute {
 void WriteFormOutputs(const design::Design& design, const sampling::SamplingSummary& summary,
                       const std::filesystem::path& out_dir);
 
-// One line in the manner of seed 001 Table 3:
+// One line in the manner of Fab Forms Table 3:
 //   "vase  |U|=3  samples 1,234  CPU 0.52 h  valid 6.5%  failures: 77% unsat_constraints, 23% not_watertight"
 std::string Table3Row(const design::Design& design, const sampling::SamplingStatistics& statistics);
 

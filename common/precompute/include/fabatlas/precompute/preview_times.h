@@ -1,5 +1,5 @@
 // fabatlas/precompute/preview_times.h — measured preview times of a design
-// with and without a geometry cache (seed 001 Sec. 8 "Performance
+// with and without a geometry cache (Fab Forms Sec. 8 "Performance
 // Evaluation", Fig. 14: "actual time to compute preview across 200 design
 // points ... randomly drawn from the valid region").
 #pragma once
@@ -17,13 +17,13 @@
 namespace fabatlas::precompute {
 
 // `count` points drawn uniformly from the form's estimated valid region (the
-// all-valid k-d leaves, seed 001 Sec. 7.1) by rejection from the bounded
+// all-valid k-d leaves, Fab Forms Sec. 5.1) by rejection from the bounded
 // space with a fixed seed; discrete dimensions draw whole values. Returns
 // fewer points when 100 * count draws find fewer (a tiny valid region), and
 // none when the region is empty.
 std::vector<std::vector<double>> RandomValidPoints(const sampling::Form& form, int count, std::uint64_t seed = 1);
 
-// Seed 001 Sec. 7.3: a preview maps u to a vertex of the leaf hypercube
+// Fab Forms Sec. 7.3: a preview maps u to a vertex of the leaf hypercube
 // containing it ("snap to the closest valid vertex"), so cached subtrees hit.
 // Returns the coordinates of the closest valid corner sample of u's leaf,
 // distance measured in leaf-relative coordinates (each dimension scaled to

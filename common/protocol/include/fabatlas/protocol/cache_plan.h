@@ -1,5 +1,5 @@
 // fabatlas/protocol/cache_plan.h — the geometry cache plan as a task
-// (tasks.proto TASK_KIND_CACHE_PLAN; seed 001 Sec. 6 and 8, docs/cache.md).
+// (tasks.proto TASK_KIND_CACHE_PLAN; Fab Forms Sec. 6 and 8, docs/cache.md).
 //
 // One function computes the plan wherever it runs: a cluster worker runs it
 // on the input blob of a TASK_KIND_CACHE_PLAN lease, and `fabatlas sample`

@@ -1,6 +1,6 @@
 // fabatlas/protocol/channel.h — transport security shared by the coordinator,
 // workers and the CLI: TLS credentials from PEM files, bearer tokens,
-// deadlines and keepalive (DESIGN.md "Cluster and reliability").
+// deadlines and keepalive (docs/protocol.md).
 #pragma once
 
 #include <grpcpp/grpcpp.h>

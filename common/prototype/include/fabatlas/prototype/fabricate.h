@@ -1,5 +1,5 @@
 // fabatlas/prototype/fabricate.h — printable geometry of a solved works-like
-// prototype (seed 003 Sec. 7): cavities by swept volume, procedural joint
+// prototype (Koo et al. Sec. 7): cavities by swept volume, procedural joint
 // geometry (hinge pin and yokes, sliding-hinge pin and slots, double-pivot
 // pins, link and caps) and print gaps, in the base configuration, as one
 // level-set solid for printing in assembled form.

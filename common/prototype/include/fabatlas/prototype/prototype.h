@@ -1,9 +1,9 @@
-// fabatlas/prototype/prototype.h — works-like prototypes (seed 003): cuboid
+// fabatlas/prototype/prototype.h — works-like prototypes (Koo et al., docs/references.md): cuboid
 // parts, joints, configurations and functional relationships, read from YAML
 // (docs/prototype.md).
 //
 // Coordinates are millimetres, z up, angles degrees. A cuboid is stored as its
-// base-configuration box [x0, x1, y0, y1, z0, z1] (seed 003 Sec. 6: "left,
+// base-configuration box [x0, x1, y0, y1, z0, z1] (Koo et al. Sec. 6: "left,
 // right, bottom, top, near and far coordinates"). Numbers in a file may be
 // expressions over the file's `parameters`, which callers can override.
 #pragma once
@@ -33,7 +33,7 @@ struct Part {
 
 enum class JointType { kHinge, kSlide, kSlidingHinge, kDoublePivot };
 
-// A joint moves `child` relative to `parent` (seed 003 Sec. 3, Fig. 2).
+// A joint moves `child` relative to `parent` (Koo et al. Sec. 3, Fig. 2).
 struct Joint {
   std::string name;
   JointType type = JointType::kHinge;
@@ -53,7 +53,7 @@ struct Joint {
   std::string where;
 };
 
-// A joint's pose in one configuration (seed 003: j(θ)).
+// A joint's pose in one configuration (Koo et al.: j(θ)).
 struct JointValue {
   double angle = 0;          // degrees (hinge, sliding hinge, double pivot)
   std::string slide = "0";   // mm, an expression over coordinates; "free" = solved for

@@ -1,5 +1,5 @@
 // fabatlas/prototype/solve.h — part and joint parameters of a works-like
-// prototype (seed 003 Sec. 4-6): functional relationships become linear
+// prototype (Koo et al. Sec. 4-6): functional relationships become linear
 // constraints on the cuboid coordinates B, solved as least-squares deviation
 // from the base configuration (Eq. 4); then, with B fixed, the double pivot
 // offsets L under the quadratic position and the motion constraints (Sec. 5.6).

@@ -1,5 +1,5 @@
 // fabatlas/sampling/adaptive_sampler.h — adaptive sampling of a design space
-// (seed 001, Sec. 5.2; DESIGN.md pipeline steps 3-4).
+// (Fab Forms, Sec. 5.2; docs/sampling.md).
 //
 // 1. Bootstrap: evaluate every vertex of the uniform grid (DesignSpace).
 // 2. Rounds, breadth-first: the frontier is every leaf at the current depth.
@@ -41,7 +41,7 @@ struct SamplingOptions {
   std::int64_t max_samples = 100000;  // global budget (bootstrap always done)
 };
 
-// Seed 001 Table 3 statistics plus sampler bookkeeping.
+// Fab Forms Table 3 statistics plus sampler bookkeeping.
 struct SamplingStatistics {
   std::int64_t samples = 0;
   std::int64_t valid_samples = 0;
@@ -58,7 +58,7 @@ struct SamplingStatistics {
   double wall_seconds = 0.0;
   double sampling_logic_seconds = 0.0;
   // Volume of all-valid leaves / volume of the bounded space, in percent
-  // (seed 001 Sec. 8 "Valid Region Analysis"); discrete dimensions measured
+  // (Fab Forms Sec. 8 "Valid Region Analysis"); discrete dimensions measured
   // in value steps (DesignSpace::length).
   double valid_volume_percent = 0.0;
   // Failure type -> share of invalid samples (sums to 1 if any invalid).

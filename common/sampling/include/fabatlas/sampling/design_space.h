@@ -1,5 +1,5 @@
 // fabatlas/sampling/design_space.h — the exposed-parameter space U of a design
-// and its bootstrap grid (seed 001, Sec. 5: "We bootstrap adaptive sampling by
+// and its bootstrap grid (Fab Forms, Sec. 5: "We bootstrap adaptive sampling by
 // uniformly sampling U inside the region bounded by the rough ranges").
 //
 // A point of U is identified by an exact integer PointKey, one integer per
@@ -44,7 +44,7 @@ class DesignSpace {
   // dimension list, more than 6 dimensions, hi <= lo, non-integer bounds of an
   // integer dimension, fewer than two enumerated values, duplicate names, or
   // subdivisions < 1.
-  // `subdivisions`: bootstrap cells per dimension (seed 001 suggests 5-7);
+  // `subdivisions`: bootstrap cells per dimension (Fab Forms suggests 5-7);
   // an integer/enumerated dimension gets min(subdivisions, values - 1) cells.
   explicit DesignSpace(std::vector<Dimension> dimensions, int subdivisions = 5);
 

@@ -2,7 +2,7 @@
 //
 // The sampler expresses all evaluator work as batches of plain-data tasks
 // (no pointers into sampler state), so a cluster executor can ship them to
-// remote workers (DESIGN.md "Cluster") without touching the sampling logic.
+// remote workers (docs/protocol.md) without touching the sampling logic.
 // An executor returns one result per task, in task order; the order in which
 // it completes the tasks must not matter (the sampler only reads results by
 // index once the whole batch is back).

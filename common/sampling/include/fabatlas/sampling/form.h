@@ -1,10 +1,10 @@
 // fabatlas/sampling/form.h — the sampled form: k-d trees over the bootstrap
-// cells, every sample, every ΔG value (seed 001, Sec. 5.1).
+// cells, every sample, every ΔG value (Fab Forms, Sec. 5.1).
 //
 // One k-d tree per bootstrap cell. Every node is an axis-aligned box in key
 // space (design_space.h); every leaf is a hypercube with a sample at each of
 // its 2^n corners. The valid region is the union of leaves whose corners are
-// all valid (seed 001, Sec. 7.1; faces/edges are ignored here, they have zero
+// all valid (Fab Forms, Sec. 5.1; faces/edges are ignored here, they have zero
 // volume).
 #pragma once
 
@@ -81,7 +81,7 @@ struct LeafRef {
 std::optional<LeafRef> LocateLeaf(const Form& form, const std::vector<double>& u);
 // Same, with the form's space passed in (saves rebuilding it per query).
 std::optional<LeafRef> LocateLeaf(const Form& form, const DesignSpace& space, const std::vector<double>& u);
-// u lies in an all-valid leaf (the estimated valid region, seed 001 Sec. 7.1).
+// u lies in an all-valid leaf (the estimated valid region, Fab Forms Sec. 5.1).
 bool InEstimatedValidRegion(const Form& form, const std::vector<double>& u);
 bool InEstimatedValidRegion(const Form& form, const DesignSpace& space, const std::vector<double>& u);
 

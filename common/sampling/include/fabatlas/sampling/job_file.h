@@ -23,7 +23,7 @@
 
 namespace fabatlas::sampling {
 
-// A fabrication material for the viewer's cost and weight readout (seed 001
+// A fabrication material for the viewer's cost and weight readout (Fab Forms
 // Sec. 7.2: "live updates on the model cost and weight in different
 // materials"): weight = volume * density, cost = weight * price_per_kg.
 struct Material {
@@ -40,7 +40,7 @@ struct JobFile {
   int threads = 1;
   // cache.min_subtree_seconds: cluster workers upload the geometry of every
   // subtree whose root took at least this long to compute (wall seconds) as
-  // a blob for the geometry cache artifact (seed 001 Sec. 6).
+  // a blob for the geometry cache artifact (Fab Forms Sec. 6).
   double cache_min_subtree_seconds = 0.1;
   std::vector<Material> materials;  // in file order; names unique
   // Reserved sections ("cluster", "cache") as YAML text, for later readers.

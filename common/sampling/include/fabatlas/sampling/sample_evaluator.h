@@ -1,10 +1,10 @@
 // fabatlas/sampling/sample_evaluator.h — what the sampler asks of a design.
 //
 // The sampler never sees geometry: it asks an evaluator for the outcome of
-// EvaluateSample(u) (seed 001, Alg. 2) and for ΔG between two *valid* samples
-// (seed 001, Eq. 2). The conventions for invalid samples (zero volume, so
-// ΔG(invalid, invalid) = 0 and ΔG(valid, invalid) = 1; DESIGN.md pipeline
-// step 4) are applied by the sampler, so GeometryChange is only called for
+// EvaluateSample(u) (Fab Forms, Alg. 2) and for ΔG between two *valid* samples
+// (Fab Forms, Eq. 2). The conventions for invalid samples (zero volume, so
+// ΔG(invalid, invalid) = 0 and ΔG(valid, invalid) = 1; Fab Forms
+// Sec. 5.2) are applied by the sampler, so GeometryChange is only called for
 // valid/valid pairs.
 #pragma once
 
@@ -40,10 +40,10 @@ struct SampleOutcome {
 class SampleEvaluator {
  public:
   virtual ~SampleEvaluator() = default;
-  // EvaluateSample(u), seed 001 Alg. 2.
+  // EvaluateSample(u), Fab Forms Alg. 2.
   virtual SampleOutcome EvaluateSample(const SamplePoint& point) = 0;
   // ΔG(a, b) = |V(Ga) xor V(Gb)| / |V(Ga) u V(Gb)| in [0, 1] for two samples
-  // the evaluator previously reported valid (seed 001, Eq. 2). Symmetric.
+  // the evaluator previously reported valid (Fab Forms, Eq. 2). Symmetric.
   virtual double GeometryChange(const SamplePoint& a, const SamplePoint& b) = 0;
 };
 

@@ -1,5 +1,5 @@
 // fabatlas/sampling/validity_map.h — a 2-D slice of the sampled form as a PNG
-// (seed 001 Fig. 10 style): the plane spanned by two dimensions, the others
+// (Fab Forms Fig. 10 style): the plane spanned by two dimensions, the others
 // fixed.
 //
 // Picture: each pixel takes the colour of the leaf that contains it — green

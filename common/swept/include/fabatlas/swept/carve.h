@@ -1,5 +1,5 @@
 // fabatlas/swept/carve.h — carving the swept volume of a moving part out of
-// another part (seed 004, section 6.7, Eq. 4):
+// another part (Reconfigurables, section 6.7, Eq. 4):
 //
 //   A <- A \ offset(sweep(B, f_A^-1 o f_B), eps)
 //
@@ -23,7 +23,7 @@ namespace fabatlas::swept {
 // closed result (e.g. self-intersecting input).
 mesh::TriangleMesh Subtract(const mesh::TriangleMesh& a, const mesh::TriangleMesh& b);
 
-// Seed 004, Eq. 4: carve from A (moving by motion_a) the eps-offset
+// Reconfigurables, Eq. 4: carve from A (moving by motion_a) the eps-offset
 // (options.offset) swept volume of B (moving by motion_b) observed in A's
 // frame. Returns A's new mesh in A's body coordinates.
 mesh::TriangleMesh CarveSweptVolume(const mesh::TriangleMesh& a, const RigidMotion& motion_a,

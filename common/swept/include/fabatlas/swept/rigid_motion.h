@@ -1,6 +1,6 @@
 // fabatlas/swept/rigid_motion.h — keyframed rigid motions of reconfigurables.
 //
-// Seed 004 (section 3) animates each object of a reconfigurable by a rigid
+// Reconfigurables (section 3) animates each object of a reconfigurable by a rigid
 // motion f(t), t in [0,1], along a transition between two states. Here a
 // motion is a cubic Bezier curve for the translation and a chain of unit
 // quaternion keyframes, interpolated by slerp, for the rotation:
@@ -60,7 +60,7 @@ struct RigidMotion {
   static RigidMotion Turn(const Vec3& axis, double total_deg, const Vec3& pivot);
 };
 
-// Relative motion of B observed in A's frame (seed 004, Eq. 4: f_A^-1 o f_B).
+// Relative motion of B observed in A's frame (Reconfigurables, Eq. 4: f_A^-1 o f_B).
 // The result is evaluated pointwise; it is not a RigidMotion (a relative
 // motion is not in general a Bezier/slerp pair), hence a sampled list of
 // transforms at t_i = i/(steps-1).

@@ -1,5 +1,5 @@
 // fabatlas/swept/spacetime_clearance.h — minimum clearance between moving
-// parts over a transition (seed 004, section 5: the property that tells a
+// parts over a transition (Reconfigurables, section 5: the property that tells a
 // designer how close a collision-free transition comes to colliding).
 //
 // clearance = min over samples t_i = i/(n-1) and pairs (a, b) of the distance

@@ -1,5 +1,5 @@
 // fabatlas/swept/spacetime_collision.h — collision intervals between moving
-// parts (seed 004, section 5): first *when* (time spans), then *where*
+// parts (Reconfigurables, section 5): first *when* (time spans), then *where*
 // (spatial box and pair of parts).
 //
 // Time is discretised at t_i = i/(n-1). Each part contributes one spacetime

@@ -1,8 +1,8 @@
 // fabatlas/swept/swept_volume.h — signed distance to a swept volume on a
-// sparse grid, and its epsilon-offset surface (seed 004, section 6.7).
+// sparse grid, and its epsilon-offset surface (Reconfigurables, section 6.7).
 //
 // The swept volume of a body B under a rigid motion f is S = U_t f(t)B and
-//   d(S, p) = min_t d(f(t)B, p)                       (seed 004, Eq. 5)
+//   d(S, p) = min_t d(f(t)B, p)                       (Reconfigurables, Eq. 5)
 // evaluated at discrete times t_i. Unlike the dense method of the seed (every
 // grid vertex, every time step, one closest-point query), we build B's narrow
 // band level set once (OpenVDB meshToLevelSet) and, at each step, touch only
@@ -126,7 +126,7 @@ std::vector<Transform> SampleMotion(const mesh::TriangleMesh& body, const RigidM
 std::vector<Transform> SamplePoses(const mesh::TriangleMesh& body, const std::function<Transform(double)>& pose,
                                    const SweptVolumeOptions& options);
 
-// Epsilon-offset surface of the swept volume (seed 004: offset(sweep(B, f), eps))
+// Epsilon-offset surface of the swept volume (Reconfigurables: offset(sweep(B, f), eps))
 // as a closed triangle mesh.
 mesh::TriangleMesh SweptOffsetSurface(const mesh::TriangleMesh& body, const RigidMotion& motion,
                                       const SweptVolumeOptions& options = {});
