@@ -13,6 +13,7 @@ find_package(embree 3 REQUIRED)
 find_package(yaml-cpp REQUIRED)
 find_package(nlohmann_json REQUIRED)
 find_package(CLI11 CONFIG REQUIRED)
+find_package(spdlog CONFIG REQUIRED)
 find_package(PNG REQUIRED)
 find_package(OpenSSL REQUIRED)
 # The cluster (issue 4): gRPC + protobuf, SQLite for the durable job store.

@@ -1,0 +1,30 @@
+// fabatlas/log/log_flags.h — the --log-level and --log-format options every
+// long-running fabatlas binary takes (CLI11), applied to log::Configure.
+//   log::LogFlags flags;
+//   flags.Add(app);            // before parsing
+//   flags.Apply();             // after parsing; throws InputError for bad values
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+#include <string>
+
+#include "fabatlas/log/log.h"
+
+namespace fabatlas::log {
+
+struct LogFlags {
+  std::string level = "info";
+  std::string format = "text";
+
+  void Add(CLI::App& app) {
+    app.add_option("--log-level", level, "lowest level written to stderr: debug, info, warn, error, off")
+        ->capture_default_str();
+    app.add_option("--log-format", format,
+                   "text (one readable line per event) or json (one JSON object per line, for log pipelines)")
+        ->capture_default_str();
+  }
+  void Apply() const { Configure({ParseLevel(level), ParseFormat(format)}); }
+};
+
+}  // namespace fabatlas::log
