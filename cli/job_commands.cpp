@@ -18,6 +18,7 @@
 #include "fabatlas/coordinator/coordinator.h"
 #include "fabatlas/coordinator/job_client.h"
 #include "fabatlas/error.h"
+#include "fabatlas/log/log.h"
 #include "fabatlas/precompute/form_outputs.h"
 
 namespace fabatlas::cli {
@@ -92,7 +93,7 @@ pid_t SpawnWorker(const fs::path& binary, const std::string& target, int slots, 
   if (pid == 0) {
     ::prctl(PR_SET_PDEATHSIG, SIGTERM);
     ::execl(binary_text.c_str(), binary_text.c_str(), "--coordinator", target.c_str(), "--slots",
-            slots_text.c_str(), "--cache-dir", cache_text.c_str(), static_cast<char*>(nullptr));
+            slots_text.c_str(), "--cache-dir", cache_text.c_str(), "--log-level", "warn", static_cast<char*>(nullptr));
     ::_exit(127);
   }
   return pid;
@@ -104,6 +105,9 @@ int Run(const ClusterArgs& a) {
   fs::path worker_binary = self.parent_path() / "fabatlas-worker";
   if (!fs::exists(worker_binary)) throw InputError(worker_binary.string() + ": fabatlas-worker not found beside fabatlas");
   fs::path out = a.out;
+  // The progress line is the report here; the embedded coordinator and the
+  // workers log only warnings and errors (lease expiries, a full disk).
+  log::Configure({log::Level::kWarn, log::Format::kText});
   coordinator::CoordinatorOptions options;
   options.listen = "127.0.0.1:0";
   options.state_dir = out / "cluster-state";

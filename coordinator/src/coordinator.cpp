@@ -8,6 +8,7 @@
 #include <httplib.h>
 
 #include <algorithm>
+#include <cctype>
 #include <atomic>
 #include <condition_variable>
 #include <cstdio>
@@ -24,6 +25,7 @@
 #include "fabatlas/coordinator/publish.h"
 #include "fabatlas/design/design.h"
 #include "fabatlas/error.h"
+#include "fabatlas/log/log.h"
 #include "fabatlas/mesh/write_mesh.h"
 #include "fabatlas/precompute/design_evaluator.h"
 #include "fabatlas/precompute/form_outputs.h"
@@ -62,6 +64,14 @@ std::string QuarantineBytes(int kind) {
 
 struct Stopping {};
 struct JobCancelled {};
+
+// "sample", "geometry_change", ... for log lines and metric labels.
+std::string KindName(int kind) {
+  std::string name = v1::TaskKind_Name(static_cast<v1::TaskKind>(kind));
+  if (name.rfind("TASK_KIND_", 0) == 0) name = name.substr(10);
+  for (char& c : name) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return name.empty() ? std::to_string(kind) : name;
+}
 
 bool Terminal(storage::JobState s) {
   return s == storage::JobState::kSucceeded || s == storage::JobState::kFailed ||
@@ -168,6 +178,7 @@ struct Coordinator::Impl {
         if (it == workers_seen.end()) return;
         slots = it->second.slots;
       }
+      if (it == workers_seen.end()) log::Info("worker_joined", {{"worker", id}, {"slots", slots}});
       workers_seen[id] = {slots, now};
     }
     store->TouchWorker(id, slots, now);
@@ -224,6 +235,8 @@ struct Coordinator::Impl {
       unregister();
       throw;
     }
+    log::Info("round_started", {{"job", job_id}, {"kind", kinds.empty() ? "" : KindName(kinds[0])},
+                                {"tasks", tasks.size()}, {"stored", finished.size()}});
     std::vector<Delivery> stored;
     for (const auto& [key, result] : finished) stored.push_back({&key, &result});
     Deliver(stored);
@@ -476,6 +489,7 @@ struct Coordinator::Impl {
       precompute::DesignSampleEvaluator unused_local(design);
       RemoteExecutor executor(*this, job_id, protocol::EvaluationDigest(bundle), job_file.subdivisions);
       Event(job_id, "driver_started", "sampling driver started (replaying stored results)");
+      log::Info("job_started", {{"job", job_id}, {"design", design.name}});
       sampling::SamplingSummary summary =
           sampling::SampleDesignSpace(space, unused_local, executor, job_file.sampling);
       fs::path out = dir / "out";
@@ -507,10 +521,13 @@ struct Coordinator::Impl {
       }
       store->SetJobState(job_id, storage::JobState::kSucceeded, "", NowMs());
       Event(job_id, "succeeded", precompute::Table3Row(design, summary.statistics));
+      log::Info("job_succeeded", {{"job", job_id}, {"design", design.name}, {"samples", summary.statistics.samples},
+                                  {"valid_samples", summary.statistics.valid_samples}});
     } catch (const Stopping&) {
     } catch (const JobCancelled&) {
     } catch (const std::exception& e) {
       if (!stopping) {
+        log::Error("job_failed", {{"job", job_id}, {"error", e.what()}});
         store->SetJobState(job_id, storage::JobState::kFailed, e.what(), NowMs());
         Event(job_id, "failed", e.what());
       }
@@ -597,7 +614,10 @@ struct Coordinator::Impl {
         }
         auto expired = store->ExpireLeases(now, options.retry_backoff_ms, options.quarantine_after, QuarantineBytes);
         for (const auto& e : expired) {
+          log::Warn("lease_expired", {{"task", e.task_key}, {"job", e.job_id}, {"worker", e.worker_id},
+                                      {"attempt", e.attempt}, {"expiries", e.expiries}});
           if (!e.quarantined) continue;
+          log::Error("task_quarantined", {{"task", e.task_key}, {"job", e.job_id}, {"expiries", e.expiries}});
           if (auto task = store->FindTask(e.task_key)) Deliver(e.task_key, task->result);
         }
         if (!expired.empty()) last_retry_ms = now;
@@ -606,6 +626,7 @@ struct Coordinator::Impl {
           std::lock_guard lock(workers_mu);
           for (auto it = workers_seen.begin(); it != workers_seen.end();)
             if (it->second.last_ms < now - options.lease_ms) {
+              log::Warn("worker_lost", {{"worker", it->first}, {"silent_ms", now - it->second.last_ms}});
               silent.push_back(it->first);
               it = workers_seen.erase(it);
             } else {
@@ -660,6 +681,7 @@ class JobServiceImpl final : public v1::JobService::Service {
         }
       }
       impl_.Event(id, created ? "submitted" : "resubmitted", "design " + design.name);
+      log::Info("job_submitted", {{"job", id}, {"design", design.name}, {"created", created}});
       auto job = impl_.store->FindJob(id);
       if (job && job->state == storage::JobState::kRunning) impl_.StartDriver(id);
       resp->set_job_id(id);
@@ -712,6 +734,7 @@ class JobServiceImpl final : public v1::JobService::Service {
       }
       impl_.results_cv.notify_all();
       impl_.Event(job->id, "cancelled", "cancelled by an operator");
+      log::Info("job_cancelled", {{"job", job->id}});
     }
     *resp = impl_.StatusOf(*impl_.store->FindJob(job->id));
     return Status::OK;
@@ -788,6 +811,7 @@ class WorkerServiceImpl final : public v1::WorkerService::Service {
         }
         impl_.store->TouchWorker(req->worker_id(), 0, now);
         if (impl_.store->ForgetAffinity(req->worker_id()) > 0) impl_.SignalWork();
+        log::Info("worker_left", {{"worker", req->worker_id()}});
       } else {
         impl_.WorkerAlive(req->worker_id(), req->free_slots() + req->in_flight_lease_ids_size(), now);
       }
@@ -800,6 +824,9 @@ class WorkerServiceImpl final : public v1::WorkerService::Service {
         done.attempt = c.attempt();
         done.failed = !c.error().empty();
         done.error = c.error();
+        if (done.failed)
+          log::Warn("task_failed", {{"task", c.task_key()}, {"worker", req->worker_id()}, {"attempt", c.attempt()},
+                                    {"reason", c.error()}});
         done.result = c.result().SerializeAsString();
         done.sample_valid = c.result().has_sample() ? (c.result().sample().valid() ? 1 : 0) : -1;
         if (c.result().has_sample()) SubtreesOf(c, &done);
@@ -820,6 +847,7 @@ class WorkerServiceImpl final : public v1::WorkerService::Service {
           case storage::CompletionOutcome::kDuplicate: ++impl_.duplicate_total; break;
           case storage::CompletionOutcome::kRequeued: requeued = true; break;
           case storage::CompletionOutcome::kQuarantined:
+            log::Error("task_quarantined", {{"task", completions[i].task_key}, {"reason", completions[i].error}});
             if (auto task = impl_.store->FindTask(completions[i].task_key))
               impl_.Deliver(completions[i].task_key, task->result);
             break;
@@ -1048,8 +1076,15 @@ void Coordinator::Start() {
     if (!m.metrics->bind_to_port(host, port)) throw InputError("coordinator: cannot listen on " + o.metrics_listen);
     m.metrics_thread = std::thread([&m] { m.metrics->listen_after_bind(); });
   }
+  std::int64_t resumed = 0, in_grace = m.store->ActiveLeases();
   for (const auto& job : m.store->Jobs())
-    if (job.state == storage::JobState::kRunning) m.StartDriver(job.id);
+    if (job.state == storage::JobState::kRunning) {
+      m.StartDriver(job.id);
+      ++resumed;
+    }
+  log::Info("coordinator_started", {{"listen", o.listen}, {"port", m.port}, {"state_dir", o.state_dir.string()},
+                                    {"jobs_resumed", resumed}, {"leases_in_grace", in_grace},
+                                    {"tls", static_cast<bool>(!o.tls_cert.empty())}});
 }
 
 int Coordinator::port() const { return impl_->port; }
@@ -1060,9 +1095,14 @@ void Coordinator::Drain(std::int64_t timeout_ms) {
   m.draining = true;
   m.server->GetHealthCheckService()->SetServingStatus(false);
   m.SignalWork();
-  auto until = std::chrono::steady_clock::now() + std::chrono::milliseconds(timeout_ms);
+  log::Info("drain_started", {{"active_leases", m.store->ActiveLeases()}, {"timeout_ms", timeout_ms}});
+  auto started = std::chrono::steady_clock::now();
+  auto until = started + std::chrono::milliseconds(timeout_ms);
   while (std::chrono::steady_clock::now() < until && m.store->ActiveLeases() > 0)
     std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  log::Info("drain_finished", {{"active_leases", m.store->ActiveLeases()},
+                               {"waited_ms", std::chrono::duration_cast<std::chrono::milliseconds>(
+                                                 std::chrono::steady_clock::now() - started).count()}});
 }
 
 void Coordinator::Shutdown() {
@@ -1085,6 +1125,7 @@ void Coordinator::Shutdown() {
     drivers.swap(m.drivers);
   }
   for (auto& t : drivers) t.join();
+  if (m.started) log::Info("coordinator_stopped", {{"port", m.port}});
   m.shutdown_cv.notify_all();
 }
 

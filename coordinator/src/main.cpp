@@ -12,13 +12,21 @@
 
 #include "fabatlas/coordinator/coordinator.h"
 #include "fabatlas/error.h"
+#include "fabatlas/log/log_flags.h"
 #include "fabatlas/protocol/channel.h"
+#include "fabatlas/protocol/tasks.h"
+#include "fabatlas/storage/artifact.h"
+#include "fabatlas/version.h"
 
 int main(int argc, char** argv) {
   CLI::App app{"fabatlas coordinator: jobs, leases and blobs over gRPC"};
   fabatlas::coordinator::CoordinatorOptions o;
   std::string token_file, port_file;
   double drain_seconds = 30;
+  fabatlas::log::LogFlags log_flags;
+  app.set_version_flag("--version", std::string("fabatlas-coordinator ") + fabatlas::kVersion + " (task code " +
+                                        fabatlas::protocol::kCodeVersion + ", protocol fabatlas.v1, artifact schema " +
+                                        std::to_string(fabatlas::storage::kArtifactSchemaVersion) + ")");
   app.add_option("--listen", o.listen, "gRPC address HOST:PORT (port 0: pick one)");
   app.add_option("--state-dir", o.state_dir, "durable state directory")->required();
   app.add_option("--token", o.token, "bearer token required on every call");
@@ -40,6 +48,7 @@ int main(int argc, char** argv) {
                "lease tasks oldest first to whoever asks, ignoring which worker holds their inputs");
   app.add_flag("--fsync-commits", o.fsync_commits,
                "fsync the store on every commit, so acknowledged results also survive a power loss");
+  log_flags.Add(app);
   CLI11_PARSE(app, argc, argv);
   o.lease_affinity = !no_affinity;
   sigset_t signals;
@@ -48,10 +57,10 @@ int main(int argc, char** argv) {
   sigaddset(&signals, SIGINT);
   pthread_sigmask(SIG_BLOCK, &signals, nullptr);  // every thread inherits the mask
   try {
+    log_flags.Apply();
     if (!token_file.empty()) o.token = fabatlas::protocol::ReadTokenFile(token_file);
     fabatlas::coordinator::Coordinator coordinator(o);
     coordinator.Start();
-    std::cerr << "fabatlas-coordinator listening on port " << coordinator.port() << "\n";
     if (!port_file.empty()) {
       std::string tmp = port_file + ".tmp";
       std::ofstream(tmp) << coordinator.port() << "\n";
@@ -59,12 +68,17 @@ int main(int argc, char** argv) {
     }
     int sig = 0;
     sigwait(&signals, &sig);
-    std::cerr << "fabatlas-coordinator: draining\n";
+    fabatlas::log::Info("signal_received", {{"signal", sig == SIGTERM ? "SIGTERM" : "SIGINT"},
+                                            {"drain_seconds", drain_seconds}});
     coordinator.Drain(static_cast<std::int64_t>(drain_seconds * 1000));
     coordinator.Shutdown();
     return 0;
   } catch (const fabatlas::InputError& e) {
-    std::cerr << "fabatlas-coordinator: " << e.what() << "\n";
+    // One line: a JSON log line under --log-format json, else plain text.
+    if (log_flags.format == "json")
+      fabatlas::log::Error("coordinator_exit", {{"error", e.what()}, {"status", fabatlas::kExitBadInput}});
+    else
+      std::cerr << "fabatlas-coordinator: " << e.what() << "\n";
     return fabatlas::kExitBadInput;
   }
 }

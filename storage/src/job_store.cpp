@@ -719,7 +719,7 @@ std::vector<ExpiredLease> JobStore::ExpireLeases(
   std::vector<std::int64_t> kinds, expiries;
   {
     Stmt s(*db_,
-           "SELECT l.lease_id, l.task_key, t.job_id, l.worker_id, t.kind, t.expiries FROM leases l "
+           "SELECT l.lease_id, l.task_key, t.job_id, l.worker_id, t.kind, t.expiries, l.attempt FROM leases l "
            "JOIN tasks t ON t.key = l.task_key WHERE l.state = 'active' AND l.deadline_ms < ?");
     s.Bind(1, now_ms);
     while (s.Step()) {
@@ -730,6 +730,8 @@ std::vector<ExpiredLease> JobStore::ExpireLeases(
       e.worker_id = s.Text(3);
       kinds.push_back(s.Int(4));
       expiries.push_back(s.Int(5) + 1);
+      e.expiries = expiries.back();
+      e.attempt = s.Int(6);
       expired.push_back(std::move(e));
     }
   }

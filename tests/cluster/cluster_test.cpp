@@ -144,7 +144,7 @@ void StopAndCheckStore(const CoordinatorProcess& c, const fs::path& state, const
   }
 }
 
-// The last line a worker wrote (its summary on exit).
+// The last line a worker wrote (its worker_exit log line).
 std::string WorkerSummary(const fs::path& worker_dir) {
   std::istringstream in(ReadText(worker_dir / "worker.log"));
   std::string line, last;
@@ -179,7 +179,7 @@ std::string RunJobOnWorkers(const std::string& name, int workers, int slots, std
   // worker uploaded, never by evaluating a sample again.
   for (int i = 0; i < workers; ++i) {
     std::string summary = WorkerSummary(dir / ("w" + std::to_string(i)));
-    EXPECT_NE(summary.find("re-evaluated 0 samples"), std::string::npos) << summary;
+    EXPECT_NE(summary.find(" samples_reevaluated=0"), std::string::npos) << summary;
   }
   StopAndCheckStore(c, dir / "state", id);
   {
@@ -216,10 +216,10 @@ fs::path RunDir(const std::string& name) {
   return fs::temp_directory_path() / ("fabatlas_cluster_" + name + "_" + std::to_string(::getpid()));
 }
 
-// Solids a worker downloaded for ΔG ("downloaded N solids" in its summary).
+// Solids a worker downloaded for ΔG (solids_downloaded=N in its exit line).
 int SolidsDownloaded(const fs::path& worker_dir) {
   std::string summary = WorkerSummary(worker_dir);
-  auto at = summary.find(" blobs, downloaded ");
+  auto at = summary.find(" solids_downloaded=");
   return at == std::string::npos ? -1 : std::atoi(summary.c_str() + at + 19);
 }
 
@@ -682,7 +682,7 @@ TEST(ClusterCli, CancelStopsTheJobOverGrpc) {
   std::this_thread::sleep_for(std::chrono::seconds(2));
   ::kill(worker, SIGTERM);
   EXPECT_EQ(WaitExit(worker, std::chrono::seconds(30)), 0);
-  EXPECT_NE(WorkerSummary(dir / "w0").find("ran 0 tasks"), std::string::npos) << WorkerSummary(dir / "w0");
+  EXPECT_NE(WorkerSummary(dir / "w0").find(" tasks_run=0 "), std::string::npos) << WorkerSummary(dir / "w0");
   v1::JobStatus after = Client(c.port).Status(id);
   EXPECT_EQ(after.state(), v1::JOB_STATE_CANCELLED);
   EXPECT_EQ(after.tasks_done(), 0);

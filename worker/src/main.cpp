@@ -12,7 +12,10 @@
 #include <thread>
 
 #include "fabatlas/error.h"
+#include "fabatlas/log/log_flags.h"
 #include "fabatlas/protocol/channel.h"
+#include "fabatlas/protocol/tasks.h"
+#include "fabatlas/version.h"
 #include "fabatlas/worker/worker.h"
 
 int main(int argc, char** argv) {
@@ -20,6 +23,9 @@ int main(int argc, char** argv) {
   fabatlas::worker::WorkerOptions o;
   std::string token_file;
   double connect_timeout = 30;
+  fabatlas::log::LogFlags log_flags;
+  app.set_version_flag("--version", std::string("fabatlas-worker ") + fabatlas::kVersion + " (task code " +
+                                        fabatlas::protocol::kCodeVersion + ", protocol fabatlas.v1)");
   app.add_option("--coordinator", o.coordinator, "coordinator HOST:PORT")->required();
   app.add_option("--slots", o.slots, "tasks run at once (default 1)");
   app.add_option("--threads", o.threads,
@@ -32,6 +38,7 @@ int main(int argc, char** argv) {
   app.add_option("--cache-dir", o.cache_dir, "where job bundles are unpacked");
   app.add_option("--id", o.worker_id, "worker id (default host-pid-time)");
   app.add_option("--connect-timeout", connect_timeout, "seconds to wait for the first answer");
+  log_flags.Add(app);
   CLI11_PARSE(app, argc, argv);
   o.connect_timeout_ms = static_cast<std::int64_t>(connect_timeout * 1000);
 
@@ -47,14 +54,21 @@ int main(int argc, char** argv) {
     stop = true;
   }).detach();
   try {
+    log_flags.Apply();
     if (!token_file.empty()) o.security.token = fabatlas::protocol::ReadTokenFile(token_file);
     auto summary = fabatlas::worker::RunWorker(o, stop);
-    std::cerr << "fabatlas-worker: ran " << summary.tasks_run << " tasks, uploaded " << summary.blobs_uploaded
-              << " blobs, downloaded " << summary.solids_downloaded << " solids, re-evaluated "
-              << summary.samples_reevaluated << " samples\n";
+    fabatlas::log::Info("worker_exit", {{"tasks_run", summary.tasks_run},
+                                        {"results_acknowledged", summary.results_acknowledged},
+                                        {"blobs_uploaded", summary.blobs_uploaded},
+                                        {"solids_downloaded", summary.solids_downloaded},
+                                        {"samples_reevaluated", summary.samples_reevaluated}});
     return 0;
   } catch (const fabatlas::InputError& e) {
-    std::cerr << "fabatlas-worker: " << e.what() << "\n";
+    // One line: a JSON log line under --log-format json, else plain text.
+    if (log_flags.format == "json")
+      fabatlas::log::Error("worker_exit", {{"error", e.what()}, {"status", fabatlas::kExitBadInput}});
+    else
+      std::cerr << "fabatlas-worker: " << e.what() << "\n";
     return fabatlas::kExitBadInput;
   }
 }

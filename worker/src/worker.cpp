@@ -22,6 +22,7 @@
 #include "fabatlas/design/evaluate_sample.h"
 #include "fabatlas/error.h"
 #include "fabatlas/geometry/solid.h"
+#include "fabatlas/log/log.h"
 #include "fabatlas/precompute/design_evaluator.h"
 #include "fabatlas/protocol/blob_transfer.h"
 #include "fabatlas/protocol/cache_plan.h"
@@ -92,6 +93,7 @@ class Worker {
     if (o_.slots > 1)
       for (int i = 0; i < o_.slots; ++i) slots_.emplace_back([this] { SlotLoop(); });
     heartbeat_ = std::thread([this] { HeartbeatLoop(); });
+    stop_watch_ = std::thread([this] { WatchStop(); });
     try {
       SyncLoop();
     } catch (...) {
@@ -116,7 +118,45 @@ class Worker {
     exit_cv_.notify_all();
     for (auto& t : slots_) t.join();
     if (heartbeat_.joinable()) heartbeat_.join();
+    if (stop_watch_.joinable()) stop_watch_.join();
   }
+
+  // Waits for `stop` (or the end), then cancels the calls under way: a long
+  // poll or heartbeat to a coordinator that has gone (no answer, no reset)
+  // would otherwise hold the worker for its whole deadline. Leases a
+  // cancelled long poll was granted are returned by the next Sync (the
+  // coordinator returns leases a worker does not list as in flight).
+  void WatchStop() {
+    std::unique_lock lock(mu_);
+    while (!stop_ && !exiting_) exit_cv_.wait_for(lock, std::chrono::milliseconds(50));
+    if (!stop_) return;
+    log::Info("worker_stopping", {{"worker", o_.worker_id}, {"running", running_}, {"queued", queue_.size()}});
+    for (grpc::ClientContext* call : calls_) call->TryCancel();
+    lock.unlock();
+    done_cv_.notify_all();
+    queue_cv_.notify_all();
+  }
+
+  // A call to the coordinator, cancelled when the worker stops (WatchStop);
+  // a call started while stopping gets a short deadline instead.
+  class Call {
+   public:
+    Call(Worker& w, std::chrono::milliseconds timeout) : w_(w) {
+      std::lock_guard lock(w_.mu_);
+      if (w_.stop_) timeout = std::min(timeout, std::chrono::milliseconds(kStoppingCallMs));
+      protocol::Prepare(ctx, w_.o_.security, timeout);
+      w_.calls_.insert(&ctx);
+    }
+    ~Call() {
+      std::lock_guard lock(w_.mu_);
+      w_.calls_.erase(&ctx);
+    }
+    grpc::ClientContext ctx;
+
+   private:
+    Worker& w_;
+  };
+  static constexpr std::int64_t kStoppingCallMs = 3000;
 
   // The next Sync, built under mu_: finished results, in-flight leases and
   // free slots; a stopping worker returns the leases it has not started and,
@@ -157,9 +197,8 @@ class Worker {
   // Sends a Sync built by NextSyncRequest (mu_ not held). When it fails,
   // its results go back to done_ for the next Sync.
   grpc::Status CallSync(v1::SyncRequest& req, v1::SyncResponse* resp) {
-    grpc::ClientContext ctx;
-    protocol::Prepare(ctx, o_.security, std::chrono::milliseconds(req.max_wait_ms() + 15000));
-    grpc::Status status = stub_->Sync(&ctx, req, resp);
+    Call call(*this, std::chrono::milliseconds(req.max_wait_ms() + 15000));
+    grpc::Status status = stub_->Sync(&call.ctx, req, resp);
     if (!status.ok()) {
       std::lock_guard lock(mu_);
       for (auto& c : *req.mutable_completed()) done_.push_back(std::move(c));
@@ -223,15 +262,32 @@ class Worker {
         if (!connected_ && waited > o_.connect_timeout_ms)
           throw InputError("cannot reach coordinator " + o_.coordinator + ": " + status.error_message());
         if (stop_ && waited > o_.connect_timeout_ms) return;  // leaving and nobody listens
-        std::this_thread::sleep_for(std::chrono::milliseconds(backoff_ms));
+        if (stop_ && status.error_code() != grpc::StatusCode::CANCELLED) {
+          // Stopping and the coordinator does not answer: what is left (its
+          // unreported results, unstarted leases) is recomputed after the
+          // leases expire, so waiting for a coordinator that may never come
+          // back gains nothing (systemd and Kubernetes would SIGKILL).
+          std::lock_guard lock(mu_);
+          log::Warn("worker_leaving_unreported", {{"worker", o_.worker_id}, {"coordinator", o_.coordinator},
+                                                  {"error", status.error_message()}, {"results", done_.size()},
+                                                  {"leases", in_flight_.size()}});
+          return;
+        }
+        if (!stop_)
+          log::Warn("worker_reconnecting", {{"worker", o_.worker_id}, {"coordinator", o_.coordinator},
+                                            {"error", status.error_message()}, {"backoff_ms", backoff_ms}});
+        std::this_thread::sleep_for(std::chrono::milliseconds(stop_ ? 200 : backoff_ms));
         backoff_ms = std::min<std::int64_t>(backoff_ms * 2, 5000);
         patient = false;
         continue;
       }
+      const bool reconnected = backoff_ms > 200;  // a Sync failed before this one
       backoff_ms = 200;
       {
         std::unique_lock lock(mu_);
         if (!connected_) started = Clock::now();
+        if (!connected_ || reconnected)
+          log::Info("worker_connected", {{"worker", o_.worker_id}, {"coordinator", o_.coordinator}, {"slots", o_.slots}});
         connected_ = true;
         TakeSyncResponse(resp);
         patient = resp.leases_size() == 0 || static_cast<int>(queue_.size()) + running_ >= o_.slots;
@@ -307,10 +363,9 @@ class Worker {
         req.set_worker_id(o_.worker_id);
         for (const auto& id : in_flight_) req.add_lease_ids(id);
       }
-      grpc::ClientContext ctx;
-      protocol::Prepare(ctx, o_.security, std::chrono::milliseconds(5000));
+      Call call(*this, std::chrono::milliseconds(5000));
       v1::HeartbeatResponse resp;
-      if (stub_->Heartbeat(&ctx, req, &resp).ok()) {
+      if (stub_->Heartbeat(&call.ctx, req, &resp).ok()) {
         std::lock_guard lock(mu_);
         // Leases still queued are dropped; a running one finishes and its
         // result is fenced or acknowledged as a duplicate.
@@ -357,6 +412,9 @@ class Worker {
   // Runs a lease taken from the queue and files its result for the next Sync.
   void RunLease(const v1::Lease& lease) {
     v1::CompletedTask done = Execute(lease);
+    if (!done.error().empty())
+      log::Warn("task_failed", {{"task", lease.task_key()}, {"job", lease.job_id()}, {"attempt", lease.attempt()},
+                                {"reason", done.error()}});
     std::lock_guard lock(mu_);
     --running_;
     ++summary_.tasks_run;
@@ -580,6 +638,8 @@ class Worker {
   std::int64_t heartbeat_ms_ = 2000;
   std::vector<std::thread> slots_;
   std::thread heartbeat_;
+  std::thread stop_watch_;
+  std::set<grpc::ClientContext*> calls_;  // calls under way (Call), under mu_
 
   std::mutex jobs_mu_;
   std::map<std::string, std::shared_ptr<JobContext>> jobs_;

@@ -127,6 +127,8 @@ enum class CompletionOutcome {
 
 struct ExpiredLease {
   std::string lease_id, task_key, job_id, worker_id;
+  std::int64_t attempt = 0;   // the lease's attempt number (fencing)
+  std::int64_t expiries = 0;  // the task's expiries, this one included
   bool quarantined = false;
 };
 
