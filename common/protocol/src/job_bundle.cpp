@@ -63,7 +63,8 @@ v1::JobBundle MakeJobBundle(const fs::path& job_file) {
   // Files the nodes need without naming them (an assembly's part library
   // and meshes, design/data_files.h) come along too, read from where this
   // machine has them.
-  const fs::path base = design_path.parent_path();
+  // (A design named without a directory part, e.g. "pawn.yaml", is in ".".)
+  const fs::path base = design_path.has_parent_path() ? design_path.parent_path() : fs::path(".");
   std::vector<design::DataFile> referenced;  // relative to the design; where to read it
   std::function<void(const design::Argument&)> visit_argument = [&](const design::Argument& a) {
     if (a.kind == design::Argument::Kind::kScalar) {
