@@ -7,10 +7,12 @@
 
 #include "commands.h"
 #include "fabatlas/error.h"
+#include "fabatlas/coordinator/version_text.h"
 
 int main(int argc, char** argv) {
   CLI::App app{"fabatlas: precompute the valid, fabricable region of a parametric design"};
   app.require_subcommand(1);
+  app.set_version_flag("--version", fabatlas::coordinator::VersionText("fabatlas"));
   int exit_code = 0;
   fabatlas::cli::AddDesignCommands(app, exit_code);
   fabatlas::cli::AddSampleCommands(app, exit_code);

@@ -20,8 +20,18 @@ std::atomic<bool> g_stop{false};
 
 extern "C" void StopServing(int) { g_stop.store(true); }
 
+// The built page: beside an installed fabatlas (PREFIX/share/fabatlas/web,
+// ops/CMakeLists.txt), else the build tree's.
+std::string DefaultWebDir() {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  const fs::path installed = fs::read_symlink("/proc/self/exe", ec).parent_path().parent_path() / "share/fabatlas/web";
+  if (!ec && fs::is_regular_file(installed / "index.html", ec)) return installed.string();
+  return FABATLAS_WEB_DIR;
+}
+
 struct ServeArgs {
-  std::string art, job, host = "127.0.0.1", web = FABATLAS_WEB_DIR, cache = "opt";
+  std::string art, job, host = "127.0.0.1", web = DefaultWebDir(), cache = "opt";
   int port = 8080;
 };
 
@@ -71,7 +81,7 @@ void AddViewerCommands(CLI::App& app, int& exit_code) {
   serve->add_option("--job", a->job, "serve a run directory's form.json alone, with this job file's design");
   serve->add_option("--port", a->port, "TCP port (0: any free port, printed)")->check(CLI::Range(0, 65535));
   serve->add_option("--host", a->host, "address to listen on (default 127.0.0.1)");
-  serve->add_option("--web", a->web, "the built page (default: build/web)");
+  serve->add_option("--web", a->web, "directory of the built web page (default: PREFIX/share/fabatlas/web when installed, else build/web)");
   serve->callback([a] { Serve(*a); });
 }
 

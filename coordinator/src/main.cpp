@@ -14,9 +14,7 @@
 #include "fabatlas/error.h"
 #include "fabatlas/log/log_flags.h"
 #include "fabatlas/protocol/channel.h"
-#include "fabatlas/protocol/tasks.h"
-#include "fabatlas/storage/artifact.h"
-#include "fabatlas/version.h"
+#include "fabatlas/coordinator/version_text.h"
 
 int main(int argc, char** argv) {
   CLI::App app{"fabatlas coordinator: jobs, leases and blobs over gRPC"};
@@ -24,9 +22,7 @@ int main(int argc, char** argv) {
   std::string token_file, port_file;
   double drain_seconds = 30;
   fabatlas::log::LogFlags log_flags;
-  app.set_version_flag("--version", std::string("fabatlas-coordinator ") + fabatlas::kVersion + " (task code " +
-                                        fabatlas::protocol::kCodeVersion + ", protocol fabatlas.v1, artifact schema " +
-                                        std::to_string(fabatlas::storage::kArtifactSchemaVersion) + ")");
+  app.set_version_flag("--version", fabatlas::coordinator::VersionText("fabatlas-coordinator"));
   app.add_option("--listen", o.listen, "gRPC address HOST:PORT (port 0: pick one)");
   app.add_option("--state-dir", o.state_dir, "durable state directory")->required();
   app.add_option("--token", o.token, "bearer token required on every call");

@@ -1,0 +1,17 @@
+// --version text of the coordinator and the CLI (version_text.h).
+#include "fabatlas/coordinator/version_text.h"
+
+#include "fabatlas/protocol/tasks.h"
+#include "fabatlas/storage/artifact.h"
+#include "fabatlas/storage/job_store.h"
+#include "fabatlas/version.h"
+
+namespace fabatlas::coordinator {
+
+std::string VersionText(const std::string& program) {
+  return program + " " + kVersion + " (task code " + protocol::kCodeVersion +
+         ", protocol fabatlas.v1, artifact schema " + std::to_string(storage::kArtifactSchemaVersion) +
+         ", job store schema " + std::to_string(storage::kJobStoreSchemaVersion) + ")";
+}
+
+}  // namespace fabatlas::coordinator
