@@ -142,7 +142,7 @@ std::int64_t BlobStore::Append(const std::string& digest, std::int64_t offset,
 void BlobStore::Finish(const std::string& digest) {
   CheckDigest(digest);
   std::lock_guard lock(mutex_);
-  if (Size(digest) >= 0) return;
+  if (Touch(digest)) return;
   fs::path partial = PartialPath(digest);
   if (!fs::exists(partial)) {
     // An empty blob has no chunks: create it.
@@ -175,7 +175,7 @@ void BlobStore::Finish(const std::string& digest) {
 
 std::string BlobStore::Put(const std::string& bytes) {
   std::string digest = Sha256Hex(bytes);
-  if (Contains(digest)) return digest;
+  if (Touch(digest)) return digest;  // held: fresh again for Collect's cutoff
   {
     std::lock_guard lock(mutex_);
     std::error_code ec;
@@ -188,7 +188,7 @@ std::string BlobStore::Put(const std::string& bytes) {
 
 std::string BlobStore::PutFile(const fs::path& path) {
   std::string digest = Sha256OfFile(path);
-  if (Contains(digest)) return digest;
+  if (Touch(digest)) return digest;
   {
     std::lock_guard lock(mutex_);
     std::error_code ec;
@@ -248,6 +248,50 @@ std::vector<std::string> BlobStore::List() const {
   }
   std::sort(out.begin(), out.end());
   return out;
+}
+
+bool BlobStore::Touch(const std::string& digest) {
+  if (!IsDigest(digest)) return false;
+  return ::utimensat(AT_FDCWD, PathOf(digest).c_str(), nullptr, 0) == 0;
+}
+
+namespace {
+
+std::int64_t ModifiedUnixMs(const struct stat& st) {
+  return static_cast<std::int64_t>(st.st_mtim.tv_sec) * 1000 + st.st_mtim.tv_nsec / 1000000;
+}
+
+}  // namespace
+
+BlobStore::Collection BlobStore::Collect(const std::vector<std::string>& keep, std::int64_t cutoff_unix_ms) {
+  std::vector<std::string> sorted = keep;
+  std::sort(sorted.begin(), sorted.end());
+  Collection c;
+  std::error_code ec;
+  for (const auto& dir : fs::directory_iterator(root_, ec)) {
+    if (!dir.is_directory()) continue;
+    const bool partial = dir.path().filename() == "partial";
+    for (const auto& f : fs::directory_iterator(dir.path(), ec)) {
+      const std::string name = f.path().filename().string();
+      if (!IsDigest(name)) continue;
+      struct stat st{};
+      if (::stat(f.path().c_str(), &st) != 0) continue;
+      const std::int64_t modified = ModifiedUnixMs(st);
+      const bool referenced = !partial && std::binary_search(sorted.begin(), sorted.end(), name);
+      const bool old = partial ? modified < cutoff_unix_ms - 86400000 : modified < cutoff_unix_ms;
+      if (referenced || !old) {
+        ++c.blobs_kept;
+        c.bytes_kept += st.st_size;
+        continue;
+      }
+      std::lock_guard lock(mutex_);  // not while an upload of this digest publishes
+      if (::unlink(f.path().c_str()) == 0) {
+        ++c.blobs_removed;
+        c.bytes_removed += st.st_size;
+      }
+    }
+  }
+  return c;
 }
 
 }  // namespace fabatlas::storage

@@ -52,6 +52,8 @@ CREATE TABLE IF NOT EXISTS sample_subtrees (
   task_key TEXT NOT NULL, position INTEGER NOT NULL, job_id TEXT NOT NULL,
   point_key TEXT NOT NULL, subtree_key TEXT NOT NULL, PRIMARY KEY (task_key, position));
 CREATE INDEX IF NOT EXISTS sample_subtrees_job ON sample_subtrees (job_id);
+CREATE TABLE IF NOT EXISTS job_blobs (
+  job_id TEXT NOT NULL, digest TEXT NOT NULL, PRIMARY KEY (job_id, digest));
 CREATE TABLE IF NOT EXISTS events (
   id INTEGER PRIMARY KEY AUTOINCREMENT, time_ms INTEGER NOT NULL, job_id TEXT NOT NULL,
   kind TEXT NOT NULL, message TEXT NOT NULL);
@@ -279,6 +281,18 @@ int JobStore::Checkpoint() {
   int log = 0, done = 0;
   int rc = sqlite3_wal_checkpoint_v2(checkpoint_db_->handle, nullptr, SQLITE_CHECKPOINT_PASSIVE, &log, &done);
   if (rc != SQLITE_OK && rc != SQLITE_BUSY) checkpoint_db_->Fail("checkpoint");
+  // Under a steady stream of commits a passive checkpoint never catches up
+  // with the last frame, so the WAL never restarts and grows with the job
+  // (61 MB on a 2k-sample job). Past kWalRestartBytes, a TRUNCATE checkpoint
+  // waits (busy timeout) for the writer, copies the rest and empties the
+  // file: the WAL stays bounded whatever the job's size.
+  constexpr std::uintmax_t kWalRestartBytes = std::uintmax_t{8} << 20;
+  std::error_code ec;
+  const auto wal = std::filesystem::file_size(path_.string() + "-wal", ec);
+  if (!ec && wal > kWalRestartBytes) {
+    rc = sqlite3_wal_checkpoint_v2(checkpoint_db_->handle, nullptr, SQLITE_CHECKPOINT_TRUNCATE, &log, &done);
+    if (rc != SQLITE_OK && rc != SQLITE_BUSY) checkpoint_db_->Fail("checkpoint");
+  }
   return done;
 }
 
@@ -858,6 +872,34 @@ std::vector<SampleSubtrees> JobStore::SampleSubtreeKeys(const std::string& job_i
     out.back().subtree_keys.push_back(s.Text(2));
   }
   return out;
+}
+
+void JobStore::AddJobBlob(const std::string& job_id, const std::string& digest) {
+  std::lock_guard lock(mutex_);
+  Stmt s(*db_, "INSERT OR IGNORE INTO job_blobs (job_id, digest) VALUES (?,?)");
+  s.BindText(1, job_id).BindText(2, digest);
+  s.Run();
+}
+
+std::vector<std::string> JobStore::ReferencedBlobs() {
+  std::lock_guard lock(mutex_);
+  // Jobs not ended: queued (1) or running (2).
+  Stmt s(*db_,
+         "SELECT bundle_digest FROM jobs UNION SELECT digest FROM job_outputs "
+         "UNION SELECT s.digest FROM subtrees s JOIN jobs j ON j.id = s.job_id WHERE j.state IN (1, 2) "
+         "AND s.digest != '' "
+         "UNION SELECT b.digest FROM job_blobs b JOIN jobs j ON j.id = b.job_id WHERE j.state IN (1, 2) "
+         "ORDER BY 1");
+  std::vector<std::string> out;
+  while (s.Step()) out.push_back(s.Text(0));
+  return out;
+}
+
+std::int64_t JobStore::OldestActiveLeaseMs() {
+  std::lock_guard lock(mutex_);
+  Stmt s(*db_, "SELECT MIN(granted_ms) FROM leases WHERE state = 'active'");
+  if (!s.Step() || s.IsNull(0)) return -1;
+  return s.Int(0);
 }
 
 void JobStore::TouchWorker(const std::string& worker_id, int slots, std::int64_t now_ms) {

@@ -4,6 +4,8 @@
 #include <sqlite3.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <chrono>
 #include <filesystem>
 #include <fstream>
 
@@ -409,4 +411,65 @@ TEST(ClusterStorage, FailuresBackOffAndQuarantineAfterThreeWorkers) {
   EXPECT_EQ(store.CountTasks("job1").quarantined, 1);
   EXPECT_EQ(store.FindTask(Key(0))->result, "quarantined kind 1");
   EXPECT_TRUE(store.CheckConsistency().empty());
+}
+
+// Blob lifecycle (docs/protocol.md "Blob lifecycle"): the store references a
+// job's bundle and outputs always, its subtree geometry and job blobs only
+// until the job ends; Collect removes what nothing references once it is
+// older than the cutoff, and keeps newer blobs (an upload whose result is
+// not reported yet).
+TEST(ClusterStorage, ReferencedBlobsAndCollection) {
+  fs::path dir = FreshDir("collect");
+  JobStore store(dir / "state.db");
+  BlobStore blobs(dir / "blobs");
+  const std::string bundle = blobs.Put("bundle"), output = blobs.Put("form"), subtree = blobs.Put("subtree"),
+                    plan = blobs.Put("plan input"), stray = blobs.Put("stray");
+  ASSERT_TRUE(store.CreateJob({"j", bundle, "d", JobState::kRunning, "", 1, 0}));
+  store.AddTasks({{"k1", "j", 1, "p", {}}});
+  auto grants = store.GrantLeases("w", 1, 1000, 5000);
+  ASSERT_EQ(grants.size(), 1u);
+  EXPECT_EQ(store.OldestActiveLeaseMs(), 1000);
+  Completion c;
+  c.lease_id = grants[0].lease_id;
+  c.task_key = "k1";
+  c.attempt = grants[0].attempt;
+  c.sample_valid = 1;
+  c.point_key = "0,0";
+  c.subtrees.push_back({"s1", "t", "union", 1.0, true, 10, {}, subtree});
+  store.Complete({c}, 2000, 100);
+  EXPECT_EQ(store.OldestActiveLeaseMs(), -1);
+  store.AddJobBlob("j", plan);
+  store.PutJobOutput("j", "form.json", output);
+  std::vector<std::string> running = {bundle, output, subtree, plan};
+  std::sort(running.begin(), running.end());
+  EXPECT_EQ(store.ReferencedBlobs(), running);
+
+  // A cutoff before every blob's mtime: nothing goes, not even the stray.
+  auto kept = blobs.Collect(store.ReferencedBlobs(), 0);
+  EXPECT_EQ(kept.blobs_removed, 0);
+  EXPECT_TRUE(blobs.Contains(stray));
+  // A cutoff after them: only the stray goes while the job runs.
+  const std::int64_t later = std::chrono::duration_cast<std::chrono::milliseconds>(
+                                 std::chrono::system_clock::now().time_since_epoch()).count() + 60000;
+  auto swept = blobs.Collect(store.ReferencedBlobs(), later);
+  EXPECT_EQ(swept.blobs_removed, 1);
+  EXPECT_FALSE(blobs.Contains(stray));
+  EXPECT_TRUE(blobs.Contains(subtree));
+  // The job ended: its geometry and plan blobs go, bundle and outputs stay.
+  store.SetJobState("j", JobState::kSucceeded, "", 3000);
+  std::vector<std::string> ended = {bundle, output};
+  std::sort(ended.begin(), ended.end());
+  EXPECT_EQ(store.ReferencedBlobs(), ended);
+  auto after = blobs.Collect(store.ReferencedBlobs(), later);
+  EXPECT_EQ(after.blobs_removed, 2);
+  EXPECT_FALSE(blobs.Contains(subtree));
+  EXPECT_FALSE(blobs.Contains(plan));
+  EXPECT_TRUE(blobs.Verify(bundle));
+  EXPECT_TRUE(blobs.Verify(output));
+  // Collecting again finds nothing (idempotent: a crash part-way is finished
+  // by the next pass).
+  EXPECT_EQ(blobs.Collect(store.ReferencedBlobs(), later).blobs_removed, 0);
+  // Touch makes an old blob new again.
+  EXPECT_TRUE(blobs.Touch(bundle));
+  EXPECT_FALSE(blobs.Touch(stray));
 }

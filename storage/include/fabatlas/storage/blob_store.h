@@ -61,6 +61,25 @@ class BlobStore {
   // Every finished blob's digest, sorted.
   std::vector<std::string> List() const;
 
+  // Sets a finished blob's modification time to now (Collect keeps blobs
+  // written or touched since its cutoff). False when the blob is missing.
+  bool Touch(const std::string& digest);
+
+  struct Collection {
+    std::int64_t blobs_removed = 0;
+    std::int64_t bytes_removed = 0;
+    std::int64_t blobs_kept = 0;
+    std::int64_t bytes_kept = 0;
+  };
+  // Garbage collection (mark and sweep, docs/protocol.md "Blob lifecycle"):
+  // removes every finished blob whose digest is not in `keep` and whose
+  // modification time is before cutoff_unix_ms, and partial uploads
+  // untouched for a day. Idempotent, so a crash part-way leaves only blobs
+  // the next call removes. The caller derives `keep` from durable references
+  // and the cutoff from the oldest live lease, so a blob uploaded for a
+  // result not yet reported survives.
+  Collection Collect(const std::vector<std::string>& keep, std::int64_t cutoff_unix_ms);
+
  private:
   std::filesystem::path PartialPath(const std::string& digest) const;
   std::filesystem::path root_;

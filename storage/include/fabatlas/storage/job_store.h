@@ -272,6 +272,20 @@ class JobStore {
   // order.
   std::vector<SampleSubtrees> SampleSubtreeKeys(const std::string& job_id);
 
+  // --- blob references (docs/protocol.md "Blob lifecycle") ---
+  // Records that the job uses the blob until it ends (e.g. its cache plan's
+  // input and report, its swept-volume surfaces). Idempotent.
+  void AddJobBlob(const std::string& job_id, const std::string& digest);
+  // Every blob the store still needs, sorted, unique: every job's bundle and
+  // published outputs, and for jobs not yet ended (queued or running) their
+  // subtree geometry (SubtreeRow.blob_digest) and AddJobBlob blobs. The
+  // geometry of a job that ended is no longer needed: its artifact holds
+  // what the cache plan kept (a failed or cancelled job resubmitted
+  // evaluates what it misses again).
+  std::vector<std::string> ReferencedBlobs();
+  // granted_ms of the oldest active lease, or -1 when none is active.
+  std::int64_t OldestActiveLeaseMs();
+
   // --- workers ---
   // Records that the worker was seen (at most one write per worker and second:
   // last_seen_ms is precise to 1 s).
