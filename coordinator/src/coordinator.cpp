@@ -135,6 +135,38 @@ struct Coordinator::Impl {
   std::condition_variable shutdown_cv;
   bool shut_down = false;
 
+  // Solid sharing (worker.proto FetchSolid / ShareSolids), in memory only: a
+  // coordinator restart forgets it and workers evaluate a missing solid
+  // again. shares: SolidKey -> the blob a holder shared (answered with an
+  // empty digest: it does not hold the solid); share_wanted: holder -> the
+  // requests to pass on; share_polled: holder -> when its ShareSolids loop
+  // was last seen (a holder not polling is not asked).
+  struct Share {
+    std::string digest;
+    bool answered = false;
+    std::int64_t asked_ms = 0;
+  };
+  std::mutex share_mu;
+  std::condition_variable share_cv;
+  std::map<std::string, Share> shares;
+  std::map<std::string, std::vector<v1::SolidRef>> share_wanted;
+  std::map<std::string, std::int64_t> share_polled;
+
+  // The adaptive schedule of each running job as its driver last saw it, for
+  // the ETA (JobStatus.eta_seconds): the predicted wall seconds of the
+  // batches after the current one and the wall seconds per task of the
+  // current batch's kind (observed on earlier batches; 0 = not yet known).
+  struct Schedule {
+    double future_seconds = 0;
+    double task_seconds = 0;
+    bool known = false;
+  };
+  std::mutex schedule_mu;
+  std::map<std::string, Schedule> schedules;
+
+  std::atomic<std::int64_t> blobs_collected_total{0}, blob_bytes_collected_total{0};
+  std::mutex collect_mu;
+
   void SignalWork() {
     {
       std::lock_guard lock(work_mu);
@@ -193,6 +225,36 @@ struct Coordinator::Impl {
     for (const auto& [id, seen] : workers_seen)
       if (seen.slots > 0 && seen.last_ms >= since) out.emplace_back(id, seen.slots);
     return out;
+  }
+
+  static std::string SolidKey(const v1::SolidRef& ref) {
+    std::string key = ref.job_bundle_digest() + ":";
+    for (int i = 0; i < ref.point_key_size(); ++i) key += (i ? "," : "") + std::to_string(ref.point_key(i));
+    return key;
+  }
+
+  // Blob garbage collection (docs/protocol.md "Blob lifecycle"): mark every
+  // blob the store references (JobStore::ReferencedBlobs), sweep the rest
+  // that are older than the oldest live lease (a worker uploads before it
+  // reports, so a blob of a result not yet reported is newer than its
+  // lease) and than 10 s (a client uploads a bundle just before it submits
+  // it; a held blob named again is touched: BlobStore::Touch). Mark and
+  // sweep are read-only on the store and idempotent on disk, so a kill -9
+  // between any two steps loses nothing and the next pass finishes the work. Order matters: the cutoff is taken before the
+  // references, so a lease that completes in between has its blobs marked.
+  void CollectBlobs(const std::string& reason) {
+    std::lock_guard lock(collect_mu);
+    std::int64_t cutoff = NowMs() - 10000;
+    const std::int64_t oldest_lease = store->OldestActiveLeaseMs();
+    if (oldest_lease >= 0) cutoff = std::min(cutoff, oldest_lease - 1000);
+    const std::vector<std::string> keep = store->ReferencedBlobs();
+    const storage::BlobStore::Collection c = blobs->Collect(keep, cutoff);
+    blobs_collected_total += c.blobs_removed;
+    blob_bytes_collected_total += c.bytes_removed;
+    if (c.blobs_removed > 0)
+      log::Info("blobs_collected", {{"reason", reason}, {"removed", c.blobs_removed},
+                                    {"removed_bytes", c.bytes_removed}, {"kept", c.blobs_kept},
+                                    {"kept_bytes", c.bytes_kept}});
   }
 
   // Runs the tasks (serialized payloads) through the workers; results in
@@ -263,9 +325,10 @@ struct Coordinator::Impl {
   // sampling::Executor whose tasks run on the workers.
   class RemoteExecutor : public sampling::Executor {
    public:
-    RemoteExecutor(Impl& impl, std::string job_id, std::string evaluation_digest, int subdivisions)
+    RemoteExecutor(Impl& impl, std::string job_id, std::string evaluation_digest, int subdivisions,
+                   const sampling::SamplingOptions& sampling)
         : impl_(impl), job_id_(std::move(job_id)), digest_(std::move(evaluation_digest)),
-          subdivisions_(subdivisions) {}
+          subdivisions_(subdivisions), sampling_(sampling) {}
 
     std::vector<sampling::SampleOutcome> RunSampleTasks(const std::vector<sampling::SampleTask>& tasks,
                                                         sampling::SampleEvaluator&,
@@ -290,13 +353,14 @@ struct Coordinator::Impl {
         }
       }
       std::vector<std::string> producers;
+      if (!tasks.empty()) dims_ = tasks[0].point.key.size();
+      BeginBatch(/*samples=*/true, tasks.size());
       auto results = Run(payloads, preferred, &producers);
+      EndBatch(/*samples=*/true, tasks.size());
       std::vector<sampling::SampleOutcome> out;
       if (timings) timings->assign(tasks.size(), {});
       for (std::size_t i = 0; i < results.size(); ++i) {
         if (!producers[i].empty()) holders_[tasks[i].point.key] = producers[i];
-        if (!results[i].sample().solid_digest().empty())
-          solid_digests_[tasks[i].point.key] = results[i].sample().solid_digest();
         out.push_back(protocol::SampleOutcomeOf(results[i]));
         if (timings) (*timings)[i].wall_seconds = results[i].wall_seconds();
       }
@@ -309,11 +373,12 @@ struct Coordinator::Impl {
       std::vector<v1::TaskPayload> payloads;
       std::vector<std::vector<std::string>> preferred;
       for (const auto& t : tasks) {
-        // The samples' root solids, so that any worker can skip evaluating
-        // them again (tasks.proto "Geometry blobs").
+        // The workers holding the samples' root solids, so that any worker
+        // can ask them instead of evaluating again (tasks.proto "Geometry
+        // blobs").
         v1::TaskPayload p = protocol::GeometryChangePayload(t);
-        if (auto it = solid_digests_.find(t.point_a.key); it != solid_digests_.end()) p.set_solid_digest_a(it->second);
-        if (auto it = solid_digests_.find(t.point_b.key); it != solid_digests_.end()) p.set_solid_digest_b(it->second);
+        if (auto it = holders_.find(t.point_a.key); it != holders_.end()) p.set_solid_holder_a(it->second);
+        if (auto it = holders_.find(t.point_b.key); it != holders_.end()) p.set_solid_holder_b(it->second);
         payloads.push_back(std::move(p));
         // Lease affinity: the workers holding the solids in memory.
         std::vector<std::string> holders;
@@ -323,7 +388,9 @@ struct Coordinator::Impl {
             holders.push_back(it->second);
         preferred.push_back(std::move(holders));
       }
+      BeginBatch(/*samples=*/false, tasks.size());
       auto results = Run(payloads, preferred);
+      EndBatch(/*samples=*/false, tasks.size());
       std::vector<sampling::GeometryChangeResult> out;
       if (timings) timings->assign(tasks.size(), {});
       for (std::size_t i = 0; i < results.size(); ++i) {
@@ -353,14 +420,79 @@ struct Coordinator::Impl {
     }
 
    private:
+    // The ETA from the adaptive schedule (JobStatus.eta_seconds). The
+    // sampler runs rounds (adaptive_sampler.h): the bootstrap samples S_0,
+    // then per depth d the ΔG batch G_d of the frontier and, while d <
+    // max_depth, the samples S_{d+1} of its splits. Batches still to come are
+    // predicted from the last ones: S_{d+1} = S_d * g with g = S_d / S_{d-1}
+    // (the frontier's growth, 1 before two sample batches were seen), capped
+    // by max_samples, and G_d = S_d * h with h = G / S of the last round
+    // (the dimension count before the first ΔG batch); each costs the
+    // observed wall seconds per task of its kind (per sample task, then per
+    // ΔG task, as a measured ratio to it).
+    void BeginBatch(bool samples, std::size_t size) {
+      if (samples) {
+        sample_batches_.push_back(static_cast<double>(size));
+      } else {
+        dg_batches_.push_back(static_cast<double>(size));
+      }
+      batch_started_ = std::chrono::steady_clock::now();
+      Publish(samples);
+    }
+    void EndBatch(bool samples, std::size_t size) {
+      if (size == 0) return;
+      const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - batch_started_).count();
+      // Batches replayed from the store take no time: they teach nothing.
+      if (seconds < 0.05 * static_cast<double>(size) * 1e-3) return;
+      (samples ? sample_task_seconds_ : dg_task_seconds_) = seconds / static_cast<double>(size);
+    }
+    void Publish(bool in_sample_batch) {
+      const double dims = static_cast<double>(std::max<std::size_t>(dims_, 1));
+      const std::size_t rounds_seen = sample_batches_.size();  // sample batches so far (incl. current)
+      double g = 1.0;
+      if (sample_batches_.size() >= 2 && sample_batches_[sample_batches_.size() - 2] > 0)
+        g = sample_batches_.back() / sample_batches_[sample_batches_.size() - 2];
+      double h = dims;
+      if (!dg_batches_.empty() && dg_batches_.size() <= sample_batches_.size() &&
+          sample_batches_[dg_batches_.size() - 1] > 0)
+        h = dg_batches_.back() / sample_batches_[dg_batches_.size() - 1];
+      double ts = sample_task_seconds_, tg = dg_task_seconds_;
+      if (ts <= 0 && tg > 0) ts = tg;
+      if (tg <= 0 && ts > 0) tg = ts;
+      double samples_so_far = 0;
+      for (double n : sample_batches_) samples_so_far += n;
+      double budget = static_cast<double>(sampling_.max_samples) - samples_so_far;
+      double future = 0;
+      // The current round's ΔG batch, when a sample batch runs now.
+      double last = sample_batches_.empty() ? 0 : sample_batches_.back();
+      if (in_sample_batch) future += last * h * tg;
+      // Rounds still to come: sample batches for depths rounds_seen..max_depth.
+      for (int d = static_cast<int>(rounds_seen); d <= sampling_.max_depth && budget > 0; ++d) {
+        const double next = std::min(last * g, budget);
+        if (next < 1) break;
+        future += next * ts + next * h * tg;
+        budget -= next;
+        last = next;
+      }
+      std::lock_guard lock(impl_.schedule_mu);
+      auto& sch = impl_.schedules[job_id_];
+      sch.future_seconds = future;
+      sch.task_seconds = in_sample_batch ? ts : tg;
+      sch.known = ts > 0;
+    }
+
     Impl& impl_;
     std::string job_id_, digest_;
     int subdivisions_;
-    // Root solid blob of each valid sample seen (SampleResult.solid_digest).
-    std::map<sampling::PointKey, std::string> solid_digests_;
+    sampling::SamplingOptions sampling_;
     // The worker that evaluated each sample in this run of the driver (it
-    // holds the root solid in memory), for ΔG lease affinity.
+    // holds the root solid in memory), for ΔG lease affinity and solid
+    // sharing (TaskPayload.solid_holder_a/b).
     std::map<sampling::PointKey, std::string> holders_;
+    std::vector<double> sample_batches_, dg_batches_;
+    double sample_task_seconds_ = 0, dg_task_seconds_ = 0;
+    std::size_t dims_ = 1;
+    std::chrono::steady_clock::time_point batch_started_;
   };
 
   // Seed 004, Sec. 6.7: the cutter of every carve_swept node of the design,
@@ -370,8 +502,8 @@ struct Coordinator::Impl {
   // voxels, surface digest) and the cutter surfaces the workers uploaded as
   // out/swept_<k>.ply, in the frame object's body coordinates. No file when
   // the design has no carve_swept node.
-  void PublishSweptVolumes(const design::Design& design, const sampling::DesignSpace& space,
-                           RemoteExecutor& executor, const fs::path& out) {
+  void PublishSweptVolumes(const std::string& job_id, const design::Design& design,
+                           const sampling::DesignSpace& space, RemoteExecutor& executor, const fs::path& out) {
     std::vector<std::string> paths;
     std::function<void(const design::Node&, const std::string&)> walk = [&](const design::Node& n,
                                                                               const std::string& path) {
@@ -395,6 +527,8 @@ struct Coordinator::Impl {
       payloads.push_back(std::move(p));
     }
     const std::vector<v1::TaskResult> results = executor.Run(payloads);
+    for (const auto& r : results)
+      if (!r.swept_volume().surface_blob().empty()) store->AddJobBlob(job_id, r.swept_volume().surface_blob());
     auto number = [](double v) {
       char buf[40];
       std::snprintf(buf, sizeof buf, "%.17g", v);
@@ -448,6 +582,7 @@ struct Coordinator::Impl {
     v1::TaskPayload payload;
     payload.set_kind(v1::TASK_KIND_CACHE_PLAN);
     payload.mutable_cache_plan()->set_input_digest(blobs->Put(input.SerializeAsString()));
+    store->AddJobBlob(job_id, payload.cache_plan().input_digest());
     const std::string key = protocol::TaskKey(payload, evaluation_digest, subdivisions);
     Event(job_id, "cache_plan", "cache plan task " + key.substr(0, 16) + ": " +
                                     std::to_string(input.subtrees_size()) + " subtree records, " +
@@ -459,6 +594,7 @@ struct Coordinator::Impl {
     if (digest.empty())
       throw InputError("job " + job_id + ": the geometry cache plan task " + key.substr(0, 16) +
                        " was quarantined (it lost too many workers)");
+    store->AddJobBlob(job_id, digest);
     v1::CachePlanReport report;
     if (!blobs->Contains(digest) || !report.ParseFromString(blobs->Read(digest)))
       throw InputError("job " + job_id + ": cache plan report " + digest + " is missing or not a CachePlanReport");
@@ -474,6 +610,74 @@ struct Coordinator::Impl {
     return text;
   }
 
+  // Forgets the job's shared solids (its sampling is over).
+  void ForgetShares(const std::string& bundle_digest) {
+    std::lock_guard lock(share_mu);
+    for (auto it = shares.lower_bound(bundle_digest + ":"); it != shares.end() && it->first.rfind(bundle_digest + ":", 0) == 0;)
+      it = shares.erase(it);
+  }
+
+  // worker.proto FetchSolid: the blob of a solid another worker holds, or ""
+  // (evaluate again).
+  std::string FetchSolid(const v1::FetchSolidRequest& req, grpc::ServerContext* ctx) {
+    const std::string& holder = req.holder_worker_id();
+    if (holder.empty() || holder == req.worker_id()) return "";
+    const std::string key = SolidKey(req.solid());
+    const std::int64_t wait_ms = std::clamp<std::int64_t>(req.max_wait_ms(), 0, 10000);
+    const auto until = std::chrono::steady_clock::now() + std::chrono::milliseconds(wait_ms);
+    std::unique_lock lock(share_mu);
+    while (true) {
+      auto it = shares.find(key);
+      if (it != shares.end() && it->second.answered) {
+        if (it->second.digest.empty()) return "";
+        if (blobs->Touch(it->second.digest)) return it->second.digest;
+        shares.erase(it);  // collected since: ask the holder again
+        continue;
+      }
+      if (it == shares.end()) {
+        // Ask the holder only while its ShareSolids loop is alive.
+        auto polled = share_polled.find(holder);
+        if (polled == share_polled.end() || polled->second < NowMs() - 3000) return "";
+        shares[key] = Share{"", false, NowMs()};
+        share_wanted[holder].push_back(req.solid());
+        share_cv.notify_all();
+      }
+      if (stopping || ctx->IsCancelled() || std::chrono::steady_clock::now() >= until) {
+        // No answer in time (holder busy, killed or gone): the next caller asks again.
+        if (auto again = shares.find(key); again != shares.end() && !again->second.answered) shares.erase(again);
+        return "";
+      }
+      share_cv.wait_until(lock, std::min(until, std::chrono::steady_clock::now() + std::chrono::milliseconds(250)));
+    }
+  }
+
+  // worker.proto ShareSolids: records the holder's answers, then waits for
+  // requests addressed to it.
+  void ShareSolids(const v1::ShareSolidsRequest& req, v1::ShareSolidsResponse* resp, grpc::ServerContext* ctx) {
+    const std::int64_t wait_ms = std::clamp<std::int64_t>(req.max_wait_ms(), 0, 10000);
+    const auto until = std::chrono::steady_clock::now() + std::chrono::milliseconds(wait_ms);
+    std::unique_lock lock(share_mu);
+    share_polled[req.worker_id()] = NowMs();
+    for (const auto& shared : req.shared()) {
+      Share& share = shares[SolidKey(shared.solid())];
+      share.digest = blobs->Touch(shared.digest()) ? shared.digest() : "";
+      share.answered = true;
+    }
+    if (req.shared_size() > 0) share_cv.notify_all();
+    while (true) {
+      auto& wanted = share_wanted[req.worker_id()];
+      if (!wanted.empty()) {
+        for (auto& ref : wanted) *resp->add_wanted() = std::move(ref);
+        wanted.clear();
+        break;
+      }
+      if (stopping || ctx->IsCancelled() || std::chrono::steady_clock::now() >= until) break;
+      share_cv.wait_until(lock, std::min(until, std::chrono::steady_clock::now() + std::chrono::milliseconds(250)));
+      share_polled[req.worker_id()] = NowMs();
+    }
+    share_polled[req.worker_id()] = NowMs();
+  }
+
   void Drive(const std::string& job_id) {
     try {
       auto job = store->FindJob(job_id);
@@ -487,14 +691,20 @@ struct Coordinator::Impl {
       design::Design design = design::LoadDesign(files.design_file);
       sampling::DesignSpace space = precompute::DesignSpaceOf(design, job_file.subdivisions);
       precompute::DesignSampleEvaluator unused_local(design);
-      RemoteExecutor executor(*this, job_id, protocol::EvaluationDigest(bundle), job_file.subdivisions);
+      RemoteExecutor executor(*this, job_id, protocol::EvaluationDigest(bundle), job_file.subdivisions,
+                              job_file.sampling);
       Event(job_id, "driver_started", "sampling driver started (replaying stored results)");
       log::Info("job_started", {{"job", job_id}, {"design", design.name}});
       sampling::SamplingSummary summary =
           sampling::SampleDesignSpace(space, unused_local, executor, job_file.sampling);
+      {
+        std::lock_guard lock(schedule_mu);
+        schedules.erase(job_id);  // sampling is over: the ETA falls back to the tasks left
+      }
+      ForgetShares(job->bundle_digest);
       fs::path out = dir / "out";
       precompute::WriteFormOutputs(design, summary, out);
-      PublishSweptVolumes(design, space, executor, out);
+      PublishSweptVolumes(job_id, design, space, executor, out);
       // The published artifact (docs/artifact.md): deterministic, atomic.
       storage::Artifact artifact = ArtifactOf(bundle, design.name, job_file, summary.form);
       if (WantsCache(job_file)) {
@@ -523,6 +733,9 @@ struct Coordinator::Impl {
       Event(job_id, "succeeded", precompute::Table3Row(design, summary.statistics));
       log::Info("job_succeeded", {{"job", job_id}, {"design", design.name}, {"samples", summary.statistics.samples},
                                   {"valid_samples", summary.statistics.valid_samples}});
+      // The published artifact holds what the cache plan kept: the job's
+      // geometry blobs go now.
+      CollectBlobs("job " + job_id + " published");
     } catch (const Stopping&) {
     } catch (const JobCancelled&) {
     } catch (const std::exception& e) {
@@ -561,6 +774,12 @@ struct Coordinator::Impl {
     s.set_created_unix_ms(job.created_ms);
     s.set_finished_unix_ms(job.finished_ms);
     std::int64_t now = NowMs(), done = c.done + c.quarantined;
+    {
+      std::lock_guard lock(schedule_mu);
+      if (auto it = schedules.find(job.id); it != schedules.end() && it->second.known && !Terminal(job.state))
+        s.set_eta_seconds(static_cast<double>(c.queued + c.leased) * it->second.task_seconds +
+                          it->second.future_seconds);
+    }
     std::lock_guard lock(rate_mu);
     auto& samples = rate_samples[job.id];
     samples.emplace_back(now, done);
@@ -597,13 +816,19 @@ struct Coordinator::Impl {
     for (int st = 1; st <= 5; ++st)
       m << "fabatlas_jobs{state=\"" << v1::JobState_Name(static_cast<v1::JobState>(st)).substr(10)
         << "\"} " << jobs[st] << "\n";
+    m << "# HELP fabatlas_blobs_collected_total Blobs removed by the collector since start-up.\n"
+         "# TYPE fabatlas_blobs_collected_total counter\n";
+    m << "fabatlas_blobs_collected_total " << blobs_collected_total.load() << "\n";
+    m << "# HELP fabatlas_blob_bytes_collected_total Bytes of blobs removed by the collector since start-up.\n"
+         "# TYPE fabatlas_blob_bytes_collected_total counter\n";
+    m << "fabatlas_blob_bytes_collected_total " << blob_bytes_collected_total.load() << "\n";
     m << "# HELP fabatlas_draining 1 while the coordinator drains.\n# TYPE fabatlas_draining gauge\n";
     m << "fabatlas_draining " << (draining ? 1 : 0) << "\n";
     return m.str();
   }
 
   void Sweep() {
-    std::int64_t last_checkpoint_ms = NowMs();
+    std::int64_t last_checkpoint_ms = NowMs(), last_collect_ms = 0;
     while (!stopping) {
       std::this_thread::sleep_for(std::chrono::milliseconds(100));
       try {
@@ -635,6 +860,20 @@ struct Coordinator::Impl {
         }
         for (const auto& id : silent)
           if (store->ForgetAffinity(id) > 0) SignalWork();
+        if (!silent.empty()) {
+          // Requests a silent holder will never answer: answered "not held".
+          std::lock_guard lock(share_mu);
+          for (const auto& id : silent) {
+            for (const auto& ref : share_wanted[id]) shares[SolidKey(ref)].answered = true;
+            share_wanted.erase(id);
+            share_polled.erase(id);
+          }
+          share_cv.notify_all();
+        }
+        if (now - last_collect_ms >= 10000) {
+          CollectBlobs("periodic");
+          last_collect_ms = now;
+        }
         if (!expired.empty() || now - last_retry_ms < 31000) SignalWork();
       } catch (const std::exception&) {
       }
@@ -793,7 +1032,9 @@ class WorkerServiceImpl final : public v1::WorkerService::Service {
       u.measured = !r.from_cache();
       u.bytes = r.bytes();
       u.children.assign(r.children().begin(), r.children().end());
-      u.blob_digest = r.blob_digest();
+      // A digest the worker uploaded for a result that was never accepted
+      // may have been collected since: record only blobs that exist.
+      if (!r.blob_digest().empty() && impl_.blobs->Contains(r.blob_digest())) u.blob_digest = r.blob_digest();
       done->subtrees.push_back(std::move(u));
     }
   }
@@ -906,6 +1147,29 @@ class WorkerServiceImpl final : public v1::WorkerService::Service {
     }
   }
 
+  Status FetchSolid(ServerContext* ctx, const v1::FetchSolidRequest* req, v1::FetchSolidResponse* resp) override {
+    if (Status s = protocol::CheckToken(*ctx, impl_.options.token); !s.ok()) return s;
+    if (req->worker_id().empty()) return Invalid("worker_id is empty");
+    if (req->solid().point_key_size() == 0) return Invalid("solid.point_key is empty");
+    try {
+      resp->set_digest(impl_.FetchSolid(*req, ctx));
+      return Status::OK;
+    } catch (const std::exception& e) {
+      return FromException(e);
+    }
+  }
+
+  Status ShareSolids(ServerContext* ctx, const v1::ShareSolidsRequest* req, v1::ShareSolidsResponse* resp) override {
+    if (Status s = protocol::CheckToken(*ctx, impl_.options.token); !s.ok()) return s;
+    if (req->worker_id().empty()) return Invalid("worker_id is empty");
+    try {
+      impl_.ShareSolids(*req, resp, ctx);
+      return Status::OK;
+    } catch (const std::exception& e) {
+      return FromException(e);
+    }
+  }
+
   Status Heartbeat(ServerContext* ctx, const v1::HeartbeatRequest* req, v1::HeartbeatResponse* resp) override {
     if (Status s = protocol::CheckToken(*ctx, impl_.options.token); !s.ok()) return s;
     try {
@@ -943,7 +1207,9 @@ class BlobServiceImpl final : public v1::BlobService::Service {
     if (Status s = protocol::CheckToken(*ctx, impl_.options.token); !s.ok()) return s;
     try {
       resp->set_committed_size(impl_.blobs->CommittedSize(req->digest()));
-      resp->set_complete(impl_.blobs->Contains(req->digest()));
+      // A held blob is fresh again for the collector's cutoff: the caller
+      // skips the upload and goes on to name it.
+      resp->set_complete(impl_.blobs->Touch(req->digest()));
       return Status::OK;
     } catch (const std::exception& e) {
       return FromException(e);

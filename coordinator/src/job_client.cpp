@@ -171,7 +171,9 @@ std::string ProgressLine(const v1::JobStatus& s) {
   double valid = s.samples_done() ? 100.0 * s.samples_valid() / s.samples_done() : 0.0;
   std::string eta = "-";
   std::int64_t left = s.tasks_queued() + s.tasks_leased();
-  if (s.tasks_per_second() > 0 && left > 0)
+  if (s.eta_seconds() > 0)  // the whole job, from the adaptive schedule
+    eta = std::to_string(static_cast<long long>(s.eta_seconds() + 0.5)) + " s";
+  else if (s.tasks_per_second() > 0 && left > 0)
     eta = std::to_string(static_cast<long long>(left / s.tasks_per_second() + 0.5)) + " s";
   std::snprintf(buffer, sizeof buffer,
                 "job %s %-9s samples %lld (%.1f%% valid)  tasks %lld/%lld  %.1f tasks/s  ETA %s  "

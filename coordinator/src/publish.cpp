@@ -21,6 +21,7 @@
 
 #include "fabatlas/protocol/cache_plan.h"
 #include "fabatlas/protocol/job_bundle.h"
+#include "fabatlas/protocol/solid_blob.h"
 #include "fabatlas/protocol/tasks.h"
 
 namespace fabatlas::coordinator {
@@ -307,7 +308,7 @@ CacheAssembly CollectSubtreesFromStore(storage::JobStore& store, storage::BlobSt
   auto samples = std::make_shared<std::map<std::int64_t, std::vector<std::string>>>(std::move(sample_keys));
   a.grid_of = [&blobs, &design, &form, digests, samples](const std::string& key) -> std::string {
     if (auto it = digests->find(key); it != digests->end() && blobs.Contains(it->second))
-      return blobs.Read(it->second);
+      return protocol::GridOfBlob(blobs.Read(it->second));  // workers upload zstd frames
     for (const auto& [id, keys] : *samples) {
       if (std::find(keys.begin(), keys.end(), key) == keys.end()) continue;
       CaptureCache capture(key);

@@ -28,6 +28,7 @@
 #include "fabatlas/sampling/form_json.h"
 #include "fabatlas/sampling/job_file.h"
 #include "fabatlas/protocol/job_bundle.h"
+#include "fabatlas/protocol/solid_blob.h"
 #include "fabatlas/v1/tasks.pb.h"
 #include "fabatlas/storage/artifact.h"
 #include "fabatlas/sha256.h"
@@ -138,9 +139,11 @@ void StopAndCheckStore(const CoordinatorProcess& c, const fs::path& state, const
   for (const auto& [key, row] : rows) {
     EXPECT_EQ(row.uses, uses[key]) << key;
     for (const auto& child : row.children) EXPECT_TRUE(rows.count(child)) << child;
-    if (row.blob_digest.empty()) continue;
+    // A published job's geometry blobs are collected (docs/protocol.md
+    // "Blob lifecycle"): each is gone or still a verified level set.
+    if (row.blob_digest.empty() || !blobs.Contains(row.blob_digest)) continue;
     ASSERT_TRUE(blobs.Verify(row.blob_digest)) << row.blob_digest;
-    EXPECT_NO_THROW(geometry::Solid::Deserialize(blobs.Read(row.blob_digest))) << key;
+    EXPECT_NO_THROW(protocol::SolidOfBlob(blobs.Read(row.blob_digest))) << key;
   }
 }
 
@@ -175,8 +178,8 @@ std::string RunJobOnWorkers(const std::string& name, int workers, int slots, std
   EXPECT_TRUE(outputs[kArtifactName] == ReferenceArtifact()) << name << ": the artifact differs from the in-process one";
   for (pid_t p : pids) ::kill(p, SIGTERM);
   for (pid_t p : pids) EXPECT_EQ(WaitExit(p, std::chrono::seconds(30)), 0);
-  // ΔG tasks take the samples' solids from memory or from the blob another
-  // worker uploaded, never by evaluating a sample again.
+  // ΔG tasks take the samples' solids from memory or from the blob the
+  // holder shared, never by evaluating a sample again.
   for (int i = 0; i < workers; ++i) {
     std::string summary = WorkerSummary(dir / ("w" + std::to_string(i)));
     EXPECT_NE(summary.find(" samples_reevaluated=0"), std::string::npos) << summary;

@@ -1,5 +1,5 @@
 // fabatlas-worker — one process per worker machine (worker.h).
-//   fabatlas-worker --coordinator HOST:PORT [--slots N] [--threads T] [--token T | --token-file F]
+//   fabatlas-worker --coordinator HOST:PORT [--slots N] [--threads T] [--memory-mb M] [--token T | --token-file F]
 //                   [--tls-ca ca.pem [--tls-cert c.pem --tls-key c.key]]
 // SIGTERM / SIGINT: finish the running tasks, report them, return the leases
 // not started, exit 0. Exit 2 with one line on stderr when the coordinator
@@ -30,6 +30,9 @@ int main(int argc, char** argv) {
   app.add_option("--slots", o.slots, "tasks run at once (default 1)");
   app.add_option("--threads", o.threads,
                  "threads the evaluations may keep busy in total (default: --slots, one per slot)");
+  app.add_option("--memory-mb", o.memory_mb,
+                 "resident memory budget of the worker process, MiB (default 1024, at least 256): solids kept "
+                 "for ΔG and the subtree cache are bounded to fit");
   app.add_option("--token", o.security.token, "bearer token");
   app.add_option("--token-file", token_file, "file holding the bearer token");
   app.add_option("--tls-ca", o.security.tls_ca, "CA certificate of the deployment (PEM); enables TLS");
@@ -61,7 +64,8 @@ int main(int argc, char** argv) {
                                         {"results_acknowledged", summary.results_acknowledged},
                                         {"blobs_uploaded", summary.blobs_uploaded},
                                         {"solids_downloaded", summary.solids_downloaded},
-                                        {"samples_reevaluated", summary.samples_reevaluated}});
+                                        {"samples_reevaluated", summary.samples_reevaluated},
+                                        {"solids_shared", summary.solids_shared}});
     return 0;
   } catch (const fabatlas::InputError& e) {
     // One line: a JSON log line under --log-format json, else plain text.

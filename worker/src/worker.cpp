@@ -9,6 +9,7 @@
 #include <cstdlib>
 #include <ctime>
 #include <deque>
+#include <list>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -27,6 +28,7 @@
 #include "fabatlas/protocol/blob_transfer.h"
 #include "fabatlas/protocol/cache_plan.h"
 #include "fabatlas/protocol/job_bundle.h"
+#include "fabatlas/protocol/solid_blob.h"
 #include "fabatlas/protocol/tasks.h"
 #include "fabatlas/sampling/job_file.h"
 #include "fabatlas/sha256.h"
@@ -55,6 +57,44 @@ std::string DefaultWorkerId() {
   return std::string(host) + "-" + std::to_string(::getpid()) + "-" + std::to_string(ms);
 }
 
+// Root solids of valid samples as blob bytes (protocol/solid_blob.h, zstd:
+// several times smaller than the level set), least recently used dropped
+// first once `budget` bytes are held. ΔG tasks take their solids from here
+// when the evaluator's own (uncompressed, smaller) memory dropped them, and
+// solids are shared from here as they are. Thread-safe.
+class SolidShelf {
+ public:
+  void SetBudget(std::size_t bytes) { budget_ = bytes; }
+  void Put(const sampling::PointKey& key, std::string blob) {
+    std::lock_guard lock(mu_);
+    if (auto it = index_.find(key); it != index_.end()) {
+      lru_.splice(lru_.begin(), lru_, it->second);
+      return;
+    }
+    bytes_ += blob.size();
+    lru_.emplace_front(key, std::move(blob));
+    index_[key] = lru_.begin();
+    while (bytes_ > budget_ && lru_.size() > 1) {
+      bytes_ -= lru_.back().second.size();
+      index_.erase(lru_.back().first);
+      lru_.pop_back();
+    }
+  }
+  std::optional<std::string> Get(const sampling::PointKey& key) {
+    std::lock_guard lock(mu_);
+    auto it = index_.find(key);
+    if (it == index_.end()) return std::nullopt;
+    lru_.splice(lru_.begin(), lru_, it->second);
+    return it->second->second;
+  }
+
+ private:
+  std::mutex mu_;
+  std::size_t budget_ = 0, bytes_ = 0;
+  std::list<std::pair<sampling::PointKey, std::string>> lru_;  // front = most recent
+  std::map<sampling::PointKey, decltype(lru_)::iterator> index_;
+};
+
 struct JobContext {
   std::unique_ptr<precompute::DesignSampleEvaluator> evaluator;
   std::string error;  // set when the job could not be loaded
@@ -65,6 +105,7 @@ struct JobContext {
   std::map<std::string, double> last_seconds;
   // Subtree key -> blob digest, for the subtrees this worker uploaded.
   std::map<std::string, std::string> subtree_blobs;
+  SolidShelf shelf;
 };
 
 class Worker {
@@ -72,6 +113,7 @@ class Worker {
   Worker(WorkerOptions options, const std::atomic<bool>& stop) : o_(std::move(options)), stop_(stop) {
     if (o_.coordinator.empty()) throw InputError("worker: --coordinator HOST:PORT is required");
     if (o_.slots < 1 || o_.slots > 1024) throw InputError("worker: --slots must be in 1..1024");
+    if (o_.memory_mb < 256) throw InputError("worker: --memory-mb must be at least 256");
     if (o_.worker_id.empty()) o_.worker_id = DefaultWorkerId();
     if (o_.cache_dir.empty()) o_.cache_dir = fs::temp_directory_path() / ("fabatlas-worker-" + std::to_string(::getpid()));
     channel_ = protocol::MakeChannel(o_.coordinator, o_.security);
@@ -94,6 +136,7 @@ class Worker {
       for (int i = 0; i < o_.slots; ++i) slots_.emplace_back([this] { SlotLoop(); });
     heartbeat_ = std::thread([this] { HeartbeatLoop(); });
     stop_watch_ = std::thread([this] { WatchStop(); });
+    share_ = std::thread([this] { ShareLoop(); });
     try {
       SyncLoop();
     } catch (...) {
@@ -104,6 +147,7 @@ class Worker {
     summary_.blobs_uploaded = blobs_uploaded_;
     summary_.solids_downloaded = solids_downloaded_;
     summary_.samples_reevaluated = samples_reevaluated_;
+    summary_.solids_shared = solids_shared_;
     return summary_;
   }
 
@@ -119,6 +163,11 @@ class Worker {
     for (auto& t : slots_) t.join();
     if (heartbeat_.joinable()) heartbeat_.join();
     if (stop_watch_.joinable()) stop_watch_.join();
+    {
+      std::lock_guard lock(share_mu_);
+      if (share_call_) share_call_->TryCancel();
+    }
+    if (share_.joinable()) share_.join();
   }
 
   // Waits for `stop` (or the end), then cancels the calls under way: a long
@@ -380,6 +429,66 @@ class Worker {
     }
   }
 
+  // Solid sharing, the holder's side (worker.proto ShareSolids): a long poll
+  // for the root solids other workers ask for; each is uploaded from this
+  // worker's memory (or reported as not held) on the next call. On a
+  // thread of its own, so a request is served while every slot is busy.
+  void ShareLoop() {
+    std::vector<v1::SharedSolid> answers;
+    std::int64_t backoff_ms = 200;
+    while (true) {
+      {
+        std::lock_guard lock(mu_);
+        if (exiting_) return;
+      }
+      v1::ShareSolidsRequest req;
+      req.set_worker_id(o_.worker_id);
+      req.set_max_wait_ms(static_cast<int>(std::min<std::int64_t>(o_.poll_ms, 10000)));
+      for (auto& a : answers) *req.add_shared() = std::move(a);
+      answers.clear();
+      v1::ShareSolidsResponse resp;
+      grpc::ClientContext ctx;
+      protocol::Prepare(ctx, o_.security, std::chrono::milliseconds(req.max_wait_ms() + 15000));
+      {
+        std::lock_guard lock(share_mu_);
+        share_call_ = &ctx;
+      }
+      {
+        std::lock_guard lock(mu_);
+        if (exiting_) ctx.TryCancel();
+      }
+      grpc::Status status = stub_->ShareSolids(&ctx, req, &resp);
+      {
+        std::lock_guard lock(share_mu_);
+        share_call_ = nullptr;
+      }
+      if (!status.ok()) {
+        if (status.error_code() == grpc::StatusCode::UNIMPLEMENTED) return;  // an older coordinator
+        for (auto& a : *req.mutable_shared()) answers.push_back(std::move(a));
+        std::unique_lock lock(mu_);
+        exit_cv_.wait_for(lock, std::chrono::milliseconds(backoff_ms), [&] { return exiting_; });
+        backoff_ms = std::min<std::int64_t>(backoff_ms * 2, 5000);
+        continue;
+      }
+      backoff_ms = 200;
+      for (const auto& ref : resp.wanted()) {
+        v1::SharedSolid answer;
+        *answer.mutable_solid() = ref;
+        std::shared_ptr<JobContext> job;
+        {
+          std::lock_guard lock(jobs_mu_);
+          if (auto it = jobs_.find(ref.job_bundle_digest()); it != jobs_.end()) job = it->second;
+        }
+        if (job)
+          if (auto blob = job->shelf.Get(sampling::PointKey(ref.point_key().begin(), ref.point_key().end()))) {
+            answer.set_digest(Upload(*blob));
+            if (!answer.digest().empty()) ++solids_shared_;
+          }
+        answers.push_back(std::move(answer));
+      }
+    }
+  }
+
   void SlotLoop() {
     while (true) {
       v1::Lease lease;
@@ -445,6 +554,14 @@ class Worker {
       ctx->min_subtree_seconds =
           sampling::ParseJobFile(bundle.job_file(), files.job_file.string()).cache_min_subtree_seconds;
       precompute::DesignEvaluatorOptions options;
+      // The resident budget (WorkerOptions.memory_mb): 1/16 for the latest
+      // root solids as level sets, 5/16 for root solids compressed (the
+      // shelf), 1/8 for the subtree cache, the other half for the running
+      // evaluations, the allocator's slack and the process itself.
+      const std::size_t budget = static_cast<std::size_t>(o_.memory_mb) << 20;
+      options.solid_memory_bytes = budget / 16;
+      options.subtree_memory_bytes = budget / 8;
+      ctx->shelf.SetBudget(budget / 16 * 5);
       JobContext* job = ctx.get();
       options.on_subtree_computed = [this, job](const std::string& key, const geometry::Solid& solid,
                                                 double seconds) {
@@ -453,7 +570,7 @@ class Worker {
           job->last_seconds[key] = seconds;
           if (seconds < job->min_subtree_seconds || job->subtree_blobs.count(key)) return;
         }
-        std::string digest = Upload(solid.Serialize());
+        std::string digest = Upload(protocol::SolidBlobOf(solid));
         if (digest.empty()) return;
         std::lock_guard lock(job->mu);
         job->subtree_blobs.emplace(key, digest);
@@ -498,8 +615,10 @@ class Worker {
         if (p.kind() == v1::TASK_KIND_SAMPLE) {
           result = EvaluateSample(*ctx, protocol::PointOf(p.point_a()));
         } else if (p.kind() == v1::TASK_KIND_GEOMETRY_CHANGE) {
-          geometry::Solid a = SolidOf(*ctx, protocol::PointOf(p.point_a()), p.solid_digest_a());
-          geometry::Solid b = SolidOf(*ctx, protocol::PointOf(p.point_b()), p.solid_digest_b());
+          geometry::Solid a =
+              SolidOf(*ctx, lease, protocol::PointOf(p.point_a()), p.solid_digest_a(), p.solid_holder_a());
+          geometry::Solid b =
+              SolidOf(*ctx, lease, protocol::PointOf(p.point_b()), p.solid_digest_b(), p.solid_holder_b());
           result.set_geometry_change(geometry::DeltaG(a, b));
         } else if (p.kind() == v1::TASK_KIND_SWEPT_VOLUME) {
           const design::Design& d = ctx->evaluator->design();
@@ -561,8 +680,9 @@ class Worker {
     return result;
   }
 
-  // EvaluateSample (seed 001 Alg. 2) with the root solid of a valid sample
-  // uploaded and the sample's subtree records (tasks.proto SampleResult).
+  // EvaluateSample (seed 001 Alg. 2) and the sample's subtree records
+  // (tasks.proto SampleResult). The root solid of a valid sample stays in
+  // the evaluator's memory for ΔG, shared only on request (ShareLoop).
   v1::TaskResult EvaluateSample(JobContext& ctx, const sampling::SamplePoint& point) {
     design::SampleResult r = ctx.evaluator->Evaluate(point);
     sampling::SampleOutcome outcome;
@@ -571,7 +691,7 @@ class Worker {
     outcome.properties = r.properties;
     v1::TaskResult result = protocol::SampleResultOf(outcome);
     v1::SampleResult* sample = result.mutable_sample();
-    if (r.valid) sample->set_solid_digest(Upload(r.solid.Serialize()));
+    if (r.valid) ctx.shelf.Put(point.key, protocol::SolidBlobOf(r.solid));
     std::lock_guard lock(ctx.mu);
     for (const design::SubtreeRecord& rec : r.subtrees) {
       v1::SubtreeRecord* out = sample->add_subtrees();
@@ -593,16 +713,36 @@ class Worker {
   }
 
   // The root solid of a sample for ΔG: from this worker's memory, else the
-  // blob another worker uploaded, else evaluated again (deterministic, so all
-  // three are the same level set).
-  geometry::Solid SolidOf(JobContext& ctx, const sampling::SamplePoint& point, const std::string& digest) {
+  // blob named in the task (older coordinators), else shared by the worker
+  // holding it (FetchSolid), else evaluated again (deterministic, so all
+  // are the same level set).
+  geometry::Solid SolidOf(JobContext& ctx, const v1::Lease& lease, const sampling::SamplePoint& point,
+                          std::string digest, const std::string& holder) {
     if (auto solid = ctx.evaluator->RememberedSolid(point.key)) return *solid;
+    if (auto blob = ctx.shelf.Get(point.key)) {
+      geometry::Solid solid = protocol::SolidOfBlob(*blob);
+      ctx.evaluator->Remember(point.key, solid);
+      return solid;
+    }
+    if (digest.empty() && !holder.empty() && holder != o_.worker_id) {
+      v1::FetchSolidRequest req;
+      req.set_worker_id(o_.worker_id);
+      req.mutable_solid()->set_job_bundle_digest(lease.job_bundle_digest());
+      for (auto k : point.key) req.mutable_solid()->add_point_key(k);
+      req.set_holder_worker_id(holder);
+      req.set_max_wait_ms(5000);
+      v1::FetchSolidResponse resp;
+      grpc::ClientContext call;
+      protocol::Prepare(call, o_.security, std::chrono::milliseconds(20000));
+      if (stub_->FetchSolid(&call, req, &resp).ok()) digest = resp.digest();
+    }
     if (!digest.empty()) {
       std::string bytes;
       if (protocol::DownloadBlob(*blob_stub_, o_.security, digest, std::chrono::seconds(60), &bytes).ok()) {
         try {
-          geometry::Solid solid = geometry::Solid::Deserialize(bytes);
+          geometry::Solid solid = protocol::SolidOfBlob(bytes);
           ctx.evaluator->Remember(point.key, solid);
+          ctx.shelf.Put(point.key, std::move(bytes));
           ++solids_downloaded_;
           return solid;
         } catch (const InputError&) {
@@ -637,14 +777,16 @@ class Worker {
   bool sync_loop_waits_ = false;   // the sync loop waits for a slot thread's Sync
   std::int64_t heartbeat_ms_ = 2000;
   std::vector<std::thread> slots_;
-  std::thread heartbeat_;
+  std::thread heartbeat_, share_;
   std::thread stop_watch_;
   std::set<grpc::ClientContext*> calls_;  // calls under way (Call), under mu_
+  std::mutex share_mu_;
+  grpc::ClientContext* share_call_ = nullptr;  // the ShareSolids long poll under way
 
   std::mutex jobs_mu_;
   std::map<std::string, std::shared_ptr<JobContext>> jobs_;
   WorkerSummary summary_;
-  std::atomic<std::int64_t> blobs_uploaded_{0}, solids_downloaded_{0}, samples_reevaluated_{0};
+  std::atomic<std::int64_t> blobs_uploaded_{0}, solids_downloaded_{0}, samples_reevaluated_{0}, solids_shared_{0};
 };
 
 }  // namespace

@@ -6,9 +6,10 @@
 // leases from a separate thread (docs/protocol.md).
 //
 // Jobs are fetched once per job bundle digest from BlobService and unpacked
-// under cache_dir. Valid samples' root solids and slow subtrees are uploaded
-// as blobs and ΔG tasks download the solids they lack (tasks.proto "Geometry
-// blobs"). Reconnects with exponential backoff (200 ms doubling to
+// under cache_dir. Slow subtrees are uploaded as blobs; valid samples' root
+// solids stay in memory and are uploaded only when another worker's ΔG task
+// asks for one (a third thread long-polls ShareSolids), and ΔG tasks fetch
+// the solids they lack from their holder (tasks.proto "Geometry blobs"). Reconnects with exponential backoff (200 ms doubling to
 // 5 s) when the coordinator goes away, and keeps reporting its in-flight
 // leases and unsent results, so a restarted coordinator accepts them.
 #pragma once
@@ -36,6 +37,14 @@ struct WorkerOptions {
   // this time; after the first answer the worker retries forever.
   std::int64_t connect_timeout_ms = 30000;
   std::int64_t poll_ms = 5000;         // long-poll wait when idle
+  // Resident memory budget of the whole worker process, MiB (>= 256): 1/16
+  // of it holds the latest root solids as level sets, 5/16 root solids
+  // compressed (zstd, for ΔG and for sharing), 1/8 the subtree cache (all
+  // least recently used first out; a solid evicted everywhere is evaluated
+  // again), the other half is left to the running evaluations, the
+  // allocator's slack and the process.
+  // Measured peak resident set with 2 slots: docs/benchmarks.md.
+  std::int64_t memory_mb = 1024;
 };
 
 struct WorkerSummary {
@@ -43,7 +52,8 @@ struct WorkerSummary {
   std::int64_t results_acknowledged = 0;
   std::int64_t blobs_uploaded = 0;       // solids and subtrees (tasks.proto "Geometry blobs")
   std::int64_t solids_downloaded = 0;    // ΔG inputs another worker evaluated
-  std::int64_t samples_reevaluated = 0;  // ΔG inputs evaluated again (no blob, or it failed)
+  std::int64_t samples_reevaluated = 0;  // ΔG inputs evaluated again (no holder, or it lost them)
+  std::int64_t solids_shared = 0;        // root solids uploaded because another worker asked
 };
 
 // Runs until `stop` becomes true, then finishes the running tasks, reports
