@@ -6,6 +6,7 @@
 #include <grpcpp/grpcpp.h>
 #include <grpcpp/health_check_service_interface.h>
 #include <httplib.h>
+#include <sys/statvfs.h>
 
 #include <algorithm>
 #include <cctype>
@@ -26,6 +27,7 @@
 #include "fabatlas/design/design.h"
 #include "fabatlas/error.h"
 #include "fabatlas/log/log.h"
+#include "fabatlas/log/metrics_text.h"
 #include "fabatlas/mesh/write_mesh.h"
 #include "fabatlas/precompute/design_evaluator.h"
 #include "fabatlas/precompute/form_outputs.h"
@@ -71,6 +73,18 @@ std::string KindName(int kind) {
   if (name.rfind("TASK_KIND_", 0) == 0) name = name.substr(10);
   for (char& c : name) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
   return name.empty() ? std::to_string(kind) : name;
+}
+
+// The task kind of a result, named as KindName names kinds.
+std::string ResultKind(const v1::TaskResult& r) {
+  switch (r.result_case()) {
+    case v1::TaskResult::kSample: return "sample";
+    case v1::TaskResult::kGeometryChange: return "geometry_change";
+    case v1::TaskResult::kNoop: return "noop";
+    case v1::TaskResult::kSweptVolume: return "swept_volume";
+    case v1::TaskResult::kCachePlan: return "cache_plan";
+    default: return "unknown";
+  }
 }
 
 bool Terminal(storage::JobState s) {
@@ -126,6 +140,50 @@ struct Coordinator::Impl {
   std::thread metrics_thread;
   std::atomic<std::int64_t> last_retry_ms{0};
   std::atomic<std::int64_t> completed_total{0}, fenced_total{0}, duplicate_total{0};
+  std::atomic<std::int64_t> task_failures_total{0}, state_write_failures_total{0};
+  log::DurationHistogram task_seconds{"kind"};  // wall seconds of accepted results, by task kind
+
+  // The state directory cannot be written (full disk, read-only or
+  // removed): jobs stall until it can, losing nothing (workers keep their
+  // results, drivers replay). Operators are told at once: an error log
+  // line (then every 10 s while it lasts), the reason in every running
+  // job's status, and fabatlas_state_stalled / _write_failures_total.
+  std::atomic<bool> stalled{false};
+  std::mutex stall_mu;
+  std::string stall_reason;
+  std::int64_t stall_since_ms = 0, stall_logged_ms = 0, stall_last_ms = 0;
+  std::set<std::string> restart_drivers;  // jobs whose driver stopped on a state write; under drivers_mu
+
+  void StateWriteFailed(const std::string& where, const std::string& error) {
+    ++state_write_failures_total;
+    std::int64_t now = NowMs();
+    std::lock_guard lock(stall_mu);
+    if (!stalled) stall_since_ms = now;
+    stalled = true;
+    stall_last_ms = now;
+    stall_reason = error;
+    if (now - stall_logged_ms < 10000) return;
+    stall_logged_ms = now;
+    log::Error("state_write_failed", {{"where", where}, {"error", error}, {"state_dir", options.state_dir.string()},
+                                      {"stalled_ms", now - stall_since_ms}});
+  }
+  // A write succeeded; the stall ends once no write failed for 5 s (on a
+  // nearly full disk small writes succeed between failing large ones).
+  void StateWriteSucceeded() {
+    if (!stalled) return;
+    std::lock_guard lock(stall_mu);
+    if (!stalled || NowMs() - stall_last_ms < 5000) return;
+    stalled = false;
+    stall_logged_ms = 0;
+    log::Info("state_write_recovered", {{"stalled_ms", NowMs() - stall_since_ms}});
+  }
+  // "" when writes succeed, else why running jobs are stalled.
+  std::string StallText() {
+    if (!stalled) return "";
+    std::lock_guard lock(stall_mu);
+    return "coordinator cannot write its state for " + std::to_string((NowMs() - stall_since_ms) / 1000) +
+           " s: " + stall_reason;
+  }
 
   // tasks/s per job: (time, tasks done) samples over the last 10 s.
   std::mutex rate_mu;
@@ -738,6 +796,14 @@ struct Coordinator::Impl {
       CollectBlobs("job " + job_id + " published");
     } catch (const Stopping&) {
     } catch (const JobCancelled&) {
+    } catch (const ResourceError& e) {
+      // State or outputs could not be written: the job stays running and the
+      // sweeper starts the driver again (a replay) until they can.
+      StateWriteFailed("job " + job_id, e.what());
+      std::lock_guard lock(drivers_mu);
+      running_drivers.erase(job_id);
+      if (!stopping) restart_drivers.insert(job_id);
+      return;
     } catch (const std::exception& e) {
       if (!stopping) {
         log::Error("job_failed", {{"job", job_id}, {"error", e.what()}});
@@ -771,6 +837,7 @@ struct Coordinator::Impl {
     s.set_lease_expiries(c.lease_expiries);
     s.set_fenced_results(c.fenced_results);
     s.set_error(job.error);
+    if (job.state == storage::JobState::kRunning) s.set_stalled_reason(StallText());
     s.set_created_unix_ms(job.created_ms);
     s.set_finished_unix_ms(job.finished_ms);
     std::int64_t now = NowMs(), done = c.done + c.quarantined;
@@ -791,40 +858,68 @@ struct Coordinator::Impl {
   }
 
   std::string Metrics() {
-    std::ostringstream m;
+    log::MetricsText m;
     storage::TaskCounts c = store->CountTasks("");
     std::int64_t now = NowMs();
-    m << "# HELP fabatlas_tasks Tasks in the store by state.\n# TYPE fabatlas_tasks gauge\n";
-    m << "fabatlas_tasks{state=\"queued\"} " << c.queued << "\n";
-    m << "fabatlas_tasks{state=\"leased\"} " << c.leased << "\n";
-    m << "fabatlas_tasks{state=\"done\"} " << c.done << "\n";
-    m << "fabatlas_tasks{state=\"quarantined\"} " << c.quarantined << "\n";
-    m << "# HELP fabatlas_tasks_completed_total Results accepted since start-up (rate() = throughput).\n"
-         "# TYPE fabatlas_tasks_completed_total counter\n";
-    m << "fabatlas_tasks_completed_total " << completed_total.load() << "\n";
-    m << "# HELP fabatlas_results_fenced_total Late results of expired leases since start-up.\n"
-         "# TYPE fabatlas_results_fenced_total counter\n";
-    m << "fabatlas_results_fenced_total " << fenced_total.load() << "\n";
-    m << "# HELP fabatlas_lease_expiries Lease expiries recorded in the store.\n"
-         "# TYPE fabatlas_lease_expiries gauge\n";
-    m << "fabatlas_lease_expiries " << c.lease_expiries << "\n";
-    m << "# HELP fabatlas_workers Workers seen within two lease periods.\n# TYPE fabatlas_workers gauge\n";
-    m << "fabatlas_workers " << store->CountWorkers(now - 2 * options.lease_ms) << "\n";
+    for (const auto& [state, n] : {std::pair{"queued", c.queued}, {"leased", c.leased}, {"done", c.done},
+                                   {"quarantined", c.quarantined}})
+      m.Gauge("fabatlas_tasks", "Tasks in the store by state.", static_cast<double>(n), {{"state", state}});
+    m.Counter("fabatlas_tasks_completed_total", "Results accepted since start-up (rate() = throughput).",
+              static_cast<double>(completed_total.load()));
+    m.Counter("fabatlas_task_failures_total", "Tasks a worker reported it could not run, since start-up.",
+              static_cast<double>(task_failures_total.load()));
+    m.Counter("fabatlas_results_fenced_total", "Late results of expired leases since start-up.",
+              static_cast<double>(fenced_total.load()));
+    m.Counter("fabatlas_results_duplicate_total", "Results of tasks already finished since start-up.",
+              static_cast<double>(duplicate_total.load()));
+    m.Counter("fabatlas_lease_expiries_total", "Lease expiries recorded in the store (all jobs, all time).",
+              static_cast<double>(c.lease_expiries));
+    task_seconds.Write(m, "fabatlas_task_duration_seconds", "Wall time of accepted task results, by task kind.");
+    m.Gauge("fabatlas_workers", "Workers seen within two lease periods.",
+            static_cast<double>(store->CountWorkers(now - 2 * options.lease_ms)));
     std::map<int, int> jobs;
-    for (const auto& j : store->Jobs()) ++jobs[static_cast<int>(j.state)];
-    m << "# HELP fabatlas_jobs Jobs by state.\n# TYPE fabatlas_jobs gauge\n";
-    for (int st = 1; st <= 5; ++st)
-      m << "fabatlas_jobs{state=\"" << v1::JobState_Name(static_cast<v1::JobState>(st)).substr(10)
-        << "\"} " << jobs[st] << "\n";
-    m << "# HELP fabatlas_blobs_collected_total Blobs removed by the collector since start-up.\n"
-         "# TYPE fabatlas_blobs_collected_total counter\n";
-    m << "fabatlas_blobs_collected_total " << blobs_collected_total.load() << "\n";
-    m << "# HELP fabatlas_blob_bytes_collected_total Bytes of blobs removed by the collector since start-up.\n"
-         "# TYPE fabatlas_blob_bytes_collected_total counter\n";
-    m << "fabatlas_blob_bytes_collected_total " << blob_bytes_collected_total.load() << "\n";
-    m << "# HELP fabatlas_draining 1 while the coordinator drains.\n# TYPE fabatlas_draining gauge\n";
-    m << "fabatlas_draining " << (draining ? 1 : 0) << "\n";
-    return m.str();
+    std::vector<storage::JobRecord> running;
+    for (const auto& j : store->Jobs()) {
+      ++jobs[static_cast<int>(j.state)];
+      if (j.state == storage::JobState::kRunning) running.push_back(j);
+    }
+    for (int st = 1; st <= 5; ++st) {
+      std::string name = v1::JobState_Name(static_cast<v1::JobState>(st)).substr(10);
+      for (char& ch : name) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+      m.Gauge("fabatlas_jobs", "Jobs by state.", jobs[st], {{"state", name}});
+    }
+    // Progress of every running job (finished jobs drop out, so the series
+    // stay few). Tasks total grows round by round as the sampler subdivides.
+    for (const auto& j : running) {
+      storage::TaskCounts jc = store->CountTasks(j.id);
+      log::Labels id = {{"job", j.id}, {"design", j.design_name}};
+      for (const auto& [state, n] : {std::pair{"queued", jc.queued}, {"leased", jc.leased}, {"done", jc.done},
+                                     {"quarantined", jc.quarantined}}) {
+        log::Labels l = id;
+        l.emplace_back("state", state);
+        m.Gauge("fabatlas_job_tasks", "Tasks of a running job by state.", static_cast<double>(n), l);
+      }
+      m.Gauge("fabatlas_job_samples", "Samples evaluated so far in a running job.", static_cast<double>(jc.samples_done), id);
+      m.Gauge("fabatlas_job_valid_samples", "Valid samples so far in a running job.", static_cast<double>(jc.samples_valid), id);
+      m.Gauge("fabatlas_job_start_time_seconds", "When a running job was submitted (Unix time).",
+              static_cast<double>(j.created_ms) / 1000.0, id);
+    }
+    m.Counter("fabatlas_blobs_collected_total", "Blobs removed by the collector since start-up.",
+              static_cast<double>(blobs_collected_total.load()));
+    m.Counter("fabatlas_blob_bytes_collected_total", "Bytes of blobs removed by the collector since start-up.",
+              static_cast<double>(blob_bytes_collected_total.load()));
+    m.Gauge("fabatlas_draining", "1 while the coordinator drains.", draining ? 1 : 0);
+    m.Gauge("fabatlas_state_stalled", "1 while the state directory cannot be written (jobs wait, nothing is lost).",
+            stalled ? 1 : 0);
+    m.Counter("fabatlas_state_write_failures_total", "Failed writes of the store, blobs or job outputs since start-up.",
+              static_cast<double>(state_write_failures_total.load()));
+    struct statvfs fs_stat {};
+    if (::statvfs(options.state_dir.c_str(), &fs_stat) == 0)
+      m.Gauge("fabatlas_state_free_bytes", "Free bytes on the state directory's file system (for unprivileged users).",
+              static_cast<double>(fs_stat.f_bavail) * static_cast<double>(fs_stat.f_frsize));
+    m.Gauge("process_resident_memory_bytes", "Resident memory of the coordinator.",
+            static_cast<double>(log::ResidentMemoryBytes()));
+    return m.text();
   }
 
   void Sweep() {
@@ -834,8 +929,15 @@ struct Coordinator::Impl {
       try {
         std::int64_t now = NowMs();
         if (now - last_checkpoint_ms >= 1000) {
-          store->Checkpoint();
           last_checkpoint_ms = now;
+          store->Checkpoint();
+          StateWriteSucceeded();
+          std::set<std::string> restart;
+          {
+            std::lock_guard lock(drivers_mu);
+            restart.swap(restart_drivers);
+          }
+          for (const auto& id : restart) StartDriver(id);
         }
         auto expired = store->ExpireLeases(now, options.retry_backoff_ms, options.quarantine_after, QuarantineBytes);
         for (const auto& e : expired) {
@@ -875,7 +977,10 @@ struct Coordinator::Impl {
           last_collect_ms = now;
         }
         if (!expired.empty() || now - last_retry_ms < 31000) SignalWork();
-      } catch (const std::exception&) {
+      } catch (const ResourceError& e) {
+        StateWriteFailed("sweep", e.what());
+      } catch (const std::exception& e) {
+        log::Error("sweep_failed", {{"error", e.what()}});
       }
     }
   }
@@ -1065,6 +1170,7 @@ class WorkerServiceImpl final : public v1::WorkerService::Service {
         done.attempt = c.attempt();
         done.failed = !c.error().empty();
         done.error = c.error();
+        if (done.failed) ++impl_.task_failures_total;
         if (done.failed)
           log::Warn("task_failed", {{"task", c.task_key()}, {"worker", req->worker_id()}, {"attempt", c.attempt()},
                                     {"reason", c.error()}});
@@ -1075,6 +1181,7 @@ class WorkerServiceImpl final : public v1::WorkerService::Service {
         known.push_back(c.lease_id());
       }
       auto outcomes = impl_.store->Complete(completions, now, o.retry_backoff_ms, o.quarantine_after, QuarantineBytes);
+      if (!completions.empty()) impl_.StateWriteSucceeded();
       bool requeued = false;
       std::vector<Coordinator::Impl::Delivery> accepted;
       for (std::size_t i = 0; i < outcomes.size(); ++i) {
@@ -1082,6 +1189,8 @@ class WorkerServiceImpl final : public v1::WorkerService::Service {
         switch (outcomes[i]) {
           case storage::CompletionOutcome::kAccepted:
             ++impl_.completed_total;
+            impl_.task_seconds.Observe(ResultKind(req->completed(static_cast<int>(i)).result()),
+                                       req->completed(static_cast<int>(i)).result().wall_seconds());
             accepted.push_back({&completions[i].task_key, &completions[i].result});
             break;
           case storage::CompletionOutcome::kFenced: ++impl_.fenced_total; break;
@@ -1142,6 +1251,9 @@ class WorkerServiceImpl final : public v1::WorkerService::Service {
         lease->set_deadline_unix_ms(g.deadline_ms);
       }
       return Status::OK;
+    } catch (const ResourceError& e) {
+      impl_.StateWriteFailed("sync", e.what());
+      return FromException(e);
     } catch (const std::exception& e) {
       return FromException(e);
     }
@@ -1233,6 +1345,7 @@ class BlobServiceImpl final : public v1::BlobService::Service {
           try {
             impl_.blobs->Finish(digest);
           } catch (const ResourceError& e) {
+            impl_.StateWriteFailed("blob", e.what());
             return Status(StatusCode::RESOURCE_EXHAUSTED, e.what());
           } catch (const InputError& e) {
             return Status(StatusCode::DATA_LOSS, e.what());
@@ -1241,6 +1354,7 @@ class BlobServiceImpl final : public v1::BlobService::Service {
         }
       }
     } catch (const ResourceError& e) {
+      impl_.StateWriteFailed("blob", e.what());
       return Status(StatusCode::RESOURCE_EXHAUSTED, e.what());
     } catch (const InputError& e) {
       return Status(StatusCode::FAILED_PRECONDITION, e.what());

@@ -182,6 +182,7 @@ std::string ProgressLine(const v1::JobStatus& s) {
                 static_cast<long long>(s.samples_done()), valid, static_cast<long long>(s.tasks_done()),
                 static_cast<long long>(s.tasks_total()), s.tasks_per_second(), eta.c_str(),
                 static_cast<long long>(s.lease_expiries()), static_cast<long long>(s.tasks_quarantined()));
+  if (!s.stalled_reason().empty()) return std::string(buffer) + "  STALLED: " + s.stalled_reason();
   return buffer;
 }
 

@@ -1,11 +1,17 @@
 // Operations as an operator meets them (issue 16): real coordinator and
 // worker processes on loopback, their JSON log lines, SIGTERM, and the CLI
 // with paths typed the way users type them.
+#include <arpa/inet.h>
 #include <gtest/gtest.h>
+#include <netinet/in.h>
 #include <nlohmann/json.hpp>
+#include <sys/mount.h>
+#include <sys/socket.h>
 
 #include <array>
+#include <cerrno>
 #include <cstdio>
+#include <cstring>
 #include <map>
 #include <set>
 #include <sstream>
@@ -188,6 +194,106 @@ TEST(OpsCli, JobFileAndOutWithoutADirectoryPart) {
   ASSERT_EQ(run_status, 0) << run_out;
   EXPECT_EQ(ReadText(dir / "cluster/form.json"), ReadText(dir / "full/form.json"));
   fs::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace fabatlas::ops_test
+
+namespace fabatlas::ops_test {
+namespace {
+
+// The free TCP port the kernel hands out for 127.0.0.1:0 (released at once;
+// a race with another process is possible but unlikely).
+int FreePort() {
+  int fd = ::socket(AF_INET, SOCK_STREAM, 0);
+  sockaddr_in addr{};
+  addr.sin_family = AF_INET;
+  addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  ::bind(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr);
+  socklen_t len = sizeof addr;
+  ::getsockname(fd, reinterpret_cast<sockaddr*>(&addr), &len);
+  ::close(fd);
+  return ntohs(addr.sin_port);
+}
+
+// A full disk under the coordinator's state: the job stalls, the operator
+// is told at once (an error log line, the reason in `fabatlas status`, the
+// fabatlas_state_stalled metric), and when space comes back the job
+// finishes with the same form as an in-process run: nothing lost.
+TEST(OpsDiskFull, CoordinatorStateOnAFullFileSystemStallsVisiblyAndLosesNothing) {
+  if (::geteuid() != 0) GTEST_SKIP() << "mounting a small tmpfs needs root";
+  fs::path dir = FreshDir("ops_diskfull");
+  fs::path mnt = dir / "mnt";
+  fs::create_directories(mnt);
+  ASSERT_EQ(::mount("tmpfs", mnt.c_str(), "tmpfs", 0, "size=64m"), 0) << std::strerror(errno);
+  struct Unmount {
+    fs::path p;
+    ~Unmount() { ::umount2(p.c_str(), MNT_DETACH); }
+  } unmount{mnt};
+  const int metrics_port = FreePort();
+  // The log goes beside the small file system, not onto it.
+  const fs::path log = dir / "coordinator.log";
+  CoordinatorProcess c;
+  c.pid = Spawn({(BinDir() / "fabatlas-coordinator").string(), "--listen", "127.0.0.1:0", "--state-dir",
+                 (mnt / "state").string(), "--port-file", (dir / "port").string(), "--log-format", "json",
+                 "--metrics", "127.0.0.1:" + std::to_string(metrics_port)},
+                log);
+  ASSERT_TRUE(WaitForText(dir / "port", "\n", c.pid)) << ReadText(log);
+  c.port = std::atoi(ReadText(dir / "port").c_str());
+  std::string id = Client(c.port).Submit(JobPath());
+  // The driver has queued the first round; no worker yet. Now fill the disk.
+  for (int i = 0; i < 500 && Client(c.port).Status(id).tasks_queued() == 0; ++i)
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  {
+    std::ofstream filler(mnt / "filler", std::ios::binary);
+    std::string block(1 << 20, 'x');
+    while (filler.write(block.data(), static_cast<std::streamsize>(block.size()))) {
+    }
+  }
+  pid_t w = StartWorker(c.port, dir / "w", {"--log-format", "json"});
+  v1::JobStatus s;
+  for (int i = 0; i < 600 && s.stalled_reason().empty(); ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    s = Client(c.port).Status(id);
+  }
+  EXPECT_EQ(s.state(), v1::JOB_STATE_RUNNING);
+  EXPECT_NE(s.stalled_reason().find("cannot write its state"), std::string::npos) << s.stalled_reason();
+  EXPECT_NE(coordinator::ProgressLine(s).find("STALLED: "), std::string::npos);
+  auto [status_code, status_out] = Shell(dir, (BinDir() / "fabatlas").string() + " status " + id +
+                                                  " --coordinator 127.0.0.1:" + std::to_string(c.port));
+  EXPECT_EQ(status_code, 0);
+  EXPECT_NE(status_out.find("STALLED: coordinator cannot write its state"), std::string::npos) << status_out;
+  auto [curl_code, metrics] = Shell(dir, "curl -sf http://127.0.0.1:" + std::to_string(metrics_port) + "/metrics");
+  ASSERT_EQ(curl_code, 0) << metrics;
+  EXPECT_NE(metrics.find("\nfabatlas_state_stalled 1\n"), std::string::npos) << metrics;
+  EXPECT_NE(metrics.find("\nfabatlas_state_free_bytes 0\n"), std::string::npos) << metrics;
+  EXPECT_EQ(metrics.find("\nfabatlas_state_write_failures_total 0\n"), std::string::npos) << metrics;
+  bool logged = false;
+  for (const auto& j : JsonLines(log))
+    if (j["event"] == "state_write_failed") {
+      logged = true;
+      EXPECT_EQ(j["level"], "error");
+      EXPECT_NE(j["error"].get<std::string>().find(mnt.string()), std::string::npos) << j;
+    }
+  EXPECT_TRUE(logged) << ReadText(log);
+
+  // Space comes back: the job finishes, and its form is the in-process one.
+  fs::remove(mnt / "filler");
+  s = WaitForJob(c.port, id, std::chrono::seconds(240));
+  EXPECT_EQ(s.state(), v1::JOB_STATE_SUCCEEDED) << s.error();
+  EXPECT_TRUE(s.stalled_reason().empty()) << s.stalled_reason();
+  auto outputs = Client(c.port).Fetch(id);
+  auto [sample_code, sample_out] = Shell(dir, (BinDir() / "fabatlas").string() + " sample " + JobPath().string() +
+                                                  " --out reference");
+  ASSERT_EQ(sample_code, 0) << sample_out;
+  EXPECT_EQ(outputs["form.json"], ReadText(dir / "reference/form.json"));
+  ::kill(w, SIGTERM);
+  EXPECT_EQ(WaitExit(w, std::chrono::seconds(30)), 0);
+  ::kill(c.pid, SIGTERM);
+  EXPECT_EQ(WaitExit(c.pid, std::chrono::seconds(30)), 0);
+  bool recovered = false;
+  for (const auto& j : JsonLines(log)) recovered |= j["event"] == "state_write_recovered";
+  EXPECT_TRUE(recovered);
 }
 
 }  // namespace

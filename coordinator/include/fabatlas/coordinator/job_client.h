@@ -57,7 +57,8 @@ class JobClient {
 
 // "RUNNING" etc.
 std::string JobStateName(v1::JobState state);
-// One progress line: "job 1a2b… RUNNING  samples 120 (37.5% valid)  tasks 300/410  12.0 tasks/s  ETA 9 s  expiries 2".
+// One progress line: "job 1a2b… RUNNING  samples 120 (37.5% valid)  tasks 300/410  12.0 tasks/s  ETA 9 s  expiries 2",
+// ending "  STALLED: <why>" while the coordinator reports the job stalled.
 std::string ProgressLine(const v1::JobStatus& status);
 
 }  // namespace fabatlas::coordinator
