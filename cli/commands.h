@@ -5,6 +5,8 @@
 #pragma once
 
 #include <CLI/CLI.hpp>
+#include <filesystem>
+#include <string>
 
 namespace fabatlas::cli {
 
@@ -26,7 +28,13 @@ void AddInspectCommands(CLI::App& app, int& exit_code);
 // prototype: solve a works-like prototype, export STL (cli/prototype_commands.cpp).
 void AddPrototypeCommands(CLI::App& app, int& exit_code);
 
-// serve: the web customiser and its API over HTTP (cli/viewer_commands.cpp).
+// serve, export: the web customiser and its API over HTTP, the design at a
+// point as a file (cli/viewer_commands.cpp).
 void AddViewerCommands(CLI::App& app, int& exit_code);
+
+// The artifact an ART argument names, as serve, export and inspect take it:
+// the file itself, or the run directory holding exactly one *.fabatlas.
+// Throws InputError naming `arg` otherwise.
+std::filesystem::path ArtifactPath(const std::string& arg);
 
 }  // namespace fabatlas::cli

@@ -83,7 +83,7 @@ std::string TimesText(const std::optional<precompute::PreviewTimes>& t) {
 }
 
 void Inspect(const InspectArgs& a, int& exit_code) {
-  const fs::path path = a.artifact;
+  const fs::path path = ArtifactPath(a.artifact);  // the file, or the run directory holding it (as serve)
   if (a.points < 0) throw InputError("inspect: --points must be >= 0");
   const storage::Artifact art = storage::ReadArtifact(path);
   const storage::Manifest& m = art.manifest;
@@ -195,7 +195,7 @@ void Inspect(const InspectArgs& a, int& exit_code) {
 void AddInspectCommands(CLI::App& app, int& exit_code) {
   auto a = std::make_shared<InspectArgs>();
   auto* inspect = app.add_subcommand("inspect", "show an artifact's seed-001 Table 3 and Fig. 14 rows, plot Fig. 13");
-  inspect->add_option("artifact", a->artifact, "a published artifact (<design>.fabatlas)")->required();
+  inspect->add_option("artifact", a->artifact, "an artifact (<design>.fabatlas) or the run directory holding it")->required();
   inspect->add_flag("--json", a->json, "print JSON");
   inspect->add_option("--png", a->png, "where to write the Fig. 13 curves (default: ART with .fig13.png)");
   inspect->add_option("--points", a->points, "random valid points for the preview times (default 200)");

@@ -192,7 +192,10 @@ TEST_F(Server, OnlyThePageAndTheApiAreReachable) {
         "/assets/%2e%2e/%2e%2e/secret.txt", "/api/../../secret.txt", "//etc/passwd", "/../../../../etc/passwd",
         "/index.html/../../secret.txt", "/form.json", "/" + RunDir().string() + "/form.json"}) {
     auto r = raw.Get(path);
-    if (!r) continue;  // refused outright is fine too
+    // Refused outright is fine too, but the server must still be answering.
+    auto alive = Get("/api/form");
+    ASSERT_TRUE(alive && alive->status == 200) << "server gone after " << path;
+    if (!r) continue;
     EXPECT_NE(r->status, 200) << path;
     EXPECT_EQ(r->body.find("SECRET"), std::string::npos) << path;
     EXPECT_EQ(r->body.find("root:"), std::string::npos) << path;
@@ -208,6 +211,106 @@ TEST_F(Server, MapMarksTheCurrentPointsCellValid) {
   const int bad = m["cells"][0 * 25 + 24];
   ASSERT_GE(bad, 0);
   EXPECT_EQ(m["failures"][bad], "unsat_constraints");
+}
+
+TEST_F(Server, ExportSendsTheSameBytesAsTheCommandAndRefusesWithItsText) {
+  // The command's file for the same point.
+  const fs::path stl = dir_ / "cli.stl";
+  const pid_t pid = Spawn({(testing::BinDir() / "fabatlas").string(), "export", RunDir().string(), "--at",
+                           "radius=15,wall=6", "--out", stl.string()},
+                          dir_ / "export.log");
+  ASSERT_EQ(WaitExit(pid, std::chrono::minutes(3)), 0) << ReadText(dir_ / "export.log");
+  auto r = Get("/api/export?u=15,6&format=stl");
+  ASSERT_TRUE(r);
+  ASSERT_EQ(r->status, 200) << r->body;
+  EXPECT_EQ(r->body, ReadText(stl));
+  EXPECT_NE(r->get_header_value("Content-Disposition").find("attachment; filename=\"tube_wall_2d-radius=15_wall=6.stl\""),
+            std::string::npos);
+  auto three = Get("/api/export?u=15,6&format=3mf");
+  ASSERT_TRUE(three);
+  EXPECT_EQ(three->status, 200);
+  EXPECT_EQ(three->body.substr(0, 4), std::string("PK\x03\x04"));
+  // An invalid point: 400 with the command's one line (after "fabatlas: ").
+  const pid_t bad = Spawn({(testing::BinDir() / "fabatlas").string(), "export", RunDir().string(), "--at",
+                           "radius=29,wall=1", "--out", (dir_ / "bad.stl").string()},
+                          dir_ / "bad.log");
+  ASSERT_EQ(WaitExit(bad, std::chrono::minutes(3)), 2);
+  auto refused = Get("/api/export?u=29,1&format=stl");
+  ASSERT_TRUE(refused);
+  EXPECT_EQ(refused->status, 400);
+  EXPECT_EQ("fabatlas: " + refused->body, ReadText(dir_ / "bad.log"));
+  auto format = Get("/api/export?u=15,6&format=3ds");
+  ASSERT_TRUE(format);
+  EXPECT_EQ(format->status, 400);
+}
+
+TEST_F(Server, OtherMethodsGet405AndTheServerStaysUp) {
+  for (const std::string path : {"/api/form", "/", "/api/export"}) {
+    auto post = client_->Post(path.c_str(), "x", "text/plain");
+    ASSERT_TRUE(post) << path;
+    EXPECT_EQ(post->status, 405) << path;
+    EXPECT_EQ(post->get_header_value("Allow"), "GET");
+    auto del = client_->Delete(path.c_str());
+    ASSERT_TRUE(del) << path;
+    EXPECT_EQ(del->status, 405) << path;
+  }
+  auto form = Get("/api/form");
+  ASSERT_TRUE(form);
+  EXPECT_EQ(form->status, 200);
+}
+
+TEST_F(Server, PreviewsComeFromTheCacheOnceEvaluated) {
+  auto first = Get("/api/preview.glb?u=15,6");
+  auto again = Get("/api/preview.glb?u=15.01,6.01");  // snaps to the same sample
+  ASSERT_TRUE(first && again);
+  ASSERT_EQ(first->get_header_value("X-Sample"), again->get_header_value("X-Sample"));
+  EXPECT_EQ(again->get_header_value("X-Preview-Cache"), "hit");
+  EXPECT_EQ(first->body, again->body);
+}
+
+// `fabatlas serve` refuses what it cannot serve with one line and exit 2.
+TEST(ServeErrors, MissingOrDamagedArtifactAndABusyPortAreOneLine) {
+  const fs::path dir = testing::FreshTempDir("viewer-serve-errors");
+  const auto serve = [&](const std::vector<std::string>& args, const std::string& name) {
+    std::vector<std::string> argv = {(testing::BinDir() / "fabatlas").string(), "serve"};
+    argv.insert(argv.end(), args.begin(), args.end());
+    const pid_t pid = Spawn(argv, dir / name);
+    const int status = WaitExit(pid, std::chrono::seconds(60));
+    if (status == -1) KillAndReap(pid);
+    return std::make_pair(status, ReadText(dir / name));
+  };
+  auto [missing_status, missing] = serve({(dir / "nothing").string(), "--port", "0"}, "missing.log");
+  EXPECT_EQ(missing_status, 2);
+  EXPECT_EQ(std::count(missing.begin(), missing.end(), '\n'), 1) << missing;
+  EXPECT_NE(missing.find("nothing"), std::string::npos) << missing;
+  // A damaged artifact: the real one cut in half.
+  fs::path art;
+  for (const auto& e : fs::directory_iterator(RunDir()))
+    if (e.path().extension() == ".fabatlas") art = e.path();
+  const std::string bytes = ReadText(art);
+  std::ofstream(dir / "cut.fabatlas", std::ios::binary) << bytes.substr(0, bytes.size() / 2);
+  auto [cut_status, cut] = serve({(dir / "cut.fabatlas").string(), "--port", "0"}, "cut.log");
+  EXPECT_EQ(cut_status, 2);
+  EXPECT_EQ(std::count(cut.begin(), cut.end(), '\n'), 1) << cut;
+  EXPECT_NE(cut.find("cut.fabatlas"), std::string::npos) << cut;
+  // A port already taken: another fabatlas serve listens on it.
+  const pid_t first = Spawn({(testing::BinDir() / "fabatlas").string(), "serve", art.string(), "--port", "0",
+                             "--preview-cache-mb", "0"},
+                            dir / "first.log");
+  int port = 0;
+  const std::regex listening(R"(at http://127\.0\.0\.1:(\d+)/)");
+  for (int i = 0; i < 3000 && port == 0; ++i) {
+    std::smatch m;
+    const std::string text = ReadText(dir / "first.log");
+    if (std::regex_search(text, m, listening)) port = std::stoi(m[1]);
+    else if (WaitExit(first, std::chrono::milliseconds(20)) != -1) break;
+  }
+  ASSERT_GT(port, 0) << ReadText(dir / "first.log");
+  auto [busy_status, busy] = serve({art.string(), "--port", std::to_string(port)}, "busy.log");
+  EXPECT_EQ(busy_status, 2);
+  EXPECT_EQ(std::count(busy.begin(), busy.end(), '\n'), 1) << busy;
+  EXPECT_NE(busy.find(std::to_string(port)), std::string::npos) << busy;
+  KillAndReap(first);
 }
 
 }  // namespace

@@ -12,6 +12,7 @@
 #include "fabatlas/precompute/design_evaluator.h"
 #include "fabatlas/sampling/form_json.h"
 #include "fabatlas/storage/artifact.h"
+#include "fabatlas/storage/glb.h"
 #include "fabatlas/viewer/starting_points.h"
 
 namespace fabatlas::viewer {
@@ -127,8 +128,9 @@ std::vector<MaterialReadout> MaterialReadouts(double volume_mm3, const std::vect
   return out;
 }
 
-Customiser::Customiser(CustomiserSource source)
-    : source_(std::move(source)), space_(source_.form.space()) {
+Customiser::Customiser(CustomiserSource source, PreviewCacheOptions preview_cache)
+    : source_(std::move(source)), space_(source_.form.space()),
+      preview_options_(preview_cache), previews_(std::make_unique<PreviewCache>(preview_cache)) {
   starting_points_ = source_.starting_points.empty() ? StartingPoints(source_.form) : source_.starting_points;
   cache_ = std::make_unique<FixedSubtreeCache>(source_.cache);
 }
@@ -166,6 +168,40 @@ PreviewResult Customiser::Preview(std::int64_t sample, bool with_cache) const {
   out.subtrees = static_cast<int>(r.subtrees.size());
   for (const auto& t : r.subtrees) out.cache_hits += t.from_cache;
   return out;
+}
+
+std::shared_ptr<const EncodedPreview> Customiser::PreviewGlb(std::int64_t sample, bool* hit) const {
+  return previews_->Get(
+      sample,
+      [this](std::int64_t id) {
+        const PreviewResult p = Preview(id);
+        EncodedPreview e;
+        e.sample = id;
+        e.glb = storage::MeshToGlb(p.solid.ToMesh());
+        e.seconds = p.seconds;
+        e.subtrees = p.subtrees;
+        e.cache_hits = p.cache_hits;
+        return e;
+      },
+      hit);
+}
+
+int Customiser::WarmPreviews(const std::atomic<bool>& stop) const {
+  if (!source_.design || preview_options_.max_bytes == 0) return 0;
+  std::vector<std::int64_t> order = starting_points_;
+  for (std::size_t id = 0; id < source_.form.samples.size(); ++id)
+    if (source_.form.samples[id].outcome.valid) order.push_back(static_cast<std::int64_t>(id));
+  int evaluated = 0;
+  std::size_t typical = 0;
+  for (const std::int64_t id : order) {
+    if (stop.load()) break;
+    if (typical && previews_->stats().bytes + typical > preview_options_.max_bytes) break;
+    bool hit = false;
+    const auto p = PreviewGlb(id, &hit);
+    if (!typical) typical = p->glb.size();
+    evaluated += !hit;
+  }
+  return evaluated;
 }
 
 }  // namespace fabatlas::viewer

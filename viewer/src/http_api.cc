@@ -9,6 +9,7 @@
 
 #include "fabatlas/error.h"
 #include "fabatlas/storage/glb.h"
+#include "fabatlas/viewer/export_design.h"
 
 namespace fabatlas::viewer {
 
@@ -162,13 +163,32 @@ ApiResponse Route(const Customiser& c, const std::string& path, const std::map<s
   if (path == "/api/preview.glb") {
     const auto u = ParsePoint(c, query);
     if (!c.source().design) throw BadRequest{"this form has no design to preview"};
-    const PreviewResult p = c.Preview(SnapOrFail(c, u));
+    bool hit = false;
+    const auto p = c.PreviewGlb(SnapOrFail(c, u), &hit);
     ApiResponse r;
     r.content_type = "model/gltf-binary";
-    r.body = storage::MeshToGlb(p.solid.ToMesh());
-    r.headers["X-Sample"] = std::to_string(p.sample);
-    r.headers["X-Preview-Seconds"] = std::to_string(p.seconds);
-    r.headers["X-Cache-Hits"] = std::to_string(p.cache_hits) + "/" + std::to_string(p.subtrees);
+    r.shared_body = std::shared_ptr<const std::string>(p, &p->glb);
+    r.headers["X-Sample"] = std::to_string(p->sample);
+    r.headers["X-Preview-Seconds"] = std::to_string(p->seconds);
+    r.headers["X-Cache-Hits"] = std::to_string(p->cache_hits) + "/" + std::to_string(p->subtrees);
+    r.headers["X-Preview-Cache"] = hit ? "hit" : "miss";
+    return r;
+  }
+  if (path == "/api/export") {
+    const auto u = ParsePoint(c, query);
+    ExportOptions options;
+    const auto f = query.find("format");
+    options.format = f == query.end() ? "stl" : f->second;
+    const ExportResult e = ExportDesign(c, u, options);
+    ApiResponse r;
+    r.content_type = options.format == "glb"   ? "model/gltf-binary"
+                     : options.format == "3mf" ? "model/3mf"
+                     : options.format == "stl" ? "model/stl"
+                                               : "model/obj";
+    r.body = e.bytes;
+    r.headers["Content-Disposition"] = "attachment; filename=\"" + e.file_name + "\"";
+    r.headers["X-Voxel-Size"] = std::to_string(e.voxel_size);
+    r.headers["X-Triangles"] = std::to_string(e.triangles);
     return r;
   }
   if (path == "/api/map") {
@@ -225,6 +245,13 @@ ApiResponse HandleApiRequest(const Customiser& c, const std::string& path, const
     r.status = 400;
     r.content_type = "text/plain";
     r.body = std::string(e.what()) + "\n";
+    return r;
+  } catch (const std::exception& e) {
+    // A fault of ours, not of the request: answered, never a dropped connection.
+    ApiResponse r;
+    r.status = 500;
+    r.content_type = "text/plain";
+    r.body = std::string("internal error: ") + e.what() + "\n";
     return r;
   }
 }

@@ -52,7 +52,16 @@ void Serve(const Customiser& customiser, const ServeOptions& options, const std:
     res.status = r.status;
     for (const auto& [k, v] : r.headers) res.set_header(k, v);
     res.set_header("Cache-Control", "no-store");
-    res.set_content(r.body, r.content_type);
+    if (r.shared_body) {
+      // Sent from the shared bytes (a cached preview) without copying them.
+      auto body = r.shared_body;
+      res.set_content_provider(body->size(), r.content_type.c_str(),
+                               [body](std::size_t offset, std::size_t length, httplib::DataSink& sink) {
+                                 return sink.write(body->data() + offset, length);
+                               });
+    } else {
+      res.set_content(r.body, r.content_type);
+    }
   });
   // Everything else: only the page's own files, looked up by exact path.
   server.Get(R"(.*)", [&](const httplib::Request& req, httplib::Response& res) {
@@ -64,8 +73,24 @@ void Serve(const Customiser& customiser, const ServeOptions& options, const std:
     }
     res.set_content(it->second, ContentType(it->first == "/" ? "/index.html" : it->first).c_str());
   });
+  // Only GET: anything else is 405 with one line.
+  const auto not_allowed = [](const httplib::Request& req, httplib::Response& res) {
+    res.status = 405;
+    res.set_header("Allow", "GET");
+    res.set_content(req.method + " is not allowed here; the customiser's API answers GET only\n", "text/plain");
+  };
+  server.Post(R"(.*)", not_allowed);
+  server.Put(R"(.*)", not_allowed);
+  server.Delete(R"(.*)", not_allowed);
+  server.Patch(R"(.*)", not_allowed);
   server.set_error_handler([](const httplib::Request&, httplib::Response& res) {
     if (res.body.empty()) res.set_content("error " + std::to_string(res.status) + "\n", "text/plain");
+  });
+  // SO_REUSEADDR only: httplib's default also sets SO_REUSEPORT, with which
+  // a second server on a taken port would bind and share its connections.
+  server.set_socket_options([](socket_t sock) {
+    int yes = 1;
+    setsockopt(sock, SOL_SOCKET, SO_REUSEADDR, reinterpret_cast<const void*>(&yes), sizeof(yes));
   });
   int port = options.port;
   if (port == 0) {

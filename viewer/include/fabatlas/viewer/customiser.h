@@ -7,6 +7,7 @@
 // evaluates the design on its own; the subtree cache is read-only).
 #pragma once
 
+#include <atomic>
 #include <cstdint>
 #include <filesystem>
 #include <map>
@@ -20,6 +21,7 @@
 #include "fabatlas/geometry/solid.h"
 #include "fabatlas/sampling/form.h"
 #include "fabatlas/sampling/job_file.h"
+#include "fabatlas/viewer/preview_cache.h"
 #include "fabatlas/viewer/snap.h"
 #include "fabatlas/viewer/valid_region.h"
 
@@ -79,7 +81,8 @@ struct PreviewResult {
 
 class Customiser {
  public:
-  explicit Customiser(CustomiserSource source);
+  explicit Customiser(CustomiserSource source, PreviewCacheOptions preview_cache = {});
+  const PreviewCacheOptions& preview_cache_options() const { return preview_options_; }
   ~Customiser();
   Customiser(const Customiser&) = delete;  // the cache refers into source_
   Customiser& operator=(const Customiser&) = delete;
@@ -104,11 +107,28 @@ class Customiser {
   // with_cache = false ignores the cache (the "no cache" baseline).
   PreviewResult Preview(std::int64_t sample, bool with_cache = true) const;
 
+  // The sample's preview as glTF binary (storage::MeshToGlb), from the
+  // bounded cache of encoded previews (preview_cache.h) or evaluated with
+  // Preview() and stored; `hit` says which.
+  std::shared_ptr<const EncodedPreview> PreviewGlb(std::int64_t sample, bool* hit = nullptr) const;
+  PreviewCache::Stats preview_cache_stats() const { return previews_->stats(); }
+
+  // Fills the preview cache ahead of requests: the starting points, then
+  // every valid sample in id order, each evaluated once on the calling
+  // thread, until all are cached, the next would exceed the cache's
+  // max_bytes (the first preview's size is taken as typical), or `stop`
+  // becomes true. Returns the number evaluated. `fabatlas serve` runs it on
+  // one background thread, so a shared customiser evaluates each preview
+  // at most once while it fits.
+  int WarmPreviews(const std::atomic<bool>& stop) const;
+
  private:
   CustomiserSource source_;
   sampling::DesignSpace space_;
   std::vector<std::int64_t> starting_points_;
   std::unique_ptr<design::SubtreeCache> cache_;
+  PreviewCacheOptions preview_options_;
+  std::unique_ptr<PreviewCache> previews_;
 };
 
 }  // namespace fabatlas::viewer

@@ -7,13 +7,17 @@
 //   GET /api/properties?u=..       the snapped sample's properties and material cost/weight
 //   GET /api/preview.glb?u=..      the snapped sample's geometry as glTF binary
 //   GET /api/map?a=i&b=j&n=N&u=..  N x N validity map over parameters i and j through u
+//   GET /api/export?u=..&format=F  the design at exactly u as a file (export_design.h)
 //
 // u lists one value per parameter in the form's order (enumerated: the value
 // index). Bad requests (unparsable or non-finite numbers, wrong arity, a value
-// outside its range, unknown route) answer 400/404 with a one-line reason.
+// outside its range, a point outside the valid region for an export, unknown
+// route) answer 400/404 with a one-line reason; any other exception is a 500
+// with its reason. Never throws.
 #pragma once
 
 #include <map>
+#include <memory>
 #include <string>
 
 #include "fabatlas/viewer/customiser.h"
@@ -24,7 +28,12 @@ struct ApiResponse {
   int status = 200;
   std::string content_type = "application/json";
   std::string body;
+  // When set, the body instead of `body`, shared rather than copied (a
+  // cached preview).
+  std::shared_ptr<const std::string> shared_body;
   std::map<std::string, std::string> headers;
+
+  const std::string& bytes() const { return shared_body ? *shared_body : body; }
 };
 
 // path: the request path ("/api/..."); query: decoded query parameters.

@@ -1,0 +1,101 @@
+#include "fabatlas/viewer/export_design.h"
+
+#include <chrono>
+#include <cctype>
+#include <cmath>
+#include <limits>
+#include <sstream>
+
+#include "fabatlas/design/evaluate_sample.h"
+#include "fabatlas/error.h"
+#include "fabatlas/mesh/mesh_report.h"
+#include "fabatlas/mesh/write_mesh.h"
+#include "fabatlas/precompute/design_evaluator.h"
+#include "fabatlas/storage/glb.h"
+
+namespace fabatlas::viewer {
+
+double FabricationVoxelSize(double design_voxel_size_mm) { return design_voxel_size_mm / 2; }
+
+std::string PointText(const Customiser& c, const std::vector<double>& u) {
+  std::ostringstream out;
+  out.precision(6);
+  for (int d = 0; d < c.dimension_count() && d < static_cast<int>(u.size()); ++d) {
+    const auto& dim = c.space().dimension(d);
+    if (d) out << ',';
+    out << dim.name << '=';
+    const auto i = static_cast<std::size_t>(std::llround(u[d]));
+    if (dim.kind == sampling::DimensionKind::kEnumerated && i < dim.values.size()) out << dim.values[i];
+    else out << u[d];
+  }
+  return out.str();
+}
+
+std::int64_t NearestValidSample(const Customiser& c, const std::vector<double>& u) {
+  std::int64_t best = -1;
+  double best_d = std::numeric_limits<double>::infinity();
+  const auto& samples = c.form().samples;
+  for (std::size_t id = 0; id < samples.size(); ++id) {
+    if (!samples[id].outcome.valid) continue;
+    double d2 = 0;
+    for (int d = 0; d < c.dimension_count(); ++d) {
+      const auto& dim = c.space().dimension(d);
+      const double range = dim.hi > dim.lo ? dim.hi - dim.lo : 1.0;
+      const double t = (samples[id].u[d] - u[d]) / range;
+      d2 += t * t;
+    }
+    if (d2 < best_d) {
+      best_d = d2;
+      best = static_cast<std::int64_t>(id);
+    }
+  }
+  return best;
+}
+
+ExportResult ExportDesign(const Customiser& c, const std::vector<double>& u, const ExportOptions& options) {
+  const std::string& f = options.format;
+  if (f != "stl" && f != "3mf" && f != "glb" && f != "obj")
+    throw InputError("format '" + f + "' is not one of stl, 3mf, glb, obj");
+  if (!c.source().design) throw InputError("this form has no design to export");
+  if (static_cast<int>(u.size()) != c.dimension_count())
+    throw InputError("the point has " + std::to_string(u.size()) + " values, the form has " +
+                     std::to_string(c.dimension_count()) + " parameters");
+  if (!c.IsValid(u)) {
+    std::string why;
+    for (const auto& failure : FailuresAt(c.form(), c.space(), u)) why += (why.empty() ? "" : ", ") + failure;
+    const std::int64_t nearest = NearestValidSample(c, u);
+    throw InputError(PointText(c, u) + " is outside the valid region" + (why.empty() ? "" : " (" + why + ")") +
+                     (nearest < 0 ? std::string("; the form has no valid point")
+                                  : "; nearest valid point: " + PointText(c, c.form().samples[nearest].u)));
+  }
+  design::Design design = *c.source().design;
+  design.voxel_size = options.voxel_size > 0 ? options.voxel_size : FabricationVoxelSize(design.voxel_size);
+  design::EvaluateOptions evaluate;
+  evaluate.run_checks = false;  // the point lies in the valid region the checks mapped
+  const auto start = std::chrono::steady_clock::now();
+  const design::SampleResult r = design::EvaluateSample(design, precompute::DesignPointOf(design, u), evaluate);
+  if (r.solid.empty())
+    throw InputError(PointText(c, u) + ": no geometry at this point (" +
+                     (r.failure_reason.empty() ? r.failure : r.failure_reason) + ")");
+  const mesh::TriangleMesh m = r.solid.ToMesh();
+  mesh::InspectOptions inspect;
+  inspect.check_self_intersection = false;
+  const mesh::MeshReport report = mesh::InspectMesh(m, inspect);
+  if (!report.closed)
+    throw ResourceError(PointText(c, u) + ": the mesh at voxel size " + std::to_string(design.voxel_size) +
+                        " mm is not closed (" + report.closed_reason + ")");
+  ExportResult out;
+  out.bytes = f == "glb" ? storage::MeshToGlb(m) : mesh::EncodeMesh(m, "." + f);
+  out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  out.u = u;
+  out.voxel_size = design.voxel_size;
+  out.triangles = static_cast<std::int64_t>(m.triangles.size());
+  out.volume_mm3 = report.volume;
+  std::string name = c.source().name + "-" + PointText(c, u);
+  for (char& ch : name)
+    if (!std::isalnum(static_cast<unsigned char>(ch)) && ch != '-' && ch != '.' && ch != '=') ch = '_';
+  out.file_name = name + "." + f;
+  return out;
+}
+
+}  // namespace fabatlas::viewer
