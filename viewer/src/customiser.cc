@@ -204,4 +204,24 @@ int Customiser::WarmPreviews(const std::atomic<bool>& stop) const {
   return evaluated;
 }
 
+std::shared_ptr<const sampling::Form> Customiser::LimitedForm(const std::vector<PropertyLimit>& limits) const {
+  if (limits.empty()) return std::shared_ptr<const sampling::Form>(std::shared_ptr<void>(), &source_.form);
+  std::ostringstream key;
+  key.precision(17);
+  for (const auto& l : limits) key << l.property << '\n' << l.min << '\n' << l.max << '\n';
+  {
+    std::lock_guard<std::mutex> lock(limited_mu_);
+    for (auto it = limited_.begin(); it != limited_.end(); ++it)
+      if (it->first == key.str()) {
+        limited_.splice(limited_.begin(), limited_, it);
+        return limited_.front().second;
+      }
+  }
+  auto form = std::make_shared<const sampling::Form>(ApplyLimits(source_.form, limits, source_.materials));
+  std::lock_guard<std::mutex> lock(limited_mu_);
+  limited_.emplace_front(key.str(), form);
+  if (limited_.size() > 8) limited_.pop_back();
+  return form;
+}
+
 }  // namespace fabatlas::viewer

@@ -10,6 +10,8 @@
 #include "fabatlas/error.h"
 #include "fabatlas/storage/glb.h"
 #include "fabatlas/viewer/export_design.h"
+#include "fabatlas/viewer/failure_reason.h"
+#include "fabatlas/viewer/property_limits.h"
 
 namespace fabatlas::viewer {
 
@@ -103,13 +105,19 @@ json FormJson(const Customiser& c) {
   for (const auto& m : c.source().materials)
     materials.push_back({{"name", m.name}, {"density_g_per_cm3", m.density_g_per_cm3}, {"price_per_kg", m.price_per_kg}});
   std::int64_t valid = 0;
-  for (const auto& s : c.form().samples) valid += s.outcome.valid;
+  std::set<std::string> property_names;  // what limits can bound
+  for (const auto& s : c.form().samples) {
+    valid += s.outcome.valid;
+    if (s.outcome.valid)
+      for (const auto& [name, value] : s.outcome.properties) property_names.insert(name);
+  }
   return {{"name", c.source().name},
           {"dimensions", dims},
           {"materials", materials},
           {"starting_points", starts},
           {"samples", c.form().samples.size()},
           {"valid_samples", valid},
+          {"properties", property_names},
           {"cache", c.source().cache_name},
           {"preview", c.source().design.has_value()}};
 }
@@ -124,32 +132,54 @@ json StretchesJson(const std::vector<Stretch>& stretches) {
   return out;
 }
 
-std::int64_t SnapOrFail(const Customiser& c, const std::vector<double>& u) {
-  const auto snap = c.SnapTo(u);
-  if (!snap) throw BadRequest{"the form has no valid sample to snap to"};
-  return snap->sample;
-}
-
 ApiResponse Json(const json& j) {
   ApiResponse r;
   r.body = j.dump();
   return r;
 }
 
+std::vector<PropertyLimit> LimitsOf(const Customiser& c, const std::map<std::string, std::string>& query) {
+  const auto it = query.find("limits");
+  if (it == query.end()) return {};
+  try {
+    return ParseLimits(it->second, c.source().materials);
+  } catch (const InputError& e) {
+    throw BadRequest{e.what()};
+  }
+}
+
 ApiResponse Route(const Customiser& c, const std::string& path, const std::map<std::string, std::string>& query) {
   if (path == "/api/form") return Json(FormJson(c));
+  // Every lookup below sees the form under the user's limits, if any.
+  const std::vector<PropertyLimit> limits = LimitsOf(c, query);
+  const std::shared_ptr<const sampling::Form> shown = c.LimitedForm(limits);
+  const sampling::Form& form = *shown;
+  const auto snap_or_fail = [&](const std::vector<double>& u) {
+    const auto snap = SnapToValidSample(form, c.space(), u);
+    if (!snap) throw BadRequest{limits.empty() ? "the form has no valid sample to snap to"
+                                               : "no valid sample meets your limits"};
+    return snap->sample;
+  };
   if (path == "/api/intervals") {
     const auto u = ParsePoint(c, query);
     json dims = json::array();
-    for (int d = 0; d < c.dimension_count(); ++d) dims.push_back(StretchesJson(c.Stretches(u, d)));
-    json j = {{"u", u}, {"valid", c.IsValid(u)}, {"dimensions", dims}};
-    if (!c.IsValid(u)) j["failures"] = FailuresAt(c.form(), c.space(), u);
+    for (int d = 0; d < c.dimension_count(); ++d) dims.push_back(StretchesJson(LineStretches(form, c.space(), u, d)));
+    const bool valid = IsValidPoint(form, c.space(), u);
+    json j = {{"u", u}, {"valid", valid}, {"dimensions", dims}};
+    if (!valid) j["failures"] = FailuresAt(form, c.space(), u);
     return Json(j);
+  }
+  if (path == "/api/reason") {
+    const auto u = ParsePoint(c, query);
+    const auto r = ReasonAt(c, form, limits, u);
+    if (!r) return Json({{"u", u}, {"sample", -1}});
+    return Json({{"u", u}, {"sample", r->sample}, {"sample_u", r->u}, {"check", r->check}, {"failure", r->failure},
+                 {"reason", r->reason}});
   }
   if (path == "/api/snap") {
     const auto u = ParsePoint(c, query);
-    const auto snap = c.SnapTo(u);
-    if (!snap) throw BadRequest{"the form has no valid sample to snap to"};
+    const auto snap = SnapToValidSample(form, c.space(), u);
+    if (!snap) snap_or_fail(u);
     return Json({{"u", u},
                  {"sample", snap->sample},
                  {"sample_u", c.form().samples[snap->sample].u},
@@ -158,13 +188,13 @@ ApiResponse Route(const Customiser& c, const std::string& path, const std::map<s
   }
   if (path == "/api/properties") {
     const auto u = ParsePoint(c, query);
-    return Json(SampleJson(c, SnapOrFail(c, u)));
+    return Json(SampleJson(c, snap_or_fail(u)));
   }
   if (path == "/api/preview.glb") {
     const auto u = ParsePoint(c, query);
     if (!c.source().design) throw BadRequest{"this form has no design to preview"};
     bool hit = false;
-    const auto p = c.PreviewGlb(SnapOrFail(c, u), &hit);
+    const auto p = c.PreviewGlb(snap_or_fail(u), &hit);
     ApiResponse r;
     r.content_type = "model/gltf-binary";
     r.shared_body = std::shared_ptr<const std::string>(p, &p->glb);
@@ -208,11 +238,11 @@ ApiResponse Route(const Customiser& c, const std::string& path, const std::map<s
       p[b] = blo + (bhi - blo) * (j + 0.5) / n;
       for (int i = 0; i < n; ++i) {
         p[a] = alo + (ahi - alo) * (i + 0.5) / n;
-        if (c.IsValid(p)) {
+        if (IsValidPoint(form, c.space(), p)) {
           cells.push_back(-1);
           continue;
         }
-        const auto f = FailuresAt(c.form(), c.space(), p);
+        const auto f = FailuresAt(form, c.space(), p);
         const std::string name = f.empty() ? "invalid" : f.front();
         auto [it, inserted] = failure_index.insert({name, static_cast<int>(failure_names.size())});
         if (inserted) failure_names.push_back(name);

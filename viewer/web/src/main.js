@@ -1,4 +1,4 @@
-// The fabatlas web customiser (seed 001 Sec. 7, Fig. 9): one slider per
+// The fabatlas web customiser (Fab Forms Sec. 7, Fig. 9): one slider per
 // exposed parameter confined to the valid region through the current point,
 // a live preview of the snapped sample, cost/weight readout, starting points
 // and a 2-D validity map. Talks only to the API of `fabatlas serve`
@@ -71,7 +71,7 @@ function stretchAt(d, v) {
     ?? state.stretches[d].find((s) => v >= s.lo && v <= s.hi);
 }
 
-// The closest value to v inside a valid stretch along d (seed 001 Sec. 7.2:
+// The closest value to v inside a valid stretch along d (Fab Forms Sec. 7.2:
 // the slider is confined to the valid intervals through the current point).
 function clampToValid(d, v) {
   let best = null;

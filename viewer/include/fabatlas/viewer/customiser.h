@@ -10,7 +10,9 @@
 #include <atomic>
 #include <cstdint>
 #include <filesystem>
+#include <list>
 #include <map>
+#include <mutex>
 #include <memory>
 #include <optional>
 #include <string>
@@ -22,6 +24,7 @@
 #include "fabatlas/sampling/form.h"
 #include "fabatlas/sampling/job_file.h"
 #include "fabatlas/viewer/preview_cache.h"
+#include "fabatlas/viewer/property_limits.h"
 #include "fabatlas/viewer/snap.h"
 #include "fabatlas/viewer/valid_region.h"
 
@@ -122,12 +125,19 @@ class Customiser {
   // at most once while it fits.
   int WarmPreviews(const std::atomic<bool>& stop) const;
 
+  // The form under the user's limits (ApplyLimits; the form itself, shared,
+  // when there are none). The last 8 distinct limit sets are kept, so a
+  // page moving its sliders under fixed limits copies the form once.
+  std::shared_ptr<const sampling::Form> LimitedForm(const std::vector<PropertyLimit>& limits) const;
+
  private:
   CustomiserSource source_;
   sampling::DesignSpace space_;
   std::vector<std::int64_t> starting_points_;
   std::unique_ptr<design::SubtreeCache> cache_;
   PreviewCacheOptions preview_options_;
+  mutable std::mutex limited_mu_;
+  mutable std::list<std::pair<std::string, std::shared_ptr<const sampling::Form>>> limited_;  // most recent first
   std::unique_ptr<PreviewCache> previews_;
 };
 

@@ -1,5 +1,5 @@
 // fabatlas/viewer/preview_cache.h — encoded previews kept for reuse. Every
-// preview snaps to one of the form's valid samples (seed 001 Sec. 7.3), so a
+// preview snaps to one of the form's valid samples (Fab Forms Sec. 7.3), so a
 // shared customiser need evaluate each sample only once while it stays in
 // this cache.
 #pragma once

@@ -1,0 +1,123 @@
+// The customiser's API in process (HandleApiRequest on the artifact of the
+// viewer_tube_run fixture): reasons in words, runtime limits on properties
+// against the tube's closed form (valid where wall >= 1 + 0.01 radius^2 and
+// radius - wall >= 2; volume pi (r^2 - (r - w)^2) 20), and faults answered
+// as a 500 with their reason.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+
+#include <nlohmann/json.hpp>
+
+#include "fabatlas/testing/paths.h"
+#include "fabatlas/viewer/customiser.h"
+#include "fabatlas/viewer/http_api.h"
+
+namespace fabatlas::viewer {
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+fs::path Artifact() {
+  const char* dir = std::getenv("FABATLAS_VIEWER_RUN");
+  const fs::path run = dir ? fs::path(dir) : testing::BinDir().parent_path() / "test-fixtures" / "viewer-tube";
+  for (const auto& e : fs::directory_iterator(run))
+    if (e.path().extension() == ".fabatlas") return e.path();
+  return {};
+}
+
+double TubeVolume(double r, double w) { return std::numbers::pi * (r * r - (r - w) * (r - w)) * 20.0; }
+
+class Api : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    ASSERT_FALSE(Artifact().empty()) << "run the viewer_tube_run fixture first";
+    customiser_ = new Customiser(LoadArtifact(Artifact()));
+  }
+  static void TearDownTestSuite() { delete customiser_; }
+  static json Get(const std::string& path, const std::map<std::string, std::string>& query, int status = 200) {
+    const ApiResponse r = HandleApiRequest(*customiser_, path, query);
+    EXPECT_EQ(r.status, status) << path << ": " << r.body;
+    return r.status == 200 ? json::parse(r.bytes()) : json(r.body);
+  }
+  static Customiser* customiser_;
+};
+Customiser* Api::customiser_ = nullptr;
+
+TEST_F(Api, ReasonNamesTheViolatedConstraintInTheDesignsWords) {
+  // (29, 1) breaks wall >= 1 + 0.01 radius^2 (the other constraint holds).
+  const json r = Get("/api/reason", {{"u", "29,1"}});
+  EXPECT_EQ(r["check"], "constraints");
+  EXPECT_EQ(r["failure"], "unsat_constraints");
+  EXPECT_NE(r["reason"].get<std::string>().find("wall >= 1 + 0.01 * radius^2"), std::string::npos) << r.dump();
+  // The sample explained is truly invalid and lies next to the point.
+  const double radius = r["sample_u"][0], wall = r["sample_u"][1];
+  EXPECT_LT(wall, 1 + 0.01 * radius * radius);
+  EXPECT_LT(std::abs(radius - 29) + std::abs(wall - 1), 5.0);
+  // (8, 7.5) breaks radius - wall >= 2 only: a different constraint named.
+  const json b = Get("/api/reason", {{"u", "8,7.5"}});
+  EXPECT_NE(b["reason"].get<std::string>().find("bore"), std::string::npos) << b.dump();
+}
+
+TEST_F(Api, AVolumeLimitShrinksTheWallStretchToTheClosedFormBound) {
+  // At radius 15 the valid walls are [3.25, 12]; volume <= V caps the wall
+  // at w* with pi (2 r w* - w*^2) 20 = V.
+  const double r = 15, v = TubeVolume(15, 6);
+  const double w_star = r - std::sqrt(r * r - v / (20 * std::numbers::pi));  // = 6
+  const auto valid_hi = [&](const json& j) {
+    double hi = -1;
+    for (const auto& s : j["dimensions"][1])
+      if (s["valid"].get<bool>() && s["lo"].get<double>() <= 5 && s["hi"].get<double>() >= 5) hi = s["hi"];
+    return hi;
+  };
+  const json free = Get("/api/intervals", {{"u", "15,5"}});
+  const json limited = Get("/api/intervals", {{"u", "15,5"}, {"limits", "volume<=" + std::to_string(v)}});
+  const double free_hi = valid_hi(free), limited_hi = valid_hi(limited);
+  EXPECT_GE(free_hi, 11.0);
+  // Conservative: ends where a sample meets the limit, the sampled volume
+  // within 2% of the closed form (0.5 mm voxels), so below w* plus that.
+  EXPECT_LE(limited_hi, w_star + 0.3);
+  EXPECT_GE(limited_hi, w_star - 12.0 / 5);  // no worse than a bootstrap cell
+  // The stretch beyond says why, in words.
+  json beyond;
+  for (const auto& s : limited["dimensions"][1])
+    if (!s["valid"].get<bool>() && s["lo"].get<double>() >= limited_hi - 1e-9) beyond = s;
+  ASSERT_FALSE(beyond.is_null()) << limited.dump();
+  EXPECT_EQ(beyond["failures"], json::array({"limit:volume"}));
+  const json why = Get("/api/reason", {{"u", "15," + std::to_string(limited_hi + 1)},
+                                       {"limits", "volume<=" + std::to_string(v)}});
+  EXPECT_EQ(why["check"], "limits");
+  EXPECT_NE(why["reason"].get<std::string>().find("above your limit"), std::string::npos) << why.dump();
+  // Snapping and properties keep to the limit.
+  const json p = Get("/api/properties", {{"u", "15,11"}, {"limits", "volume<=" + std::to_string(v)}});
+  EXPECT_LE(p["properties"]["volume"].get<double>(), v);
+  // A weight limit is the same bound through the density (PLA 1.24 g/cm^3).
+  const json w = Get("/api/intervals", {{"u", "15,5"}, {"limits", "weight:PLA<=" + std::to_string(v / 1000 * 1.24)}});
+  EXPECT_NEAR(valid_hi(w), limited_hi, 1e-9);
+}
+
+TEST_F(Api, BadLimitsAre400WithOneLine) {
+  for (const std::string bad : {"volume", "volume<=abc", "weight:gold<=3", "volume<=nan", "<=3"}) {
+    const ApiResponse r = HandleApiRequest(*customiser_, "/api/intervals", {{"u", "15,6"}, {"limits", bad}});
+    EXPECT_EQ(r.status, 400) << bad;
+    EXPECT_EQ(r.body.find('\n'), r.body.size() - 1) << bad << ": " << r.body;
+  }
+}
+
+TEST(ApiFaults, AnInternalFaultIsA500WithItsReason) {
+  // A source naming a starting point the form does not have: /api/form
+  // fails inside (std::out_of_range), which must not escape as a dropped
+  // connection.
+  CustomiserSource source = LoadArtifact(Artifact());
+  source.starting_points = {1000000};
+  const Customiser c(std::move(source));
+  const ApiResponse r = HandleApiRequest(c, "/api/form", {});
+  EXPECT_EQ(r.status, 500);
+  EXPECT_EQ(r.body.rfind("internal error: ", 0), 0u) << r.body;
+  EXPECT_EQ(r.body.find('\n'), r.body.size() - 1) << r.body;
+}
+
+}  // namespace
+}  // namespace fabatlas::viewer

@@ -1,0 +1,52 @@
+// fabatlas/viewer/property_limits.h — runtime thresholds on stored
+// properties (Fab Forms Sec. 7.2): the user bounds weight, cost, volume or a
+// bounding-box side, and the valid region shrinks to the samples meeting
+// the bounds. A sample outside a bound counts as invalid, so valid
+// stretches, the validity map and snapping keep their interval semantics
+// (valid_region.h, snap.h) on the limited form.
+#pragma once
+
+#include <limits>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "fabatlas/sampling/form.h"
+#include "fabatlas/sampling/job_file.h"
+
+namespace fabatlas::viewer {
+
+// The failure type of a sample outside a limit: "limit:" + property.
+inline constexpr const char* kLimitFailurePrefix = "limit:";
+
+struct PropertyLimit {
+  // A recorded property ("volume", "bbox_z", ...), or "weight:MATERIAL" (g)
+  // / "cost:MATERIAL" derived from "volume" with the job's material table
+  // (MaterialReadouts in customiser.h).
+  std::string property;
+  double min = -std::numeric_limits<double>::infinity();
+  double max = std::numeric_limits<double>::infinity();
+};
+
+// "volume<=9000,weight:PLA<=10,bbox_z>=20" (the API's limits= value; empty:
+// none). Throws InputError naming the item for anything else, a non-finite
+// number, or a material not in `materials`.
+std::vector<PropertyLimit> ParseLimits(const std::string& text, const std::vector<sampling::Material>& materials);
+
+// The value of a limit's property for a sample's properties; nullopt when
+// the sample does not record it (then the limit does not apply).
+std::optional<double> LimitedValue(const PropertyLimit& limit, const std::map<std::string, double>& properties,
+                                   const std::vector<sampling::Material>& materials);
+
+// A copy of `form` in which every valid sample breaking a limit is invalid
+// with failure type "limit:<property>" (the first limit broken, in order).
+// O(samples x limits).
+sampling::Form ApplyLimits(const sampling::Form& form, const std::vector<PropertyLimit>& limits,
+                           const std::vector<sampling::Material>& materials);
+
+// The first limit the properties break, in words, e.g. "volume 9520 above
+// your limit 9000"; empty if none.
+std::string LimitReason(const std::map<std::string, double>& properties, const std::vector<PropertyLimit>& limits,
+                        const std::vector<sampling::Material>& materials);
+
+}  // namespace fabatlas::viewer
