@@ -1,7 +1,10 @@
 // The fabatlas web customiser (Fab Forms Sec. 7, Fig. 9): one slider per
 // exposed parameter confined to the valid region through the current point,
 // a live preview of the snapped sample, cost/weight readout, starting points
-// and a 2-D validity map. Talks only to the API of `fabatlas serve`
+// and a 2-D validity map; the point lives in the page URL, presets are
+// OpenSCAD parameter sets, limits on properties shrink the valid region
+// (Fab Forms Sec. 7.2), invalid stretches say why in words, and the design
+// downloads as STL or 3MF. Talks only to the API of `fabatlas serve`
 // (docs/viewer.md).
 import * as THREE from 'three';
 import { OrbitControls } from 'three/examples/jsm/controls/OrbitControls.js';
@@ -17,11 +20,26 @@ const state = {
   previewSample: -1,   // sample id of the preview on screen
   properties: null,
   error: null,
+  limits: {},          // property -> {min, max} (numbers or undefined)
+  reason: null,        // the last reason shown: {check, failure, reason, sample}
+  reasonCount: 0,      // reasons shown so far
+  download: null,      // the last download: {name, size, format}
+  map: null,           // the validity map on screen (/api/map's answer)
 };
 window.fabatlas = state;
 
 const $ = (id) => document.getElementById(id);
-const query = (u) => 'u=' + u.map((v) => String(v)).join(',');
+// The limits as the API reads them: "volume<=9000,weight:PLA>=3".
+function limitsText() {
+  const items = [];
+  for (const [p, l] of Object.entries(state.limits)) {
+    if (Number.isFinite(l.max)) items.push(`${p}<=${l.max}`);
+    if (Number.isFinite(l.min)) items.push(`${p}>=${l.min}`);
+  }
+  return items.join(',');
+}
+const query = (u) => 'u=' + u.map((v) => String(v)).join(',') +
+  (limitsText() ? '&limits=' + encodeURIComponent(limitsText()) : '');
 
 async function api(path) {
   const res = await fetch(path);
@@ -30,10 +48,18 @@ async function api(path) {
 }
 const apiJson = async (path) => (await api(path)).json();
 
-function setStatus(text) { $('status').textContent = text; }
+// Routine news; an error stays on the line until the user acts (clearError).
+function setStatus(text) {
+  if (state.error !== null) return;
+  $('status').textContent = text;
+}
+function clearError() {
+  state.error = null;
+  $('status').classList.remove('error');
+}
 
 // ---------------------------------------------------------------- sliders
-const sliders = [];  // {input, segments, valueLabel}
+const sliders = [];  // {input, number, select, segments, valueLabel, track}
 
 function formatValue(d, v) {
   const dim = state.form.dimensions[d];
@@ -48,9 +74,11 @@ function buildSliders() {
   state.form.dimensions.forEach((dim, d) => {
     const box = document.createElement('div');
     box.className = 'slider';
-    box.innerHTML = `<div class="label"><span>${dim.name}</span><span class="value"></span></div>
-      <div class="track"><div class="segments"></div><input type="range"></div>`;
-    const input = box.querySelector('input');
+    box.innerHTML = `<div class="label"><span class="name"></span><span class="value"></span></div>
+      <div class="row"><div class="track"><div class="segments"></div><input type="range"></div></div>
+      <div class="why" hidden></div>`;
+    box.querySelector('.name').textContent = dim.name;
+    const input = box.querySelector('input[type=range]');
     input.min = dim.lo;
     input.max = dim.hi;
     input.step = dim.kind === 'real' ? 'any' : '1';
@@ -61,8 +89,31 @@ function buildSliders() {
     input.addEventListener('change', () => onSlide(d));
     track.addEventListener('mousemove', (e) => onHover(d, e));
     track.addEventListener('mouseleave', () => { $('tooltip').hidden = true; });
+    // A tap (touch or pen) on an invalid stretch shows why under the slider.
+    track.addEventListener('pointerdown', (e) => { if (e.pointerType !== 'mouse') onHover(d, e, true); });
+    // Beside the slider: a number box, or a dropdown for enumerated values.
+    let number = null, select = null;
+    if (dim.kind === 'enumerated') {
+      select = document.createElement('select');
+      select.dataset.dimension = d;
+      select.setAttribute('aria-label', dim.name);
+      dim.values.forEach((label, i) => select.add(new Option(label, i)));
+      select.addEventListener('change', () => setValue(d, Number(select.value)));
+      box.querySelector('.row').appendChild(select);
+    } else {
+      number = document.createElement('input');
+      number.type = 'number';
+      number.min = dim.lo;
+      number.max = dim.hi;
+      number.step = dim.kind === 'integer' ? '1' : 'any';
+      number.dataset.dimension = d;
+      number.setAttribute('aria-label', dim.name + ' value');
+      number.addEventListener('change', () => setValue(d, parseFloat(number.value)));
+      box.querySelector('.row').appendChild(number);
+    }
     root.appendChild(box);
-    sliders.push({ input, segments: box.querySelector('.segments'), valueLabel: box.querySelector('.value'), track });
+    sliders.push({ input, number, select, segments: box.querySelector('.segments'), valueLabel: box.querySelector('.value'), track,
+      why: box.querySelector('.why') });
   });
 }
 
@@ -83,21 +134,41 @@ function clampToValid(d, v) {
   return best;
 }
 
-function onSlide(d) {
-  const input = sliders[d].input;
-  let v = parseFloat(input.value);
+function onSlide(d) { setValue(d, parseFloat(sliders[d].input.value)); }
+
+// Sets parameter d to v (from the slider, the number box or the dropdown):
+// rounded for integer and enumerated parameters, kept in range and moved to
+// the nearest valid interval through the current point.
+function setValue(d, v) {
+  clearError();
+  for (const sl of sliders) sl.why.hidden = true;
   const dim = state.form.dimensions[d];
+  if (!Number.isFinite(v)) { drawTracks(); return; }
+  v = Math.min(Math.max(v, dim.lo), dim.hi);
   if (dim.kind !== 'real') v = Math.round(v);
-  const c = clampToValid(d, v);
-  if (c === null) return;
-  if (c !== v || String(c) !== input.value) input.value = String(c);
-  if (c === state.u[d]) return;
+  let c = clampToValid(d, v);
+  if (c === null) { drawTracks(); return; }
+  if (dim.kind !== 'real') c = Math.round(c);
+  const input = sliders[d].input;
+  if (String(c) !== input.value) input.value = String(c);
+  if (c === state.u[d]) { drawTracks(); return; }
   state.u[d] = c;
   sliders[d].valueLabel.textContent = formatValue(d, c);
   requestUpdate();
 }
 
-function onHover(d, e) {
+// Why a stretch is invalid, in words (/api/reason), cached per stretch.
+const reasons = new Map();
+async function reasonFor(d, s, v) {
+  const u = state.u.slice();
+  u[d] = Math.min(Math.max(v, s.lo), s.hi);
+  const key = `${d}:${s.lo}:${s.hi}:${state.u.join(',')}:${limitsText()}`;
+  if (!reasons.has(key)) reasons.set(key, apiJson('/api/reason?' + query(u)));
+  return reasons.get(key);
+}
+const reasonWords = (r) => r.sample < 0 ? 'invalid' : `${r.reason} (check: ${r.check}, ${r.failure})`;
+
+function onHover(d, e, tap = false) {
   const rect = sliders[d].segments.getBoundingClientRect();
   const dim = state.form.dimensions[d];
   const t = Math.min(Math.max((e.clientX - rect.left) / rect.width, 0), 1);
@@ -105,14 +176,22 @@ function onHover(d, e) {
   const s = stretchAt(d, v);
   const tip = $('tooltip');
   if (!s) { tip.hidden = true; return; }
-  tip.textContent = s.valid
-    ? `${dim.name} ${formatValue(d, v)}: valid`
-    : `${dim.name} ${formatValue(d, v)}: not fabricable — ${(s.failures ?? []).join(', ') || 'invalid'}`;
+  const head = `${dim.name} ${formatValue(d, v)}: `;
+  tip.textContent = s.valid ? head + 'valid' : head + `not fabricable — ${(s.failures ?? []).join(', ') || 'invalid'}`;
   tip.dataset.failures = s.valid ? '' : (s.failures ?? []).join(',');
   tip.hidden = false;
   tip.style.left = `${e.clientX + 12}px`;
   tip.style.top = `${e.clientY + 12}px`;
   sliders[d].track.title = tip.textContent;
+  if (s.valid) { if (tap) sliders[d].why.hidden = true; return; }
+  reasonFor(d, s, v).then((r) => {
+    state.reason = r;
+    state.reasonCount += 1;
+    const words = head + 'not fabricable — ' + reasonWords(r);
+    if (!tip.hidden && tip.textContent.startsWith(head)) tip.textContent = words;
+    sliders[d].track.title = words;
+    if (tap) { sliders[d].why.textContent = words; sliders[d].why.hidden = false; }
+  }).catch(showError);
 }
 
 function drawTracks() {
@@ -132,6 +211,13 @@ function drawTracks() {
     }
     input.value = String(state.u[d]);
     valueLabel.textContent = formatValue(d, state.u[d]);
+    const { number, select } = sliders[d];
+    if (number && document.activeElement !== number) number.value = String(Number(state.u[d].toFixed(6)));
+    if (select) {
+      select.value = String(Math.round(state.u[d]));
+      // Values not reachable from here are offered but disabled.
+      [...select.options].forEach((o, i) => { o.disabled = clampToValid(d, i) !== i; });
+    }
   });
 }
 
@@ -150,7 +236,8 @@ function requestUpdate() {
 
 function showError(e) {
   state.error = String(e.message ?? e);
-  setStatus(state.error);
+  $('status').textContent = state.error;
+  $('status').classList.add('error');
 }
 
 async function update() {
@@ -161,6 +248,7 @@ async function update() {
   ]);
   state.stretches = intervals.dimensions;
   state.valid = intervals.valid;
+  writeUrl();
   state.properties = properties;
   drawTracks();
   drawReadout(properties);
@@ -287,7 +375,7 @@ async function buildStarts() {
     const img = document.createElement('img');
     img.alt = `starting point ${i + 1}`;
     button.appendChild(img);
-    button.addEventListener('click', () => { state.u = start.u.slice(); requestUpdate(); });
+    button.addEventListener('click', () => { clearError(); state.u = start.u.slice(); requestUpdate(); });
     host.appendChild(button);
     try {
       const buffer = await (await api('/api/preview.glb?' + query(start.u))).arrayBuffer();
@@ -335,6 +423,7 @@ async function drawMap() {
   const n = 64;
   const m = await apiJson(`/api/map?a=${a}&b=${b}&n=${n}&` + query(state.u));
   mapData = m;
+  state.map = m;
   const cw = canvas.width / n, ch = canvas.height / n;
   for (let j = 0; j < n; ++j)
     for (let i = 0; i < n; ++i) {
@@ -353,6 +442,7 @@ async function drawMap() {
 
 function onMapClick(e) {
   if (!mapData) return;
+  clearError();
   const canvas = $('map');
   const rect = canvas.getBoundingClientRect();
   const n = mapData.n;
@@ -367,15 +457,186 @@ function onMapClick(e) {
   requestUpdate();
 }
 
+// ------------------------------------------------- the point in the URL
+// ?radius=15&wall=6&limits=volume<=9000 : open the URL, get the same design.
+function writeUrl() {
+  const params = new URLSearchParams();
+  state.form.dimensions.forEach((dim, d) => params.set(dim.name, dim.kind === 'enumerated'
+    ? dim.values[Math.round(state.u[d])] : String(state.u[d])));
+  if (limitsText()) params.set('limits', limitsText());
+  history.replaceState(null, '', '?' + params.toString());
+}
+
+// The point named by the URL, over `fallback` (values it does not name).
+function readUrl(fallback) {
+  const params = new URLSearchParams(location.search);
+  const u = fallback.slice();
+  state.form.dimensions.forEach((dim, d) => {
+    const text = params.get(dim.name);
+    if (text === null) return;
+    const v = dim.kind === 'enumerated' ? dim.values.indexOf(text) : Number(text);
+    if (v >= 0 && Number.isFinite(v) && v >= dim.lo && v <= dim.hi) u[d] = v;
+    else showError(new Error(`URL: ${dim.name}=${text} is not a value of ${dim.name}`));
+  });
+  for (const item of (params.get('limits') ?? '').split(',').filter(Boolean)) {
+    const m = item.match(/^(.+?)(<=|>=)(.+)$/);
+    if (!m || !Number.isFinite(Number(m[3]))) continue;
+    const l = state.limits[m[1]] ??= {};
+    l[m[2] === '<=' ? 'max' : 'min'] = Number(m[3]);
+  }
+  return u;
+}
+
+// ------------------------------------------------------------- download
+async function download(format) {
+  const res = await api(`/api/export?format=${format}&` + query(state.u));
+  const bytes = new Uint8Array(await res.arrayBuffer());
+  const name = (res.headers.get('Content-Disposition') ?? '').match(/filename="([^"]+)"/)?.[1] ?? `design.${format}`;
+  state.download = { name, format, size: bytes.length };
+  const a = document.createElement('a');
+  a.href = URL.createObjectURL(new Blob([bytes], { type: res.headers.get('Content-Type') }));
+  a.download = name;
+  document.body.appendChild(a);
+  a.click();
+  a.remove();
+  setTimeout(() => URL.revokeObjectURL(a.href), 60000);
+  setStatus(`downloaded ${name} (${(bytes.length / 1024).toFixed(0)} KiB, ${res.headers.get('X-Triangles')} triangles, voxel ${Number(res.headers.get('X-Voxel-Size')).toFixed(3)} mm)`);
+}
+
+function buildDownloads() {
+  for (const format of ['stl', '3mf']) {
+    const b = $('download-' + format);
+    b.addEventListener('click', () => {
+      b.disabled = true;
+      download(format).catch(showError).finally(() => { b.disabled = false; });
+    });
+  }
+}
+
+// ---------------------------------------------------------------- presets
+// OpenSCAD's parameter-set JSON: {"parameterSets": {name: {param: "value"}},
+// "fileFormatVersion": "1"}; kept in this browser's localStorage per design.
+const presetKey = () => `fabatlas:presets:${state.form.name}`;
+function loadPresets() {
+  try { return JSON.parse(localStorage.getItem(presetKey())) ?? { parameterSets: {}, fileFormatVersion: '1' }; }
+  catch { return { parameterSets: {}, fileFormatVersion: '1' }; }
+}
+function savePresets(p) { localStorage.setItem(presetKey(), JSON.stringify(p)); drawPresets(); }
+function drawPresets() {
+  const select = $('preset');
+  select.textContent = '';
+  select.add(new Option('— presets —', ''));
+  for (const name of Object.keys(loadPresets().parameterSets)) select.add(new Option(name, name));
+}
+function presetOf() {
+  const set = {};
+  state.form.dimensions.forEach((dim, d) => {
+    set[dim.name] = dim.kind === 'enumerated' ? dim.values[Math.round(state.u[d])] : String(state.u[d]);
+  });
+  return set;
+}
+function applyPreset(set) {
+  clearError();
+  const u = state.u.slice();
+  state.form.dimensions.forEach((dim, d) => {
+    if (!(dim.name in set)) return;
+    const text = String(set[dim.name]);
+    const v = dim.kind === 'enumerated' ? dim.values.indexOf(text) : Number(text);
+    if (v >= 0 && Number.isFinite(v)) u[d] = Math.min(Math.max(v, dim.lo), dim.hi);
+  });
+  state.u = u;
+  requestUpdate();
+}
+function buildPresets() {
+  drawPresets();
+  $('preset').addEventListener('change', () => {
+    const set = loadPresets().parameterSets[$('preset').value];
+    if (set) applyPreset(set);
+  });
+  $('preset-save').addEventListener('click', () => {
+    const name = $('preset-name').value.trim();
+    if (!name) { setStatus('name the preset first'); return; }
+    const p = loadPresets();
+    p.parameterSets[name] = presetOf();
+    savePresets(p);
+    $('preset').value = name;
+  });
+  $('preset-export').addEventListener('click', () => {
+    const a = document.createElement('a');
+    a.href = URL.createObjectURL(new Blob([JSON.stringify(loadPresets(), null, 2)], { type: 'application/json' }));
+    a.download = `${state.form.name}.json`;
+    a.click();
+  });
+  $('preset-import').addEventListener('change', async () => {
+    const file = $('preset-import').files[0];
+    if (!file) return;
+    try {
+      const sets = JSON.parse(await file.text()).parameterSets;
+      if (!sets || typeof sets !== 'object') throw new Error('no parameterSets');
+      const p = loadPresets();
+      Object.assign(p.parameterSets, sets);
+      savePresets(p);
+      setStatus(`loaded ${Object.keys(sets).length} presets from ${file.name}`);
+    } catch (e) { showError(new Error(`${file.name}: not an OpenSCAD parameter-set file (${e.message})`)); }
+  });
+}
+
+// ----------------------------------------------------------------- limits
+// Bounds on stored properties and, per material, weight (g) and cost.
+function buildLimits() {
+  const host = $('limits');
+  host.textContent = '';
+  const names = [...(state.form.properties ?? [])];
+  if (names.includes('volume'))
+    for (const m of state.form.materials) names.push(`weight:${m.name}`, `cost:${m.name}`);
+  for (const p of names) {
+    const row = document.createElement('div');
+    row.className = 'limit';
+    row.innerHTML = `<span class="name"></span><input type="number" step="any" placeholder="min" data-bound="min">
+      <input type="number" step="any" placeholder="max" data-bound="max">`;
+    row.querySelector('.name').textContent = p.replace(/^(weight|cost):(.*)$/, '$1 in $2') +
+      (p === 'volume' ? ' (mm³)' : p.startsWith('weight:') ? ' (g)' : p.startsWith('bbox') ? ' (mm)' : '');
+    for (const input of row.querySelectorAll('input')) {
+      input.dataset.property = p;
+      input.setAttribute('aria-label', `${p} ${input.dataset.bound}`);
+      const l = state.limits[p];
+      if (l && Number.isFinite(l[input.dataset.bound])) input.value = l[input.dataset.bound];
+      input.addEventListener('change', () => setLimit(p, input.dataset.bound, input.value));
+    }
+    host.appendChild(row);
+  }
+}
+
+// A changed limit: if the current point leaves the valid region, it moves to
+// the closest sample that meets every limit.
+async function setLimit(property, bound, text) {
+  clearError();
+  const l = state.limits[property] ??= {};
+  l[bound] = text === '' ? undefined : Number(text);
+  if (!Number.isFinite(l.min) && !Number.isFinite(l.max)) delete state.limits[property];
+  reasons.clear();
+  try {
+    const at = await apiJson('/api/intervals?' + query(state.u));
+    if (!at.valid) {
+      const snap = await apiJson('/api/snap?' + query(state.u));
+      state.u = snap.sample_u.slice();
+    }
+    requestUpdate();
+  } catch (e) { showError(e); }
+}
+
 // ------------------------------------------------------------------ start
 async function main() {
   state.form = await apiJson('/api/form');
   $('title').textContent = `${state.form.name} — fabatlas customiser`;
   document.title = $('title').textContent;
   const start = state.form.starting_points[0];
-  state.u = start ? start.u.slice() : state.form.dimensions.map((d) => d.default ?? (d.lo + d.hi) / 2);
+  state.u = readUrl(start ? start.u.slice() : state.form.dimensions.map((d) => d.default ?? (d.lo + d.hi) / 2));
   buildSliders();
   buildMapControls();
+  buildDownloads();
+  buildPresets();
+  buildLimits();
   initView();
   await update();
   state.ready = true;
