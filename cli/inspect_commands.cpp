@@ -85,7 +85,9 @@ std::string TimesText(const std::optional<precompute::PreviewTimes>& t) {
 void Inspect(const InspectArgs& a, int& exit_code) {
   const fs::path path = ArtifactPath(a.artifact);  // the file, or the run directory holding it (as serve)
   if (a.points < 0) throw InputError("inspect: --points must be >= 0");
-  const storage::Artifact art = storage::ReadArtifact(path);
+  // Metadata only: the cache's geometry is read set by set below, so the
+  // memory holds the form and one preview cache, not the whole file.
+  const storage::Artifact art = storage::ReadArtifact(path, {.load_geometry = false});
   const storage::Manifest& m = art.manifest;
 
   // The design, from the artifact's own bundle.
@@ -126,15 +128,22 @@ void Inspect(const InspectArgs& a, int& exit_code) {
   std::optional<precompute::PreviewTimes> t_none, t_opt, t_rfree;
   if (!points.empty()) {
     t_none = precompute::MeasurePreviewTimes(design, points, nullptr);
+    // One cache in memory at a time (H_opt, then H_rfree), and only when
+    // the artifact stores every entry of it (H_rfree's entries beyond H_opt
+    // are stored only with `cache: {store_rfree: true}`, docs/artifact.md).
+    auto measure = [&](bool storage::CacheEntry::*member, std::int64_t entries) -> std::optional<precompute::PreviewTimes> {
+      std::int64_t stored = 0;
+      for (const auto& e : art.cache) stored += e.*member;
+      if (stored != entries) return std::nullopt;
+      precompute::FrozenSubtreeCache cache;
+      storage::ReadCacheGeometry(
+          path, [&](const storage::CacheEntry& e) { return e.*member; },
+          [&](storage::CacheEntry& e) { cache.Add(e.key, geometry::Solid::Deserialize(e.grid)); });
+      return precompute::MeasurePreviewTimes(design, points, &cache);
+    };
     if (!m.cache.strategy.empty() && !art.cache.empty()) {
-      precompute::FrozenSubtreeCache opt, rfree;
-      for (const auto& e : art.cache) {
-        geometry::Solid solid = geometry::Solid::Deserialize(e.grid);
-        if (e.in_opt) opt.Add(e.key, solid);
-        if (e.in_rfree) rfree.Add(e.key, solid);
-      }
-      t_opt = precompute::MeasurePreviewTimes(design, points, &opt);
-      t_rfree = precompute::MeasurePreviewTimes(design, points, &rfree);
+      t_opt = measure(&storage::CacheEntry::in_opt, m.cache.opt_entries);
+      t_rfree = measure(&storage::CacheEntry::in_rfree, m.cache.rfree_entries);
     }
   }
 

@@ -136,8 +136,9 @@ int Run(const ClusterArgs& a) {
       std::string artifact;
       for (const auto& [name, bytes] : files)
         if (fs::path(name).extension() == ".fabatlas") artifact = (out / name).string();
-      std::cout << "wrote " << (artifact.empty() ? "" : artifact + ", ") << (out / "form.json").string()
-                << " and statistics.json\n";
+      std::cout << "wrote " << (artifact.empty() ? "" : artifact + ", ")
+                << (files.count("form.json") ? (out / "form.json").string() + ", " : std::string())
+                << "statistics.json\n";
     }
     stop_workers();
     coordinator.Shutdown();

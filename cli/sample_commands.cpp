@@ -35,7 +35,8 @@ void Sample(const SampleArgs& args) {
   precompute::DesignSampleEvaluator evaluator(design);
   sampling::ThreadPoolExecutor executor(threads);
   sampling::SamplingSummary summary = sampling::SampleDesignSpace(space, evaluator, executor, job.sampling);
-  precompute::WriteFormOutputs(design, summary, args.out);
+  const bool form_json = precompute::WritesFormJson(job, summary.form.samples.size());
+  precompute::WriteFormOutputs(design, summary, args.out, form_json);
   // The same artifact the cluster publishes for this job (docs/artifact.md).
   const std::string artifact = coordinator::ArtifactFileName(design.name);
   storage::Artifact published = coordinator::ArtifactOf(protocol::MakeJobBundle(args.job), design.name, job, summary.form);
@@ -45,6 +46,7 @@ void Sample(const SampleArgs& args) {
     const std::filesystem::path blobs = std::filesystem::path(args.out) / "subtree-blobs";
     coordinator::CacheAssembly assembly = coordinator::CollectSubtreesInProcess(design, summary.form, blobs);
     assembly.options = cache_options;
+    assembly.store_rfree = coordinator::StoresRfree(job);
     assembly.stream_geometry = true;  // one entry's geometry in memory at a time
     const auto added = coordinator::AddCache(published, assembly);
     const auto written = storage::WriteArtifact(published, std::filesystem::path(args.out) / artifact);
@@ -61,7 +63,8 @@ void Sample(const SampleArgs& args) {
     storage::WriteArtifact(published, std::filesystem::path(args.out) / artifact);
   }
   std::cout << precompute::Table3Row(design, summary.statistics) << "\n";
-  std::cout << "wrote " << args.out << "/" << artifact << ", form.json, statistics.json and validity maps\n";
+  std::cout << "wrote " << args.out << "/" << artifact << (form_json ? ", form.json" : "")
+            << ", statistics.json and validity maps\n";
 }
 
 }  // namespace

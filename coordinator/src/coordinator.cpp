@@ -761,7 +761,8 @@ struct Coordinator::Impl {
       }
       ForgetShares(job->bundle_digest);
       fs::path out = dir / "out";
-      precompute::WriteFormOutputs(design, summary, out);
+      precompute::WriteFormOutputs(design, summary, out,
+                                   precompute::WritesFormJson(job_file, summary.form.samples.size()));
       PublishSweptVolumes(job_id, design, space, executor, out);
       // The published artifact (docs/artifact.md): deterministic, atomic.
       storage::Artifact artifact = ArtifactOf(bundle, design.name, job_file, summary.form);
@@ -769,6 +770,7 @@ struct Coordinator::Impl {
         // The geometry cache from the subtrees the workers reported (docs/artifact.md).
         CacheAssembly assembly = CollectSubtreesFromStore(*store, *blobs, job_id, design, summary.form);
         assembly.options = CacheOptionsOf(job_file);
+        assembly.store_rfree = StoresRfree(job_file);
         assembly.stream_geometry = true;  // one entry's geometry in memory at a time
         const v1::CachePlanReport report =
             PlanCacheOnWorkers(job_id, protocol::EvaluationDigest(bundle), job_file.subdivisions, assembly);

@@ -123,6 +123,7 @@ CacheAssemblySummary AddCache(storage::Artifact& artifact, const CacheAssembly& 
   };
   if (a.stream_geometry) artifact.cache_geometry = fill;
   for (const auto& r : report.entries()) {
+    if (!r.in_opt() && !a.store_rfree) continue;  // H_rfree beyond H_opt: sizes in the manifest only
     storage::CacheEntry e;
     e.key = r.key();
     e.op = r.op();
@@ -147,6 +148,7 @@ CacheAssemblySummary AddCache(storage::Artifact& artifact, const CacheAssembly& 
 
 cache::CacheOptions CacheOptionsOf(const sampling::JobFile& job) {
   cache::CacheOptions o;
+  o.budget_bytes = kDefaultCacheBudgetMb << 20;
   auto it = job.reserved_sections.find("cache");
   if (it == job.reserved_sections.end()) return o;
   const std::string where = job.path + ": cache: ";
@@ -175,8 +177,10 @@ cache::CacheOptions CacheOptionsOf(const sampling::JobFile& job) {
         const double v = kv.second.as<double>();
         if (!(v >= 0) || !std::isfinite(v)) throw InputError(where + "min_subtree_seconds must be >= 0");
         o.min_seconds = v;
+      } else if (key == "store_rfree") {
+        kv.second.as<bool>();  // read by StoresRfree
       } else {
-        throw InputError(where + "unknown key '" + key + "' (strategy, budget_mb, min_subtree_seconds)");
+        throw InputError(where + "unknown key '" + key + "' (strategy, budget_mb, min_subtree_seconds, store_rfree)");
       }
     } catch (const YAML::Exception&) {
       throw InputError(where + "'" + key + "' has the wrong type");
@@ -280,6 +284,14 @@ sampling::PointKey ParsePointKey(const std::string& text) {
 }
 
 }  // namespace
+
+bool StoresRfree(const sampling::JobFile& job) {
+  CacheOptionsOf(job);  // the section's errors, once
+  auto it = job.reserved_sections.find("cache");
+  if (it == job.reserved_sections.end()) return false;
+  const YAML::Node node = YAML::Load(it->second);
+  return node.IsMap() && node["store_rfree"] && node["store_rfree"].as<bool>();
+}
 
 bool WantsCache(const sampling::JobFile& job) {
   auto it = job.reserved_sections.find("cache");

@@ -12,6 +12,7 @@
 #include <cstdio>
 #include <cstring>
 #include <fstream>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <set>
 #include <sstream>
@@ -27,12 +28,15 @@ namespace fs = std::filesystem;
 
 namespace {
 
-constexpr int kMaxDimensions = 6;
 constexpr int kPageSize = 4096;
 
-// ---- schema v1 --------------------------------------------------------------
+// ---- schema ----------------------------------------------------------------------
+//
+// Version 2 (written): `samples` has one column u<d> per dimension of the
+// form (SamplesTableSql). Version 1 (read only): u0..u5 whatever the
+// dimension count, NULL beyond it; everything else is the same.
 
-constexpr const char* kSchemaV1 = R"sql(
+constexpr const char* kSchema = R"sql(
 CREATE TABLE manifest (key TEXT PRIMARY KEY, value TEXT NOT NULL) WITHOUT ROWID;
 CREATE TABLE dimensions (idx INTEGER PRIMARY KEY, name TEXT NOT NULL, kind TEXT NOT NULL,
   lo REAL NOT NULL, hi REAL NOT NULL, enum_values TEXT NOT NULL);
@@ -41,9 +45,6 @@ CREATE TABLE nodes (tree INTEGER NOT NULL, node INTEGER NOT NULL, depth INTEGER 
   lo TEXT NOT NULL, hi TEXT NOT NULL, split_dimension INTEGER NOT NULL, split_key INTEGER NOT NULL,
   child_lo INTEGER NOT NULL, child_hi INTEGER NOT NULL, stop TEXT NOT NULL,
   PRIMARY KEY (tree, node)) WITHOUT ROWID;
-CREATE TABLE samples (id INTEGER PRIMARY KEY, key TEXT NOT NULL UNIQUE,
-  u0 REAL, u1 REAL, u2 REAL, u3 REAL, u4 REAL, u5 REAL,
-  valid INTEGER NOT NULL, failure TEXT NOT NULL);
 CREATE TABLE sample_properties (sample_id INTEGER NOT NULL, name TEXT NOT NULL, value REAL NOT NULL,
   PRIMARY KEY (sample_id, name)) WITHOUT ROWID;
 CREATE TABLE geometry_changes (a INTEGER NOT NULL, b INTEGER NOT NULL, dg REAL NOT NULL,
@@ -59,12 +60,19 @@ CREATE TABLE bundle_files (role TEXT NOT NULL, name TEXT NOT NULL, bytes BLOB NO
   PRIMARY KEY (role, name)) WITHOUT ROWID;
 )sql";
 
+// The samples table of a form with `dimensions` dimensions (schema v2).
+std::string SamplesTableSql(int dimensions) {
+  std::string sql = "CREATE TABLE samples (id INTEGER PRIMARY KEY, key TEXT NOT NULL UNIQUE";
+  for (int d = 0; d < dimensions; ++d) sql += ", u" + std::to_string(d) + " REAL NOT NULL";
+  return sql + ", valid INTEGER NOT NULL, failure TEXT NOT NULL);";
+}
+
 // Tables covered by a checksum, with their canonical (primary key) order.
 struct TableOrder {
   const char* table;
   const char* order;
 };
-constexpr TableOrder kTablesV1[] = {
+constexpr TableOrder kTables[] = {
     {"dimensions", "idx"},          {"trees", "tree"},
     {"nodes", "tree, node"},        {"samples", "id"},
     {"sample_properties", "sample_id, name"}, {"geometry_changes", "a, b"},
@@ -132,6 +140,8 @@ class Stmt {
     sqlite3_reset(stmt_);
     sqlite3_clear_bindings(stmt_);
   }
+  // Back to the first row of a SELECT, bindings kept.
+  void Reset() { sqlite3_reset(stmt_); }
   // Next row of a SELECT; false at the end.
   bool Next() {
     int rc = sqlite3_step(stmt_);
@@ -390,8 +400,9 @@ std::map<std::string, std::string> ManifestRows(const Artifact& a) {
 void InsertContent(Db& db, const Artifact& a, ArtifactWriteSummary& summary) {
   const sampling::Form& form = a.form;
   const int n = static_cast<int>(form.dimensions.size());
-  if (n < 1 || n > kMaxDimensions)
-    throw InputError("artifact: a form needs 1 to 6 dimensions, this one has " + std::to_string(n));
+  if (n < 1 || n > sampling::kMaxDimensions)
+    throw InputError("artifact: a form needs 1 to " + std::to_string(sampling::kMaxDimensions) +
+                     " dimensions, this one has " + std::to_string(n));
   {
     Stmt s(db, "INSERT INTO dimensions VALUES (?, ?, ?, ?, ?, ?)");
     for (int d = 0; d < n; ++d) {
@@ -418,18 +429,18 @@ void InsertContent(Db& db, const Artifact& a, ArtifactWriteSummary& summary) {
     }
   }
   {
-    Stmt s(db, "INSERT INTO samples VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?)");
+    db.Exec(SamplesTableSql(n));
+    std::string insert = "INSERT INTO samples VALUES (?, ?";
+    for (int d = 0; d < n; ++d) insert += ", ?";
+    Stmt s(db, insert + ", ?, ?)");
     Stmt p(db, "INSERT INTO sample_properties VALUES (?, ?, ?)");
     for (std::size_t i = 0; i < form.samples.size(); ++i) {
       const auto& sample = form.samples[i];
       if (static_cast<int>(sample.u.size()) != n || static_cast<int>(sample.key.size()) != n)
         throw InputError("artifact: sample " + std::to_string(i) + " has the wrong dimension");
       s.Int(1, static_cast<std::int64_t>(i)).Text(2, JoinInts(sample.key));
-      for (int d = 0; d < kMaxDimensions; ++d) {
-        if (d < n) s.Real(3 + d, sample.u[d]);
-        else s.Null(3 + d);
-      }
-      s.Int(9, sample.outcome.valid ? 1 : 0).Text(10, sample.outcome.failure_type);
+      for (int d = 0; d < n; ++d) s.Real(3 + d, sample.u[d]);
+      s.Int(3 + n, sample.outcome.valid ? 1 : 0).Text(4 + n, sample.outcome.failure_type);
       s.Run();
       for (const auto& [name, value] : sample.outcome.properties) {
         p.Int(1, static_cast<std::int64_t>(i)).Text(2, name).Real(3, value);
@@ -543,15 +554,16 @@ struct ManifestReader {
   }
 };
 
-Artifact ReadV1(Db& db, const ArtifactReadOptions& options) {
+Artifact Read(Db& db, int version, const ArtifactReadOptions& options) {
   Artifact a;
   const auto rows = ReadManifestRows(db);
   ManifestReader m{rows};
   if (m.Text("format") != "fabatlas.artifact") throw Corrupt("manifest format is '" + m.Text("format") + "'");
-  if (m.Int("schema_version") != 1)
-    throw Corrupt("manifest schema_version " + m.Text("schema_version") + " disagrees with the file header (1)");
+  if (m.Int("schema_version") != version)
+    throw Corrupt("manifest schema_version " + m.Text("schema_version") + " disagrees with the file header (" +
+                  std::to_string(version) + ")");
   Manifest& man = a.manifest;
-  man.schema_version = 1;
+  man.schema_version = version;
   man.design_name = m.Text("design_name");
   man.design_hash = m.Text("design_hash");
   man.code_version = m.Text("code_version");
@@ -582,7 +594,7 @@ Artifact ReadV1(Db& db, const ArtifactReadOptions& options) {
     if (key.rfind(checksum_prefix, 0) == 0) man.checksums[key.substr(checksum_prefix.size())] = value;
 
   if (options.verify_checksums) {
-    for (const auto& t : kTablesV1) {
+    for (const auto& t : kTables) {
       auto it = man.checksums.find(t.table);
       if (it == man.checksums.end()) throw Corrupt(std::string("manifest has no checksum of table ") + t.table);
       if (TableChecksum(db, t) != it->second)
@@ -616,9 +628,15 @@ Artifact ReadV1(Db& db, const ArtifactReadOptions& options) {
     }
   }
   const int n = static_cast<int>(form.dimensions.size());
-  if (n < 1 || n > kMaxDimensions) throw Corrupt("the form has " + std::to_string(n) + " dimensions (1 to 6 expected)");
+  const int max_dimensions = version == 1 ? 6 : sampling::kMaxDimensions;
+  if (n < 1 || n > max_dimensions)
+    throw Corrupt("the form has " + std::to_string(n) + " dimensions (1 to " + std::to_string(max_dimensions) +
+                  " expected)");
   {
-    Stmt s(db, "SELECT id, key, u0, u1, u2, u3, u4, u5, valid, failure FROM samples ORDER BY id");
+    // Both versions have u0..u<n-1>; version 1 has NULL columns beyond them.
+    std::string select = "SELECT id, key";
+    for (int d = 0; d < n; ++d) select += ", u" + std::to_string(d);
+    Stmt s(db, select + ", valid, failure FROM samples ORDER BY id");
     while (s.Next()) {
       const auto id = static_cast<std::int64_t>(form.samples.size());
       if (s.GetInt(0) != id) throw Corrupt("sample ids are not 0..n-1");
@@ -630,8 +648,8 @@ Artifact ReadV1(Db& db, const ArtifactReadOptions& options) {
           throw Corrupt("sample " + std::to_string(id) + " has no u" + std::to_string(d));
         sample.u.push_back(s.GetReal(2 + d));
       }
-      sample.outcome.valid = s.GetInt(8) != 0;
-      sample.outcome.failure_type = s.GetText(9);
+      sample.outcome.valid = s.GetInt(2 + n) != 0;
+      sample.outcome.failure_type = s.GetText(3 + n);
       if (!form.sample_ids.emplace(sample.key, id).second) throw Corrupt("two samples share key " + s.GetText(1));
       form.samples.push_back(std::move(sample));
     }
@@ -813,10 +831,10 @@ ArtifactWriteSummary WriteArtifact(const Artifact& artifact, const fs::path& pat
               " PRAGMA application_id = " + std::to_string(kArtifactApplicationId) +
               "; PRAGMA user_version = " + std::to_string(kArtifactSchemaVersion) + "; PRAGMA encoding = 'UTF-8';");
       db.Exec("BEGIN");
-      db.Exec(kSchemaV1);
+      db.Exec(kSchema);
       InsertContent(db, artifact, summary);
       auto rows = ManifestRows(artifact);
-      for (const auto& t : kTablesV1) rows[std::string("checksum.") + t.table] = TableChecksum(db, t);
+      for (const auto& t : kTables) rows[std::string("checksum.") + t.table] = TableChecksum(db, t);
       InsertManifest(db, rows);
       db.Exec("COMMIT");
     }
@@ -840,18 +858,71 @@ ArtifactWriteSummary WriteArtifact(const Artifact& artifact, const fs::path& pat
   return summary;
 }
 
+namespace {
+
+// The artifact opened read-only. immutable=1: published artifacts never
+// change; no locks, no -wal/-shm files.
+std::unique_ptr<Db> OpenArtifact(const fs::path& path) {
+  char* uri = sqlite3_mprintf("file:%q?immutable=1", fs::absolute(path).string().c_str());
+  std::string uri_text = uri ? uri : "";
+  sqlite3_free(uri);
+  return std::make_unique<Db>(uri_text, SQLITE_OPEN_READONLY | SQLITE_OPEN_URI);
+}
+
+}  // namespace
+
+void ReadCacheGeometry(const fs::path& path, const std::function<bool(const CacheEntry&)>& want,
+                       const std::function<void(CacheEntry& entry)>& visit) {
+  try {
+    CheckHeader(path);
+    auto db = OpenArtifact(path);
+    // Metadata of every row first (small), then each wanted row's geometry
+    // by its key, so only one entry's bytes are ever in memory.
+    std::vector<CacheEntry> entries;
+    {
+      Stmt s(*db, "SELECT key, op, children, bytes, cost_seconds, in_opt, in_rfree, grid_sha256 "
+                  "FROM cache_entries ORDER BY key");
+      while (s.Next()) {
+        CacheEntry e;
+        e.key = s.GetText(0);
+        e.op = s.GetText(1);
+        e.children = SplitStrings(s.GetText(2));
+        e.bytes = s.GetInt(3);
+        e.cost_seconds = s.GetReal(4);
+        e.in_opt = s.GetInt(5) != 0;
+        e.in_rfree = s.GetInt(6) != 0;
+        e.grid_sha256 = s.GetText(7);
+        if (want(e)) entries.push_back(std::move(e));
+      }
+    }
+    Stmt g(*db, "SELECT grid, glb FROM cache_entries WHERE key = ?");
+    for (auto& e : entries) {
+      g.Text(1, e.key);
+      if (!g.Next()) throw Corrupt("cache entry " + e.key + " disappeared");
+      e.grid = g.GetText(0);
+      e.glb = g.GetText(1);
+      g.Reset();
+      if (Sha256Hex(e.grid) != e.grid_sha256) throw Corrupt("cache entry " + e.key + " does not match its grid_sha256");
+      visit(e);
+      e.grid.clear();
+      e.grid.shrink_to_fit();
+      e.glb.clear();
+      e.glb.shrink_to_fit();
+    }
+  } catch (const Corrupt& e) {
+    throw InputError(path.string() + ": " + e.what());
+  } catch (const InputError&) {
+    throw;
+  } catch (const std::exception& e) {
+    throw InputError(path.string() + ": corrupt artifact: " + e.what());
+  }
+}
+
 Artifact ReadArtifact(const fs::path& path, const ArtifactReadOptions& options) {
   try {
     const int version = CheckHeader(path);
-    // immutable=1: published artifacts never change; no locks, no -wal/-shm files.
-    char* uri = sqlite3_mprintf("file:%q?immutable=1", fs::absolute(path).string().c_str());
-    std::string uri_text = uri ? uri : "";
-    sqlite3_free(uri);
-    Db db(uri_text, SQLITE_OPEN_READONLY | SQLITE_OPEN_URI);
-    switch (version) {
-      case 1: return ReadV1(db, options);
-    }
-    throw Corrupt("unsupported schema version " + std::to_string(version));
+    auto db = OpenArtifact(path);
+    return Read(*db, version, options);
   } catch (const Corrupt& e) {
     throw InputError(path.string() + ": " + e.what());
   } catch (const InputError&) {

@@ -19,6 +19,7 @@
 #include "fabatlas/storage/artifact.h"
 #include "fabatlas/storage/glb.h"
 #include "fabatlas/testing/paths.h"
+#include "fabatlas/viewer/customiser.h"
 
 namespace {
 
@@ -172,7 +173,7 @@ TEST(ArtifactCli, SampleWithCacheStoresHoptAndHrfreeEntriesThatInspectReloads) {
   const fs::path job = dir / "tube_cache.yaml";
   std::ofstream(job) << "design: " << (SourceDir() / "configs/designs/tube_wall_2d.yaml").string()
                      << "\nsampling: {subdivisions: 3, max_depth: 1, dg_threshold: 0.05}\n"
-                     << "cache: {strategy: opt_max, min_subtree_seconds: 0}\n";
+                     << "cache: {strategy: opt_max, min_subtree_seconds: 0, store_rfree: true}\n";
   CommandRun run = Fabatlas("sample " + job.string() + " --cache --out " + (dir / "out").string());
   ASSERT_EQ(run.status, 0) << run.err;
   EXPECT_NE(run.out.find("cache opt_max: H_TOP"), std::string::npos) << run.out;
@@ -199,6 +200,30 @@ TEST(ArtifactCli, SampleWithCacheStoresHoptAndHrfreeEntriesThatInspectReloads) {
   EXPECT_EQ(j["fig14"]["h_rfree"]["entries"], c.rfree_entries);
   ASSERT_TRUE(j["fig13_png"].is_string());
   EXPECT_TRUE(fs::file_size(j["fig13_png"].get<std::string>()) > 1000);
+
+  // Without store_rfree (the default) and with a budget below H_rfree, the
+  // file holds H_opt's entries only; the manifest still has H_rfree's size
+  // and inspect reports no t_rfree rather than a time over part of it.
+  const std::int64_t budget = c.rfree_bytes / 2;
+  std::ofstream(dir / "tight.yaml") << "design: " << (SourceDir() / "configs/designs/tube_wall_2d.yaml").string()
+                                    << "\nsampling: {subdivisions: 3, max_depth: 1, dg_threshold: 0.05}\n"
+                                    << "cache: {strategy: opt_max, min_subtree_seconds: 0, budget_mb: "
+                                    << static_cast<double>(budget) / (1 << 20) << "}\n";
+  CommandRun tight = Fabatlas("sample " + (dir / "tight.yaml").string() + " --out " + (dir / "tight").string());
+  ASSERT_EQ(tight.status, 0) << tight.err;
+  const auto t = fabatlas::storage::ReadArtifact(dir / "tight/tube_wall_2d.fabatlas", {.load_geometry = false});
+  EXPECT_EQ(t.manifest.cache.rfree_entries, c.rfree_entries);
+  EXPECT_EQ(t.manifest.cache.rfree_bytes, c.rfree_bytes);
+  EXPECT_LT(t.manifest.cache.budget_bytes, c.rfree_bytes);
+  EXPECT_LE(t.manifest.cache.opt_bytes, t.manifest.cache.budget_bytes);
+  EXPECT_LT(t.manifest.cache.opt_entries, c.rfree_entries);
+  EXPECT_EQ(static_cast<std::int64_t>(t.cache.size()), t.manifest.cache.opt_entries);
+  for (const auto& e : t.cache) EXPECT_TRUE(e.in_opt) << e.key;
+  CommandRun ti = Fabatlas("inspect " + (dir / "tight/tube_wall_2d.fabatlas").string() + " --json --points 5");
+  ASSERT_EQ(ti.status, 0) << ti.err;
+  const auto tj = nlohmann::json::parse(ti.out);
+  EXPECT_TRUE(tj["fig14"]["t_opt"].is_object()) << ti.out;
+  EXPECT_TRUE(tj["fig14"]["t_rfree"].is_null()) << ti.out;
 
   // A bad cache section is a one-line error naming the job file.
   std::ofstream(dir / "bad.yaml") << "design: " << (SourceDir() / "configs/designs/tube_wall_2d.yaml").string()
@@ -240,3 +265,91 @@ TEST(ArtifactCli, CheckedInVersion1ArtifactStaysReadable) {
 }
 
 }  // namespace
+
+// More than 6 dimensions end to end: the closed-form 8-D box
+// (configs/designs/box_8d.yaml, valid iff a0 + a1 <= 4.5) sampled by
+// `fabatlas sample`, published as a schema-v2 artifact with one u column per
+// dimension, read back, inspected and looked up by the customiser runtime.
+TEST(ArtifactCli, EightDimensionalJobEndToEnd) {
+  const fs::path dir = FreshTempDir("artifact-8d");
+  CommandRun r = Fabatlas("sample " + (SourceDir() / "tests/artifact/data/box_8d.yaml").string() + " --out " +
+                          (dir / "out").string());
+  ASSERT_EQ(r.status, 0) << r.err;
+  const fs::path path = dir / "out/box_8d.fabatlas";
+  const auto a = fabatlas::storage::ReadArtifact(path);
+  EXPECT_EQ(a.manifest.schema_version, fabatlas::storage::kArtifactSchemaVersion);
+  ASSERT_EQ(a.form.dimensions.size(), 8u);
+  auto truly_valid = [](const std::vector<double>& u) { return u[0] + u[1] <= 4.5; };
+  // 3^8 would be the whole subdivision-2 grid; the bootstrap alone is 2^8.
+  ASSERT_GE(a.form.samples.size(), 256u);
+  for (const auto& s : a.form.samples) {
+    ASSERT_EQ(s.u.size(), 8u);
+    EXPECT_EQ(s.outcome.valid, truly_valid(s.u)) << s.u[0] << " " << s.u[1];
+  }
+  // The valid region is convex (a half-space), so every point of the
+  // estimated valid region is truly valid, and the estimate is at most the
+  // analytic 71.875 %.
+  EXPECT_LE(a.manifest.statistics.valid_volume_percent, 71.875);
+  EXPECT_GT(a.manifest.statistics.valid_volume_percent, 0.0);
+  fabatlas::viewer::Customiser customiser(fabatlas::viewer::LoadArtifact(path));
+  std::mt19937_64 rng(8);
+  std::uniform_real_distribution<double> value(1, 3);
+  int inside = 0;
+  for (int i = 0; i < 2000; ++i) {
+    std::vector<double> u(8);
+    for (auto& x : u) x = value(rng);
+    if (!customiser.IsValid(u)) continue;
+    ++inside;
+    EXPECT_TRUE(truly_valid(u)) << u[0] << " " << u[1];
+    // The valid stretches along a0 through u end no later than 4.5 - a1.
+    for (const auto& s : customiser.Stretches(u, 0))
+      if (s.valid) EXPECT_LE(s.hi, 4.5 - u[1] + 1e-9);
+  }
+  EXPECT_GT(inside, 100);
+  // The table has exactly the 8 coordinate columns.
+  CommandRun schema = {};
+  {
+    const std::string cmd = "sqlite3 " + path.string() + " 'SELECT name FROM pragma_table_info(\"samples\")'";
+    FILE* pipe = ::popen(cmd.c_str(), "r");
+    std::array<char, 4096> buf;
+    std::size_t n;
+    while ((n = std::fread(buf.data(), 1, buf.size(), pipe)) > 0) schema.out.append(buf.data(), n);
+    ::pclose(pipe);
+  }
+  EXPECT_EQ(schema.out, "id\nkey\nu0\nu1\nu2\nu3\nu4\nu5\nu6\nu7\nvalid\nfailure\n");
+  CommandRun inspect = Fabatlas("inspect " + path.string() + " --points 5 --json");
+  ASSERT_EQ(inspect.status, 0) << inspect.err;
+  const auto j = nlohmann::json::parse(inspect.out);
+  EXPECT_EQ(j["schema_version"], fabatlas::storage::kArtifactSchemaVersion);
+  EXPECT_EQ(j["table3"]["samples"], a.form.samples.size());
+  EXPECT_EQ(j["fig14"]["t_nocache"]["points"], 5);
+}
+
+// The checked-in version-1 artifact, read and written again, becomes a
+// current-version file with the same content: same form, bundle and cache,
+// one u column per dimension instead of u0..u5.
+TEST(ArtifactCli, Version1ArtifactMigratesToTheCurrentVersion) {
+  const fs::path v1 = SourceDir() / "tests/data/artifact_v1/tube_wall_2d.fabatlas";
+  const auto old = fabatlas::storage::ReadArtifact(v1);
+  const fs::path path = FreshTempDir("artifact-migrate") / "tube_wall_2d.fabatlas";
+  fabatlas::storage::WriteArtifact(old, path);
+  const auto now = fabatlas::storage::ReadArtifact(path);
+  EXPECT_EQ(old.manifest.schema_version, 1);
+  EXPECT_EQ(now.manifest.schema_version, fabatlas::storage::kArtifactSchemaVersion);
+  ASSERT_EQ(now.form.samples.size(), old.form.samples.size());
+  for (std::size_t i = 0; i < old.form.samples.size(); ++i) {
+    EXPECT_EQ(now.form.samples[i].u, old.form.samples[i].u);
+    EXPECT_EQ(now.form.samples[i].key, old.form.samples[i].key);
+    EXPECT_EQ(now.form.samples[i].outcome.valid, old.form.samples[i].outcome.valid);
+    EXPECT_EQ(now.form.samples[i].outcome.properties, old.form.samples[i].outcome.properties);
+  }
+  EXPECT_EQ(now.form.geometry_changes, old.form.geometry_changes);
+  EXPECT_EQ(now.manifest.design_hash, old.manifest.design_hash);
+  EXPECT_EQ(now.manifest.statistics.valid_volume_percent, old.manifest.statistics.valid_volume_percent);
+  EXPECT_EQ(now.bundle.design_file, old.bundle.design_file);
+  EXPECT_EQ(now.cache.size(), old.cache.size());
+  // Only the samples table's checksum changes (its columns did).
+  for (const auto& [table, sum] : old.manifest.checksums)
+    if (table == "samples") EXPECT_NE(now.manifest.checksums.at(table), sum);
+    else EXPECT_EQ(now.manifest.checksums.at(table), sum) << table;
+}

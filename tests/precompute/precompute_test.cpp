@@ -10,6 +10,7 @@
 #include "fabatlas/error.h"
 #include "fabatlas/precompute/design_evaluator.h"
 #include "fabatlas/precompute/form_outputs.h"
+#include "fabatlas/sampling/job_file.h"
 #include "fabatlas/sampling/adaptive_sampler.h"
 #include "fabatlas/sampling/executor.h"
 #include "fabatlas/sampling/form_json.h"
@@ -87,12 +88,28 @@ TEST(Precompute, OutputsAreWrittenAndReadable) {
   options.max_depth = 1;
   sampling::SamplingSummary s = Sample(d, 2, options);
   auto out = fabatlas::testing::TempDesign("", "placeholder").parent_path() / "out";
-  precompute::WriteFormOutputs(d, s, out);
+  precompute::WriteFormOutputs(d, s, out, true);
   EXPECT_TRUE(std::filesystem::exists(out / "statistics.json"));
   EXPECT_GT(std::filesystem::file_size(out / "map_radius_wall.png"), 1000u);
   std::ifstream in(out / "form.json");
   std::string text((std::istreambuf_iterator<char>(in)), {});
   EXPECT_EQ(sampling::FormToJson(sampling::FormFromJson(text)), text);
+  // Without form.json, a form.json of an earlier run in the directory goes.
+  precompute::WriteFormOutputs(d, s, out, false);
+  EXPECT_FALSE(std::filesystem::exists(out / "form.json"));
+  EXPECT_TRUE(std::filesystem::exists(out / "statistics.json"));
+  // form_json: auto writes it up to kFormJsonMaxSamples samples; true and
+  // false in the job file decide alone.
+  sampling::JobFile job;
+  EXPECT_TRUE(precompute::WritesFormJson(job, precompute::kFormJsonMaxSamples));
+  EXPECT_FALSE(precompute::WritesFormJson(job, precompute::kFormJsonMaxSamples + 1));
+  job.form_json = true;
+  EXPECT_TRUE(precompute::WritesFormJson(job, 100 * precompute::kFormJsonMaxSamples));
+  job.form_json = false;
+  EXPECT_FALSE(precompute::WritesFormJson(job, 1));
+  EXPECT_EQ(sampling::ParseJobFile("design: d.yaml\nform_json: false\n", "j.yaml").form_json, false);
+  EXPECT_FALSE(sampling::ParseJobFile("design: d.yaml\nform_json: auto\n", "j.yaml").form_json.has_value());
+  EXPECT_THROW(sampling::ParseJobFile("design: d.yaml\nform_json: maybe\n", "j.yaml"), InputError);
   // A path that cannot be created is a one-line input error.
-  EXPECT_THROW(precompute::WriteFormOutputs(d, s, "/proc/fabatlas-cannot-write"), InputError);
+  EXPECT_THROW(precompute::WriteFormOutputs(d, s, "/proc/fabatlas-cannot-write", true), InputError);
 }

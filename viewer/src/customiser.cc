@@ -82,7 +82,9 @@ void WriteBundled(const std::filesystem::path& dir, const std::string& name, con
 }  // namespace
 
 CustomiserSource LoadArtifact(const std::filesystem::path& artifact, CacheChoice cache) {
-  storage::Artifact art = storage::ReadArtifact(artifact);
+  // Metadata only; the chosen cache's geometry is read entry by entry below,
+  // so loading holds the form and that cache, never the whole file.
+  storage::Artifact art = storage::ReadArtifact(artifact, {.load_geometry = false});
   CustomiserSource source;
   source.form = std::move(art.form);
   source.name = art.manifest.design_name;
@@ -110,9 +112,11 @@ CustomiserSource LoadArtifact(const std::filesystem::path& artifact, CacheChoice
                       : cache == CacheChoice::kOpt               ? "H_opt"
                                                                  : "H_rfree";
   if (has_cache && cache != CacheChoice::kNone)
-    for (auto& e : art.cache)
-      if (cache == CacheChoice::kOpt ? e.in_opt : e.in_rfree)
-        source.cache.emplace(e.key, std::make_pair(geometry::Solid::Deserialize(e.grid), e.cost_seconds));
+    storage::ReadCacheGeometry(
+        artifact, [&](const storage::CacheEntry& e) { return cache == CacheChoice::kOpt ? e.in_opt : e.in_rfree; },
+        [&](storage::CacheEntry& e) {
+          source.cache.emplace(e.key, std::make_pair(geometry::Solid::Deserialize(e.grid), e.cost_seconds));
+        });
   return source;
 }
 

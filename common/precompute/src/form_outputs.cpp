@@ -60,12 +60,17 @@ std::string Table3Row(const design::Design& design, const sampling::SamplingStat
   return out.str();
 }
 
+bool WritesFormJson(const sampling::JobFile& job, std::size_t samples) {
+  return job.form_json.value_or(samples <= kFormJsonMaxSamples);
+}
+
 void WriteFormOutputs(const design::Design& design, const sampling::SamplingSummary& summary,
-                      const std::filesystem::path& out_dir) {
+                      const std::filesystem::path& out_dir, bool form_json) {
   std::error_code ec;
   std::filesystem::create_directories(out_dir, ec);
   if (ec) throw InputError(out_dir.string() + ": cannot create output directory: " + ec.message());
-  WriteFileAtomically(out_dir / "form.json", sampling::FormToJson(summary.form));
+  if (form_json) WriteFileAtomically(out_dir / "form.json", sampling::FormToJson(summary.form));
+  else std::filesystem::remove(out_dir / "form.json", ec);
 
   const auto& s = summary.statistics;
   nlohmann::json stats{{"design", design.name},

@@ -23,9 +23,9 @@ std::int64_t DiscreteHi(const Dimension& d) {
 DesignSpace::DesignSpace(std::vector<Dimension> dimensions, int subdivisions)
     : dimensions_(std::move(dimensions)), subdivisions_(subdivisions) {
   if (dimensions_.empty()) throw InputError("design space: no exposed parameters");
-  if (dimensions_.size() > 6)
-    throw InputError("design space: " + std::to_string(dimensions_.size()) +
-                     " exposed parameters, at most 6 are supported");
+  if (dimensions_.size() > static_cast<std::size_t>(kMaxDimensions))
+    throw InputError("design space: " + std::to_string(dimensions_.size()) + " exposed parameters, at most " +
+                     std::to_string(kMaxDimensions) + " are supported");
   if (subdivisions_ < 1 || subdivisions_ > 1000)
     throw InputError("design space: subdivisions must be in [1, 1000], got " +
                      std::to_string(subdivisions_));

@@ -101,6 +101,11 @@ JobFile ParseJobFile(const std::string& yaml_text, const std::string& path) {
                "unknown key 'sampling." + skey +
                    "' (expected subdivisions, max_depth, dg_threshold, max_samples)");
       }
+    } else if (key == "form_json") {
+      const std::string v = Scalar(path, value, "form_json");
+      if (v == "true") job.form_json = true;
+      else if (v == "false") job.form_json = false;
+      else if (v != "auto") Fail(path, value.Mark(), "form_json must be true, false or auto, got '" + v + "'");
     } else if (key == "threads") {
       job.threads = static_cast<int>(Integer(path, value, "threads", 1, 4096));
     } else if (key == "materials") {

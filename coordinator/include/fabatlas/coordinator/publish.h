@@ -70,6 +70,11 @@ struct CacheAssembly {
   // so the writer holds one entry at a time; grid_of must then stay valid
   // until WriteArtifact, which counts the entries and the missing ones.
   bool stream_geometry = false;
+  // Store H_rfree's entries beyond H_opt too (for measuring t_rfree, seed
+  // 001 Fig. 14). H_rfree has no budget, so this can make the artifact as
+  // large as H_TOP; without it only H_opt's geometry is stored and the
+  // manifest still records H_rfree's size. Job file: cache.store_rfree.
+  bool store_rfree = false;
 };
 
 struct CacheAssemblySummary {
@@ -100,15 +105,23 @@ CacheAssemblySummary AddCache(storage::Artifact& artifact, const CacheAssembly& 
 // AddCache(artifact, assembly, protocol::RunCachePlan(CachePlanInputOf(assembly))).
 CacheAssemblySummary AddCache(storage::Artifact& artifact, const CacheAssembly& assembly);
 
+// H_opt's memory budget when the job file gives no cache.budget_mb, in MiB
+// of level-set memory (design::SubtreeRecord::bytes). A viewer holds H_opt
+// in memory, so this bounds `fabatlas serve` and the artifact's size.
+inline constexpr std::uint64_t kDefaultCacheBudgetMb = 256;
+
 // The job file's `cache:` section (docs/job-format.md):
 //   cache:
 //     strategy: opt_max     # naive | opt_ave | opt_max
-//     budget_mb: 512        # memory budget of H_opt (default: none)
+//     budget_mb: 512        # memory budget of H_opt (default: kDefaultCacheBudgetMb)
 //     min_subtree_seconds: 0.1  # subtrees whose model root cost (docs/cache.md)
 //                               # is lower are never cached; cluster workers
 //                               # also upload only subtrees this slow
+//     store_rfree: false    # also store H_rfree beyond H_opt (StoresRfree)
 // Throws InputError "<job file>: cache: ..." for unknown keys or bad values.
 cache::CacheOptions CacheOptionsOf(const sampling::JobFile& job);
+// cache.store_rfree of the job file (default false); same errors.
+bool StoresRfree(const sampling::JobFile& job);
 
 // The subtrees of a form's valid samples evaluated in this process (for
 // `fabatlas sample --cache`; the cluster gets them from its workers):

@@ -41,7 +41,7 @@
 namespace fabatlas::storage {
 
 // The schema version WriteArtifact writes.
-inline constexpr int kArtifactSchemaVersion = 1;
+inline constexpr int kArtifactSchemaVersion = 2;
 // SQLite application_id of artifact files ("FbAt").
 inline constexpr std::int32_t kArtifactApplicationId = 0x46624174;
 
@@ -151,7 +151,9 @@ struct ArtifactWriteSummary {
 };
 
 struct ArtifactReadOptions {
-  // Load cache entries' grid and glb bytes (false: metadata only, fast).
+  // Load cache entries' grid and glb bytes (false: metadata only, fast; the
+  // memory then does not grow with the cache: read geometry with
+  // ReadCacheGeometry).
   bool load_geometry = true;
   // Recompute and compare every checksum of the manifest.
   bool verify_checksums = true;
@@ -163,6 +165,16 @@ struct ArtifactReadOptions {
 // a truncated file, a newer schema version, a missing table or column, a
 // checksum mismatch or inconsistent content.
 Artifact ReadArtifact(const std::filesystem::path& path, const ArtifactReadOptions& options = {});
+
+// Reads the geometry (grid and glb) of the cache entries `want` accepts,
+// one row at a time in key order: `want` sees an entry's metadata (no
+// geometry), `visit` gets the entry with its geometry, checked against its
+// grid_sha256, and the bytes are dropped when it returns. Memory: one
+// entry's geometry at a time, whatever the artifact's size. Tables are not
+// checksummed here (ReadArtifact does that). Throws InputError like
+// ReadArtifact.
+void ReadCacheGeometry(const std::filesystem::path& path, const std::function<bool(const CacheEntry&)>& want,
+                       const std::function<void(CacheEntry& entry)>& visit);
 
 // Writes the artifact atomically (see above). Throws InputError naming the
 // path for an inconsistent Artifact (e.g. a starting point that names no

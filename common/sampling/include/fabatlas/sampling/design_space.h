@@ -34,6 +34,11 @@ struct Dimension {
 
 using PointKey = std::vector<std::int64_t>;
 
+// Most exposed parameters a design space may have. A k-d leaf has 2^d
+// corner samples, so the bootstrap grid alone holds (subdivisions + 1)^d
+// samples: 8 dimensions at subdivisions 2 is 6,561, at 5 it is 1.7 million.
+inline constexpr int kMaxDimensions = 16;
+
 // Number of halvings a real bootstrap cell supports (ticks per cell = 2^40).
 inline constexpr int kDyadicBits = 40;
 
@@ -41,7 +46,7 @@ inline constexpr int kDyadicBits = 40;
 class DesignSpace {
  public:
   // Throws fabatlas::InputError (one line naming the dimension) for an empty
-  // dimension list, more than 6 dimensions, hi <= lo, non-integer bounds of an
+  // dimension list, more than kMaxDimensions dimensions, hi <= lo, non-integer bounds of an
   // integer dimension, fewer than two enumerated values, duplicate names, or
   // subdivisions < 1.
   // `subdivisions`: bootstrap cells per dimension (Fab Forms suggests 5-7);

@@ -8,6 +8,7 @@
 //     dg_threshold: 0.1
 //     max_samples: 100000
 //   threads: 2                     # optional, local executor threads
+//   form_json: auto                # optional: true | false | auto (see below)
 //   materials:                     # optional, for the viewer's cost/weight
 //     - {name: PLA, density: 1.24, price_per_kg: 20}
 //   cluster: {...}                 # reserved, kept as YAML text
@@ -16,6 +17,7 @@
 #pragma once
 
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -38,6 +40,10 @@ struct JobFile {
   int subdivisions = 5;
   SamplingOptions sampling;
   int threads = 1;
+  // form_json: true | false | auto (unset): whether the run also writes
+  // form.json beside the artifact (precompute::WritesFormJson; auto = only
+  // forms of at most precompute::kFormJsonMaxSamples samples).
+  std::optional<bool> form_json;
   // cache.min_subtree_seconds: cluster workers upload the geometry of every
   // subtree whose root took at least this long to compute (wall seconds) as
   // a blob for the geometry cache artifact (Fab Forms Sec. 6).
