@@ -2,7 +2,7 @@
 // opening and querying it costs.
 //
 //   bench_artifact_scale write JOB OUT.fabatlas
-//     Samples JOB's design adaptively (seed 001 Sec. 5, SampleDesignSpace with
+//     Samples JOB's design adaptively (Fab Forms Sec. 5, SampleDesignSpace with
 //     the job's sampling settings) with a closed-form evaluator of
 //     configs/designs/tube_wall_3d.yaml (valid iff bore = radius - wall >= 2
 //     and wall >= 1 + 0.01 radius^2 + 0.0005 height^2, "unsat_constraints"

@@ -70,8 +70,8 @@ struct CacheAssembly {
   // so the writer holds one entry at a time; grid_of must then stay valid
   // until WriteArtifact, which counts the entries and the missing ones.
   bool stream_geometry = false;
-  // Store H_rfree's entries beyond H_opt too (for measuring t_rfree, seed
-  // 001 Fig. 14). H_rfree has no budget, so this can make the artifact as
+  // Store H_rfree's entries beyond H_opt too (for measuring t_rfree, Fab
+  // Forms Fig. 14). H_rfree has no budget, so this can make the artifact as
   // large as H_TOP; without it only H_opt's geometry is stored and the
   // manifest still records H_rfree's size. Job file: cache.store_rfree.
   bool store_rfree = false;
