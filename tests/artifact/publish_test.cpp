@@ -7,6 +7,7 @@
 #include <numbers>
 #include <set>
 
+#include "fabatlas/cache/cost_model.h"
 #include "fabatlas/coordinator/publish.h"
 #include "fabatlas/design/evaluate_sample.h"
 #include "fabatlas/precompute/design_evaluator.h"
@@ -78,15 +79,50 @@ TEST(PublishCache, ChessLikeDesignPlansHoptHrfreeHtopAndTheFileHoldsTheCache) {
   const auto& m = art.manifest.cache;
   EXPECT_EQ(m.strategy, "opt_max");
   EXPECT_EQ(summary.missing, 0);
-  // H_TOP: the 9 roots. H_rfree: OPT-MAX to the end. Which subtrees it keeps
-  // depends on the model costs (docs/cache.md): when a union costs more than
-  // the threshold it is cached and its pieces become redundant (Fab Forms'
-  // shoe: H_rfree ~ H_TOP); when only the pieces do, H_rfree is the 6 pieces.
-  // Either way it is never larger than H_TOP.
+  // H_TOP: the 9 roots. H_rfree: OPT-MAX to the end. With threshold 0 every
+  // root is eligible, and a root always has a sample evaluating it until it
+  // is cached, so OPT-MAX run to the end caches all 9 and every piece below
+  // becomes redundant: H_rfree = H_TOP (Fab Forms' shoe case).
+  std::int64_t root_bytes = 0;
+  for (const auto& r : chess.assembly.subtrees)
+    if (r.op == "union") root_bytes += r.bytes;
   EXPECT_EQ(m.top_entries, 9);
-  EXPECT_GT(m.rfree_entries, 0);
-  EXPECT_LE(m.rfree_bytes, m.top_bytes);
+  EXPECT_EQ(m.top_bytes, root_bytes);
+  EXPECT_EQ(m.rfree_entries, 9);
+  EXPECT_EQ(m.rfree_bytes, root_bytes);
   EXPECT_EQ(m.opt_entries, m.rfree_entries);  // no budget: the chosen cache is H_rfree
+  // With a threshold above every union's model cost and below a sphere's
+  // (6.56 ms, docs/cache.md), the roots are never cached, so H_rfree is
+  // exactly the pieces whose model cost reaches the threshold, the three
+  // spheres (boxes cost 1.89 ms), each shared by three samples (Fab Forms'
+  // chess and vase rows: H_rfree well below H_TOP).
+  double union_seconds = 0;
+  for (const auto& r : chess.assembly.subtrees)
+    if (r.op == "union") {
+      std::uint64_t input = 0;
+      for (const auto& p : chess.assembly.subtrees)
+        if (p.key == r.children[0] || p.key == r.children[1]) input += static_cast<std::uint64_t>(p.bytes) / 3;
+      union_seconds = std::max(union_seconds, cache::ModelSubtreeSeconds("union", r.bytes, input));
+    }
+  const double sphere_seconds = cache::ModelSubtreeSeconds("sphere", 0, 0);
+  ASSERT_LT(union_seconds, sphere_seconds);
+  ASSERT_LT(cache::ModelSubtreeSeconds("box", 0, 0), union_seconds);
+  {
+    ChessLike spheres_only;
+    spheres_only.assembly.options.min_seconds = (union_seconds + sphere_seconds) / 2;
+    storage::Artifact p = art;
+    AddCache(p, spheres_only.assembly);
+    std::int64_t sphere_bytes = 0;
+    for (const auto& r : chess.assembly.subtrees)
+      if (r.op == "sphere") sphere_bytes += r.bytes;
+    EXPECT_EQ(p.manifest.cache.top_entries, 9);
+    EXPECT_EQ(p.manifest.cache.rfree_entries, 3);
+    EXPECT_EQ(p.manifest.cache.rfree_bytes, sphere_bytes / 3);
+    std::set<std::string> keys, spheres;
+    for (const auto& e : p.cache) keys.insert(e.key);
+    for (const auto& [key, radius] : chess.sphere_radius) spheres.insert(key);
+    EXPECT_EQ(keys, spheres);
+  }
   // Curves: three strategies, each from the empty cache, mean never above worst.
   std::set<std::string> strategies;
   for (const auto& p : art.cache_curves) {

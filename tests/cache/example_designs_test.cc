@@ -59,8 +59,16 @@ TEST(ExampleDesigns, ChessPairRedundancyFreeCacheIsSeveralTimesSmallerThanTopLev
   EXPECT_EQ(r.top.entries, g.sample_count());
 }
 
-// The exact optimum of the worst case (GLPK) bounds OPT-MAX from below.
-TEST_P(ExampleDesign, ExactOptimumIsNoWorseThanOptMax) {
+// The exact optimum of the worst case (GLPK), solved from scratch (no
+// incumbent from OPT-MAX), bounds OPT-MAX from below: proven optimal, its
+// objective is what EvaluateCache measures for its cache, it fits the
+// budget, and OPT-MAX's worst case is never below it. Only the designs whose
+// program GLPK proves optimal within the limit on this machine; cup and vase
+// end at the limit (docs/cache.md), so no bound is claimed for them.
+class ExactExampleDesign : public ::testing::TestWithParam<const char*> {};
+INSTANTIATE_TEST_SUITE_P(Graphs, ExactExampleDesign, ::testing::Values("chess_pair", "pawn", "tube_wall_2d", "tube_wall_3d"));
+
+TEST_P(ExactExampleDesign, ExactOptimumBoundsOptMaxFromBelow) {
   DependencyGraph g = Load(GetParam());
   CacheOptions o;
   o.min_seconds = 0.01;
@@ -70,16 +78,16 @@ TEST_P(ExampleDesign, ExactOptimumIsNoWorseThanOptMax) {
   ExactCacheOptions e;
   e.min_seconds = 0.01;
   e.budget_bytes = o.budget_bytes;
-  e.time_limit_seconds = 5;
-  e.start = max.cache;
+  e.time_limit_seconds = 60;
   ExactCacheSummary ex = SolveExactCache(g, e);
   ASSERT_TRUE(ex.solved) << ex.message;
+  ASSERT_TRUE(ex.optimal) << ex.message;
   EXPECT_LE(ex.cost.bytes, o.budget_bytes);
-  EXPECT_LE(ex.bound, max.cost.worst_seconds + 1e-9);
-  // With OPT-MAX's cache as the first incumbent, never worse, optimal or not.
+  const CacheCost measured = EvaluateCache(g, ex.cache);
+  EXPECT_NEAR(measured.worst_seconds, ex.objective, 1e-6);
   EXPECT_LE(ex.cost.worst_seconds, max.cost.worst_seconds + 1e-9);
-  std::printf("%s: OPT-MAX worst %.3f s, exact %.3f s (%s), gap %.1f %%\n", GetParam(), max.cost.worst_seconds,
-              ex.cost.worst_seconds, ex.optimal ? "optimal" : "time limit", 100 * (max.cost.worst_seconds / ex.cost.worst_seconds - 1));
+  std::printf("%s: OPT-MAX worst %.3f s, exact %.3f s (optimal), gap %.1f %%\n", GetParam(), max.cost.worst_seconds,
+              ex.cost.worst_seconds, 100 * (max.cost.worst_seconds / ex.cost.worst_seconds - 1));
 }
 
 }  // namespace

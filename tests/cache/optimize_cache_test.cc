@@ -7,6 +7,11 @@
 #include "fabatlas/cache/exact_cache.h"
 #include "fabatlas/cache/optimize_cache.h"
 #include "fabatlas/error.h"
+#include "fabatlas/testing/paths.h"
+#include "synthetic_graphs.h"
+
+#include <map>
+#include <string>
 
 namespace fabatlas::cache {
 namespace {
@@ -215,8 +220,31 @@ namespace {
 TEST(CostModel, DeterministicAndGrowingWithGeometry) {
   EXPECT_EQ(ModelSubtreeSeconds("offset", 3000000, 4000000), ModelSubtreeSeconds("offset", 3000000, 4000000));
   EXPECT_GT(ModelSubtreeSeconds("offset", 3000000, 4000000), ModelSubtreeSeconds("offset", 1000000, 1000000));
-  // An offset of a 3 MB pawn from 3 MB of input: about the 0.7 s measured.
-  EXPECT_NEAR(ModelSubtreeSeconds("offset", 3000000, 3000000), 0.58, 0.01);
+  // Against measurements: the checked-in graphs of the example designs
+  // (tests/cache/data, measured root times, docs/cache.md) hold every
+  // record of the operations below that the model was fitted on (the
+  // counts of docs/cache.md's table). Over each one's records the model's
+  // mean is the measured mean within 5 % (offset: 28 records, 0.710 s).
+  std::map<std::string, std::pair<double, double>> sums;  // op -> (measured, model)
+  std::map<std::string, int> counts;
+  for (const char* design : {"chess_pair", "cup", "pawn", "tube_wall_2d", "tube_wall_3d", "vase"}) {
+    const auto graph =
+        testing::ReadGraphFile((fabatlas::testing::SourceDir() / "tests/cache/data" / (std::string(design) + ".graph")).string());
+    std::map<std::string, std::uint64_t> bytes;
+    for (const auto& n : graph.nodes) bytes[n.key] = n.bytes;
+    for (std::size_t i = 0; i < graph.nodes.size(); ++i) {
+      const auto& n = graph.nodes[i];
+      std::uint64_t input = 0;
+      for (const auto& c : n.children) input += bytes.at(c);
+      sums[graph.ops[i]].first += n.seconds;
+      sums[graph.ops[i]].second += ModelSubtreeSeconds(graph.ops[i], n.bytes, input);
+      ++counts[graph.ops[i]];
+    }
+  }
+  EXPECT_EQ(counts["offset"], 28);
+  EXPECT_NEAR(sums["offset"].first / 28, 0.710, 0.0005);
+  for (const char* op : {"box", "offset", "revolve", "rotate", "sphere", "torus"})
+    EXPECT_NEAR(sums[op].second / sums[op].first, 1.0, 0.05) << op;
   EXPECT_GT(ModelSubtreeSeconds("no_such_op", 0, 0), 0);
 }
 }  // namespace

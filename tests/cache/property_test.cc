@@ -144,8 +144,11 @@ TEST(Determinism, PlanIndependentOfRecordOrder) {
 }
 
 // The exact optimum of the worst case never loses to OPT-MAX, and its
-// reported objective is what EvaluateCache measures for its cache.
-TEST(ExactCache, GapOfOptMaxToTheOptimumOnSmallGraphs) {
+// reported objective is what EvaluateCache measures for its cache. Every
+// program must be proven optimal (a time-limited answer bounds nothing), so
+// no run is skipped. The gap it prints is a measurement, not a claim: a
+// greedy has no bound on it (docs/cache.md).
+TEST(ExactCache, ExactOptimumNeverLosesToOptMaxOnSmallGraphs) {
   double gap_sum = 0, gap_max = 0;
   int cases = 0, optimal_hits = 0;
   for (std::uint64_t seed = 1; seed <= 8; ++seed) {
@@ -157,10 +160,10 @@ TEST(ExactCache, GapOfOptMaxToTheOptimumOnSmallGraphs) {
       CachePlan max = OptimizeCache(g, o);
       ExactCacheOptions e;
       e.budget_bytes = o.budget_bytes;
-      e.time_limit_seconds = 3;
+      e.time_limit_seconds = 30;
       ExactCacheSummary ex = SolveExactCache(g, e);
       ASSERT_TRUE(ex.solved) << ex.message;
-      if (!ex.optimal) continue;
+      ASSERT_TRUE(ex.optimal) << "seed " << seed << " f " << f << ": " << ex.message;
       if (ex.cost.worst_seconds > max.cost.worst_seconds + 1e-9)
         std::printf("seed %d f %.1f exact %.4f (obj %.4f, %llu bytes) opt_max %.4f (%llu bytes) budget %llu\n", (int)seed, f,
                     ex.cost.worst_seconds, ex.objective, (unsigned long long)ex.cost.bytes, max.cost.worst_seconds,
@@ -175,7 +178,7 @@ TEST(ExactCache, GapOfOptMaxToTheOptimumOnSmallGraphs) {
       gap_max = std::max(gap_max, gap);
     }
   }
-  ASSERT_GE(cases, 8);
+  EXPECT_EQ(cases, 16);
   std::printf("OPT-MAX worst case vs the optimum over %d programs: optimal in %d, mean gap %.1f %%, max gap %.1f %%\n",
               cases, optimal_hits, 100 * gap_sum / cases, 100 * gap_max);
 }
