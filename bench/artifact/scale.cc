@@ -9,7 +9,8 @@
 //     otherwise; property volume = pi (radius^2 - bore^2) height; ΔG the
 //     hollow cylinders' symmetric-difference ratio), and publishes it as the
 //     cluster would (coordinator::ArtifactOf: manifest, form, starting points,
-//     the job bundle with the real design). Prints samples, times, file size.
+//     the job bundle with the real design). Prints samples, times, file size
+//     and the size form.json would have (built in memory, not written).
 //   bench_artifact_scale lookups ART [POINTS=10000] [SEED=1]
 //     Loads ART as `fabatlas serve` does (viewer::LoadArtifact) and times, at
 //     POINTS uniform random points, what /api/intervals computes (IsValid +
@@ -32,6 +33,7 @@
 #include "fabatlas/protocol/job_bundle.h"
 #include "fabatlas/sampling/adaptive_sampler.h"
 #include "fabatlas/sampling/executor.h"
+#include "fabatlas/sampling/form_json.h"
 #include "fabatlas/sampling/job_file.h"
 #include "fabatlas/storage/artifact.h"
 #include "fabatlas/viewer/customiser.h"
@@ -99,6 +101,10 @@ int Write(const std::string& job_path, const std::filesystem::path& out) {
               static_cast<long long>(summary.statistics.leaves), summary.form.geometry_changes.size());
   std::printf("sampling %.2f s, artifact assembly (starting points) %.2f s, write %.2f s\n", sample_s, assemble_s,
               write_s);
+  start = Clock::now();
+  const std::size_t json_bytes = sampling::FormToJson(summary.form).size();
+  std::printf("form.json would be %zu bytes (%.0f per sample), built in %.2f s\n", json_bytes,
+              static_cast<double>(json_bytes) / static_cast<double>(summary.form.samples.size()), Seconds(start));
   std::printf("artifact %s: %ju bytes; peak resident %s\n", out.string().c_str(),
               static_cast<std::uintmax_t>(std::filesystem::file_size(out)), ProcStatus("VmHWM:").c_str());
   return 0;
