@@ -37,24 +37,29 @@ TEST(FemCheck, ShortThickBlockPasses) {
   EXPECT_TRUE(r.converged);
   EXPECT_TRUE(r.reason.empty());
   EXPECT_EQ(r.num_elements, 512);
-  // Beam theory with shear for a stubby block is only an order of magnitude:
-  // PL^3/(3EI) = 0.5*512/(3*100*341.3) = 2.5e-3 mm; shear adds about as much.
-  EXPECT_GT(r.max_displacement, 1e-3);
-  EXPECT_LT(r.max_displacement, 2e-2);
+  // Peer value: CalculiX 2.20 (calculix-ccx) on the same mesh and load,
+  // C3D8I, Neo-Hookean, NLGEOM: max |u| = 0.00481713 mm (C3D8: 0.00476134);
+  // bench/fem/calculix_cantilever ... fem_check_test writes and runs it.
+  // Beam theory is only an estimate for a stubby block (bending
+  // PL^3/(3EI) = 2.5e-3 mm plus Timoshenko shear PL/(kGA) = 1.95e-3 mm).
+  RecordProperty("max_displacement", std::to_string(r.max_displacement));
+  EXPECT_NEAR(r.max_displacement, 0.00481713, 0.01 * 0.00481713);
 }
 
 TEST(FemCheck, SlenderCantileverFailsWithReason) {
   // 60 x 3 x 3 mm beam, same load: Euler-Bernoulli PL^3/(3EI) = 53 mm in
-  // the linear theory (large rotation makes it about 36 mm), far beyond the
-  // 0.5 mm threshold.
+  // the linear theory, far beyond the 0.5 mm threshold. Large rotation:
+  // peer value CalculiX C3D8I on the same mesh and load (as above),
+  // max |u| = 37.0545 mm (C3D8, which locks with 3 elements through the
+  // depth: 35.8582, what Q1 gives here).
   const FemLoadCase lc = EndLoad(60.0, {0, 0, -0.5});
   FemCheckOptions opt;
   opt.max_displacement = 0.5;
   const FemCheckResult r = RunFemCheck(Block(60, 3, 3, 1.0), lc, opt);
   EXPECT_FALSE(r.passed);
   ASSERT_TRUE(r.converged) << r.reason;
-  EXPECT_GT(r.max_displacement, 10.0);
-  EXPECT_LT(r.max_displacement, 53.4);  // below the linear theory
+  RecordProperty("max_displacement", std::to_string(r.max_displacement));
+  EXPECT_NEAR(r.max_displacement, 37.0545, 0.005 * 37.0545);
   EXPECT_NE(r.reason.find("exceeds the threshold 0.5 mm"), std::string::npos) << r.reason;
 }
 

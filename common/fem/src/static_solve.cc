@@ -53,9 +53,15 @@ constexpr double kGauss = 0.57735026918962576451;  // 1/sqrt(3)
 constexpr int kNodeSign[8][3] = {{-1, -1, -1}, {1, -1, -1}, {1, 1, -1}, {-1, 1, -1},
                                  {-1, -1, 1},  {1, -1, 1},  {1, 1, 1},  {-1, 1, 1}};
 
-// Reference-configuration data of one Gauss point: dN_a/dX and weight*det J0.
+// Reference-configuration data of one Gauss point: dN_a/dX, weight*det J, and
+// the gradients G_k = dphi_k/dX of the three incompatible modes
+// phi_k = 1 - xi_k^2 (Wilson, Taylor, Doherty & Ghaboussi 1973), taken as
+// Simo & Armero 1992, Eq. (4.9) do: G_k = (j0/j) J0^-T grad_xi phi_k with the
+// Jacobian J0 = dX/dxi at the element centre, so that int G_k dV = 0 (the
+// patch test) on any hexahedron.
 struct GaussPoint {
   double dN[8][3];
+  double G[3][3];  // G[k][J] = d phi_k / d X_J (scaled as above)
   double weight;
 };
 
@@ -64,6 +70,12 @@ std::vector<GaussPoint> PrecomputeGaussPoints(const HexMesh& mesh) {
   std::vector<GaussPoint> gps(mesh.elements.size() * 8);
   for (std::size_t e = 0; e < mesh.elements.size(); ++e) {
     const auto& el = mesh.elements[e];
+    Eigen::Matrix3d Jc = Eigen::Matrix3d::Zero();  // dX/dxi at the centre
+    for (int a = 0; a < 8; ++a)
+      for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) Jc(i, j) += 0.125 * mesh.nodes[el[a]][i] * kNodeSign[a][j];
+    const double j0 = Jc.determinant();
+    const Eigen::Matrix3d Jc_inv = j0 > 0 ? Eigen::Matrix3d(Jc.inverse()) : Eigen::Matrix3d::Zero();
     for (int g = 0; g < 8; ++g) {
       const double xi[3] = {kNodeSign[g][0] * kGauss, kNodeSign[g][1] * kGauss,
                             kNodeSign[g][2] * kGauss};
@@ -92,47 +104,71 @@ std::vector<GaussPoint> PrecomputeGaussPoints(const HexMesh& mesh) {
         for (int j = 0; j < 3; ++j) {
           gp.dN[a][j] = dNdxi[a][0] * Jinv(0, j) + dNdxi[a][1] * Jinv(1, j) + dNdxi[a][2] * Jinv(2, j);
         }
+      // d phi_k / d xi_m = -2 xi_k delta_km.
+      for (int k = 0; k < 3; ++k)
+        for (int j = 0; j < 3; ++j) gp.G[k][j] = (j0 / det) * (-2.0 * xi[k]) * Jc_inv(k, j);
     }
   }
   return gps;
 }
 
+// F = I + sum_a u_a (x) dN_a + sum_k alpha_k (x) G_k. `alpha` points at the
+// element's 9 incompatible-mode amplitudes (alpha[3k + i]: component i of
+// mode k, mm), or is null for plain Q1.
 Mat3 DeformationGradient(const GaussPoint& gp, const std::array<int, 8>& el,
-                         const Eigen::VectorXd& u) {
+                         const Eigen::VectorXd& u, const double* alpha) {
   Mat3 F{{{1, 0, 0}, {0, 1, 0}, {0, 0, 1}}};
   for (int a = 0; a < 8; ++a) {
     const double* ua = u.data() + 3 * static_cast<std::size_t>(el[a]);
     for (int i = 0; i < 3; ++i)
       for (int j = 0; j < 3; ++j) F[i][j] += ua[i] * gp.dN[a][j];
   }
+  if (alpha) {
+    for (int k = 0; k < 3; ++k)
+      for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) F[i][j] += alpha[3 * k + i] * gp.G[k][j];
+  }
   return F;
 }
 
-// The discrete problem: mesh, Gauss data, DOF map, sparsity pattern.
+// The discrete problem: mesh, Gauss data, DOF map, sparsity pattern, and for
+// the incompatible-mode element the per-element static condensation of the
+// mode amplitudes alpha (Simo & Armero 1992, Sec. 5: the element equations
+// [K_uu K_ua; K_au K_aa] [du; da] = -[r_u; r_a] are reduced to
+// (K_uu - K_ua K_aa^-1 K_au) du = -(r_u - K_ua K_aa^-1 r_a) and
+// da = -K_aa^-1 (r_a + K_au du)).
 class Problem {
  public:
   Problem(const HexMesh& mesh, const Material& mat, std::vector<GaussPoint> gps,
-          std::vector<int> free_index, std::vector<double> coefficient, int num_free)
+          std::vector<int> free_index, std::vector<double> coefficient, int num_free, bool incompatible)
       : mesh_(mesh), mat_(mat), gps_(std::move(gps)), free_(std::move(free_index)),
-        coef_(std::move(coefficient)), num_free_(num_free) {
+        coef_(std::move(coefficient)), num_free_(num_free), incompatible_(incompatible) {
     BuildPattern();
+    if (incompatible_) {
+      const std::size_t ne = mesh_.elements.size();
+      cond_M_.assign(ne * 216, 0.0);
+      cond_m_.assign(ne * 9, 0.0);
+      f_alpha_.assign(ne * 9, 0.0);
+    }
   }
 
   int num_free() const { return num_free_; }
-  const std::vector<int>& free_index() const { return free_; }
+  // Number of incompatible-mode unknowns (9 per element, 0 for Q1).
+  Eigen::Index num_alpha() const { return incompatible_ ? static_cast<Eigen::Index>(9 * mesh_.elements.size()) : 0; }
   SpMat& K() { return K_; }
   const std::vector<int>& diagonal_slots() const { return diag_; }
 
   // Strain energy sum_e int Psi dV (mJ); +inf if any Gauss point has J <= 0.
-  double StrainEnergy(const Eigen::VectorXd& u) const {
+  double StrainEnergy(const Eigen::VectorXd& u, const Eigen::VectorXd& alpha) const {
     const std::size_t ne = mesh_.elements.size();
     return tbb::parallel_reduce(
         tbb::blocked_range<std::size_t>(0, ne, 256), 0.0,
         [&](const tbb::blocked_range<std::size_t>& r, double acc) {
           for (std::size_t e = r.begin(); e < r.end(); ++e) {
+            const double* a = incompatible_ ? alpha.data() + 9 * e : nullptr;
             for (int g = 0; g < 8; ++g) {
               const GaussPoint& gp = gps_[e * 8 + g];
-              acc += gp.weight * NeoHookeanEnergy(mat_, DeformationGradient(gp, mesh_.elements[e], u));
+              acc += gp.weight * NeoHookeanEnergy(mat_, DeformationGradient(gp, mesh_.elements[e], u, a));
             }
           }
           return acc;
@@ -140,36 +176,75 @@ class Problem {
         std::plus<double>());
   }
 
-  // Internal forces (all DOFs) and, if want_K, the free-free tangent into K().
-  void Assemble(const Eigen::VectorXd& u, Eigen::VectorXd* f_int, bool want_K) {
+  // Internal forces f_int = dW/du (all DOFs). With want_K also the
+  // (condensed) free-free tangent into K(), the condensed internal forces
+  // into *f_cond (all DOFs) and the condensation data AlphaIncrement uses.
+  // Returns |dW/dalpha|^2 (0 for Q1).
+  double Assemble(const Eigen::VectorXd& u, const Eigen::VectorXd& alpha, Eigen::VectorXd* f_int,
+                  Eigen::VectorXd* f_cond, bool want_K) {
     const std::size_t ne = mesh_.elements.size();
     f_int->setZero(u.size());
-    if (want_K) std::fill(K_.valuePtr(), K_.valuePtr() + K_.nonZeros(), 0.0);
+    if (want_K) {
+      f_cond->setZero(u.size());
+      std::fill(K_.valuePtr(), K_.valuePtr() + K_.nonZeros(), 0.0);
+    }
     constexpr std::size_t kBatch = 2048;
     ke_.resize(kBatch * 576);
     fe_.resize(kBatch * 24);
+    fc_.resize(kBatch * 24);
     for (std::size_t b0 = 0; b0 < ne; b0 += kBatch) {
       const std::size_t b1 = std::min(ne, b0 + kBatch);
       tbb::parallel_for(tbb::blocked_range<std::size_t>(b0, b1, 64),
                         [&](const tbb::blocked_range<std::size_t>& r) {
                           for (std::size_t e = r.begin(); e < r.end(); ++e) {
-                            ElementKernel(e, u, &fe_[(e - b0) * 24],
+                            ElementKernel(e, u, alpha, &fe_[(e - b0) * 24], &fc_[(e - b0) * 24],
                                           want_K ? &ke_[(e - b0) * 576] : nullptr);
                           }
                         });
-      for (std::size_t e = b0; e < b1; ++e) Scatter(e, &fe_[(e - b0) * 24], want_K ? &ke_[(e - b0) * 576] : nullptr, f_int);
+      for (std::size_t e = b0; e < b1; ++e) {
+        Scatter(e, &fe_[(e - b0) * 24], want_K ? &fc_[(e - b0) * 24] : nullptr,
+                want_K ? &ke_[(e - b0) * 576] : nullptr, f_int, f_cond);
+      }
     }
+    double fa2 = 0;
+    for (double v : f_alpha_) fa2 += v * v;
+    return fa2;
+  }
+
+  // The mode increments da_e = -K_aa^-1 (r_a + K_au du_e) for a displacement
+  // increment du (all DOFs), from the last Assemble with want_K; and
+  // dW/dalpha . da.
+  double AlphaIncrement(const Eigen::VectorXd& du, Eigen::VectorXd* dalpha) const {
+    dalpha->setZero(num_alpha());
+    if (!incompatible_) return 0.0;
+    const std::size_t ne = mesh_.elements.size();
+    double dot = 0;
+    for (std::size_t e = 0; e < ne; ++e) {
+      const auto& el = mesh_.elements[e];
+      double due[24];
+      for (int a = 0; a < 8; ++a)
+        for (int i = 0; i < 3; ++i) due[3 * a + i] = du[3 * static_cast<Eigen::Index>(el[a]) + i];
+      const double* M = &cond_M_[e * 216];
+      for (int j = 0; j < 9; ++j) {
+        double v = cond_m_[e * 9 + j];
+        for (int c = 0; c < 24; ++c) v += M[c * 9 + j] * due[c];
+        (*dalpha)[static_cast<Eigen::Index>(9 * e + j)] = -v;
+        dot += f_alpha_[e * 9 + j] * -v;
+      }
+    }
+    return dot;
   }
 
   // Largest |principal Green-Lagrange strain| over all Gauss points.
-  double MaxPrincipalStrain(const Eigen::VectorXd& u) const {
+  double MaxPrincipalStrain(const Eigen::VectorXd& u, const Eigen::VectorXd& alpha) const {
     const std::size_t ne = mesh_.elements.size();
     return tbb::parallel_reduce(
         tbb::blocked_range<std::size_t>(0, ne, 256), 0.0,
         [&](const tbb::blocked_range<std::size_t>& r, double acc) {
           for (std::size_t e = r.begin(); e < r.end(); ++e) {
+            const double* a = incompatible_ ? alpha.data() + 9 * e : nullptr;
             for (int g = 0; g < 8; ++g) {
-              const Mat3 F = DeformationGradient(gps_[e * 8 + g], mesh_.elements[e], u);
+              const Mat3 F = DeformationGradient(gps_[e * 8 + g], mesh_.elements[e], u, a);
               Eigen::Matrix3d Fm;
               for (int i = 0; i < 3; ++i)
                 for (int j = 0; j < 3; ++j) Fm(i, j) = F[i][j];
@@ -185,47 +260,102 @@ class Problem {
   }
 
  private:
-  void ElementKernel(std::size_t e, const Eigen::VectorXd& u, double* fe, double* ke) const {
+  // Element forces fe (24, dW/du) and, if ke, the tangent (24 x 24) and the
+  // condensed forces fc (24). The incompatible-mode element treats its three
+  // modes as three extra "nodes" with gradients G_k (33 unknowns), then
+  // condenses them out.
+  void ElementKernel(std::size_t e, const Eigen::VectorXd& u, const Eigen::VectorXd& alpha, double* fe,
+                     double* fc, double* ke) {
     const auto& el = mesh_.elements[e];
-    std::fill(fe, fe + 24, 0.0);
-    if (ke) std::fill(ke, ke + 576, 0.0);
+    const int na = incompatible_ ? 11 : 8;
+    const int n3 = 3 * na;
+    const double* al = incompatible_ ? alpha.data() + 9 * e : nullptr;
+    double f[33] = {0};
+    double k33[33 * 33];
+    if (ke) std::fill(k33, k33 + n3 * n3, 0.0);
     for (int g = 0; g < 8; ++g) {
       const GaussPoint& gp = gps_[e * 8 + g];
-      const Mat3 F = DeformationGradient(gp, el, u);
-      const Mat3 P = NeoHookeanStress(mat_, F);
+      double grad[11][3];
       for (int a = 0; a < 8; ++a)
+        for (int j = 0; j < 3; ++j) grad[a][j] = gp.dN[a][j];
+      if (incompatible_)
+        for (int k = 0; k < 3; ++k)
+          for (int j = 0; j < 3; ++j) grad[8 + k][j] = gp.G[k][j];
+      const Mat3 F = DeformationGradient(gp, el, u, al);
+      const Mat3 P = NeoHookeanStress(mat_, F);
+      for (int a = 0; a < na; ++a)
         for (int i = 0; i < 3; ++i) {
-          fe[3 * a + i] += gp.weight * (P[i][0] * gp.dN[a][0] + P[i][1] * gp.dN[a][1] + P[i][2] * gp.dN[a][2]);
+          f[3 * a + i] += gp.weight * (P[i][0] * grad[a][0] + P[i][1] * grad[a][1] + P[i][2] * grad[a][2]);
         }
       if (!ke) continue;
       const Tangent9 A = NeoHookeanTangent(mat_, F);
-      // T[a][i][kL] = sum_J dN_a/dX_J A[iJ][kL]
-      double T[8][3][9];
-      for (int a = 0; a < 8; ++a)
+      // T[a][i][kL] = sum_J grad_a,J A[iJ][kL]
+      double T[11][3][9];
+      for (int a = 0; a < na; ++a)
         for (int i = 0; i < 3; ++i)
           for (int kl = 0; kl < 9; ++kl) {
-            T[a][i][kl] = gp.dN[a][0] * A[3 * i][kl] + gp.dN[a][1] * A[3 * i + 1][kl] +
-                          gp.dN[a][2] * A[3 * i + 2][kl];
+            T[a][i][kl] = grad[a][0] * A[3 * i][kl] + grad[a][1] * A[3 * i + 1][kl] + grad[a][2] * A[3 * i + 2][kl];
           }
-      for (int a = 0; a < 8; ++a)
+      for (int a = 0; a < na; ++a)
         for (int i = 0; i < 3; ++i) {
-          double* row = ke + (3 * a + i) * 24;
-          for (int b = 0; b < 8; ++b)
+          double* row = k33 + (3 * a + i) * n3;
+          for (int b = 0; b < na; ++b)
             for (int k = 0; k < 3; ++k) {
-              row[3 * b + k] += gp.weight * (T[a][i][3 * k] * gp.dN[b][0] + T[a][i][3 * k + 1] * gp.dN[b][1] +
-                                             T[a][i][3 * k + 2] * gp.dN[b][2]);
+              row[3 * b + k] += gp.weight * (T[a][i][3 * k] * grad[b][0] + T[a][i][3 * k + 1] * grad[b][1] +
+                                             T[a][i][3 * k + 2] * grad[b][2]);
             }
         }
     }
+    std::copy(f, f + 24, fe);
+    if (!incompatible_) {
+      if (ke) {
+        std::copy(k33, k33 + 576, ke);
+        std::copy(f, f + 24, fc);
+      }
+      return;
+    }
+    std::copy(f + 24, f + 33, &f_alpha_[e * 9]);
+    if (!ke) return;
+    // Static condensation. K_aa is shifted until positive definite (like
+    // the global tangent), which keeps the step a descent direction.
+    Eigen::Matrix<double, 9, 9> Kaa;
+    Eigen::Matrix<double, 9, 24> Kau;
+    Eigen::Matrix<double, 9, 1> fa;
+    for (int j = 0; j < 9; ++j) {
+      fa[j] = f[24 + j];
+      for (int c = 0; c < 9; ++c) Kaa(j, c) = k33[(24 + j) * 33 + 24 + c];
+      for (int c = 0; c < 24; ++c) Kau(j, c) = k33[(24 + j) * 33 + c];
+    }
+    Eigen::LLT<Eigen::Matrix<double, 9, 9>> llt(Kaa);
+    const double mean_diag = Kaa.diagonal().cwiseAbs().mean();
+    for (double shift = 1e-8 * mean_diag; llt.info() != Eigen::Success && shift < 1e8 * mean_diag; shift *= 10) {
+      llt.compute(Kaa + shift * Eigen::Matrix<double, 9, 9>::Identity());
+    }
+    const Eigen::Matrix<double, 9, 24> M = llt.solve(Kau);
+    const Eigen::Matrix<double, 9, 1> m = llt.solve(fa);
+    std::copy(M.data(), M.data() + 216, &cond_M_[e * 216]);  // column-major 9 x 24
+    std::copy(m.data(), m.data() + 9, &cond_m_[e * 9]);
+    for (int r = 0; r < 24; ++r) {
+      double v = f[r];
+      for (int j = 0; j < 9; ++j) v -= k33[r * 33 + 24 + j] * m[j];
+      fc[r] = v;
+      for (int c = 0; c < 24; ++c) {
+        double w = k33[r * 33 + c];
+        for (int j = 0; j < 9; ++j) w -= k33[r * 33 + 24 + j] * M(j, c);
+        ke[r * 24 + c] = w;
+      }
+    }
   }
 
-  void Scatter(std::size_t e, const double* fe, const double* ke, Eigen::VectorXd* f_int) {
+  void Scatter(std::size_t e, const double* fe, const double* fc, const double* ke, Eigen::VectorXd* f_int,
+               Eigen::VectorXd* f_cond) {
     const auto& el = mesh_.elements[e];
     int g[24];
     double w[24];
     for (int a = 0; a < 8; ++a)
       for (int i = 0; i < 3; ++i) {
         (*f_int)[3 * el[a] + i] += fe[3 * a + i];
+        if (fc) (*f_cond)[3 * el[a] + i] += fc[3 * a + i];
         g[3 * a + i] = free_[3 * static_cast<std::size_t>(el[a]) + i];
         w[3 * a + i] = coef_[3 * static_cast<std::size_t>(el[a]) + i];
       }
@@ -298,9 +428,13 @@ class Problem {
   std::vector<int> free_;
   std::vector<double> coef_;
   int num_free_;
+  bool incompatible_;
   SpMat K_;
   std::vector<int> diag_;
-  std::vector<double> ke_, fe_;
+  std::vector<double> ke_, fe_, fc_;
+  // Per element, from the last Assemble with the tangent: K_aa^-1 K_au
+  // (9 x 24, column-major), K_aa^-1 r_a (9), and r_a = dW/dalpha (9).
+  std::vector<double> cond_M_, cond_m_, f_alpha_;
 };
 
 // Consistent nodal forces of a uniform traction with the given total force.
@@ -402,7 +536,8 @@ StaticSolveSummary SolveStatic(const HexMesh& mesh, const Material& material,
   std::vector<double> problem_gauss_weights;
   problem_gauss_weights.reserve(gauss_points.size());
   for (const auto& gp : gauss_points) problem_gauss_weights.push_back(gp.weight);
-  Problem problem(mesh, material, std::move(gauss_points), free_index, coefficient, num_free);
+  const bool incompatible = options.element == StaticSolveOptions::Element::kIncompatibleModes;
+  Problem problem(mesh, material, std::move(gauss_points), free_index, coefficient, num_free, incompatible);
   summary.num_free_dofs = num_free;
   const Eigen::Index nf = num_free;
   auto restrict_free = [&](const Eigen::VectorXd& full) {
@@ -431,9 +566,10 @@ StaticSolveSummary SolveStatic(const HexMesh& mesh, const Material& material,
   cg_jacobi.setMaxIterations(options.cg_max_iterations);
 
   Eigen::VectorXd u = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(ndof));
-  Eigen::VectorXd f_int;
-  auto potential = [&](const Eigen::VectorXd& x, double lambda) {
-    return problem.StrainEnergy(x) - lambda * f_total.dot(x);
+  Eigen::VectorXd alpha = Eigen::VectorXd::Zero(problem.num_alpha());  // incompatible modes, mm
+  Eigen::VectorXd f_int, f_cond, dalpha, d_full(static_cast<Eigen::Index>(ndof));
+  auto potential = [&](const Eigen::VectorXd& x, const Eigen::VectorXd& a, double lambda) {
+    return problem.StrainEnergy(x, a) - lambda * f_total.dot(x);
   };
 
   // Rounding noise of the energy sum: a few ulps of the energy density
@@ -445,20 +581,40 @@ StaticSolveSummary SolveStatic(const HexMesh& mesh, const Material& material,
   double lambda = 0.0;
   double dlambda = 1.0 / options.load_steps;
   int cutbacks = 0;
+  int easy_steps = 0;  // consecutive steps that converged quickly
+  double last_shift_ratio = 0;  // last diagonal shift / mean diagonal
   while (lambda < 1.0 - 1e-14) {
     const double target = std::min(1.0, lambda + dlambda);
     const Eigen::VectorXd u_step_start = u;
+    const Eigen::VectorXd alpha_step_start = alpha;
     for (std::size_t k = 0; k < ndof; ++k)
       if (free_index[k] < 0) u[static_cast<Eigen::Index>(k)] = target * prescribed[static_cast<Eigen::Index>(k)];
+    const int iterations_before = summary.newton_iterations;
     bool step_ok = false;
     std::string failure;
     double scale = target * f_total_free.norm();
+    // First attempt: full Newton steps (halved only while an element would
+    // invert); if that does not converge, the increment is redone from its
+    // start with the Armijo line search on the potential energy.
+    for (int attempt = options.full_newton_first ? 0 : 1; attempt < 2 && !step_ok; ++attempt) {
+    const bool line_search = attempt == 1;
+    if (attempt == 1 && options.full_newton_first) {
+      u = u_step_start;
+      alpha = alpha_step_start;
+      for (std::size_t k = 0; k < ndof; ++k)
+        if (free_index[k] < 0) u[static_cast<Eigen::Index>(k)] = target * prescribed[static_cast<Eigen::Index>(k)];
+      if (options.verbose) std::fprintf(stderr, "fem: full Newton steps failed (%s); line search\n", failure.c_str());
+      failure.clear();
+    }
     for (int it = 0; it < options.max_newton_iterations; ++it) {
       const auto ta = Clock::now();
-      problem.Assemble(u, &f_int, true);
+      const double ra2 = problem.Assemble(u, alpha, &f_int, &f_cond, true);
       summary.assembly_seconds += Seconds(ta, Clock::now());
-      const Eigen::VectorXd r = restrict_free(f_int) - target * f_total_free;
-      const double rnorm = r.norm();
+      // The gradient of Pi: r_u (free DOFs) and r_alpha; the Newton system
+      // uses the condensed r (static condensation, Problem).
+      const Eigen::VectorXd r_u = restrict_free(f_int) - target * f_total_free;
+      const Eigen::VectorXd r = incompatible ? Eigen::VectorXd(restrict_free(f_cond) - target * f_total_free) : r_u;
+      const double rnorm = std::sqrt(r_u.squaredNorm() + ra2);
       if (!std::isfinite(rnorm)) {
         failure = "non-finite residual (inverted element)";
         break;
@@ -486,7 +642,7 @@ StaticSolveSummary SolveStatic(const HexMesh& mesh, const Material& material,
       Eigen::VectorXd d;
       // One attempt at K d = -r with the current shift; false if K is not
       // (numerically) positive definite or the solve did not converge.
-      auto attempt = [&]() -> bool {
+      auto try_solve = [&]() -> bool {
         if (direct) {
           solver.factorize(K);
           if (solver.info() != Eigen::Success) return false;
@@ -508,13 +664,17 @@ StaticSolveSummary SolveStatic(const HexMesh& mesh, const Material& material,
         }
         return ok && d.allFinite() && r.dot(d) < 0;
       };
-      bool solved = attempt();
+      // Shifts: none, then from a tenth of the last shift that worked (the
+      // tangent changes little between iterations, and every failed try is
+      // a factorisation) or 1e-6 x the mean diagonal, times 10 each try.
+      bool solved = try_solve();
       while (!solved && shift < 1e6 * mean_diag) {
-        const double next = shift == 0 ? 1e-6 * mean_diag : shift * 10;
+        const double next = shift == 0 ? std::max(1e-6, 0.1 * last_shift_ratio) * mean_diag : shift * 10;
         for (int j = 0; j < num_free; ++j) K.valuePtr()[problem.diagonal_slots()[j]] += next - shift;
         shift = next;
-        solved = attempt();
+        solved = try_solve();
       }
+      last_shift_ratio = shift / mean_diag;
       if (!solved) {
         summary.linear_solve_seconds += Seconds(ts, Clock::now());
         failure = direct ? "tangent stiffness could not be factorised (a part not held by the fixed region?)"
@@ -525,21 +685,27 @@ StaticSolveSummary SolveStatic(const HexMesh& mesh, const Material& material,
       summary.linear_solve_seconds += Seconds(ts, Clock::now());
       ++summary.newton_iterations;
 
+      // The full step: d on the free DOFs (d_full on all DOFs) and the mode
+      // increments it implies (static condensation).
+      d_full.setZero();
+      for (std::size_t k = 0; k < ndof; ++k) {
+        const int fk = free_index[k];
+        if (fk >= 0) d_full[static_cast<Eigen::Index>(k)] = coefficient[k] * d[fk];
+      }
+      const double slope_alpha = problem.AlphaIncrement(d_full, &dalpha);
+
       // Backtracking line search on the potential energy (Armijo).
-      Eigen::VectorXd u_trial = u;
-      const double pi0 = potential(u, target);
-      const double slope = r.dot(d);  // dPi/dalpha at alpha = 0 (< 0)
-      double alpha = 1.0;
+      Eigen::VectorXd u_trial = u, alpha_trial = alpha;
+      const double pi0 = potential(u, alpha, target);
+      const double slope = r_u.dot(d) + slope_alpha;  // dPi/dstep at step = 0 (< 0)
+      double step = 1.0;
       bool accepted = false;
-      for (int ls = 0; ls <= options.max_line_search_halvings; ++ls, alpha *= 0.5) {
-        u_trial = u;
-        for (std::size_t k = 0; k < ndof; ++k) {
-          const int fk = free_index[k];
-          if (fk >= 0) u_trial[static_cast<Eigen::Index>(k)] += alpha * coefficient[k] * d[fk];
-        }
-        const double pi = potential(u_trial, target);
+      for (int ls = 0; ls <= options.max_line_search_halvings; ++ls, step *= 0.5) {
+        u_trial = u + step * d_full;
+        alpha_trial = alpha + step * dalpha;
+        const double pi = potential(u_trial, alpha_trial, target);
         if (!std::isfinite(pi)) continue;
-        if (pi <= pi0 + options.armijo_c * alpha * slope) {
+        if (!line_search || pi <= pi0 + options.armijo_c * step * slope) {
           accepted = true;
           break;
         }
@@ -548,8 +714,9 @@ StaticSolveSummary SolveStatic(const HexMesh& mesh, const Material& material,
         // the residual norm instead.
         if (std::isfinite(pi0) && std::abs(pi - pi0) <= energy_noise) {
           Eigen::VectorXd f_trial;
-          problem.Assemble(u_trial, &f_trial, false);
-          if ((restrict_free(f_trial) - target * f_total_free).norm() < rnorm) {
+          const double ra2_trial = problem.Assemble(u_trial, alpha_trial, &f_trial, nullptr, false);
+          const Eigen::VectorXd r_trial = restrict_free(f_trial) - target * f_total_free;
+          if (std::sqrt(r_trial.squaredNorm() + ra2_trial) < rnorm) {
             accepted = true;
             break;
           }
@@ -560,22 +727,33 @@ StaticSolveSummary SolveStatic(const HexMesh& mesh, const Material& material,
         break;
       }
       if (options.verbose) {
-        std::fprintf(stderr, "fem:   step alpha=%.3g shift=%.3g |d|=%.3e\n", alpha, shift, d.norm());
+        std::fprintf(stderr, "fem:   step %.3g shift=%.3g |d|=%.3e\n", step, shift, d.norm());
       }
       u = u_trial;
+      alpha = alpha_trial;
       // Rounding floor: a full Newton step that moves no node by more than
       // step_tolerance relative to the displacement field is converged.
-      if (alpha == 1.0 && d.lpNorm<Eigen::Infinity>() <= options.step_tolerance * u.lpNorm<Eigen::Infinity>()) {
+      if (step == 1.0 && d.lpNorm<Eigen::Infinity>() <= options.step_tolerance * u.lpNorm<Eigen::Infinity>()) {
         step_ok = true;
         break;
       }
     }
+    }  // attempt
     if (step_ok) {
       lambda = target;
       ++summary.load_steps_taken;
+      // After two quick steps in a row, a cut-back increment grows again
+      // (doubling, up to the initial 1 / load_steps).
+      easy_steps = summary.newton_iterations - iterations_before <= options.quick_step_iterations ? easy_steps + 1 : 0;
+      if (easy_steps >= 2 && dlambda < 1.0 / options.load_steps) {
+        dlambda = std::min(2 * dlambda, 1.0 / options.load_steps);
+        easy_steps = 0;
+      }
       continue;
     }
+    easy_steps = 0;
     u = u_step_start;
+    alpha = alpha_step_start;
     if (failure.empty()) {
       failure = "no convergence in " + std::to_string(options.max_newton_iterations) + " Newton iterations";
     }
@@ -596,7 +774,7 @@ StaticSolveSummary SolveStatic(const HexMesh& mesh, const Material& material,
     summary.displacements[n] = d;
     summary.max_displacement = std::max(summary.max_displacement, std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]));
   }
-  summary.max_principal_strain = problem.MaxPrincipalStrain(u);
+  summary.max_principal_strain = problem.MaxPrincipalStrain(u, alpha);
   summary.total_seconds = Seconds(t_start, Clock::now());
   return summary;
 }

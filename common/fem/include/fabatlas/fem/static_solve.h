@@ -1,7 +1,13 @@
 // fabatlas/fem/static_solve.h — static equilibrium of a hyperelastic body.
 //
-// Total Lagrangian finite elements on 8-node trilinear hexahedra (Q1) with full
-// 2x2x2 Gauss integration, compressible Neo-Hookean material (neo_hookean.h).
+// Total Lagrangian finite elements on 8-node hexahedra with full 2x2x2 Gauss
+// integration, compressible Neo-Hookean material (neo_hookean.h). Two
+// elements (StaticSolveOptions::element): the trilinear Q1, which locks in
+// bending when few elements span a thickness, and the default Q1 with
+// incompatible modes (Wilson, Taylor, Doherty & Ghaboussi 1973, in the
+// finite-strain form of Simo & Armero 1992: the deformation gradient gets
+// three extra, element-internal modes, condensed out per element), which
+// does not; docs/fem.md has both papers and the bending validation.
 // Equilibrium is the minimiser of the potential energy
 //   Pi(u) = sum_e int_Omega_e Psi(F) dV - f_ext . u
 // found by Newton's method with a backtracking (Armijo) line search on Pi,
@@ -71,9 +77,29 @@ struct BoundaryConditions {
 };
 
 struct StaticSolveOptions {
+  // kIncompatibleModes (default): F = I + Grad u + sum_k alpha_k (x) G_k with
+  //   the modes phi_k = 1 - xi_k^2 (9 amplitudes per element, condensed out;
+  //   Simo & Armero 1992). Bending-locking free; same unknowns and sparsity
+  //   as Q1, about 2-3x its element cost.
+  // kQ1: plain trilinear displacements (the published Cook's membrane table
+  //   of DESIGN.md is for this element).
+  enum class Element { kIncompatibleModes, kQ1 };
+  Element element = Element::kIncompatibleModes;
   int load_steps = 4;               // equal load increments
   int max_newton_iterations = 30;   // per load step (before a cutback)
   int max_cutbacks = 4;             // a failing increment is halved this often
+  // A step that converges within this many Newton iterations is quick; after
+  // two quick steps in a row a cut-back increment doubles again (never above
+  // 1 / load_steps).
+  int quick_step_iterations = 6;
+  // Each increment is first tried with full Newton steps (halved only while
+  // an element would invert), as CalculiX does; if that does not converge in
+  // max_newton_iterations, the increment is redone with the Armijo line
+  // search on the potential energy, and only then cut back. On slender
+  // bending the line search is what costs iterations (the residual of a
+  // rotating beam is far from monotone in the energy-decreasing steps), on
+  // buckling and snap-through it is what converges. false: line search only.
+  bool full_newton_first = true;
   // Converged when ||r_free|| <= relative_tolerance * max(||f_ext,free||,
   // ||reactions to prescribed displacements at the start of the step||).
   double relative_tolerance = 1e-9;
