@@ -95,10 +95,10 @@ TEST(DesignFem, ThinTallHeelDeformsTooMuch) {
 }
 
 // Euler-Bernoulli: tip deflection of a clamped beam under an end load,
-// delta = F L^3 / (3 E I), I = b h^3 / 12. Full-integration Q1 hexahedra are
-// stiff in bending (shear locking, docs/fem.md) and the 3D clamp and shear
-// deformation (Timoshenko, +0.8% at L/h = 10) shift the answer by a few
-// percent; the error must shrink as the FEM voxel does. The load is small
+// delta = F L^3 / (3 E I), I = b h^3 / 12. The default incompatible-mode
+// element does not lock in bending (docs/fem.md), so already 5 elements
+// through the depth are within 1%; the 3D clamp and shear deformation
+// (Timoshenko, +0.8% at L/h = 10) shift the answer by less. The load is small
 // (delta/L = 1e-3), so the Neo-Hookean solution is in its linear range. The
 // reported max |u| includes the tip's axial displacement from the end
 // rotation (+0.3%).
@@ -106,8 +106,7 @@ TEST(DesignFem, CantileverMatchesEulerBernoulli) {
   const double L = 100, b = 10, h = 10, E = 1000, F = 0.25;
   const double I = b * h * h * h / 12;
   const double expected = F * L * L * L / (3 * E * I);  // 0.1 mm
-  double previous_error = 1;
-  for (auto [voxel, tolerance] : {std::pair{2.0, 0.03}, std::pair{1.25, 0.015}}) {
+  for (auto [voxel, tolerance] : {std::pair{2.0, 0.01}, std::pair{1.25, 0.01}}) {
     design::Design d = design::LoadDesign(TempDesign(Cantilever(L, b, h, voxel, E, F, "[[-1, -1, -1], [0.01, 11, 11]]")));
     auto start = std::chrono::steady_clock::now();
     design::SampleResult r = Evaluate(d);
@@ -122,9 +121,6 @@ TEST(DesignFem, CantileverMatchesEulerBernoulli) {
     const long elements = std::lround(L / voxel) * std::lround(b / voxel) * std::lround(h / voxel);
     EXPECT_NE(fem.reason.find(", " + std::to_string(elements) + " elements"), std::string::npos) << fem.reason;
     EXPECT_NEAR(u / expected, 1.0, tolerance) << "voxel " << voxel;
-    double error = std::abs(u / expected - 1);
-    EXPECT_LT(error, previous_error) << "voxel " << voxel;
-    previous_error = error;
   }
 }
 
@@ -144,8 +140,40 @@ void ExpectOneLineError(const std::string& text, const std::string& needle) {
   }
 }
 
-TEST(DesignFem, EmptyFixedRegionIsAnInputError) {
-  ExpectOneLineError(Cantilever(100, 10, 10, 2, 1000, 0.25, "[[-10, -10, -10], [-5, -5, -5]]"), "fixed");
+// A region that selects nothing at a sample makes that sample invalid with
+// its reason (the job goes on); it depends on the sample's geometry.
+TEST(DesignFem, EmptyFixedRegionMakesTheSampleInvalid) {
+  design::Design d = design::LoadDesign(TempDesign(Cantilever(100, 10, 10, 2, 1000, 0.25, "[[-10, -10, -10], [-5, -5, -5]]")));
+  design::SampleResult r = Evaluate(d);
+  EXPECT_FALSE(r.valid);
+  EXPECT_EQ(r.failure, design::kLoadCaseMissesSolid);
+  EXPECT_NE(r.failure_reason.find("the fixed region selects no node"), std::string::npos) << r.failure_reason;
+}
+
+// The loaded box [L - 0.01, L + 1] holds the beam's end face only while the
+// end lands on a node layer of the 2 mm FEM grid within it: L = 100 puts it
+// at x = 100, L = 100.5 voxelises the beam to x = 100 (the cell [100, 102]
+// has its centre outside), which the box misses.
+TEST(DesignFem, LoadedRegionMissingAtOneSampleOnlyInvalidatesThatSample) {
+  design::Design d = design::LoadDesign(TempDesign(Cantilever(100, 10, 10, 2, 1000, 0.25, "[[-1, -1, -1], [0.01, 11, 11]]")));
+  design::SampleResult hit = Evaluate(d, "L=100");
+  EXPECT_TRUE(hit.valid) << hit.failure << ": " << hit.failure_reason;
+  design::SampleResult miss = Evaluate(d, "L=100.5");
+  EXPECT_FALSE(miss.valid);
+  EXPECT_EQ(miss.failure, design::kLoadCaseMissesSolid);
+  EXPECT_NE(miss.failure_reason.find("the loaded region selects no boundary face"), std::string::npos)
+      << miss.failure_reason;
+}
+
+// `element: q1` selects the plain trilinear element, which locks in bending:
+// 5 elements through the depth give a visibly stiffer beam than the default
+// incompatible modes. An unknown element is a one-line input error.
+TEST(DesignFem, ElementChoice) {
+  std::string text = Cantilever(100, 10, 10, 2, 1000, 0.25, "[[-1, -1, -1], [0.01, 11, 11]]");
+  const double im = MaxDisplacement(FemOutcome(Evaluate(design::LoadDesign(TempDesign(text)))));
+  const double q1 = MaxDisplacement(FemOutcome(Evaluate(design::LoadDesign(TempDesign(text + "    element: q1\n")))));
+  EXPECT_LT(q1, 0.98 * im) << "q1 " << q1 << " incompatible modes " << im;
+  ExpectOneLineError(text + "    element: q2\n", "'element' must be incompatible_modes or q1");
 }
 
 TEST(DesignFem, FixedRegionNeedsTwoCorners) {

@@ -172,6 +172,14 @@ CheckOutcome Fem(const CheckSpec& spec, CheckContext& c) {
   for (int k = 0; k < 3; ++k) load.total_force[k] = EvaluateItem(c, spec, force.items[k]);
   fem::FemCheckOptions options;
   options.max_displacement = limit;
+  // `element`: incompatible_modes (default, does not lock in bending) or q1
+  // (docs/fem.md).
+  if (auto it = spec.args.find("element"); it != spec.args.end()) {
+    if (it->second.text == "q1") options.solve.element = fem::StaticSolveOptions::Element::kQ1;
+    else if (it->second.text != "incompatible_modes")
+      throw InputError(it->second.place.str() + ": check '" + spec.name + "': 'element' must be incompatible_modes or q1, got '" +
+                       it->second.text + "'");
+  }
   options.max_strain = c.Number(spec, "max_strain", 0.0);
 
   geometry::Occupancy occupancy;
@@ -203,6 +211,16 @@ CheckOutcome Fem(const CheckSpec& spec, CheckContext& c) {
     throw InputError(where + ": " + e.what());
   }
   CheckOutcome o;
+  if (result.empty_load_case) {
+    // Depends on the sample's geometry (e.g. a heel height that puts the
+    // sole's top between FEM node layers): the sample is invalid, the job
+    // goes on.
+    o.failure = kLoadCaseMissesSolid;
+    std::ostringstream m;
+    m << result.reason << " (" << result.num_elements << " elements of " << voxel << " mm)";
+    o.reason = m.str();
+    return o;
+  }
   o.passed = result.passed;
   std::ostringstream reason;
   reason.precision(4);

@@ -6,7 +6,6 @@
 #include <cstdio>
 #include <string>
 
-#include "fabatlas/error.h"
 
 namespace fabatlas::fem {
 
@@ -37,14 +36,22 @@ FemCheckResult RunFemCheck(const VoxelSolid& solid, const FemLoadCase& load,
                            const FemCheckOptions& options) {
   const auto t0 = std::chrono::steady_clock::now();
   const HexMesh mesh = HexMeshFromVoxels(solid);
-  if (mesh.elements.empty()) throw InputError("FEM check: the solid has no occupied voxel");
+  FemCheckResult r;
+  r.num_elements = static_cast<int>(mesh.elements.size());
+  auto empty = [&](const char* what) {
+    r.empty_load_case = true;
+    r.reason = what;
+    r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    return r;
+  };
+  if (mesh.elements.empty()) return empty("the solid has no occupied voxel");
   const double tol = 1e-6 * solid.voxel_size;
 
   BoundaryConditions bc;
   for (int n = 0; n < static_cast<int>(mesh.nodes.size()); ++n) {
     if (InAny(load.fixed_region, mesh.nodes[n], tol)) bc.FixNode(n);
   }
-  if (bc.dirichlet.empty()) throw InputError("FEM check: the fixed region selects no node of the solid");
+  if (bc.dirichlet.empty()) return empty("the fixed region selects no node of the solid");
 
   FaceTraction traction;
   traction.total_force = load.total_force;
@@ -60,17 +67,13 @@ FemCheckResult RunFemCheck(const VoxelSolid& solid, const FemLoadCase& load,
     }
     if (inside) traction.faces.push_back(face);
   }
-  if (traction.faces.empty()) {
-    throw InputError("FEM check: the loaded region selects no boundary face of the solid");
-  }
+  if (traction.faces.empty()) return empty("the loaded region selects no boundary face of the solid");
   bc.tractions.push_back(traction);
 
   const StaticSolveSummary s = SolveStatic(mesh, load.material, bc, options.solve);
-  FemCheckResult r;
   r.converged = s.converged;
   r.max_displacement = s.max_displacement;
   r.max_strain = s.max_principal_strain;
-  r.num_elements = static_cast<int>(mesh.elements.size());
   r.newton_iterations = s.newton_iterations;
   r.assembly_seconds = s.assembly_seconds;
   r.linear_solve_seconds = s.linear_solve_seconds;

@@ -23,6 +23,9 @@ inline constexpr const char* kThinParts = "thin_parts";
 inline constexpr const char* kUnstable = "unstable";
 inline constexpr const char* kTooMuchMaterial = "too_much_material";
 inline constexpr const char* kTooMuchDeformation = "too_much_deformation";  // fem check
+// fem check: at this sample the fixed or loaded region selects nothing of the
+// solid (or the solid has no FEM voxel), so there is no load path to test.
+inline constexpr const char* kLoadCaseMissesSolid = "load_case_misses_solid";
 inline constexpr const char* kCollision = "collision";                         // collision_free check
 inline constexpr const char* kTooLittleClearance = "too_little_clearance";     // collision_free check
 inline constexpr const char* kInfeasible = "infeasible";                       // assembly_feasible check

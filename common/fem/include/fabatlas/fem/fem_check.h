@@ -48,6 +48,12 @@ struct FemCheckResult {
   bool converged = false;
   double max_displacement = 0;  // mm
   double max_strain = 0;        // largest |principal Green-Lagrange strain|
+  // The load case selects nothing on this solid: no occupied voxel, a fixed
+  // region with no node, or a loaded region with no boundary face (reason
+  // says which). No solve is run and passed is false. For a parametric
+  // design this depends on the sample's geometry, so it is a verdict on
+  // the sample, not an input error.
+  bool empty_load_case = false;
   int num_elements = 0;
   int newton_iterations = 0;
   double seconds = 0;            // wall time of the whole check
@@ -59,9 +65,10 @@ struct FemCheckResult {
 
 // Meshes the solid (HexMeshFromVoxels), applies the load case and solves.
 // passed = converged && max_displacement <= options.max_displacement (&& the
-// strain limit if set). Throws InputError for bad input: empty solid, a fixed
-// region that selects no node, or a loaded region that selects no boundary
-// face.
+// strain limit if set). An empty solid, a fixed region that selects no node
+// or a loaded region that selects no boundary face fail the check with
+// empty_load_case set (see FemCheckResult). Throws InputError for a bad
+// voxel grid or material.
 FemCheckResult RunFemCheck(const VoxelSolid& solid, const FemLoadCase& load,
                            const FemCheckOptions& options = {});
 
