@@ -57,9 +57,40 @@ TEST(RigidMotion, InverseAndCompose) {
 
 TEST(RigidMotion, RelativeMotionIsMotionInOtherFrame) {
   const RigidMotion a = RigidMotion::Line({0, 0, 0}, {10, 0, 0});
-  const RigidMotion b = RigidMotion::Line({0, 0, 0}, {10, 0, 0});
   // Two parts moving together do not move relative to each other.
-  for (const auto& f : SampleRelativeMotion(a, b, 5)) ExpectNear(f.Apply({1, 2, 3}), {1, 2, 3}, 1e-12);
+  const std::vector<Transform> together = SampleRelativeMotion(a, a, 5);
+  ASSERT_EQ(together.size(), 5u);
+  for (const auto& f : together) ExpectNear(f.Apply({1, 2, 3}), {1, 2, 3}, 1e-12);
+  // B turns 90 degrees about z through the origin while A slides 10 mm
+  // along x: in A's frame, B's point x is at R(90 t deg) x - (10 t, 0, 0).
+  const RigidMotion b = RigidMotion::Turn({0, 0, 1}, 90, {0, 0, 0});
+  const std::vector<Transform> rel = SampleRelativeMotion(a, b, 5);
+  ASSERT_EQ(rel.size(), 5u);
+  for (int i = 0; i < 5; ++i) {
+    const double t = i / 4.0, ang = 0.5 * std::acos(-1.0) * t;
+    ExpectNear(rel[i].Apply({2, 0, 1}), {2 * std::cos(ang) - 10 * t, 2 * std::sin(ang), 1}, 1e-12);
+  }
+}
+
+// The speed bound of conservative advancement: exact for a straight line at
+// constant speed and a turn at constant angular speed, and never below the
+// speed of a point of a curved, turning motion (central differences).
+TEST(RigidMotion, SpeedBoundHoldsAndIsTightForSimpleMotions) {
+  EXPECT_NEAR(RigidMotion::Line({0, 0, 0}, {3, 4, 0}).SpeedBound(100), 5.0, 1e-12);
+  EXPECT_NEAR(RigidMotion::Turn({0, 0, 1}, 360, {0, 0, 0}).SpeedBound(3), 6 * std::acos(-1.0), 1e-9);
+  RigidMotion m = RigidMotion::Turn({1, 2, 3}, 200, {0.5, -1, 2});
+  m.translation = {{{0, 0, 0}, {20, 5, 0}, {-10, 15, 3}, {4, 4, 4}}};
+  const Vec3 x{3, -2, 7};
+  const double radius = std::hypot(x[0] - 0.5, x[1] + 1, x[2] - 2);
+  const double bound = m.SpeedBound(radius);
+  double fastest = 0;
+  for (int i = 1; i < 999; ++i) {
+    const double t = i / 1000.0, h = 1e-6;
+    const Vec3 p = m.At(t + h).Apply(x), q = m.At(t - h).Apply(x);
+    fastest = std::max(fastest, std::hypot(p[0] - q[0], p[1] - q[1], p[2] - q[2]) / (2 * h));
+  }
+  EXPECT_LE(fastest, bound);
+  EXPECT_GT(fastest, 0.3 * bound);  // and not uselessly loose
 }
 
 TEST(RigidMotion, BadInputIsInputError) {

@@ -3,6 +3,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include "fabatlas/error.h"
 #include "test_shapes.h"
 
@@ -39,6 +41,71 @@ TEST(SpacetimeCollision, BoxThroughBoxMatchesHandComputedSpan) {
   EXPECT_NEAR(c.where.min[2], 0.25, 1e-12);
   EXPECT_NEAR(c.where.max[2], 0.75, 1e-12);
   EXPECT_EQ(r.proxies, 3u * 120u);
+}
+
+// A 1 mm plate flies through a 1 mm wall between two time samples (it moves
+// 10 mm per step): sampled alone the transition looks collision-free;
+// conservative advancement between the samples reports the crossing with
+// its time span. Plate x in [x(t) - 0.5, x(t) + 0.5], x(t) = -495 + 1000 t
+// (samples at x = ..., -5, 5, ...); wall x in [0, 1]: they touch while
+// x(t) + 0.5 >= 0 and x(t) - 0.5 <= 1, t in [494.5, 496.5] / 1000.
+TEST(SpacetimeCollision, ThinPlateCrossingThinWallBetweenSamplesIsCaught) {
+  std::vector<MovingPart> parts(2);
+  parts[0].mesh = testing::BoxMesh({0, -10, -10}, {1, 10, 10});   // the wall, static
+  parts[1].mesh = testing::BoxMesh({-0.5, -5, -5}, {0.5, 5, 5});  // the plate
+  parts[1].motion = RigidMotion::Line({-495, 0, 0}, {505, 0, 0});
+  SpacetimeOptions o;
+  o.time_steps = 101;
+  o.continuous = false;
+  EXPECT_TRUE(DetectCollisions(parts, o).collision_free());  // the samples alone miss it
+  o.continuous = true;
+  const CollisionReport r = DetectCollisions(parts, o);
+  ASSERT_EQ(r.intervals.size(), 1u);
+  const CollisionInterval& c = r.intervals[0];
+  EXPECT_EQ(c.part_a, 0);
+  EXPECT_EQ(c.part_b, 1);
+  // To the contact tolerance (1e-5 x 20 mm extent = 0.2 micrometre, 2e-7
+  // in t).
+  EXPECT_NEAR(c.t_begin, 0.4945, 1e-6);
+  EXPECT_NEAR(c.t_end, 0.4965, 1e-6);
+  EXPECT_NEAR(c.where.min[0], 0.0, 1e-3);
+  EXPECT_NEAR(c.where.max[0], 1.0, 1e-3);
+  EXPECT_NEAR(c.where.min[1], -5.0, 1e-9);
+  EXPECT_NEAR(c.where.max[1], 5.0, 1e-9);
+  EXPECT_GE(r.continuous_searches, 1u);
+  EXPECT_GT(r.distance_queries, 2u);
+}
+
+// A thin blade (10 mm long, 0.1 mm thick) turning a full circle about z in
+// four 90-degree steps sweeps through a 0.2 mm cube at 45 degrees, radius
+// 7 mm, between the samples at 0 and 90 degrees: the samples alone miss it,
+// the continuous test reports it with its time span (below).
+TEST(SpacetimeCollision, FastTurningBladeThroughSmallCubeBetweenSamplesIsCaught) {
+  std::vector<MovingPart> parts(2);
+  parts[0].mesh = testing::BoxMesh({4.85, 4.85, -0.1}, {5.05, 5.05, 0.1});
+  parts[1].mesh = testing::BoxMesh({0, -0.05, -1}, {10, 0.05, 1});
+  parts[1].motion = RigidMotion::Turn({0, 0, 1}, 360, {0, 0, 0});
+  SpacetimeOptions o;
+  o.time_steps = 5;
+  o.continuous = false;
+  EXPECT_TRUE(DetectCollisions(parts, o).collision_free());
+  o.continuous = true;
+  const CollisionReport r = DetectCollisions(parts, o);
+  ASSERT_EQ(r.intervals.size(), 1u);
+  const CollisionInterval& c = r.intervals[0];
+  // In the blade's frame turned by a, a point (x, y) is at
+  // y' = -x sin a + y cos a. The leading side y' = +0.05 first reaches the
+  // cube's corner at the lowest angle, (5.05, 4.85): a1 = atan2(4.85, 5.05)
+  // - asin(0.05 / r); the trailing side y' = -0.05 last leaves the corner at
+  // the highest angle, (4.85, 5.05): a2 = atan2(5.05, 4.85) + asin(0.05 / r),
+  // r = |corner| (both corners have the same radius). t = a / 2 pi:
+  // [0.1196, 0.1304].
+  const double r1 = std::hypot(5.05, 4.85);
+  const double a1 = std::atan2(4.85, 5.05) - std::asin(0.05 / r1);
+  const double a2 = std::atan2(5.05, 4.85) + std::asin(0.05 / r1);
+  const double two_pi = 2 * 3.14159265358979323846;
+  EXPECT_NEAR(c.t_begin, a1 / two_pi, 1e-5);
+  EXPECT_NEAR(c.t_end, a2 / two_pi, 1e-5);
 }
 
 TEST(SpacetimeCollision, TwoSeparateIntervalsAreReportedInTimeOrder) {

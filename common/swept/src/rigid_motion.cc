@@ -114,6 +114,22 @@ Transform RigidMotion::At(double t) const {
   return f;
 }
 
+double RigidMotion::SpeedBound(double radius) const {
+  double linear = 0;
+  for (int k = 0; k < 3; ++k) {
+    const double dx = translation[k + 1][0] - translation[k][0], dy = translation[k + 1][1] - translation[k][1],
+                 dz = translation[k + 1][2] - translation[k][2];
+    linear = std::max(linear, 3 * std::sqrt(dx * dx + dy * dy + dz * dz));
+  }
+  double angular = 0;
+  for (std::size_t i = 0; i + 1 < rotation_keys.size(); ++i) {
+    const Quaternion a = Normalised(rotation_keys[i], i), b = Normalised(rotation_keys[i + 1], i + 1);
+    const double d = std::clamp(a.w * b.w + a.x * b.x + a.y * b.y + a.z * b.z, -1.0, 1.0);
+    angular = std::max(angular, 2 * std::acos(d) * static_cast<double>(rotation_keys.size() - 1));
+  }
+  return linear + radius * angular;
+}
+
 RigidMotion RigidMotion::Line(const Vec3& from, const Vec3& to) {
   RigidMotion m;
   for (int k = 0; k < 4; ++k)

@@ -23,6 +23,7 @@
 #include <string>
 
 #include "fabatlas/error.h"
+#include "fabatlas/swept/continuous_contact.h"
 
 namespace fabatlas::swept {
 namespace {
@@ -347,6 +348,72 @@ CollisionReport DetectCollisions(const std::vector<MovingPart>& parts, const Spa
       }
     }
   }
+  // Between samples: (pair, step) whose boxes, grown by each part's travel
+  // bound over one step, meet while neither end sample collides.
+  if (options.continuous && np > 1) {
+    const ContinuousContact contact(parts);
+    ContactSearchOptions co;
+    co.tolerance = options.contact_tolerance * tscale;
+    const double dt = 1.0 / (n - 1);
+    auto grown = [&](std::size_t p, int i) {
+      const double r = contact.SpeedBound(static_cast<int>(p)) * dt;
+      SpatialBox b;
+      for (int k = 0; k < 3; ++k) {
+        // Each end sample's box grown by the travel bound contains the part
+        // throughout the step; so does their intersection.
+        b.min[k] = std::max(aabb[p][i].min[k], aabb[p][i + 1].min[k]) - r;
+        b.max[k] = std::min(aabb[p][i].max[k], aabb[p][i + 1].max[k]) + r;
+      }
+      return b;
+    };
+    for (std::size_t a = 0; a < np; ++a)
+      for (std::size_t b = a + 1; b < np; ++b) {
+        if (still[a] && still[b]) continue;
+        const auto hit_it = hits.find({static_cast<int>(a), static_cast<int>(b)});
+        auto collides_at = [&](int i) {
+          return hit_it != hits.end() && std::binary_search(hit_it->second.begin(), hit_it->second.end(), i);
+        };
+        for (int i = 0; i + 1 < n; ++i) {
+          if (collides_at(i) || collides_at(i + 1)) continue;  // the sampled interval covers this step
+          const SpatialBox ga = grown(a, i), gb = grown(b, i);
+          bool apart = false;
+          for (int k = 0; k < 3; ++k) apart |= ga.min[k] > gb.max[k] || gb.min[k] > ga.max[k];
+          if (apart) continue;
+          ++report.continuous_searches;
+          const double t0 = i * dt, t1 = (i + 1) * dt;
+          const ContactSearch first = contact.Advance(static_cast<int>(a), static_cast<int>(b), t0, t1, co);
+          report.distance_queries += first.steps;
+          if (!first.contact) continue;
+          const ContactSearch last = contact.Advance(static_cast<int>(a), static_cast<int>(b), t1, first.t, co);
+          report.distance_queries += last.steps;
+          CollisionInterval c;
+          c.part_a = static_cast<int>(a);
+          c.part_b = static_cast<int>(b);
+          c.t_begin = first.t;
+          c.t_end = last.contact ? last.t : first.t;
+          c.where = {{1e300, 1e300, 1e300}, {-1e300, -1e300, -1e300}};
+          for (double t : {c.t_begin, c.t_end}) {
+            SpatialBox box[2];
+            for (int q = 0; q < 2; ++q) {
+              const std::size_t p = q ? b : a;
+              const Transform f = parts[p].motion.At(t);
+              box[q] = {{1e300, 1e300, 1e300}, {-1e300, -1e300, -1e300}};
+              for (const auto& v : parts[p].mesh.vertices) {
+                const Vec3 x = f.Apply(v);
+                for (int k = 0; k < 3; ++k)
+                  box[q].min[k] = std::min(box[q].min[k], x[k]), box[q].max[k] = std::max(box[q].max[k], x[k]);
+              }
+            }
+            for (int k = 0; k < 3; ++k) {
+              c.where.min[k] = std::min(c.where.min[k], std::max(box[0].min[k], box[1].min[k]));
+              c.where.max[k] = std::max(c.where.max[k], std::min(box[0].max[k], box[1].max[k]));
+            }
+          }
+          report.intervals.push_back(c);
+        }
+      }
+  }
+
   // Runs of consecutive samples -> intervals (when), with their box (where).
   for (const auto& [pair, samples] : hits) {
     std::size_t s = 0;

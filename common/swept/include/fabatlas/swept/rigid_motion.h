@@ -53,6 +53,15 @@ struct RigidMotion {
   // finite or a rotation key has zero length.
   Transform At(double t) const;
 
+  // An upper bound on |d/dt f(t) x| over t in [0,1] for every body point x
+  // within `radius` mm of the pivot (mm per unit t): the largest control
+  // point of T' (a quadratic Bezier with control points 3 (P_k+1 - P_k), so
+  // |T'| stays below the largest of them) plus radius times the largest
+  // angular speed, 2 theta_i (K - 1) for the slerp between keys i and i+1 at
+  // quaternion angle theta_i. Used by conservative advancement
+  // (continuous_contact.h).
+  double SpeedBound(double radius) const;
+
   // A straight translation from `from` to `to` at constant speed.
   static RigidMotion Line(const Vec3& from, const Vec3& to);
   // A turn by total_deg about `axis` through `pivot` at constant angular
