@@ -21,10 +21,12 @@
 #include <cstdint>
 #include <vector>
 
+#include "fabatlas/vec3.h"
+
 namespace fabatlas::fem {
 
-using Vec3 = std::array<double, 3>;
-using Vec2 = std::array<double, 2>;
+using fabatlas::Vec2;
+using fabatlas::Vec3;
 
 struct HexMesh {
   std::vector<Vec3> nodes;                   // mm

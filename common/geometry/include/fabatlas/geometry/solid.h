@@ -24,11 +24,12 @@
 #include <vector>
 
 #include "fabatlas/mesh/triangle_mesh.h"
+#include "fabatlas/vec3.h"
 
 namespace fabatlas::geometry {
 
-using Vec3 = std::array<double, 3>;
-using Vec2 = std::array<double, 2>;
+using fabatlas::Vec2;
+using fabatlas::Vec3;
 
 // Resolution of a level set: voxel edge length and narrow-band half width.
 struct GridSpec {

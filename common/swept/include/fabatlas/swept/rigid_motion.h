@@ -18,9 +18,11 @@
 #include <array>
 #include <vector>
 
+#include "fabatlas/vec3.h"
+
 namespace fabatlas::swept {
 
-using Vec3 = std::array<double, 3>;
+using fabatlas::Vec3;
 
 // Unit quaternion w + xi + yj + zk (normalised on use).
 struct Quaternion {
