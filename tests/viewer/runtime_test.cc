@@ -7,12 +7,12 @@
 #include <set>
 
 #include "../sampling/analytic_designs.h"
+#include "fabatlas/cache/starting_points.h"
 #include "fabatlas/error.h"
 #include "fabatlas/sampling/adaptive_sampler.h"
 #include "fabatlas/sampling/executor.h"
 #include "fabatlas/viewer/customiser.h"
 #include "fabatlas/viewer/snap.h"
-#include "fabatlas/viewer/starting_points.h"
 #include "fabatlas/viewer/valid_region.h"
 
 namespace fabatlas::viewer {
@@ -221,20 +221,24 @@ TEST(ViewerSnap, FallsBackToTheNearestValidSampleOutsideValidLeaves) {
 
 TEST(ViewerStartingPoints, OnePerComponentOfTheValidGraph) {
   // The valid samples of Gap form two components (x <= 0.3 and x >= 0.7) with
-  // no leaf edge between them: farthest-point sampling seeds both first.
+  // no leaf edge between them: farthest-point sampling seeds both first. The
+  // customiser serves these points for a run directory (cache::ChooseStartingPoints,
+  // the rule the artifact's starting points follow).
   Gap gap;
   const sampling::Form form = Sample(gap, UnitSquare(), 5, 3);
-  StartingPointOptions options;
+  cache::StartingPointOptions options;
   options.count = 2;
-  const auto points = StartingPoints(form, options);
+  const auto points = cache::ChooseStartingPoints(form, options);
   ASSERT_EQ(points.size(), 2u);
-  const double x0 = form.samples[points[0]].u[0], x1 = form.samples[points[1]].u[0];
+  const double x0 = form.samples[points[0].sample_id].u[0], x1 = form.samples[points[1].sample_id].u[0];
   EXPECT_TRUE((x0 <= 0.3 && x1 >= 0.7) || (x0 >= 0.7 && x1 <= 0.3)) << x0 << " " << x1;
-  for (auto id : points) EXPECT_TRUE(form.samples[id].outcome.valid);
+  EXPECT_NE(points[0].component, points[1].component);
+  for (const auto& p : points) EXPECT_TRUE(form.samples[p.sample_id].outcome.valid);
   // More points than samples: every valid sample at most once.
   options.count = 1000;
-  const auto many = StartingPoints(form, options);
-  std::set<std::int64_t> distinct(many.begin(), many.end());
+  std::set<std::int64_t> distinct;
+  const auto many = cache::ChooseStartingPoints(form, options);
+  for (const auto& p : many) distinct.insert(p.sample_id);
   EXPECT_EQ(distinct.size(), many.size());
 }
 

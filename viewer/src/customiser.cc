@@ -7,13 +7,13 @@
 
 #include <unistd.h>
 
+#include "fabatlas/cache/starting_points.h"
 #include "fabatlas/design/evaluate_sample.h"
 #include "fabatlas/error.h"
 #include "fabatlas/precompute/design_evaluator.h"
 #include "fabatlas/sampling/form_json.h"
 #include "fabatlas/storage/artifact.h"
 #include "fabatlas/storage/glb.h"
-#include "fabatlas/viewer/starting_points.h"
 
 namespace fabatlas::viewer {
 
@@ -135,7 +135,9 @@ std::vector<MaterialReadout> MaterialReadouts(double volume_mm3, const std::vect
 Customiser::Customiser(CustomiserSource source, PreviewCacheOptions preview_cache)
     : source_(std::move(source)), space_(source_.form.space()),
       preview_options_(preview_cache), previews_(std::make_unique<PreviewCache>(preview_cache)) {
-  starting_points_ = source_.starting_points.empty() ? StartingPoints(source_.form) : source_.starting_points;
+  starting_points_ = source_.starting_points;
+  if (starting_points_.empty())  // a run directory: the artifact's rule (cache/starting_points.h)
+    for (const auto& p : cache::ChooseStartingPoints(source_.form)) starting_points_.push_back(p.sample_id);
   cache_ = std::make_unique<FixedSubtreeCache>(source_.cache);
 }
 

@@ -36,7 +36,7 @@ struct CustomiserSource {
   sampling::Form form;
   std::optional<design::Design> design;        // needed for previews
   std::vector<sampling::Material> materials;   // cost/weight table
-  std::vector<std::int64_t> starting_points;   // sample ids; empty: computed (starting_points.h)
+  std::vector<std::int64_t> starting_points;   // sample ids; empty: computed by cache::ChooseStartingPoints
   // Cached subtree geometry by cache key (design::SubtreeRecord::key), with
   // the root compute time t_i in seconds (Fab Forms Sec. 6).
   std::map<std::string, std::pair<geometry::Solid, double>> cache;
