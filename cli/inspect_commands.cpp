@@ -5,7 +5,7 @@
 //            with no cache, with H_opt and with H_rfree, measured by
 //            re-evaluating the design from the artifact's bundle at N random
 //            points of the valid region (default 200, as in the paper), each
-//            snapped to the closest valid vertex of its leaf (Sec. 7.3);
+//            snapped as the customiser snaps (Sec. 7.3, ΔG-weighted);
 //   Fig. 13: mean and worst predicted preview time against cache size for
 //            the three strategies, written as a PNG.
 // The CPU time is a measurement of the run, kept out of the (deterministic)
@@ -31,6 +31,7 @@
 #include "fabatlas/precompute/preview_times.h"
 #include "fabatlas/protocol/job_bundle.h"
 #include "fabatlas/storage/artifact.h"
+#include "fabatlas/viewer/snap.h"
 
 namespace fabatlas::cli {
 
@@ -120,11 +121,14 @@ void Inspect(const InspectArgs& a, int& exit_code) {
   }
 
   // Fig. 14: preview times at random valid points.
-  // Random points of the valid region, each snapped to its leaf's closest
-  // valid vertex as the customiser previews them (Fab Forms Sec. 7.3).
+  // Random points of the valid region, each snapped exactly as the
+  // customiser snaps a preview (viewer::SnapToValidSample, ΔG-weighted,
+  // Fab Forms Sec. 7.3).
   std::vector<std::vector<double>> points;
+  const sampling::DesignSpace space = art.form.space();
   for (const auto& u : precompute::RandomValidPoints(art.form, a.points, a.seed))
-    if (auto snapped = precompute::SnapToSample(art.form, u)) points.push_back(*snapped);
+    if (auto snapped = viewer::SnapToValidSample(art.form, space, u))
+      points.push_back(art.form.samples[static_cast<std::size_t>(snapped->sample)].u);
   std::optional<precompute::PreviewTimes> t_none, t_opt, t_rfree;
   if (!points.empty()) {
     t_none = precompute::MeasurePreviewTimes(design, points, nullptr);

@@ -4,7 +4,6 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <limits>
 #include <random>
 
 #include "fabatlas/design/evaluate_sample.h"
@@ -39,31 +38,6 @@ std::vector<std::vector<double>> RandomValidPoints(const sampling::Form& form, i
     if (sampling::InEstimatedValidRegion(form, space, u)) points.push_back(u);
   }
   return points;
-}
-
-std::optional<std::vector<double>> SnapToSample(const sampling::Form& form, const std::vector<double>& u) {
-  const sampling::DesignSpace space = form.space();
-  const auto leaf = sampling::LocateLeaf(form, space, u);
-  if (!leaf) return std::nullopt;
-  const sampling::FormNode& node = form.trees[leaf->tree].nodes[leaf->node];
-  const int n = space.dimension_count();
-  double best = std::numeric_limits<double>::infinity();
-  std::optional<std::vector<double>> out;
-  for (std::int64_t id : sampling::CornerSampleIds(form, node)) {
-    const auto& s = form.samples[id];
-    if (!s.outcome.valid) continue;
-    double d2 = 0;
-    for (int d = 0; d < n; ++d) {
-      const double lo = space.value(d, node.lo[d]), hi = space.value(d, node.hi[d]);
-      const double t = hi > lo ? (u[d] - s.u[d]) / (hi - lo) : 0.0;
-      d2 += t * t;
-    }
-    if (d2 < best) {
-      best = d2;
-      out = s.u;
-    }
-  }
-  return out;
 }
 
 std::optional<geometry::Solid> FrozenSubtreeCache::Find(const std::string& key) {

@@ -23,14 +23,6 @@ namespace fabatlas::precompute {
 // none when the region is empty.
 std::vector<std::vector<double>> RandomValidPoints(const sampling::Form& form, int count, std::uint64_t seed = 1);
 
-// Fab Forms Sec. 7.3: a preview maps u to a vertex of the leaf hypercube
-// containing it ("snap to the closest valid vertex"), so cached subtrees hit.
-// Returns the coordinates of the closest valid corner sample of u's leaf,
-// distance measured in leaf-relative coordinates (each dimension scaled to
-// the leaf's extent; the paper weights by ΔG, not done here), or nullopt when
-// u is outside the space or its leaf has no valid corner.
-std::optional<std::vector<double>> SnapToSample(const sampling::Form& form, const std::vector<double>& u);
-
 // A read-only subtree cache: Find() serves the loaded entries, Offer()
 // ignores what evaluation offers, so every preview sees the same cache H.
 class FrozenSubtreeCache final : public design::SubtreeCache {
