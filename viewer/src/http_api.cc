@@ -69,14 +69,6 @@ std::vector<double> ParsePoint(const Customiser& c, const std::map<std::string, 
   return u;
 }
 
-const char* KindName(sampling::DimensionKind kind) {
-  switch (kind) {
-    case sampling::DimensionKind::kReal: return "real";
-    case sampling::DimensionKind::kInteger: return "integer";
-    case sampling::DimensionKind::kEnumerated: return "enumerated";
-  }
-  return "real";
-}
 
 json SampleJson(const Customiser& c, std::int64_t id) {
   const auto& s = c.form().samples.at(id);
@@ -92,7 +84,7 @@ json FormJson(const Customiser& c) {
   for (int d = 0; d < c.dimension_count(); ++d) {
     const auto& dim = c.space().dimension(d);
     json j = {{"name", dim.name},
-              {"kind", KindName(dim.kind)},
+              {"kind", sampling::DimensionKindName(dim.kind)},
               {"lo", c.space().value(d, c.space().key_lo(d))},
               {"hi", c.space().value(d, c.space().key_hi(d))}};
     if (dim.kind == sampling::DimensionKind::kEnumerated) j["values"] = dim.values;

@@ -8,6 +8,24 @@
 
 namespace fabatlas::sampling {
 
+const char* DimensionKindName(DimensionKind kind) {
+  switch (kind) {
+    case DimensionKind::kReal: return "real";
+    case DimensionKind::kInteger: return "integer";
+    case DimensionKind::kEnumerated: return "enumerated";
+  }
+  return "real";
+}
+
+bool DimensionKindFromName(const std::string& name, DimensionKind* kind) {
+  for (DimensionKind k : {DimensionKind::kReal, DimensionKind::kInteger, DimensionKind::kEnumerated})
+    if (name == DimensionKindName(k)) {
+      *kind = k;
+      return true;
+    }
+  return false;
+}
+
 namespace {
 constexpr std::int64_t kTicksPerCell = std::int64_t{1} << kDyadicBits;
 

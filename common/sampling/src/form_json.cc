@@ -9,14 +9,6 @@ namespace fabatlas::sampling {
 namespace {
 using nlohmann::json;
 
-const char* KindName(DimensionKind k) {
-  switch (k) {
-    case DimensionKind::kReal: return "real";
-    case DimensionKind::kInteger: return "integer";
-    case DimensionKind::kEnumerated: return "enumerated";
-  }
-  return "real";
-}
 
 const char* StopName(LeafStop s) {
   switch (s) {
@@ -43,7 +35,7 @@ std::string FormToJson(const Form& form, bool include_timings) {
   j["subdivisions"] = form.subdivisions;
   json dims = json::array();
   for (const Dimension& d : form.dimensions) {
-    json jd{{"name", d.name}, {"kind", KindName(d.kind)}, {"lo", d.lo}, {"hi", d.hi}};
+    json jd{{"name", d.name}, {"kind", DimensionKindName(d.kind)}, {"lo", d.lo}, {"hi", d.hi}};
     if (d.kind == DimensionKind::kEnumerated) jd["values"] = d.values;
     dims.push_back(std::move(jd));
   }
@@ -91,10 +83,7 @@ Form FormFromJson(const std::string& text, const std::string& source) {
       Dimension d;
       d.name = jd.at("name").get<std::string>();
       const std::string kind = jd.at("kind").get<std::string>();
-      if (kind == "real") d.kind = DimensionKind::kReal;
-      else if (kind == "integer") d.kind = DimensionKind::kInteger;
-      else if (kind == "enumerated") d.kind = DimensionKind::kEnumerated;
-      else throw std::runtime_error("unknown dimension kind '" + kind + "'");
+      if (!DimensionKindFromName(kind, &d.kind)) throw std::runtime_error("unknown dimension kind '" + kind + "'");
       d.lo = jd.at("lo").get<double>();
       d.hi = jd.at("hi").get<double>();
       if (jd.contains("values")) d.values = jd.at("values").get<std::vector<std::string>>();

@@ -21,6 +21,11 @@ namespace fabatlas::sampling {
 
 enum class DimensionKind { kReal, kInteger, kEnumerated };
 
+// The kind's name in every file format ("real", "integer", "enumerated"), and
+// back; DimensionKindFromName returns false for any other text.
+const char* DimensionKindName(DimensionKind kind);
+bool DimensionKindFromName(const std::string& name, DimensionKind* kind);
+
 // One exposed parameter. For kReal and kInteger, [lo, hi] is the designer's
 // rough range (hi > lo; integers must be whole numbers). For kEnumerated,
 // `values` holds the k >= 2 value names and lo/hi are ignored (0 and k-1).
