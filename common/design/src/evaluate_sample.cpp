@@ -1,4 +1,5 @@
 // EvaluateSample (Fab Forms Alg. 2) and ΔG (Eq. 2).
+#include "fabatlas/exact_decimal.h"
 #include "fabatlas/design/evaluate_sample.h"
 
 #include <chrono>
@@ -23,12 +24,6 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 double Since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
-
-std::string Format(double v) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.17g", v);
-  return buf;
-}
 
 // Digest of a file's bytes, remembered per path for the process lifetime.
 std::string FileDigest(const std::filesystem::path& p) {
@@ -111,7 +106,7 @@ class TreeEvaluation {
     for (const auto& [name, _] : node.args) tau += name + ",";
     for (const auto* c : kids) tau += c->topology + ";";
     tau += ")";
-    std::string rho = "voxel=" + Format(design_.voxel_size) + ";" + args.Canonical();
+    std::string rho = "voxel=" + ExactDecimal(design_.voxel_size) + ";" + args.Canonical();
     for (const auto* c : kids) rho += "child=" + c->key + ";";
     if (node.op == "carve_swept") {  // the same extras as Evaluate
       const Identity& moving = IdentityOf(design_.FindObject(args.Text("moving"))->tree);
@@ -219,7 +214,7 @@ class TreeEvaluation {
       auto number = [&](const Argument& x) {
         double value = Expression(x.text, scope_, x.place).Evaluate();
         if (!std::isfinite(value))
-          throw SampleFailure(kNoGeometry, x.place.str() + ": '" + spec.name + "' evaluates to " + Format(value));
+          throw SampleFailure(kNoGeometry, x.place.str() + ": '" + spec.name + "' evaluates to " + ExactDecimal(value));
         return value;
       };
       switch (spec.shape) {
@@ -266,7 +261,7 @@ std::string ResolvedArgs::Canonical() const {
     out += name + "=";
     for (std::size_t i = 0; i < v.numbers.size(); ++i) {
       if (i < v.keys.size()) out += v.keys[i] + ":";
-      out += Format(v.numbers[i]) + ",";
+      out += ExactDecimal(v.numbers[i]) + ",";
     }
     out += v.text + (v.digest.empty() ? "" : "@" + v.digest) + ";";
   }

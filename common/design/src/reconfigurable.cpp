@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <map>
 
+#include "fabatlas/exact_decimal.h"
 #include "fabatlas/design/evaluate_sample.h"
 #include "fabatlas/error.h"
 #include "fabatlas/swept/swept_volume.h"
@@ -18,15 +19,9 @@ using swept::Quaternion;
 using swept::RigidMotion;
 using swept::Transform;
 
-std::string Format(double v) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.17g", v);
-  return buf;
-}
-
 double Number(const Argument& a, Scope& scope) {
   double v = Expression(a.text, scope, a.place).Evaluate();
-  if (!std::isfinite(v)) throw SampleFailure(kNoGeometry, a.place.str() + ": motion value evaluates to " + Format(v));
+  if (!std::isfinite(v)) throw SampleFailure(kNoGeometry, a.place.str() + ": motion value evaluates to " + ExactDecimal(v));
   return v;
 }
 
@@ -66,11 +61,11 @@ RigidMotion Constant(const Transform& f) {
 std::string Canonical(const RigidMotion& m) {
   std::string s = "T=";
   for (const auto& p : m.translation)
-    for (double x : p) s += Format(x) + ",";
+    for (double x : p) s += ExactDecimal(x) + ",";
   s += ";R=";
-  for (const auto& q : m.rotation_keys) s += Format(q.w) + "," + Format(q.x) + "," + Format(q.y) + "," + Format(q.z) + ",";
+  for (const auto& q : m.rotation_keys) s += ExactDecimal(q.w) + "," + ExactDecimal(q.x) + "," + ExactDecimal(q.y) + "," + ExactDecimal(q.z) + ",";
   s += ";P=";
-  for (double x : m.pivot) s += Format(x) + ",";
+  for (double x : m.pivot) s += ExactDecimal(x) + ",";
   return s;
 }
 
