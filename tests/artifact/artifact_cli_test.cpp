@@ -17,6 +17,7 @@
 #include "fabatlas/error.h"
 #include "fabatlas/sampling/form.h"
 #include "fabatlas/storage/artifact.h"
+#include "fabatlas/storage/job_store.h"
 #include "fabatlas/storage/glb.h"
 #include "fabatlas/testing/paths.h"
 #include "fabatlas/viewer/customiser.h"
@@ -158,8 +159,15 @@ TEST(ArtifactCli, DamagedArtifactsAreOneLineErrorsWithStatus2) {
   const std::string bytes = Bytes(dir / "tube_wall_2d.fabatlas");
   std::ofstream(dir / "cut.fabatlas", std::ios::binary) << bytes.substr(0, bytes.size() - 4096);
   std::ofstream(dir / "text.fabatlas") << "hello\n";
+  // As a newer fabatlas would write it: user_version (header offset 60) one
+  // above what this reader knows.
+  std::string newer = bytes;
+  newer[63] = static_cast<char>(fabatlas::storage::kArtifactSchemaVersion + 1);
+  std::ofstream(dir / "newer.fabatlas", std::ios::binary) << newer;
   for (const auto& [file, what] : std::vector<std::pair<std::string, std::string>>{
-           {"cut.fabatlas", "truncated"}, {"text.fabatlas", "not a fabatlas artifact"}, {"none.fabatlas", "no such file"}}) {
+           {"cut.fabatlas", "truncated"}, {"text.fabatlas", "not a fabatlas artifact"}, {"none.fabatlas", "no such file"},
+           {"newer.fabatlas", "written by a newer fabatlas (schema version " +
+                                  std::to_string(fabatlas::storage::kArtifactSchemaVersion + 1)}}) {
     CommandRun r = Fabatlas("inspect " + (dir / file).string());
     EXPECT_EQ(r.status, 2) << file;
     EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
@@ -352,4 +360,28 @@ TEST(ArtifactCli, Version1ArtifactMigratesToTheCurrentVersion) {
   for (const auto& [table, sum] : old.manifest.checksums)
     if (table == "samples") EXPECT_NE(now.manifest.checksums.at(table), sum);
     else EXPECT_EQ(now.manifest.checksums.at(table), sum) << table;
+}
+
+// A job store written by a newer fabatlas: the coordinator refuses it with one
+// line naming the file and exit status 2, and leaves it as it was.
+TEST(ArtifactCli, CoordinatorRefusesANewerJobStore) {
+  const fs::path dir = FreshTempDir("newer-store");
+  const fs::path db = dir / "state.db";
+  ASSERT_EQ(std::system(("sqlite3 " + db.string() + " 'CREATE TABLE t(x); PRAGMA user_version = " +
+                         std::to_string(fabatlas::storage::kJobStoreSchemaVersion + 1) + ";'")
+                            .c_str()),
+            0);
+  const std::string before = Bytes(db);
+  const fs::path err = dir / "err.txt";
+  const std::string cmd = (BinDir() / "fabatlas-coordinator").string() + " --listen 127.0.0.1:0 --state-dir " +
+                          dir.string() + " 2>" + err.string();
+  const int status = std::system(cmd.c_str());
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 2);
+  const std::string text = Bytes(err);
+  EXPECT_NE(text.find(db.string() + ": job store written by a newer fabatlas (schema version " +
+                      std::to_string(fabatlas::storage::kJobStoreSchemaVersion + 1)),
+            std::string::npos)
+      << text;
+  EXPECT_EQ(Bytes(db), before);
 }
