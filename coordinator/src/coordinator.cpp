@@ -67,15 +67,7 @@ std::string QuarantineBytes(int kind) {
 struct Stopping {};
 struct JobCancelled {};
 
-// "sample", "geometry_change", ... for log lines and metric labels.
-std::string KindName(int kind) {
-  std::string name = v1::TaskKind_Name(static_cast<v1::TaskKind>(kind));
-  if (name.rfind("TASK_KIND_", 0) == 0) name = name.substr(10);
-  for (char& c : name) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return name.empty() ? std::to_string(kind) : name;
-}
-
-// The task kind of a result, named as KindName names kinds.
+// The task kind of a result, named as protocol::TaskKindName names kinds.
 std::string ResultKind(const v1::TaskResult& r) {
   switch (r.result_case()) {
     case v1::TaskResult::kSample: return "sample";
@@ -355,7 +347,7 @@ struct Coordinator::Impl {
       unregister();
       throw;
     }
-    log::Info("round_started", {{"job", job_id}, {"kind", kinds.empty() ? "" : KindName(kinds[0])},
+    log::Info("round_started", {{"job", job_id}, {"kind", kinds.empty() ? "" : protocol::TaskKindName(kinds[0])},
                                 {"tasks", tasks.size()}, {"stored", finished.size()}});
     std::vector<Delivery> stored;
     for (const auto& [key, result] : finished) stored.push_back({&key, &result});
@@ -1447,6 +1439,13 @@ void Coordinator::Start() {
     std::string host = o.metrics_listen.substr(0, colon);
     int port = std::atoi(o.metrics_listen.c_str() + colon + 1);
     m.metrics = std::make_unique<httplib::Server>();
+    // Plaintext health for probes that cannot speak the gRPC port's TLS
+    // (Kubernetes httpGet): 200 while serving, 503 while draining.
+    m.metrics->Get("/healthz", [&m](const httplib::Request&, httplib::Response& res) {
+      const bool serving = !m.draining && !m.stopping;
+      res.status = serving ? 200 : 503;
+      res.set_content(serving ? "serving\n" : "draining\n", "text/plain");
+    });
     m.metrics->Get("/metrics", [&m](const httplib::Request&, httplib::Response& res) {
       try {
         res.set_content(m.Metrics(), "text/plain; version=0.0.4");

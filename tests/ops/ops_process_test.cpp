@@ -90,10 +90,26 @@ std::pair<int, std::string> Shell(const fs::path& dir, const std::string& comman
   return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
 }
 
+// The free TCP port the kernel hands out for 127.0.0.1:0 (released at once;
+// a race with another process is possible but unlikely).
+int FreePort() {
+  int fd = ::socket(AF_INET, SOCK_STREAM, 0);
+  sockaddr_in addr{};
+  addr.sin_family = AF_INET;
+  addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  ::bind(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr);
+  socklen_t len = sizeof addr;
+  ::getsockname(fd, reinterpret_cast<sockaddr*>(&addr), &len);
+  ::close(fd);
+  return ntohs(addr.sin_port);
+}
+
 TEST(OpsLogs, JsonLinesTellTheStoryOfAJobWithAKilledWorker) {
   fs::path dir = FreshDir("ops_logs");
+  const int coordinator_metrics = FreePort(), worker_metrics = FreePort();
   CoordinatorProcess c = StartCoordinator(dir / "state", 0,
-                                          {"--lease-ms", "1500", "--retry-backoff-ms", "50", "--log-format", "json"});
+                                          {"--lease-ms", "1500", "--retry-backoff-ms", "50", "--log-format", "json",
+                                           "--metrics", "127.0.0.1:" + std::to_string(coordinator_metrics)});
   ASSERT_GT(c.port, 0) << ReadText(dir / "state/coordinator.log");
   // w1 SIGKILLs itself when it starts a task whose key begins with "0"
   // (about one task in 16): it dies holding that lease.
@@ -103,9 +119,35 @@ TEST(OpsLogs, JsonLinesTellTheStoryOfAJobWithAKilledWorker) {
   ASSERT_TRUE(WaitForText(dir / "w1/worker.log", "worker_connected", w1)) << ReadText(dir / "w1/worker.log");
   std::string id = Client(c.port).Submit(JobPath());
   EXPECT_EQ(WaitExit(w1, std::chrono::seconds(120)), 128 + SIGKILL);
-  pid_t w2 = StartWorker(c.port, dir / "w2", {"--id", "w2", "--log-format", "json"});
+  pid_t w2 = StartWorker(c.port, dir / "w2", {"--id", "w2", "--log-format", "json", "--metrics",
+                                              "127.0.0.1:" + std::to_string(worker_metrics)});
   v1::JobStatus s = WaitForJob(c.port, id, std::chrono::seconds(240));
   EXPECT_EQ(s.state(), v1::JOB_STATE_SUCCEEDED) << s.error();
+  // Metrics: every accepted sample result is one observation of the
+  // coordinator's sample histogram; the worker counts the tasks it ran.
+  auto scrape = [&](int port) {
+    auto [code, text] = Shell(dir, "curl -sf http://127.0.0.1:" + std::to_string(port) + "/metrics");
+    EXPECT_EQ(code, 0) << text;
+    return text;
+  };
+  auto value = [](const std::string& text, const std::string& series) {
+    auto at = text.find("\n" + series + " ");
+    return at == std::string::npos ? -1.0 : std::atof(text.c_str() + at + series.size() + 2);
+  };
+  const std::string cm = scrape(coordinator_metrics), wm = scrape(worker_metrics);
+  EXPECT_EQ(value(cm, "fabatlas_task_duration_seconds_count{kind=\"sample\"}"), s.samples_done()) << cm;
+  EXPECT_GE(value(cm, "fabatlas_lease_expiries_total"), 1) << cm;
+  EXPECT_EQ(value(cm, "fabatlas_state_stalled"), 0) << cm;
+  double w2_tasks = 0;  // over all kinds
+  {
+    std::istringstream lines(wm);
+    std::string line;
+    while (std::getline(lines, line))
+      if (line.rfind("fabatlas_worker_tasks_total{", 0) == 0) w2_tasks += std::atof(line.c_str() + line.rfind(' '));
+  }
+  EXPECT_GT(value(wm, "process_resident_memory_bytes"), 0) << wm;
+  EXPECT_EQ(value(wm, "fabatlas_worker_connected"), 1) << wm;
+  EXPECT_EQ(Shell(dir, "curl -sf http://127.0.0.1:" + std::to_string(worker_metrics) + "/healthz").second, "working\n");
   ::kill(w2, SIGTERM);
   EXPECT_EQ(WaitExit(w2, std::chrono::seconds(30)), 0);
   ::kill(c.pid, SIGTERM);
@@ -144,6 +186,7 @@ TEST(OpsLogs, JsonLinesTellTheStoryOfAJobWithAKilledWorker) {
   auto exit = Events(worker, "worker_exit");
   ASSERT_EQ(exit.size(), 1u);
   EXPECT_GT(exit[0]["tasks_run"].get<int>(), 0);
+  EXPECT_EQ(exit[0]["tasks_run"].get<double>(), w2_tasks) << wm;
   fs::remove_all(dir);
 }
 
@@ -201,20 +244,6 @@ TEST(OpsCli, JobFileAndOutWithoutADirectoryPart) {
 
 namespace fabatlas::ops_test {
 namespace {
-
-// The free TCP port the kernel hands out for 127.0.0.1:0 (released at once;
-// a race with another process is possible but unlikely).
-int FreePort() {
-  int fd = ::socket(AF_INET, SOCK_STREAM, 0);
-  sockaddr_in addr{};
-  addr.sin_family = AF_INET;
-  addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  ::bind(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr);
-  socklen_t len = sizeof addr;
-  ::getsockname(fd, reinterpret_cast<sockaddr*>(&addr), &len);
-  ::close(fd);
-  return ntohs(addr.sin_port);
-}
 
 // A full disk under the coordinator's state: the job stalls, the operator
 // is told at once (an error log line, the reason in `fabatlas status`, the

@@ -41,6 +41,8 @@ int main(int argc, char** argv) {
   app.add_option("--cache-dir", o.cache_dir, "where job bundles are unpacked");
   app.add_option("--id", o.worker_id, "worker id (default host-pid-time)");
   app.add_option("--connect-timeout", connect_timeout, "seconds to wait for the first answer");
+  app.add_option("--metrics", o.metrics_listen,
+                 "serve /metrics (Prometheus) and /healthz on HOST:PORT, plaintext (default: off)");
   log_flags.Add(app);
   CLI11_PARSE(app, argc, argv);
   o.connect_timeout_ms = static_cast<std::int64_t>(connect_timeout * 1000);

@@ -17,6 +17,7 @@
 #include <set>
 #include <thread>
 
+#include <httplib.h>
 #include <tbb/global_control.h>
 
 #include "fabatlas/design/design.h"
@@ -24,6 +25,7 @@
 #include "fabatlas/error.h"
 #include "fabatlas/geometry/solid.h"
 #include "fabatlas/log/log.h"
+#include "fabatlas/log/metrics_text.h"
 #include "fabatlas/precompute/design_evaluator.h"
 #include "fabatlas/protocol/blob_transfer.h"
 #include "fabatlas/protocol/cache_plan.h"
@@ -79,6 +81,10 @@ class SolidShelf {
       index_.erase(lru_.back().first);
       lru_.pop_back();
     }
+  }
+  std::size_t bytes() {
+    std::lock_guard lock(mu_);
+    return bytes_;
   }
   std::optional<std::string> Get(const sampling::PointKey& key) {
     std::lock_guard lock(mu_);
@@ -136,6 +142,7 @@ class Worker {
       for (int i = 0; i < o_.slots; ++i) slots_.emplace_back([this] { SlotLoop(); });
     heartbeat_ = std::thread([this] { HeartbeatLoop(); });
     stop_watch_ = std::thread([this] { WatchStop(); });
+    ServeMetrics();
     share_ = std::thread([this] { ShareLoop(); });
     try {
       SyncLoop();
@@ -168,6 +175,70 @@ class Worker {
       if (share_call_) share_call_->TryCancel();
     }
     if (share_.joinable()) share_.join();
+    if (metrics_) metrics_->stop();
+    if (metrics_thread_.joinable()) metrics_thread_.join();
+  }
+
+  // /metrics (Prometheus text) and /healthz (200 while working, 503 once
+  // stopping) on WorkerOptions.metrics_listen, plaintext.
+  void ServeMetrics() {
+    if (o_.metrics_listen.empty()) return;
+    auto colon = o_.metrics_listen.rfind(':');
+    if (colon == std::string::npos) throw InputError("worker: --metrics wants HOST:PORT, got " + o_.metrics_listen);
+    metrics_ = std::make_unique<httplib::Server>();
+    metrics_->Get("/healthz", [this](const httplib::Request&, httplib::Response& res) {
+      res.status = stop_ ? 503 : 200;
+      res.set_content(stop_ ? "stopping\n" : "working\n", "text/plain");
+    });
+    metrics_->Get("/metrics", [this](const httplib::Request&, httplib::Response& res) {
+      res.set_content(MetricsPage(), "text/plain; version=0.0.4");
+    });
+    if (!metrics_->bind_to_port(o_.metrics_listen.substr(0, colon), std::atoi(o_.metrics_listen.c_str() + colon + 1)))
+      throw InputError("worker: cannot listen on " + o_.metrics_listen);
+    metrics_thread_ = std::thread([this] { metrics_->listen_after_bind(); });
+  }
+
+  std::string MetricsPage() {
+    log::MetricsText m;
+    std::map<std::string, std::int64_t> run, failed;
+    int running = 0;
+    bool connected = false;
+    {
+      std::lock_guard lock(mu_);
+      run = tasks_by_kind_;
+      failed = failures_by_kind_;
+      running = running_;
+      connected = connected_;
+    }
+    for (const auto& [kind, n] : run)
+      m.Counter("fabatlas_worker_tasks_total", "Tasks this worker ran, by kind.", static_cast<double>(n), {{"kind", kind}});
+    for (const auto& [kind, n] : failed)
+      m.Counter("fabatlas_worker_task_failures_total", "Tasks this worker could not run, by kind.",
+                static_cast<double>(n), {{"kind", kind}});
+    task_seconds_.Write(m, "fabatlas_worker_task_duration_seconds", "Wall time of the tasks this worker ran, by kind.");
+    std::size_t level_sets = 0, compressed = 0, subtrees = 0;
+    {
+      std::lock_guard lock(jobs_mu_);
+      for (const auto& [digest, ctx] : jobs_) {
+        if (!ctx) continue;
+        compressed += ctx->shelf.bytes();
+        if (ctx->evaluator) {
+          level_sets += ctx->evaluator->solid_bytes();
+          subtrees += ctx->evaluator->subtree_bytes();
+        }
+      }
+    }
+    m.Gauge("fabatlas_worker_solid_cache_bytes", "Root solids held for ΔG tasks, as level sets and compressed.",
+            static_cast<double>(level_sets), {{"form", "level_set"}});
+    m.Gauge("fabatlas_worker_solid_cache_bytes", "", static_cast<double>(compressed), {{"form", "compressed"}});
+    m.Gauge("fabatlas_worker_subtree_cache_bytes", "Subtree cache of the design evaluators.", static_cast<double>(subtrees));
+    m.Gauge("fabatlas_worker_memory_budget_bytes", "The resident budget (--memory-mb).",
+            static_cast<double>(static_cast<std::int64_t>(o_.memory_mb) << 20));
+    m.Gauge("process_resident_memory_bytes", "Resident memory of the worker.", static_cast<double>(log::ResidentMemoryBytes()));
+    m.Gauge("fabatlas_worker_slots", "Tasks this worker runs at once (--slots).", o_.slots);
+    m.Gauge("fabatlas_worker_running_tasks", "Tasks running now.", running);
+    m.Gauge("fabatlas_worker_connected", "1 once the coordinator has answered.", connected ? 1 : 0);
+    return m.text();
   }
 
   // Waits for `stop` (or the end), then cancels the calls under way: a long
@@ -520,11 +591,16 @@ class Worker {
 
   // Runs a lease taken from the queue and files its result for the next Sync.
   void RunLease(const v1::Lease& lease) {
+    auto started = Clock::now();
     v1::CompletedTask done = Execute(lease);
+    const std::string kind = protocol::TaskKindName(lease.payload().kind());
+    task_seconds_.Observe(kind, std::chrono::duration<double>(Clock::now() - started).count());
     if (!done.error().empty())
       log::Warn("task_failed", {{"task", lease.task_key()}, {"job", lease.job_id()}, {"attempt", lease.attempt()},
                                 {"reason", done.error()}});
     std::lock_guard lock(mu_);
+    ++tasks_by_kind_[kind];
+    if (!done.error().empty()) ++failures_by_kind_[kind];
     --running_;
     ++summary_.tasks_run;
     in_flight_.erase(lease.lease_id());
@@ -780,6 +856,10 @@ class Worker {
   std::thread heartbeat_, share_;
   std::thread stop_watch_;
   std::set<grpc::ClientContext*> calls_;  // calls under way (Call), under mu_
+  std::map<std::string, std::int64_t> tasks_by_kind_, failures_by_kind_;  // under mu_
+  log::DurationHistogram task_seconds_{"kind"};
+  std::unique_ptr<httplib::Server> metrics_;
+  std::thread metrics_thread_;
   std::mutex share_mu_;
   grpc::ClientContext* share_call_ = nullptr;  // the ShareSolids long poll under way
 

@@ -78,6 +78,11 @@ double DesignSampleEvaluator::GeometryChange(const sampling::SamplePoint& a, con
   return geometry::DeltaG(SolidOf(a), SolidOf(b));
 }
 
+std::size_t DesignSampleEvaluator::solid_bytes() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return bytes_;
+}
+
 std::size_t DesignSampleEvaluator::reevaluations() const {
   std::lock_guard<std::mutex> lock(mutex_);
   return reevaluations_;

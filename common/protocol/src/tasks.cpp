@@ -1,9 +1,18 @@
 // Sampling tasks <-> protocol messages (see tasks.h).
 #include "fabatlas/protocol/tasks.h"
 
+#include <cctype>
+
 #include "fabatlas/sha256.h"
 
 namespace fabatlas::protocol {
+
+std::string TaskKindName(int kind) {
+  std::string name = v1::TaskKind_Name(static_cast<v1::TaskKind>(kind));
+  if (name.rfind("TASK_KIND_", 0) == 0) name = name.substr(10);
+  for (char& c : name) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return name.empty() ? std::to_string(kind) : name;
+}
 
 const char* const kCodeVersion = "fabatlas-0.1/tasks-1";
 

@@ -57,7 +57,8 @@ struct CoordinatorOptions {
   // When set, clients must present a certificate signed by this CA (PEM).
   std::string tls_client_ca;
   bool allow_insecure_network = false;
-  // Prometheus text endpoint "HOST:PORT" serving /metrics; empty = off.
+  // Plaintext HTTP on "HOST:PORT" serving /metrics (Prometheus text) and
+  // /healthz (200 serving, 503 draining, for probes); empty = off.
   std::string metrics_listen;
   std::int64_t lease_ms = 30000;
   std::int64_t heartbeat_ms = 5000;

@@ -37,6 +37,10 @@ struct WorkerOptions {
   // this time; after the first answer the worker retries forever.
   std::int64_t connect_timeout_ms = 30000;
   std::int64_t poll_ms = 5000;         // long-poll wait when idle
+  // Plaintext HTTP "HOST:PORT" serving /metrics (Prometheus text: tasks run
+  // and failed by kind, their durations, solid and subtree cache bytes,
+  // resident memory) and /healthz (200 working, 503 stopping); empty = off.
+  std::string metrics_listen;
   // Resident memory budget of the whole worker process, MiB (>= 256): 1/16
   // of it holds the latest root solids as level sets, 5/16 root solids
   // compressed (zstd, for ΔG and for sharing), 1/8 the subtree cache (all

@@ -70,6 +70,9 @@ class DesignSampleEvaluator final : public sampling::SampleEvaluator {
 
   const design::Design& design() const { return design_; }
   std::size_t reevaluations() const;
+  // Memory held: remembered root solids and the subtree cache, bytes.
+  std::size_t solid_bytes() const;
+  std::size_t subtree_bytes() const { return subtrees_.bytes(); }
 
  private:
   class ObservedCache;

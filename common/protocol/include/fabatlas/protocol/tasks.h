@@ -24,6 +24,10 @@ sampling::SamplePoint PointOf(const v1::SamplePoint& point);
 
 // Task key (tasks.proto): SHA-256 hex of kind, the evaluation digest (which
 // design bytes), the bootstrap subdivisions, kCodeVersion and the point keys.
+// "sample", "geometry_change", "swept_volume", "cache_plan", "noop": the
+// kind as log lines and metric labels name it.
+std::string TaskKindName(int kind);
+
 std::string TaskKey(const v1::TaskPayload& payload, const std::string& evaluation_digest,
                     int subdivisions);
 
