@@ -12,6 +12,7 @@
 int main(int argc, char** argv) {
   CLI::App app{"fabatlas: precompute the valid, fabricable region of a parametric design"};
   app.require_subcommand(1);
+  app.option_defaults()->always_capture_default();  // every --help shows the defaults
   app.set_version_flag("--version", fabatlas::coordinator::VersionText("fabatlas"));
   int exit_code = 0;
   fabatlas::cli::AddDesignCommands(app, exit_code);

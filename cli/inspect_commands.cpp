@@ -207,7 +207,7 @@ void Inspect(const InspectArgs& a, int& exit_code) {
 
 void AddInspectCommands(CLI::App& app, int& exit_code) {
   auto a = std::make_shared<InspectArgs>();
-  auto* inspect = app.add_subcommand("inspect", "show an artifact's seed-001 Table 3 and Fig. 14 rows, plot Fig. 13");
+  auto* inspect = app.add_subcommand("inspect", "show an artifact's statistics (samples, CPU time, valid volume, failure shares, cache sizes: Fab Forms Table 3) and preview times (Fig. 14), and plot preview time against cache size (Fig. 13)");
   inspect->add_option("artifact", a->artifact, "an artifact (<design>.fabatlas) or the run directory holding it")->required();
   inspect->add_flag("--json", a->json, "print JSON");
   inspect->add_option("--png", a->png, "where to write the Fig. 13 curves (default: ART with .fig13.png)");

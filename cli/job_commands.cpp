@@ -14,6 +14,9 @@
 #include <memory>
 #include <thread>
 
+#include <google/protobuf/descriptor.h>
+#include <nlohmann/json.hpp>
+
 #include "commands.h"
 #include "fabatlas/coordinator/coordinator.h"
 #include "fabatlas/coordinator/job_client.h"
@@ -33,15 +36,42 @@ struct ClusterArgs {
   std::string job, out;
   int workers = 2, slots = 1;
   bool quiet = false;
+  bool json = false;  // machine-readable output on stdout (--json)
 };
+
+// A job's status as a JSON object: every JobStatus field by its proto name,
+// numbers as numbers, the state as "RUNNING" etc. (new fields appear as
+// they are added to job.proto).
+nlohmann::json StatusJson(const v1::JobStatus& s) {
+  nlohmann::json j = nlohmann::json::object();
+  const auto* d = s.GetDescriptor();
+  const auto* r = s.GetReflection();
+  for (int i = 0; i < d->field_count(); ++i) {
+    const auto* f = d->field(i);
+    switch (f->cpp_type()) {
+      case google::protobuf::FieldDescriptor::CPPTYPE_INT64: j[f->name()] = r->GetInt64(s, f); break;
+      case google::protobuf::FieldDescriptor::CPPTYPE_INT32: j[f->name()] = r->GetInt32(s, f); break;
+      case google::protobuf::FieldDescriptor::CPPTYPE_DOUBLE: j[f->name()] = r->GetDouble(s, f); break;
+      case google::protobuf::FieldDescriptor::CPPTYPE_BOOL: j[f->name()] = r->GetBool(s, f); break;
+      case google::protobuf::FieldDescriptor::CPPTYPE_STRING: j[f->name()] = r->GetString(s, f); break;
+      case google::protobuf::FieldDescriptor::CPPTYPE_ENUM:
+        j[f->name()] = f->name() == "state" ? coordinator::JobStateName(s.state()) : r->GetEnum(s, f)->name();
+        break;
+      default: break;
+    }
+  }
+  return j;
+}
+
+void PrintJson(const nlohmann::json& j) { std::cout << j.dump() << std::endl; }
 
 void AddConnectionOptions(CLI::App* cmd, ClusterArgs& a) {
   const char* env = std::getenv("FABATLAS_COORDINATOR");
   a.coordinator = env ? env : "127.0.0.1:7450";
-  cmd->add_option("--coordinator", a.coordinator, "coordinator HOST:PORT (env FABATLAS_COORDINATOR)");
-  cmd->add_option("--token", a.token, "bearer token (env FABATLAS_TOKEN)");
-  cmd->add_option("--tls-ca", a.tls_ca, "deployment CA certificate (PEM); enables TLS");
-  cmd->add_option("--tls-cert", a.tls_cert, "client certificate (PEM)");
+  cmd->add_option("--coordinator", a.coordinator, "coordinator HOST:PORT (env FABATLAS_COORDINATOR)")->capture_default_str();
+  cmd->add_option("--token", a.token, "bearer token (env FABATLAS_TOKEN; default: none)");
+  cmd->add_option("--tls-ca", a.tls_ca, "the deployment's CA certificate (PEM, ops/tls/make-certs.sh); enables TLS (default: plaintext, loopback only)");
+  cmd->add_option("--tls-cert", a.tls_cert, "client certificate (PEM), when the coordinator requires one");
   cmd->add_option("--tls-key", a.tls_key, "client key (PEM)");
 }
 
@@ -57,7 +87,19 @@ coordinator::JobClient ClientOf(const ClusterArgs& a) {
 }
 
 // Prints the live progress line (carriage return on a terminal).
-v1::JobStatus WatchJob(coordinator::JobClient& client, const std::string& id, bool quiet) {
+// With json, one JSON object per update on stdout instead (the last one is
+// the final status).
+v1::JobStatus WatchJob(coordinator::JobClient& client, const std::string& id, bool quiet, bool json = false) {
+  if (json) {
+    v1::JobStatus last;
+    v1::JobStatus final_status = client.Watch(id, [&](const v1::JobStatus& s) {
+      PrintJson(StatusJson(s));
+      last = s;
+      return true;
+    });
+    if (final_status.SerializeAsString() != last.SerializeAsString()) PrintJson(StatusJson(final_status));
+    return final_status;
+  }
   bool tty = ::isatty(STDERR_FILENO);
   auto last_print = std::chrono::steady_clock::now() - std::chrono::hours(1);
   v1::JobStatus final_status = client.Watch(id, [&](const v1::JobStatus& s) {
@@ -128,18 +170,23 @@ int Run(const ClusterArgs& a) {
     coordinator::JobClient client(target, {});
     std::string id = client.Submit(a.job);
     if (!a.quiet) std::cerr << "job " << id << " on " << a.workers << " worker(s) at " << target << "\n";
-    v1::JobStatus s = WatchJob(client, id, a.quiet);
+    v1::JobStatus s = WatchJob(client, id, a.quiet || a.json);
     int code = FinishedExitCode(s);
+    nlohmann::json written = nlohmann::json::array();
     if (code == 0) {
       auto files = client.Fetch(id);
       WriteOutputs(files, out);
       std::string artifact;
-      for (const auto& [name, bytes] : files)
+      for (const auto& [name, bytes] : files) {
         if (fs::path(name).extension() == ".fabatlas") artifact = (out / name).string();
-      std::cout << "wrote " << (artifact.empty() ? "" : artifact + ", ")
-                << (files.count("form.json") ? (out / "form.json").string() + ", " : std::string())
-                << "statistics.json\n";
+        written.push_back((out / name).string());
+      }
+      if (!a.json)
+        std::cout << "wrote " << (artifact.empty() ? "" : artifact + ", ")
+                  << (files.count("form.json") ? (out / "form.json").string() + ", " : std::string())
+                  << "statistics.json\n";
     }
+    if (a.json) PrintJson({{"job", StatusJson(s)}, {"outputs", written}});
     stop_workers();
     coordinator.Shutdown();
     return code;
@@ -154,35 +201,44 @@ int Run(const ClusterArgs& a) {
 void AddJobCommands(CLI::App& app, int& exit_code) {
   auto a = std::make_shared<ClusterArgs>();
 
-  auto* run = app.add_subcommand("run", "run a job on an embedded coordinator with N local worker processes");
-  run->add_option("job", a->job, "job YAML (docs/job-format.md)")->required();
-  run->add_option("--workers", a->workers, "worker processes (default 2)");
-  run->add_option("--slots", a->slots, "tasks per worker at once (default 1)");
-  run->add_option("--out", a->out, "output directory (<design>.fabatlas, form.json, statistics.json; cluster-state/ keeps the store)")->required();
+  auto* run = app.add_subcommand("run", "compute a job's form on this machine: a coordinator in this process and N worker processes");
+  run->add_option("job", a->job, "job file (YAML, docs/job-format.md)")->required();
+  run->add_option("--workers", a->workers, "worker processes");
+  run->add_option("--slots", a->slots, "tasks each worker runs at once");
+  run->add_option("--out", a->out, "output directory (<design>.fabatlas, form.json, statistics.json; cluster-state/ keeps the store, so the same command resumes after a crash)")->required();
   run->add_flag("--quiet", a->quiet, "no progress line");
+  run->add_flag("--json", a->json, "print the final status and the files written as one JSON object on stdout");
   run->callback([a, &exit_code] { exit_code = Run(*a); });
 
-  auto* submit = app.add_subcommand("submit", "submit a job file to a coordinator");
-  submit->add_option("job", a->job, "job YAML")->required();
+  auto* submit = app.add_subcommand("submit", "send a job file (and its design) to a coordinator; prints the job id");
+  submit->add_option("job", a->job, "job file (YAML, docs/job-format.md)")->required();
+  submit->add_flag("--json", a->json, "print {\"job_id\", \"created\"} as JSON");
   AddConnectionOptions(submit, *a);
   submit->callback([a] {
     bool created = false;
     auto client = ClientOf(*a);
     std::string id = client.Submit(a->job, &created);
-    std::cout << id << (created ? "" : " (already submitted)") << "\n";
+    if (a->json) PrintJson({{"job_id", id}, {"created", created}});
+    else std::cout << id << (created ? "" : " (already submitted)") << "\n";
   });
 
-  auto* status = app.add_subcommand("status", "show a job's progress");
-  status->add_option("job_id", a->job, "job id")->required();
+  auto* status = app.add_subcommand("status", "show a job's progress: samples, valid %, tasks, tasks/s, ETA, failures, why it is stalled");
+  status->add_option("job_id", a->job, "job id (from submit or jobs)")->required();
+  status->add_flag("--json", a->json, "print the status as one JSON object");
   AddConnectionOptions(status, *a);
-  status->callback([a] { std::cout << coordinator::ProgressLine(ClientOf(*a).Status(a->job)) << "\n"; });
+  status->callback([a] {
+    v1::JobStatus s = ClientOf(*a).Status(a->job);
+    if (a->json) PrintJson(StatusJson(s));
+    else std::cout << coordinator::ProgressLine(s) << "\n";
+  });
 
-  auto* watch = app.add_subcommand("watch", "follow a job until it ends (samples, valid %, tasks/s, ETA, failures)");
-  watch->add_option("job_id", a->job, "job id")->required();
+  auto* watch = app.add_subcommand("watch", "follow a job until it ends (samples, valid %, tasks/s, ETA, failures); exit 0 when it succeeded");
+  watch->add_option("job_id", a->job, "job id (from submit or jobs)")->required();
+  watch->add_flag("--json", a->json, "print each status change as one JSON object per line on stdout");
   AddConnectionOptions(watch, *a);
   watch->callback([a, &exit_code] {
     auto client = ClientOf(*a);
-    exit_code = FinishedExitCode(WatchJob(client, a->job, false));
+    exit_code = FinishedExitCode(WatchJob(client, a->job, false, a->json));
   });
 
   auto* cancel = app.add_subcommand("cancel", "cancel a job");
@@ -199,10 +255,18 @@ void AddJobCommands(CLI::App& app, int& exit_code) {
     std::cout << "wrote " << a->out << "\n";
   });
 
-  auto* jobs = app.add_subcommand("jobs", "list the coordinator's jobs");
+  auto* jobs = app.add_subcommand("jobs", "list the coordinator's jobs with their progress");
+  jobs->add_flag("--json", a->json, "print {\"jobs\": [status, ...]} as JSON");
   AddConnectionOptions(jobs, *a);
   jobs->callback([a] {
-    for (const auto& s : ClientOf(*a).List()) std::cout << coordinator::ProgressLine(s) << "\n";
+    auto list = ClientOf(*a).List();
+    if (a->json) {
+      nlohmann::json out = nlohmann::json::array();
+      for (const auto& s : list) out.push_back(StatusJson(s));
+      PrintJson({{"jobs", out}});
+      return;
+    }
+    for (const auto& s : list) std::cout << coordinator::ProgressLine(s) << "\n";
   });
 }
 

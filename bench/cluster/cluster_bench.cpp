@@ -31,6 +31,8 @@
 //    and subtrees computed. --no-lease-affinity turns lease affinity off
 //    (docs/protocol.md) for comparison.
 // Medians over R (S for the speed-up) repeats.
+#include <CLI/CLI.hpp>
+
 #include <signal.h>
 #include <sys/prctl.h>
 #include <sys/resource.h>
@@ -52,6 +54,7 @@
 
 #include "fabatlas/coordinator/coordinator.h"
 #include "fabatlas/coordinator/job_client.h"
+#include "fabatlas/log/log.h"
 #include "fabatlas/protocol/channel.h"
 #include "fabatlas/sha256.h"
 #include "fabatlas/storage/job_store.h"
@@ -171,12 +174,6 @@ double NoopThroughput(coordinator::Coordinator& c, int tasks, int salt) {
   return static_cast<double>(results.size()) / Seconds(t0, Clock::now());
 }
 
-int Arg(int argc, char** argv, const char* name, int fallback) {
-  for (int i = 1; i + 1 < argc; ++i)
-    if (std::strcmp(argv[i], name) == 0) return std::atoi(argv[i + 1]);
-  return fallback;
-}
-
 std::string only;  // --only: run one section
 bool Run(const char* section) { return only.empty() || only == section; }
 
@@ -184,17 +181,25 @@ bool Run(const char* section) { return only.empty() || only == section; }
 
 int main(int argc, char** argv) {
   std::setvbuf(stdout, nullptr, _IOLBF, 0);
-  int tasks = Arg(argc, argv, "--tasks", 20000);
-  int repeats = Arg(argc, argv, "--repeats", 3);
-  int blob_mb = Arg(argc, argv, "--blob-mb", 128);
-  int idle = Arg(argc, argv, "--idle", 1000);
-  int speedup_repeats = Arg(argc, argv, "--speedup-repeats", repeats);
-  int overhead_slots = Arg(argc, argv, "--overhead-slots", 1);
-  fs::path job = fs::path(FABATLAS_BENCH_SOURCE_DIR) / "bench/cluster/data/pawn_small.yaml";
-  for (int i = 1; i + 1 < argc; ++i) {
-    if (std::strcmp(argv[i], "--job") == 0) job = argv[i + 1];
-    if (std::strcmp(argv[i], "--only") == 0) only = argv[i + 1];
-  }
+  CLI::App app{"cluster benchmarks (results in docs/benchmarks.md, Cluster): no-op round trips through one "
+               "coordinator, per-task overhead, idle workers, blob ingest, speed-up of 2 workers over 1"};
+  app.option_defaults()->always_capture_default();
+  int tasks = 20000, repeats = 3, blob_mb = 128, idle = 1000, speedup_repeats = -1, overhead_slots = 1;
+  std::string job = (fs::path(FABATLAS_BENCH_SOURCE_DIR) / "bench/cluster/data/pawn_small.yaml").string();
+  bool fsync_commits = false, no_lease_affinity = false;
+  app.add_option("--tasks", tasks, "no-op tasks per throughput run");
+  app.add_option("--repeats", repeats, "runs of each measurement");
+  app.add_option("--blob-mb", blob_mb, "size of the blob uploaded for the ingest rate, MB");
+  app.add_option("--idle", idle, "idle workers connected during the third measurement");
+  app.add_option("--speedup-repeats", speedup_repeats, "1-worker/2-worker run pairs for the speed-up (default: --repeats)");
+  app.add_option("--overhead-slots", overhead_slots, "slots of the worker in the per-task overhead measurement");
+  app.add_option("--job", job, "CPU-bound job file for the speed-up");
+  app.add_option("--only", only, "run one section only")->check(CLI::IsMember({"noop", "overhead", "idle", "blob", "speedup"}));
+  app.add_flag("--fsync-commits", fsync_commits, "coordinator store fsyncs every commit (synchronous=FULL)");
+  app.add_flag("--no-lease-affinity", no_lease_affinity, "lease tasks oldest first, ignoring affinity");
+  CLI11_PARSE(app, argc, argv);
+  if (speedup_repeats < 0) speedup_repeats = repeats;
+  log::Configure({log::Level::kWarn, log::Format::kText});  // the coordinator in this process logs warnings only
   fs::path dir = fs::temp_directory_path() / ("fabatlas_cluster_bench_" + std::to_string(getpid()));
   fs::remove_all(dir);
   fs::create_directories(dir);
@@ -202,10 +207,8 @@ int main(int argc, char** argv) {
   coordinator::CoordinatorOptions options;
   options.listen = "127.0.0.1:0";
   options.state_dir = dir / "state";
-  for (int i = 1; i < argc; ++i) {
-    if (std::strcmp(argv[i], "--fsync-commits") == 0) options.fsync_commits = true;  // synchronous=FULL
-    if (std::strcmp(argv[i], "--no-lease-affinity") == 0) options.lease_affinity = false;
-  }
+  options.fsync_commits = fsync_commits;  // synchronous=FULL
+  options.lease_affinity = !no_lease_affinity;
   coordinator::Coordinator c(options);
   c.Start();
   std::string target = "127.0.0.1:" + std::to_string(c.port());
@@ -339,7 +342,7 @@ int main(int argc, char** argv) {
   if (fs::exists(job) && Run("speedup")) {
     std::vector<double> wall[3], coordinator_cpu[3], worker_cpu[3], busiest_cpu[3], process_cpu[3];
     long long task_count = 0;
-    std::printf("speed-up of 2 workers over 1 x 1 slot, %s, lease affinity %s\n", job.filename().c_str(),
+    std::printf("speed-up of 2 workers over 1 x 1 slot, %s, lease affinity %s\n", fs::path(job).filename().c_str(),
                 options.lease_affinity ? "on" : "off");
     for (int r = 0; r < speedup_repeats; ++r) {
       for (int n : {1, 2}) {
@@ -407,7 +410,7 @@ int main(int argc, char** argv) {
     std::printf("%s, %lld tasks, %d pairs: wall-time speed-up median %.2fx (1 worker %.2f s, 2 workers %.2f s); "
                 "CPU-time speed-up median %.2fx (1 worker %.2f s, busier of 2 %.2f s, both %.2f s); coordinator "
                 "CPU per task %.2f ms (1 worker) / %.2f ms (2 workers)\n",
-                job.filename().c_str(), task_count, speedup_repeats, Median(ratios), Median(wall[1]),
+                fs::path(job).filename().c_str(), task_count, speedup_repeats, Median(ratios), Median(wall[1]),
                 Median(wall[2]), Median(cpu_ratios), Median(busiest_cpu[1]), Median(busiest_cpu[2]),
                 Median(worker_cpu[2]), 1000.0 * Median(coordinator_cpu[1]) / std::max(1LL, task_count),
                 1000.0 * Median(coordinator_cpu[2]) / std::max(1LL, task_count));

@@ -18,6 +18,7 @@
 
 int main(int argc, char** argv) {
   CLI::App app{"fabatlas coordinator: jobs, leases and blobs over gRPC"};
+  app.option_defaults()->always_capture_default();  // --help shows the defaults
   fabatlas::coordinator::CoordinatorOptions o;
   std::string token_file, port_file;
   double drain_seconds = 30;

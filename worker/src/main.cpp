@@ -20,6 +20,7 @@
 
 int main(int argc, char** argv) {
   CLI::App app{"fabatlas worker: runs sampling tasks leased by a coordinator"};
+  app.option_defaults()->always_capture_default();  // --help shows the defaults
   fabatlas::worker::WorkerOptions o;
   std::string token_file;
   double connect_timeout = 30;
@@ -27,7 +28,7 @@ int main(int argc, char** argv) {
   app.set_version_flag("--version", std::string("fabatlas-worker ") + fabatlas::kVersion + " (task code " +
                                         fabatlas::protocol::kCodeVersion + ", protocol fabatlas.v1)");
   app.add_option("--coordinator", o.coordinator, "coordinator HOST:PORT")->required();
-  app.add_option("--slots", o.slots, "tasks run at once (default 1)");
+  app.add_option("--slots", o.slots, "tasks run at once (about one per core)");
   app.add_option("--threads", o.threads,
                  "threads the evaluations may keep busy in total (default: --slots, one per slot)");
   app.add_option("--memory-mb", o.memory_mb,
