@@ -1413,6 +1413,7 @@ void Coordinator::Start() {
   m.store->ExtendAllLeases(NowMs() + o.lease_ms);
   m.store->ClearAffinity();  // which workers are alive is not known yet
 
+  protocol::RouteGrpcLogs();
   grpc::EnableDefaultHealthCheckService(true);
   grpc::ServerBuilder builder;
   builder.AddListeningPort(o.listen, credentials, &m.port);

@@ -1,10 +1,14 @@
 // Channels, credentials and tokens (see channel.h).
 #include "fabatlas/protocol/channel.h"
 
+#include <grpc/support/log.h>
+
 #include <fstream>
+#include <mutex>
 #include <sstream>
 
 #include "fabatlas/error.h"
+#include "fabatlas/log/log.h"
 
 namespace fabatlas::protocol {
 
@@ -38,7 +42,21 @@ bool IsLoopback(const std::string& address) {
   return host == "localhost" || host == "::1" || host.rfind("127.", 0) == 0;
 }
 
+void RouteGrpcLogs() {
+  static std::once_flag once;
+  std::call_once(once, [] {
+    gpr_set_log_function([](gpr_log_func_args* args) {
+      // Debug: the caller reports what failed (one line, or a log event).
+      const log::Level level = log::Level::kDebug;
+      if (!log::Enabled(level)) return;
+      log::Write(level, "grpc", {{"message", args->message ? args->message : ""},
+                                 {"source", std::string(args->file ? args->file : "") + ":" + std::to_string(args->line)}});
+    });
+  });
+}
+
 std::shared_ptr<grpc::Channel> MakeChannel(const std::string& target, const ClientSecurity& security) {
+  RouteGrpcLogs();
   grpc::ChannelArguments args;
   args.SetMaxReceiveMessageSize(kMaxMessageBytes);
   args.SetMaxSendMessageSize(kMaxMessageBytes);

@@ -30,6 +30,12 @@ bool IsLoopback(const std::string& address);
 // PEM file.
 std::shared_ptr<grpc::Channel> MakeChannel(const std::string& target, const ClientSecurity& security);
 
+// Routes gRPC's own diagnostics (e.g. "Handshake failed" on stderr) into
+// the operator's log at debug level as event "grpc", so a
+// refused connection is the one line its caller reports and JSON logs stay
+// JSON. Idempotent; MakeChannel and the coordinator call it.
+void RouteGrpcLogs();
+
 // Sets the deadline and the bearer token on a client call.
 void Prepare(grpc::ClientContext& context, const ClientSecurity& security,
              std::chrono::milliseconds timeout);
