@@ -19,6 +19,7 @@
 #include "../cluster/cluster_process.h"
 #include "fabatlas/coordinator/job_client.h"
 #include "fabatlas/error.h"
+#include "fabatlas/storage/job_store.h"
 
 namespace fabatlas::ops_test {
 namespace {
@@ -79,8 +80,9 @@ std::vector<nlohmann::json> Events(const std::vector<nlohmann::json>& lines, con
 }
 
 // Runs a shell command line in `dir`; exit status and stdout+stderr.
-std::pair<int, std::string> Shell(const fs::path& dir, const std::string& command) {
-  std::string cmd = "cd '" + dir.string() + "' && " + command + " 2>&1";
+// With stderr false, only stdout (stderr dropped).
+std::pair<int, std::string> Shell(const fs::path& dir, const std::string& command, bool stderr = true) {
+  std::string cmd = "cd '" + dir.string() + "' && " + command + (stderr ? " 2>&1" : " 2>/dev/null");
   FILE* pipe = ::popen(cmd.c_str(), "r");
   std::string out;
   std::array<char, 4096> buf;
@@ -323,6 +325,198 @@ TEST(OpsDiskFull, CoordinatorStateOnAFullFileSystemStallsVisiblyAndLosesNothing)
   bool recovered = false;
   for (const auto& j : JsonLines(log)) recovered |= j["event"] == "state_write_recovered";
   EXPECT_TRUE(recovered);
+}
+
+}  // namespace
+}  // namespace fabatlas::ops_test
+
+namespace fabatlas::ops_test {
+namespace {
+
+// stdout of a shell command line run in `dir` (stderr dropped), and its status.
+std::pair<int, std::string> Stdout(const fs::path& dir, const std::string& command) {
+  return Shell(dir, command, false);
+}
+
+// --json on submit, watch, status, jobs and run: every line a user's script
+// reads is one JSON object, with the numbers the progress line shows.
+TEST(OpsCli, JsonOutputOfSubmitWatchStatusJobsAndRun) {
+  fs::path dir = FreshDir("ops_json");
+  CoordinatorProcess c = StartCoordinator(dir / "state", 0, {"--log-level", "warn"});
+  ASSERT_GT(c.port, 0) << ReadText(dir / "state/coordinator.log");
+  pid_t w = StartWorker(c.port, dir / "w", {"--log-level", "warn"});
+  const std::string bin = (BinDir() / "fabatlas").string();
+  const std::string at = " --coordinator 127.0.0.1:" + std::to_string(c.port);
+
+  auto [submit_code, submit_out] = Stdout(dir, bin + " submit " + JobPath().string() + at + " --json");
+  ASSERT_EQ(submit_code, 0) << submit_out;
+  nlohmann::json submitted = nlohmann::json::parse(submit_out);
+  const std::string id = submitted["job_id"];
+  EXPECT_EQ(id.size(), 16u);
+  EXPECT_EQ(submitted["created"], true);
+
+  auto [watch_code, watch_out] = Stdout(dir, bin + " watch " + id + at + " --json");
+  EXPECT_EQ(watch_code, 0) << watch_out;
+  std::istringstream lines(watch_out);
+  std::string line;
+  nlohmann::json last;
+  int updates = 0;
+  while (std::getline(lines, line)) {
+    last = nlohmann::json::parse(line);  // throws on a line that is not JSON
+    EXPECT_EQ(last["job_id"], id);
+    ++updates;
+  }
+  EXPECT_GE(updates, 1);
+  EXPECT_EQ(last["state"], "SUCCEEDED");
+
+  v1::JobStatus s = Client(c.port).Status(id);
+  auto [status_code, status_out] = Stdout(dir, bin + " status " + id + at + " --json");
+  ASSERT_EQ(status_code, 0) << status_out;
+  nlohmann::json status = nlohmann::json::parse(status_out);
+  EXPECT_EQ(status["state"], "SUCCEEDED");
+  EXPECT_EQ(status["samples_done"], s.samples_done());
+  EXPECT_EQ(status["samples_valid"], s.samples_valid());
+  EXPECT_EQ(status["tasks_done"], status["tasks_total"]);
+  EXPECT_EQ(last["samples_done"], s.samples_done());
+
+  auto [jobs_code, jobs_out] = Stdout(dir, bin + " jobs" + at + " --json");
+  ASSERT_EQ(jobs_code, 0) << jobs_out;
+  nlohmann::json jobs = nlohmann::json::parse(jobs_out);
+  ASSERT_EQ(jobs["jobs"].size(), 1u);
+  EXPECT_EQ(jobs["jobs"][0]["job_id"], id);
+
+  auto [run_code, run_out] = Stdout(dir, bin + " run " + JobPath().string() + " --workers 1 --out run --json");
+  ASSERT_EQ(run_code, 0) << run_out;
+  nlohmann::json run = nlohmann::json::parse(run_out);
+  EXPECT_EQ(run["job"]["state"], "SUCCEEDED");
+  EXPECT_EQ(run["job"]["samples_done"], s.samples_done());  // the same job, computed again
+  bool form = false;
+  for (const auto& path : run["outputs"]) {
+    EXPECT_TRUE(fs::exists(dir / path.get<std::string>())) << path;
+    form |= fs::path(path.get<std::string>()).filename() == "form.json";
+  }
+  EXPECT_TRUE(form) << run_out;
+  // fetch: the coordinator's outputs of the submitted job, the same form.
+  auto [fetch_code, fetch_out] = Shell(dir, bin + " fetch " + id + at + " --out fetched");
+  ASSERT_EQ(fetch_code, 0) << fetch_out;
+  EXPECT_EQ(ReadText(dir / "fetched/form.json"), ReadText(dir / "run/form.json"));
+  EXPECT_FALSE(ReadText(dir / "fetched/form.json").empty());
+
+  ::kill(w, SIGTERM);
+  EXPECT_EQ(WaitExit(w, std::chrono::seconds(30)), 0);
+  ::kill(c.pid, SIGTERM);
+  EXPECT_EQ(WaitExit(c.pid, std::chrono::seconds(30)), 0);
+  fs::remove_all(dir);
+}
+
+// Every subcommand's --help exits 0, shows defaults and speaks the user's
+// words (no bare "seed 001" references to the papers); the benchmarks'
+// --help prints usage instead of running them.
+TEST(OpsCli, HelpShowsDefaultsInTheUsersWords) {
+  fs::path dir = FreshDir("ops_help");
+  const std::string bin = (BinDir() / "fabatlas").string();
+  auto [top_code, top] = Stdout(dir, bin + " --help");
+  ASSERT_EQ(top_code, 0) << top;
+  std::vector<std::string> subcommands;
+  std::istringstream in(top.substr(top.find("Subcommands:")));
+  std::string line;
+  std::getline(in, line);
+  while (std::getline(in, line)) {
+    std::istringstream words(line);
+    std::string name;
+    if (words >> name) subcommands.push_back(name);
+  }
+  EXPECT_GE(subcommands.size(), 10u) << top;
+  for (const auto& sub : subcommands) {
+    auto [code, help] = Stdout(dir, bin + " " + sub + " --help");
+    EXPECT_EQ(code, 0) << sub;
+    EXPECT_EQ(help.find("seed 0"), std::string::npos) << sub << ":\n" << help;
+    EXPECT_EQ(help.find("seed-0"), std::string::npos) << sub << ":\n" << help;
+  }
+  EXPECT_NE(Stdout(dir, bin + " run --help").second.find("--workers INT=2"), std::string::npos);
+  EXPECT_NE(Stdout(dir, bin + " status --help").second.find("=127.0.0.1:7450"), std::string::npos);
+  auto coordinator = Stdout(dir, (BinDir() / "fabatlas-coordinator").string() + " --help").second;
+  EXPECT_NE(coordinator.find("--lease-ms INT=30000"), std::string::npos) << coordinator;
+  EXPECT_NE(coordinator.find("--log-format TEXT=text"), std::string::npos) << coordinator;
+  auto worker = Stdout(dir, (BinDir() / "fabatlas-worker").string() + " --help").second;
+  EXPECT_NE(worker.find("--slots INT=1"), std::string::npos) << worker;
+  const fs::path bench = BinDir() / "cluster_bench";
+  if (fs::exists(bench)) {
+    auto [code, help] = Stdout(dir, bench.string() + " --help");
+    EXPECT_EQ(code, 0);
+    EXPECT_NE(help.find("--tasks INT=20000"), std::string::npos) << help;
+    EXPECT_EQ(help.find("round trips/s"), std::string::npos) << "cluster_bench --help ran the benchmark";
+  }
+  fs::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace fabatlas::ops_test
+
+namespace fabatlas::ops_test {
+namespace {
+
+// SIGTERM to a coordinator while a worker holds a lease: it stops handing
+// out leases, waits for the running one (up to --drain-seconds), accepts
+// its result and exits 0; started again (here with --fsync-commits, one
+// WAL fsync per commit) it resumes the job, which ends with the in-process
+// run's form.
+TEST(OpsDrain, SigtermWaitsForRunningLeasesThenTheJobResumes) {
+  fs::path dir = FreshDir("ops_drain");
+  CoordinatorProcess c =
+      StartCoordinator(dir / "state", 0, {"--log-format", "json", "--drain-seconds", "120", "--lease-ms", "60000"});
+  ASSERT_GT(c.port, 0) << ReadText(dir / "state/coordinator.log");
+  pid_t w = StartWorker(c.port, dir / "w", {"--log-format", "json", "--connect-timeout", "120"});
+  ASSERT_TRUE(WaitForText(dir / "w/worker.log", "worker_connected", w));
+  std::string id = Client(c.port).Submit(JobPath());
+  // The worker holds a lease: freeze it there.
+  v1::JobStatus s;
+  for (int i = 0; i < 3000 && s.tasks_leased() == 0; ++i) {
+    s = Client(c.port).Status(id);
+    if (s.tasks_leased() == 0) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  ASSERT_GT(s.tasks_leased(), 0);
+  ::kill(w, SIGSTOP);
+  const std::int64_t done_before = Client(c.port).Status(id).tasks_done();
+  ::kill(c.pid, SIGTERM);
+  ASSERT_TRUE(WaitForText(dir / "state/coordinator.log", "drain_started", c.pid));
+  // Draining: the coordinator is still there, waiting for the lease.
+  EXPECT_EQ(WaitExit(c.pid, std::chrono::milliseconds(500)), -1);
+  ::kill(w, SIGCONT);
+  EXPECT_EQ(WaitExit(c.pid, std::chrono::seconds(120)), 0);
+  auto lines = JsonLines(dir / "state/coordinator.log");
+  auto started = Events(lines, "drain_started");
+  auto finished = Events(lines, "drain_finished");
+  ASSERT_EQ(started.size(), 1u);
+  ASSERT_EQ(finished.size(), 1u);
+  EXPECT_GE(started[0]["active_leases"].get<int>(), 1);
+  EXPECT_EQ(finished[0]["active_leases"], 0);
+  {
+    storage::JobStore store(dir / "state/state.db");
+    EXPECT_EQ(store.ActiveLeases(), 0);
+    EXPECT_GT(store.CountTasks(id).done, done_before);  // the drained lease's result was kept
+    EXPECT_EQ(store.CheckConsistency(), std::vector<std::string>{});
+  }
+  // Started again, with --fsync-commits: the job resumes and finishes.
+  c = StartCoordinator(dir / "state", 0, {"--log-format", "json", "--fsync-commits"});
+  ASSERT_GT(c.port, 0) << ReadText(dir / "state/coordinator.log");
+  ::kill(w, SIGTERM);  // it was pointed at the old port
+  EXPECT_EQ(WaitExit(w, std::chrono::seconds(60)), 0) << ReadText(dir / "w/worker.log");
+  pid_t w2 = StartWorker(c.port, dir / "w2", {"--log-format", "json"});
+  s = WaitForJob(c.port, id, std::chrono::seconds(240));
+  EXPECT_EQ(s.state(), v1::JOB_STATE_SUCCEEDED) << s.error();
+  auto outputs = Client(c.port).Fetch(id);
+  auto [code, out] = Shell(dir, (BinDir() / "fabatlas").string() + " sample " + JobPath().string() + " --out reference");
+  ASSERT_EQ(code, 0) << out;
+  EXPECT_EQ(outputs["form.json"], ReadText(dir / "reference/form.json"));
+  auto resumed = Events(JsonLines(dir / "state/coordinator.log"), "coordinator_started");
+  ASSERT_EQ(resumed.size(), 2u);
+  EXPECT_EQ(resumed[1]["jobs_resumed"], 1);
+  ::kill(w2, SIGTERM);
+  EXPECT_EQ(WaitExit(w2, std::chrono::seconds(30)), 0);
+  ::kill(c.pid, SIGTERM);
+  EXPECT_EQ(WaitExit(c.pid, std::chrono::seconds(30)), 0);
+  fs::remove_all(dir);
 }
 
 }  // namespace

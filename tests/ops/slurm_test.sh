@@ -20,8 +20,8 @@ chmod 755 "$tmp"
 pids=()
 cleanup() {
   local rc=$?
-  for p in "${pids[@]}"; do kill "$p" 2>/dev/null || true; done
-  for p in "${pids[@]}"; do wait "$p" 2>/dev/null || true; done
+  # Last started first: the coordinator and slurmd before slurmctld, munged last.
+  for ((i = ${#pids[@]} - 1; i >= 0; i--)); do kill "${pids[i]}" 2>/dev/null || true; wait "${pids[i]}" 2>/dev/null || true; done
   if [[ $rc != 0 ]]; then
     for f in "$tmp"/*.log "$tmp"/slurm-*.out; do [[ -f $f ]] && { echo "== $f"; tail -n 30 "$f"; }; done
   fi
@@ -110,7 +110,7 @@ grep -q '"event":"worker_joined".*"slots":2' "$tmp/coordinator.log"
 # Drain: SIGTERM to the job's steps; the workers return their leases and
 # exit 0, so the batch script and the Slurm job complete.
 scancel --signal=TERM "$job"
-wait_for 40 bash -c '[[ $(scontrol show job '"$job"' | grep -o "JobState=[A-Z]*") != JobState=RUNNING ]]'
+wait_for 60 bash -c '[[ ! $(scontrol show job '"$job"' | grep -o "JobState=[A-Z]*") =~ ^JobState=(PENDING|RUNNING|COMPLETING)$ ]]'
 state=$(scontrol show job "$job" | grep -o 'JobState=[A-Z]* ' | head -n 1)
 code=$(scontrol show job "$job" | grep -o ' ExitCode=[0-9:]*' | head -n 1)
 echo "slurm: batch job $job$state$code"
