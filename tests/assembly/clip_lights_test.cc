@@ -23,6 +23,8 @@ TEST(AssemblyClipLights, RejectsParametersOutsideTheirRanges) {
   const Program p = BuildClipLights({3, 10, RingSize::kM}, Lib());
   EXPECT_EQ(p.instances.size(), 1u + 1u + 2u * 3u + 1u);  // ceiling, hanger, 3 pairs, light
   EXPECT_EQ(p.connections.size(), 2u * 3u + 2u);
+  // ParamTurnbuckle hooks at y = ±(43.5 + e/2) (PARTS.md §3.1).
+  EXPECT_NEAR(p.library.parts.at("ParamTurnbuckle").primitives[0].frame.position.y(), 48.5, 1e-12);
 }
 
 TEST(AssemblyClipLights, ExtensionLowersTheLightByItsLength) {

@@ -16,7 +16,7 @@ TEST(AssemblyJacobian, AnalyticEqualsAutodiff) {
   const char* all[] = {"demo", "toothbrush_holder", "charger_holder", "soap_bottle_holder",
                        "soap_bottle_holder_one_hook", "mug_hanger", "bird_feeder", "paper_towel_holder",
                        "diaper_caddy", "bathroom_basket", "clip_lights_1", "clip_lights_2", "clip_lights_3",
-                       "clip_lights_4"};
+                       "clip_lights_4", "reading_nook"};
   int checked = 0;
   for (const char* name : all) {
     const Program p =

@@ -35,10 +35,10 @@ TEST(AssemblyPrecheck, ClosedAndUnconnectablePairsRejected) {
       "start_with: {name: door, part: DoorRod, frame: [[0,0,500],[90,0,90]]}\n"
       "parts: {r1: RingXS, r2: RingS}\n"
       "end_with: {name: bottle, part: SoapBottle, frame: [[0,0,0],[0,0,0]]}\n"
-      "connect:\n"
-      "  - {a: r1.ring, b: door.rod}\n"
-      "  - {a: r2.ring, b: r1.ring}\n"
-      "  - {a: bottle.rod, b: door.rod}\n",
+      "steps:\n"
+      "  - {attach: r1.ring, to: door.door}\n"
+      "  - {attach: r2.ring, to: r1.ring}\n"
+      "  - {attach: bottle.rod, to: door.door}\n",
       "closed.yaml", Lib(), Mesh());
   const PrecheckSummary s = Precheck(p);
   EXPECT_FALSE(s.ok);
@@ -49,14 +49,14 @@ TEST(AssemblyPrecheck, ClosedAndUnconnectablePairsRejected) {
 }
 
 TEST(AssemblyPrecheck, CriticalDimensionExhausted) {
-  // Rings XS have a 30 mm hoop; a 38.5 mm-radius bottle rod does not fit.
+  // Rings XS have a 33.3 mm arc radius; a 38.5 mm-radius bottle rod does not fit.
   const Program p = ParseProgram(
       "start_with: {name: door, part: DoorRod, frame: [[0,0,500],[90,0,90]]}\n"
       "end_with: {name: ring, part: RingXS, frame: [[0,0,0],[0,0,0]]}\n"
       "parts: {bottle: SoapBottle}\n"
-      "connect:\n"
-      "  - {a: ring.ring, b: door.rod}\n"
-      "  - {a: bottle.rod, b: ring.ring}\n",
+      "steps:\n"
+      "  - {attach: ring.ring, to: door.door}\n"
+      "  - {attach: bottle.rod, to: ring.ring}\n",
       "crit.yaml", Lib(), Mesh());
   const PrecheckSummary s = Precheck(p);
   ASSERT_FALSE(s.ok);
@@ -70,11 +70,11 @@ TEST(AssemblyPrecheck, CycleThatCannotCloseIsRejectedBeforeSolving) {
       "start_with: {name: env, part: ClosetRods, frame: [[0,0,0],[0,0,0]]}\n"
       "parts: {e1: HookEyeLeft, e2: HookEyeLeft, basket: Basket}\n"
       "end_with: {name: basket, frame: [[0,0,0],[0,0,0]]}\n"
-      "connect:\n"
-      "  - {a: e1.ring, b: env.rod1}\n"
-      "  - {a: e2.ring, b: env.rod2}\n"
-      "  - {a: e1.hook, b: basket.rod1}\n"
-      "  - {a: e2.hook, b: basket.rod2}\n",
+      "steps:\n"
+      "  - {attach: e1.ring, to: env.rod1}\n"
+      "  - {attach: e2.ring, to: env.rod2}\n"
+      "  - {attach: basket.rod1, to: e1.hook}\n"
+      "  - {connect: e2.hook, with: basket.rod2}\n",
       "near.yaml", Lib(), Mesh());
   // ClosetRods pieces are 350 mm apart (centres at y = ±175): this closes.
   EXPECT_TRUE(Precheck(p).ok);

@@ -21,36 +21,76 @@ double Primitive::Shape(const std::string& key) const {
 }
 
 std::vector<ParamSpec> Primitive::Params() const {
-  const ParamKind open = closed || clamped ? ParamKind::kBoundedAndClamped : ParamKind::kBoundedAndOpen;
+  // PARTS.md §1.10: periodic parameters wrap; a bounded parameter is
+  // BOUNDED_AND_CLAMPED when the primitive's ends are closed (is_open false)
+  // and otherwise BOUNDED_AND_OPEN — but only parameters that move the
+  // contact along the primitive (rod/tube/edge t, hook θ, the point on a
+  // hemisphere) can run off it (FabHacks 4.3.3: "hooks or rings that slide
+  // past the end of the dowel rod fall off"). The orientation limits (rod φ
+  // around the rod, the flex φ of hooks and rings) are geometric stops: leaving
+  // them turns a connector against its partner, it does not slip off, so we
+  // keep them clamped (the reference marks them open with the primitive;
+  // docs/assembly.md "Falling apart").
+  const ParamKind b = clamped ? ParamKind::kBoundedAndClamped : ParamKind::kBoundedAndOpen;
+  const ParamKind c = ParamKind::kBoundedAndClamped;
+  const ParamKind u = ParamKind::kUnbounded;
+  std::vector<ParamSpec> p;
   switch (type) {
     case PrimitiveType::kRod:
-      return {{"t", 0, 1, open}, {"phi", 45, 135, ParamKind::kBoundedAndClamped}};
+      p = {{"t", 0, 1, b, 0.5}};
+      if (!ctl) p.push_back({"phi", 45, 135, c, 90});
+      break;
     case PrimitiveType::kHook: {
-      // theta_max (optional) overrides the arc angle as the range of theta.
-      const double tmax = shape.count("theta_max") ? shape.at("theta_max") : Shape("arc_angle");
-      std::vector<ParamSpec> p{{"theta", 0, tmax, open}};
-      if (flex) p.push_back({"phi", 45, 135, ParamKind::kBoundedAndClamped});
-      return p;
+      const double alpha = Shape("arc_angle");
+      const double lo = shape.count("theta_min") ? shape.at("theta_min") : 0;
+      const double hi = shape.count("theta_max") ? shape.at("theta_max") : alpha;
+      p = {{"theta", lo, hi, alpha >= 360 ? u : b, alpha / 2}};
+      if (flex) p.push_back({"phi", 45, 135, c, 90});
+      break;
     }
-    case PrimitiveType::kRing: {
-      std::vector<ParamSpec> p{{"theta", 0, 360, ParamKind::kUnbounded}};
-      if (flex) p.push_back({"phi", 30, 150, ParamKind::kBoundedAndClamped});
-      return p;
-    }
+    case PrimitiveType::kRing:
+      if (ctl) return {{"u1", 0, 360, u, 0}, {"u2", 0, 360, u, 180}};
+      p = {{"theta", 0, 360, u, 180}};
+      if (flex) p.push_back({"phi", 30, 150, c, 90});
+      break;
     case PrimitiveType::kTube:
-      return {{"t", 0, 1, open}, {"theta", 0, 360, ParamKind::kUnbounded}};
+      p = {{"t", 0, 1, b, 0.5}, {"theta", 0, 360, u, 180}};
+      break;
     case PrimitiveType::kClip:
-      return {{"t", 0, 1, ParamKind::kBoundedAndClamped}};
+      return {{"t", 0, 1, c, 0.5}};
     case PrimitiveType::kEdge:
-      return {{"t", 0, 1, open}};
+      p = {{"t", 0, 1, ParamKind::kBoundedAndOpen, 0.5}};
+      break;
     case PrimitiveType::kSurface:
-      return {{"t1", 0, 1, open}, {"t2", 0, 1, open}, {"spin", 0, 360, ParamKind::kUnbounded}};
+      return {{"t1", 0, 1, b, 0.5}, {"t2", 0, 1, b, 0.5}, {"spin", 0, 360, u, 0}};
     case PrimitiveType::kHemisphere:
-      return {{"theta", 0, 360, ParamKind::kUnbounded},
-              {"phi", 90, 270, ParamKind::kBoundedAndClamped},
-              {"spin", 0, 360, ParamKind::kUnbounded}};
+      return {{"theta", 90, 270, ParamKind::kBoundedAndOpen, 180},
+              {"phi", 90, 270, ParamKind::kBoundedAndOpen, 180},
+              {"spin", 0, 360, u, 0}};
   }
-  return {};
+  p[0].blocked_min = blocked_min;
+  p[0].blocked_max = blocked_max;
+  return p;
+}
+
+std::vector<ParamSpec> Primitive::BaseFormParams() const {
+  std::vector<ParamSpec> p = Params();
+  for (auto& s : p) {
+    if (type == PrimitiveType::kRing && s.name == "theta") continue;   // θ stays free
+    if (type == PrimitiveType::kTube && s.name == "theta") continue;   // θ stays free
+    s.held = true;
+    if (type == PrimitiveType::kRing && ctl) s.init = s.name == "u1" ? 180 : 0;  // R(0,180,0)
+  }
+  return p;
+}
+
+std::string Primitive::ClassName(bool variant) const {
+  static const char* kNames[] = {"Hook", "Rod", "Ring", "Tube", "Hemisphere", "Clip", "Edge", "Surface"};
+  std::string n = kNames[static_cast<int>(type)];
+  if (!variant) return n;
+  if (ctl) return n + "Ctl";
+  if (flex) return n + "Flex";
+  return n;
 }
 
 double Primitive::CriticalDimension() const {
@@ -62,7 +102,7 @@ double Primitive::CriticalDimension() const {
       return Shape("length");
     case PrimitiveType::kHook:
     case PrimitiveType::kRing:
-      return Shape("arc_radius") - Shape("thickness");
+      return Shape("arc_radius");  // the reference's critical_dim (a rod fits if its radius is below it)
     case PrimitiveType::kClip:
       return Shape("gap");
     case PrimitiveType::kHemisphere:
@@ -124,31 +164,43 @@ const char* ToString(PrimitiveType t) {
 namespace {
 
 using PT = PrimitiveType;
-bool IsRodHookRing(PT t) { return t == PT::kRod || t == PT::kHook || t == PT::kRing; }
 
 struct Offset {
   Eigen::Vector3d euler;
   std::vector<int> flip_axes;
-  bool found;
 };
 
-// EXAMPLES.md alignment table for the ordered pair (a, b).
-Offset LookUp(const Primitive& a, const Primitive& b) {
-  const PT ta = a.type, tb = b.type;
-  if (ta == PT::kRod && a.ctl && tb == PT::kRing && b.ctl) return {{0, 0, 90}, {2}, true};
-  if (IsRodHookRing(ta) && IsRodHookRing(tb)) return {{180, 0, 90}, {2}, true};
-  if (ta == PT::kRod && tb == PT::kTube) return {b.ctl ? Eigen::Vector3d(0, 0, 0) : Eigen::Vector3d(0, 90, 0), {}, true};
-  if (ta == PT::kTube && (tb == PT::kHook || tb == PT::kRing)) return {{0, 0, 90}, {2}, true};
-  if (ta == PT::kHook && tb == PT::kEdge) return {{90, 0, -90}, {2}, true};
-  if (ta == PT::kEdge && tb == PT::kHook) return {{-90, 0, 90}, {2}, true};
-  if (ta == PT::kEdge && tb == PT::kClip) return {{0, -90, -90}, {1, 2}, true};
-  if (ta == PT::kClip && tb == PT::kEdge) return {{0, 90, 90}, {1, 2}, true};
-  if (ta == PT::kClip && tb == PT::kRod) return {{0, 180, 0}, {1}, true};
-  if (ta == PT::kSurface && tb == PT::kSurface) return {{0, 0, 0}, {0}, true};
-  return {{0, 0, 0}, {}, false};
+// PARTS.md §2.2: alignment frame and flip axes per ordered class-name key.
+Offset LookUp(const std::string& key) {
+  const auto us = key.find('_');
+  const std::string k1 = key.substr(0, us), k2 = key.substr(us + 1);
+  auto in = [](const std::string& k, std::initializer_list<const char*> set) {
+    for (const char* s : set)
+      if (k == s) return true;
+    return false;
+  };
+  if ((k1 == "RodCtl" && k2 == "RingCtl") || (k1 == "RingCtl" && k2 == "RodCtl")) return {{0, 0, 90}, {2}};
+  const auto rodhook = {"Rod", "RodCtl", "Hook", "HookFlex"};
+  const auto hookring = {"Hook", "HookFlex", "Ring", "RingFlex", "RingCtl"};
+  if ((in(k1, rodhook) && in(k2, hookring)) || (in(k2, rodhook) && in(k1, hookring))) return {{180, 0, 90}, {2}};
+  if (key == "Rod_Tube" || key == "Tube_Rod") return {{0, 90, 0}, {}};
+  if (key == "Rod_TubeCtl" || key == "TubeCtl_Rod") return {{0, 0, 0}, {}};
+  const auto hookring4 = {"Hook", "HookFlex", "Ring", "RingFlex"};
+  if ((k1 == "Tube" && in(k2, hookring4)) || (k2 == "Tube" && in(k1, hookring4))) return {{0, 0, 90}, {2}};
+  if (key == "Hook_Edge" || key == "HookFlex_Edge") return {{90, 0, -90}, {2}};
+  if (key == "Edge_Hook" || key == "Edge_HookFlex") return {{-90, 0, 90}, {2}};
+  if (key == "Edge_Clip") return {{0, -90, -90}, {1, 2}};
+  if (key == "Clip_Edge") return {{0, 90, 90}, {1, 2}};
+  if (in(key, {"Clip_Rod", "Rod_Clip", "Clip_RodCtl", "RodCtl_Clip"})) return {{0, 180, 0}, {1}};
+  if (key == "Surface_Surface") return {{0, 0, 0}, {0}};
+  return {{0, 0, 0}, {}};
 }
 
-Eigen::Matrix3d Apply(Offset o, bool flip) {
+}  // namespace
+
+Eigen::Matrix3d AlignmentOffset(const std::string& key, bool flip) {
+  Offset o = LookUp(key);
+  // PARTS.md §2.1: "flip" maps each flip axis 0 -> 180, 180 -> 0, else negates.
   if (flip)
     for (int ax : o.flip_axes) {
       double& v = o.euler[ax];
@@ -159,21 +211,11 @@ Eigen::Matrix3d Apply(Offset o, bool flip) {
   return EulerToRotation(o.euler);
 }
 
-}  // namespace
-
-Eigen::Matrix3d AlignmentOffset(const Primitive& a, const Primitive& b, bool flip) {
-  const Offset ab = LookUp(a, b);
-  if (ab.found) return Apply(ab, flip);
-  const Offset ba = LookUp(b, a);
-  if (ba.found) return Apply(ba, flip).transpose();  // P_b M_b A_ba = P_a M_a
-  return Eigen::Matrix3d::Identity();
-}
-
 bool CanConnect(PrimitiveType a, PrimitiveType b) {
   auto pair = [&](PT x, PT y) { return (a == x && b == y) || (a == y && b == x); };
   return pair(PT::kHook, PT::kRod) || pair(PT::kHook, PT::kRing) || pair(PT::kHook, PT::kHook) ||
          pair(PT::kHook, PT::kTube) || pair(PT::kHook, PT::kEdge) || pair(PT::kRing, PT::kRod) ||
-         pair(PT::kRing, PT::kRing) || pair(PT::kRing, PT::kTube) || pair(PT::kRod, PT::kTube) ||
+         pair(PT::kRing, PT::kRing) || pair(PT::kRing, PT::kTube) || pair(PT::kRod, PT::kTube) || pair(PT::kTube, PT::kTube) ||
          pair(PT::kRod, PT::kClip) || pair(PT::kClip, PT::kEdge) || pair(PT::kSurface, PT::kSurface) ||
          pair(PT::kHemisphere, PT::kSurface);
 }
@@ -298,11 +340,21 @@ PartLibrary LoadPartLibrary(const std::string& file, const std::string& mesh_dir
         else if (k == "flex") p.flex = e.second.as<bool>();
         else if (k == "clamped") p.clamped = e.second.as<bool>();
         else if (k == "ctl") p.ctl = e.second.as<bool>();
+        else if (k == "blocked") {  // "min" / "max": that end of the slide parameter is blocked
+          const std::string v = AsString(file, e.second, "blocked");
+          if (v == "min") p.blocked_min = true;
+          else if (v == "max") p.blocked_max = true;
+          else Fail(file, e.second, "blocked must be 'min' or 'max'");
+        } else if (k == "range") {  // hook θ range [min, max] (default [0, arc_angle])
+          if (!e.second.IsSequence() || e.second.size() != 2) Fail(file, e.second, "range must be [min, max]");
+          p.shape["theta_min"] = AsDouble(file, e.second[0], "range");
+          p.shape["theta_max"] = AsDouble(file, e.second[1], "range");
+        }
         else p.shape[k] = AsDouble(file, e.second, "shape parameter '" + k + "'");
       }
       for (const auto& req : RequiredShape().at(p.type))
         if (!p.shape.count(req)) Fail(file, pn, std::string(ToString(p.type)) + " '" + p.name + "' lacks '" + req + "'");
-      if (p.type == PT::kRing) p.closed = true;  // rings are always closed (FabHacks, 4.1)
+      if (p.type == PT::kRing) p.closed = true;  // rings are always closed for connecting (FabHacks, 4.1)
       if (pn["fit"]) {
         if (pn["frame"]) Fail(file, pn["fit"], "primitive '" + p.name + "' has both 'frame' and 'fit'");
         if (part.mesh.empty()) Fail(file, pn["fit"], "primitive '" + p.name + "': 'fit' needs the part's 'mesh'");

@@ -2,7 +2,11 @@
 
 #include <cstdlib>
 #include <filesystem>
+#include <algorithm>
 #include <map>
+
+#include "connector_frames.h"
+#include "fabatlas/assembly/frame.h"
 
 #include "yaml_errors.h"
 
@@ -12,6 +16,16 @@ std::string DefaultMeshDir() {
   if (const char* s = std::getenv("FABATLAS_SHARED_DIR")) return std::string(s) + "/data/fabhacks/meshes";
   if (const char* s = std::getenv("FABATLAS_SOURCE_DIR")) return std::string(s) + "/../shared/data/fabhacks/meshes";
   return "../shared/data/fabhacks/meshes";
+}
+
+bool IsRestingContact(const std::string& key) {
+  return key == "Surface_Surface" || key == "Tube_TubeCtl" || key == "TubeCtl_Tube" || key == "TubeCtl_Rod" ||
+         key == "Rod_TubeCtl";
+}
+
+Eigen::Matrix4d Program::TargetOffset() const {
+  if (target_primitive < 0) return Eigen::Matrix4d::Identity();
+  return ToIsometry(PartOf(target).primitives[target_primitive].frame).matrix();
 }
 
 namespace {
@@ -31,7 +45,7 @@ Program Build(const YAML::Node& root, const std::string& file, std::string libra
   if (!root.IsMap()) Fail(file, root, "a program must be a map");
   for (const auto& kv : root) {
     const std::string k = kv.first.as<std::string>();
-    if (k != "library" && k != "start_with" && k != "end_with" && k != "parts" && k != "connect" &&
+    if (k != "library" && k != "start_with" && k != "end_with" && k != "parts" && k != "steps" &&
         k != "name" && k != "description")
       Fail(file, kv.first, "unknown key '" + k + "'");
   }
@@ -60,6 +74,10 @@ Program Build(const YAML::Node& root, const std::string& file, std::string libra
   }
   const YAML::Node ew = root["end_with"];
   if (!ew || !ew.IsMap() || !ew["name"] || !ew["frame"]) Fail(file, ew ? ew : root, "'end_with' needs name and frame");
+  for (const auto& kv : ew)
+    if (const auto k = kv.first.as<std::string>();
+        k != "name" && k != "part" && k != "primitive" && k != "frame" && k != "match_rotation")
+      Fail(file, kv.first, "unknown key '" + k + "' in end_with");
   {
     const std::string n = AsString(file, ew["name"], "end_with name");
     if (ew["part"] && !index.count(n)) add_instance(ew["name"], ew["part"]);
@@ -67,6 +85,14 @@ Program Build(const YAML::Node& root, const std::string& file, std::string libra
     prog.target = index[n];
     if (prog.target == 0) Fail(file, ew["name"], "the target cannot be the environment");
     prog.target_frame = internal::AsFrame(file, ew["frame"], "end_with frame");
+    if (ew["primitive"]) {
+      const std::string pn = AsString(file, ew["primitive"], "end_with primitive");
+      const auto& prims = prog.PartOf(prog.target).primitives;
+      for (size_t i = 0; i < prims.size(); ++i)
+        if (prims[i].name == pn) prog.target_primitive = static_cast<int>(i);
+      if (prog.target_primitive < 0)
+        Fail(file, ew["primitive"], "part '" + prog.instances[prog.target].part + "' has no primitive '" + pn + "'");
+    }
     if (ew["match_rotation"]) {
       try {
         prog.target_match_rotation = ew["match_rotation"].as<bool>();
@@ -75,8 +101,8 @@ Program Build(const YAML::Node& root, const std::string& file, std::string libra
       }
     }
   }
-  const YAML::Node conns = root["connect"];
-  if (!conns || !conns.IsSequence() || conns.size() == 0) Fail(file, conns ? conns : root, "'connect' must be a non-empty list");
+  const YAML::Node steps = root["steps"];
+  if (!steps || !steps.IsSequence() || steps.size() == 0) Fail(file, steps ? steps : root, "'steps' must be a non-empty list");
   auto ref = [&](const YAML::Node& n, int& inst, std::string& prim) {
     const std::string s = AsString(file, n, "connector reference");
     const auto dot = s.find('.');
@@ -88,18 +114,34 @@ Program Build(const YAML::Node& root, const std::string& file, std::string libra
     if (!prog.PartOf(inst).Find(prim))
       Fail(file, n, "part '" + prog.instances[inst].part + "' has no primitive '" + prim + "'");
   };
-  for (const auto& c : conns) {
-    if (!c.IsMap() || !c["a"] || !c["b"]) Fail(file, c, "connect entry needs 'a' and 'b'");
+  std::vector<bool> placed(prog.instances.size(), false);
+  placed[0] = true;
+  for (const auto& c : steps) {
+    if (!c.IsMap() || !((c["attach"] && c["to"]) || (c["connect"] && c["with"])))
+      Fail(file, c, "a step is {attach: part.primitive, to: part.primitive} or {connect: ..., with: ...}");
     Connection con;
     const auto m = c.Mark();
     con.where = file + ":" + std::to_string(m.line + 1) + ":" + std::to_string(m.column + 1);
+    con.closing = static_cast<bool>(c["connect"]);
     for (const auto& kv : c) {
       const std::string k = kv.first.as<std::string>();
-      if (k != "a" && k != "b" && k != "alignment" && k != "is_fixed" && k != "fixed_a" && k != "fixed_b")
-        Fail(file, kv.first, "unknown key '" + k + "' in connect");
+      if (k != (con.closing ? "connect" : "attach") && k != (con.closing ? "with" : "to") && k != "alignment" &&
+          k != "is_fixed")
+        Fail(file, kv.first, "unknown key '" + k + "' in " + (con.closing ? "connect" : "attach") + " step");
     }
-    ref(c["a"], con.part_a, con.primitive_a);
-    ref(c["b"], con.part_b, con.primitive_b);
+    if (con.closing) {
+      ref(c["connect"], con.part_a, con.primitive_a);
+      ref(c["with"], con.part_b, con.primitive_b);
+      if (!placed[con.part_a] || !placed[con.part_b])
+        Fail(file, c, "connect joins two parts already placed by earlier steps");
+    } else {
+      ref(c["to"], con.part_a, con.primitive_a);  // placed
+      ref(c["attach"], con.part_b, con.primitive_b);  // new
+      if (!placed[con.part_a]) Fail(file, c["to"], "attach: '" + prog.instances[con.part_a].name + "' is not placed yet");
+      if (placed[con.part_b])
+        Fail(file, c["attach"], "attach: '" + prog.instances[con.part_b].name + "' is already placed (use connect)");
+      placed[con.part_b] = true;
+    }
     if (con.part_a == con.part_b) Fail(file, c, "a part cannot connect to itself");
     if (c["alignment"]) {
       const std::string al = AsString(file, c["alignment"], "alignment");
@@ -113,16 +155,61 @@ Program Build(const YAML::Node& root, const std::string& file, std::string libra
         Fail(file, c["is_fixed"], "is_fixed must be true or false");
       }
     }
-    auto values = [&](const char* key, std::vector<double>& out, const Primitive& p) {
-      if (!c[key]) return;
-      const YAML::Node v = c[key];
-      if (!v.IsSequence() || v.size() != p.Params().size())
-        Fail(file, v, std::string(key) + " needs " + std::to_string(p.Params().size()) + " values");
-      for (const auto& x : v) out.push_back(internal::AsDouble(file, x, key));
-    };
-    values("fixed_a", con.fixed_a, prog.PrimitiveA(con));
-    values("fixed_b", con.fixed_b, prog.PrimitiveB(con));
+    const Primitive& pa = prog.PrimitiveA(con);
+    const Primitive& pb = prog.PrimitiveB(con);
+    con.key = pa.ClassName(!con.closing) + "_" + pb.ClassName(!con.closing);
+    con.align = AlignmentOffset(con.key, con.flip);
+    // Held in the relaxation: fixed joints and clips (PARTS.md §1.10), and a
+    // part resting on another (a surface on a surface, a roll on a rod), which
+    // static friction holds in place; whether it tips over or slides off is
+    // checked after the relaxation (solve.cc).
+    con.held_in_relaxation = con.is_fixed || con.key.find("Clip") != std::string::npos || IsRestingContact(con.key);
+    con.params_a = pa.Params();
+    con.params_b = pb.Params();
+    // PARTS.md §2.3: connections where one side takes its fixed base form.
+    const std::string& k = con.key;
+    if (k == "Surface_Surface") {
+      const bool a_smaller = pa.Shape("width") < pb.Shape("width") && pa.Shape("length") < pb.Shape("length");
+      const Primitive& small = a_smaller ? pa : pb;
+      const Primitive& large = a_smaller ? pb : pa;
+      (a_smaller ? con.params_a : con.params_b) = small.BaseFormParams();
+      auto& lp = a_smaller ? con.params_b : con.params_a;
+      const double fw = small.Shape("width") / (2 * large.Shape("width"));
+      const double fl = small.Shape("length") / (2 * large.Shape("length"));
+      lp[0].min = fw, lp[0].max = 1 - fw, lp[1].min = fl, lp[1].max = 1 - fl;
+    } else if (k == "HookFlex_HookFlex") {
+      con.params_a = pa.BaseFormParams();  // the placed hook
+    } else if (k == "Tube_TubeCtl" || k == "TubeCtl_Tube" || k == "TubeCtl_Rod" || k == "Rod_TubeCtl") {
+      const bool a_shorter = pa.Shape("length") < pb.Shape("length");
+      const Primitive& small = a_shorter ? pa : pb;
+      const Primitive& large = a_shorter ? pb : pa;
+      (a_shorter ? con.params_a : con.params_b) = small.BaseFormParams();
+      auto& lp = a_shorter ? con.params_b : con.params_a;
+      const double h = 0.5 * (large.Shape("length") - small.Shape("length")) / large.Shape("length");
+      lp[0].min = 0.5 - h, lp[0].max = 0.5 + h;
+      if (k.find("Rod") != std::string::npos && lp.size() > 1) lp[1].min = lp[1].max = 90;
+      else if (lp.size() > 1) lp[1].min = 0, lp[1].max = 360;
+    }
+    for (auto* side : {&con.params_a, &con.params_b})
+      for (auto& p : *side) p.init = std::clamp(p.init, p.min, p.max);
+    if (con.closing) con.symmetry_axis_a = internal::SymmetryAxis(pa.type);
     prog.connections.push_back(con);
+  }
+  for (size_t i = 0; i < placed.size(); ++i)
+    if (!placed[i])
+      Fail(file, steps, "part '" + prog.instances[i].name + "' is never attached");
+  // PARTS.md §1: several connections on one primitive start spread evenly,
+  // value_i = min + (max − min)·(i+1)/(n+1), in program order.
+  std::map<std::pair<int, std::string>, std::vector<std::vector<ParamSpec>*>> users;
+  for (auto& con : prog.connections) {
+    users[{con.part_a, con.primitive_a}].push_back(&con.params_a);
+    users[{con.part_b, con.primitive_b}].push_back(&con.params_b);
+  }
+  for (auto& [key, sides] : users) {
+    if (sides.size() < 2) continue;
+    for (size_t i = 0; i < sides.size(); ++i)
+      for (auto& p : *sides[i])
+        if (!p.held) p.init = p.min + (p.max - p.min) * static_cast<double>(i + 1) / static_cast<double>(sides.size() + 1);
   }
   return prog;
 }

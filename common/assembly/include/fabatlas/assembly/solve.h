@@ -40,16 +40,24 @@ struct SolveOptions {
   int penalty_doublings = 5;
   double relaxation_penalty = 1e4;      // σ_r of step 2 (EXAMPLES.md: 1e4)
   double gravity = 9.8;                 // m/s²
-  double rotation_scale_mm = 20;        // mm per unit of rotation-matrix difference
+  double rotation_scale_mm = 20;        // closure: mm per unit of rotation-matrix difference
+  // Step 1 target: mm per radian of rotation error. The reference weighs
+  // |Δpos|² (mm²) against |ΔEuler|² (deg²), i.e. 1° ≈ 1 mm (PARTS.md §2.1).
+  double target_mm_per_rad = 180 / 3.14159265358979323846;
   int max_iterations = 200;             // Ceres iterations per feasibility / objective solve
   // Step 2 (relaxation). Levenberg-Marquardt sees the gravity potential only
   // through its gradient (the least-squares form has no curvature along a
   // swing), so it converges linearly along hanging chains: it gets its own
   // iteration cap and stops on absolute criteria, not on the cost change.
-  int relaxation_max_iterations = 5000;
+  int relaxation_max_iterations = 20000;
   double relaxation_function_tolerance = 1e-16;   // relative cost change
   double relaxation_gradient_tolerance = 1e-14;   // projected gradient, J per unit
   double relaxation_parameter_tolerance = 1e-14;  // relative step
+  // ... and when no parameter moved by more than `relaxation_window_motion`
+  // (mm or degrees) over `relaxation_window` iterations (0 disables): LM
+  // creeps along soft modes with steps of ~1e-6 (RelaxationWindow, solve.cc).
+  int relaxation_window = 500;
+  double relaxation_window_motion = 1e-3;
   // Gauge fix: ½k‖s − s_step1‖² over the free parameters (J per unit², degrees
   // for angles) so a part free to turn about the vertical stays where step 1
   // put it; 0 disables. See AnchorCost in solve.cc.
@@ -63,13 +71,15 @@ struct SolveOptions {
   int stall_window = 10;                // iterations in the stall regression
   double stall_slope = 1e-3;            // abort if log10(C) falls slower than this per iteration
   bool relax = true;                    // run step 2
+  // A part resting on another (a surface on a surface, a roll on a rod) is
+  // held by static friction in step 2 and slides off when its support tilts
+  // beyond this angle: atan μ for μ = 0.36, the low end of wood, paper and
+  // plastic on each other (docs/assembly.md "Falling apart").
+  double friction_angle_deg = 20;
   // Step 1 stops trying further feasible starts once the target is within:
   double early_exit_mm = 1.0;
   // ... and after this many feasible starts have run step 1.
   int objective_starts = 4;
-  // "stable": nothing falls apart and relaxation moves the target by at most
-  double stable_displacement_mm = 25;
-  double stable_rotation_deg = 10;
   // "target reached": final (relaxed) target pose within
   double target_tolerance_mm = 25;
   double target_tolerance_deg = 10;
@@ -78,13 +88,15 @@ struct SolveOptions {
 struct SolveSummary {
   bool prechecks_passed = true;
   bool feasible = false;       // cycles close: C < feasibility_tolerance
-  bool stable = false;         // nothing falls apart, relaxation moves the target little
+  bool stable = false;         // relaxed, and nothing falls apart (falls_apart empty)
   bool target_reached = false; // relaxed target within target_tolerance
   double constraint_residual = 0;  // C after step 1 (mm²)
   double step1_target_error_mm = 0, step1_target_error_deg = 0;
   double final_target_error_mm = 0, final_target_error_deg = 0;  // after relaxation
   double relax_displacement_mm = 0, relax_rotation_deg = 0;      // target motion in step 2
-  std::vector<std::string> falls_apart;  // "hook1.hook.theta at max" ...
+  // What falls apart after relaxation: "hook1.hook.theta at max" (a connector
+  // slides off an open end), "bottle.surface tips over (...)".
+  std::vector<std::string> falls_apart;
   std::vector<std::string> messages;     // pre-check issues and solver notes
   int starts_tried = 0;
   // Step 2 as Ceres ended it: "CONVERGENCE", "NO_CONVERGENCE" (iteration cap),
@@ -92,6 +104,11 @@ struct SolveSummary {
   std::string relaxation_termination;
   int relaxation_iterations = 0;
   double seconds = 0;  // wall time of the whole solve
+  // Wall time per step, as FabHacks Table 5's columns: quick reject (the
+  // pre-checks), feasibility (cycle closure over all starts tried; Table 5's
+  // "constraints checking"), step 1 (target objective) and step 2 (relaxation).
+  double precheck_seconds = 0, feasibility_seconds = 0, objective_seconds = 0, relaxation_seconds = 0;
+  int feasibility_starts = 0;  // starts until the first feasible one (Table 5 "# initial guesses")
   // Per instance (mm). Infeasible: `poses` are those of the start that came
   // closest to closing the cycles (tree connections hold), `step1_poses` empty.
   std::vector<Eigen::Isometry3d> step1_poses, poses;
