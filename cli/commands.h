@@ -37,4 +37,7 @@ void AddViewerCommands(CLI::App& app, int& exit_code);
 // Throws InputError naming `arg` otherwise.
 std::filesystem::path ArtifactPath(const std::string& arg);
 
+// assemble: solve a FabHacks assembly program (cli/assembly_commands.cpp).
+void AddAssemblyCommands(CLI::App& app, int& exit_code);
+
 }  // namespace fabatlas::cli
