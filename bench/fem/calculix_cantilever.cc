@@ -218,11 +218,14 @@ Result RunFabatlas(const Cantilever& c, StaticSolveOptions::Element element, int
     const double c0 = CpuSeconds(RUSAGE_SELF);
     const StaticSolveSummary s = SolveStatic(c.mesh, Material::FromYoungPoisson(kE, kNu), bc, o);
     r.cpu.push_back(CpuSeconds(RUSAGE_SELF) - c0);
-    if (!s.converged) r.note = s.message;
     double uz = 0;
     for (int n : c.tip) uz += s.displacements[n][2];
     r.tip = -uz / c.tip.size();
-    r.note = std::to_string(s.newton_iterations) + " Newton its, " + std::to_string(s.load_steps_taken) + " steps, assembly " + std::to_string(s.assembly_seconds) + " s, linear " + std::to_string(s.linear_solve_seconds) + " s, total " + std::to_string(s.total_seconds);
+    char note[200];
+    std::snprintf(note, sizeof note, "%d Newton its, %d factorisations, %d load steps; wall: assembly %.2f s, linear %.2f s, total %.2f s",
+                  s.newton_iterations, s.factorizations, s.load_steps_taken, s.assembly_seconds, s.linear_solve_seconds,
+                  s.total_seconds);
+    r.note = s.converged ? note : s.message;
   }
   return r;
 }

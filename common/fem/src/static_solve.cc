@@ -643,6 +643,7 @@ StaticSolveSummary SolveStatic(const HexMesh& mesh, const Material& material,
       // One attempt at K d = -r with the current shift; false if K is not
       // (numerically) positive definite or the solve did not converge.
       auto try_solve = [&]() -> bool {
+        ++summary.factorizations;
         if (direct) {
           solver.factorize(K);
           if (solver.info() != Eigen::Success) return false;
@@ -696,7 +697,9 @@ StaticSolveSummary SolveStatic(const HexMesh& mesh, const Material& material,
 
       // Backtracking line search on the potential energy (Armijo).
       Eigen::VectorXd u_trial = u, alpha_trial = alpha;
-      const double pi0 = potential(u, alpha, target);
+      // Full Newton steps only need the trial's energy to be finite (no
+      // inverted element), not the energy here.
+      const double pi0 = line_search ? potential(u, alpha, target) : 0.0;
       const double slope = r_u.dot(d) + slope_alpha;  // dPi/dstep at step = 0 (< 0)
       double step = 1.0;
       bool accepted = false;

@@ -143,6 +143,7 @@ struct StaticSolveSummary {
   double assembly_seconds = 0;      // wall time in element assembly
   double linear_solve_seconds = 0;  // wall time in factorisation + solves
   long long linear_iterations = 0;  // conjugate-gradient iterations (iterative solvers only)
+  int factorizations = 0;           // linear-solver set-ups, shifted retries included
   double total_seconds = 0;
 };
 
