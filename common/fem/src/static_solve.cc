@@ -665,9 +665,16 @@ StaticSolveSummary SolveStatic(const HexMesh& mesh, const Material& material,
         }
         return ok && d.allFinite() && r.dot(d) < 0;
       };
-      // Shifts: none, then from a tenth of the last shift that worked (the
-      // tangent changes little between iterations, and every failed try is
-      // a factorisation) or 1e-6 x the mean diagonal, times 10 each try.
+      // Shifts: the first try uses a tenth of the last shift that worked
+      // (none once that falls below 1e-6 x the mean diagonal, and none if
+      // the last step needed none): the tangent changes little between
+      // iterations, and every failed try is a factorisation. Then 1e-6 x the
+      // mean diagonal or the last shift, times 10 each try.
+      double first = 0.1 * last_shift_ratio >= 1e-6 ? 0.1 * last_shift_ratio * mean_diag : 0.0;
+      if (first > 0) {
+        for (int j = 0; j < num_free; ++j) K.valuePtr()[problem.diagonal_slots()[j]] += first;
+        shift = first;
+      }
       bool solved = try_solve();
       while (!solved && shift < 1e6 * mean_diag) {
         const double next = shift == 0 ? std::max(1e-6, 0.1 * last_shift_ratio) * mean_diag : shift * 10;
