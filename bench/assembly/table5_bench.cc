@@ -50,9 +50,9 @@ int main(int argc, char** argv) {
       {"clip_lights_4", "clip lights 4", 18.685, -1, -1, -1},
       {"reading_nook", "reading nook", 742.279, 0.0146, 3.1, 336.741}};
   auto pub = [](double v, const char* fmt) {
-    static char buf[4][32];
+    static char buf[8][32];
     static int k = 0;
-    k = (k + 1) % 4;
+    k = (k + 1) % 8;
     if (v < 0) return "-";
     std::snprintf(buf[k], sizeof buf[k], fmt, v);
     return static_cast<const char*>(buf[k]);
