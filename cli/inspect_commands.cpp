@@ -29,6 +29,7 @@
 #include "fabatlas/geometry/solid.h"
 #include "fabatlas/precompute/cache_curves_plot.h"
 #include "fabatlas/precompute/preview_times.h"
+#include "fabatlas/precompute/preview_times_plot.h"
 #include "fabatlas/protocol/job_bundle.h"
 #include "fabatlas/storage/artifact.h"
 #include "fabatlas/viewer/snap.h"
@@ -41,7 +42,7 @@ namespace fs = std::filesystem;
 using nlohmann::json;
 
 struct InspectArgs {
-  std::string artifact, png;
+  std::string artifact, png, fig14_png;
   bool json = false;
   int points = 200;
   std::uint64_t seed = 1;
@@ -151,6 +152,19 @@ void Inspect(const InspectArgs& a, int& exit_code) {
     }
   }
 
+  // Fig. 14 as box plots of the measured times.
+  std::string fig14_png;
+  if (t_none) {
+    const fs::path out =
+        a.fig14_png.empty() ? fs::path(path).replace_extension(".fig14.png") : fs::path(a.fig14_png);
+    std::vector<precompute::PreviewTimesSeries> series = {{"no cache", t_none->seconds}};
+    if (t_opt) series.push_back({"H_opt", t_opt->seconds});
+    if (t_rfree) series.push_back({"H_rfree", t_rfree->seconds});
+    precompute::WritePreviewTimesPng(
+        series, out, {.title = m.design_name + ": preview time at " + std::to_string(points.size()) + " valid points"});
+    fig14_png = out.string();
+  }
+
   // Fig. 13.
   std::string png;
   if (!art.cache_curves.empty()) {
@@ -185,6 +199,7 @@ void Inspect(const InspectArgs& a, int& exit_code) {
                   {"t_opt", TimesJson(t_opt)},
                   {"t_rfree", TimesJson(t_rfree)}};
     j["fig13_png"] = png.empty() ? json(nullptr) : json(png);
+    j["fig14_png"] = fig14_png.empty() ? json(nullptr) : json(fig14_png);
     std::cout << j.dump(2) << "\n";
   } else {
     std::cout << "artifact " << path.string() << "  schema v" << m.schema_version << "  design " << m.design_name
@@ -197,7 +212,8 @@ void Inspect(const InspectArgs& a, int& exit_code) {
     else
       std::cout << "no geometry cache in the artifact";
     std::cout << "\n         preview over " << points.size() << " random valid points: no cache " << TimesText(t_none)
-              << "  H_opt " << TimesText(t_opt) << "  H_rfree " << TimesText(t_rfree) << "\n";
+              << "  H_opt " << TimesText(t_opt) << "  H_rfree " << TimesText(t_rfree)
+              << (fig14_png.empty() ? "" : "; box plots: " + fig14_png) << "\n";
     std::cout << "Fig. 13: " << (png.empty() ? "no cache curves in the artifact" : "wrote " + png) << "\n";
   }
   exit_code = 0;
@@ -211,6 +227,8 @@ void AddInspectCommands(CLI::App& app, int& exit_code) {
   inspect->add_option("artifact", a->artifact, "an artifact (<design>.fabatlas) or the run directory holding it")->required();
   inspect->add_flag("--json", a->json, "print JSON");
   inspect->add_option("--png", a->png, "where to write the Fig. 13 curves (default: ART with .fig13.png)");
+  inspect->add_option("--fig14-png", a->fig14_png,
+                      "where to write the Fig. 14 preview-time box plots (default: ART with .fig14.png)");
   inspect->add_option("--points", a->points, "random valid points for the preview times (default 200)");
   inspect->add_option("--seed", a->seed, "seed of the random points (default 1)");
   inspect->callback([a, &exit_code] { Inspect(*a, exit_code); });

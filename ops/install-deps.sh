@@ -17,6 +17,7 @@ APT_PACKAGES=(
   libgtest-dev libgmock-dev libbenchmark-dev
   openscad
   chromium
+  fonts-dejavu-core
   libglpk-dev
   # peers and operators' tools: CalculiX (FEM side by side), FCL (continuous
   # collisions), Slurm + munge (the slurm test), Dask (task-throughput peer)

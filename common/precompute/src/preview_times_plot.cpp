@@ -1,0 +1,167 @@
+// Fig. 14 box plots as a PNG (see preview_times_plot.h): text rasterised with
+// stb_truetype from a TrueType font, image written with stb_image_write.
+#include "fabatlas/precompute/preview_times_plot.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+
+#define STB_IMAGE_WRITE_STATIC
+#define STB_IMAGE_WRITE_IMPLEMENTATION
+#include <stb/stb_image_write.h>
+#define STBTT_STATIC
+#define STB_TRUETYPE_IMPLEMENTATION
+#include <stb/stb_truetype.h>
+
+#include "fabatlas/error.h"
+#include "fabatlas/precompute/form_outputs.h"
+
+namespace fabatlas::precompute {
+
+namespace {
+
+struct Image {
+  int w, h;
+  std::vector<unsigned char> rgb;
+  std::string font_bytes;
+  stbtt_fontinfo font{};
+
+  Image(int w_, int h_, const std::filesystem::path& font_file) : w(w_), h(h_), rgb(std::size_t(w_) * h_ * 3, 255) {
+    std::ifstream in(font_file, std::ios::binary);
+    std::ostringstream bytes;
+    bytes << in.rdbuf();
+    font_bytes = bytes.str();
+    const auto* data = reinterpret_cast<const unsigned char*>(font_bytes.data());
+    if (!in || font_bytes.empty() || !stbtt_InitFont(&font, data, stbtt_GetFontOffsetForIndex(data, 0)))
+      throw InputError(font_file.string() + ": cannot read the TrueType font (install fonts-dejavu-core)");
+  }
+  void Blend(int x, int y, unsigned c, double alpha) {
+    if (x < 0 || y < 0 || x >= w || y >= h || alpha <= 0) return;
+    unsigned char* p = &rgb[(std::size_t(y) * w + x) * 3];
+    const int rgb_c[3] = {int((c >> 16) & 255), int((c >> 8) & 255), int(c & 255)};
+    for (int k = 0; k < 3; ++k) p[k] = static_cast<unsigned char>(std::lround(p[k] + alpha * (rgb_c[k] - p[k])));
+  }
+  void Rect(int x0, int y0, int x1, int y1, unsigned c) {
+    for (int y = std::min(y0, y1); y < std::max(y0, y1); ++y)
+      for (int x = std::min(x0, x1); x < std::max(x0, x1); ++x) Blend(x, y, c, 1.0);
+  }
+  void HLine(int x0, int x1, int y, unsigned c, int pen = 1) { Rect(x0, y - pen / 2, x1 + 1, y - pen / 2 + pen, c); }
+  void VLine(int x, int y0, int y1, unsigned c, int pen = 1) { Rect(x - pen / 2, y0, x - pen / 2 + pen, y1 + 1, c); }
+  // Width in pixels of `text` at pixel height `px`.
+  int TextWidth(const std::string& text, double px) {
+    const float scale = stbtt_ScaleForPixelHeight(&font, static_cast<float>(px));
+    int width = 0;
+    for (unsigned char ch : text) {
+      int advance = 0, lsb = 0;
+      stbtt_GetCodepointHMetrics(&font, ch, &advance, &lsb);
+      width += static_cast<int>(std::lround(advance * scale));
+    }
+    return width;
+  }
+  // Anti-aliased text with its baseline at y, starting at x (ASCII).
+  void Text(int x, int y, const std::string& text, unsigned c, double px = 16) {
+    const float scale = stbtt_ScaleForPixelHeight(&font, static_cast<float>(px));
+    for (unsigned char ch : text) {
+      int advance = 0, lsb = 0, bw = 0, bh = 0, ox = 0, oy = 0;
+      stbtt_GetCodepointHMetrics(&font, ch, &advance, &lsb);
+      unsigned char* bitmap = stbtt_GetCodepointBitmap(&font, 0, scale, ch, &bw, &bh, &ox, &oy);
+      for (int j = 0; j < bh; ++j)
+        for (int i = 0; i < bw; ++i) Blend(x + ox + i, y + oy + j, c, bitmap[j * bw + i] / 255.0);
+      stbtt_FreeBitmap(bitmap, nullptr);
+      x += static_cast<int>(std::lround(advance * scale));
+    }
+  }
+  void CentredText(int cx, int y, const std::string& text, unsigned c, double px = 16) {
+    Text(cx - TextWidth(text, px) / 2, y, text, c, px);
+  }
+};
+
+// Quantile q of sorted v by linear interpolation between order statistics.
+double Quantile(const std::vector<double>& v, double q) {
+  const double at = q * (v.size() - 1);
+  const std::size_t i = static_cast<std::size_t>(at);
+  return i + 1 < v.size() ? v[i] + (at - i) * (v[i + 1] - v[i]) : v.back();
+}
+
+std::string Ms(double seconds) {
+  char buf[32];
+  const double ms = seconds * 1000;
+  std::snprintf(buf, sizeof buf, ms < 10 ? "%.2f ms" : ms < 100 ? "%.1f ms" : "%.0f ms", ms);
+  return buf;
+}
+
+}  // namespace
+
+void WritePreviewTimesPng(const std::vector<PreviewTimesSeries>& series, const std::filesystem::path& path,
+                          const PreviewTimesPlotOptions& options) {
+  double lo = INFINITY, hi = 0;
+  for (const auto& s : series)
+    for (double t : s.seconds)
+      if (t > 0) lo = std::min(lo, t), hi = std::max(hi, t);
+  if (!(hi > 0)) throw InputError(path.string() + ": no preview time to plot");
+  Image img(options.width, options.height, options.font_file);
+  const int left = 90, right = options.width - 30, top = 80, bottom = options.height - 110;
+  // Log axis over whole decades (ms) around the data.
+  const double d0 = std::floor(std::log10(lo * 1000)), d1 = std::max(d0 + 1, std::ceil(std::log10(hi * 1000)));
+  const auto Y = [&](double seconds) {
+    const double t = (std::log10(std::max(seconds, 1e-9) * 1000) - d0) / (d1 - d0);
+    return static_cast<int>(std::lround(bottom - t * (bottom - top)));
+  };
+  for (double d = d0; d <= d1; ++d)
+    for (double m : {1.0, 2.0, 5.0}) {
+      const double ms = m * std::pow(10.0, d);
+      if (std::log10(ms) > d1 + 1e-9) continue;
+      const int y = Y(ms / 1000);
+      img.HLine(left, right, y, m == 1 ? 0xCCCCCC : 0xEEEEEE);
+      char label[32];
+      std::snprintf(label, sizeof label, ms >= 1 ? "%.0f" : "%g", ms);
+      img.Text(left - 10 - img.TextWidth(label, 14), y + 5, label, 0x333333, 14);
+    }
+  img.VLine(left, top, bottom, 0x000000);
+  img.HLine(left, right, bottom, 0x000000);
+  img.Text(12, top - 20, "preview time (ms, log scale)", 0x000000, 15);
+  img.Text(left, 32, options.title, 0x000000, 18);
+  const unsigned colours[] = {0x7F7F7F, 0x1F5FA8, 0x7D3C98, 0x2E8B57};
+  const int n = static_cast<int>(series.size());
+  const int slot = (right - left) / std::max(1, n), box = std::min(120, slot / 2);
+  for (int k = 0; k < n; ++k) {
+    const int cx = left + slot * k + slot / 2;
+    std::vector<double> v = series[k].seconds;
+    std::sort(v.begin(), v.end());
+    const unsigned c = colours[k % 4];
+    img.CentredText(cx, bottom + 26, series[k].name, 0x000000, 17);
+    if (v.empty()) {
+      img.CentredText(cx, bottom + 48, "n = 0", 0x555555, 14);
+      continue;
+    }
+    double mean = 0;
+    for (double t : v) mean += t;
+    mean /= v.size();
+    const int q1 = Y(Quantile(v, 0.25)), q2 = Y(Quantile(v, 0.5)), q3 = Y(Quantile(v, 0.75));
+    img.VLine(cx, Y(v.back()), q3, c, 2);
+    img.VLine(cx, q1, Y(v.front()), c, 2);
+    img.HLine(cx - box / 4, cx + box / 4, Y(v.back()), c, 2);
+    img.HLine(cx - box / 4, cx + box / 4, Y(v.front()), c, 2);
+    img.Rect(cx - box / 2, q3, cx + box / 2, q1 + 1, (c & 0xFEFEFE) / 2 + 0x7F7F7F);  // lighter fill
+    img.HLine(cx - box / 2, cx + box / 2, q3, c, 2);
+    img.HLine(cx - box / 2, cx + box / 2, q1, c, 2);
+    img.VLine(cx - box / 2, q3, q1, c, 2);
+    img.VLine(cx + box / 2, q3, q1, c, 2);
+    img.HLine(cx - box / 2, cx + box / 2, q2, 0x000000, 3);
+    const int my = Y(mean);
+    for (int r = 0; r <= 6; ++r) img.HLine(cx - (6 - r), cx + (6 - r), my - r, 0xC0392B), img.HLine(cx - (6 - r), cx + (6 - r), my + r, 0xC0392B);
+    img.CentredText(cx, bottom + 48, "n = " + std::to_string(v.size()) + ", mean " + Ms(mean), 0x333333, 14);
+    img.CentredText(cx, bottom + 68, "median " + Ms(Quantile(v, 0.5)) + ", worst " + Ms(v.back()), 0x333333, 14);
+  }
+  img.Text(left, options.height - 14, "box: quartiles, bar: median, whiskers: fastest and worst, diamond: mean", 0x555555, 13);
+  int size = 0;
+  unsigned char* png = stbi_write_png_to_mem(img.rgb.data(), img.w * 3, img.w, img.h, 3, &size);
+  if (!png) throw InputError(path.string() + ": cannot encode the PNG");
+  std::string bytes(reinterpret_cast<const char*>(png), static_cast<std::size_t>(size));
+  STBIW_FREE(png);
+  WriteFileAtomically(path, bytes);
+}
+
+}  // namespace fabatlas::precompute
