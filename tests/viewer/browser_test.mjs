@@ -126,6 +126,11 @@ try {
   await page.waitForFunction(() => window.fabatlas.ready && window.fabatlas.previewCount >= 1, null, { timeout: 60000 });
   await settle(page);
   check(await page.evaluate(() => window.fabatlas.form.dimensions.length) === 2, 'two sliders for radius and wall');
+  // Descriptions and groups from the design file (tube_wall_2d_design.yaml).
+  const groups = await page.evaluate(() => [...document.querySelectorAll('fieldset.group')].map((f) =>
+    [f.querySelector('legend').textContent, f.querySelector('.slider .name').textContent, f.querySelector('.description').textContent]));
+  check(JSON.stringify(groups) === JSON.stringify([['Size', 'radius', 'outer radius of the tube (mm)'], ['Strength', 'wall', 'wall thickness (mm)']]),
+    `groups and descriptions from the design file: ${JSON.stringify(groups)}`);
 
   // 1. Drag the radius slider across its valid interval: the preview changes.
   const before = await page.evaluate(() => ({ u: window.fabatlas.u.slice(), sample: window.fabatlas.previewSample }));

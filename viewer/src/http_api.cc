@@ -88,7 +88,12 @@ json FormJson(const Customiser& c) {
               {"lo", c.space().value(d, c.space().key_lo(d))},
               {"hi", c.space().value(d, c.space().key_hi(d))}};
     if (dim.kind == sampling::DimensionKind::kEnumerated) j["values"] = dim.values;
-    if (c.source().design) j["default"] = c.source().design->exposed.at(d).default_value;
+    if (c.source().design) {
+      const auto& e = c.source().design->exposed.at(d);
+      j["default"] = e.default_value;
+      if (!e.description.empty()) j["description"] = e.description;
+      if (!e.group.empty()) j["group"] = e.group;
+    }
     dims.push_back(j);
   }
   json starts = json::array();

@@ -419,7 +419,9 @@ Design ParseDesign(const std::string& text, const std::filesystem::path& path) {
     CheckUnique(r, names, p.name, it->first);
     const YAML::Node spec = it->second;  // a copy: the iterator yields temporaries
     if (!spec.IsMap()) r.Fail(spec, "parameter '" + p.name + "' must be a map with type, min, max");
-    r.OnlyKeys(spec, {"type", "min", "max", "default", "values"}, "parameter '" + p.name + "'");
+    r.OnlyKeys(spec, {"type", "min", "max", "default", "values", "description", "group"}, "parameter '" + p.name + "'");
+    if (spec["description"]) p.description = r.String(spec["description"], "description");
+    if (spec["group"]) p.group = r.String(spec["group"], "group");
     std::string type = spec["type"] ? r.String(spec["type"], "type") : "real";
     if (type == "real" || type == "integer") {
       p.kind = type == "real" ? ParameterKind::kReal : ParameterKind::kInteger;

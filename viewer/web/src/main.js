@@ -69,15 +69,38 @@ function formatValue(d, v) {
 }
 
 function buildSliders() {
-  const root = $('sliders');
-  root.textContent = '';
+  const top = $('sliders');
+  top.textContent = '';
+  // Parameters with a group (from the design file) go under its heading.
+  const groups = new Map([['', top]]);
+  const hostOf = (group) => {
+    if (!groups.has(group)) {
+      const fieldset = document.createElement('fieldset');
+      fieldset.className = 'group';
+      const legend = document.createElement('legend');
+      legend.textContent = group;
+      fieldset.appendChild(legend);
+      top.appendChild(fieldset);
+      groups.set(group, fieldset);
+    }
+    return groups.get(group);
+  };
+  state.form.dimensions.forEach((d, i) => { if (!d.group) hostOf(''); });
   state.form.dimensions.forEach((dim, d) => {
+    const root = hostOf(dim.group ?? '');
     const box = document.createElement('div');
     box.className = 'slider';
     box.innerHTML = `<div class="label"><span class="name"></span><span class="value"></span></div>
       <div class="row"><div class="track"><div class="segments"></div><input type="range"></div></div>
       <div class="why" hidden></div>`;
     box.querySelector('.name').textContent = dim.name;
+    if (dim.description) {
+      box.querySelector('.name').title = dim.description;
+      const hint = document.createElement('div');
+      hint.className = 'description';
+      hint.textContent = dim.description;
+      box.querySelector('.label').after(hint);
+    }
     const input = box.querySelector('input[type=range]');
     input.min = dim.lo;
     input.max = dim.hi;

@@ -33,6 +33,8 @@ struct ExposedParameter {
   double min = 0, max = 1;           // for enumerated: 0 .. labels.size()-1
   double default_value = 0;          // the design's, else the middle of the range
   std::vector<std::string> labels;   // enumerated only
+  std::string description;           // optional: shown to users (the customiser)
+  std::string group;                 // optional: the customiser groups parameters by it
   SourcePlace place;
 };
 
