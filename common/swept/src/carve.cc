@@ -2,7 +2,6 @@
 #include "fabatlas/swept/carve.h"
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
-#include <CGAL/Polygon_mesh_processing/corefinement.h>
 #include <CGAL/Polygon_mesh_processing/intersection.h>
 #include <CGAL/Polygon_mesh_processing/orientation.h>
 #include <CGAL/Surface_mesh.h>
@@ -10,6 +9,7 @@
 #include <string>
 
 #include "fabatlas/error.h"
+#include "fabatlas/mesh/exact_boolean.h"
 
 namespace fabatlas::swept {
 namespace {
@@ -43,36 +43,10 @@ Surface ToSurface(const mesh::TriangleMesh& m, const Transform* f, const char* w
   return s;
 }
 
-mesh::TriangleMesh FromSurface(const Surface& s) {
-  mesh::TriangleMesh out;
-  std::vector<std::int32_t> index(s.number_of_vertices() + s.number_of_removed_vertices(), -1);
-  for (auto v : s.vertices()) {
-    index[v.idx()] = static_cast<std::int32_t>(out.vertices.size());
-    const Point& p = s.point(v);
-    out.vertices.push_back({p.x(), p.y(), p.z()});
-  }
-  for (auto f : s.faces()) {
-    std::array<std::int32_t, 3> tri{};
-    int k = 0;
-    for (auto v : CGAL::vertices_around_face(s.halfedge(f), s)) {
-      if (k < 3) tri[k] = index[v.idx()];
-      ++k;
-    }
-    if (k == 3) out.triangles.push_back(tri);
-  }
-  return out;
-}
-
 }  // namespace
 
 mesh::TriangleMesh Subtract(const mesh::TriangleMesh& a, const mesh::TriangleMesh& b) {
-  Surface sa = ToSurface(a, nullptr, "carve: part");
-  Surface sb = ToSurface(b, nullptr, "carve: cutter");
-  Surface out;
-  if (!PMP::corefine_and_compute_difference(sa, sb, out)) {
-    throw InputError("carve: CGAL could not compute a closed difference (self-intersecting input?)");
-  }
-  return FromSurface(out);
+  return mesh::ExactBoolean(mesh::BooleanOp::kDifference, {a, b});
 }
 
 mesh::TriangleMesh CarveSweptVolume(const mesh::TriangleMesh& a, const RigidMotion& motion_a,

@@ -19,8 +19,8 @@
 namespace fabatlas::swept {
 
 // Exact boolean a \ b of two closed, non-self-intersecting, outward triangle
-// meshes. Throws InputError if either is not closed or CGAL cannot produce a
-// closed result (e.g. self-intersecting input).
+// meshes (mesh::ExactBoolean). Throws InputError if either is not closed,
+// not manifold or intersects itself, or CGAL cannot produce a manifold result.
 mesh::TriangleMesh Subtract(const mesh::TriangleMesh& a, const mesh::TriangleMesh& b);
 
 // Reconfigurables, Eq. 4: carve from A (moving by motion_a) the eps-offset
