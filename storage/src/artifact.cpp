@@ -18,9 +18,11 @@
 #include <sstream>
 
 #include "fabatlas/error.h"
+#include "fabatlas/exact_decimal.h"
 #include "fabatlas/sha256.h"
 #include "fabatlas/sampling/design_space.h"
 #include "fabatlas/sampling/adaptive_sampler.h"
+#include "sqlite_statement.h"
 
 namespace fabatlas::storage {
 
@@ -114,58 +116,14 @@ class Db {
   sqlite3* handle_ = nullptr;
 };
 
-class Stmt {
+// A prepared statement of the artifact file; SQLite errors are Corrupt.
+class Stmt : public internal::SqliteStatement {
  public:
-  Stmt(Db& db, const std::string& sql) : db_(db) {
-    if (sqlite3_prepare_v2(db.get(), sql.c_str(), -1, &stmt_, nullptr) != SQLITE_OK)
-      throw Corrupt(std::string("SQLite: ") + sqlite3_errmsg(db.get()));
-  }
-  ~Stmt() { sqlite3_finalize(stmt_); }
-  Stmt(const Stmt&) = delete;
-  Stmt& operator=(const Stmt&) = delete;
-
-  Stmt& Int(int i, std::int64_t v) { return Check(sqlite3_bind_int64(stmt_, i, v)); }
-  Stmt& Real(int i, double v) { return Check(sqlite3_bind_double(stmt_, i, v)); }
-  Stmt& Null(int i) { return Check(sqlite3_bind_null(stmt_, i)); }
-  Stmt& Text(int i, const std::string& v) {
-    return Check(sqlite3_bind_text64(stmt_, i, v.data(), v.size(), SQLITE_TRANSIENT, SQLITE_UTF8));
-  }
-  Stmt& Blob(int i, const std::string& v) {
-    return Check(sqlite3_bind_blob64(stmt_, i, v.data(), v.size(), SQLITE_TRANSIENT));
-  }
-  // Runs an INSERT/UPDATE to completion and resets for the next bindings.
-  void Run() {
-    int rc = sqlite3_step(stmt_);
-    if (rc != SQLITE_DONE) throw Corrupt(std::string("SQLite: ") + sqlite3_errmsg(db_.get()));
-    sqlite3_reset(stmt_);
-    sqlite3_clear_bindings(stmt_);
-  }
-  // Back to the first row of a SELECT, bindings kept.
-  void Reset() { sqlite3_reset(stmt_); }
-  // Next row of a SELECT; false at the end.
-  bool Next() {
-    int rc = sqlite3_step(stmt_);
-    if (rc == SQLITE_ROW) return true;
-    if (rc == SQLITE_DONE) return false;
-    throw Corrupt(std::string("SQLite: ") + sqlite3_errmsg(db_.get()));
-  }
-  int Columns() const { return sqlite3_column_count(stmt_); }
-  int Type(int c) const { return sqlite3_column_type(stmt_, c); }
-  std::int64_t GetInt(int c) const { return sqlite3_column_int64(stmt_, c); }
-  double GetReal(int c) const { return sqlite3_column_double(stmt_, c); }
-  std::string GetText(int c) const {
-    const void* p = sqlite3_column_blob(stmt_, c);
-    int n = sqlite3_column_bytes(stmt_, c);
-    return p ? std::string(static_cast<const char*>(p), static_cast<std::size_t>(n)) : std::string();
-  }
-
- private:
-  Stmt& Check(int rc) {
-    if (rc != SQLITE_OK) throw Corrupt(std::string("SQLite: ") + sqlite3_errmsg(db_.get()));
-    return *this;
-  }
-  Db& db_;
-  sqlite3_stmt* stmt_ = nullptr;
+  Stmt(Db& db, const std::string& sql)
+      : SqliteStatement(db.get(), sql, [&db](const std::string& what) {
+          (void)what;
+          throw Corrupt(std::string("SQLite: ") + sqlite3_errmsg(db.get()));
+        }) {}
 };
 
 // SHA-256 fed in pieces (the canonical content of a table with cache
@@ -199,24 +157,24 @@ std::string TableChecksum(Db& db, const TableOrder& t) {
     for (int i = 0; i < 8; ++i) canonical.push_back(static_cast<char>((v >> (8 * i)) & 0xff));
   };
   while (s.Next()) {
-    for (int c = 0; c < s.Columns(); ++c) {
-      switch (s.Type(c)) {
+    for (int c = 0; c < s.ColumnCount(); ++c) {
+      switch (s.ColumnType(c)) {
         case SQLITE_NULL: canonical.push_back('N'); break;
         case SQLITE_INTEGER:
           canonical.push_back('I');
-          put64(static_cast<std::uint64_t>(s.GetInt(c)));
+          put64(static_cast<std::uint64_t>(s.ColumnInt(c)));
           break;
         case SQLITE_FLOAT: {
           canonical.push_back('R');
-          double d = s.GetReal(c);
+          double d = s.ColumnReal(c);
           std::uint64_t bits;
           std::memcpy(&bits, &d, 8);
           put64(bits);
           break;
         }
         default: {
-          canonical.push_back(s.Type(c) == SQLITE_TEXT ? 'T' : 'B');
-          std::string v = s.GetText(c);
+          canonical.push_back(s.ColumnType(c) == SQLITE_TEXT ? 'T' : 'B');
+          std::string v = s.ColumnText(c);
           put64(v.size());
           canonical += v;
         }
@@ -268,21 +226,6 @@ std::vector<std::string> SplitStrings(const std::string& text) {
   std::string part;
   while (std::getline(in, part, ',')) out.push_back(part);
   return out;
-}
-
-std::string Number(double v) {
-  char buf[40];
-  std::snprintf(buf, sizeof buf, "%.17g", v);
-  return buf;
-}
-
-const char* KindName(sampling::DimensionKind k) {
-  switch (k) {
-    case sampling::DimensionKind::kReal: return "real";
-    case sampling::DimensionKind::kInteger: return "integer";
-    case sampling::DimensionKind::kEnumerated: return "enumerated";
-  }
-  return "real";
 }
 
 const char* StopName(sampling::LeafStop s) {
@@ -359,7 +302,7 @@ int CheckHeader(const fs::path& path) {
 void InsertManifest(Db& db, const std::map<std::string, std::string>& rows) {
   Stmt s(db, "INSERT INTO manifest (key, value) VALUES (?, ?)");
   for (const auto& [key, value] : rows) {
-    s.Text(1, key).Text(2, value);
+    s.BindText(1, key).BindText(2, value);
     s.Run();
   }
 }
@@ -374,19 +317,19 @@ std::map<std::string, std::string> ManifestRows(const Artifact& a) {
   r["code_version"] = m.code_version;
   r["sampling.subdivisions"] = std::to_string(a.form.subdivisions);
   r["sampling.max_depth"] = std::to_string(m.max_depth);
-  r["sampling.dg_threshold"] = Number(m.dg_threshold);
+  r["sampling.dg_threshold"] = ExactDecimal(m.dg_threshold);
   r["sampling.max_samples"] = std::to_string(m.max_samples);
   const ArtifactStatistics& s = m.statistics;
   r["statistics.samples"] = std::to_string(s.samples);
   r["statistics.valid_samples"] = std::to_string(s.valid_samples);
   r["statistics.leaves"] = std::to_string(s.leaves);
   r["statistics.geometry_changes"] = std::to_string(s.geometry_changes);
-  r["statistics.valid_volume_percent"] = Number(s.valid_volume_percent);
-  for (const auto& [type, share] : s.failure_shares) r["statistics.failure_share." + type] = Number(share);
+  r["statistics.valid_volume_percent"] = ExactDecimal(s.valid_volume_percent);
+  for (const auto& [type, share] : s.failure_shares) r["statistics.failure_share." + type] = ExactDecimal(share);
   const CacheSummary& c = m.cache;
   r["cache.strategy"] = c.strategy;
   r["cache.budget_bytes"] = std::to_string(c.budget_bytes);
-  r["cache.threshold_seconds"] = Number(c.threshold_seconds);
+  r["cache.threshold_seconds"] = ExactDecimal(c.threshold_seconds);
   r["cache.cost_model"] = c.cost_model;
   r["cache.top_entries"] = std::to_string(c.top_entries);
   r["cache.top_bytes"] = std::to_string(c.top_bytes);
@@ -407,8 +350,8 @@ void InsertContent(Db& db, const Artifact& a, ArtifactWriteSummary& summary) {
     Stmt s(db, "INSERT INTO dimensions VALUES (?, ?, ?, ?, ?, ?)");
     for (int d = 0; d < n; ++d) {
       const auto& dim = form.dimensions[d];
-      s.Int(1, d).Text(2, dim.name).Text(3, KindName(dim.kind)).Real(4, dim.lo).Real(5, dim.hi);
-      s.Text(6, dim.kind == sampling::DimensionKind::kEnumerated ? nlohmann::json(dim.values).dump() : "");
+      s.Bind(1, d).BindText(2, dim.name).BindText(3, sampling::DimensionKindName(dim.kind)).BindReal(4, dim.lo).BindReal(5, dim.hi);
+      s.BindText(6, dim.kind == sampling::DimensionKind::kEnumerated ? nlohmann::json(dim.values).dump() : "");
       s.Run();
     }
   }
@@ -417,13 +360,13 @@ void InsertContent(Db& db, const Artifact& a, ArtifactWriteSummary& summary) {
     Stmt s(db, "INSERT INTO nodes VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?)");
     for (std::size_t ti = 0; ti < form.trees.size(); ++ti) {
       const auto& tree = form.trees[ti];
-      t.Int(1, static_cast<std::int64_t>(ti)).Text(2, JoinInts({tree.cell.begin(), tree.cell.end()}));
+      t.Bind(1, static_cast<std::int64_t>(ti)).BindText(2, JoinInts({tree.cell.begin(), tree.cell.end()}));
       t.Run();
       for (std::size_t ni = 0; ni < tree.nodes.size(); ++ni) {
         const auto& node = tree.nodes[ni];
-        s.Int(1, static_cast<std::int64_t>(ti)).Int(2, static_cast<std::int64_t>(ni)).Int(3, node.depth);
-        s.Text(4, JoinInts(node.lo)).Text(5, JoinInts(node.hi)).Int(6, node.split_dimension);
-        s.Int(7, node.split_key).Int(8, node.children[0]).Int(9, node.children[1]).Text(10, StopName(node.stop));
+        s.Bind(1, static_cast<std::int64_t>(ti)).Bind(2, static_cast<std::int64_t>(ni)).Bind(3, node.depth);
+        s.BindText(4, JoinInts(node.lo)).BindText(5, JoinInts(node.hi)).Bind(6, node.split_dimension);
+        s.Bind(7, node.split_key).Bind(8, node.children[0]).Bind(9, node.children[1]).BindText(10, StopName(node.stop));
         s.Run();
       }
     }
@@ -438,12 +381,12 @@ void InsertContent(Db& db, const Artifact& a, ArtifactWriteSummary& summary) {
       const auto& sample = form.samples[i];
       if (static_cast<int>(sample.u.size()) != n || static_cast<int>(sample.key.size()) != n)
         throw InputError("artifact: sample " + std::to_string(i) + " has the wrong dimension");
-      s.Int(1, static_cast<std::int64_t>(i)).Text(2, JoinInts(sample.key));
-      for (int d = 0; d < n; ++d) s.Real(3 + d, sample.u[d]);
-      s.Int(3 + n, sample.outcome.valid ? 1 : 0).Text(4 + n, sample.outcome.failure_type);
+      s.Bind(1, static_cast<std::int64_t>(i)).BindText(2, JoinInts(sample.key));
+      for (int d = 0; d < n; ++d) s.BindReal(3 + d, sample.u[d]);
+      s.Bind(3 + n, sample.outcome.valid ? 1 : 0).BindText(4 + n, sample.outcome.failure_type);
       s.Run();
       for (const auto& [name, value] : sample.outcome.properties) {
-        p.Int(1, static_cast<std::int64_t>(i)).Text(2, name).Real(3, value);
+        p.Bind(1, static_cast<std::int64_t>(i)).BindText(2, name).BindReal(3, value);
         p.Run();
       }
     }
@@ -451,7 +394,7 @@ void InsertContent(Db& db, const Artifact& a, ArtifactWriteSummary& summary) {
   {
     Stmt s(db, "INSERT INTO geometry_changes VALUES (?, ?, ?)");
     for (const auto& [edge, dg] : form.geometry_changes) {
-      s.Int(1, edge.first).Int(2, edge.second).Real(3, dg);
+      s.Bind(1, edge.first).Bind(2, edge.second).BindReal(3, dg);
       s.Run();
     }
   }
@@ -474,8 +417,8 @@ void InsertContent(Db& db, const Artifact& a, ArtifactWriteSummary& summary) {
       }
       const CacheEntry& e = streamed.grid.empty() ? *entries[i] : streamed;
       ++summary.cache_entries;
-      s.Text(1, e.key).Text(2, e.op).Text(3, JoinStrings(e.children)).Int(4, e.bytes).Real(5, e.cost_seconds);
-      s.Int(6, e.in_opt ? 1 : 0).Int(7, e.in_rfree ? 1 : 0).Blob(8, e.grid).Text(9, Sha256Hex(e.grid)).Blob(10, e.glb);
+      s.BindText(1, e.key).BindText(2, e.op).BindText(3, JoinStrings(e.children)).Bind(4, e.bytes).BindReal(5, e.cost_seconds);
+      s.Bind(6, e.in_opt ? 1 : 0).Bind(7, e.in_rfree ? 1 : 0).Bind(8, e.grid).BindText(9, Sha256Hex(e.grid)).Bind(10, e.glb);
       s.Run();
     }
   }
@@ -487,8 +430,8 @@ void InsertContent(Db& db, const Artifact& a, ArtifactWriteSummary& summary) {
     });
     Stmt s(db, "INSERT INTO cache_curves VALUES (?, ?, ?, ?, ?, ?)");
     for (const auto* p : points) {
-      s.Text(1, p->strategy).Int(2, p->step).Int(3, p->entries).Int(4, p->bytes).Real(5, p->mean_seconds);
-      s.Real(6, p->worst_seconds);
+      s.BindText(1, p->strategy).Bind(2, p->step).Bind(3, p->entries).Bind(4, p->bytes).BindReal(5, p->mean_seconds);
+      s.BindReal(6, p->worst_seconds);
       s.Run();
     }
   }
@@ -499,19 +442,19 @@ void InsertContent(Db& db, const Artifact& a, ArtifactWriteSummary& summary) {
       if (sp.sample_id < 0 || sp.sample_id >= static_cast<std::int64_t>(form.samples.size()))
         throw InputError("artifact: starting point " + std::to_string(i) + " names sample " +
                          std::to_string(sp.sample_id) + ", which does not exist");
-      s.Int(1, static_cast<std::int64_t>(i)).Int(2, sp.sample_id).Int(3, sp.component);
+      s.Bind(1, static_cast<std::int64_t>(i)).Bind(2, sp.sample_id).Bind(3, sp.component);
       s.Run();
     }
   }
   {
     Stmt s(db, "INSERT INTO bundle_files VALUES (?, ?, ?)");
-    s.Text(1, "design").Text(2, a.bundle.design_file_name).Blob(3, a.bundle.design_file);
+    s.BindText(1, "design").BindText(2, a.bundle.design_file_name).Bind(3, a.bundle.design_file);
     s.Run();
     for (const auto& [name, bytes] : a.bundle.files) {
-      s.Text(1, "file").Text(2, name).Blob(3, bytes);
+      s.BindText(1, "file").BindText(2, name).Bind(3, bytes);
       s.Run();
     }
-    s.Text(1, "job").Text(2, a.bundle.job_file_name).Blob(3, a.bundle.job_file);
+    s.BindText(1, "job").BindText(2, a.bundle.job_file_name).Bind(3, a.bundle.job_file);
     s.Run();
   }
 }
@@ -521,7 +464,7 @@ void InsertContent(Db& db, const Artifact& a, ArtifactWriteSummary& summary) {
 std::map<std::string, std::string> ReadManifestRows(Db& db) {
   std::map<std::string, std::string> rows;
   Stmt s(db, "SELECT key, value FROM manifest ORDER BY key");
-  while (s.Next()) rows[s.GetText(0)] = s.GetText(1);
+  while (s.Next()) rows[s.ColumnText(0)] = s.ColumnText(1);
   return rows;
 }
 
@@ -607,19 +550,16 @@ Artifact Read(Db& db, int version, const ArtifactReadOptions& options) {
   {
     Stmt s(db, "SELECT idx, name, kind, lo, hi, enum_values FROM dimensions ORDER BY idx");
     while (s.Next()) {
-      if (s.GetInt(0) != static_cast<std::int64_t>(form.dimensions.size())) throw Corrupt("dimension indices are not 0..n-1");
+      if (s.ColumnInt(0) != static_cast<std::int64_t>(form.dimensions.size())) throw Corrupt("dimension indices are not 0..n-1");
       sampling::Dimension d;
-      d.name = s.GetText(1);
-      std::string kind = s.GetText(2);
-      if (kind == "real") d.kind = sampling::DimensionKind::kReal;
-      else if (kind == "integer") d.kind = sampling::DimensionKind::kInteger;
-      else if (kind == "enumerated") d.kind = sampling::DimensionKind::kEnumerated;
-      else throw Corrupt("dimension '" + d.name + "' has unknown kind '" + kind + "'");
-      d.lo = s.GetReal(3);
-      d.hi = s.GetReal(4);
+      d.name = s.ColumnText(1);
+      std::string kind = s.ColumnText(2);
+      if (!sampling::DimensionKindFromName(kind, &d.kind)) throw Corrupt("dimension '" + d.name + "' has unknown kind '" + kind + "'");
+      d.lo = s.ColumnReal(3);
+      d.hi = s.ColumnReal(4);
       if (d.kind == sampling::DimensionKind::kEnumerated) {
         try {
-          d.values = nlohmann::json::parse(s.GetText(5)).get<std::vector<std::string>>();
+          d.values = nlohmann::json::parse(s.ColumnText(5)).get<std::vector<std::string>>();
         } catch (const std::exception&) {
           throw Corrupt("dimension '" + d.name + "' has malformed enum_values");
         }
@@ -639,56 +579,56 @@ Artifact Read(Db& db, int version, const ArtifactReadOptions& options) {
     Stmt s(db, select + ", valid, failure FROM samples ORDER BY id");
     while (s.Next()) {
       const auto id = static_cast<std::int64_t>(form.samples.size());
-      if (s.GetInt(0) != id) throw Corrupt("sample ids are not 0..n-1");
+      if (s.ColumnInt(0) != id) throw Corrupt("sample ids are not 0..n-1");
       sampling::FormSample sample;
-      sample.key = SplitInts(s.GetText(1), "sample key");
+      sample.key = SplitInts(s.ColumnText(1), "sample key");
       if (static_cast<int>(sample.key.size()) != n) throw Corrupt("sample " + std::to_string(id) + " has a key of the wrong dimension");
       for (int d = 0; d < n; ++d) {
-        if (s.Type(2 + d) != SQLITE_FLOAT && s.Type(2 + d) != SQLITE_INTEGER)
+        if (s.ColumnType(2 + d) != SQLITE_FLOAT && s.ColumnType(2 + d) != SQLITE_INTEGER)
           throw Corrupt("sample " + std::to_string(id) + " has no u" + std::to_string(d));
-        sample.u.push_back(s.GetReal(2 + d));
+        sample.u.push_back(s.ColumnReal(2 + d));
       }
-      sample.outcome.valid = s.GetInt(2 + n) != 0;
-      sample.outcome.failure_type = s.GetText(3 + n);
-      if (!form.sample_ids.emplace(sample.key, id).second) throw Corrupt("two samples share key " + s.GetText(1));
+      sample.outcome.valid = s.ColumnInt(2 + n) != 0;
+      sample.outcome.failure_type = s.ColumnText(3 + n);
+      if (!form.sample_ids.emplace(sample.key, id).second) throw Corrupt("two samples share key " + s.ColumnText(1));
       form.samples.push_back(std::move(sample));
     }
   }
   {
     Stmt s(db, "SELECT sample_id, name, value FROM sample_properties ORDER BY sample_id, name");
     while (s.Next()) {
-      auto id = s.GetInt(0);
+      auto id = s.ColumnInt(0);
       if (id < 0 || id >= static_cast<std::int64_t>(form.samples.size()))
         throw Corrupt("a property names sample " + std::to_string(id) + ", which does not exist");
-      form.samples[id].outcome.properties[s.GetText(1)] = s.GetReal(2);
+      form.samples[id].outcome.properties[s.ColumnText(1)] = s.ColumnReal(2);
     }
   }
   {
     Stmt t(db, "SELECT tree, cell FROM trees ORDER BY tree");
     while (t.Next()) {
-      if (t.GetInt(0) != static_cast<std::int64_t>(form.trees.size())) throw Corrupt("tree indices are not 0..n-1");
+      if (t.ColumnInt(0) != static_cast<std::int64_t>(form.trees.size())) throw Corrupt("tree indices are not 0..n-1");
       sampling::FormTree tree;
-      for (auto c : SplitInts(t.GetText(1), "tree cell")) tree.cell.push_back(static_cast<int>(c));
+      for (auto c : SplitInts(t.ColumnText(1), "tree cell")) tree.cell.push_back(static_cast<int>(c));
       form.trees.push_back(std::move(tree));
     }
     Stmt s(db,
            "SELECT tree, node, depth, lo, hi, split_dimension, split_key, child_lo, child_hi, stop FROM nodes "
            "ORDER BY tree, node");
     while (s.Next()) {
-      auto ti = s.GetInt(0);
+      auto ti = s.ColumnInt(0);
       if (ti < 0 || ti >= static_cast<std::int64_t>(form.trees.size())) throw Corrupt("a node names a tree that does not exist");
       auto& tree = form.trees[ti];
-      if (s.GetInt(1) != static_cast<std::int64_t>(tree.nodes.size()))
+      if (s.ColumnInt(1) != static_cast<std::int64_t>(tree.nodes.size()))
         throw Corrupt("node indices of tree " + std::to_string(ti) + " are not 0..n-1");
       sampling::FormNode node;
-      node.depth = static_cast<int>(s.GetInt(2));
-      node.lo = SplitInts(s.GetText(3), "node box");
-      node.hi = SplitInts(s.GetText(4), "node box");
-      node.split_dimension = static_cast<int>(s.GetInt(5));
-      node.split_key = s.GetInt(6);
-      node.children[0] = static_cast<int>(s.GetInt(7));
-      node.children[1] = static_cast<int>(s.GetInt(8));
-      node.stop = StopOf(s.GetText(9));
+      node.depth = static_cast<int>(s.ColumnInt(2));
+      node.lo = SplitInts(s.ColumnText(3), "node box");
+      node.hi = SplitInts(s.ColumnText(4), "node box");
+      node.split_dimension = static_cast<int>(s.ColumnInt(5));
+      node.split_key = s.ColumnInt(6);
+      node.children[0] = static_cast<int>(s.ColumnInt(7));
+      node.children[1] = static_cast<int>(s.ColumnInt(8));
+      node.stop = StopOf(s.ColumnText(9));
       if (static_cast<int>(node.lo.size()) != n || static_cast<int>(node.hi.size()) != n)
         throw Corrupt("a node of tree " + std::to_string(ti) + " has a box of the wrong dimension");
       if (node.split_dimension >= n) throw Corrupt("a node splits a dimension that does not exist");
@@ -716,9 +656,9 @@ Artifact Read(Db& db, int version, const ArtifactReadOptions& options) {
     Stmt s(db, "SELECT a, b, dg FROM geometry_changes ORDER BY a, b");
     const auto count = static_cast<std::int64_t>(form.samples.size());
     while (s.Next()) {
-      auto x = s.GetInt(0), y = s.GetInt(1);
+      auto x = s.ColumnInt(0), y = s.ColumnInt(1);
       if (x < 0 || y < 0 || x >= count || y >= count) throw Corrupt("a ΔG value names a sample that does not exist");
-      form.geometry_changes[{x, y}] = s.GetReal(2);
+      form.geometry_changes[{x, y}] = s.ColumnReal(2);
     }
   }
   {
@@ -729,17 +669,17 @@ Artifact Read(Db& db, int version, const ArtifactReadOptions& options) {
                      "FROM cache_entries ORDER BY key");
     while (s.Next()) {
       CacheEntry e;
-      e.key = s.GetText(0);
-      e.op = s.GetText(1);
-      e.children = SplitStrings(s.GetText(2));
-      e.bytes = s.GetInt(3);
-      e.cost_seconds = s.GetReal(4);
-      e.in_opt = s.GetInt(5) != 0;
-      e.in_rfree = s.GetInt(6) != 0;
-      e.grid_sha256 = s.GetText(7);
+      e.key = s.ColumnText(0);
+      e.op = s.ColumnText(1);
+      e.children = SplitStrings(s.ColumnText(2));
+      e.bytes = s.ColumnInt(3);
+      e.cost_seconds = s.ColumnReal(4);
+      e.in_opt = s.ColumnInt(5) != 0;
+      e.in_rfree = s.ColumnInt(6) != 0;
+      e.grid_sha256 = s.ColumnText(7);
       if (options.load_geometry) {
-        e.grid = s.GetText(8);
-        e.glb = s.GetText(9);
+        e.grid = s.ColumnText(8);
+        e.glb = s.ColumnText(9);
         if (Sha256Hex(e.grid) != e.grid_sha256) throw Corrupt("cache entry " + e.key + " does not match its grid_sha256");
       }
       a.cache.push_back(std::move(e));
@@ -748,14 +688,14 @@ Artifact Read(Db& db, int version, const ArtifactReadOptions& options) {
   {
     Stmt s(db, "SELECT strategy, step, entries, bytes, mean_seconds, worst_seconds FROM cache_curves ORDER BY strategy, step");
     while (s.Next())
-      a.cache_curves.push_back({s.GetText(0), s.GetInt(1), s.GetInt(2), s.GetInt(3), s.GetReal(4), s.GetReal(5)});
+      a.cache_curves.push_back({s.ColumnText(0), s.ColumnInt(1), s.ColumnInt(2), s.ColumnInt(3), s.ColumnReal(4), s.ColumnReal(5)});
   }
   {
     Stmt s(db, "SELECT idx, sample_id, component FROM starting_points ORDER BY idx");
     while (s.Next()) {
       StartingPoint p;
-      p.sample_id = s.GetInt(1);
-      p.component = static_cast<int>(s.GetInt(2));
+      p.sample_id = s.ColumnInt(1);
+      p.component = static_cast<int>(s.ColumnInt(2));
       if (p.sample_id < 0 || p.sample_id >= static_cast<std::int64_t>(form.samples.size()))
         throw Corrupt("a starting point names sample " + std::to_string(p.sample_id) + ", which does not exist");
       p.u = form.samples[p.sample_id].u;
@@ -766,17 +706,17 @@ Artifact Read(Db& db, int version, const ArtifactReadOptions& options) {
     Stmt s(db, "SELECT role, name, bytes FROM bundle_files ORDER BY role, name");
     int jobs = 0, designs = 0;
     while (s.Next()) {
-      std::string role = s.GetText(0);
+      std::string role = s.ColumnText(0);
       if (role == "job") {
-        a.bundle.job_file_name = s.GetText(1);
-        a.bundle.job_file = s.GetText(2);
+        a.bundle.job_file_name = s.ColumnText(1);
+        a.bundle.job_file = s.ColumnText(2);
         ++jobs;
       } else if (role == "design") {
-        a.bundle.design_file_name = s.GetText(1);
-        a.bundle.design_file = s.GetText(2);
+        a.bundle.design_file_name = s.ColumnText(1);
+        a.bundle.design_file = s.ColumnText(2);
         ++designs;
       } else if (role == "file") {
-        a.bundle.files[s.GetText(1)] = s.GetText(2);
+        a.bundle.files[s.ColumnText(1)] = s.ColumnText(2);
       } else {
         throw Corrupt("bundle file of unknown role '" + role + "'");
       }
@@ -884,23 +824,23 @@ void ReadCacheGeometry(const fs::path& path, const std::function<bool(const Cach
                   "FROM cache_entries ORDER BY key");
       while (s.Next()) {
         CacheEntry e;
-        e.key = s.GetText(0);
-        e.op = s.GetText(1);
-        e.children = SplitStrings(s.GetText(2));
-        e.bytes = s.GetInt(3);
-        e.cost_seconds = s.GetReal(4);
-        e.in_opt = s.GetInt(5) != 0;
-        e.in_rfree = s.GetInt(6) != 0;
-        e.grid_sha256 = s.GetText(7);
+        e.key = s.ColumnText(0);
+        e.op = s.ColumnText(1);
+        e.children = SplitStrings(s.ColumnText(2));
+        e.bytes = s.ColumnInt(3);
+        e.cost_seconds = s.ColumnReal(4);
+        e.in_opt = s.ColumnInt(5) != 0;
+        e.in_rfree = s.ColumnInt(6) != 0;
+        e.grid_sha256 = s.ColumnText(7);
         if (want(e)) entries.push_back(std::move(e));
       }
     }
     Stmt g(*db, "SELECT grid, glb FROM cache_entries WHERE key = ?");
     for (auto& e : entries) {
-      g.Text(1, e.key);
+      g.BindText(1, e.key);
       if (!g.Next()) throw Corrupt("cache entry " + e.key + " disappeared");
-      e.grid = g.GetText(0);
-      e.glb = g.GetText(1);
+      e.grid = g.ColumnText(0);
+      e.glb = g.ColumnText(1);
       g.Reset();
       if (Sha256Hex(e.grid) != e.grid_sha256) throw Corrupt("cache entry " + e.key + " does not match its grid_sha256");
       visit(e);

@@ -7,6 +7,7 @@
 #include <set>
 
 #include "fabatlas/error.h"
+#include "sqlite_statement.h"
 
 namespace fabatlas::storage {
 
@@ -90,77 +91,31 @@ struct JobStore::Db {
 
 namespace {
 
-// A prepared statement with positional binding; finalised on scope exit.
-class Stmt {
+// A statement from the store's cache of prepared statements (preparing
+// costs more than running most of them); a fresh one, finalised after use,
+// when the cached one is in use further up the stack.
+class Stmt : public internal::SqliteStatement {
  public:
-  Stmt(JobStore::Db& db, const char* sql) : db_(db) {
-    auto it = db.statements.find(sql);
-    if (it != db.statements.end() && !it->second.second) {
-      stmt_ = it->second.first;
-      it->second.second = true;
-      cached_ = &it->second.second;
-      return;
-    }
-    if (sqlite3_prepare_v2(db.handle, sql, -1, &stmt_, nullptr) != SQLITE_OK) db.Fail("prepare");
-    if (it == db.statements.end()) {
-      auto& entry = db.statements[sql];
-      entry = {stmt_, true};
-      cached_ = &entry.second;
-    }
-  }
-  ~Stmt() {
-    if (!cached_) {
-      sqlite3_finalize(stmt_);
-      return;
-    }
-    sqlite3_reset(stmt_);
-    sqlite3_clear_bindings(stmt_);
-    *cached_ = false;
-  }
-  Stmt& Bind(int i, const std::string& v) {
-    sqlite3_bind_blob(stmt_, i, v.data(), static_cast<int>(v.size()), SQLITE_TRANSIENT);
-    return *this;
-  }
-  Stmt& BindText(int i, const std::string& v) {
-    sqlite3_bind_text(stmt_, i, v.data(), static_cast<int>(v.size()), SQLITE_TRANSIENT);
-    return *this;
-  }
-  Stmt& Bind(int i, std::int64_t v) {
-    sqlite3_bind_int64(stmt_, i, v);
-    return *this;
-  }
-  Stmt& BindReal(int i, double v) {
-    sqlite3_bind_double(stmt_, i, v);
-    return *this;
-  }
-  // True while a row is available.
-  bool Step() {
-    int rc = sqlite3_step(stmt_);
-    if (rc == SQLITE_ROW) return true;
-    if (rc == SQLITE_DONE) return false;
-    db_.Fail("step");
-  }
-  void Run() {
-    while (Step()) {
-    }
-  }
-  void Reset() {
-    sqlite3_reset(stmt_);
-    sqlite3_clear_bindings(stmt_);
-  }
-  std::int64_t Int(int c) const { return sqlite3_column_int64(stmt_, c); }
-  double Real(int c) const { return sqlite3_column_double(stmt_, c); }
-  std::string Text(int c) const {
-    const void* p = sqlite3_column_blob(stmt_, c);
-    int n = sqlite3_column_bytes(stmt_, c);
-    return p ? std::string(static_cast<const char*>(p), n) : std::string();
-  }
-  bool IsNull(int c) const { return sqlite3_column_type(stmt_, c) == SQLITE_NULL; }
+  Stmt(JobStore::Db& db, const char* sql) : Stmt(db, sql, Borrow(db, sql)) {}
 
  private:
-  JobStore::Db& db_;
-  sqlite3_stmt* stmt_ = nullptr;
-  bool* cached_ = nullptr;  // the cache entry's in-use flag, if cached
+  Stmt(JobStore::Db& db, const char* sql, bool* in_use)
+      : SqliteStatement(db.handle, sql, [&db](const std::string& what) { db.Fail(what); },
+                        in_use ? db.statements.at(sql).first : nullptr,
+                        in_use ? std::function<void()>([in_use] { *in_use = false; }) : nullptr) {}
+  // The cached statement for `sql`, prepared on first use, marked in use;
+  // nullptr when it is in use already.
+  static bool* Borrow(JobStore::Db& db, const char* sql) {
+    auto it = db.statements.find(sql);
+    if (it == db.statements.end()) {
+      sqlite3_stmt* stmt = nullptr;
+      if (sqlite3_prepare_v2(db.handle, sql, -1, &stmt, nullptr) != SQLITE_OK) db.Fail("prepare");
+      it = db.statements.emplace(sql, std::make_pair(stmt, false)).first;
+    }
+    if (it->second.second) return nullptr;
+    it->second.second = true;
+    return &it->second.second;
+  }
 };
 
 // BEGIN IMMEDIATE ... COMMIT, rolled back if an exception escapes.
@@ -182,13 +137,13 @@ class Transaction {
 
 JobRecord ReadJob(const Stmt& s) {
   JobRecord j;
-  j.id = s.Text(0);
-  j.bundle_digest = s.Text(1);
-  j.design_name = s.Text(2);
-  j.state = static_cast<JobState>(s.Int(3));
-  j.error = s.Text(4);
-  j.created_ms = s.Int(5);
-  j.finished_ms = s.Int(6);
+  j.id = s.ColumnText(0);
+  j.bundle_digest = s.ColumnText(1);
+  j.design_name = s.ColumnText(2);
+  j.state = static_cast<JobState>(s.ColumnInt(3));
+  j.error = s.ColumnText(4);
+  j.created_ms = s.ColumnInt(5);
+  j.finished_ms = s.ColumnInt(6);
   return j;
 }
 
@@ -314,7 +269,7 @@ std::optional<JobRecord> JobStore::FindJob(const std::string& id) {
          "SELECT id, bundle_digest, design_name, state, error, created_ms, finished_ms FROM jobs "
          "WHERE id = ?");
   s.BindText(1, id);
-  if (!s.Step()) return std::nullopt;
+  if (!s.Next()) return std::nullopt;
   return ReadJob(s);
 }
 
@@ -324,7 +279,7 @@ std::vector<JobRecord> JobStore::Jobs() {
          "SELECT id, bundle_digest, design_name, state, error, created_ms, finished_ms FROM jobs "
          "ORDER BY created_ms, id");
   std::vector<JobRecord> jobs;
-  while (s.Step()) jobs.push_back(ReadJob(s));
+  while (s.Next()) jobs.push_back(ReadJob(s));
   return jobs;
 }
 
@@ -349,7 +304,7 @@ std::map<std::string, std::string> JobStore::JobOutputs(const std::string& job_i
   Stmt s(*db_, "SELECT name, digest FROM job_outputs WHERE job_id = ? ORDER BY name");
   s.BindText(1, job_id);
   std::map<std::string, std::string> out;
-  while (s.Step()) out[s.Text(0)] = s.Text(1);
+  while (s.Next()) out[s.ColumnText(0)] = s.ColumnText(1);
   return out;
 }
 
@@ -376,7 +331,7 @@ std::map<std::string, std::string> JobStore::AddTasks(const std::vector<NewTask>
       }
     }
     find.BindText(1, task.key);
-    if (find.Step()) finished[task.key] = find.Text(0);
+    if (find.Next()) finished[task.key] = find.ColumnText(0);
     find.Reset();
   }
   t.Commit();
@@ -388,15 +343,15 @@ constexpr const char* kTaskColumns =
     "SELECT key, job_id, kind, payload, state, attempt, expiries, completions, result FROM tasks ";
 TaskRecord ReadTask(const Stmt& s) {
   TaskRecord r;
-  r.key = s.Text(0);
-  r.job_id = s.Text(1);
-  r.kind = static_cast<int>(s.Int(2));
-  r.payload = s.Text(3);
-  r.state = static_cast<TaskState>(s.Int(4));
-  r.attempt = s.Int(5);
-  r.expiries = s.Int(6);
-  r.completions = s.Int(7);
-  r.result = s.Text(8);
+  r.key = s.ColumnText(0);
+  r.job_id = s.ColumnText(1);
+  r.kind = static_cast<int>(s.ColumnInt(2));
+  r.payload = s.ColumnText(3);
+  r.state = static_cast<TaskState>(s.ColumnInt(4));
+  r.attempt = s.ColumnInt(5);
+  r.expiries = s.ColumnInt(6);
+  r.completions = s.ColumnInt(7);
+  r.result = s.ColumnText(8);
   return r;
 }
 }  // namespace
@@ -405,7 +360,7 @@ std::optional<TaskRecord> JobStore::FindTask(const std::string& key) {
   std::lock_guard lock(mutex_);
   Stmt s(*db_, (std::string(kTaskColumns) + "WHERE key = ?").c_str());
   s.BindText(1, key);
-  if (!s.Step()) return std::nullopt;
+  if (!s.Next()) return std::nullopt;
   return ReadTask(s);
 }
 
@@ -414,7 +369,7 @@ std::vector<TaskRecord> JobStore::Tasks(const std::string& job_id) {
   Stmt s(*db_, (std::string(kTaskColumns) + "WHERE job_id = ? ORDER BY seq").c_str());
   s.BindText(1, job_id);
   std::vector<TaskRecord> out;
-  while (s.Step()) out.push_back(ReadTask(s));
+  while (s.Next()) out.push_back(ReadTask(s));
   return out;
 }
 
@@ -442,17 +397,17 @@ std::vector<LeaseGrant> JobStore::GrantLeases(const std::string& worker_id, int 
   std::set<std::int64_t> picked;
   std::vector<std::int64_t> unprefer;  // seq of granted tasks that had a preference
   auto take = [&](Stmt& pick) {
-    while (static_cast<int>(grants.size()) < max && pick.Step()) {
-      std::int64_t seq = pick.Int(6);
+    while (static_cast<int>(grants.size()) < max && pick.Next()) {
+      std::int64_t seq = pick.ColumnInt(6);
       if (!picked.insert(seq).second) continue;
-      if (pick.Int(7) != 0) unprefer.push_back(seq);
+      if (pick.ColumnInt(7) != 0) unprefer.push_back(seq);
       LeaseGrant g;
-      g.task_key = pick.Text(0);
-      g.job_id = pick.Text(1);
-      g.bundle_digest = pick.Text(2);
-      g.attempt = pick.Int(3) + 1;
-      g.kind = static_cast<int>(pick.Int(4));
-      g.payload = pick.Text(5);
+      g.task_key = pick.ColumnText(0);
+      g.job_id = pick.ColumnText(1);
+      g.bundle_digest = pick.ColumnText(2);
+      g.attempt = pick.ColumnInt(3) + 1;
+      g.kind = static_cast<int>(pick.ColumnInt(4));
+      g.payload = pick.ColumnText(5);
       g.lease_id = LeaseIdOf(g.task_key, g.attempt);
       g.deadline_ms = now_ms + lease_ms;
       grants.push_back(std::move(g));
@@ -517,7 +472,7 @@ int JobStore::ForgetAffinity(const std::string& worker_id) {
   {
     Stmt s(*db_, "SELECT task_seq FROM task_affinity WHERE worker_id = ?");
     s.BindText(1, worker_id);
-    while (s.Step()) seqs.push_back(s.Int(0));
+    while (s.Next()) seqs.push_back(s.ColumnInt(0));
   }
   if (seqs.empty()) return 0;
   Transaction t(*db_);
@@ -584,18 +539,18 @@ std::vector<CompletionOutcome> JobStore::Complete(const std::vector<Completion>&
   Stmt event(*db_, "INSERT INTO events (time_ms, job_id, kind, message) VALUES (?,?,?,?)");
   for (const Completion& c : completions) {
     task.BindText(1, c.task_key);
-    if (!task.Step()) {
+    if (!task.Next()) {
       task.Reset();
       outcomes.push_back(CompletionOutcome::kUnknown);
       continue;
     }
-    auto state = static_cast<TaskState>(task.Int(0));
-    std::int64_t attempt = task.Int(1);
-    std::string job_id = task.Text(2);
-    const int kind = static_cast<int>(task.Int(3));
+    auto state = static_cast<TaskState>(task.ColumnInt(0));
+    std::int64_t attempt = task.ColumnInt(1);
+    std::string job_id = task.ColumnText(2);
+    const int kind = static_cast<int>(task.ColumnInt(3));
     task.Reset();
     lease.BindText(1, c.lease_id).BindText(2, c.task_key).Bind(3, c.attempt);
-    bool active = lease.Step() && lease.Text(0) == "active";
+    bool active = lease.Next() && lease.ColumnText(0) == "active";
     lease.Reset();
     CompletionOutcome outcome;
     std::string lease_state;
@@ -611,8 +566,8 @@ std::vector<CompletionOutcome> JobStore::Complete(const std::vector<Completion>&
     } else if (c.failed) {
       lease_state = "failed";
       failures.BindText(1, c.task_key).BindText(2, c.lease_id);
-      failures.Step();
-      const std::int64_t failed_leases = failures.Int(0), failed_workers = failures.Int(1);
+      failures.Next();
+      const std::int64_t failed_leases = failures.ColumnInt(0), failed_workers = failures.ColumnInt(1);
       failures.Reset();
       std::string kind_name = "task_failed";
       if (quarantine_after > 0 && quarantine_result && failed_workers >= quarantine_after) {
@@ -676,7 +631,7 @@ std::vector<std::string> JobStore::ExtendLeases(const std::string& worker_id,
   {
     Stmt s(*db_, "SELECT lease_id, deadline_ms FROM leases WHERE worker_id = ? AND state = 'active'");
     s.BindText(1, worker_id);
-    while (s.Step()) active.emplace(s.Text(0), s.Int(1));
+    while (s.Next()) active.emplace(s.ColumnText(0), s.ColumnInt(1));
   }
   std::vector<const std::string*> extend;
   for (const std::string& id : lease_ids) {
@@ -706,8 +661,8 @@ int JobStore::ReturnUnknownLeases(const std::string& worker_id,
   {
     Stmt s(*db_, "SELECT lease_id, task_key FROM leases WHERE worker_id = ? AND state = 'active'");
     s.BindText(1, worker_id);
-    while (s.Step())
-      if (!keep.count(s.Text(0))) lost.emplace_back(s.Text(0), s.Text(1));
+    while (s.Next())
+      if (!keep.count(s.ColumnText(0))) lost.emplace_back(s.ColumnText(0), s.ColumnText(1));
   }
   if (lost.empty()) return 0;
   Transaction t(*db_);
@@ -736,16 +691,16 @@ std::vector<ExpiredLease> JobStore::ExpireLeases(
            "SELECT l.lease_id, l.task_key, t.job_id, l.worker_id, t.kind, t.expiries, l.attempt FROM leases l "
            "JOIN tasks t ON t.key = l.task_key WHERE l.state = 'active' AND l.deadline_ms < ?");
     s.Bind(1, now_ms);
-    while (s.Step()) {
+    while (s.Next()) {
       ExpiredLease e;
-      e.lease_id = s.Text(0);
-      e.task_key = s.Text(1);
-      e.job_id = s.Text(2);
-      e.worker_id = s.Text(3);
-      kinds.push_back(s.Int(4));
-      expiries.push_back(s.Int(5) + 1);
+      e.lease_id = s.ColumnText(0);
+      e.task_key = s.ColumnText(1);
+      e.job_id = s.ColumnText(2);
+      e.worker_id = s.ColumnText(3);
+      kinds.push_back(s.ColumnInt(4));
+      expiries.push_back(s.ColumnInt(5) + 1);
       e.expiries = expiries.back();
-      e.attempt = s.Int(6);
+      e.attempt = s.ColumnInt(6);
       expired.push_back(std::move(e));
     }
   }
@@ -804,21 +759,21 @@ TaskCounts JobStore::CountTasks(const std::string& job_id) {
                 "SUM(expiries), SUM(fenced) FROM tasks" + where + " GROUP BY state").c_str());
   if (!job_id.empty()) s.BindText(1, job_id);
   TaskCounts c;
-  while (s.Step()) {
-    std::int64_t n = s.Int(1);
+  while (s.Next()) {
+    std::int64_t n = s.ColumnInt(1);
     c.total += n;
-    switch (static_cast<TaskState>(s.Int(0))) {
+    switch (static_cast<TaskState>(s.ColumnInt(0))) {
       case TaskState::kQueued: c.queued += n; break;
       case TaskState::kLeased: c.leased += n; break;
       case TaskState::kDone: c.done += n; break;
       case TaskState::kQuarantined: c.quarantined += n; break;
     }
-    if (s.Int(0) >= 2) {
-      c.samples_valid += s.Int(2);
-      c.samples_done += s.Int(3);
+    if (s.ColumnInt(0) >= 2) {
+      c.samples_valid += s.ColumnInt(2);
+      c.samples_done += s.ColumnInt(3);
     }
-    c.lease_expiries += s.Int(4);
-    c.fenced_results += s.Int(5);
+    c.lease_expiries += s.ColumnInt(4);
+    c.fenced_results += s.ColumnInt(5);
   }
   return c;
 }
@@ -826,8 +781,8 @@ TaskCounts JobStore::CountTasks(const std::string& job_id) {
 std::int64_t JobStore::ActiveLeases() {
   std::lock_guard lock(mutex_);
   Stmt s(*db_, "SELECT COUNT(*) FROM leases WHERE state = 'active'");
-  s.Step();
-  return s.Int(0);
+  s.Next();
+  return s.ColumnInt(0);
 }
 
 std::vector<SubtreeRow> JobStore::Subtrees(const std::string& job_id) {
@@ -837,24 +792,24 @@ std::vector<SubtreeRow> JobStore::Subtrees(const std::string& job_id) {
          "FROM subtrees WHERE job_id = ? ORDER BY key");
   s.BindText(1, job_id);
   std::vector<SubtreeRow> out;
-  while (s.Step()) {
+  while (s.Next()) {
     SubtreeRow r;
-    r.key = s.Text(0);
-    r.topology = s.Text(1);
-    r.op = s.Text(2);
-    r.blob_digest = s.Text(3);
-    r.bytes = s.Int(4);
-    std::string children = s.Text(5);
+    r.key = s.ColumnText(0);
+    r.topology = s.ColumnText(1);
+    r.op = s.ColumnText(2);
+    r.blob_digest = s.ColumnText(3);
+    r.bytes = s.ColumnInt(4);
+    std::string children = s.ColumnText(5);
     for (std::size_t at = 0; at < children.size();) {
       std::size_t comma = children.find(',', at);
       if (comma == std::string::npos) comma = children.size();
       r.children.push_back(children.substr(at, comma - at));
       at = comma + 1;
     }
-    r.seconds_sum = s.Real(6);
-    r.seconds_count = s.Int(7);
-    r.last_seconds = s.Real(8);
-    r.uses = s.Int(9);
+    r.seconds_sum = s.ColumnReal(6);
+    r.seconds_count = s.ColumnInt(7);
+    r.last_seconds = s.ColumnReal(8);
+    r.uses = s.ColumnInt(9);
     out.push_back(std::move(r));
   }
   return out;
@@ -867,9 +822,9 @@ std::vector<SampleSubtrees> JobStore::SampleSubtreeKeys(const std::string& job_i
          "u.task_key WHERE u.job_id = ? ORDER BY t.seq, u.position");
   s.BindText(1, job_id);
   std::vector<SampleSubtrees> out;
-  while (s.Step()) {
-    if (out.empty() || out.back().task_key != s.Text(0)) out.push_back({s.Text(0), s.Text(1), {}});
-    out.back().subtree_keys.push_back(s.Text(2));
+  while (s.Next()) {
+    if (out.empty() || out.back().task_key != s.ColumnText(0)) out.push_back({s.ColumnText(0), s.ColumnText(1), {}});
+    out.back().subtree_keys.push_back(s.ColumnText(2));
   }
   return out;
 }
@@ -891,15 +846,15 @@ std::vector<std::string> JobStore::ReferencedBlobs() {
          "UNION SELECT b.digest FROM job_blobs b JOIN jobs j ON j.id = b.job_id WHERE j.state IN (1, 2) "
          "ORDER BY 1");
   std::vector<std::string> out;
-  while (s.Step()) out.push_back(s.Text(0));
+  while (s.Next()) out.push_back(s.ColumnText(0));
   return out;
 }
 
 std::int64_t JobStore::OldestActiveLeaseMs() {
   std::lock_guard lock(mutex_);
   Stmt s(*db_, "SELECT MIN(granted_ms) FROM leases WHERE state = 'active'");
-  if (!s.Step() || s.IsNull(0)) return -1;
-  return s.Int(0);
+  if (!s.Next() || s.ColumnIsNull(0)) return -1;
+  return s.ColumnInt(0);
 }
 
 void JobStore::TouchWorker(const std::string& worker_id, int slots, std::int64_t now_ms) {
@@ -919,8 +874,8 @@ std::int64_t JobStore::CountWorkers(std::int64_t since_ms) {
   std::lock_guard lock(mutex_);
   Stmt s(*db_, "SELECT COUNT(*) FROM workers WHERE last_seen_ms >= ?");
   s.Bind(1, since_ms);
-  s.Step();
-  return s.Int(0);
+  s.Next();
+  return s.ColumnInt(0);
 }
 
 void JobStore::AddEvent(const Event& event) {
@@ -936,7 +891,7 @@ std::vector<Event> JobStore::Events(const std::string& job_id) {
   Stmt s(*db_, "SELECT time_ms, job_id, kind, message FROM events WHERE job_id = ? ORDER BY id");
   s.BindText(1, job_id);
   std::vector<Event> out;
-  while (s.Step()) out.push_back({s.Int(0), s.Text(1), s.Text(2), s.Text(3)});
+  while (s.Next()) out.push_back({s.ColumnInt(0), s.ColumnText(1), s.ColumnText(2), s.ColumnText(3)});
   return out;
 }
 
@@ -945,24 +900,24 @@ std::vector<std::string> JobStore::CheckConsistency() {
   std::vector<std::string> problems;
   {
     Stmt s(*db_, "SELECT key, completions FROM tasks WHERE state IN (2, 3) AND completions != 1");
-    while (s.Step())
-      problems.push_back("task " + s.Text(0) + " completed " + std::to_string(s.Int(1)) + " times");
+    while (s.Next())
+      problems.push_back("task " + s.ColumnText(0) + " completed " + std::to_string(s.ColumnInt(1)) + " times");
   }
   {
     Stmt s(*db_,
            "SELECT l.lease_id FROM leases l JOIN tasks t ON t.key = l.task_key WHERE "
            "l.state = 'active' AND (t.state != 1 OR t.attempt != l.attempt)");
-    while (s.Step()) problems.push_back("orphaned active lease " + s.Text(0));
+    while (s.Next()) problems.push_back("orphaned active lease " + s.ColumnText(0));
   }
   {
     Stmt s(*db_,
            "SELECT t.key FROM tasks t WHERE t.state = 1 AND (SELECT COUNT(*) FROM leases l WHERE "
            "l.task_key = t.key AND l.state = 'active') != 1");
-    while (s.Step()) problems.push_back("leased task " + s.Text(0) + " without one active lease");
+    while (s.Next()) problems.push_back("leased task " + s.ColumnText(0) + " without one active lease");
   }
   {
     Stmt s(*db_, "SELECT key FROM tasks WHERE state IN (0, 1) AND completions != 0");
-    while (s.Step()) problems.push_back("unfinished task " + s.Text(0) + " has a result");
+    while (s.Next()) problems.push_back("unfinished task " + s.ColumnText(0) + " has a result");
   }
   return problems;
 }
