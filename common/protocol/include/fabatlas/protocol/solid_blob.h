@@ -1,6 +1,6 @@
 // fabatlas/protocol/solid_blob.h — the bytes of a geometry blob ("solid" in
 // tasks.proto "Geometry blobs"): geometry::Solid::Serialize() compressed as
-// one zstd frame (level 3, single-threaded, so the same solid always gives
+// one zstd frame (level 1, single-threaded, so the same solid always gives
 // the same bytes and so the same digest).
 //
 // A level set's serialised grid compresses 3-6x (measured in
