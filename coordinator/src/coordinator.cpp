@@ -760,6 +760,13 @@ struct Coordinator::Impl {
       storage::Artifact artifact = ArtifactOf(bundle, design.name, job_file, summary.form);
       if (WantsCache(job_file)) {
         // The geometry cache from the subtrees the workers reported (docs/artifact.md).
+        // Every subtree blob the store names is still here (the collector
+        // keeps a running job's geometry); one that is not is evaluated again
+        // below, and recorded.
+        for (const auto& row : store->Subtrees(job_id))
+          if (!row.blob_digest.empty() && !blobs->Contains(row.blob_digest))
+            Event(job_id, "blob_missing", "subtree " + row.key + " names blob " + row.blob_digest +
+                                              ", which is not in the store");
         CacheAssembly assembly = CollectSubtreesFromStore(*store, *blobs, job_id, design, summary.form);
         assembly.options = CacheOptionsOf(job_file);
         assembly.store_rfree = StoresRfree(job_file);
@@ -1171,6 +1178,14 @@ class WorkerServiceImpl final : public v1::WorkerService::Service {
         done.result = c.result().SerializeAsString();
         done.sample_valid = c.result().has_sample() ? (c.result().sample().valid() ? 1 : 0) : -1;
         if (c.result().has_sample()) SubtreesOf(c, &done);
+        // Blobs a result names (a cache plan report, a cutter surface) are
+        // referenced from before the result is stored, so the collector
+        // never removes one that a replayed driver will read.
+        const std::string& named = c.result().has_cache_plan() ? c.result().cache_plan().report_digest()
+                                   : c.result().has_swept_volume() ? c.result().swept_volume().surface_blob()
+                                                                   : std::string();
+        if (!named.empty())
+          if (auto task = impl_.store->FindTask(c.task_key())) impl_.store->AddJobBlob(task->job_id, named);
         completions.push_back(std::move(done));
         known.push_back(c.lease_id());
       }
@@ -1361,7 +1376,13 @@ class BlobServiceImpl final : public v1::BlobService::Service {
   Status Read(ServerContext* ctx, const v1::ReadRequest* req, grpc::ServerWriter<v1::ReadChunk>* writer) override {
     if (Status s = protocol::CheckToken(*ctx, impl_.options.token); !s.ok()) return s;
     std::int64_t size = impl_.blobs->Size(req->digest());
-    if (size < 0) return Status(StatusCode::NOT_FOUND, "no blob " + req->digest());
+    if (size < 0) {
+      // Someone needed a blob the store does not hold (collected too early,
+      // or never uploaded): recorded, so a test or an operator sees it.
+      impl_.Event("", "blob_missing", "read of blob " + req->digest() + ", which is not in the store");
+      log::Warn("blob_missing", {{"digest", req->digest()}});
+      return Status(StatusCode::NOT_FOUND, "no blob " + req->digest());
+    }
     try {
       for (std::int64_t offset = req->offset(); offset < size; offset += protocol::kBlobChunkBytes) {
         v1::ReadChunk chunk;
