@@ -4,8 +4,12 @@
 // of workers and whatever faults are injected (SIGKILL / SIGSTOP of workers,
 // kill -9 of the coordinator). After each run the durable store is checked:
 // every task key completed once, no orphaned lease, every blob verifies.
+#include <arpa/inet.h>
 #include <gtest/gtest.h>
+#include <httplib.h>
+#include <netinet/in.h>
 #include <sqlite3.h>
+#include <sys/socket.h>
 
 #include <algorithm>
 #include <map>
@@ -13,6 +17,7 @@
 #include <set>
 #include <sstream>
 
+#include "cluster_job.h"
 #include "cluster_process.h"
 #include "fabatlas/coordinator/job_client.h"
 #include "fabatlas/coordinator/publish.h"
@@ -39,6 +44,23 @@ using namespace fabatlas;
 using namespace fabatlas::cluster_test;
 
 namespace {
+
+// A TCP port nothing listens on now (bound to 0, read back, released).
+int FreePort() {
+  int fd = ::socket(AF_INET, SOCK_STREAM, 0);
+  sockaddr_in addr{};
+  addr.sin_family = AF_INET;
+  addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  addr.sin_port = 0;
+  socklen_t len = sizeof addr;
+  if (::bind(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr) != 0 ||
+      ::getsockname(fd, reinterpret_cast<sockaddr*>(&addr), &len) != 0) {
+    ::close(fd);
+    return 0;
+  }
+  ::close(fd);
+  return ntohs(addr.sin_port);
+}
 
 fs::path JobPath() { return SourceDir() / "tests/cluster/data/tube_small.yaml"; }
 
@@ -75,30 +97,6 @@ const std::string& ReferenceArtifact() {
 // Fast failure detection for the fault tests.
 const std::vector<std::string> kFastLeases = {"--lease-ms", "1500", "--heartbeat-ms", "300",
                                               "--retry-backoff-ms", "50", "--quarantine-after", "1000"};
-
-coordinator::JobClient Client(int port, const std::string& token = "") {
-  protocol::ClientSecurity security;
-  security.token = token;
-  return coordinator::JobClient("127.0.0.1:" + std::to_string(port), security, std::chrono::seconds(5));
-}
-
-// Polls until the job ends (tolerating a coordinator that is down) or the
-// timeout passes; calls between() after each poll.
-v1::JobStatus WaitForJob(const std::function<int()>& port, const std::string& id, std::chrono::seconds timeout,
-                         const std::function<void(const v1::JobStatus&)>& between = {}) {
-  auto until = std::chrono::steady_clock::now() + timeout;
-  v1::JobStatus last;
-  while (std::chrono::steady_clock::now() < until) {
-    try {
-      last = Client(port()).Status(id);
-      if (last.state() >= v1::JOB_STATE_SUCCEEDED) return last;
-    } catch (const InputError&) {
-    }
-    if (between) between(last);
-    std::this_thread::sleep_for(std::chrono::milliseconds(100));
-  }
-  return last;
-}
 
 // Stops the coordinator (SIGTERM: drain and exit) and checks the store.
 void StopAndCheckStore(const CoordinatorProcess& c, const fs::path& state, const std::string& job_id) {
@@ -309,16 +307,17 @@ TEST(ClusterFaults, TwentyWorkerKillsMidTaskLoseNothing) {
   std::string id = Client(c.port).Submit(JobPath());
   std::mt19937 rng(4);
   int kills = 0;
-  auto last_kill = std::chrono::steady_clock::now();
+  std::int64_t done_at_last_kill = -1;
   v1::JobStatus s = WaitForJob([&] { return c.port; }, id, std::chrono::seconds(300), [&](const v1::JobStatus& st) {
-    // Kill a random worker every 150 ms while it holds leases (mid-task).
-    if (kills >= 30 || st.tasks_leased() == 0) return;
-    if (std::chrono::steady_clock::now() - last_kill < std::chrono::milliseconds(150)) return;
+    // Kill a random worker while leases are out (mid-task), once per task
+    // completed since the last kill: the faults follow the job's progress,
+    // not the speed of the machine.
+    if (kills >= 30 || st.tasks_leased() == 0 || st.tasks_done() <= done_at_last_kill) return;
     std::size_t victim = rng() % workers.size();
     KillAndReap(workers[victim]);
     workers[victim] = spawn();
     ++kills;
-    last_kill = std::chrono::steady_clock::now();
+    done_at_last_kill = st.tasks_done();
   });
   EXPECT_EQ(s.state(), v1::JOB_STATE_SUCCEEDED) << s.error();
   EXPECT_GE(kills, 20);
@@ -353,9 +352,39 @@ TEST(ClusterFaults, StoppedWorkerLosesItsLeaseAndTheTaskMoves) {
   EXPECT_GE(s.lease_expiries(), 1);
   EXPECT_EQ(Client(c.port).Fetch(id)["form.json"], ReferenceForm());
   EXPECT_TRUE(Client(c.port).Fetch(id)[kArtifactName] == ReferenceArtifact()) << "the artifact differs";
-  // Thawed, the frozen worker reports a stale attempt: fenced, not stored.
+  // Thawed, the frozen worker reports its stale attempt: the lease was
+  // expired and the task finished by the healthy worker, so the report is
+  // refused (lease state duplicate or fenced), never stored: the task's one
+  // accepted completion is another worker's lease.
   ::kill(frozen, SIGCONT);
-  std::this_thread::sleep_for(std::chrono::milliseconds(1500));
+  const std::string frozen_id_part = "-" + std::to_string(frozen) + "-";
+  auto late_reports = [&] {
+    std::vector<std::pair<std::string, std::string>> out;  // task key, lease state
+    sqlite3* db = nullptr;
+    if (sqlite3_open_v2((dir / "state/state.db").c_str(), &db, SQLITE_OPEN_READONLY, nullptr) == SQLITE_OK) {
+      sqlite3_stmt* st = nullptr;
+      sqlite3_prepare_v2(db, "SELECT task_key, state FROM leases WHERE instr(worker_id, ?) > 0", -1, &st, nullptr);
+      sqlite3_bind_text(st, 1, frozen_id_part.c_str(), -1, SQLITE_TRANSIENT);
+      while (st && sqlite3_step(st) == SQLITE_ROW) {
+        std::string state = reinterpret_cast<const char*>(sqlite3_column_text(st, 1));
+        if (state == "duplicate" || state == "fenced")
+          out.emplace_back(reinterpret_cast<const char*>(sqlite3_column_text(st, 0)), state);
+      }
+      sqlite3_finalize(st);
+    }
+    sqlite3_close(db);
+    return out;
+  };
+  std::vector<std::pair<std::string, std::string>> refused;
+  for (int i = 0; i < 600 && refused.empty(); ++i) {
+    refused = late_reports();
+    if (refused.empty()) std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  ASSERT_FALSE(refused.empty()) << "the thawed worker never reported its stale lease";
+  {
+    storage::JobStore store(dir / "state/state.db");
+    for (const auto& [key, state] : refused) EXPECT_EQ(store.FindTask(key)->completions, 1) << key << " " << state;
+  }
   for (pid_t p : {frozen, healthy}) ::kill(p, SIGTERM);
   for (pid_t p : {frozen, healthy}) EXPECT_EQ(WaitExit(p, std::chrono::seconds(30)), 0);
   StopAndCheckStore(c, dir / "state", id);
@@ -370,12 +399,15 @@ TEST(ClusterFaults, CoordinatorKilledThreeTimesResumesByReplay) {
   for (int i = 0; i < 2; ++i) workers.push_back(StartWorker(port, dir / ("w" + std::to_string(i))));
   std::string id = Client(port).Submit(JobPath());
   std::mt19937 rng(7);
+  std::int64_t gap = 5 + rng() % 20;
   int kills = 0;
   std::int64_t done_at_last_kill = -1;
   v1::JobStatus s = WaitForJob([&] { return port; }, id, std::chrono::seconds(300), [&](const v1::JobStatus& st) {
-    // kill -9 at random moments once some new work was done since the last restart.
-    if (kills >= 3 || st.tasks_done() <= done_at_last_kill || st.tasks_done() == 0) return;
-    if (rng() % 4 != 0) return;
+    // kill -9 once a random number (5..24) of tasks was done since the last
+    // restart: faults follow the job's progress, not the poll rate.
+    if (kills >= 3 || st.tasks_done() == 0 || st.tasks_done() < std::max<std::int64_t>(done_at_last_kill, 0) + gap)
+      return;
+    gap = 5 + rng() % 20;
     KillAndReap(c.pid);
     ++kills;
     done_at_last_kill = st.tasks_done();
@@ -433,9 +465,8 @@ TEST(ClusterSecurity, TlsWithTokenRunsTheJobAndServesMetrics) {
   ASSERT_EQ(std::system(make.c_str()), 0) << ReadText(dir / "certs.log");
   std::string token = ReadText(certs / "token");
   while (!token.empty() && token.back() == '\n') token.pop_back();
-  // A free port for /metrics: bind 0 through a throwaway coordinator is
-  // overkill; 127.0.0.1:0 is not allowed by httplib, so pick from the pid.
-  int metrics_port = 20000 + ::getpid() % 20000;
+  // A free port for /metrics (the coordinator's --metrics wants HOST:PORT).
+  const int metrics_port = FreePort();
   CoordinatorProcess c = StartCoordinator(
       dir / "state", 0,
       {"--tls-cert", (certs / "server.pem").string(), "--tls-key", (certs / "server.key").string(),
@@ -454,16 +485,18 @@ TEST(ClusterSecurity, TlsWithTokenRunsTheJobAndServesMetrics) {
   v1::JobStatus s = client.Watch(id, [](const v1::JobStatus&) { return true; });
   EXPECT_EQ(s.state(), v1::JOB_STATE_SUCCEEDED) << s.error();
   EXPECT_EQ(client.Fetch(id)["form.json"], ReferenceForm());
-  // Prometheus text over plain HTTP.
-  std::string metrics_file = (dir / "metrics.txt").string();
-  std::string curl = "curl -sf http://127.0.0.1:" + std::to_string(metrics_port) + "/metrics > " + metrics_file;
-  if (std::system("command -v curl > /dev/null") == 0) {
-    ASSERT_EQ(std::system(curl.c_str()), 0);
-    std::string text = ReadText(metrics_file);
+  // Prometheus text over plain HTTP, fetched in this process.
+  {
+    httplib::Client http("127.0.0.1", metrics_port);
+    auto res = http.Get("/metrics");
+    ASSERT_TRUE(res) << "no answer from /metrics";
+    ASSERT_EQ(res->status, 200);
+    const std::string& text = res->body;
     EXPECT_NE(text.find("fabatlas_tasks{state=\"done\"} " + std::to_string(s.tasks_total())), std::string::npos)
         << text;
     EXPECT_NE(text.find("# TYPE fabatlas_tasks_completed_total counter"), std::string::npos) << text;
     EXPECT_NE(text.find("fabatlas_workers 1"), std::string::npos) << text;
+    EXPECT_NE(text.find("# TYPE fabatlas_blobs_collected_total counter"), std::string::npos) << text;
   }
   ::kill(worker, SIGTERM);
   EXPECT_EQ(WaitExit(worker, std::chrono::seconds(30)), 0);
@@ -682,7 +715,16 @@ TEST(ClusterCli, CancelStopsTheJobOverGrpc) {
   EXPECT_NE(ReadText(dir / "cancel.log").find("CANCELLED"), std::string::npos) << ReadText(dir / "cancel.log");
   EXPECT_EQ(Client(c.port).Status(id).state(), v1::JOB_STATE_CANCELLED);
   pid_t worker = StartWorker(c.port, dir / "w0");
-  std::this_thread::sleep_for(std::chrono::seconds(2));
+  // Wait until it has connected (a Sync answered: worker_connected) and
+  // asked again with nothing granted, so "ran 0 tasks" means it was offered
+  // the cancelled job's work and got none.
+  for (int i = 0; i < 600 && ReadText(dir / "w0/worker.log").find("worker_connected") == std::string::npos; ++i)
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  ASSERT_NE(ReadText(dir / "w0/worker.log").find("worker_connected"), std::string::npos) << ReadText(dir / "w0/worker.log");
+  {
+    storage::JobStore store(dir / "state/state.db");
+    EXPECT_GE(store.CountWorkers(0), 1);
+  }
   ::kill(worker, SIGTERM);
   EXPECT_EQ(WaitExit(worker, std::chrono::seconds(30)), 0);
   EXPECT_NE(WorkerSummary(dir / "w0").find(" tasks_run=0 "), std::string::npos) << WorkerSummary(dir / "w0");
@@ -775,7 +817,8 @@ TEST(ClusterCli, WatchReconnectsAfterACoordinatorRestart) {
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   ASSERT_NE(ReadText(dir / "watch.log").find("RUNNING"), std::string::npos) << ReadText(dir / "watch.log");
   KillAndReap(c.pid);
-  std::this_thread::sleep_for(std::chrono::milliseconds(1500));
+  // The watch outlives the coordinator: it is still running once the
+  // coordinator is reaped (it reconnects for a minute before giving up).
   EXPECT_EQ(WaitExit(watch, std::chrono::milliseconds(0)), -1) << ReadText(dir / "watch.log");  // still watching
   c = StartCoordinator(dir / "state", port);
   ASSERT_EQ(c.port, port) << ReadText(dir / "state/coordinator.log");
