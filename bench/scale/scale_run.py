@@ -37,6 +37,7 @@ def watch(root_pid):
             try:
                 cmdline = open(f"/proc/{pid}/cmdline", "rb").read().split(b"\0")
                 if int(pid) != root_pid and not any(out.encode() in a for a in cmdline): continue
+                if b"python" in cmdline[0]: continue
                 status = open(f"/proc/{pid}/status").read()
                 hwm = int(status.split("VmHWM:")[1].split()[0])
                 name = os.path.basename(cmdline[0].decode()) + ("" if int(pid) == root_pid else f"[{pid}]")
