@@ -1,9 +1,9 @@
 // Faults at scale (label cluster, slow): a >= 10^4-sample job on two
 // workers, with >= 10 worker SIGKILLs mid-task and 2 coordinator kill -9s,
 // publishes the same artifact, byte for byte, as the job run in this process;
-// afterwards every blob the store references verifies, and no task, and no
-// cache plan, ever asked for a blob the collector had removed (no
-// blob_missing event; docs/protocol.md "Blob lifecycle").
+// afterwards every blob the store references verifies, and no task ever asked
+// for a blob the collector had removed (no blob_missing event;
+// docs/protocol.md "Blob lifecycle").
 #include <gtest/gtest.h>
 
 #include <random>
@@ -28,8 +28,8 @@ namespace {
 
 fs::path JobPath() { return SourceDir() / "tests/cluster/data/tube_scale.yaml"; }
 
-// The artifact of the job computed in this process (thread pool, geometry
-// cache collected in process): what the cluster must publish.
+// The artifact of the job computed in this process (thread pool): what the
+// cluster must publish.
 std::string ReferenceArtifact(std::int64_t* samples) {
   sampling::JobFile job = sampling::ReadJobFile(JobPath().string());
   design::Design design = design::LoadDesign(job.design_path);
@@ -41,9 +41,6 @@ std::string ReferenceArtifact(std::int64_t* samples) {
   storage::Artifact artifact =
       coordinator::ArtifactOf(protocol::MakeJobBundle(JobPath()), design.name, job, summary.form);
   fs::path dir = FreshDir("scale-reference");
-  coordinator::CacheAssembly assembly = coordinator::CollectSubtreesInProcess(design, summary.form, dir / "blobs");
-  assembly.options = coordinator::CacheOptionsOf(job);
-  coordinator::AddCache(artifact, assembly);
   storage::WriteArtifact(artifact, dir / "tube_scale.fabatlas");
   return ReadText(dir / "tube_scale.fabatlas");
 }
