@@ -8,6 +8,8 @@
 #include <filesystem>
 #include <string>
 
+#include "fabatlas/design/design.h"
+
 namespace fabatlas::cli {
 
 // validate, eval, dg (cli/design_commands.cpp).
@@ -39,5 +41,16 @@ std::filesystem::path ArtifactPath(const std::string& arg);
 
 // assemble: solve a FabHacks assembly program (cli/assembly_commands.cpp).
 void AddAssemblyCommands(CLI::App& app, int& exit_code);
+
+// import-scad: an OpenSCAD Customizer model as a design (cli/scad_commands.cpp).
+void AddScadCommands(CLI::App& app, int& exit_code);
+
+// True for an OpenSCAD model path (.scad).
+bool IsScadModel(const std::string& path);
+// A design file, or an OpenSCAD model imported on the fly (warnings on stderr).
+design::Design LoadDesignOrModel(const std::string& path);
+// A job file as given, or for an OpenSCAD model the job of its on-the-fly
+// import written into `dir` (scad::WriteImportedJob).
+std::string JobOrModel(const std::string& path, const std::string& dir);
 
 }  // namespace fabatlas::cli

@@ -18,13 +18,13 @@ struct DesignArgs {
 };
 
 void Validate(const DesignArgs& args) {
-  design::Design d = design::LoadDesign(args.design);
+  design::Design d = LoadDesignOrModel(args.design);
   std::cout << args.design << ": ok (" << d.exposed.size() << " exposed, " << d.mutables.size()
             << " mutable parameters, " << d.constraints.size() << " constraints, " << d.checks.size() << " checks)\n";
 }
 
 void Eval(const DesignArgs& args) {
-  design::Design d = design::LoadDesign(args.design);
+  design::Design d = LoadDesignOrModel(args.design);
   design::SampleResult r = design::EvaluateSample(d, design::ParsePoint(d, args.at, "--at"));
   if (!args.mesh_out.empty()) {
     if (r.solid.empty())
@@ -36,7 +36,7 @@ void Eval(const DesignArgs& args) {
 }
 
 void Dg(const DesignArgs& args) {
-  design::Design d = design::LoadDesign(args.design);
+  design::Design d = LoadDesignOrModel(args.design);
   design::SampleResult ra = design::EvaluateSample(d, design::ParsePoint(d, args.a, "--a"));
   design::SampleResult rb = design::EvaluateSample(d, design::ParsePoint(d, args.b, "--b"));
   double dg = design::DeltaG(ra, rb);
@@ -58,18 +58,18 @@ void AddDesignCommands(CLI::App& app, int& exit_code) {
   (void)exit_code;
 
   auto* validate = app.add_subcommand("validate", "parse and lint a design file");
-  validate->add_option("design", args->design, "design YAML")->required();
+  validate->add_option("design", args->design, "design YAML or OpenSCAD model (.scad)")->required();
   validate->callback([args] { Validate(*args); });
 
   auto* eval = app.add_subcommand("eval", "evaluate one sample: checks, properties, timings");
-  eval->add_option("design", args->design, "design YAML")->required();
+  eval->add_option("design", args->design, "design YAML or OpenSCAD model (.scad)")->required();
   eval->add_option("--at", args->at, "name=value,... (others take their defaults)");
   eval->add_flag("--json", args->json, "print JSON");
   eval->add_option("--mesh", args->mesh_out, "write the sample's mesh (.stl, .obj, .off, .ply)");
   eval->callback([args] { Eval(*args); });
 
   auto* dg = app.add_subcommand("dg", "volumetric change dG = vol(A xor B) / vol(A union B) between two samples (0 = the same solid, 1 = disjoint)");
-  dg->add_option("design", args->design, "design YAML")->required();
+  dg->add_option("design", args->design, "design YAML or OpenSCAD model (.scad)")->required();
   dg->add_option("--a", args->a, "first point, name=value,...")->required();
   dg->add_option("--b", args->b, "second point, name=value,...")->required();
   dg->add_flag("--json", args->json, "print JSON");

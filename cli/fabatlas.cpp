@@ -22,6 +22,7 @@ int main(int argc, char** argv) {
   fabatlas::cli::AddPrototypeCommands(app, exit_code);
   fabatlas::cli::AddViewerCommands(app, exit_code);
   fabatlas::cli::AddAssemblyCommands(app, exit_code);
+  fabatlas::cli::AddScadCommands(app, exit_code);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

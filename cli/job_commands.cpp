@@ -168,7 +168,7 @@ int Run(const ClusterArgs& a) {
   };
   try {
     coordinator::JobClient client(target, {});
-    std::string id = client.Submit(a.job);
+    std::string id = client.Submit(JobOrModel(a.job, (out / "model").string()));
     if (!a.quiet) std::cerr << "job " << id << " on " << a.workers << " worker(s) at " << target << "\n";
     v1::JobStatus s = WatchJob(client, id, a.quiet || a.json);
     int code = FinishedExitCode(s);
@@ -202,7 +202,7 @@ void AddJobCommands(CLI::App& app, int& exit_code) {
   auto a = std::make_shared<ClusterArgs>();
 
   auto* run = app.add_subcommand("run", "compute a job's form on this machine: a coordinator in this process and N worker processes");
-  run->add_option("job", a->job, "job file (YAML, docs/job-format.md)")->required();
+  run->add_option("job", a->job, "job file (YAML, docs/job-format.md) or OpenSCAD model (.scad)")->required();
   run->add_option("--workers", a->workers, "worker processes");
   run->add_option("--slots", a->slots, "tasks each worker runs at once");
   run->add_option("--out", a->out, "output directory (<design>.fabatlas, form.json, statistics.json; cluster-state/ keeps the store, so the same command resumes after a crash)")->required();
@@ -211,13 +211,30 @@ void AddJobCommands(CLI::App& app, int& exit_code) {
   run->callback([a, &exit_code] { exit_code = Run(*a); });
 
   auto* submit = app.add_subcommand("submit", "send a job file (and its design) to a coordinator; prints the job id");
-  submit->add_option("job", a->job, "job file (YAML, docs/job-format.md)")->required();
+  submit->add_option("job", a->job, "job file (YAML, docs/job-format.md) or OpenSCAD model (.scad)")->required();
   submit->add_flag("--json", a->json, "print {\"job_id\", \"created\"} as JSON");
   AddConnectionOptions(submit, *a);
   submit->callback([a] {
     bool created = false;
     auto client = ClientOf(*a);
-    std::string id = client.Submit(a->job, &created);
+    // An OpenSCAD model is imported into a temporary directory; the bundle
+    // carries its files, so the directory goes once submitted.
+    std::string job = a->job;
+    fs::path staging;
+    if (IsScadModel(job)) {
+      char tmpl[] = "/tmp/fabatlas-import-XXXXXX";
+      if (!::mkdtemp(tmpl)) throw ResourceError("submit: cannot create a temporary directory");
+      staging = tmpl;
+      job = JobOrModel(job, staging.string());
+    }
+    std::string id;
+    try {
+      id = client.Submit(job, &created);
+    } catch (...) {
+      if (!staging.empty()) fs::remove_all(staging);
+      throw;
+    }
+    if (!staging.empty()) fs::remove_all(staging);
     if (a->json) PrintJson({{"job_id", id}, {"created", created}});
     else std::cout << id << (created ? "" : " (already submitted)") << "\n";
   });

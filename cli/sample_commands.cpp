@@ -27,7 +27,9 @@ struct SampleArgs {
 };
 
 void Sample(const SampleArgs& args) {
-  sampling::JobFile job = sampling::ReadJobFile(args.job);
+  // An OpenSCAD model runs as the job of its import, written under DIR/model.
+  const std::string job_path = JobOrModel(args.job, (std::filesystem::path(args.out) / "model").string());
+  sampling::JobFile job = sampling::ReadJobFile(job_path);
   design::Design design = design::LoadDesign(job.design_path);
   const cache::CacheOptions cache_options = coordinator::CacheOptionsOf(job);  // bad input before the work
   int threads = args.threads > 0 ? args.threads : job.threads;
@@ -39,7 +41,7 @@ void Sample(const SampleArgs& args) {
   precompute::WriteFormOutputs(design, summary, args.out, form_json);
   // The same artifact the cluster publishes for this job (docs/artifact.md).
   const std::string artifact = coordinator::ArtifactFileName(design.name);
-  storage::Artifact published = coordinator::ArtifactOf(protocol::MakeJobBundle(args.job), design.name, job, summary.form);
+  storage::Artifact published = coordinator::ArtifactOf(protocol::MakeJobBundle(job_path), design.name, job, summary.form);
   if (args.cache || coordinator::WantsCache(job)) {
     // The geometry cache (Fab Forms Sec. 6): re-evaluate the valid samples'
     // geometry, keep every subtree as a blob, plan and store H_opt / H_rfree.
@@ -73,7 +75,7 @@ void AddSampleCommands(CLI::App& app, int& exit_code) {
   (void)exit_code;
   auto args = std::make_shared<SampleArgs>();
   auto* sample = app.add_subcommand("sample", "run a precompute job in this process on a thread pool");
-  sample->add_option("job", args->job, "job YAML (docs/job-format.md)")->required();
+  sample->add_option("job", args->job, "job YAML (docs/job-format.md) or OpenSCAD model (.scad)")->required();
   sample->add_option("--out", args->out, "output directory")->required();
   sample->add_option("--threads", args->threads, "threads (default: the job file's)");
   sample->add_flag("--cache", args->cache,

@@ -13,6 +13,7 @@
 #include "checks.h"
 #include "expression.h"
 #include "fabatlas/error.h"
+#include "fabatlas/scad/customizer.h"
 #include "fabatlas/sha256.h"
 #include "node_schema.h"
 #include "operations.h"
@@ -24,6 +25,15 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 double Since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+// A plain value OpenSCAD reads as a number or boolean (else it is a string).
+bool IsScadNumberOrBoolean(const std::string& s) {
+  if (s == "true" || s == "false") return true;
+  char* end = nullptr;
+  double v = std::strtod(s.c_str(), &end);
+  return !s.empty() && end == s.c_str() + s.size() && std::isfinite(v) &&
+         s.find_first_not_of("0123456789.-+eE") == std::string::npos;
+}
 
 // Digest of a file's bytes, remembered per path for the process lifetime.
 std::string FileDigest(const std::filesystem::path& p) {
@@ -37,6 +47,25 @@ std::string FileDigest(const std::filesystem::path& p) {
   std::stringstream ss;
   ss << in.rdbuf();
   return digests[p.string()] = Sha256Hex(ss.str());
+}
+
+// The OpenSCAD literal a `set` entry of an openscad node passes: the value
+// its `choices` list holds at index `value` (quoted YAML scalars as OpenSCAD
+// strings, plain ones as written), else the number.
+std::string OpenScadLiteral(const Node& node, const std::string& key, double value, const SourcePlace& place) {
+  auto c = node.args.find("choices");
+  if (c != node.args.end()) {
+    for (std::size_t i = 0; i < c->second.keys.size(); ++i) {
+      if (c->second.keys[i] != key) continue;
+      const auto& options = c->second.items[i].items;
+      if (value != std::round(value) || value < 0 || value >= static_cast<double>(options.size()))
+        throw SampleFailure(kNoGeometry, place.str() + ": '" + key + "' = " + ExactDecimal(value) + " is not an index of its " +
+                                             std::to_string(options.size()) + " choices");
+      const Argument& chosen = options[static_cast<std::size_t>(value)];
+      return chosen.quoted || !IsScadNumberOrBoolean(chosen.text) ? scad::QuoteScadString(chosen.text) : chosen.text;
+    }
+  }
+  return scad::FormatScadNumber(value);
 }
 
 // Evaluates the operation tree bottom-up, keying every subtree by (τ, ρ).
@@ -235,8 +264,11 @@ class TreeEvaluation {
           for (std::size_t i = 0; i < a.items.size(); ++i) {
             v.keys.push_back(a.keys[i]);
             v.numbers.push_back(number(a.items[i]));
+            v.literals.push_back(OpenScadLiteral(node, a.keys[i], v.numbers.back(), a.items[i].place));
           }
           break;
+        case ArgShape::kChoiceMap:
+          continue;  // read through `set` (OpenScadLiteral)
       }
       r.values[spec.name] = std::move(v);
     }
@@ -262,6 +294,7 @@ std::string ResolvedArgs::Canonical() const {
     for (std::size_t i = 0; i < v.numbers.size(); ++i) {
       if (i < v.keys.size()) out += v.keys[i] + ":";
       out += ExactDecimal(v.numbers[i]) + ",";
+      if (i < v.literals.size()) out += v.literals[i] + ",";
     }
     out += v.text + (v.digest.empty() ? "" : "@" + v.digest) + ";";
   }

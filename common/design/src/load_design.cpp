@@ -99,6 +99,7 @@ class Reader {
     if (n.IsScalar()) {
       a.kind = Argument::Kind::kScalar;
       a.text = n.Scalar();
+      a.quoted = n.Tag() == "!";  // yaml-cpp tags quoted scalars "!", plain ones "?"
     } else if (n.IsSequence()) {
       a.kind = Argument::Kind::kList;
       for (const auto& item : n) a.items.push_back(ToArgument(item));
@@ -153,7 +154,18 @@ void LintArgument(const Argument& a, const ArgSpec& spec, Scope& scope, const st
       if (a.kind != Argument::Kind::kMap) fail("must be a map of name: expression");
       for (const auto& item : a.items) scalar_expr(item);
       break;
+    case ArgShape::kChoiceMap:
+      if (a.kind != Argument::Kind::kMap) fail("must be a map of name: [value, ...]");
+      for (const auto& item : a.items) {
+        if (item.kind != Argument::Kind::kList || item.items.empty())
+          throw InputError(item.place.str() + ": '" + spec.name + "' entries must be non-empty lists of values");
+        for (const auto& x : item.items)
+          if (x.kind != Argument::Kind::kScalar)
+            throw InputError(x.place.str() + ": '" + spec.name + "' values must be numbers, booleans or strings");
+      }
+      break;
   }
+  if (spec.name == "render" && a.text != "native" && a.text != "openscad") fail("must be native or openscad");
   if (spec.name == "file") {
     std::filesystem::path p = dir / a.text;
     if (!std::filesystem::is_regular_file(p)) fail("names a file that does not exist: " + p.string());
@@ -211,6 +223,13 @@ Node ReadNode(const Reader& r, const YAML::Node& y, Scope& scope, const std::fil
     r.Fail(node.place, "'" + node.op + "' takes " + want + ", got " + std::to_string(n));
   }
   LintArgs(node.args, schema, node.place, "'" + node.op + "'", scope, dir);
+  if (auto c = node.args.find("choices"); c != node.args.end()) {
+    auto set = node.args.find("set");
+    for (std::size_t i = 0; i < c->second.keys.size(); ++i)
+      if (set == node.args.end() ||
+          std::find(set->second.keys.begin(), set->second.keys.end(), c->second.keys[i]) == set->second.keys.end())
+        r.Fail(c->second.items[i].place, "choices for '" + c->second.keys[i] + "' need an entry in 'set' giving the index");
+  }
   return node;
 }
 
@@ -400,7 +419,7 @@ Design ParseDesign(const std::string& text, const std::filesystem::path& path) {
   }
   if (!root.IsMap()) throw InputError(file + ": a design file must be a YAML map (name, parameters, tree, ...)");
   r.OnlyKeys(root, {"name", "voxel_size", "parameters", "variables", "constraints", "tree", "checks", "properties", "description",
-                   "objects", "states", "transitions"},
+                   "objects", "states", "transitions", "presets"},
              "design");
 
   d.name = root["name"] ? r.String(root["name"], "name") : path.stem().string();
@@ -557,6 +576,38 @@ Design ParseDesign(const std::string& text, const std::filesystem::path& path) {
     }
   } else {
     d.properties = {"volume"};
+  }
+
+  // presets: {name: {parameter: value, ...}}; enum values by label.
+  if (root["presets"]) {
+    if (!root["presets"].IsMap()) r.Fail(root["presets"], "'presets' must be a map of name: {parameter: value}");
+    for (auto it = root["presets"].begin(); it != root["presets"].end(); ++it) {
+      Preset preset;
+      preset.name = it->first.Scalar();
+      preset.place = r.At(it->first);
+      const YAML::Node values = it->second;  // a copy: the iterator yields temporaries
+      if (!values.IsMap()) r.Fail(values, "preset '" + preset.name + "' must be a map of parameter: value");
+      for (const auto& p : d.exposed) preset.values[p.name] = p.default_value;
+      for (auto v = values.begin(); v != values.end(); ++v) {
+        const std::string name = v->first.Scalar();
+        const ExposedParameter* p = d.FindExposed(name);
+        if (!p) r.Fail(v->first, "preset '" + preset.name + "': '" + name + "' is not an exposed parameter");
+        double x = 0;
+        if (p->kind == ParameterKind::kEnumerated) {
+          const std::string label = r.String(v->second, "preset value");
+          auto f = std::find(p->labels.begin(), p->labels.end(), label);
+          if (f == p->labels.end()) r.Fail(v->second, "preset '" + preset.name + "': '" + label + "' is not one of the values of '" + name + "'");
+          x = static_cast<double>(f - p->labels.begin());
+        } else {
+          x = r.Number(v->second, "preset value");
+          if (x < p->min || x > p->max) r.Fail(v->second, "preset '" + preset.name + "': " + name + " is outside [min, max]");
+          if (p->kind == ParameterKind::kInteger && x != std::round(x))
+            r.Fail(v->second, "preset '" + preset.name + "': " + name + " takes whole numbers");
+        }
+        preset.values[name] = x;
+      }
+      d.presets.push_back(std::move(preset));
+    }
   }
   return d;
 }

@@ -25,7 +25,14 @@ const std::map<std::string, OpSchema>& OperationSchemas() {
         0,
         0}},
       {"mesh", {{{"file", S::kString}}, 0, 0}},
-      {"openscad", {{{"file", S::kString}, {"set", S::kNumberMap, false}}, 0, 0}},
+      // An OpenSCAD model (docs/openscad.md): `set` passes -D overrides,
+      // `choices` the OpenSCAD value each index of an enum in `set` stands
+      // for; `render: native` (default) evaluates OpenSCAD's CSG tree with
+      // level sets, `render: openscad` imports OpenSCAD's own STL.
+      {"openscad",
+       {{{"file", S::kString}, {"set", S::kNumberMap, false}, {"choices", S::kChoiceMap, false}, {"render", S::kString, false}},
+        0,
+        0}},
       // A works-like prototype (Koo et al., docs/prototype.md): solved, then
       // its printable geometry; unsatisfiable constraints fail the sample.
       {"prototype", {{{"file", S::kString}, {"set", S::kNumberMap, false}}, 0, 0}},

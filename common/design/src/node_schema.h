@@ -16,6 +16,7 @@ enum class ArgShape {
   kVec3List,    // list of [x, y, z] triples
   kString,      // literal string (file names, options)
   kNumberMap,   // map name -> expression (OpenSCAD -D overrides)
+  kChoiceMap,   // map name -> list of literal values an index selects (OpenSCAD enums)
 };
 
 struct ArgSpec {

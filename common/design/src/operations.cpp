@@ -93,10 +93,8 @@ Solid OpenScad(const geometry::GridSpec& g, const ResolvedArgs& a, const Node& n
   std::vector<std::string> argv = {"timeout", "300", "openscad", "--quiet", "-o", out.string()};
   if (auto it = a.values.find("set"); it != a.values.end()) {
     for (std::size_t i = 0; i < it->second.keys.size(); ++i) {
-      char value[64];
-      std::snprintf(value, sizeof value, "%.10g", it->second.numbers[i]);
       argv.push_back("-D");
-      argv.push_back(it->second.keys[i] + "=" + value);
+      argv.push_back(it->second.keys[i] + "=" + it->second.literals[i]);
     }
   }
   argv.push_back(scad.string());

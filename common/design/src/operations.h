@@ -35,6 +35,7 @@ struct ResolvedArgs {
   struct Value {
     std::vector<double> numbers;     // scalars, vectors, flattened point lists
     std::vector<std::string> keys;   // map keys (OpenSCAD overrides)
+    std::vector<std::string> literals;  // `set` of openscad: each key's value as an OpenSCAD literal
     std::string text;                // strings
     std::string digest;              // file contents digest, for keys
     SourcePlace place;

@@ -38,6 +38,14 @@ struct ExposedParameter {
   SourcePlace place;
 };
 
+// A named point of the exposed space the designer offers (e.g. an OpenSCAD
+// parameter set); parameters it does not name take their defaults.
+struct Preset {
+  std::string name;
+  std::map<std::string, double> values;  // every exposed parameter (enums by index)
+  SourcePlace place;
+};
+
 // A mutable low-level parameter: solved for, with bounds and a default the
 // solver stays as close to as the constraints allow.
 struct MutableParameter {
@@ -64,6 +72,7 @@ struct Constraint {
 struct Argument {
   enum class Kind { kScalar, kList, kMap } kind = Kind::kScalar;
   std::string text;                 // scalar: expression or string
+  bool quoted = false;              // scalar written in quotes (a string, never a number)
   std::vector<Argument> items;      // list items, or map values
   std::vector<std::string> keys;    // map keys, parallel to items
   SourcePlace place;
@@ -130,6 +139,7 @@ struct Design {
   Node tree;
   std::vector<CheckSpec> checks;
   std::vector<std::string> properties;      // volume, area, bbox
+  std::vector<Preset> presets;              // optional, in file order
   // Reconfigurables (optional; see ObjectMotion). Transitions are listed so
   // that each one's `from` state is the first state or the `to` of an earlier
   // transition (the state poses are propagated in that order).

@@ -1,0 +1,287 @@
+// An OpenSCAD Customizer model as a fabatlas design (fabatlas/scad/import_design.h).
+#include "fabatlas/scad/import_design.h"
+
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <map>
+#include <set>
+#include <sstream>
+
+#include "fabatlas/error.h"
+#include "fabatlas/scad/customizer.h"
+
+namespace fabatlas::scad {
+namespace {
+
+// A YAML double-quoted scalar (JSON string syntax is valid YAML).
+std::string Yaml(const std::string& s) { return nlohmann::json(s).dump(); }
+
+std::string ReadText(const std::filesystem::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  if (!in) throw InputError(p.string() + ": cannot read the OpenSCAD model");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+bool Whole(double v) { return v == std::floor(v) && std::abs(v) < 1e15; }
+
+// How a parameter is exposed: kind, range, labels and OpenSCAD literals.
+struct Exposure {
+  const CustomizerParameter* p = nullptr;
+  std::string type;                   // real, integer, enum
+  double min = 0, max = 0;
+  std::vector<std::string> labels;    // enum: what users see
+  std::vector<std::string> literals;  // enum: what OpenSCAD gets
+  std::vector<bool> quoted;           // enum: literal is a string
+  std::size_t default_index = 0;
+};
+
+Exposure ExposureOf(const CustomizerParameter& p) {
+  Exposure e;
+  e.p = &p;
+  if (p.value.type == ScadValue::Type::kBoolean) {
+    e.type = "enum";
+    e.labels = e.literals = {"false", "true"};
+    e.quoted = {false, false};
+    e.default_index = p.value.text == "true";
+  } else if (p.widget == CustomizerParameter::Widget::kSlider) {
+    // Integer where min and step are whole (and the model's value is).
+    const double step = p.step > 0 ? p.step : 1;
+    e.type = Whole(p.min) && Whole(step) && Whole(p.value.number) && Whole(p.max) ? "integer" : "real";
+    e.min = p.min;
+    e.max = p.max;
+  } else {
+    e.type = "enum";
+    std::set<std::string> seen;
+    for (std::size_t i = 0; i < p.options.size(); ++i) {
+      const DropdownOption& o = p.options[i];
+      std::string label = o.label;
+      // Labels are how users and --at name values: keep them unique.
+      while (!seen.insert(label).second) label += "'";
+      e.labels.push_back(label);
+      e.literals.push_back(o.value.type == ScadValue::Type::kString ? o.value.text : o.value.Literal());
+      e.quoted.push_back(o.value.type == ScadValue::Type::kString);
+    }
+    for (std::size_t i = 0; i < p.options.size(); ++i) {  // the first option equal to the model's value
+      const ScadValue& v = p.options[i].value;
+      if (v.type == ScadValue::Type::kNumber ? v.number == p.value.number : v.text == p.value.text) {
+        e.default_index = i;
+        break;
+      }
+    }
+  }
+  return e;
+}
+
+double VoxelFor(const ImportOptions& o) {
+  if (o.voxel_size > 0) return o.voxel_size;
+  if (o.model_size <= 0) return 0.5;
+  double v = std::round(o.model_size / 200 / 0.05) * 0.05;
+  return std::clamp(v, 0.1, 1.0);
+}
+
+}  // namespace
+
+ImportSummary ImportScad(const std::filesystem::path& model, const ImportOptions& options) {
+  const std::string text = ReadText(model);
+  CustomizerModel m = ReadCustomizer(text, model.string());
+  ImportSummary s;
+  s.warnings = m.warnings;
+
+  std::map<std::string, const CustomizerParameter*> by_name;
+  for (const auto& p : m.parameters) by_name[p.name] = &p;
+  std::vector<const CustomizerParameter*> chosen;
+  if (options.expose.empty()) {
+    for (const auto& p : m.parameters)
+      if (!p.hidden && p.widget != CustomizerParameter::Widget::kNone && p.name[0] != '$') chosen.push_back(&p);
+  } else {
+    for (const auto& name : options.expose) {
+      auto it = by_name.find(name);
+      if (it == by_name.end())
+        throw InputError(model.string() + ": --expose " + name + ": the model has no Customizer parameter '" + name +
+                         "' (a top-level literal assignment before the first '{')");
+      const CustomizerParameter* p = it->second;
+      if (name[0] == '$') throw InputError(model.string() + ": --expose " + name + ": $-variables stay fixed");
+      if (p->widget == CustomizerParameter::Widget::kNone && p->value.type != ScadValue::Type::kBoolean)
+        throw InputError(model.string() + ":" + std::to_string(p->line) + ": --expose " + name +
+                         ": the parameter has no slider or dropdown annotation, so it has no range");
+      if (std::find(chosen.begin(), chosen.end(), p) == chosen.end()) chosen.push_back(p);
+    }
+    std::sort(chosen.begin(), chosen.end(), [](auto* a, auto* b) { return a->line < b->line; });
+  }
+  if (chosen.empty())
+    throw InputError(model.string() + ": no Customizer parameter has a slider or dropdown annotation outside [Hidden]; "
+                     "name parameters with --expose");
+  if (chosen.size() > 6)
+    throw InputError(model.string() + ": " + std::to_string(chosen.size()) +
+                     " Customizer parameters have ranges; fabatlas samples at most 6 dimensions, choose them with --expose a,b,...");
+
+  std::vector<Exposure> exposures;
+  for (const auto* p : chosen) exposures.push_back(ExposureOf(*p));
+  for (const auto& p : m.parameters)
+    if (std::find(chosen.begin(), chosen.end(), &p) == chosen.end()) s.fixed.push_back(p.name);
+
+  const std::string stem = model.stem().string();
+  const std::string reference = options.model_reference.empty() ? model.filename().string() : options.model_reference;
+  std::ostringstream y;
+  y << "# Imported from the OpenSCAD Customizer model " << model.filename().string()
+    << " by `fabatlas import-scad` (docs/openscad.md).\n";
+  if (!s.fixed.empty()) {
+    y << "# Fixed at the model's values:";
+    for (const auto& p : m.parameters)
+      if (std::find(chosen.begin(), chosen.end(), &p) == chosen.end()) y << " " << p.name << "=" << p.value.Literal();
+    y << "\n";
+  }
+  y << "name: " << Yaml(stem) << "\n";
+  y << "voxel_size: " << FormatScadNumber(VoxelFor(options)) << "\n";
+  y << "parameters:\n";
+  for (const auto& e : exposures) {
+    const CustomizerParameter& p = *e.p;
+    y << "  " << p.name << ": {type: " << e.type;
+    if (e.type == "enum") {
+      y << ", values: [";
+      for (std::size_t i = 0; i < e.labels.size(); ++i) y << (i ? ", " : "") << Yaml(e.labels[i]);
+      y << "], default: " << Yaml(e.labels[e.default_index]);
+    } else {
+      y << ", min: " << FormatScadNumber(e.min) << ", max: " << FormatScadNumber(e.max)
+        << ", default: " << FormatScadNumber(p.value.number);
+    }
+    if (!p.group.empty()) y << ", group: " << Yaml(p.group);
+    if (!p.description.empty()) y << ", description: " << Yaml(p.description);
+    y << "}";
+    // fabatlas samples the whole range; OpenSCAD's slider step is noted only.
+    if (p.step > 0 && e.type != "enum") y << "  # OpenSCAD slider step " << FormatScadNumber(p.step);
+    y << "\n";
+  }
+  y << "tree:\n  op: openscad\n  file: " << Yaml(reference) << "\n  set: {";
+  for (std::size_t i = 0; i < exposures.size(); ++i)
+    y << (i ? ", " : "") << exposures[i].p->name << ": " << exposures[i].p->name;
+  y << "}\n";
+  bool any_enum = false;
+  for (const auto& e : exposures) any_enum = any_enum || e.type == "enum";
+  if (any_enum) {
+    // The OpenSCAD value each enum index stands for: quoted YAML scalars are
+    // passed as OpenSCAD strings, plain ones as numbers or booleans.
+    y << "  choices:\n";
+    for (const auto& e : exposures) {
+      if (e.type != "enum") continue;
+      y << "    " << e.p->name << ": [";
+      for (std::size_t i = 0; i < e.literals.size(); ++i)
+        y << (i ? ", " : "") << (e.quoted[i] ? Yaml(e.literals[i]) : e.literals[i]);
+      y << "]\n";
+    }
+  }
+  // Checks: the mesh OpenSCAD produces (polyhedra, subtrees it renders) must
+  // be watertight; a wall of two 0.4 mm FDM extrusion lines; stands.
+  y << "checks:\n  - watertight\n  - {type: min_thickness, value: 0.8}\n  - stands\n";
+  y << "properties: [volume, bbox]\n";
+
+  // OpenSCAD's parameter sets beside the model become presets.
+  std::filesystem::path json = model;
+  json.replace_extension(".json");
+  std::error_code ec;
+  if (std::filesystem::is_regular_file(json, ec)) {
+    std::vector<ParameterSet> sets = ReadParameterSets(ReadText(json), json.string());
+    std::ostringstream presets;
+    for (const auto& set : sets) {
+      std::ostringstream values;
+      std::vector<std::string> ignored;
+      std::string problem;
+      for (const auto& [name, written] : set.values) {
+        auto e = std::find_if(exposures.begin(), exposures.end(), [&](const Exposure& x) { return x.p->name == name; });
+        if (e == exposures.end()) {
+          auto it = by_name.find(name);
+          if (it != by_name.end()) {
+            const ScadValue& v = it->second->value;
+            std::string model_text = v.type == ScadValue::Type::kString ? v.text : v.Literal();
+            if (model_text != written) ignored.push_back(name);
+          }
+          continue;
+        }
+        std::string value;
+        if (e->type == "enum") {
+          for (std::size_t i = 0; i < e->literals.size(); ++i) {
+            double a = 0, b = 0;
+            bool same = e->literals[i] == written ||
+                        (!e->quoted[i] && std::sscanf(written.c_str(), "%lf", &a) == 1 &&
+                         std::sscanf(e->literals[i].c_str(), "%lf", &b) == 1 && a == b);
+            if (same) {
+              value = Yaml(e->labels[i]);
+              break;
+            }
+          }
+          if (value.empty()) problem = name + "=" + written + " is not one of its dropdown values";
+        } else {
+          char* end = nullptr;
+          double v = std::strtod(written.c_str(), &end);
+          if (end == written.c_str() || *end != 0 || !std::isfinite(v)) problem = name + "=" + written + " is not a number";
+          else if (v < e->min || v > e->max) problem = name + "=" + written + " lies outside [" + FormatScadNumber(e->min) + ", " + FormatScadNumber(e->max) + "]";
+          else if (e->type == "integer" && !Whole(v)) problem = name + "=" + written + " is not a whole number";
+          else value = FormatScadNumber(v);
+        }
+        if (!problem.empty()) break;
+        values << (values.tellp() > 0 ? ", " : "") << name << ": " << value;
+      }
+      if (!problem.empty()) {
+        s.warnings.push_back(json.string() + ": parameter set '" + set.name + "' not kept as a preset: " + problem);
+        continue;
+      }
+      if (!ignored.empty()) {
+        std::string list;
+        for (const auto& n : ignored) list += (list.empty() ? "" : ", ") + n;
+        s.warnings.push_back(json.string() + ": parameter set '" + set.name + "' also sets fixed parameters (" + list +
+                             "); its preset keeps the model's values for them (expose them with --expose)");
+      }
+      presets << "  " << Yaml(set.name) << ": {" << values.str() << "}\n";
+      ++s.presets;
+    }
+    if (s.presets > 0) y << "presets:\n" << presets.str();
+  }
+  s.design_yaml = y.str();
+  for (const auto& e : exposures) s.exposed.push_back(e.p->name);
+
+  std::ostringstream job;
+  job << "# A precompute job for " << options.design_file_name << " (docs/job-format.md).\n";
+  job << "design: " << Yaml(options.design_file_name) << "\n";
+  job << "sampling: {subdivisions: 3, max_depth: 3, dg_threshold: 0.1, max_samples: 400}\n";
+  job << "threads: 2\n";
+  s.job_yaml = job.str();
+  return s;
+}
+
+}  // namespace fabatlas::scad
+
+namespace fabatlas::scad {
+
+std::filesystem::path WriteImportedJob(const std::filesystem::path& model, const std::filesystem::path& dir,
+                                       ImportOptions options, ImportSummary* summary) {
+  namespace fs = std::filesystem;
+  const std::string stem = model.stem().string();
+  options.model_reference = stem + ".scad";
+  options.design_file_name = stem + ".yaml";
+  ImportSummary s = ImportScad(model, options);
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  if (ec) throw InputError(dir.string() + ": cannot create the directory: " + ec.message());
+  auto write = [&](const fs::path& p, const std::string& text) {
+    std::ofstream out(p, std::ios::binary);
+    out << text;
+    if (!out) throw InputError(p.string() + ": cannot write");
+  };
+  if (!fs::exists(dir / (stem + ".scad")) || !fs::equivalent(model, dir / (stem + ".scad")))
+    write(dir / (stem + ".scad"), ReadText(model));
+  fs::path json = model;
+  json.replace_extension(".json");
+  if (fs::is_regular_file(json, ec) && (!fs::exists(dir / (stem + ".json")) || !fs::equivalent(json, dir / (stem + ".json"))))
+    write(dir / (stem + ".json"), ReadText(json));
+  write(dir / (stem + ".yaml"), s.design_yaml);
+  write(dir / (stem + ".job.yaml"), s.job_yaml);
+  if (summary) *summary = s;
+  return dir / (stem + ".job.yaml");
+}
+
+}  // namespace fabatlas::scad

@@ -1,0 +1,83 @@
+// `fabatlas import-scad` and MODEL.scad given to eval and sample, as a user
+// runs them: files written, warnings naming lines, exit status 2 with one line.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <array>
+#include <cstdio>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "fabatlas/testing/paths.h"
+
+namespace {
+
+struct CommandRun {
+  int status = -1;
+  std::string out, err;
+};
+
+CommandRun Fabatlas(const std::string& args, const std::filesystem::path& cwd) {
+  std::string bin = (fabatlas::testing::BinDir() / "fabatlas").string();
+  auto err_path = cwd / "stderr.txt";
+  std::string cmd = "cd " + cwd.string() + " && " + bin + " " + args + " 2>" + err_path.string();
+  CommandRun r;
+  FILE* pipe = ::popen(cmd.c_str(), "r");
+  std::array<char, 4096> buf;
+  std::size_t n;
+  while ((n = std::fread(buf.data(), 1, buf.size(), pipe)) > 0) r.out.append(buf.data(), n);
+  int status = ::pclose(pipe);
+  r.status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  std::ifstream e(err_path);
+  r.err.assign(std::istreambuf_iterator<char>(e), {});
+  return r;
+}
+
+TEST(ScadCli, ImportWritesDesignAndJobAndNamesMalformedLines) {
+  auto dir = fabatlas::testing::FreshTempDir("scad-cli");
+  std::ofstream(dir / "box.scad") << "// Edge length\nsize = 10; // [5:20]\nbad = 3; // [9:1]\ncube(size);\n";
+  CommandRun r = Fabatlas("import-scad box.scad --out box.yaml", dir);
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.err.find("box.scad:3: parameter 'bad'"), std::string::npos) << r.err;
+  EXPECT_TRUE(std::filesystem::exists(dir / "box.yaml"));
+  EXPECT_TRUE(std::filesystem::exists(dir / "box.job.yaml"));
+  CommandRun v = Fabatlas("validate box.yaml", dir);
+  EXPECT_EQ(v.status, 0) << v.err;
+
+  CommandRun e = Fabatlas("eval box.scad --at size=12 --json", dir);
+  ASSERT_EQ(e.status, 0) << e.err;
+  auto j = nlohmann::json::parse(e.out);
+  EXPECT_NEAR(j["properties"]["volume"].get<double>(), 1728, 0.01 * 1728);
+
+  CommandRun bad = Fabatlas("import-scad box.scad --out x.yaml --expose nope", dir);
+  EXPECT_EQ(bad.status, 2);
+  EXPECT_EQ(std::count(bad.err.begin(), bad.err.end(), '\n'), 1) << bad.err;
+  EXPECT_NE(bad.err.find("box.scad: --expose nope"), std::string::npos) << bad.err;
+  CommandRun missing = Fabatlas("eval nothere.scad", dir);
+  EXPECT_EQ(missing.status, 2);
+  EXPECT_NE(missing.err.find("nothere.scad"), std::string::npos) << missing.err;
+}
+
+TEST(ScadCli, SampleAModelDirectly) {
+  auto dir = fabatlas::testing::FreshTempDir("scad-cli-sample");
+  std::ofstream(dir / "slab.scad") << "n = 2; // [1:3]\nshape = \"flat\"; // [flat, tall]\n"
+                                      "cube([10 * n, 10, shape == \"tall\" ? 8 : 4]);\n";
+  CommandRun r = Fabatlas("sample slab.scad --out out", dir);
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_TRUE(std::filesystem::exists(dir / "out/model/slab.yaml"));
+  std::ifstream form(dir / "out/form.json");
+  auto j = nlohmann::json::parse(form);
+  ASSERT_TRUE(j.contains("samples"));
+  // Every sample's volume is the cube's: 10 n * 10 * (4 or 8).
+  int checked = 0;
+  for (const auto& s : j["samples"]) {
+    if (!s.value("valid", false)) continue;
+    const double n = s["u"][0].get<double>();                 // dimensions in order: n, shape
+    const double h = s["u"][1].get<double>() == 1 ? 8 : 4;  // enum index: flat, tall
+    EXPECT_NEAR(s["properties"]["volume"].get<double>(), 100 * n * h, 0.02 * 100 * n * h);
+    ++checked;
+  }
+  EXPECT_GE(checked, 6);
+}
+
+}  // namespace

@@ -1,0 +1,249 @@
+// Reading OpenSCAD Customizer annotations by the rules of the OpenSCAD User
+// Manual ("Customizer") and importing models as designs: every widget form,
+// groups, [Hidden], descriptions, malformed lines, Debian's Parametric
+// examples, parameter sets as presets.
+#include <gtest/gtest.h>
+
+#include <fstream>
+
+#include "fabatlas/design/design.h"
+#include "fabatlas/error.h"
+#include "fabatlas/scad/customizer.h"
+#include "fabatlas/scad/import_design.h"
+#include "fabatlas/testing/paths.h"
+
+namespace {
+
+using fabatlas::scad::CustomizerModel;
+using fabatlas::scad::CustomizerParameter;
+using fabatlas::scad::ScadValue;
+using W = CustomizerParameter::Widget;
+
+const CustomizerParameter& Find(const CustomizerModel& m, const std::string& name) {
+  for (const auto& p : m.parameters)
+    if (p.name == name) return p;
+  throw std::runtime_error("no parameter " + name);
+}
+
+bool Has(const CustomizerModel& m, const std::string& name) {
+  for (const auto& p : m.parameters)
+    if (p.name == name) return true;
+  return false;
+}
+
+// The manual's widget examples, verbatim in form.
+const char* kManual = R"(// combo box for number
+Numbers=2; // [0, 1, 2, 3]
+
+// combo box for string
+Strings="foo"; // [foo, bar, baz]
+
+//labeled combo box for numbers
+Labeled_values=10; // [10:S, 20:M, 30:L]
+
+//labeled combo box for string
+Labeled_value="S"; // [S:Small, M:Medium, L:Large]
+
+/* [Sliders] */
+// slider widget for number with max. value
+sliderWithMax =34; // [50]
+
+// slider widget for number in range
+sliderWithRange =34; // [10:100]
+
+//step slider for number
+stepSlider=2; //[0:5:100]
+
+// slider widget for number in range
+sliderCentered =0; // [-10:0.1:10]
+
+/*[ Other widgets ]*/
+//description
+Variable = true;
+
+// spinbox with step size 1
+Spinbox= 5;
+
+//Text box for vector with more than 4 elements
+Vector6=[12,34,44,43,23,23];
+
+// Text box for string
+String="hello";
+
+expression = 12 + 0.5;
+
+/* [Hidden] */
+secret = 3; // [0:10]
+
+/* [Back] */
+$fn = 20;
+module __Customizer_Limit__ () {}
+after_brace = 4; // [0:10]
+)";
+
+TEST(Customizer, EveryWidgetOfTheManual) {
+  CustomizerModel m = fabatlas::scad::ReadCustomizer(kManual, "manual.scad");
+  EXPECT_TRUE(m.warnings.empty()) << m.warnings[0];
+
+  const auto& numbers = Find(m, "Numbers");
+  EXPECT_EQ(numbers.widget, W::kDropdown);
+  ASSERT_EQ(numbers.options.size(), 4u);
+  EXPECT_EQ(numbers.options[3].value.type, ScadValue::Type::kNumber);
+  EXPECT_EQ(numbers.options[3].value.number, 3);
+  EXPECT_EQ(numbers.description, "combo box for number");
+
+  const auto& strings = Find(m, "Strings");
+  EXPECT_EQ(strings.widget, W::kDropdown);
+  ASSERT_EQ(strings.options.size(), 3u);
+  EXPECT_EQ(strings.options[1].value.type, ScadValue::Type::kString);
+  EXPECT_EQ(strings.options[1].value.text, "bar");
+
+  const auto& labelled = Find(m, "Labeled_values");
+  ASSERT_EQ(labelled.options.size(), 3u);
+  EXPECT_EQ(labelled.options[1].value.number, 20);
+  EXPECT_EQ(labelled.options[1].label, "M");
+  const auto& labelled_s = Find(m, "Labeled_value");
+  EXPECT_EQ(labelled_s.options[2].value.text, "L");
+  EXPECT_EQ(labelled_s.options[2].label, "Large");
+
+  const auto& max_only = Find(m, "sliderWithMax");
+  EXPECT_EQ(max_only.widget, W::kSlider);
+  EXPECT_EQ(max_only.min, 0);
+  EXPECT_EQ(max_only.max, 50);
+  EXPECT_EQ(max_only.group, "Sliders");
+  const auto& range = Find(m, "sliderWithRange");
+  EXPECT_EQ(range.min, 10);
+  EXPECT_EQ(range.max, 100);
+  EXPECT_EQ(range.step, 0);
+  const auto& step = Find(m, "stepSlider");
+  EXPECT_EQ(step.step, 5);
+  EXPECT_EQ(step.max, 100);
+  const auto& centred = Find(m, "sliderCentered");
+  EXPECT_EQ(centred.min, -10);
+  EXPECT_DOUBLE_EQ(centred.step, 0.1);
+
+  // No annotation: check box, spin box, text boxes: parameters without a widget.
+  EXPECT_EQ(Find(m, "Variable").widget, W::kNone);
+  EXPECT_EQ(Find(m, "Variable").value.type, ScadValue::Type::kBoolean);
+  EXPECT_EQ(Find(m, "Variable").group, "Other widgets");
+  EXPECT_EQ(Find(m, "Spinbox").widget, W::kNone);
+  EXPECT_EQ(Find(m, "Vector6").value.type, ScadValue::Type::kVector);
+  EXPECT_EQ(Find(m, "String").value.text, "hello");
+  // Expressions are not parameters; [Hidden] hides; nothing after the first '{'.
+  EXPECT_FALSE(Has(m, "expression"));
+  EXPECT_TRUE(Find(m, "secret").hidden);
+  EXPECT_FALSE(Find(m, "$fn").hidden);
+  EXPECT_FALSE(Has(m, "after_brace"));
+}
+
+TEST(Customizer, MalformedAnnotationsAreWarningsNamingTheLine) {
+  const char* text =
+      "a = 5; // [10:1]\n"          // 1: min > max
+      "b = 5; // [0:0:10]\n"        // 2: step 0
+      "c = 5; // [0:10\n"           // 3: unterminated
+      "d = \"x\"; // [0:10]\n"      // 4: slider on a string
+      "e = 7; // [1, 2, 3]\n"       // 5: value not among the options
+      "f = 5; // [1:2:3:4]\n"       // 6: too many parts
+      "g = 5; // [0:10]\n"          // 7: fine
+      "h = 5; // just a comment\n"  // 8: not an annotation, no warning
+      "i = 50; // [0:10]\n";        // 9: value outside the slider
+  CustomizerModel m = fabatlas::scad::ReadCustomizer(text, "bad.scad");
+  ASSERT_EQ(m.warnings.size(), 7u);
+  const int lines[] = {1, 2, 3, 4, 5, 6, 9};
+  for (int k = 0; k < 7; ++k)
+    EXPECT_EQ(m.warnings[k].rfind("bad.scad:" + std::to_string(lines[k]) + ": ", 0), 0u) << m.warnings[k];
+  EXPECT_NE(m.warnings[0].find("min > max"), std::string::npos) << m.warnings[0];
+  EXPECT_NE(m.warnings[0].find("kept fixed at 5"), std::string::npos) << m.warnings[0];
+  for (const char* name : {"a", "b", "c", "d", "e", "f", "h", "i"}) EXPECT_EQ(Find(m, name).widget, W::kNone) << name;
+  EXPECT_EQ(Find(m, "g").widget, W::kSlider);
+}
+
+TEST(Customizer, QuotingForOpenScad) {
+  EXPECT_EQ(fabatlas::scad::QuoteScadString("square"), "\"square\"");
+  EXPECT_EQ(fabatlas::scad::QuoteScadString("say \"hi\" \\o/"), "\"say \\\"hi\\\" \\\\o/\"");
+  EXPECT_EQ(fabatlas::scad::FormatScadNumber(0.1), "0.1");
+  EXPECT_EQ(fabatlas::scad::FormatScadNumber(120), "120");
+  EXPECT_EQ(fabatlas::scad::FormatScadNumber(-2.5), "-2.5");
+  // A quoted dropdown value with an escaped quote reads back unescaped.
+  CustomizerModel m = fabatlas::scad::ReadCustomizer("s = \"a\"; // [\"a\", \"b \\\"c\\\", d\"]\n", "q.scad");
+  ASSERT_TRUE(m.warnings.empty()) << m.warnings[0];
+  ASSERT_EQ(Find(m, "s").options.size(), 2u);
+  EXPECT_EQ(Find(m, "s").options[1].value.text, "b \"c\", d");
+}
+
+TEST(Customizer, DebianParametricExamples) {
+  const std::filesystem::path dir = "/usr/share/openscad/examples/Parametric";
+  if (!std::filesystem::exists(dir / "sign.scad")) GTEST_SKIP() << "openscad examples not installed";
+  auto read = [](const std::filesystem::path& p) {
+    std::ifstream in(p);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+  };
+  CustomizerModel sign = fabatlas::scad::ReadCustomizer(read(dir / "sign.scad"), "sign.scad");
+  EXPECT_TRUE(sign.warnings.empty());
+  // resolution, radius, height, Message, To (and not $fn = resolution, an expression).
+  ASSERT_EQ(sign.parameters.size(), 5u);
+  EXPECT_EQ(Find(sign, "resolution").options.size(), 5u);
+  EXPECT_EQ(Find(sign, "radius").min, 60);
+  EXPECT_EQ(Find(sign, "radius").max, 200);
+  EXPECT_EQ(Find(sign, "Message").options[1].value.text, "Happy Birthday!");
+  EXPECT_EQ(Find(sign, "Message").group, "Content To be written");
+  EXPECT_EQ(Find(sign, "To").widget, W::kNone);
+  EXPECT_EQ(Find(sign, "height").description, "Total height of the sign");
+
+  CustomizerModel candle = fabatlas::scad::ReadCustomizer(read(dir / "candleStand.scad"), "candleStand.scad");
+  EXPECT_TRUE(candle.warnings.empty());
+  EXPECT_EQ(candle.parameters.size(), 12u);  // length .. widthOfRing, before the first '{'
+  const auto& length = Find(candle, "length");
+  ASSERT_EQ(length.options.size(), 3u);
+  EXPECT_EQ(length.options[0].value.number, 70);
+  EXPECT_EQ(length.options[0].label, "large");
+  EXPECT_EQ(Find(candle, "count").max, 14);
+  EXPECT_EQ(Find(candle, "centerCandle").value.type, ScadValue::Type::kBoolean);
+  EXPECT_EQ(Find(candle, "widthOfRing").group, "Properties of Ring");
+
+  // Imported as designs: exposed parameters, enum choices, presets.
+  fabatlas::scad::ImportSummary s = fabatlas::scad::ImportScad(dir / "candleStand.scad", {});
+  EXPECT_EQ(s.exposed, (std::vector<std::string>{"length", "count"}));
+  EXPECT_EQ(s.presets, 4);
+  fabatlas::design::Design d = fabatlas::design::ParseDesign(s.design_yaml, dir / "candleStand.yaml");
+  ASSERT_EQ(d.exposed.size(), 2u);
+  EXPECT_EQ(d.exposed[0].kind, fabatlas::design::ParameterKind::kEnumerated);
+  EXPECT_EQ(d.exposed[0].labels, (std::vector<std::string>{"large", "medium", "small"}));
+  EXPECT_EQ(d.exposed[0].default_value, 1);  // the model's 50 = medium
+  EXPECT_EQ(d.exposed[1].kind, fabatlas::design::ParameterKind::kInteger);
+  ASSERT_EQ(d.presets.size(), 4u);
+  EXPECT_EQ(d.presets[3].name, "Large");
+  EXPECT_EQ(d.presets[3].values.at("length"), 0);
+  EXPECT_EQ(d.presets[2].values.at("count"), 5);  // "With Ball"
+
+  fabatlas::scad::ImportSummary sg = fabatlas::scad::ImportScad(dir / "sign.scad", {});
+  EXPECT_EQ(sg.exposed, (std::vector<std::string>{"resolution", "radius", "height", "Message"}));
+  fabatlas::design::Design ds = fabatlas::design::ParseDesign(sg.design_yaml, dir / "sign.yaml");
+  EXPECT_EQ(ds.exposed[3].labels[4], "Thank You");
+  EXPECT_EQ(ds.exposed[0].labels[2], "30");
+}
+
+TEST(Import, ExposeAndItsErrors) {
+  auto dir = fabatlas::testing::FreshTempDir("scad-import");
+  std::ofstream(dir / "m.scad") << "/* [A] */\nw = 10; // [1:20]\nflag = true;\nfree = 3;\n/* [Hidden] */\nh = 2; // [1:5]\ncube([w, h, 1]);\n";
+  fabatlas::scad::ImportOptions o;
+  o.expose = {"flag", "h"};
+  fabatlas::scad::ImportSummary s = fabatlas::scad::ImportScad(dir / "m.scad", o);
+  EXPECT_EQ(s.exposed, (std::vector<std::string>{"flag", "h"}));  // a boolean and a hidden slider, by name
+  fabatlas::design::Design d = fabatlas::design::ParseDesign(s.design_yaml, dir / "m.yaml");
+  EXPECT_EQ(d.exposed[0].labels, (std::vector<std::string>{"false", "true"}));
+  EXPECT_EQ(d.exposed[0].default_value, 1);
+  o.expose = {"free"};
+  try {
+    fabatlas::scad::ImportScad(dir / "m.scad", o);
+    ADD_FAILURE() << "a parameter without a range was exposed";
+  } catch (const fabatlas::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("m.scad:4: --expose free"), std::string::npos) << e.what();
+  }
+  o.expose = {"nope"};
+  EXPECT_THROW(fabatlas::scad::ImportScad(dir / "m.scad", o), fabatlas::InputError);
+  std::ofstream(dir / "none.scad") << "a = 1;\ncube(a);\n";
+  EXPECT_THROW(fabatlas::scad::ImportScad(dir / "none.scad", {}), fabatlas::InputError);
+}
+
+}  // namespace
