@@ -8,6 +8,7 @@
 #include <numbers>
 
 #include "fabatlas/design/evaluate_sample.h"
+#include "fabatlas/mesh/read_mesh.h"
 #include "fabatlas/scad/import_design.h"
 #include "fabatlas/testing/paths.h"
 
@@ -46,6 +47,62 @@ TEST(ScadEval, StringDropdownChangesTheGeometry) {
   // diameter 6 mm ($fn = 32), 3 * 2 * (36 - 16 * 9 * sin(2 pi / 32)) mm^3.
   const double expected = 3 * 2 * (36 - 16 * 9 * std::sin(2 * std::numbers::pi / 32));
   EXPECT_NEAR(round - square, expected, 0.2 * expected) << round << " " << square;
+}
+
+}  // namespace
+
+namespace {
+
+// Volume of a closed triangle mesh (divergence theorem), mm^3.
+double MeshVolume(const fabatlas::mesh::TriangleMesh& m) {
+  double v = 0;
+  for (const auto& t : m.triangles) {
+    const auto& a = m.vertices[t[0]];
+    const auto& b = m.vertices[t[1]];
+    const auto& c = m.vertices[t[2]];
+    v += a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) + a[2] * (b[0] * c[1] - b[1] * c[0]);
+  }
+  return std::abs(v) / 6;
+}
+
+TEST(ScadEval, NativeCsgMatchesOpenScadsOwnRenderAndIsCachedPerSubtree) {
+  const std::filesystem::path scad = "/usr/share/openscad/examples/Parametric/candleStand.scad";
+  if (!std::filesystem::exists(scad)) GTEST_SKIP() << "openscad examples not installed";
+  auto dir = fabatlas::testing::FreshTempDir("scad-native");
+  // OpenSCAD's own STL of the model at count = 5: the peer's volume.
+  const std::string stl = (dir / "peer.stl").string();
+  ASSERT_EQ(std::system(("openscad --quiet -o " + stl + " -D count=5 " + scad.string() + " 2>/dev/null").c_str()), 0);
+  const double peer = MeshVolume(fabatlas::mesh::ReadMesh(stl));
+
+  design::Design d = design::ParseDesign(
+      "name: candles\nvoxel_size: 0.25\nparameters: {count: {type: integer, min: 3, max: 14, default: 7}}\n"
+      "tree: {op: openscad, file: " + scad.string() + ", set: {count: count}}\nproperties: [volume]\n",
+      dir / "candles.yaml");
+  design::InMemorySubtreeCache cache;
+  design::EvaluateOptions options;
+  options.cache = &cache;
+  options.run_checks = false;
+  design::SampleResult five = design::EvaluateSample(d, design::ParsePoint(d, "count=5", "--at"), options);
+  ASSERT_TRUE(five.valid) << five.failure_reason;
+  // The volume enclosed by the extracted surface (what an export writes).
+  EXPECT_NEAR(MeshVolume(five.solid.ToMesh()), peer, 0.01 * peer);
+  int native = 0, rendered = 0;
+  for (const auto& s : five.subtrees) {
+    native += s.op.rfind("csg:", 0) == 0;
+    rendered += s.op.rfind("csg-openscad:", 0) == 0;
+  }
+  EXPECT_GT(native, 20);
+  EXPECT_EQ(rendered, 0);  // cylinders, cubes, a sphere, transforms, booleans, a linear_extrude of circles
+  EXPECT_EQ(five.subtrees.back().op, "openscad");
+  EXPECT_EQ(five.subtrees.back().children.size(), 1u);
+
+  // count = 6 shares the centre candle and the base ring's subtrees with count = 5.
+  design::SampleResult six = design::EvaluateSample(d, design::ParsePoint(d, "count=6", "--at"), options);
+  ASSERT_TRUE(six.valid) << six.failure_reason;
+  int hits = 0;
+  for (const auto& s : six.subtrees) hits += s.from_cache;
+  EXPECT_GT(hits, 0);
+  EXPECT_GT(MeshVolume(six.solid.ToMesh()), MeshVolume(five.solid.ToMesh()));
 }
 
 }  // namespace

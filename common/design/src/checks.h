@@ -6,6 +6,7 @@
 
 #include "assembly_node.h"
 #include "expression.h"
+#include "openscad_node.h"
 #include "fabatlas/design/evaluate_sample.h"
 #include "fabatlas/mesh/triangle_mesh.h"
 #include "reconfigurable.h"
@@ -28,6 +29,9 @@ class CheckContext {
   std::function<const std::vector<ResolvedTransition>&()> transitions;
   // Assemblies: the design's `assembly` node solved at this sample.
   std::function<std::shared_ptr<const AssemblyOutcome>()> assembly;
+  // Meshes that entered the sample from outside fabatlas (mesh nodes,
+  // OpenSCAD polyhedra and renders): what `watertight` inspects in full.
+  const std::vector<OutsideMesh>* outside = nullptr;
 
  private:
   const Design& design_;

@@ -16,6 +16,7 @@
 #include "fabatlas/scad/customizer.h"
 #include "fabatlas/sha256.h"
 #include "node_schema.h"
+#include "openscad_node.h"
 #include "operations.h"
 #include "reconfigurable.h"
 #include "fabatlas/swept/swept_volume.h"
@@ -107,6 +108,9 @@ class TreeEvaluation {
     return SolveAssemblyNode(Resolve(*found), *found, design_.file.parent_path());
   }
 
+  // Meshes from outside fabatlas met while evaluating (for `watertight`).
+  const std::vector<OutsideMesh>& Outside() const { return outside_; }
+
   // Where subtree records go from now on.
   void RecordInto(std::vector<SubtreeRecord>* records) { records_ = records; }
 
@@ -175,10 +179,12 @@ class TreeEvaluation {
         record.from_cache = true;
         record.bytes = hit->MemoryBytes();
         records_->push_back(std::move(record));
+        RecallOutside(id.key, &outside_);
         return {*hit, id.key, id.topology};
       }
     }
     ResolvedArgs args = Resolve(node);
+    const std::size_t outside_before = outside_.size();  // this subtree's outside meshes follow
     std::vector<Result> children;
     for (std::size_t i = 0; i < node.children.size(); ++i)
       children.push_back(Evaluate(node.children[i], path + "/" + std::to_string(i)));
@@ -205,12 +211,14 @@ class TreeEvaluation {
       if (auto hit = options_.cache->Find(record.key)) {
         out.solid = *hit;
         record.from_cache = true;
+        RecallOutside(record.key, &outside_);
       }
     }
     if (!record.from_cache) {
       std::vector<geometry::Solid> inputs;
       for (auto& c : children) inputs.push_back(std::move(c.solid));
       auto start = Clock::now();
+      double openscad_seconds = -1;
       if (node.op == "carve_swept") {
         geometry::Solid target = inputs.size() == 1 ? inputs[0] : inputs[0];
         for (std::size_t i = 1; i < inputs.size(); ++i) target = geometry::Union(target, inputs[i]);
@@ -219,11 +227,28 @@ class TreeEvaluation {
                                has_frame ? transition->motions[frame_index] : still, args.Number("offset", 0),
                                static_cast<int>(args.Number("time_steps", 2)), grid_, node.place,
                                args.Text("exact", "true") != "false");
+      } else if (node.op == "openscad") {
+        // Its CSG subtrees are records (and cache entries) of their own,
+        // before this one; the node's own time is OpenSCAD's export.
+        OpenScadNodeContext context;
+        context.grid = grid_;
+        context.cache = options_.cache;
+        context.records = records_;
+        context.outside = &outside_;
+        context.path = path;
+        OpenScadNodeResult scad = EvaluateOpenScadNode(node, args, design_.file.parent_path(), context);
+        out.solid = std::move(scad.solid);
+        if (!scad.root_key.empty()) record.children = {scad.root_key};
+        openscad_seconds = scad.export_seconds;
       } else {
-        out.solid = ApplyOperation(node, args, inputs, grid_, design_.file.parent_path());
+        out.solid = ApplyOperation(node, args, inputs, grid_, design_.file.parent_path(), &outside_);
       }
-      record.seconds = Since(start);
-      if (options_.cache) options_.cache->Offer(record.key, out.solid, record.seconds);
+      record.seconds = openscad_seconds >= 0 ? openscad_seconds : Since(start);
+      if (options_.cache) {
+        options_.cache->Offer(record.key, out.solid, record.seconds);
+        if (outside_.size() > outside_before)
+          RememberOutside(record.key, std::vector<OutsideMesh>(outside_.begin() + outside_before, outside_.end()));
+      }
     }
     record.bytes = out.solid.MemoryBytes();
     records_->push_back(std::move(record));
@@ -282,6 +307,7 @@ class TreeEvaluation {
   geometry::GridSpec grid_;
   std::map<const Node*, Identity> identities_;
   std::map<std::string, Result> objects_;
+  std::vector<OutsideMesh> outside_;  // meshes from outside fabatlas met in this sample
   std::optional<std::vector<ResolvedTransition>> transitions_;
 };
 
@@ -388,6 +414,7 @@ SampleResult EvaluateSample(const Design& design, const Point& u, const Evaluate
       context.object_solid = [&](const std::string& name) { return tree.EvaluateObject(name).solid; };
       context.transitions = [&]() -> const std::vector<ResolvedTransition>& { return tree.Transitions(); };
       context.assembly = [&]() { return tree.Assembly(); };
+      context.outside = &tree.Outside();
       for (const CheckSpec& spec : design.checks) {
         CheckOutcome outcome = RunCheck(spec, context);
         if (!outcome.passed) fail(outcome.failure, outcome.reason);

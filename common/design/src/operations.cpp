@@ -16,6 +16,7 @@
 #include "fabatlas/mesh/read_mesh.h"
 #include "fabatlas/prototype/fabricate.h"
 #include "fabatlas/prototype/solve.h"
+#include "openscad_node.h"
 
 namespace fabatlas::design {
 namespace {
@@ -83,56 +84,6 @@ Solid Tentacle(const geometry::GridSpec& g, const ResolvedArgs& a, const Node& n
   return UnionAll(std::move(spheres));
 }
 
-// Runs Debian's openscad with -D overrides and imports the mesh it writes.
-Solid OpenScad(const geometry::GridSpec& g, const ResolvedArgs& a, const Node& node, const std::filesystem::path& dir) {
-  std::filesystem::path scad = dir / a.Text("file");
-  char tmpl[] = "/tmp/fabatlas-openscad-XXXXXX";
-  if (!mkdtemp(tmpl)) throw DesignFault(node.place.str() + ": cannot create a temporary directory for openscad");
-  std::filesystem::path work(tmpl);
-  std::filesystem::path out = work / "out.stl", log = work / "log.txt";
-  std::vector<std::string> argv = {"timeout", "300", "openscad", "--quiet", "-o", out.string()};
-  if (auto it = a.values.find("set"); it != a.values.end()) {
-    for (std::size_t i = 0; i < it->second.keys.size(); ++i) {
-      argv.push_back("-D");
-      argv.push_back(it->second.keys[i] + "=" + it->second.literals[i]);
-    }
-  }
-  argv.push_back(scad.string());
-  // posix_spawn, not fork + freopen: sample evaluation runs on many threads,
-  // and only async-signal-safe calls may follow a fork there.
-  std::vector<char*> args;
-  for (auto& s : argv) args.push_back(s.data());
-  args.push_back(nullptr);
-  posix_spawn_file_actions_t actions;
-  posix_spawn_file_actions_init(&actions);
-  posix_spawn_file_actions_addopen(&actions, STDERR_FILENO, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  pid_t pid = 0;
-  int spawned = posix_spawnp(&pid, args[0], &actions, nullptr, args.data(), environ);
-  posix_spawn_file_actions_destroy(&actions);
-  if (spawned != 0) {
-    std::filesystem::remove_all(work);
-    throw DesignFault(node.place.str() + ": cannot start openscad: " + std::strerror(spawned));
-  }
-  int status = 0;
-  waitpid(pid, &status, 0);
-  int code = WIFEXITED(status) ? WEXITSTATUS(status) : 128;
-  if (code == 127) {
-    std::filesystem::remove_all(work);
-    throw DesignFault(node.place.str() + ": the openscad program is not installed (apt-get install openscad)");
-  }
-  if (code != 0 || !std::filesystem::exists(out)) {
-    std::ifstream in(log);
-    std::string line, last;
-    while (std::getline(in, line))
-      if (!line.empty()) last = line;
-    std::filesystem::remove_all(work);
-    throw SampleFailure("no_geometry", node.place.str() + ": openscad failed (exit " + std::to_string(code) + "): " + last);
-  }
-  mesh::TriangleMesh m = mesh::ReadMesh(out);
-  std::filesystem::remove_all(work);
-  return geometry::FromMesh(g, m);
-}
-
 // A works-like prototype file with its parameters set from the design: the
 // two-stage solve, then the printable geometry on this evaluation's grid.
 Solid PrototypeNode(const geometry::GridSpec& g, const ResolvedArgs& a, const Node& node, const std::filesystem::path& dir) {
@@ -153,7 +104,7 @@ Solid PrototypeNode(const geometry::GridSpec& g, const ResolvedArgs& a, const No
 }  // namespace
 
 Solid ApplyOperation(const Node& node, const ResolvedArgs& a, std::vector<Solid>& children,
-                     const geometry::GridSpec& g, const std::filesystem::path& dir) {
+                     const geometry::GridSpec& g, const std::filesystem::path& dir, std::vector<OutsideMesh>* outside) {
   const std::string& op = node.op;
   if (op == "sphere") return geometry::Sphere(g, a.Number("radius"));
   if (op == "box") return geometry::Box(g, a.Vec3("size"));
@@ -181,9 +132,16 @@ Solid ApplyOperation(const Node& node, const ResolvedArgs& a, std::vector<Solid>
     } catch (const InputError& e) {
       throw DesignFault(node.place.str() + ": " + e.what());
     }
+    if (outside)
+      outside->push_back({a.Text("file"), a.values.at("file").digest, std::make_shared<const mesh::TriangleMesh>(m)});
     return geometry::FromMesh(g, m);
   }
-  if (op == "openscad") return OpenScad(g, a, node, dir);
+  if (op == "openscad") {  // without a cache or records (EvaluateSample passes both)
+    OpenScadNodeContext context;
+    context.grid = g;
+    context.outside = outside;
+    return EvaluateOpenScadNode(node, a, dir, context).solid;
+  }
   if (op == "prototype") return PrototypeNode(g, a, node, dir);
   if (op == "assembly") return AssemblyGeometry(g, *SolveAssemblyNode(a, node, dir), a, node, dir);
 

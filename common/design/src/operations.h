@@ -50,7 +50,11 @@ struct ResolvedArgs {
 };
 
 // Computes one node from its resolved arguments and its children's solids.
+// Meshes read from outside fabatlas (mesh, openscad) are appended to
+// `outside` when given (struct OutsideMesh, openscad_node.h).
+struct OutsideMesh;
 geometry::Solid ApplyOperation(const Node& node, const ResolvedArgs& args, std::vector<geometry::Solid>& children,
-                               const geometry::GridSpec& grid, const std::filesystem::path& design_dir);
+                               const geometry::GridSpec& grid, const std::filesystem::path& design_dir,
+                               std::vector<OutsideMesh>* outside = nullptr);
 
 }  // namespace fabatlas::design

@@ -195,17 +195,61 @@ Solid Union(const Solid& a, const Solid& b) {
   return detail::MakeSolid(openvdb::tools::csgUnionCopy(*a.impl()->grid, *OnSpecOf(a, b)), a.impl()->spec);
 }
 
+namespace {
+
+// Faces the two operands share (a cap of a hole cut to the same height, a
+// box face flush with another's) make max(d_a, -d_b) exactly 0 on a plane of
+// voxel centres with no material on either side: a sheet of zero thickness
+// that the mesh extraction (iso a hair above 0) would close into a slab. A
+// voxel with 0 <= value <= iso whose two neighbours along some axis are both
+// outside is such a sub-voxel sheet: it takes the smaller neighbour value.
+// Genuine material is negative and never changes. Returns the voxels repaired.
+// Then the inactive values are signed again from the narrow band.
+std::size_t RemoveZeroSheets(FloatGrid& grid, double voxel_size) {
+  const float iso = static_cast<float>(kMeshIso * voxel_size);
+  std::vector<std::pair<openvdb::Coord, float>> fixes;
+  auto acc = grid.getConstAccessor();
+  for (auto it = grid.tree().cbeginValueOn(); it; ++it) {
+    const float v = *it;
+    if (v < 0 || v > iso || !it.isVoxelValue()) continue;
+    const openvdb::Coord c = it.getCoord();
+    for (int axis = 0; axis < 3; ++axis) {
+      openvdb::Coord lo = c, hi = c;
+      lo[axis] -= 1;
+      hi[axis] += 1;
+      const float a = acc.getValue(lo), b = acc.getValue(hi);
+      if (a > iso && b > iso) {
+        fixes.emplace_back(c, std::min(a, b));
+        break;
+      }
+    }
+  }
+  auto out = grid.getAccessor();
+  for (const auto& [c, v] : fixes) out.setValue(c, v);
+  // OpenVDB's CSG keeps the first operand's inactive interior values where
+  // the second operand removed material (a hole's inside stays "inside"):
+  // re-sign every inactive value from the active band, as the volume and
+  // centre of mass read them.
+  openvdb::tools::signedFloodFill(grid.tree());
+  return fixes.size();
+}
+
+}  // namespace
+
 Solid Difference(const Solid& a, const Solid& b) {
   if (!a.impl()) return a;
   if (!b.impl()) return a;
-  return detail::MakeSolid(openvdb::tools::csgDifferenceCopy(*a.impl()->grid, *OnSpecOf(a, b)), a.impl()->spec);
+  FloatGrid::Ptr out = openvdb::tools::csgDifferenceCopy(*a.impl()->grid, *OnSpecOf(a, b));
+  RemoveZeroSheets(*out, a.voxel_size());
+  return detail::MakeSolid(out, a.impl()->spec);
 }
 
 Solid Intersection(const Solid& a, const Solid& b) {
   if (!a.impl()) return a;
   if (!b.impl()) return b;
-  return detail::MakeSolid(openvdb::tools::csgIntersectionCopy(*a.impl()->grid, *OnSpecOf(a, b)),
-                           a.impl()->spec);
+  FloatGrid::Ptr out = openvdb::tools::csgIntersectionCopy(*a.impl()->grid, *OnSpecOf(a, b));
+  RemoveZeroSheets(*out, a.voxel_size());
+  return detail::MakeSolid(out, a.impl()->spec);
 }
 
 // ---- Offsets --------------------------------------------------------------------

@@ -1,0 +1,638 @@
+// The `openscad` node: OpenSCAD's CSG tree evaluated with level sets
+// (openscad_node.h, docs/openscad.md).
+#include "openscad_node.h"
+
+#include <unistd.h>
+
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/Surface_mesh.h>
+#include <CGAL/convex_hull_3.h>
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <fstream>
+#include <map>
+#include <mutex>
+#include <sstream>
+
+#include "fabatlas/error.h"
+#include "fabatlas/mesh/read_mesh.h"
+#include "fabatlas/scad/csg_tree.h"
+#include "fabatlas/scad/customizer.h"
+#include "fabatlas/scad/primitive_mesh.h"
+#include "fabatlas/sha256.h"
+
+namespace fabatlas::design {
+namespace {
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+using geometry::Solid;
+using scad::CsgNode;
+using scad::CsgValue;
+using scad::Loop;
+
+double Since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+// An affine map x -> A x + t, row-major 3x4.
+using Affine = std::array<double, 12>;
+constexpr Affine kIdentity = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0};
+
+Affine Compose(const Affine& a, const Affine& b) {  // a after b
+  Affine c{};
+  for (int r = 0; r < 3; ++r) {
+    for (int k = 0; k < 3; ++k) c[4 * r + k] = a[4 * r] * b[k] + a[4 * r + 1] * b[4 + k] + a[4 * r + 2] * b[8 + k];
+    c[4 * r + 3] = a[4 * r] * b[3] + a[4 * r + 1] * b[7] + a[4 * r + 2] * b[11] + a[4 * r + 3];
+  }
+  return c;
+}
+
+std::string AffineText(const Affine& a) {
+  std::string s;
+  for (double v : a) s += scad::FormatScadNumber(v) + ",";
+  return s;
+}
+
+void Transform(mesh::TriangleMesh& m, const Affine& a) {
+  for (auto& v : m.vertices) {
+    const double x = v[0], y = v[1], z = v[2];
+    v = {a[0] * x + a[1] * y + a[2] * z + a[3], a[4] * x + a[5] * y + a[6] * z + a[7], a[8] * x + a[9] * y + a[10] * z + a[11]};
+  }
+}
+
+// A subtree OpenSCAD must render: thrown by the 2D evaluation up to the
+// enclosing 3D node.
+struct NoNativeEquivalent {
+  std::string what;
+};
+
+bool IsTwoD(const std::string& name) {
+  return name == "circle" || name == "square" || name == "polygon" || name == "text" || name == "offset" ||
+         name == "projection";
+}
+
+double Num(const CsgValue& v, double fallback) { return v.type == CsgValue::Type::kNumber ? v.number : fallback; }
+
+std::vector<double> Numbers(const CsgValue& v) {
+  std::vector<double> out;
+  for (const auto& x : v.items) out.push_back(Num(x, 0));
+  return out;
+}
+
+int FragmentsOf(const CsgNode& n, double r) {
+  return scad::Fragments(r, n.Number("$fn", 0), n.Number("$fs", 2), n.Number("$fa", 12));
+}
+
+// multmatrix(m): the 4x4 argument as an affine map.
+Affine MatrixOf(const CsgNode& n) {
+  Affine a = kIdentity;
+  auto it = n.args.find("m");  // OpenSCAD writes the matrix as the first positional argument
+  const CsgValue* matrix = it != n.args.end() ? &it->second : n.positional.empty() ? nullptr : &n.positional[0];
+  if (!matrix || matrix->items.size() < 3) throw NoNativeEquivalent{"multmatrix without a 4x4 matrix"};
+  for (int r = 0; r < 3; ++r) {
+    std::vector<double> row = Numbers(matrix->items[r]);
+    if (row.size() < 4) throw NoNativeEquivalent{"multmatrix with a short row"};
+    for (int k = 0; k < 4; ++k) a[4 * r + k] = row[k];
+  }
+  return a;
+}
+
+// A 2D shape as closed loops (after the 2D transform) combined by booleans.
+struct Shape2 {
+  enum class Op { kLoops, kUnion, kDifference, kIntersection } op = Op::kLoops;
+  std::vector<Loop> loops;  // kLoops: filled by the even-odd rule
+  std::vector<Shape2> parts;
+};
+
+bool PointInLoop(const scad::Point2& p, const Loop& loop) {
+  bool inside = false;
+  for (std::size_t i = 0, j = loop.size() - 1; i < loop.size(); j = i++) {
+    const auto& a = loop[i];
+    const auto& b = loop[j];
+    if ((a[1] > p[1]) != (b[1] > p[1]) && p[0] < (b[0] - a[0]) * (p[1] - a[1]) / (b[1] - a[1]) + a[0]) inside = !inside;
+  }
+  return inside;
+}
+
+Loop ConvexHull2(std::vector<scad::Point2> pts) {
+  std::sort(pts.begin(), pts.end());
+  pts.erase(std::unique(pts.begin(), pts.end()), pts.end());
+  if (pts.size() < 3) return pts;
+  auto cross = [](const scad::Point2& o, const scad::Point2& a, const scad::Point2& b) {
+    return (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0]);
+  };
+  std::vector<scad::Point2> h(2 * pts.size());
+  std::size_t k = 0;
+  for (std::size_t i = 0; i < pts.size(); ++i) {
+    while (k >= 2 && cross(h[k - 2], h[k - 1], pts[i]) <= 0) --k;
+    h[k++] = pts[i];
+  }
+  for (std::size_t i = pts.size() - 1, t = k + 1; i > 0; --i) {
+    while (k >= t && cross(h[k - 2], h[k - 1], pts[i - 1]) <= 0) --k;
+    h[k++] = pts[i - 1];
+  }
+  h.resize(k - 1);
+  return h;
+}
+
+void CollectPoints(const Shape2& s, std::vector<scad::Point2>& out) {
+  for (const auto& l : s.loops) out.insert(out.end(), l.begin(), l.end());
+  for (const auto& p : s.parts) CollectPoints(p, out);
+}
+
+// 2D transform: rows (a b tx; c d ty).
+using Affine2 = std::array<double, 6>;
+
+Loop Apply(const Affine2& t, const Loop& l) {
+  Loop out;
+  for (const auto& p : l) out.push_back({t[0] * p[0] + t[1] * p[1] + t[2], t[3] * p[0] + t[4] * p[1] + t[5]});
+  return out;
+}
+
+Shape2 Evaluate2(const CsgNode& n, const Affine2& t) {
+  Shape2 s;
+  const std::string& name = n.name;
+  if (name == "circle") {
+    const double r = n.Number("r", 1);
+    if (r > 0) s.loops.push_back(Apply(t, scad::CircleLoop(r, FragmentsOf(n, r))));
+    return s;
+  }
+  if (name == "square") {
+    auto it = n.args.find("size");
+    double x = 1, y = 1;
+    if (it != n.args.end()) {
+      if (it->second.type == CsgValue::Type::kVector) {
+        auto v = Numbers(it->second);
+        if (v.size() >= 2) x = v[0], y = v[1];
+      } else {
+        x = y = Num(it->second, 1);
+      }
+    }
+    if (x > 0 && y > 0) s.loops.push_back(Apply(t, scad::SquareLoop(x, y, n.Boolean("center", false))));
+    return s;
+  }
+  if (name == "polygon") {
+    auto pts = n.args.find("points");
+    if (pts == n.args.end()) return s;
+    std::vector<scad::Point2> points;
+    for (const auto& p : pts->second.items) {
+      auto v = Numbers(p);
+      if (v.size() < 2) throw NoNativeEquivalent{"polygon point without x and y"};
+      points.push_back({v[0], v[1]});
+    }
+    auto paths = n.args.find("paths");
+    if (paths == n.args.end() || paths->second.type != CsgValue::Type::kVector) {
+      if (points.size() >= 3) s.loops.push_back(Apply(t, points));
+    } else {
+      for (const auto& path : paths->second.items) {
+        Loop loop;
+        for (double i : Numbers(path)) {
+          if (i < 0 || i >= static_cast<double>(points.size())) throw NoNativeEquivalent{"polygon path index out of range"};
+          loop.push_back(points[static_cast<std::size_t>(i)]);
+        }
+        if (loop.size() >= 3) s.loops.push_back(Apply(t, loop));
+      }
+    }
+    return s;
+  }
+  if (name == "multmatrix") {
+    const Affine m = MatrixOf(n);
+    const Affine2 m2 = {m[0], m[1], m[3], m[4], m[5], m[7]};
+    const Affine2 c = {t[0] * m2[0] + t[1] * m2[3], t[0] * m2[1] + t[1] * m2[4], t[0] * m2[2] + t[1] * m2[5] + t[2],
+                       t[3] * m2[0] + t[4] * m2[3], t[3] * m2[1] + t[4] * m2[4], t[3] * m2[2] + t[4] * m2[5] + t[5]};
+    s.op = Shape2::Op::kUnion;
+    for (const auto& c2 : n.children) s.parts.push_back(Evaluate2(c2, c));
+    return s;
+  }
+  if (name == "group" || name == "union" || name == "render" || name == "color") {
+    s.op = Shape2::Op::kUnion;
+  } else if (name == "difference") {
+    s.op = Shape2::Op::kDifference;
+  } else if (name == "intersection") {
+    s.op = Shape2::Op::kIntersection;
+  } else if (name == "hull") {
+    Shape2 all;
+    all.op = Shape2::Op::kUnion;
+    for (const auto& c : n.children) all.parts.push_back(Evaluate2(c, t));
+    std::vector<scad::Point2> points;
+    CollectPoints(all, points);
+    Loop h = ConvexHull2(points);
+    if (h.size() >= 3) s.loops.push_back(h);
+    return s;
+  } else {
+    throw NoNativeEquivalent{name};
+  }
+  for (const auto& c : n.children) s.parts.push_back(Evaluate2(c, t));
+  return s;
+}
+
+double MaxX(const Shape2& s) {
+  double m = 0;
+  for (const auto& l : s.loops)
+    for (const auto& p : l) m = std::max(m, p[0]);
+  for (const auto& p : s.parts) m = std::max(m, MaxX(p));
+  return m;
+}
+
+double MinX(const Shape2& s) {
+  double m = 0;
+  for (const auto& l : s.loops)
+    for (const auto& p : l) m = std::min(m, p[0]);
+  for (const auto& p : s.parts) m = std::min(m, MinX(p));
+  return m;
+}
+
+// Hull of 3D points (CGAL) as a closed triangle mesh.
+mesh::TriangleMesh Hull3(const std::vector<std::array<double, 3>>& points) {
+  using K = CGAL::Exact_predicates_inexact_constructions_kernel;
+  std::vector<K::Point_3> p;
+  for (const auto& v : points) p.emplace_back(v[0], v[1], v[2]);
+  CGAL::Surface_mesh<K::Point_3> sm;
+  CGAL::convex_hull_3(p.begin(), p.end(), sm);
+  mesh::TriangleMesh out;
+  std::map<std::size_t, std::int32_t> index;
+  for (auto v : sm.vertices()) {
+    const auto& q = sm.point(v);
+    index[v] = static_cast<std::int32_t>(out.vertices.size());
+    out.vertices.push_back({q.x(), q.y(), q.z()});
+  }
+  for (auto f : sm.faces()) {
+    std::vector<std::int32_t> ids;
+    for (auto v : vertices_around_face(sm.halfedge(f), sm)) ids.push_back(index[v]);
+    for (std::size_t k = 1; k + 1 < ids.size(); ++k) out.triangles.push_back({ids[0], ids[k], ids[k + 1]});
+  }
+  return out;
+}
+
+class CsgEvaluation {
+ public:
+  CsgEvaluation(OpenScadNodeContext& context, const fs::path& model, const fs::path& work)
+      : c_(context), model_(model), work_(work) {}
+
+  struct Result {
+    Solid solid;
+    std::string key;
+  };
+
+  Result Evaluate3(const CsgNode& n, const Affine& m, const std::string& path) {
+    const std::string key = Sha256Hex("csg|voxel=" + scad::FormatScadNumber(c_.grid.voxel_size) + "|m=" + AffineText(m) +
+                                      "|" + n.canonical);
+    SubtreeRecord record;
+    record.key = key;
+    record.topology = Sha256Hex("csg|" + Topology(n));
+    record.path = path;
+    record.op = kCsgNativeOp + n.name;
+    if (c_.cache) {
+      if (auto hit = c_.cache->Find(key)) {
+        record.from_cache = true;
+        record.bytes = hit->MemoryBytes();
+        if (c_.records) c_.records->push_back(record);
+        RecallOutside(key, c_.outside);
+        return {*hit, key};
+      }
+    }
+    Solid solid;
+    const std::size_t outside_before = c_.outside ? c_.outside->size() : 0;
+    // Children first (3D nodes whose children are 3D), each its own record.
+    std::vector<Result> kids;
+    bool boolean = n.name == "group" || n.name == "union" || n.name == "render" || n.name == "color" ||
+                   n.name == "difference" || n.name == "intersection" || n.name == "multmatrix";
+    Affine inner = m;
+    if (n.name == "multmatrix") {
+      try {
+        inner = Compose(m, MatrixOf(n));
+      } catch (const NoNativeEquivalent&) {
+        boolean = false;  // rendered by OpenSCAD below
+      }
+    }
+    if (boolean) {
+      for (std::size_t i = 0; i < n.children.size(); ++i) {
+        if (IsTwoD(n.children[i].name)) continue;  // OpenSCAD ignores 2D objects among 3D ones
+        kids.push_back(Evaluate3(n.children[i], inner, path + "/" + std::to_string(i)));
+      }
+    }
+    const auto start = Clock::now();
+    if (boolean) {
+      if (n.name == "difference") {
+        if (!kids.empty()) {
+          solid = kids[0].solid;
+          for (std::size_t i = 1; i < kids.size(); ++i) solid = geometry::Difference(solid, kids[i].solid);
+        }
+      } else if (n.name == "intersection") {
+        if (!kids.empty()) {
+          solid = kids[0].solid;
+          for (std::size_t i = 1; i < kids.size(); ++i) solid = geometry::Intersection(solid, kids[i].solid);
+        }
+      } else {
+        for (const auto& k : kids) solid = geometry::Union(solid, k.solid);
+      }
+    } else {
+      try {
+        solid = Leaf(n, m);
+      } catch (const NoNativeEquivalent& e) {
+        record.op = kCsgRenderedOp + n.name;
+        solid = Rendered(n, m, e.what);
+      }
+    }
+    record.seconds = Since(start);
+    record.bytes = solid.MemoryBytes();
+    for (const auto& k : kids) record.children.push_back(k.key);
+    if (c_.cache) {
+      c_.cache->Offer(key, solid, record.seconds);
+      if (c_.outside && c_.outside->size() > outside_before)
+        RememberOutside(key, std::vector<OutsideMesh>(c_.outside->begin() + outside_before, c_.outside->end()));
+    }
+    if (c_.records) c_.records->push_back(std::move(record));
+    return {solid, key};
+  }
+
+ private:
+  static std::string Topology(const CsgNode& n) {
+    std::string t = n.name + "(";
+    for (const auto& c : n.children) t += Topology(c) + ";";
+    return t + ")";
+  }
+
+  Solid FromMesh(mesh::TriangleMesh m, const Affine& a) {
+    if (m.triangles.empty()) return Solid();
+    Transform(m, a);
+    return geometry::FromMesh(c_.grid, m);
+  }
+
+  void Outside(const std::string& what, const std::string& key, const mesh::TriangleMesh& m) {
+    if (c_.outside) c_.outside->push_back({what, key, std::make_shared<const mesh::TriangleMesh>(m)});
+  }
+
+  Solid Extruded(const Shape2& s, const std::function<mesh::TriangleMesh(const Loop&)>& build, const Affine& m) {
+    if (s.op == Shape2::Op::kLoops) {
+      // Even-odd: a loop inside an odd number of others is a hole.
+      Solid filled, holes;
+      for (std::size_t i = 0; i < s.loops.size(); ++i) {
+        int depth = 0;
+        for (std::size_t j = 0; j < s.loops.size(); ++j)
+          if (i != j && PointInLoop(s.loops[i][0], s.loops[j])) ++depth;
+        Solid one = FromMesh(build(s.loops[i]), m);
+        if (depth % 2) holes = geometry::Union(holes, one);
+        else filled = geometry::Union(filled, one);
+      }
+      return holes.empty() || filled.empty() ? filled : geometry::Difference(filled, holes);
+    }
+    Solid acc;
+    bool first = true;
+    for (const auto& p : s.parts) {
+      Solid x = Extruded(p, build, m);
+      if (first) acc = x;
+      else if (s.op == Shape2::Op::kUnion) acc = geometry::Union(acc, x);
+      else if (s.op == Shape2::Op::kDifference) acc = geometry::Difference(acc, x);
+      else acc = geometry::Intersection(acc, x);
+      first = false;
+    }
+    return acc;
+  }
+
+  // Points of a subtree made only of primitives, groups and transforms (for hull).
+  void HullPoints(const CsgNode& n, const Affine& m, std::vector<std::array<double, 3>>& out) {
+    if (n.name == "multmatrix" || n.name == "group" || n.name == "union" || n.name == "hull" || n.name == "render" ||
+        n.name == "color") {
+      const Affine inner = n.name == "multmatrix" ? Compose(m, MatrixOf(n)) : m;
+      for (const auto& c : n.children) HullPoints(c, inner, out);
+      return;
+    }
+    mesh::TriangleMesh mm = PrimitiveMesh(n);
+    Transform(mm, m);
+    out.insert(out.end(), mm.vertices.begin(), mm.vertices.end());
+  }
+
+  mesh::TriangleMesh PrimitiveMesh(const CsgNode& n) {
+    if (n.name == "cube") {
+      std::array<double, 3> size{1, 1, 1};
+      auto it = n.args.find("size");
+      if (it != n.args.end()) {
+        if (it->second.type == CsgValue::Type::kVector) {
+          auto v = Numbers(it->second);
+          if (v.size() >= 3) size = {v[0], v[1], v[2]};
+        } else {
+          size = {Num(it->second, 1), Num(it->second, 1), Num(it->second, 1)};
+        }
+      }
+      if (size[0] <= 0 || size[1] <= 0 || size[2] <= 0) return {};
+      return scad::CubeMesh(size, n.Boolean("center", false));
+    }
+    if (n.name == "sphere") {
+      const double r = n.Number("r", 1);
+      if (r <= 0) return {};
+      return scad::SphereMesh(r, FragmentsOf(n, r));
+    }
+    if (n.name == "cylinder") {
+      const double h = n.Number("h", 1), r1 = n.Number("r1", 1), r2 = n.Number("r2", 1);
+      if (h <= 0 || r1 < 0 || r2 < 0 || (r1 == 0 && r2 == 0)) return {};
+      return scad::CylinderMesh(h, r1, r2, n.Boolean("center", false), FragmentsOf(n, std::max(r1, r2)));
+    }
+    if (n.name == "polyhedron") {
+      std::vector<std::array<double, 3>> points;
+      auto p = n.args.find("points");
+      if (p == n.args.end()) return {};
+      for (const auto& v : p->second.items) {
+        auto x = Numbers(v);
+        if (x.size() < 3) throw NoNativeEquivalent{"polyhedron point without x, y, z"};
+        points.push_back({x[0], x[1], x[2]});
+      }
+      auto f = n.args.find("faces");
+      if (f == n.args.end()) f = n.args.find("triangles");
+      if (f == n.args.end()) return {};
+      std::vector<std::vector<int>> faces;
+      for (const auto& face : f->second.items) {
+        std::vector<int> ids;
+        for (double i : Numbers(face)) {
+          if (i < 0 || i >= static_cast<double>(points.size())) throw NoNativeEquivalent{"polyhedron face index out of range"};
+          ids.push_back(static_cast<int>(i));
+        }
+        faces.push_back(ids);
+      }
+      return scad::PolyhedronMesh(points, faces);
+    }
+    throw NoNativeEquivalent{n.name};
+  }
+
+  Solid Leaf(const CsgNode& n, const Affine& m) {
+    if (n.name == "cube" || n.name == "sphere" || n.name == "cylinder") return FromMesh(PrimitiveMesh(n), m);
+    if (n.name == "polyhedron") {
+      mesh::TriangleMesh mm = PrimitiveMesh(n);
+      Outside(model_.filename().string() + ": polyhedron (CSG line " + std::to_string(n.line) + ")", Sha256Hex(n.canonical), mm);
+      return FromMesh(std::move(mm), m);
+    }
+    if (n.name == "linear_extrude") {
+      Shape2 s;
+      s.op = Shape2::Op::kUnion;
+      for (const auto& c : n.children) s.parts.push_back(Evaluate2(c, {1, 0, 0, 0, 1, 0}));
+      const double h = n.Number("height", 100), twist = n.Number("twist", 0);
+      if (h <= 0) return Solid();
+      scad::Point2 scale{1, 1};
+      if (auto it = n.args.find("scale"); it != n.args.end()) {
+        if (it->second.type == CsgValue::Type::kVector) {
+          auto v = Numbers(it->second);
+          if (v.size() >= 2) scale = {v[0], v[1]};
+        } else {
+          scale = {Num(it->second, 1), Num(it->second, 1)};
+        }
+      }
+      int slices = static_cast<int>(n.Number("slices", 0));
+      if (slices <= 0)
+        slices = twist == 0 ? 1 : std::max(1, static_cast<int>(std::ceil(FragmentsOf(n, MaxX(s)) * std::abs(twist) / 360)));
+      const bool center = n.Boolean("center", false);
+      return Extruded(s, [&](const Loop& l) { return scad::LinearExtrudeMesh(l, h, center, twist, slices, scale); }, m);
+    }
+    if (n.name == "rotate_extrude") {
+      Shape2 s;
+      s.op = Shape2::Op::kUnion;
+      for (const auto& c : n.children) s.parts.push_back(Evaluate2(c, {1, 0, 0, 0, 1, 0}));
+      if (MinX(s) < 0) throw NoNativeEquivalent{"rotate_extrude of points with x < 0"};
+      const double angle = std::clamp(n.Number("angle", 360), -360.0, 360.0);
+      const int fragments =
+          static_cast<int>(std::ceil(std::max(FragmentsOf(n, MaxX(s)) * std::abs(angle) / 360, 1.0)));
+      return Extruded(s, [&](const Loop& l) { return scad::RotateExtrudeMesh(l, angle, fragments); }, m);
+    }
+    if (n.name == "hull") {
+      std::vector<std::array<double, 3>> points;
+      for (const auto& c : n.children) HullPoints(c, kIdentity, points);
+      if (points.size() < 4) return Solid();
+      return FromMesh(Hull3(points), m);
+    }
+    if (n.name == "import") {
+      auto f = n.args.find("file");
+      if (f == n.args.end() || f->second.type != CsgValue::Type::kString) throw NoNativeEquivalent{"import"};
+      fs::path file = f->second.text;
+      const std::string ext = file.extension().string();
+      if (ext != ".stl" && ext != ".STL" && ext != ".off" && ext != ".obj") throw NoNativeEquivalent{"import of " + ext};
+      if (file.is_relative()) file = model_.parent_path() / file;
+      mesh::TriangleMesh mm;
+      try {
+        mm = mesh::ReadMesh(file);
+      } catch (const InputError& e) {
+        throw SampleFailure(kNoGeometry, e.what());
+      }
+      Outside(file.string() + " (imported by " + model_.filename().string() + ")", Sha256Hex(n.canonical), mm);
+      return FromMesh(std::move(mm), m);
+    }
+    throw NoNativeEquivalent{n.name};
+  }
+
+  // OpenSCAD renders this subtree alone (its canonical text is a program).
+  Solid Rendered(const CsgNode& n, const Affine& m, const std::string& why) {
+    const fs::path program = work_ / ("subtree-" + std::to_string(++rendered_) + ".scad");
+    const fs::path stl = program.string() + ".stl";
+    {
+      std::ofstream out(program);
+      out << n.canonical << "\n";
+    }
+    scad::OpenScadRun run;
+    if (!scad::RunOpenScad(program, stl, {}, &run))
+      throw SampleFailure(kNoGeometry, model_.string() + ": OpenSCAD could not render " + n.name + " (CSG line " +
+                                           std::to_string(n.line) + ", no native " + why + "): " + run.log_tail);
+    mesh::TriangleMesh mm;
+    try {
+      mm = mesh::ReadMesh(stl);
+    } catch (const InputError& e) {
+      throw SampleFailure(kNoGeometry, model_.string() + ": OpenSCAD's render of " + n.name + ": " + e.what());
+    }
+    Outside(model_.filename().string() + ": OpenSCAD's render of " + n.name + " (CSG line " + std::to_string(n.line) + ")",
+            Sha256Hex(n.canonical), mm);
+    return FromMesh(std::move(mm), m);
+  }
+
+  OpenScadNodeContext& c_;
+  fs::path model_, work_;
+  int rendered_ = 0;
+};
+
+// A temporary directory removed when it goes out of scope.
+struct WorkDir {
+  fs::path path;
+  explicit WorkDir(const std::string& where) {
+    char tmpl[] = "/tmp/fabatlas-openscad-XXXXXX";
+    if (!::mkdtemp(tmpl)) throw DesignFault(where + ": cannot create a temporary directory for openscad");
+    path = tmpl;
+  }
+  ~WorkDir() {
+    std::error_code ec;
+    fs::remove_all(path, ec);
+  }
+};
+
+}  // namespace
+
+namespace {
+std::mutex outside_mutex;
+std::map<std::string, std::vector<OutsideMesh>> outside_by_subtree;
+}  // namespace
+
+void RememberOutside(const std::string& subtree_key, const std::vector<OutsideMesh>& meshes) {
+  if (meshes.empty()) return;
+  std::lock_guard<std::mutex> lock(outside_mutex);
+  outside_by_subtree[subtree_key] = meshes;
+}
+
+void RecallOutside(const std::string& subtree_key, std::vector<OutsideMesh>* out) {
+  if (!out) return;
+  std::lock_guard<std::mutex> lock(outside_mutex);
+  auto it = outside_by_subtree.find(subtree_key);
+  if (it != outside_by_subtree.end()) out->insert(out->end(), it->second.begin(), it->second.end());
+}
+
+OpenScadNodeResult EvaluateOpenScadNode(const Node& node, const ResolvedArgs& args, const fs::path& dir,
+                                        OpenScadNodeContext& context) {
+  const fs::path model = dir / args.Text("file");
+  std::vector<std::pair<std::string, std::string>> overrides;
+  if (auto it = args.values.find("set"); it != args.values.end())
+    for (std::size_t i = 0; i < it->second.keys.size(); ++i) overrides.emplace_back(it->second.keys[i], it->second.literals[i]);
+  WorkDir work(node.place.str());
+  const bool native = args.Text("render", "native") == "native";
+  const fs::path out = work.path / (native ? "model.csg" : "model.stl");
+  scad::OpenScadRun run;
+  try {
+    if (!scad::RunOpenScad(model, out, overrides, &run))
+      throw SampleFailure(kNoGeometry, node.place.str() + ": openscad failed: " + run.log_tail);
+  } catch (const SampleFailure&) {
+    throw;
+  } catch (const InputError& e) {
+    throw DesignFault(node.place.str() + ": " + e.what());
+  }
+  OpenScadNodeResult result;
+  result.export_seconds = run.seconds;
+  if (!native) {
+    mesh::TriangleMesh m;
+    try {
+      m = mesh::ReadMesh(out);
+    } catch (const InputError& e) {
+      throw SampleFailure(kNoGeometry, node.place.str() + ": OpenSCAD's STL: " + e.what());
+    }
+    if (context.outside) {
+      std::string key = Sha256Hex(args.Canonical());
+      context.outside->push_back({model.filename().string() + ": OpenSCAD's render", key, std::make_shared<const mesh::TriangleMesh>(m)});
+    }
+    result.solid = geometry::FromMesh(context.grid, m);
+    return result;
+  }
+  std::string text;
+  {
+    std::ifstream in(out, std::ios::binary);
+    std::stringstream ss;
+    ss << in.rdbuf();
+    text = ss.str();
+  }
+  scad::CsgNode root;
+  try {
+    root = scad::ParseCsg(text, model.string() + " (OpenSCAD's CSG export)");
+  } catch (const InputError& e) {
+    throw SampleFailure(kNoGeometry, e.what());
+  }
+  CsgEvaluation evaluation(context, model, work.path);
+  CsgEvaluation::Result r = evaluation.Evaluate3(root, kIdentity, context.path + "/csg");
+  result.solid = r.solid;
+  result.root_key = r.key;
+  return result;
+}
+
+}  // namespace fabatlas::design
