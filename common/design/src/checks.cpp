@@ -36,7 +36,7 @@ double Cross(const geometry::Vec2& o, const geometry::Vec2& a, const geometry::V
 //    self-intersections), its defects named; reports are remembered per
 //    mesh content for the process, so a mesh is inspected once;
 //  - the sample's own level-set extraction is closed by construction
-//    (marching cubes of a flood-filled narrow band; booleans remove the
+//    (marching cubes of a flood-filled narrow band; a difference removes the
 //    zero-thickness sheets shared faces leave, geometry.h), so it gets the
 //    cheap guarantee: closed and manifold by edge counting, no CGAL
 //    self-intersection test (docs/mesh.md, "Which check runs where").

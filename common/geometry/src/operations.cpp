@@ -247,9 +247,8 @@ Solid Difference(const Solid& a, const Solid& b) {
 Solid Intersection(const Solid& a, const Solid& b) {
   if (!a.impl()) return a;
   if (!b.impl()) return b;
-  FloatGrid::Ptr out = openvdb::tools::csgIntersectionCopy(*a.impl()->grid, *OnSpecOf(a, b));
-  RemoveZeroSheets(*out, a.voxel_size());
-  return detail::MakeSolid(out, a.impl()->spec);
+  return detail::MakeSolid(openvdb::tools::csgIntersectionCopy(*a.impl()->grid, *OnSpecOf(a, b)),
+                           a.impl()->spec);
 }
 
 // ---- Offsets --------------------------------------------------------------------

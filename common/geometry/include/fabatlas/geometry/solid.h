@@ -109,9 +109,9 @@ Solid Scale(const Solid& s, double factor);
 
 // ---- CSG and offsets --------------------------------------------------------
 Solid Union(const Solid& a, const Solid& b);
-// Difference and intersection remove the zero-thickness sheets that faces the
-// operands share would leave on voxel centres (a hole's caps flush with the
-// solid's): extraction artefacts of sub-voxel features (docs/geometry.md).
+// Difference removes the zero-thickness sheets that faces the operands share
+// would leave on voxel centres (a hole's caps flush with the solid's):
+// extraction artefacts of sub-voxel features (docs/geometry.md).
 Solid Difference(const Solid& a, const Solid& b);  // a minus b
 Solid Intersection(const Solid& a, const Solid& b);
 // Outward offset by distance mm (negative = inward); the narrow band is widened
