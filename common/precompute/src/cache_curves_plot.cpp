@@ -1,5 +1,5 @@
 // Fig. 13 curves as a PNG (see cache_curves_plot.h), drawn with
-// stb_easy_font text and written with stb_image_write.
+// stb_easy_font text and written by WritePngFile (png_file.h).
 #include "fabatlas/precompute/cache_curves_plot.h"
 
 #include <algorithm>
@@ -7,13 +7,11 @@
 #include <cstdio>
 #include <map>
 
-#define STB_IMAGE_WRITE_STATIC
-#define STB_IMAGE_WRITE_IMPLEMENTATION
-#include <stb/stb_image_write.h>
 #include <stb/stb_easy_font.h>
 
 #include "fabatlas/error.h"
 #include "fabatlas/precompute/form_outputs.h"
+#include "png_file.h"
 
 namespace fabatlas::precompute {
 
@@ -148,12 +146,7 @@ void WriteCacheCurvesPng(const std::vector<storage::CacheCurvePoint>& points, co
     }
   }
 
-  int size = 0;
-  unsigned char* png = stbi_write_png_to_mem(img.rgb.data(), img.w * 3, img.w, img.h, 3, &size);
-  if (!png) throw InputError(path.string() + ": cannot encode the PNG");
-  std::string bytes(reinterpret_cast<const char*>(png), static_cast<std::size_t>(size));
-  STBIW_FREE(png);
-  WriteFileAtomically(path, bytes);
+  WritePngFile(path, img.rgb, img.w, img.h);
 }
 
 }  // namespace fabatlas::precompute

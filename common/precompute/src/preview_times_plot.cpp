@@ -1,5 +1,5 @@
 // Fig. 14 box plots as a PNG (see preview_times_plot.h): text rasterised with
-// stb_truetype from a TrueType font, image written with stb_image_write.
+// stb_truetype from a TrueType font, image written by WritePngFile (png_file.h).
 #include "fabatlas/precompute/preview_times_plot.h"
 
 #include <algorithm>
@@ -8,15 +8,13 @@
 #include <fstream>
 #include <sstream>
 
-#define STB_IMAGE_WRITE_STATIC
-#define STB_IMAGE_WRITE_IMPLEMENTATION
-#include <stb/stb_image_write.h>
 #define STBTT_STATIC
 #define STB_TRUETYPE_IMPLEMENTATION
 #include <stb/stb_truetype.h>
 
 #include "fabatlas/error.h"
 #include "fabatlas/precompute/form_outputs.h"
+#include "png_file.h"
 
 namespace fabatlas::precompute {
 
@@ -156,12 +154,7 @@ void WritePreviewTimesPng(const std::vector<PreviewTimesSeries>& series, const s
     img.CentredText(cx, bottom + 68, "median " + Ms(Quantile(v, 0.5)) + ", worst " + Ms(v.back()), 0x333333, 14);
   }
   img.Text(left, options.height - 14, "box: quartiles, bar: median, whiskers: fastest and worst, diamond: mean", 0x555555, 13);
-  int size = 0;
-  unsigned char* png = stbi_write_png_to_mem(img.rgb.data(), img.w * 3, img.w, img.h, 3, &size);
-  if (!png) throw InputError(path.string() + ": cannot encode the PNG");
-  std::string bytes(reinterpret_cast<const char*>(png), static_cast<std::size_t>(size));
-  STBIW_FREE(png);
-  WriteFileAtomically(path, bytes);
+  WritePngFile(path, img.rgb, img.w, img.h);
 }
 
 }  // namespace fabatlas::precompute
