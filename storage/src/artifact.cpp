@@ -497,6 +497,25 @@ struct ManifestReader {
   }
 };
 
+// The columns of a cache entry's metadata, in the order CacheEntryMetadata
+// reads them.
+const std::string kCacheEntryMetadataColumns = "key, op, children, bytes, cost_seconds, in_opt, in_rfree, grid_sha256";
+
+// A cache entry's metadata from a row that starts with
+// kCacheEntryMetadataColumns; its geometry is left empty.
+CacheEntry CacheEntryMetadata(Stmt& s) {
+  CacheEntry e;
+  e.key = s.ColumnText(0);
+  e.op = s.ColumnText(1);
+  e.children = SplitStrings(s.ColumnText(2));
+  e.bytes = s.ColumnInt(3);
+  e.cost_seconds = s.ColumnReal(4);
+  e.in_opt = s.ColumnInt(5) != 0;
+  e.in_rfree = s.ColumnInt(6) != 0;
+  e.grid_sha256 = s.ColumnText(7);
+  return e;
+}
+
 Artifact Read(Db& db, int version, const ArtifactReadOptions& options) {
   Artifact a;
   const auto rows = ReadManifestRows(db);
@@ -662,21 +681,10 @@ Artifact Read(Db& db, int version, const ArtifactReadOptions& options) {
     }
   }
   {
-    Stmt s(db, options.load_geometry
-                   ? "SELECT key, op, children, bytes, cost_seconds, in_opt, in_rfree, grid_sha256, grid, glb "
-                     "FROM cache_entries ORDER BY key"
-                   : "SELECT key, op, children, bytes, cost_seconds, in_opt, in_rfree, grid_sha256 "
-                     "FROM cache_entries ORDER BY key");
+    Stmt s(db, "SELECT " + kCacheEntryMetadataColumns + (options.load_geometry ? ", grid, glb" : "") +
+                   " FROM cache_entries ORDER BY key");
     while (s.Next()) {
-      CacheEntry e;
-      e.key = s.ColumnText(0);
-      e.op = s.ColumnText(1);
-      e.children = SplitStrings(s.ColumnText(2));
-      e.bytes = s.ColumnInt(3);
-      e.cost_seconds = s.ColumnReal(4);
-      e.in_opt = s.ColumnInt(5) != 0;
-      e.in_rfree = s.ColumnInt(6) != 0;
-      e.grid_sha256 = s.ColumnText(7);
+      CacheEntry e = CacheEntryMetadata(s);
       if (options.load_geometry) {
         e.grid = s.ColumnText(8);
         e.glb = s.ColumnText(9);
@@ -820,18 +828,9 @@ void ReadCacheGeometry(const fs::path& path, const std::function<bool(const Cach
     // by its key, so only one entry's bytes are ever in memory.
     std::vector<CacheEntry> entries;
     {
-      Stmt s(*db, "SELECT key, op, children, bytes, cost_seconds, in_opt, in_rfree, grid_sha256 "
-                  "FROM cache_entries ORDER BY key");
+      Stmt s(*db, "SELECT " + kCacheEntryMetadataColumns + " FROM cache_entries ORDER BY key");
       while (s.Next()) {
-        CacheEntry e;
-        e.key = s.ColumnText(0);
-        e.op = s.ColumnText(1);
-        e.children = SplitStrings(s.ColumnText(2));
-        e.bytes = s.ColumnInt(3);
-        e.cost_seconds = s.ColumnReal(4);
-        e.in_opt = s.ColumnInt(5) != 0;
-        e.in_rfree = s.ColumnInt(6) != 0;
-        e.grid_sha256 = s.ColumnText(7);
+        CacheEntry e = CacheEntryMetadata(s);
         if (want(e)) entries.push_back(std::move(e));
       }
     }
