@@ -141,7 +141,9 @@ void Export(const ExportArgs& a) {
   }
   std::cout << "fabatlas export: " << a.out << ": " << customiser.source().name << " at "
             << viewer::PointText(customiser, r.u) << ", " << r.triangles << " triangles, volume " << r.volume_mm3
-            << " mm^3, voxel " << r.voxel_size << " mm, " << r.seconds << " s" << std::endl;
+            << " mm^3, voxel " << r.voxel_size << " mm, " << r.seconds << " s, checks passed there: ";
+  for (std::size_t k = 0; k < r.checks.size(); ++k) std::cout << (k ? ", " : "") << r.checks[k];
+  std::cout << std::endl;
 }
 
 }  // namespace

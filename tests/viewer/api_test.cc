@@ -119,5 +119,27 @@ TEST(ApiFaults, AnInternalFaultIsA500WithItsReason) {
   EXPECT_EQ(r.body.find('\n'), r.body.size() - 1) << r.body;
 }
 
+// The peg rail run (viewer_peg_run): valid at length 17.5 by interpolation
+// between its valid samples at 15 and 20, but its 20 mm bulge there breaks
+// max_volume (17.5 x 6 x 22 mm^3 > 1000): the export answers 400 with the
+// failing check, the same line as `fabatlas export`.
+TEST(ApiExport, ChecksRunAtExactlyThePointBeforeWriting) {
+  const char* dir = std::getenv("FABATLAS_VIEWER_PEG_RUN");
+  const fs::path run = dir ? fs::path(dir) : testing::BinDir().parent_path() / "test-fixtures" / "viewer-peg";
+  ASSERT_TRUE(fs::exists(run / "peg_rail.fabatlas")) << "run the viewer_peg_run fixture first: " << run;
+  const Customiser c(LoadArtifact(run / "peg_rail.fabatlas"));
+  const ApiResponse at = HandleApiRequest(c, "/api/intervals", {{"u", "17.5,1,0"}});
+  ASSERT_EQ(at.status, 200) << at.body;
+  EXPECT_TRUE(json::parse(at.bytes())["valid"].get<bool>());
+  const ApiResponse r = HandleApiRequest(c, "/api/export", {{"u", "17.5,1,0"}, {"format", "stl"}});
+  EXPECT_EQ(r.status, 400);
+  EXPECT_EQ(std::count(r.body.begin(), r.body.end(), '\n'), 1) << r.body;
+  EXPECT_EQ(r.body.rfind("length=17.5,pegs=1,peg=thin fails check 'max_volume' at exactly this point (too_much_material: "
+                         "material volume ", 0), 0u) << r.body;
+  const ApiResponse ok = HandleApiRequest(c, "/api/export", {{"u", "16,1,0"}, {"format", "stl"}});
+  EXPECT_EQ(ok.status, 200) << ok.body;
+  EXPECT_EQ(ok.headers.at("X-Checks"), "constraints,geometry,max_volume");
+}
+
 }  // namespace
 }  // namespace fabatlas::viewer

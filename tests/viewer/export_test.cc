@@ -214,5 +214,50 @@ TEST_F(Export, AnInvalidPointIsRefusedNamingATrulyValidNearestPoint) {
   }
 }
 
+// The peg rail run (viewer_peg_run: tests/viewer/data/peg_rail_design.yaml,
+// sampled on its bootstrap grid only): the rail is 2 mm high except for a
+// 20 mm bulge at exactly length 17.5, where no sample lies.
+fs::path PegRunDir() {
+  const char* dir = std::getenv("FABATLAS_VIEWER_PEG_RUN");
+  return dir ? fs::path(dir) : testing::BinDir().parent_path() / "test-fixtures" / "viewer-peg";
+}
+double RailHeight(double length) { return 2 + 20 * std::exp(-std::pow((length - 17.5) / 0.4, 2)); }
+
+TEST_F(Export, APointValidOnlyBetweenSamplesIsCheckedAtExactlyThatPoint) {
+  ASSERT_TRUE(fs::exists(PegRunDir() / "form.json")) << "run the viewer_peg_run fixture first: " << PegRunDir();
+  // The samples on both sides, (15, 1, thin) and (20, 1, thin), are valid,
+  // so the form's valid region holds length 17.5 between them ...
+  const auto form = nlohmann::json::parse(ReadText(PegRunDir() / "form.json"));
+  int neighbours_valid = 0;
+  for (const auto& s : form["samples"]) {
+    const auto u = s["u"].get<std::vector<double>>();
+    if ((u[0] == 15 || u[0] == 20) && u[1] == 1 && u[2] == 0) neighbours_valid += s["valid"].get<bool>();
+  }
+  ASSERT_EQ(neighbours_valid, 2);
+  // ... but there the rail is 22 mm high: 17.5 x 6 x 22 = 2310 mm^3 of
+  // material (the peg stands inside it), above the design's max_volume 1000.
+  ASSERT_GT(17.5 * 6 * RailHeight(17.5), 1000);
+  const Outcome r = Fabatlas({"export", PegRunDir().string(), "--at", "length=17.5,pegs=1,peg=thin", "--out",
+                              (dir_ / "bulge.stl").string()},
+                             dir_);
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << r.output;
+  EXPECT_NE(r.output.find("fails check 'max_volume' at exactly this point (too_much_material"), std::string::npos)
+      << r.output;
+  EXPECT_FALSE(fs::exists(dir_ / "bulge.stl"));
+  // Off the bulge (at 16 the bump is 20 e^-14 mm) the checks pass at the
+  // exact point and the file holds the analytic volume: the 16 x 6 x 2 rail
+  // and the peg's 5.5 mm above it (radius 1).
+  const Outcome ok = Fabatlas({"export", PegRunDir().string(), "--at", "length=16,pegs=1,peg=thin", "--out",
+                               (dir_ / "rail.stl").string()},
+                              dir_);
+  ASSERT_EQ(ok.status, 0) << ok.output;
+  EXPECT_NE(ok.output.find("checks passed there: constraints, geometry, max_volume"), std::string::npos) << ok.output;
+  const double exact = 16 * 6 * RailHeight(16) + std::numbers::pi * (7.5 - RailHeight(16));
+  const StlFacts f = ReadStl(ReadBytes(dir_ / "rail.stl"));
+  EXPECT_EQ(f.open_edges, 0u);
+  EXPECT_NEAR(f.volume, exact, 0.01 * exact);
+}
+
 }  // namespace
 }  // namespace fabatlas::viewer

@@ -70,13 +70,28 @@ ExportResult ExportDesign(const Customiser& c, const std::vector<double>& u, con
   }
   design::Design design = *c.source().design;
   design.voxel_size = options.voxel_size > 0 ? options.voxel_size : FabricationVoxelSize(design.voxel_size);
+  // The valid region between samples is an interpolation (IsValidPoint);
+  // the file is the design at exactly u, so its checks run again there, on
+  // the geometry written (at the fabrication voxel size), before anything
+  // is encoded.
   design::EvaluateOptions evaluate;
-  evaluate.run_checks = false;  // the point lies in the valid region the checks mapped
+  evaluate.run_checks = true;
   const auto start = std::chrono::steady_clock::now();
   const design::SampleResult r = design::EvaluateSample(design, precompute::DesignPointOf(design, u), evaluate);
-  if (r.solid.empty())
-    throw InputError(PointText(c, u) + ": no geometry at this point (" +
-                     (r.failure_reason.empty() ? r.failure : r.failure_reason) + ")");
+  if (!r.valid) {
+    const design::CheckOutcome* failed = nullptr;
+    for (const auto& check : r.checks)
+      if (!check.passed) {
+        failed = &check;
+        break;
+      }
+    const std::int64_t nearest = NearestValidSample(c, u);
+    throw InputError(PointText(c, u) + " fails check '" + (failed ? failed->name : r.failure) +
+                     "' at exactly this point (" + r.failure + ": " +
+                     (r.failure_reason.empty() && failed ? failed->reason : r.failure_reason) +
+                     "), though the samples around it pass" +
+                     (nearest < 0 ? std::string() : "; nearest valid point: " + PointText(c, c.form().samples[nearest].u)));
+  }
   const mesh::TriangleMesh m = r.solid.ToMesh();
   mesh::InspectOptions inspect;
   inspect.check_self_intersection = false;
@@ -91,6 +106,7 @@ ExportResult ExportDesign(const Customiser& c, const std::vector<double>& u, con
   out.voxel_size = design.voxel_size;
   out.triangles = static_cast<std::int64_t>(m.triangles.size());
   out.volume_mm3 = report.volume;
+  for (const auto& check : r.checks) out.checks.push_back(check.name);
   std::string name = c.source().name + "-" + PointText(c, u);
   for (char& ch : name)
     if (!std::isalnum(static_cast<unsigned char>(ch)) && ch != '-' && ch != '.' && ch != '=') ch = '_';

@@ -216,6 +216,9 @@ ApiResponse Route(const Customiser& c, const std::string& path, const std::map<s
     r.headers["Content-Disposition"] = "attachment; filename=\"" + e.file_name + "\"";
     r.headers["X-Voxel-Size"] = std::to_string(e.voxel_size);
     r.headers["X-Triangles"] = std::to_string(e.triangles);
+    std::string checks;
+    for (const auto& name : e.checks) checks += (checks.empty() ? "" : ",") + name;
+    r.headers["X-Checks"] = checks;  // the checks passed at exactly u
     return r;
   }
   if (path == "/api/map") {

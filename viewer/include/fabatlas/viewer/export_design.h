@@ -31,16 +31,21 @@ struct ExportResult {
   double voxel_size = 0;       // mm
   std::int64_t triangles = 0;
   double volume_mm3 = 0;       // of the closed mesh (divergence theorem)
-  double seconds = 0;          // evaluation and meshing, wall time
+  double seconds = 0;          // evaluation, checks and meshing, wall time
+  std::vector<std::string> checks;  // the checks passed at exactly u (constraints, geometry, the design's)
 };
 
 // Evaluates the design at exactly u (no snapping) with voxel size
-// options.voxel_size, meshes its zero level set and encodes it. Refuses, with
-// an InputError whose one line names the point, why it is invalid and the
-// nearest valid point (PointText), a u outside the form's valid region
-// (IsValidPoint, docs/viewer.md); also refuses an unknown format, a point
-// whose constraints cannot be solved and a mesh that is not closed (its
-// border edge count). Thread-safe; evaluates on the calling thread.
+// options.voxel_size, runs all its validity checks there (the constraints,
+// the geometry and the design's checks, on the geometry to be written),
+// meshes its zero level set and encodes it. Refuses, with an InputError of
+// one line naming the point and the nearest valid point (PointText):
+//   - a u outside the form's valid region (IsValidPoint, docs/viewer.md),
+//     with why it is invalid;
+//   - a u inside it (the region interpolates between samples) where a check
+//     fails at exactly u, naming the first failed check and its reason.
+// Also refuses an unknown format and a mesh that is not closed (its border
+// edge count). Thread-safe; evaluates on the calling thread.
 ExportResult ExportDesign(const Customiser& customiser, const std::vector<double>& u, const ExportOptions& options = {});
 
 // "radius=15,wall=6": parameter names in the form's order, enumerated values
