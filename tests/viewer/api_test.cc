@@ -10,6 +10,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "corner_table_check.h"
 #include "fabatlas/testing/paths.h"
 #include "fabatlas/viewer/customiser.h"
 #include "fabatlas/viewer/http_api.h"
@@ -45,6 +46,12 @@ class Api : public ::testing::Test {
   static Customiser* customiser_;
 };
 Customiser* Api::customiser_ = nullptr;
+
+// The corner table serve builds at load against the search of
+// Form::sample_ids it replaces, on this real run's artifact.
+TEST_F(Api, CornerTableGivesTheAnswersOfTheSampleIdSearch) {
+  ExpectCornerTableMatchesSampleIdSearch(customiser_->form(), customiser_->corners(), 2000);
+}
 
 TEST_F(Api, ReasonNamesTheViolatedConstraintInTheDesignsWords) {
   // (29, 1) breaks wall >= 1 + 0.01 radius^2 (the other constraint holds).

@@ -7,11 +7,15 @@
 #include <set>
 
 #include "../sampling/analytic_designs.h"
+#include "corner_table_check.h"
 #include "fabatlas/cache/starting_points.h"
 #include "fabatlas/error.h"
 #include "fabatlas/sampling/adaptive_sampler.h"
 #include "fabatlas/sampling/executor.h"
+#include "fabatlas/storage/artifact.h"
+#include "fabatlas/testing/paths.h"
 #include "fabatlas/viewer/customiser.h"
+#include "fabatlas/viewer/leaf_corners.h"
 #include "fabatlas/viewer/snap.h"
 #include "fabatlas/viewer/valid_region.h"
 
@@ -64,19 +68,39 @@ class Gap : public sampling::SampleEvaluator {
   double GeometryChange(const SamplePoint&, const SamplePoint&) override { return 0.0; }
 };
 
+// The corner table against the search of Form::sample_ids it replaces, on a
+// real artifact: the tube_wall_2d job as `fabatlas run` published it (schema
+// version 1; viewer_api_test does the same on the viewer_tube_run fixture).
+TEST(ViewerLeafCorners, TableGivesTheAnswersOfTheSampleIdSearchOnARealArtifact) {
+  const storage::Artifact art =
+      storage::ReadArtifact(testing::SourceDir() / "tests/data/artifact_v1/tube_wall_2d.fabatlas");
+  const LeafCorners corners(art.form);
+  ExpectCornerTableMatchesSampleIdSearch(art.form, corners, 2000);
+
+  // A copy with other validity (as ApplyLimits makes) fits; a form with
+  // other trees does not, and the lookups refuse it.
+  sampling::Form other = art.form;
+  other.samples[0].outcome.valid = !other.samples[0].outcome.valid;
+  EXPECT_TRUE(corners.Fits(other));
+  other.trees.pop_back();
+  EXPECT_FALSE(corners.Fits(other));
+  EXPECT_THROW(IsValidPoint(other, other.space(), corners, {15, 5}), std::invalid_argument);
+}
+
 TEST(ViewerValidRegion, FaceRuleMakesAnAllValidGridLineValid) {
   Band band;
   const sampling::Form form = Sample(band, UnitSquare(), 5, 0);
   const sampling::DesignSpace space = form.space();
-  EXPECT_TRUE(IsValidPoint(form, space, {0.3, 0.4}));   // on the all-valid face
-  EXPECT_TRUE(IsValidPoint(form, space, {0.4, 0.4}));   // on an all-valid vertex
-  EXPECT_FALSE(IsValidPoint(form, space, {0.3, 0.41}));  // inside a cell with invalid corners
-  EXPECT_FALSE(IsValidPoint(form, space, {0.3, 0.2}));
-  EXPECT_FALSE(IsValidPoint(form, space, {0.3, 1.5}));  // outside the space
-  EXPECT_FALSE(IsValidPoint(form, space, {0.3}));       // wrong arity
+  const LeafCorners corners(form);
+  EXPECT_TRUE(IsValidPoint(form, space, corners, {0.3, 0.4}));   // on the all-valid face
+  EXPECT_TRUE(IsValidPoint(form, space, corners, {0.4, 0.4}));   // on an all-valid vertex
+  EXPECT_FALSE(IsValidPoint(form, space, corners, {0.3, 0.41}));  // inside a cell with invalid corners
+  EXPECT_FALSE(IsValidPoint(form, space, corners, {0.3, 0.2}));
+  EXPECT_FALSE(IsValidPoint(form, space, corners, {0.3, 1.5}));  // outside the space
+  EXPECT_FALSE(IsValidPoint(form, space, corners, {0.3}));       // wrong arity
 
   // Along x through y = 0.4: the whole line is one valid interval.
-  const auto along_x = LineStretches(form, space, {0.3, 0.4}, 0);
+  const auto along_x = LineStretches(form, space, corners, {0.3, 0.4}, 0);
   ASSERT_EQ(along_x.size(), 1u);
   EXPECT_TRUE(along_x[0].valid);
   EXPECT_DOUBLE_EQ(along_x[0].lo, 0.0);
@@ -84,7 +108,7 @@ TEST(ViewerValidRegion, FaceRuleMakesAnAllValidGridLineValid) {
 
   // Along y through x = 0.3: the single point y = 0.4, invalid on both sides
   // for the reasons recorded below and above the band.
-  const auto along_y = LineStretches(form, space, {0.3, 0.4}, 1);
+  const auto along_y = LineStretches(form, space, corners, {0.3, 0.4}, 1);
   ASSERT_EQ(along_y.size(), 3u);
   EXPECT_FALSE(along_y[0].valid);
   EXPECT_DOUBLE_EQ(along_y[0].lo, 0.0);
@@ -97,8 +121,8 @@ TEST(ViewerValidRegion, FaceRuleMakesAnAllValidGridLineValid) {
   EXPECT_DOUBLE_EQ(along_y[2].lo, 0.4);
   EXPECT_DOUBLE_EQ(along_y[2].hi, 1.0);
   EXPECT_EQ(along_y[2].failures, std::vector<std::string>{"too_thick"});
-  EXPECT_EQ(FailuresAt(form, space, {0.3, 0.9}), std::vector<std::string>{"too_thick"});
-  EXPECT_TRUE(FailuresAt(form, space, {0.3, 0.4}).empty());
+  EXPECT_EQ(FailuresAt(form, space, corners, {0.3, 0.9}), std::vector<std::string>{"too_thick"});
+  EXPECT_TRUE(FailuresAt(form, space, corners, {0.3, 0.4}).empty());
 }
 
 TEST(ViewerValidRegion, NonConvexLineHasTwoIntervalsAtTheRefinedBoundaries) {
@@ -108,27 +132,28 @@ TEST(ViewerValidRegion, NonConvexLineHasTwoIntervalsAtTheRefinedBoundaries) {
   Gap gap;
   const sampling::Form form = Sample(gap, UnitSquare(), 5, 3);
   const sampling::DesignSpace space = form.space();
+  const LeafCorners corners(form);
   for (double y : {0.0, 0.13, 0.4, 1.0}) {
-    const auto valid = ValidIntervals(form, space, {0.1, y}, 0);
+    const auto valid = ValidIntervals(form, space, corners, {0.1, y}, 0);
     ASSERT_EQ(valid.size(), 2u) << "y = " << y;
     EXPECT_DOUBLE_EQ(valid[0].lo, 0.0);
     EXPECT_DOUBLE_EQ(valid[0].hi, 0.3);
     EXPECT_DOUBLE_EQ(valid[1].lo, 0.7);
     EXPECT_DOUBLE_EQ(valid[1].hi, 1.0);
-    const auto all = LineStretches(form, space, {0.1, y}, 0);
+    const auto all = LineStretches(form, space, corners, {0.1, y}, 0);
     ASSERT_EQ(all.size(), 3u);
     EXPECT_FALSE(all[1].valid);
     EXPECT_EQ(all[1].failures, std::vector<std::string>{"gap"});
   }
   // Interval ends passed back are valid points; the middle of the gap is not.
-  EXPECT_TRUE(IsValidPoint(form, space, {0.3, 0.5}));
-  EXPECT_TRUE(IsValidPoint(form, space, {space.value(0, space.key_lo(0)) + 0.7, 0.5}));
-  EXPECT_FALSE(IsValidPoint(form, space, {0.31, 0.5}));
+  EXPECT_TRUE(IsValidPoint(form, space, corners, {0.3, 0.5}));
+  EXPECT_TRUE(IsValidPoint(form, space, corners, {space.value(0, space.key_lo(0)) + 0.7, 0.5}));
+  EXPECT_FALSE(IsValidPoint(form, space, corners, {0.31, 0.5}));
   // Along y every line is entirely valid or entirely invalid.
-  EXPECT_EQ(ValidIntervals(form, space, {0.2, 0.5}, 1).size(), 1u);
-  EXPECT_TRUE(ValidIntervals(form, space, {0.5, 0.5}, 1).empty());
-  EXPECT_THROW(LineStretches(form, space, {0.5, 1.5}, 1), InputError);
-  EXPECT_THROW(LineStretches(form, space, {0.5, 0.5}, 2), InputError);
+  EXPECT_EQ(ValidIntervals(form, space, corners, {0.2, 0.5}, 1).size(), 1u);
+  EXPECT_TRUE(ValidIntervals(form, space, corners, {0.5, 0.5}, 1).empty());
+  EXPECT_THROW(LineStretches(form, space, corners, {0.5, 1.5}, 1), InputError);
+  EXPECT_THROW(LineStretches(form, space, corners, {0.5, 0.5}, 2), InputError);
 }
 
 TEST(ViewerValidRegion, IntervalsMatchTheAnalyticRegionOfTheHollowCylinder) {
@@ -139,15 +164,16 @@ TEST(ViewerValidRegion, IntervalsMatchTheAnalyticRegionOfTheHollowCylinder) {
   sampling::testing::HollowCylinder2D cylinder;
   const sampling::Form form = Sample(cylinder, cylinder.Dimensions(), 5, 4);
   const sampling::DesignSpace space = form.space();
+  const LeafCorners corners(form);
   for (double R : {6.0, 10.0, 13.7, 18.0}) {
-    const auto valid = ValidIntervals(form, space, {R, 2.0}, 1);
+    const auto valid = ValidIntervals(form, space, corners, {R, 2.0}, 1);
     ASSERT_EQ(valid.size(), 1u) << "R = " << R;
     const auto t = [](double r) { return 0.5 + 0.01 * r * r; };
     EXPECT_GE(valid[0].lo, t(R) - 1e-9);
     EXPECT_LT(valid[0].lo, t(R + 3.0) + 0.9);
     EXPECT_DOUBLE_EQ(valid[0].hi, 5.0);
-    EXPECT_TRUE(IsValidPoint(form, space, {R, valid[0].lo}));
-    EXPECT_FALSE(IsValidPoint(form, space, {R, valid[0].lo - 1e-6}));
+    EXPECT_TRUE(IsValidPoint(form, space, corners, {R, valid[0].lo}));
+    EXPECT_FALSE(IsValidPoint(form, space, corners, {R, valid[0].lo - 1e-6}));
     EXPECT_TRUE(cylinder.TrulyValid({R, valid[0].lo}));
   }
 }

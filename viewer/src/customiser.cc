@@ -133,7 +133,7 @@ std::vector<MaterialReadout> MaterialReadouts(double volume_mm3, const std::vect
 }
 
 Customiser::Customiser(CustomiserSource source, PreviewCacheOptions preview_cache)
-    : source_(std::move(source)), space_(source_.form.space()),
+    : source_(std::move(source)), space_(source_.form.space()), corners_(source_.form),
       preview_options_(preview_cache), previews_(std::make_unique<PreviewCache>(preview_cache)) {
   starting_points_ = source_.starting_points;
   if (starting_points_.empty())  // a run directory: the artifact's rule (cache/starting_points.h)

@@ -62,7 +62,7 @@ ExportResult ExportDesign(const Customiser& c, const std::vector<double>& u, con
                      std::to_string(c.dimension_count()) + " parameters");
   if (!c.IsValid(u)) {
     std::string why;
-    for (const auto& failure : FailuresAt(c.form(), c.space(), u)) why += (why.empty() ? "" : ", ") + failure;
+    for (const auto& failure : FailuresAt(c.form(), c.space(), c.corners(), u)) why += (why.empty() ? "" : ", ") + failure;
     const std::int64_t nearest = NearestValidSample(c, u);
     throw InputError(PointText(c, u) + " is outside the valid region" + (why.empty() ? "" : " (" + why + ")") +
                      (nearest < 0 ? std::string("; the form has no valid point")

@@ -16,8 +16,8 @@ std::optional<FailureReason> ReasonAt(const Customiser& c, const sampling::Form&
   if (!c.source().design) return std::nullopt;
   const auto& samples = shown.samples;
   std::vector<std::int64_t> candidates;
-  for (const sampling::FormNode* leaf : internal::LeavesTouching(shown, c.space(), *x))
-    for (const std::int64_t id : sampling::CornerSampleIds(shown, *leaf))
+  for (const internal::LeafHit& leaf : internal::LeavesTouching(shown, c.space(), *x))
+    for (const std::int64_t id : sampling::CornerSampleIds(shown, *leaf.node))
       if (!samples[id].outcome.valid) candidates.push_back(id);
   if (candidates.empty())
     for (std::size_t id = 0; id < samples.size(); ++id)

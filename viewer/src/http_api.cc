@@ -160,10 +160,10 @@ ApiResponse Route(const Customiser& c, const std::string& path, const std::map<s
   if (path == "/api/intervals") {
     const auto u = ParsePoint(c, query);
     json dims = json::array();
-    for (int d = 0; d < c.dimension_count(); ++d) dims.push_back(StretchesJson(LineStretches(form, c.space(), u, d)));
-    const bool valid = IsValidPoint(form, c.space(), u);
+    for (int d = 0; d < c.dimension_count(); ++d) dims.push_back(StretchesJson(LineStretches(form, c.space(), c.corners(), u, d)));
+    const bool valid = IsValidPoint(form, c.space(), c.corners(), u);
     json j = {{"u", u}, {"valid", valid}, {"dimensions", dims}};
-    if (!valid) j["failures"] = FailuresAt(form, c.space(), u);
+    if (!valid) j["failures"] = FailuresAt(form, c.space(), c.corners(), u);
     return Json(j);
   }
   if (path == "/api/reason") {
@@ -238,11 +238,11 @@ ApiResponse Route(const Customiser& c, const std::string& path, const std::map<s
       p[b] = blo + (bhi - blo) * (j + 0.5) / n;
       for (int i = 0; i < n; ++i) {
         p[a] = alo + (ahi - alo) * (i + 0.5) / n;
-        if (IsValidPoint(form, c.space(), p)) {
+        if (IsValidPoint(form, c.space(), c.corners(), p)) {
           cells.push_back(-1);
           continue;
         }
-        const auto f = FailuresAt(form, c.space(), p);
+        const auto f = FailuresAt(form, c.space(), c.corners(), p);
         const std::string name = f.empty() ? "invalid" : f.front();
         auto [it, inserted] = failure_index.insert({name, static_cast<int>(failure_names.size())});
         if (inserted) failure_names.push_back(name);

@@ -26,23 +26,23 @@ std::optional<std::vector<double>> KeyCoordinates(const DesignSpace& space, cons
 
 namespace {
 
-void Descend(const sampling::FormTree& tree, int node, const std::vector<double>& x, int free_dimension,
-             std::vector<const FormNode*>& out) {
+void Descend(const sampling::FormTree& tree, int tree_index, int node, const std::vector<double>& x,
+             int free_dimension, std::vector<LeafHit>& out) {
   const FormNode& nd = tree.nodes[node];
   if (nd.split_dimension < 0) {
-    out.push_back(&nd);
+    out.push_back({&nd, tree_index, node});
     return;
   }
   const int e = nd.split_dimension;
   const double split = static_cast<double>(nd.split_key);
-  if (e == free_dimension || x[e] <= split) Descend(tree, nd.children[0], x, free_dimension, out);
-  if (e == free_dimension || x[e] >= split) Descend(tree, nd.children[1], x, free_dimension, out);
+  if (e == free_dimension || x[e] <= split) Descend(tree, tree_index, nd.children[0], x, free_dimension, out);
+  if (e == free_dimension || x[e] >= split) Descend(tree, tree_index, nd.children[1], x, free_dimension, out);
 }
 
 }  // namespace
 
-std::vector<const FormNode*> LeavesTouching(const Form& form, const DesignSpace& space, const std::vector<double>& x,
-                                            int free_dimension) {
+std::vector<LeafHit> LeavesTouching(const Form& form, const DesignSpace& space, const std::vector<double>& x,
+                                    int free_dimension) {
   const int n = space.dimension_count();
   // Candidate bootstrap cells per dimension (two where x is on a grid line).
   std::vector<std::vector<int>> cells(n);
@@ -53,12 +53,12 @@ std::vector<const FormNode*> LeavesTouching(const Form& form, const DesignSpace&
         cells[d].push_back(j);
     }
   }
-  std::vector<const FormNode*> out;
+  std::vector<LeafHit> out;
   std::vector<size_t> pick(n, 0);
   for (;;) {
     int tree = 0;
     for (int d = 0; d < n; ++d) tree = tree * space.cell_count(d) + cells[d][pick[d]];
-    Descend(form.trees[tree], 0, x, free_dimension, out);
+    Descend(form.trees[tree], tree, 0, x, free_dimension, out);
     int d = n - 1;
     while (d >= 0 && ++pick[d] == cells[d].size()) pick[d--] = 0;
     if (d < 0) break;
@@ -66,8 +66,8 @@ std::vector<const FormNode*> LeavesTouching(const Form& form, const DesignSpace&
   return out;
 }
 
-bool FaceAllValid(const Form& form, const FormNode& leaf, const std::vector<double>& x, int free_dimension,
-                  std::vector<std::string>* failures) {
+bool FaceAllValid(const Form& form, const FormNode& leaf, const std::int32_t* corners, const std::vector<double>& x,
+                  int free_dimension, std::vector<std::string>* failures) {
   const int n = static_cast<int>(leaf.lo.size());
   // fixed[d]: -1 free, 0 corner must be on lo side, 1 on hi side.
   std::vector<int> fixed(n, -1);
@@ -77,16 +77,12 @@ bool FaceAllValid(const Form& form, const FormNode& leaf, const std::vector<doub
     else if (x[d] == static_cast<double>(leaf.hi[d])) fixed[d] = 1;
   }
   bool all_valid = true;
-  sampling::PointKey key(n);
   for (size_t c = 0; c < (size_t{1} << n); ++c) {
     bool on_face = true;
-    for (int d = 0; d < n && on_face; ++d) {
-      const int side = static_cast<int>((c >> d) & 1);
-      if (fixed[d] >= 0 && fixed[d] != side) on_face = false;
-      key[d] = side ? leaf.hi[d] : leaf.lo[d];
-    }
+    for (int d = 0; d < n && on_face; ++d)
+      if (fixed[d] >= 0 && fixed[d] != static_cast<int>((c >> d) & 1)) on_face = false;
     if (!on_face) continue;
-    const auto& sample = form.samples[form.sample_ids.at(key)];
+    const auto& sample = form.samples[corners[c]];
     if (!sample.outcome.valid) {
       all_valid = false;
       if (!failures) return false;

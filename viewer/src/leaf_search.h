@@ -2,7 +2,9 @@
 // coordinates (sampling/design_space.h). Shared by valid_region.cc and snap.cc.
 #pragma once
 
+#include <cstdint>
 #include <optional>
+#include <string>
 #include <vector>
 
 #include "fabatlas/sampling/form.h"
@@ -14,17 +16,25 @@ namespace fabatlas::viewer::internal {
 // value or a point outside the bounded space.
 std::optional<std::vector<double>> KeyCoordinates(const sampling::DesignSpace& space, const std::vector<double>& u);
 
+// A leaf found by LeavesTouching: the node and where it is in form.trees.
+struct LeafHit {
+  const sampling::FormNode* node = nullptr;
+  int tree = -1;
+  int index = -1;  // in form.trees[tree].nodes
+};
+
 // Every leaf whose closed box contains x (key coordinates). With
 // free_dimension >= 0, the leaves whose closed box meets the whole line
 // through x along that dimension.
-std::vector<const sampling::FormNode*> LeavesTouching(const sampling::Form& form, const sampling::DesignSpace& space,
-                                                      const std::vector<double>& x, int free_dimension = -1);
+std::vector<LeafHit> LeavesTouching(const sampling::Form& form, const sampling::DesignSpace& space,
+                                    const std::vector<double>& x, int free_dimension = -1);
 
 // True if the corners of `leaf` on the smallest face containing x are all
 // valid; the face is free along free_dimension (if >= 0) and along every
-// dimension where x is strictly inside the leaf. Appends the failure types of
-// invalid corners of that face to *failures when given.
-bool FaceAllValid(const sampling::Form& form, const sampling::FormNode& leaf, const std::vector<double>& x,
-                  int free_dimension, std::vector<std::string>* failures = nullptr);
+// dimension where x is strictly inside the leaf. corners: the leaf's 2^n
+// sample ids (LeafCorners::of). Appends the failure types of invalid corners
+// of that face to *failures when given.
+bool FaceAllValid(const sampling::Form& form, const sampling::FormNode& leaf, const std::int32_t* corners,
+                  const std::vector<double>& x, int free_dimension, std::vector<std::string>* failures = nullptr);
 
 }  // namespace fabatlas::viewer::internal

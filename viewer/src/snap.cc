@@ -19,7 +19,8 @@ std::optional<Snap> SnapToValidSample(const sampling::Form& form, const sampling
   if (!x) return std::nullopt;
   const int n = space.dimension_count();
   std::optional<Snap> best;
-  for (const sampling::FormNode* leaf : internal::LeavesTouching(form, space, *x)) {
+  for (const internal::LeafHit& hit : internal::LeavesTouching(form, space, *x)) {
+    const sampling::FormNode* leaf = hit.node;
     const std::vector<std::int64_t> corners = sampling::CornerSampleIds(form, *leaf);
     std::vector<double> t(n);
     for (int d = 0; d < n; ++d)

@@ -23,6 +23,7 @@
 #include "fabatlas/geometry/solid.h"
 #include "fabatlas/sampling/form.h"
 #include "fabatlas/sampling/job_file.h"
+#include "fabatlas/viewer/leaf_corners.h"
 #include "fabatlas/viewer/preview_cache.h"
 #include "fabatlas/viewer/property_limits.h"
 #include "fabatlas/viewer/snap.h"
@@ -96,9 +97,13 @@ class Customiser {
   int dimension_count() const { return space_.dimension_count(); }
   const std::vector<std::int64_t>& starting_points() const { return starting_points_; }
 
-  bool IsValid(const std::vector<double>& u) const { return IsValidPoint(source_.form, space_, u); }
+  // The form's leaf corner table (leaf_corners.h), built once here; it fits
+  // every LimitedForm too.
+  const LeafCorners& corners() const { return corners_; }
+
+  bool IsValid(const std::vector<double>& u) const { return IsValidPoint(source_.form, space_, corners_, u); }
   std::vector<Stretch> Stretches(const std::vector<double>& u, int dimension) const {
-    return LineStretches(source_.form, space_, u, dimension);
+    return LineStretches(source_.form, space_, corners_, u, dimension);
   }
   std::optional<Snap> SnapTo(const std::vector<double>& u) const { return SnapToValidSample(source_.form, space_, u); }
   // The sample's recorded properties (Fab Forms P_F) and, when it has a
@@ -133,6 +138,7 @@ class Customiser {
  private:
   CustomiserSource source_;
   sampling::DesignSpace space_;
+  LeafCorners corners_;
   std::vector<std::int64_t> starting_points_;
   std::unique_ptr<design::SubtreeCache> cache_;
   PreviewCacheOptions preview_options_;

@@ -5,7 +5,9 @@
 // samples are all valid, plus the faces and edges of any leaf whose corners
 // on that face/edge are all valid ("any point u is considered valid if it lies
 // inside a valid hypercube, or on an all-valid face or edge"). Lookups work
-// on the raw k-d trees; nothing is precomputed.
+// on the raw k-d trees and read leaf corners from a LeafCorners table built
+// once per form (leaf_corners.h); it must fit the form (LeafCorners::Fits),
+// else std::invalid_argument. Single-threaded per call, thread-safe.
 //
 // Points u are parameter values in the order of form.dimensions (enumerated:
 // the value index). A coordinate within 1e-9 of a bootstrap cell's width of
@@ -17,18 +19,20 @@
 #include <vector>
 
 #include "fabatlas/sampling/form.h"
+#include "fabatlas/viewer/leaf_corners.h"
 
 namespace fabatlas::viewer {
 
 // True if u lies in the estimated valid region (see above). False outside
 // the bounded space or for the wrong number of coordinates.
-bool IsValidPoint(const sampling::Form& form, const sampling::DesignSpace& space, const std::vector<double>& u);
+bool IsValidPoint(const sampling::Form& form, const sampling::DesignSpace& space, const LeafCorners& corners,
+                  const std::vector<double>& u);
 
 // Why u is outside the valid region: the distinct failure types (sorted) of
 // the invalid corners of the smallest faces containing u of the leaves
 // touching it. Empty if u is valid or outside the space.
 std::vector<std::string> FailuresAt(const sampling::Form& form, const sampling::DesignSpace& space,
-                                    const std::vector<double>& u);
+                                    const LeafCorners& corners, const std::vector<double>& u);
 
 // One stretch of the line through u along a dimension.
 struct Stretch {
@@ -48,10 +52,10 @@ struct Stretch {
 // is the open gap between its neighbours. Throws fabatlas::InputError if u is
 // outside the bounded space or has the wrong arity.
 std::vector<Stretch> LineStretches(const sampling::Form& form, const sampling::DesignSpace& space,
-                                   const std::vector<double>& u, int dimension);
+                                   const LeafCorners& corners, const std::vector<double>& u, int dimension);
 
 // Only the valid stretches of LineStretches.
 std::vector<Stretch> ValidIntervals(const sampling::Form& form, const sampling::DesignSpace& space,
-                                    const std::vector<double>& u, int dimension);
+                                    const LeafCorners& corners, const std::vector<double>& u, int dimension);
 
 }  // namespace fabatlas::viewer
