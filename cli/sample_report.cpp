@@ -28,6 +28,7 @@ nlohmann::json SampleJson(const design::Design& d, const design::SampleResult& r
   for (const auto& c : r.checks) {
     nlohmann::json cj{{"passed", c.passed}, {"reason", c.reason}, {"seconds", c.seconds}};
     if (!c.passed) cj["failure"] = c.failure;
+    if (!c.measures.empty()) cj["measures"] = c.measures;  // e.g. collision_t_begin, full precision
     j["checks"][c.name] = cj;
   }
   j["properties"] = r.properties;

@@ -15,6 +15,7 @@
 #include "../../common/design/src/operations.h"
 #include "design_files.h"
 #include "fabatlas/design/evaluate_sample.h"
+#include "fabatlas/design/state_graph.h"
 #include "fabatlas/error.h"
 
 using namespace fabatlas;
@@ -83,6 +84,52 @@ TEST(DesignReconfigurable, CollisionIntervalMatchesHandComputedSpan) {
   EXPECT_NE(c.reason.find("transition slide t in ["), std::string::npos) << c.reason;
   EXPECT_NE(c.reason.find("'post' and 'cube'"), std::string::npos) << c.reason;
   EXPECT_EQ(c.measures.at("min_clearance"), 0.0);
+}
+
+// The state graph the customiser plays (state_graph.h) is what the check
+// tested: its intervals are the check's measures, its motions the file's
+// (the cube at x = -60 + 120 t), its objects the level-set meshes.
+TEST(DesignReconfigurable, StateGraphHoldsWhatTheCheckTested) {
+  const design::Design d = design::LoadDesign(TempDesign(kSlider));
+  const design::StateGraphResult r = design::EvaluateStateGraph(d, design::ParsePoint(d, "dy=0", "--at"));
+  const auto& c = Outcome(r.sample, "collision_free");
+  const design::StateGraph& g = r.graph;
+  EXPECT_TRUE(g.collisions_checked);
+  EXPECT_EQ(g.time_steps, 121);
+  ASSERT_EQ(g.object_names, (std::vector<std::string>{"post", "cube"}));
+  ASSERT_EQ(g.objects.size(), 2u);
+  EXPECT_GT(g.objects[1].triangles.size(), 12u);
+  ASSERT_EQ(g.transitions.size(), 1u);
+  const auto& t = g.transitions[0];
+  EXPECT_EQ(t.name, "slide");
+  EXPECT_EQ(t.from, "left");
+  EXPECT_EQ(t.to, "right");
+  ASSERT_EQ(t.collisions.size(), 1u);
+  EXPECT_EQ(t.collisions[0].t_begin, c.measures.at("collision_t_begin"));
+  EXPECT_EQ(t.collisions[0].t_end, c.measures.at("collision_t_end"));
+  EXPECT_EQ(t.collisions[0].part_a, 0);
+  EXPECT_EQ(t.collisions[0].part_b, 1);
+  ASSERT_EQ(t.motions.size(), 2u);
+  for (const double time : {0.0, 0.25, 1.0}) {
+    EXPECT_NEAR(t.motions[1].At(time).translation[0], -60 + 120 * time, 1e-9);
+    EXPECT_EQ(t.motions[0].At(time).translation[0], 0.0);
+  }
+  // Clear: no intervals, the motions still there.
+  const design::StateGraphResult clear = design::EvaluateStateGraph(d, design::ParsePoint(d, "dy=20", "--at"));
+  EXPECT_TRUE(clear.sample.valid);
+  ASSERT_EQ(clear.graph.transitions.size(), 1u);
+  EXPECT_TRUE(clear.graph.transitions[0].collisions.empty());
+  // Without a collision_free check: objects and motions, nothing checked.
+  std::string text = kSlider;
+  text.erase(text.find("checks:"));
+  const design::Design unchecked = design::LoadDesign(TempDesign(text));
+  const design::StateGraphResult u = design::EvaluateStateGraph(unchecked, design::ParsePoint(unchecked, "dy=0", "--at"));
+  EXPECT_TRUE(u.sample.valid);
+  EXPECT_FALSE(u.graph.collisions_checked);
+  EXPECT_EQ(u.graph.objects.size(), 2u);
+  ASSERT_EQ(u.graph.transitions.size(), 1u);
+  EXPECT_TRUE(u.graph.transitions[0].collisions.empty());
+  EXPECT_NEAR(u.graph.transitions[0].motions[1].At(1).translation[0], 60, 1e-9);
 }
 
 TEST(DesignReconfigurable, ClearConfigurationReportsTheAnalyticGap) {

@@ -126,6 +126,15 @@ TEST(ApiFaults, AnInternalFaultIsA500WithItsReason) {
   EXPECT_EQ(r.body.find('\n'), r.body.size() - 1) << r.body;
 }
 
+TEST_F(Api, StateGraphOfADesignWithoutOneIsABadRequest) {
+  // The tube has no objects or transitions: one line, 400 (the bench's state
+  // graph is played in viewer_browser_transition_test).
+  const json r = Get("/api/state_graph", {{"u", "15,6"}}, 400);
+  EXPECT_EQ(r.get<std::string>(), "this design has no state graph (objects and transitions)\n");
+  const json form = Get("/api/form", {});
+  EXPECT_TRUE(form["transitions"].empty() && form["objects"].empty() && form["states"].empty()) << form.dump();
+}
+
 // The peg rail run (viewer_peg_run): valid at length 17.5 by interpolation
 // between its valid samples at 15 and 20, but its 20 mm bulge there breaks
 // max_volume (17.5 x 6 x 22 mm^3 > 1000): the export answers 400 with the

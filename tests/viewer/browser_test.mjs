@@ -11,33 +11,13 @@
 // downloads whose bytes are a closed mesh of the tube's analytic volume
 // pi (r^2 - (r - w)^2) 20 at the chosen point. Keeps a screenshot in
 // $FABATLAS_TEST_OUTPUT/viewer_browser.png. Exit status 0 = pass.
-import { execFileSync, spawn } from 'node:child_process';
+import { execFileSync } from 'node:child_process';
 import fs from 'node:fs';
 import path from 'node:path';
-import { chromium } from 'playwright-core';
+import { check, env, failures, launchBrowser, settle, startServer, statusOk } from './browser_support.mjs';
 
-const env = process.env;
-const bin = env.FABATLAS_BIN_DIR;
 const run = env.FABATLAS_VIEWER_RUN;
 const out = env.FABATLAS_TEST_OUTPUT ?? '.';
-const failures = [];
-const check = (ok, what) => { console.log(`${ok ? 'ok  ' : 'FAIL'} ${what}`); if (!ok) failures.push(what); };
-
-function startServer() {
-  const child = spawn(path.join(bin, 'fabatlas'), ['serve', run, '--port', '0'], { stdio: ['ignore', 'pipe', 'pipe'] });
-  return new Promise((resolve, reject) => {
-    let text = '';
-    const timer = setTimeout(() => reject(new Error('fabatlas serve did not start: ' + text)), 30000);
-    const onData = (d) => {
-      text += d;
-      const m = text.match(/at (http:\/\/127\.0\.0\.1:\d+\/)/);
-      if (m) { clearTimeout(timer); resolve({ child, url: m[1] }); }
-    };
-    child.stdout.on('data', onData);
-    child.stderr.on('data', onData);
-    child.on('exit', (code) => { clearTimeout(timer); reject(new Error(`fabatlas serve exited ${code}: ${text}`)); });
-  });
-}
 
 // Screen x of value v on slider d's track (the thumb is 16 px wide).
 async function xOf(page, d, v) {
@@ -57,25 +37,8 @@ async function drag(page, d, to) {
   await page.mouse.up();
 }
 
-async function settle(page) {
-  // Quiet: no update in flight and the preview matches the properties' sample.
-  await page.waitForFunction(() => {
-    const s = window.fabatlas;
-    return s.properties && s.previewSample === s.properties.sample;
-  }, null, { timeout: 60000 });
-  await page.waitForTimeout(300);
-  await page.waitForFunction(() => window.fabatlas.previewSample === window.fabatlas.properties.sample, null, { timeout: 60000 });
-}
-
 const truly = (r, w) => w >= 1 + 0.01 * r * r && r - w >= 2;
 const tubeVolume = (r, w) => Math.PI * (r * r - (r - w) * (r - w)) * 20;
-
-// The status line: not an error.
-async function statusOk(page, what) {
-  const st = await page.evaluate(() => ({ text: document.querySelector('#status').textContent,
-    error: document.querySelector('#status').classList.contains('error') || window.fabatlas.error !== null }));
-  check(!st.error, `${what}: status line "${st.text}" shows no error`);
-}
 
 // The colour of the validity map at parameter values (a, b) of its axes.
 async function mapColour(page, a, b) {
@@ -114,11 +77,8 @@ const canvasPixels = (page) => page.evaluate(() => document.querySelector('#prev
 
 let server, browser;
 try {
-  server = await startServer();
-  browser = await chromium.launch({
-    executablePath: env.FABATLAS_CHROMIUM ?? '/usr/bin/chromium',
-    args: ['--no-sandbox', '--no-proxy-server', '--use-angle=swiftshader', '--enable-unsafe-swiftshader', '--ignore-gpu-blocklist'],
-  });
+  server = await startServer(run);
+  browser = await launchBrowser();
   const page = await browser.newPage({ viewport: { width: 1200, height: 900 }, acceptDownloads: true });
   const errors = [];
   page.on('pageerror', (e) => errors.push(String(e)));

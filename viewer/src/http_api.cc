@@ -7,7 +7,9 @@
 
 #include <nlohmann/json.hpp>
 
+#include "fabatlas/design/state_graph.h"
 #include "fabatlas/error.h"
+#include "fabatlas/precompute/design_evaluator.h"
 #include "fabatlas/storage/glb.h"
 #include "fabatlas/viewer/export_design.h"
 #include "fabatlas/viewer/failure_reason.h"
@@ -108,7 +110,18 @@ json FormJson(const Customiser& c) {
     if (s.outcome.valid)
       for (const auto& [name, value] : s.outcome.properties) property_names.insert(name);
   }
+  // Reconfigurables: the state graph the page can play (/api/state_graph).
+  json states = json::array(), transitions = json::array(), objects = json::array();
+  if (c.source().design) {
+    const design::Design& d = *c.source().design;
+    for (const auto& o : d.objects) objects.push_back(o.name);
+    states = d.states;
+    for (const auto& t : d.transitions) transitions.push_back({{"name", t.name}, {"from", t.from}, {"to", t.to}});
+  }
   return {{"name", c.source().name},
+          {"objects", objects},
+          {"states", states},
+          {"transitions", transitions},
           {"dimensions", dims},
           {"materials", materials},
           {"starting_points", starts},
@@ -127,6 +140,76 @@ json StretchesJson(const std::vector<Stretch>& stretches) {
     out.push_back(j);
   }
   return out;
+}
+
+// A reconfigurable design at exactly u, to be played (Reconfigurables Sec. 5):
+// the design evaluated there with every check (design::EvaluateStateGraph),
+// each object's mesh (body frame, mm, z up), and per transition the poses of
+// every object at `frames` evenly spaced times plus the ends of every
+// collision interval, the intervals (first by when, then where) and the
+// first colliding time over all transitions.
+json StateGraphJson(const Customiser& c, const std::vector<double>& u, int frames) {
+  if (!c.source().design) throw BadRequest{"this form has no design"};
+  const design::Design& d = *c.source().design;
+  if (d.objects.empty() || d.transitions.empty()) throw BadRequest{"this design has no state graph (objects and transitions)"};
+  const design::StateGraphResult r = design::EvaluateStateGraph(d, precompute::DesignPointOf(d, u));
+  const design::StateGraph& g = r.graph;
+  json j = {{"u", u}, {"valid", r.sample.valid}, {"collisions_checked", g.collisions_checked},
+            {"time_steps", g.time_steps}};
+  if (!r.sample.valid) {
+    j["failure"] = r.sample.failure;
+    j["reason"] = r.sample.failure_reason;
+    for (const auto& check : r.sample.checks)
+      if (!check.passed) {
+        j["check"] = check.name;
+        break;
+      }
+  }
+  json objects = json::array();
+  for (std::size_t k = 0; k < g.objects.size(); ++k) {
+    json positions = json::array(), triangles = json::array();
+    for (const auto& v : g.objects[k].vertices)
+      for (double x : v) positions.push_back(std::round(x * 1e4) / 1e4);  // 0.1 micrometre: half the bytes
+    for (const auto& t : g.objects[k].triangles)
+      for (auto i : t) triangles.push_back(i);
+    objects.push_back({{"name", g.object_names.at(k)}, {"positions", positions}, {"triangles", triangles}});
+  }
+  j["objects"] = objects;
+  json transitions = json::array();
+  json first = nullptr;
+  for (const auto& t : g.transitions) {
+    std::set<double> times;
+    for (int i = 0; i < frames; ++i) times.insert(static_cast<double>(i) / (frames - 1));
+    json collisions = json::array();
+    for (const auto& ci : t.collisions) {
+      times.insert(ci.t_begin);
+      times.insert(ci.t_end);
+      const json pair = {g.object_names.at(ci.part_a), g.object_names.at(ci.part_b)};
+      collisions.push_back({{"t_begin", ci.t_begin}, {"t_end", ci.t_end}, {"objects", pair},
+                            {"where", {{"min", ci.where.min}, {"max", ci.where.max}}}});
+      if (first.is_null() || ci.t_begin < first["t"].get<double>())
+        first = {{"transition", t.name}, {"t", ci.t_begin}, {"t_end", ci.t_end}, {"objects", pair}};
+    }
+    json poses = json::array();  // per time, per object: row-major 3x4 [R | T], mm
+    for (const double time : times) {
+      json at = json::array();
+      for (const auto& motion : t.motions) {
+        const swept::Transform f = motion.At(time);
+        json m = json::array();
+        for (int row = 0; row < 3; ++row) {
+          for (int col = 0; col < 3; ++col) m.push_back(f.rotation[row][col]);
+          m.push_back(f.translation[row]);
+        }
+        at.push_back(m);
+      }
+      poses.push_back(at);
+    }
+    transitions.push_back({{"name", t.name}, {"from", t.from}, {"to", t.to}, {"times", times}, {"poses", poses},
+                           {"collisions", collisions}});
+  }
+  j["transitions"] = transitions;
+  j["first_collision"] = first;
+  return j;
 }
 
 ApiResponse Json(const json& j) {
@@ -220,6 +303,10 @@ ApiResponse Route(const Customiser& c, const std::string& path, const std::map<s
     for (const auto& name : e.checks) checks += (checks.empty() ? "" : ",") + name;
     r.headers["X-Checks"] = checks;  // the checks passed at exactly u
     return r;
+  }
+  if (path == "/api/state_graph") {
+    const int frames = ParseIndex(query, "frames", 2, 1000, 61);
+    return Json(StateGraphJson(c, ParsePoint(c, query), frames));
   }
   if (path == "/api/map") {
     const int n_dims = c.dimension_count();

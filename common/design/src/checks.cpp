@@ -308,6 +308,12 @@ CheckOutcome CollisionFree(const CheckSpec& spec, CheckContext& c) {
     o.reason = e.what();
     return o;
   }
+  if (c.state_graph) {
+    c.state_graph->collisions_checked = true;
+    c.state_graph->time_steps = static_cast<int>(steps);
+    c.state_graph->objects = meshes;
+    c.state_graph->transitions.clear();
+  }
   struct Hit {
     std::string transition;
     swept::CollisionInterval interval;
@@ -331,6 +337,11 @@ CheckOutcome CollisionFree(const CheckSpec& spec, CheckContext& c) {
       return o;
     }
     for (const auto& i : report.intervals) hits.push_back({t.name, i});
+    if (c.state_graph) {
+      const std::size_t k = c.state_graph->transitions.size();
+      const Transition& edge = c.design().transitions.at(k);
+      c.state_graph->transitions.push_back({t.name, edge.from, edge.to, t.motions, report.intervals});
+    }
     if (!report.collision_free()) {
       clearance = 0;
       continue;

@@ -8,6 +8,7 @@
 #include "expression.h"
 #include "openscad_node.h"
 #include "fabatlas/design/evaluate_sample.h"
+#include "fabatlas/design/state_graph.h"
 #include "fabatlas/mesh/triangle_mesh.h"
 #include "reconfigurable.h"
 
@@ -32,6 +33,8 @@ class CheckContext {
   // Meshes that entered the sample from outside fabatlas (mesh nodes,
   // OpenSCAD polyhedra and renders): what `watertight` inspects in full.
   const std::vector<OutsideMesh>* outside = nullptr;
+  // Reconfigurables: where collision_free records what it tested (optional).
+  StateGraph* state_graph = nullptr;
 
  private:
   const Design& design_;

@@ -1,6 +1,7 @@
 // EvaluateSample (Fab Forms Alg. 2) and ΔG (Eq. 2).
 #include "fabatlas/exact_decimal.h"
 #include "fabatlas/design/evaluate_sample.h"
+#include "fabatlas/design/state_graph.h"
 
 #include <chrono>
 #include <cmath>
@@ -415,12 +416,33 @@ SampleResult EvaluateSample(const Design& design, const Point& u, const Evaluate
       context.transitions = [&]() -> const std::vector<ResolvedTransition>& { return tree.Transitions(); };
       context.assembly = [&]() { return tree.Assembly(); };
       context.outside = &tree.Outside();
+      context.state_graph = options.state_graph;
       for (const CheckSpec& spec : design.checks) {
         CheckOutcome outcome = RunCheck(spec, context);
         if (!outcome.passed) fail(outcome.failure, outcome.reason);
         r.checks.push_back(std::move(outcome));
       }
       r.timings["checks"] = Since(checks_start);
+    }
+    // Reconfigurables: what a collision_free check did not record (no such
+    // check, or checks skipped): the objects and motions, without collisions.
+    if (geometry_check.passed && options.state_graph && !design.objects.empty()) {
+      StateGraph& g = *options.state_graph;
+      g.object_names.clear();
+      for (const auto& object : design.objects) g.object_names.push_back(object.name);
+      try {
+        if (g.objects.empty())
+          for (const auto& object : design.objects) g.objects.push_back(tree.EvaluateObject(object.name).solid.ToMesh());
+        {
+          const auto& resolved = tree.Transitions();
+          for (std::size_t k = g.transitions.size(); k < resolved.size(); ++k)
+            g.transitions.push_back({resolved[k].name, design.transitions[k].from, design.transitions[k].to,
+                                     resolved[k].motions, {}});
+        }
+      } catch (const SampleFailure& e) {
+        fail(e.type(), e.what());
+        g = StateGraph{};
+      }
     }
   }
   r.valid = r.failure.empty();

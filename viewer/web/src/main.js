@@ -4,8 +4,11 @@
 // and a 2-D validity map; the point lives in the page URL, presets are
 // OpenSCAD parameter sets, limits on properties shrink the valid region
 // (Fab Forms Sec. 7.2), invalid stretches say why in words, and the design
-// downloads as STL or 3MF. Talks only to the API of `fabatlas serve`
-// (docs/viewer.md).
+// downloads as STL or 3MF. For a reconfigurable design (a state graph) it
+// plays each transition with the objects moving along their motions, and for
+// an invalid sample shows the first colliding time and highlights the
+// colliding objects (Reconfigurables Sec. 5: when, then where). Talks only to
+// the API of `fabatlas serve` (docs/viewer.md).
 import * as THREE from 'three';
 import { OrbitControls } from 'three/examples/jsm/controls/OrbitControls.js';
 import { GLTFLoader } from 'three/examples/jsm/loaders/GLTFLoader.js';
@@ -25,8 +28,15 @@ const state = {
   reasonCount: 0,      // reasons shown so far
   download: null,      // the last download: {name, size, format}
   map: null,           // the validity map on screen (/api/map's answer)
+  // The transition on screen: {transition, u, valid, failure, frame, frames,
+  // t, playing, framesShown, firstCollision (/api/state_graph's), colliding
+  // (objects in collision at t), highlighted (objects drawn red)}.
+  motion: null,
+  motionPlays: 0,      // transitions played to their end so far
 };
 window.fabatlas = state;
+// The moving objects on screen (three.js meshes), for the browser test.
+state.motionObjects = () => motionMeshes;
 
 const $ = (id) => document.getElementById(id);
 // The limits as the API reads them: "volume<=9000,weight:PLA>=3".
@@ -214,6 +224,7 @@ function onHover(d, e, tap = false) {
     if (!tip.hidden && tip.textContent.startsWith(head)) tip.textContent = words;
     sliders[d].track.title = words;
     if (tap) { sliders[d].why.textContent = words; sliders[d].why.hidden = false; }
+    offerWhy(r);
   }).catch(showError);
 }
 
@@ -264,6 +275,7 @@ function showError(e) {
 }
 
 async function update() {
+  leaveMotion();
   const u = state.u.slice();
   const [intervals, properties] = await Promise.all([
     apiJson('/api/intervals?' + query(u)),
@@ -341,7 +353,7 @@ async function meshFromGlb(buffer) {
 }
 
 function fitCamera(object, cam, ctl) {
-  const box = new THREE.Box3().setFromObject(object);
+  const box = object.isBox3 ? object : new THREE.Box3().setFromObject(object);
   const size = box.getSize(new THREE.Vector3()).length() || 1;
   const centre = box.getCenter(new THREE.Vector3());
   cam.position.copy(centre).add(new THREE.Vector3(0.6, 0.45, 0.9).multiplyScalar(size * 1.1));
@@ -472,12 +484,184 @@ function onMapClick(e) {
   const i = Math.min(n - 1, Math.floor(((e.clientX - rect.left) / rect.width) * n));
   const j = Math.min(n - 1, Math.floor(((rect.bottom - e.clientY) / rect.height) * n));
   const cell = mapData.cells[j * n + i];
-  if (cell >= 0) { setStatus(`not fabricable there: ${mapData.failures[cell]}`); return; }
   const u = state.u.slice();
   u[mapData.a] = mapData.a_range[0] + ((i + 0.5) / n) * (mapData.a_range[1] - mapData.a_range[0]);
   u[mapData.b] = mapData.b_range[0] + ((j + 0.5) / n) * (mapData.b_range[1] - mapData.b_range[0]);
+  if (cell >= 0) {
+    setStatus(`not fabricable there: ${mapData.failures[cell]}`);
+    // A reconfigurable: play the invalid sample next to the click, to see
+    // when and where it collides.
+    if (state.form.transitions.length && !mapData.failures[cell].startsWith('limit:'))
+      apiJson('/api/reason?' + query(u)).then((r) => {
+        state.reason = r;
+        if (r.sample >= 0) playTransition(null, r.sample_u, `invalid sample #${r.sample}`);
+      }).catch(showError);
+    return;
+  }
   state.u = u;
   requestUpdate();
+}
+
+// ------------------------------------------------------------ transitions
+// Reconfigurables (Sec. 5): /api/state_graph evaluates the design at exactly
+// a point with its checks; the page moves each object's mesh (body frame,
+// mm, z up) by the poses it sends, in a group that turns mm / z up into the
+// preview's metres / +Y up (as storage/glb.h's node transform does).
+let motionData = null, motionGroup = null, motionMeshes = [], whereBox = null, motionTimer = null;
+const collidingMaterial = new THREE.MeshStandardMaterial({ color: 0xd62828, roughness: 0.5, metalness: 0.05 });
+const PLAY_SECONDS = 2.5;
+
+function buildTransitions() {
+  if (!state.form.transitions?.length) return;
+  $('motion-panel').hidden = false;
+  for (const t of state.form.transitions) {
+    const b = document.createElement('button');
+    b.textContent = `Play ${t.name}`;
+    b.title = `${t.from} → ${t.to}, at the current design`;
+    b.dataset.transition = t.name;
+    b.addEventListener('click', () => playTransition(t.name, state.properties?.u ?? state.u, 'this design'));
+    $('transitions').appendChild(b);
+  }
+  $('motion-t').addEventListener('input', () => {
+    if (!motionData) return;
+    stopPlaying();
+    const tr = currentTransition();
+    const t = parseFloat($('motion-t').value);
+    let k = 0;
+    tr.times.forEach((x, i) => { if (Math.abs(x - t) < Math.abs(tr.times[k] - t)) k = i; });
+    showFrame(k);
+  });
+  $('motion-back').addEventListener('click', leaveMotion);
+  $('motion-why').addEventListener('click', () => {
+    const r = state.reason;
+    if (r && r.sample >= 0) playTransition(null, r.sample_u, `invalid sample #${r.sample}`);
+  });
+}
+
+// Back to the preview (the button, or any change of the point).
+function leaveMotion() {
+  if (!state.motion) return;
+  stopPlaying();
+  if (motionGroup) motionGroup.visible = false;
+  modelGroup.visible = true;
+  $('motion-back').hidden = true;
+  state.motion = null;
+  render();
+}
+
+// After a reason in words: a collision can be played.
+function offerWhy(r) {
+  const b = $('motion-why');
+  if (!state.form.transitions?.length || r.sample < 0 || r.check !== 'collision_free') { b.hidden = true; return; }
+  b.textContent = `Play invalid sample #${r.sample} (${r.failure})`;
+  b.hidden = false;
+}
+
+const currentTransition = () => motionData.transitions.find((t) => t.name === state.motion.transition);
+
+function stopPlaying() {
+  if (motionTimer !== null) cancelAnimationFrame(motionTimer);
+  motionTimer = null;
+  if (state.motion) state.motion.playing = false;
+}
+
+function buildMotionMeshes(data) {
+  if (!motionGroup) {
+    motionGroup = new THREE.Group();
+    motionGroup.rotation.x = -Math.PI / 2;  // z up -> +Y up
+    motionGroup.scale.setScalar(1 / 1000);  // mm -> m
+    scene.add(motionGroup);
+  }
+  motionGroup.clear();
+  motionMeshes = data.objects.map((o) => {
+    const g = new THREE.BufferGeometry();
+    g.setAttribute('position', new THREE.Float32BufferAttribute(o.positions, 3));
+    g.setIndex(o.triangles);
+    g.computeVertexNormals();
+    const m = new THREE.Mesh(g, material);
+    m.name = o.name;
+    m.matrixAutoUpdate = false;
+    motionGroup.add(m);
+    return m;
+  });
+  whereBox = new THREE.Box3Helper(new THREE.Box3(), 0xd62828);
+  whereBox.visible = false;
+  motionGroup.add(whereBox);
+}
+
+// Frame k of the transition on screen: poses, colliding objects drawn red,
+// the collision's box (where) drawn, time shown.
+function showFrame(k) {
+  const tr = currentTransition();
+  const t = tr.times[k];
+  tr.poses[k].forEach((p, i) => {
+    motionMeshes[i].matrix.set(p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], p[8], p[9], p[10], p[11], 0, 0, 0, 1);
+    motionMeshes[i].matrixWorldNeedsUpdate = true;
+  });
+  const hits = tr.collisions.filter((c) => c.t_begin <= t && t <= c.t_end);
+  const colliding = [...new Set(hits.flatMap((c) => c.objects))];
+  for (const m of motionMeshes) m.material = colliding.includes(m.name) ? collidingMaterial : material;
+  whereBox.visible = hits.length > 0;
+  if (hits.length) {
+    const w = hits[0].where;
+    whereBox.box.set(new THREE.Vector3(...w.min), new THREE.Vector3(...w.max));
+  }
+  Object.assign(state.motion, { frame: k, t, colliding,
+    highlighted: motionMeshes.filter((m) => m.material === collidingMaterial).map((m) => m.name) });
+  state.motion.framesShown += 1;
+  $('motion-t').value = String(t);
+  $('motion-time').textContent = `t = ${t.toFixed(4)}`;
+  render();
+}
+
+// Plays transition `name` (null: the one that collides first, else the
+// first) of the design at exactly u, then rests at its first colliding time.
+async function playTransition(name, u, label) {
+  clearError();
+  stopPlaying();
+  setStatus(`evaluating the state graph at ${label}…`);
+  const data = await apiJson('/api/state_graph?frames=61&u=' + u.map((v) => String(v)).join(',')).catch((e) => { showError(e); return null; });
+  if (!data) return;
+  if (!data.objects.length) {
+    showError(new Error(`${label}: no geometry to play (${data.failure}: ${data.reason})`));
+    return;
+  }
+  motionData = data;
+  const tr = data.transitions.find((t) => t.name === name)
+    ?? data.transitions.find((t) => t.name === data.first_collision?.transition) ?? data.transitions[0];
+  const first = tr.collisions.length ? data.first_collision?.transition === tr.name ? data.first_collision
+    : { transition: tr.name, t: tr.collisions[0].t_begin, t_end: tr.collisions[0].t_end, objects: tr.collisions[0].objects } : null;
+  buildMotionMeshes(data);
+  modelGroup.visible = false;
+  motionGroup.visible = true;
+  $('motion-back').hidden = false;
+  state.motion = { transition: tr.name, u: data.u, label, valid: data.valid, failure: data.failure ?? null,
+    reason: data.reason ?? null, frame: 0, frames: tr.times.length, t: 0, playing: true, framesShown: 0,
+    firstCollision: first, colliding: [], highlighted: [] };
+  const info = $('motion-info');
+  info.classList.toggle('collision', first !== null);
+  info.textContent = `${tr.name} (${tr.from} → ${tr.to}) at ${label}: ` + (first
+    ? `first collision at t = ${first.t.toFixed(4)} (until ${first.t_end.toFixed(4)}): '${first.objects[0]}' and '${first.objects[1]}'`
+    : data.collisions_checked ? 'no collision' : 'collisions not checked (the design has no collision_free check)');
+  // Fit to the objects in their first pose (not the hidden collision box).
+  motionGroup.updateMatrixWorld(true);
+  const bounds = new THREE.Box3();
+  for (const m of motionMeshes) bounds.expandByObject(m);
+  fitCamera(bounds, camera, controls);
+  const start = performance.now();
+  const step = () => {
+    const k = Math.min(tr.times.length - 1, Math.floor(((performance.now() - start) / (PLAY_SECONDS * 1000)) * (tr.times.length - 1)));
+    // Frames advance by wall time; on a slow machine some are skipped, never the last.
+    showFrame(k);
+    if (k < tr.times.length - 1) { motionTimer = requestAnimationFrame(step); return; }
+    motionTimer = null;
+    state.motion.playing = false;
+    // Rest at the first colliding time: the collision in view, parts red.
+    if (first) showFrame(tr.times.indexOf(first.t));
+    state.motionPlays += 1;
+    setStatus(info.textContent);
+  };
+  motionTimer = requestAnimationFrame(step);
 }
 
 // ------------------------------------------------- the point in the URL
@@ -661,6 +845,7 @@ async function main() {
   buildPresets();
   buildLimits();
   initView();
+  buildTransitions();
   await update();
   state.ready = true;
   buildStarts().catch(showError);

@@ -13,6 +13,8 @@
 
 namespace fabatlas::design {
 
+struct StateGraph;  // state_graph.h
+
 // Failure types, in the order checks run. A sample's failure is the type of
 // its first failed check.
 inline constexpr const char* kUnsatConstraints = "unsat_constraints";
@@ -68,6 +70,10 @@ struct EvaluateOptions {
   // Sec. 6.2). The records of a hit's descendants are then absent. false
   // (sampling): children are always evaluated, every subtree is recorded.
   bool lookup_before_children = false;
+  // Reconfigurables: when set (and the point has geometry), filled with the
+  // objects' meshes, the transitions' motions and the collision_free check's
+  // intervals (state_graph.h, EvaluateStateGraph).
+  StateGraph* state_graph = nullptr;
 };
 
 struct SampleResult {

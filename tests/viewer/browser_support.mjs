@@ -1,0 +1,71 @@
+// What the customiser's browser tests share: a real `fabatlas serve` on a
+// free port, headless Chromium (Debian's, through playwright-core), the
+// ok/FAIL log, waiting for the page to be quiet, the status line.
+import { spawn } from 'node:child_process';
+import path from 'node:path';
+import { chromium } from 'playwright-core';
+
+export const env = process.env;
+export const failures = [];
+export const check = (ok, what) => { console.log(`${ok ? 'ok  ' : 'FAIL'} ${what}`); if (!ok) failures.push(what); };
+
+// `fabatlas serve RUN --port 0`; resolves with {child, url} once it prints its URL.
+export function startServer(run) {
+  const child = spawn(path.join(env.FABATLAS_BIN_DIR, 'fabatlas'), ['serve', run, '--port', '0'], { stdio: ['ignore', 'pipe', 'pipe'] });
+  return new Promise((resolve, reject) => {
+    let text = '';
+    const timer = setTimeout(() => reject(new Error('fabatlas serve did not start: ' + text)), 30000);
+    const onData = (d) => {
+      text += d;
+      const m = text.match(/at (http:\/\/127\.0\.0\.1:\d+\/)/);
+      if (m) { clearTimeout(timer); resolve({ child, url: m[1] }); }
+    };
+    child.stdout.on('data', onData);
+    child.stderr.on('data', onData);
+    child.on('exit', (code) => { clearTimeout(timer); reject(new Error(`fabatlas serve exited ${code}: ${text}`)); });
+  });
+}
+
+export function launchBrowser() {
+  return chromium.launch({
+    executablePath: env.FABATLAS_CHROMIUM ?? '/usr/bin/chromium',
+    args: ['--no-sandbox', '--no-proxy-server', '--use-angle=swiftshader', '--enable-unsafe-swiftshader', '--ignore-gpu-blocklist'],
+  });
+}
+
+// Opens the page and waits for its first preview.
+export async function openPage(browser, url, viewport = { width: 1200, height: 900 }) {
+  const page = await browser.newPage({ viewport, acceptDownloads: true });
+  const errors = [];
+  page.on('pageerror', (e) => errors.push(String(e)));
+  await page.goto(url);
+  await page.waitForFunction(() => window.fabatlas.ready && window.fabatlas.previewCount >= 1, null, { timeout: 60000 });
+  await settle(page);
+  return { page, errors };
+}
+
+export async function settle(page) {
+  // Quiet: no update in flight and the preview matches the properties' sample.
+  await page.waitForFunction(() => {
+    const s = window.fabatlas;
+    return s.properties && s.previewSample === s.properties.sample;
+  }, null, { timeout: 60000 });
+  await page.waitForTimeout(300);
+  await page.waitForFunction(() => window.fabatlas.previewSample === window.fabatlas.properties.sample, null, { timeout: 60000 });
+}
+
+// The status line: not an error.
+export async function statusOk(page, what) {
+  const st = await page.evaluate(() => ({ text: document.querySelector('#status').textContent,
+    error: document.querySelector('#status').classList.contains('error') || window.fabatlas.error !== null }));
+  check(!st.error, `${what}: status line "${st.text}" shows no error`);
+}
+
+// A click on the validity map at parameter values (a, b) of its axes.
+export async function clickMap(page, a, b) {
+  const box = await page.locator('#map').boundingBox();
+  const m = await page.evaluate(() => window.fabatlas.map);
+  await page.locator('#map').click({ position: {
+    x: ((a - m.a_range[0]) / (m.a_range[1] - m.a_range[0])) * box.width,
+    y: box.height - ((b - m.b_range[0]) / (m.b_range[1] - m.b_range[0])) * box.height } });
+}
