@@ -69,3 +69,26 @@ export async function clickMap(page, a, b) {
     x: ((a - m.a_range[0]) / (m.a_range[1] - m.a_range[0])) * box.width,
     y: box.height - ((b - m.b_range[0]) / (m.b_range[1] - m.b_range[0])) * box.height } });
 }
+
+// Screen x of value v on slider d's track (the thumb is 16 px wide).
+export async function xOf(page, d, v) {
+  const box = await page.locator(`input[type=range][data-dimension="${d}"]`).boundingBox();
+  const dim = await page.evaluate((d) => window.fabatlas.form.dimensions[d], d);
+  const t = (v - dim.lo) / (dim.hi - dim.lo);
+  return { x: box.x + 8 + t * (box.width - 16), y: box.y + box.height / 2 };
+}
+
+// Drags slider d's thumb to value `to` in 12 mouse moves; onStep (optional)
+// runs after each move.
+export async function drag(page, d, to, onStep = null) {
+  const u = await page.evaluate(() => window.fabatlas.u);
+  const from = await xOf(page, d, u[d]);
+  const target = await xOf(page, d, to);
+  await page.mouse.move(from.x, from.y);
+  await page.mouse.down();
+  for (let i = 1; i <= 12; ++i) {
+    await page.mouse.move(from.x + ((target.x - from.x) * i) / 12, from.y);
+    if (onStep) await onStep(i);
+  }
+  await page.mouse.up();
+}

@@ -14,28 +14,10 @@
 import { execFileSync } from 'node:child_process';
 import fs from 'node:fs';
 import path from 'node:path';
-import { check, env, failures, launchBrowser, settle, startServer, statusOk } from './browser_support.mjs';
+import { check, clickMap, drag, env, failures, launchBrowser, settle, startServer, statusOk, xOf } from './browser_support.mjs';
 
 const run = env.FABATLAS_VIEWER_RUN;
 const out = env.FABATLAS_TEST_OUTPUT ?? '.';
-
-// Screen x of value v on slider d's track (the thumb is 16 px wide).
-async function xOf(page, d, v) {
-  const box = await page.locator(`input[type=range][data-dimension="${d}"]`).boundingBox();
-  const dim = await page.evaluate((d) => window.fabatlas.form.dimensions[d], d);
-  const t = (v - dim.lo) / (dim.hi - dim.lo);
-  return { x: box.x + 8 + t * (box.width - 16), y: box.y + box.height / 2 };
-}
-
-async function drag(page, d, to) {
-  const u = await page.evaluate(() => window.fabatlas.u);
-  const from = await xOf(page, d, u[d]);
-  const target = await xOf(page, d, to);
-  await page.mouse.move(from.x, from.y);
-  await page.mouse.down();
-  for (let i = 1; i <= 12; ++i) await page.mouse.move(from.x + ((target.x - from.x) * i) / 12, from.y);
-  await page.mouse.up();
-}
 
 const truly = (r, w) => w >= 1 + 0.01 * r * r && r - w >= 2;
 const tubeVolume = (r, w) => Math.PI * (r * r - (r - w) * (r - w)) * 20;
@@ -166,20 +148,12 @@ try {
     check(await mapColour(page, r, w) === want, `map at radius ${r}, wall ${w} drawn ${want}`);
   }
   {
-    // A click at parameter values (a, b), relative to the map element.
-    const clickMap = async (a, b) => {
-      const box = await page.locator('#map').boundingBox();
-      const m = await page.evaluate(() => window.fabatlas.map);
-      await page.locator('#map').click({ position: {
-        x: ((a - m.a_range[0]) / (m.a_range[1] - m.a_range[0])) * box.width,
-        y: box.height - ((b - m.b_range[0]) / (m.b_range[1] - m.b_range[0])) * box.height } });
-    };
-    await clickMap(20, 8);
+    await clickMap(page, 20, 8);
     await page.waitForFunction(() => Math.abs(window.fabatlas.u[0] - 20) < 0.5 && Math.abs(window.fabatlas.u[1] - 8) < 0.2, null, { timeout: 30000 });
     await settle(page);
     check(true, 'a click on a valid map cell jumps there: ' + (await page.evaluate(() => window.fabatlas.u.map((v) => v.toFixed(2)).join(', '))));
     const before = await page.evaluate(() => window.fabatlas.u.slice());
-    await clickMap(29, 1);
+    await clickMap(page, 29, 1);
     await page.waitForFunction(() => document.querySelector('#status').textContent.startsWith('not fabricable there'), null, { timeout: 30000 })
       .catch((e) => page.evaluate(() => [document.querySelector('#status').textContent, window.fabatlas.error, window.fabatlas.u])
         .then((st) => { throw new Error(e.message + ' status: ' + JSON.stringify(st)); }));
