@@ -99,6 +99,8 @@ try {
   await statusOk(page, 'at the end');
   check(errors.length === 0, 'no page errors' + (errors.length ? ': ' + errors.join('; ') : ''));
   fs.mkdirSync(out, { recursive: true });
+  await page.mouse.move(1, 1);  // no tooltip in the picture
+  await page.waitForFunction(() => document.querySelector('#tooltip').hidden, null, { timeout: 10000 });
   await page.screenshot({ path: path.join(out, 'viewer_widgets.png'), fullPage: true });
   console.log('screenshot: ' + path.join(out, 'viewer_widgets.png'));
 } catch (e) {
