@@ -642,7 +642,8 @@ async function playTransition(name, u, label) {
   info.classList.toggle('collision', first !== null);
   info.textContent = `${tr.name} (${tr.from} → ${tr.to}) at ${label}: ` + (first
     ? `first collision at t = ${first.t.toFixed(4)} (until ${first.t_end.toFixed(4)}): '${first.objects[0]}' and '${first.objects[1]}'`
-    : data.collisions_checked ? 'no collision' : 'collisions not checked (the design has no collision_free check)');
+    : data.collisions_checked ? 'no collision' : 'collisions not checked (the design has no collision_free check)') +
+    (!data.valid && !first ? ` — not fabricable here: ${data.reason} (check: ${data.check}, ${data.failure})` : '');
   // Fit to the objects in their first pose (not the hidden collision box).
   motionGroup.updateMatrixWorld(true);
   const bounds = new THREE.Box3();
