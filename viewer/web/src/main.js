@@ -489,9 +489,9 @@ function onMapClick(e) {
   u[mapData.b] = mapData.b_range[0] + ((j + 0.5) / n) * (mapData.b_range[1] - mapData.b_range[0]);
   if (cell >= 0) {
     setStatus(`not fabricable there: ${mapData.failures[cell]}`);
-    // A reconfigurable: play the invalid sample next to the click, to see
-    // when and where it collides.
-    if (state.form.transitions.length && !mapData.failures[cell].startsWith('limit:'))
+    // A reconfigurable's collision: play the invalid sample next to the
+    // click, to see when and where it collides.
+    if (state.form.transitions.length && ['collision', 'too_little_clearance'].includes(mapData.failures[cell]))
       apiJson('/api/reason?' + query(u)).then((r) => {
         state.reason = r;
         if (r.sample >= 0) playTransition(null, r.sample_u, `invalid sample #${r.sample}`);
@@ -650,11 +650,15 @@ async function playTransition(name, u, label) {
   for (const m of motionMeshes) bounds.expandByObject(m);
   fitCamera(bounds, camera, controls);
   const start = performance.now();
+  const last = tr.times.length - 1;
+  let k = -1;
   const step = () => {
-    const k = Math.min(tr.times.length - 1, Math.floor(((performance.now() - start) / (PLAY_SECONDS * 1000)) * (tr.times.length - 1)));
-    // Frames advance by wall time; on a slow machine some are skipped, never the last.
+    // Frames follow wall time, but advance by 1 to 6 per screen refresh: a
+    // slow machine plays slower instead of jumping to the end.
+    const due = Math.floor(((performance.now() - start) / (PLAY_SECONDS * 1000)) * last);
+    k = Math.min(last, Math.max(k + 1, Math.min(due, k + 6)));
     showFrame(k);
-    if (k < tr.times.length - 1) { motionTimer = requestAnimationFrame(step); return; }
+    if (k < last) { motionTimer = requestAnimationFrame(step); return; }
     motionTimer = null;
     state.motion.playing = false;
     // Rest at the first colliding time: the collision in view, parts red.
