@@ -199,6 +199,11 @@ struct AssemblyResidual {
   std::vector<SpacingTerm> spacing;
   std::vector<EnergyTerm> energy;
   const TargetForm* target = nullptr;
+  // Per closing connection (kin->closing order): multiplies its closure
+  // residuals; empty = all 1. A chain solve (Solver::SetChainStart) switches
+  // off the cycles it does not close.
+  std::vector<double> closing_scale;
+  double ClosingScale(size_t k) const { return closing_scale.empty() ? 1.0 : closing_scale[k]; }
 
   int NumResiduals() const {
     return 12 * static_cast<int>(kin->closing.size()) + static_cast<int>(spacing.size()) +
@@ -209,15 +214,17 @@ struct AssemblyResidual {
   bool operator()(T const* const* params, T* r) const {
     const std::vector<Mat4<T>> p = kin->Poses<T>(params);
     int k = 0;
-    for (int e : kin->closing) {
+    for (size_t ci = 0; ci < kin->closing.size(); ++ci) {
+      const int e = kin->closing[ci];
       const auto& c = kin->prog->connections[e];
       Mat4<T> ma, mb;
       kin->Frames<T>(e, params[2 * e], params[2 * e + 1], ma, mb);
       const Mat4<T> fa = p[c.part_a] * ma * kin->align[e].template cast<T>();
       const Mat4<T> fb = p[c.part_b] * mb;
-      for (int i = 0; i < 3; ++i) r[k++] = T(closure_weight) * (fa(i, 3) - fb(i, 3));
+      const double w = closure_weight * ClosingScale(ci);
+      for (int i = 0; i < 3; ++i) r[k++] = T(w) * (fa(i, 3) - fb(i, 3));
       for (int i = 0; i < 3; ++i)
-        for (int j = 0; j < 3; ++j) r[k++] = T(closure_weight * rot_scale) * (fa(i, j) - fb(i, j));
+        for (int j = 0; j < 3; ++j) r[k++] = T(w * rot_scale) * (fa(i, j) - fb(i, j));
     }
     // Multi-connection spacing (FabHacks, 4.3.1): f = |t1 − t2|·L − (w1 + w2)/2, f² if f < 0.
     for (const auto& s : spacing) {
@@ -393,7 +400,7 @@ class AssemblyCost : public ceres::CostFunction {
             Eigen::Matrix4d d = Eigen::Matrix4d::Zero();
             if (ina) d += g * fa[k];
             if (inb) d -= g * fb[k];
-            put12(jac, 12 * static_cast<int>(k), i, d, wc, wr);
+            put12(jac, 12 * static_cast<int>(k), i, d, wc * f_.ClosingScale(k), wr * f_.ClosingScale(k));
           }
           if (f_.phase == Phase::kObjective && sub[prog.target]) {
             const Eigen::Matrix4d d = g * pose[prog.target] * f_.target->offset;
@@ -424,7 +431,7 @@ class AssemblyCost : public ceres::CostFunction {
           if (!used_[b][i]) continue;
           const Eigen::Matrix4d d = side == 0 ? Eigen::Matrix4d(pose[c.part_a] * fr[b].d[i] * kin.align[e])
                                               : Eigen::Matrix4d(-(pose[c.part_b] * fr[b].d[i]));
-          put12(jacobians[b], 12 * static_cast<int>(k), i, d, wc, wr);
+          put12(jacobians[b], 12 * static_cast<int>(k), i, d, wc * f_.ClosingScale(k), wr * f_.ClosingScale(k));
         }
       }
     }
@@ -535,6 +542,13 @@ class RelaxationWindow : public ceres::IterationCallback {
   std::vector<Block> last_;
 };
 
+// One chain of the chain-by-chain initial guess (Solver::SetChainStart):
+// which connections' parameters move, and which cycles are closed.
+struct Chain {
+  std::vector<char> free;              // per connection
+  std::vector<double> closing_scale;   // per closing connection: 1 closed by this chain, 0 ignored
+};
+
 double Halton(int index, int base) {
   double f = 1, r = 0;
   while (index > 0) {
@@ -604,6 +618,7 @@ class Solver {
   }
 
   bool HasCycles() const { return !kin_.closing.empty() || !spacing_.empty(); }
+  bool ClosesCycles() const { return !kin_.closing.empty(); }
 
   // Connection parameter values of start k (k = 0: box centre; else Halton).
   void SetStart(int k) {
@@ -633,9 +648,65 @@ class Solver {
     }
   }
 
-  ceres::Solver::Summary Run(Phase phase, double sigma, std::unique_ptr<ceres::Problem>* keep = nullptr) {
+  // Chain-by-chain initial guess (FabHacks, Table 5: for the reading nook
+  // "the initial guesses are computed from optimizing individual chains in
+  // the design"; PARTS.md §6: the reference's hand-set start vectors for it).
+  // From the defaults (start 0):
+  //  1. the chain from the environment to the target part — the spanning-tree
+  //     connections on its path — minimises the step-1 target objective alone
+  //     (no cycle terms), so the target part is placed first;
+  //  2. each cycle-closing connection in program order closes its own cycle:
+  //     its closure residual is minimised over its own parameters and those of
+  //     the tree connections on its two parts' paths from the environment
+  //     that no earlier chain moved, every earlier chain held where it was
+  //     solved — each new connection starts from the already-solved chains.
+  // Connections on no chain keep their defaults. Returns the chains solved.
+  int SetChainStart() {
+    SetStart(0);
+    const int m = static_cast<int>(prog_.connections.size());
+    const int n = static_cast<int>(prog_.instances.size());
+    std::vector<int> edge_to(n, -1), parent(n, -1);  // tree connection placing each part
+    for (const auto& [e, child] : kin_.tree) {
+      edge_to[child] = e;
+      const auto& c = prog_.connections[e];
+      parent[child] = child == c.part_b ? c.part_a : c.part_b;
+    }
+    std::vector<char> solved(m, 0);
+    auto take_path = [&](int part, Chain& chain) {
+      for (int u = part; u >= 0 && edge_to[u] >= 0; u = parent[u])
+        if (!solved[edge_to[u]]) chain.free[edge_to[u]] = 1;
+    };
+    auto run = [&](Chain& chain, bool target) {
+      bool any = false;
+      for (int e = 0; e < m; ++e) any = any || chain.free[e];
+      if (!any) return false;
+      Run(Phase::kObjective, target ? opt_.penalty_start : 1.0, nullptr, &chain);
+      for (int e = 0; e < m; ++e) solved[e] = solved[e] || chain.free[e];
+      return true;
+    };
+    int chains = 0;
+    {
+      Chain chain{std::vector<char>(m, 0), std::vector<double>(kin_.closing.size(), 0.0)};
+      take_path(prog_.target, chain);
+      chains += run(chain, true);
+    }
+    for (size_t k = 0; k < kin_.closing.size(); ++k) {
+      const int e = kin_.closing[k];
+      const auto& c = prog_.connections[e];
+      Chain chain{std::vector<char>(m, 0), std::vector<double>(kin_.closing.size(), 0.0)};
+      chain.closing_scale[k] = 1;
+      take_path(c.part_a, chain);
+      take_path(c.part_b, chain);
+      chain.free[e] = 1;
+      chains += run(chain, false);
+    }
+    return chains;
+  }
+
+  ceres::Solver::Summary Run(Phase phase, double sigma, std::unique_ptr<ceres::Problem>* keep = nullptr,
+                             const Chain* chain = nullptr) {
     auto problem = std::make_unique<ceres::Problem>();
-    Build(*problem, phase, sigma);
+    Build(*problem, phase, sigma, chain);
     ceres::Solver::Options o;
     o.linear_solver_type = ceres::DENSE_QR;
     o.max_num_iterations = phase == Phase::kRelaxation ? opt_.relaxation_max_iterations : opt_.max_iterations;
@@ -813,11 +884,17 @@ class Solver {
     return f;
   }
 
-  void Build(ceres::Problem& problem, Phase phase, double sigma) {
-    assembly_block_ = problem.AddResidualBlock(new AssemblyCost(Residual(phase, sigma)), nullptr, Pointers());
+  void Build(ceres::Problem& problem, Phase phase, double sigma, const Chain* chain = nullptr) {
+    AssemblyResidual f = Residual(phase, sigma);
+    if (chain) f.closing_scale = chain->closing_scale;
+    assembly_block_ = problem.AddResidualBlock(new AssemblyCost(std::move(f)), nullptr, Pointers());
     for (size_t b = 0; b < blocks_.size(); ++b) {
       const auto& c = prog_.connections[b / 2];
       double* s = blocks_[b].data();
+      if (chain && !chain->free[b / 2]) {
+        problem.SetParameterBlockConstant(s);
+        continue;
+      }
       const auto& specs = Spec(static_cast<int>(b));
       for (size_t i = 0; i < specs.size(); ++i)
         if (specs[i].kind != ParamKind::kUnbounded && !specs[i].held) {
@@ -949,7 +1026,8 @@ SolveSummary Solve(const Program& prog, const SolveOptions& opt, double perturba
   for (int k = 0; k < opt.restarts; ++k) {
     ++out.starts_tried;
     const auto tf = std::chrono::steady_clock::now();
-    solver.SetStart(k);
+    if (k == opt.chain_start && solver.ClosesCycles()) solver.SetChainStart();
+    else solver.SetStart(k);
     if (solver.ConstraintResidual() >= opt.feasibility_tolerance) solver.Run(Phase::kFeasibility, 1.0);
     const double c = solver.ConstraintResidual();
     out.feasibility_seconds += Since(tf);

@@ -10,7 +10,10 @@
 //     parameter box; start 0 = box centre), poses initialised by forward
 //     kinematics along a spanning tree so tree connections hold exactly;
 //     stall detection aborts a start whose log-cost stops decreasing.
-//     Feasible when C < feasibility_tolerance.
+//     Feasible when C < feasibility_tolerance. In programs with cycles one
+//     start (`chain_start`) is computed chain by chain instead (FabHacks
+//     Table 5 ★): the chain to the target part first, then each cycle from
+//     the chains already solved.
 //  1. User objective (4.3.3 step 1): minimise ‖target pose − end_with frame‖²
 //     + σ·(C + C_m), σ from penalty_start doubling up to penalty_doublings
 //     times until C < feasibility_tolerance. C_m: multi-connection spacing.
@@ -35,6 +38,9 @@ namespace fabatlas::assembly {
 
 struct SolveOptions {
   int restarts = 16;                    // starts of the feasibility solve (FabHacks uses T = 16)
+  // Which start (0-based) is the chain-by-chain initial guess (FabHacks
+  // Table 5 ★; SetChainStart in solve.cc) in programs with cycles; -1 never.
+  int chain_start = 1;
   double feasibility_tolerance = 1e-6;  // C threshold, mm² (FabHacks: 1e-6)
   double penalty_start = 100;           // σ of step 1 (FabHacks: 100, doubling)
   int penalty_doublings = 5;
