@@ -2,7 +2,9 @@
 // 20 steps over [0, 45.7] mm, ring XS/S/M/L); reports per ring size the
 // best variation (smallest relaxed target deviation among feasible ones) next
 // to the extension the paper chose. Usage:
-//   assembly_clip_lights_bench [--library configs/assemblies/parts.yaml]
+//   assembly_clip_lights_bench [--library configs/assemblies/parts.yaml] [--flip-clip]
+// --flip-clip attaches the clip to the bar with alignment flip
+// (ClipLightsParams::flip_clip).
 #include <chrono>
 #include <ctime>
 #include <map>
@@ -17,8 +19,16 @@ using namespace fabatlas::assembly;
 
 int main(int argc, char** argv) {
   std::string lib = "configs/assemblies/parts.yaml";
-  for (int i = 1; i + 1 < argc; i += 2)
-    if (std::string(argv[i]) == "--library") lib = argv[i + 1];
+  bool flip_clip = false;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "--library" && i + 1 < argc) lib = argv[++i];
+    else if (a == "--flip-clip") flip_clip = true;
+    else {
+      std::fprintf(stderr, "assembly_clip_lights_bench: unknown argument %s\n", a.c_str());
+      return fabatlas::kExitBadInput;
+    }
+  }
   const RingSize rings[] = {RingSize::kXS, RingSize::kS, RingSize::kM, RingSize::kL};
   // FabHacks Table 5 / Fig. 12: the chosen variation per ring size (n from
   // the part counts 11, 11, 9, 9).
@@ -37,7 +47,7 @@ int main(int argc, char** argv) {
       for (int n = 1; n <= 4; ++n)
         for (int k = 0; k < 20; ++k) {
           // l = 2.285 k: the paper's 20 values (its four choices are multiples of 45.7/20).
-          const ClipLightsParams p{n, 2.285 * k, rings[ri]};
+          const ClipLightsParams p{n, 2.285 * k, rings[ri], flip_clip};
           const ClipLightsResult r = EvaluateClipLights(p, lib);
           ++evaluated;
           ++terminations[r.summary.relaxation_termination];
@@ -49,7 +59,7 @@ int main(int argc, char** argv) {
             best_stable = r.stable;
           }
         }
-      const ClipLightsResult at_paper = EvaluateClipLights({paper_n[ri], paper[ri], rings[ri]}, lib);
+      const ClipLightsResult at_paper = EvaluateClipLights({paper_n[ri], paper[ri], rings[ri], flip_clip}, lib);
       std::printf("| %s | %d | %.2f | %.1f | %s | %d, %.3f | %.1f | %s |\n", ToString(rings[ri]), best.pairs,
                   best.extension, best_dev, best_stable ? "yes" : "no", paper_n[ri], paper[ri],
                   at_paper.target_deviation_mm, at_paper.stable ? "yes" : "no");

@@ -37,7 +37,8 @@ Program BuildClipLights(const ClipLightsParams& p, const std::string& library_pa
     if (k < p.pairs) y << "  - {attach: tb" << k + 1 << ".hook1, to: ring" << k << ".ring}\n";
   }
   y << "  - {attach: hanger.hook1, to: ring" << p.pairs << ".ring" << (flip ? ", alignment: flip" : "") << "}\n"
-    << "  - {attach: light.clip, to: hanger.rod" << (fixed_clip ? ", is_fixed: true" : "") << "}\n";
+    << "  - {attach: light.clip, to: hanger.rod" << (p.flip_clip ? ", alignment: flip" : "")
+    << (fixed_clip ? ", is_fixed: true" : "") << "}\n";
   Program prog = ParseProgram(y.str(), "clip_lights(n=" + std::to_string(p.pairs) + ")", library_path, mesh_dir);
   // ParamTurnbuckle with extension e (PARTS.md §3.1): hooks at y = ±hook_y,
   // hook_y = 43.5 + e/2; the library's part is e = 0.

@@ -21,6 +21,13 @@ struct ClipLightsParams {
   int pairs = 4;           // n in 1..4
   double extension = 0;    // l in [0, 45.7] mm
   RingSize ring = RingSize::kXS;
+  // Attach the clip light to the hanger's bar with alignment flip (Rod_Clip
+  // [0,0,0] instead of the published programs' [0,180,0]): the clip on the
+  // other side of the bar. The published target orientation [180,90,0] is
+  // reachable with the hanger hanging upright only this way; with the
+  // published alignment the clip frame is then 180° from it about the clip's
+  // width axis (docs/assembly.md "Clip-lights family").
+  bool flip_clip = false;
 };
 
 struct ClipLightsResult {
