@@ -1,6 +1,7 @@
 // The geometry cache plan task (see cache_plan.h).
 #include "fabatlas/protocol/cache_plan.h"
 
+#include <algorithm>
 #include <limits>
 #include <map>
 
@@ -61,21 +62,38 @@ cache::CacheOptions CacheOptionsOf(const v1::CachePlanOptions& m) {
 }
 
 v1::CachePlanReport RunCachePlan(const v1::CachePlanInput& input) {
-  // Model costs (docs/cache.md): op, output bytes, input bytes.
-  std::map<std::string, std::int64_t> bytes_of;
-  std::map<std::string, std::string> op_of;
+  // One graph node per key, costed once (docs/cache.md "Determinism"): a
+  // key's records all carry the same op and children, so its model cost is
+  // a function of the key, and how many records a path reports (one per
+  // sample in process, one per key from the cluster's store, more after
+  // retries) must not change a bit of it. Merging k equal costs as a mean
+  // would: (t + t + t) / 3 is not always t.
+  struct Merged {
+    const v1::CachePlanSubtree* first = nullptr;
+    std::int64_t bytes = 0;
+    bool stored = false;
+  };
+  std::map<std::string, Merged> by_key;
   for (const auto& s : input.subtrees()) {
-    bytes_of[s.key()] = std::max(bytes_of[s.key()], s.bytes());
-    op_of.emplace(s.key(), s.op());
+    Merged& m = by_key[s.key()];
+    if (m.first == nullptr) m.first = &s;
+    else if (!std::equal(s.children().begin(), s.children().end(), m.first->children().begin(),
+                         m.first->children().end()))
+      throw InputError("cache graph: subtree " + s.key() + " is recorded with different children");
+    m.bytes = std::max(m.bytes, s.bytes());
+    m.stored = m.stored || s.stored();
   }
+  std::map<std::string, std::string> op_of;
   std::vector<cache::SubtreeNode> nodes;
-  nodes.reserve(static_cast<std::size_t>(input.subtrees_size()));
-  for (const auto& s : input.subtrees()) {
+  nodes.reserve(by_key.size());
+  for (const auto& [key, m] : by_key) {
     std::uint64_t in = 0;
-    for (const auto& c : s.children()) in += static_cast<std::uint64_t>(bytes_of[c]);
-    const auto out = static_cast<std::uint64_t>(bytes_of[s.key()]);
-    nodes.push_back({s.key(), {s.children().begin(), s.children().end()},
-                     cache::ModelSubtreeSeconds(s.op(), out, in), out, s.stored()});
+    for (const auto& c : m.first->children())
+      if (auto it = by_key.find(c); it != by_key.end()) in += static_cast<std::uint64_t>(it->second.bytes);
+    const auto out = static_cast<std::uint64_t>(m.bytes);
+    nodes.push_back({key, {m.first->children().begin(), m.first->children().end()},
+                     cache::ModelSubtreeSeconds(m.first->op(), out, in), out, m.stored});
+    op_of.emplace(key, m.first->op());
   }
   std::vector<cache::SampleTree> samples;
   samples.reserve(static_cast<std::size_t>(input.sample_roots_size()));
