@@ -23,6 +23,7 @@
 #include <thread>
 #include <unordered_map>
 
+#include "fabatlas/coordinator/job_eta.h"
 #include "fabatlas/coordinator/publish.h"
 #include "fabatlas/design/design.h"
 #include "fabatlas/error.h"
@@ -203,13 +204,11 @@ struct Coordinator::Impl {
   std::map<std::string, std::int64_t> share_polled;
 
   // The adaptive schedule of each running job as its driver last saw it, for
-  // the ETA (JobStatus.eta_seconds): the predicted wall seconds of the
-  // batches after the current one and the wall seconds per task of the
-  // current batch's kind (observed on earlier batches; 0 = not yet known).
+  // the ETA (JobStatus.eta_seconds, job_eta.h): the batches so far, when the
+  // running one began and, once sampling is over, when publishing began.
   struct Schedule {
-    double future_seconds = 0;
-    double task_seconds = 0;
-    bool known = false;
+    JobEtaInput input;
+    std::chrono::steady_clock::time_point batch_started, publish_started;
   };
   std::mutex schedule_mu;
   std::map<std::string, Schedule> schedules;
@@ -406,7 +405,7 @@ struct Coordinator::Impl {
       if (!tasks.empty()) dims_ = tasks[0].point.key.size();
       BeginBatch(/*samples=*/true, tasks.size());
       auto results = Run(payloads, preferred, &producers);
-      EndBatch(/*samples=*/true, tasks.size());
+      EndBatch(tasks.size());
       std::vector<sampling::SampleOutcome> out;
       if (timings) timings->assign(tasks.size(), {});
       for (std::size_t i = 0; i < results.size(); ++i) {
@@ -440,7 +439,7 @@ struct Coordinator::Impl {
       }
       BeginBatch(/*samples=*/false, tasks.size());
       auto results = Run(payloads, preferred);
-      EndBatch(/*samples=*/false, tasks.size());
+      EndBatch(tasks.size());
       std::vector<sampling::GeometryChangeResult> out;
       if (timings) timings->assign(tasks.size(), {});
       for (std::size_t i = 0; i < results.size(); ++i) {
@@ -470,65 +469,29 @@ struct Coordinator::Impl {
     }
 
    private:
-    // The ETA from the adaptive schedule (JobStatus.eta_seconds). The
-    // sampler runs rounds (adaptive_sampler.h): the bootstrap samples S_0,
-    // then per depth d the ΔG batch G_d of the frontier and, while d <
-    // max_depth, the samples S_{d+1} of its splits. Batches still to come are
-    // predicted from the last ones: S_{d+1} = S_d * g with g = S_d / S_{d-1}
-    // (the frontier's growth, 1 before two sample batches were seen), capped
-    // by max_samples, and G_d = S_d * h with h = G / S of the last round
-    // (the dimension count before the first ΔG batch); each costs the
-    // observed wall seconds per task of its kind (per sample task, then per
-    // ΔG task, as a measured ratio to it).
+    // The schedule for the ETA (JobStatus.eta_seconds, job_eta.h): every
+    // batch with its wall seconds, handed to the status calls.
     void BeginBatch(bool samples, std::size_t size) {
-      if (samples) {
-        sample_batches_.push_back(static_cast<double>(size));
-      } else {
-        dg_batches_.push_back(static_cast<double>(size));
-      }
+      batches_.push_back({samples, static_cast<double>(size), 0});
       batch_started_ = std::chrono::steady_clock::now();
-      Publish(samples);
+      Publish();
     }
-    void EndBatch(bool samples, std::size_t size) {
+    void EndBatch(std::size_t size) {
       if (size == 0) return;
       const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - batch_started_).count();
       // Batches replayed from the store take no time: they teach nothing.
       if (seconds < 0.05 * static_cast<double>(size) * 1e-3) return;
-      (samples ? sample_task_seconds_ : dg_task_seconds_) = seconds / static_cast<double>(size);
+      batches_.back().seconds = seconds;
+      Publish();
     }
-    void Publish(bool in_sample_batch) {
-      const double dims = static_cast<double>(std::max<std::size_t>(dims_, 1));
-      const std::size_t rounds_seen = sample_batches_.size();  // sample batches so far (incl. current)
-      double g = 1.0;
-      if (sample_batches_.size() >= 2 && sample_batches_[sample_batches_.size() - 2] > 0)
-        g = sample_batches_.back() / sample_batches_[sample_batches_.size() - 2];
-      double h = dims;
-      if (!dg_batches_.empty() && dg_batches_.size() <= sample_batches_.size() &&
-          sample_batches_[dg_batches_.size() - 1] > 0)
-        h = dg_batches_.back() / sample_batches_[dg_batches_.size() - 1];
-      double ts = sample_task_seconds_, tg = dg_task_seconds_;
-      if (ts <= 0 && tg > 0) ts = tg;
-      if (tg <= 0 && ts > 0) tg = ts;
-      double samples_so_far = 0;
-      for (double n : sample_batches_) samples_so_far += n;
-      double budget = static_cast<double>(sampling_.max_samples) - samples_so_far;
-      double future = 0;
-      // The current round's ΔG batch, when a sample batch runs now.
-      double last = sample_batches_.empty() ? 0 : sample_batches_.back();
-      if (in_sample_batch) future += last * h * tg;
-      // Rounds still to come: sample batches for depths rounds_seen..max_depth.
-      for (int d = static_cast<int>(rounds_seen); d <= sampling_.max_depth && budget > 0; ++d) {
-        const double next = std::min(last * g, budget);
-        if (next < 1) break;
-        future += next * ts + next * h * tg;
-        budget -= next;
-        last = next;
-      }
+    void Publish() {
       std::lock_guard lock(impl_.schedule_mu);
       auto& sch = impl_.schedules[job_id_];
-      sch.future_seconds = future;
-      sch.task_seconds = in_sample_batch ? ts : tg;
-      sch.known = ts > 0;
+      sch.input.batches = batches_;
+      sch.input.max_depth = sampling_.max_depth;
+      sch.input.max_samples = static_cast<double>(sampling_.max_samples);
+      sch.input.dimensions = static_cast<int>(dims_);
+      sch.batch_started = batch_started_;
     }
 
     Impl& impl_;
@@ -539,8 +502,7 @@ struct Coordinator::Impl {
     // holds the root solid in memory), for ΔG lease affinity and solid
     // sharing (TaskPayload.solid_holder_a/b).
     std::map<sampling::PointKey, std::string> holders_;
-    std::vector<double> sample_batches_, dg_batches_;
-    double sample_task_seconds_ = 0, dg_task_seconds_ = 0;
+    std::vector<EtaBatch> batches_;
     std::size_t dims_ = 1;
     std::chrono::steady_clock::time_point batch_started_;
   };
@@ -747,9 +709,10 @@ struct Coordinator::Impl {
       log::Info("job_started", {{"job", job_id}, {"design", design.name}});
       sampling::SamplingSummary summary =
           sampling::SampleDesignSpace(space, unused_local, executor, job_file.sampling);
+      const auto publish_started = std::chrono::steady_clock::now();
       {
-        std::lock_guard lock(schedule_mu);
-        schedules.erase(job_id);  // sampling is over: the ETA falls back to the tasks left
+        std::lock_guard lock(schedule_mu);  // sampling is over: the ETA is the publishing left
+        if (auto it = schedules.find(job_id); it != schedules.end()) it->second.publish_started = publish_started;
       }
       ForgetShares(job->bundle_digest);
       fs::path out = dir / "out";
@@ -790,8 +753,11 @@ struct Coordinator::Impl {
       }
       store->SetJobState(job_id, storage::JobState::kSucceeded, "", NowMs());
       Event(job_id, "succeeded", precompute::Table3Row(design, summary.statistics));
-      log::Info("job_succeeded", {{"job", job_id}, {"design", design.name}, {"samples", summary.statistics.samples},
-                                  {"valid_samples", summary.statistics.valid_samples}});
+      log::Info("job_succeeded",
+                {{"job", job_id}, {"design", design.name}, {"samples", summary.statistics.samples},
+                 {"valid_samples", summary.statistics.valid_samples},
+                 {"publish_seconds",
+                  std::chrono::duration<double>(std::chrono::steady_clock::now() - publish_started).count()}});
       // The published artifact holds what the cache plan kept: the job's
       // geometry blobs go now.
       CollectBlobs("job " + job_id + " published");
@@ -801,6 +767,7 @@ struct Coordinator::Impl {
       // State or outputs could not be written: the job stays running and the
       // sweeper starts the driver again (a replay) until they can.
       StateWriteFailed("job " + job_id, e.what());
+      ForgetSchedule(job_id);
       std::lock_guard lock(drivers_mu);
       running_drivers.erase(job_id);
       if (!stopping) restart_drivers.insert(job_id);
@@ -812,8 +779,14 @@ struct Coordinator::Impl {
         Event(job_id, "failed", e.what());
       }
     }
+    ForgetSchedule(job_id);
     std::lock_guard lock(drivers_mu);
     running_drivers.erase(job_id);
+  }
+
+  void ForgetSchedule(const std::string& job_id) {
+    std::lock_guard lock(schedule_mu);
+    schedules.erase(job_id);
   }
 
   void StartDriver(const std::string& job_id) {
@@ -844,9 +817,15 @@ struct Coordinator::Impl {
     std::int64_t now = NowMs(), done = c.done + c.quarantined;
     {
       std::lock_guard lock(schedule_mu);
-      if (auto it = schedules.find(job.id); it != schedules.end() && it->second.known && !Terminal(job.state))
-        s.set_eta_seconds(static_cast<double>(c.queued + c.leased) * it->second.task_seconds +
-                          it->second.future_seconds);
+      if (auto it = schedules.find(job.id); it != schedules.end() && !Terminal(job.state)) {
+        JobEtaInput in = it->second.input;
+        const auto steady_now = std::chrono::steady_clock::now();
+        in.running_left = static_cast<double>(c.queued + c.leased);
+        in.running_seconds = std::chrono::duration<double>(steady_now - it->second.batch_started).count();
+        if (it->second.publish_started != std::chrono::steady_clock::time_point{})
+          in.publishing_seconds = std::chrono::duration<double>(steady_now - it->second.publish_started).count();
+        if (const JobEta eta = EstimateJobEta(in); eta.known) s.set_eta_seconds(eta.seconds);
+      }
     }
     std::lock_guard lock(rate_mu);
     auto& samples = rate_samples[job.id];

@@ -1,0 +1,86 @@
+// fabatlas/coordinator/job_eta.h — the predicted wall seconds until a job's
+// artifact is published (JobStatus.eta_seconds), from its adaptive schedule.
+//
+// The sampler runs rounds (sampling/adaptive_sampler.h): the bootstrap
+// samples S_0; then per depth d the ΔG batch G_d of the frontier and, while
+// d < max_depth and the sample budget lasts, the samples S_{d+1} of the
+// frontier's splits; then the coordinator publishes (form outputs, artifact,
+// blob collection). EstimateJobEta predicts the rounds still to come from
+// the batches seen so far:
+//  - samples of the next round: S_{d+1} = g S_d, where g = S_d / S_{d-1}
+//    is the growth of the last split round (it is 2 p sigma_d / sigma_{d-1}:
+//    p the fraction of frontier leaves that split, each split leaving 2
+//    leaves, sigma the new samples per split). The bootstrap grid is no
+//    guide to splits, so until two split rounds are seen g =
+//    Options::first_growth. Capped by max_samples (the budget ends all
+//    refinement, adaptive_sampler.h step c) and by max_depth.
+//  - ΔG tasks of a round: G_d = h S_d, h = ΔG tasks per new sample of the
+//    last round; from two split rounds on, h follows its trend (the ratio of
+//    the last two, clamped to [1/1.25, 1.25]: h grows as the new samples
+//    concentrate where the valid share is higher). Before the first split
+//    round's ΔG batch, h = first_split_dg_per_sample_factor times the
+//    bootstrap's.
+//  - wall seconds per task of each kind: the last finished batch of that
+//    kind that ran on the workers (replayed batches take no time and are
+//    left out); the running batch's own rate once min_live_fraction of it
+//    is done, and the same factor for later batches of its kind.
+//  - publishing: publish_seconds_per_sample times the predicted samples;
+//    while publishing, that minus the seconds spent so far (at least 0).
+// Pure function, no I/O, thread-compatible.
+#pragma once
+
+#include <vector>
+
+namespace fabatlas::coordinator {
+
+// One batch the sampler handed to the cluster.
+struct EtaBatch {
+  bool samples = true;   // SampleTasks (S_d) or GeometryChangeTasks (G_d)
+  double tasks = 0;
+  double seconds = 0;    // wall seconds of the whole batch; 0 = running, or replayed from the store
+};
+
+struct JobEtaInput {
+  // Every batch so far in the order the sampler ran them (S_0, G_0, S_1,
+  // G_1, ...; a round whose batch had no task has none). Unless publishing,
+  // the last one is running.
+  std::vector<EtaBatch> batches;
+  double running_left = 0;      // tasks of the running batch not finished (queued + leased)
+  double running_seconds = 0;   // wall seconds since the running batch began
+  // Seconds since sampling ended and publishing began; < 0 while sampling.
+  double publishing_seconds = -1;
+  int max_depth = 6;            // SamplingOptions
+  double max_samples = 100000;  // SamplingOptions
+  int dimensions = 1;
+};
+
+struct JobEtaOptions {
+  // Growth S_{d+1} / S_d of the sample batches until two split rounds were
+  // seen: every split leaf's two children split again, what the frontier
+  // along a valid region's boundary does (measured on the coarse tube, 10k
+  // job: S_2 / S_1 = 2.0; docs/benchmarks.md "Scale").
+  double first_growth = 2.0;
+  // h of the first split round over the bootstrap grid's h (measured: 2.43
+  // on the 10k tube job, 2.71 on the 100k; the bootstrap grid's ΔG edges
+  // join samples far from the boundary, half of them invalid).
+  double first_split_dg_per_sample_factor = 2.5;
+  // Wall seconds of publishing per sample (form outputs, artifact, blob
+  // collection) on 2 cores; measured on the coarse tube jobs
+  // (docs/benchmarks.md "Scale"). Jobs with a geometry cache add the cache
+  // plan, which this does not estimate.
+  double publish_seconds_per_sample = 0.0008;
+  // Share of the running batch done before its own rate replaces the last
+  // batch's.
+  double min_live_fraction = 0.1;
+};
+
+struct JobEta {
+  bool known = false;  // false until some batch's wall seconds per task is known
+  double seconds = 0;  // running batch + batches to come + publishing
+  double publish_seconds = 0;       // the publishing part of it
+  double predicted_samples = 0;     // samples when sampling ends
+};
+
+JobEta EstimateJobEta(const JobEtaInput& input, const JobEtaOptions& options = {});
+
+}  // namespace fabatlas::coordinator

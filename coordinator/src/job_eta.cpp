@@ -1,0 +1,81 @@
+// The model is described in job_eta.h.
+#include "fabatlas/coordinator/job_eta.h"
+
+#include <algorithm>
+
+namespace fabatlas::coordinator {
+
+JobEta EstimateJobEta(const JobEtaInput& in, const JobEtaOptions& options) {
+  JobEta eta;
+  // Sample batch sizes S_0, S_1, ...; ΔG per new sample h of each ΔG batch,
+  // with the sample batch it follows.
+  std::vector<double> s;
+  std::vector<std::pair<std::size_t, double>> h;  // (index into s, G / S)
+  double seconds_per[2] = {0, 0};                 // [samples?1:0]: last finished batch that ran
+  for (const EtaBatch& b : in.batches) {
+    if (b.samples) {
+      s.push_back(b.tasks);
+    } else if (!s.empty() && s.back() > 0) {
+      h.emplace_back(s.size() - 1, b.tasks / s.back());
+    }
+    if (b.seconds > 0 && b.tasks > 0) seconds_per[b.samples] = b.seconds / b.tasks;
+  }
+  double sampled = 0;
+  for (double n : s) sampled += n;
+
+  const bool publishing = in.publishing_seconds >= 0;
+  const EtaBatch* running = !publishing && !in.batches.empty() ? &in.batches.back() : nullptr;
+  if (running && running->seconds <= 0) {
+    const double done = running->tasks - in.running_left;
+    if (in.running_seconds > 0 && done >= std::max(1.0, options.min_live_fraction * running->tasks))
+      seconds_per[running->samples] = in.running_seconds / done;
+  }
+  double ts = seconds_per[1], tg = seconds_per[0];
+  if (ts <= 0) ts = tg;
+  if (tg <= 0) tg = ts;
+
+  // ΔG tasks per new sample for the rounds to come.
+  double hn = static_cast<double>(std::max(in.dimensions, 1));
+  std::vector<double> split_h;  // h of split rounds (after S_1, S_2, ...)
+  for (const auto& [k, v] : h)
+    if (k >= 1) split_h.push_back(v);
+  if (split_h.size() >= 2 && split_h[split_h.size() - 2] > 0) {
+    const double trend = std::clamp(split_h.back() / split_h[split_h.size() - 2], 1 / 1.25, 1.25);
+    hn = split_h.back() * trend;
+  } else if (split_h.size() == 1) {
+    hn = split_h.back();
+  } else if (!h.empty()) {
+    hn = h.back().second * options.first_split_dg_per_sample_factor;
+  }
+
+  double future = 0;  // wall seconds of batches after the running one
+  double budget = in.max_samples - sampled;
+  if (!publishing && !s.empty()) {
+    // The running round's ΔG batch, when its sample batch runs now.
+    if (running && running->samples) future += s.back() * hn * tg;
+    const double g = s.size() >= 3 && s[s.size() - 2] > 0 ? s.back() / s[s.size() - 2] : options.first_growth;
+    double last = s.back();
+    for (int depth = static_cast<int>(s.size()); depth <= in.max_depth && budget >= 1; ++depth) {
+      const double next = std::min(last * g, budget);
+      if (next < 1) break;
+      future += next * ts + next * hn * tg;
+      budget -= next;
+      last = next;
+    }
+  }
+  eta.predicted_samples = in.max_samples - std::max(budget, 0.0);
+  if (publishing) eta.predicted_samples = sampled;
+  eta.publish_seconds = options.publish_seconds_per_sample * eta.predicted_samples;
+  if (publishing) {
+    eta.known = true;
+    eta.seconds = std::max(eta.publish_seconds - in.publishing_seconds, 0.0);
+    return eta;
+  }
+  if (ts <= 0) return eta;  // no batch has run yet: nothing to scale by
+  eta.known = true;
+  const double running_rest = running ? in.running_left * (running->samples ? ts : tg) : 0;
+  eta.seconds = running_rest + future + eta.publish_seconds;
+  return eta;
+}
+
+}  // namespace fabatlas::coordinator
