@@ -25,10 +25,13 @@ JobEta EstimateJobEta(const JobEtaInput& in, const JobEtaOptions& options) {
 
   const bool publishing = in.publishing_seconds >= 0;
   const EtaBatch* running = !publishing && !in.batches.empty() ? &in.batches.back() : nullptr;
-  if (running && running->seconds <= 0) {
-    const double done = running->tasks - in.running_left;
-    if (in.running_seconds > 0 && done >= std::max(1.0, options.min_live_fraction * running->tasks))
-      seconds_per[running->samples] = in.running_seconds / done;
+  if (running && running->seconds <= 0 && running->tasks > 0) {
+    const double done = std::clamp(running->tasks - in.running_left, 0.0, running->tasks);
+    if (in.running_seconds > 0 && done >= 1) {
+      const double live = in.running_seconds / done, w = done / running->tasks;
+      double& last = seconds_per[running->samples];
+      last = last > 0 ? (1 - w) * last + w * live : live;
+    }
   }
   double ts = seconds_per[1], tg = seconds_per[0];
   if (ts <= 0) ts = tg;

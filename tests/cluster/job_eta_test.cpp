@@ -72,18 +72,28 @@ TEST(JobEta, TheBudgetEndsRefinementAndTheDepthLimitEndsRounds) {
   EXPECT_NEAR(EstimateJobEta(in, options).seconds, 800 * kTs + 2000 * kTg, 1e-9);
 }
 
-TEST(JobEta, TheRunningBatchsOwnRateReplacesTheLastOnceATenthIsDone) {
+TEST(JobEta, TheRunningBatchsOwnRateWeighsInByTheShareOfItDone) {
   JobEtaOptions options;
   options.publish_seconds_per_sample = 0;
   JobEtaInput in = Upto(7, false);  // G_3 running: 4,000 tasks, the last of the job
-  // 5 % done: still the last ΔG batch's 0.02 s per task.
-  in.running_left = 3800;
-  in.running_seconds = 12;
-  EXPECT_NEAR(EstimateJobEta(in, options).seconds, 3800 * kTg, 1e-9);
-  // 1,000 done in 30 s: 0.03 s per task for the 3,000 left.
+  // 1,000 done (a quarter) in 40 s: 0.04 s per task so far, after 0.02 on
+  // G_2: 0.75 x 0.02 + 0.25 x 0.04 = 0.025 s per task for the 3,000 left.
   in.running_left = 3000;
-  in.running_seconds = 30;
-  EXPECT_NEAR(EstimateJobEta(in, options).seconds, 90, 1e-9);
+  in.running_seconds = 40;
+  EXPECT_NEAR(EstimateJobEta(in, options).seconds, 75, 1e-9);
+  // Nothing done yet: G_2's rate.
+  in.running_left = 4000;
+  in.running_seconds = 5;
+  EXPECT_NEAR(EstimateJobEta(in, options).seconds, 80, 1e-9);
+  // The first ΔG batch, a quarter done in 2 s (no earlier ΔG rate): its own
+  // 0.008 s per task for the 750 left and for the ΔG batch to come; then
+  // S_1 = first_growth x 1,000 at S_0's 0.01 s per task, G_1 = 2.5 ΔG tasks
+  // per new sample (first_split_dg_per_sample_factor x G_0 / S_0).
+  JobEtaInput first = Upto(1, false);
+  first.max_depth = 1;
+  first.running_left = 750;
+  first.running_seconds = 2;
+  EXPECT_NEAR(EstimateJobEta(first, options).seconds, 750 * 0.008 + 2000 * 0.01 + 2.5 * 2000 * 0.008, 1e-9);
 }
 
 TEST(JobEta, ReplayedBatchesTeachNothingAndPublishingCountsDown) {

@@ -22,8 +22,10 @@
 //    bootstrap's.
 //  - wall seconds per task of each kind: the last finished batch of that
 //    kind that ran on the workers (replayed batches take no time and are
-//    left out); the running batch's own rate once min_live_fraction of it
-//    is done, and the same factor for later batches of its kind.
+//    left out), blended with the running batch's own rate so far in
+//    proportion to the share of it done (a batch's first tasks wait for
+//    its leases and solids, so its early rate is no guide); the blend also
+//    prices later batches of its kind.
 //  - publishing: publish_seconds_per_sample times the predicted samples;
 //    while publishing, that minus the seconds spent so far (at least 0).
 // Pure function, no I/O, thread-compatible.
@@ -64,14 +66,11 @@ struct JobEtaOptions {
   // on the 10k tube job, 2.71 on the 100k; the bootstrap grid's ΔG edges
   // join samples far from the boundary, half of them invalid).
   double first_split_dg_per_sample_factor = 2.5;
-  // Wall seconds of publishing per sample (form outputs, artifact, blob
-  // collection) on 2 cores; measured on the coarse tube jobs
-  // (docs/benchmarks.md "Scale"). Jobs with a geometry cache add the cache
-  // plan, which this does not estimate.
-  double publish_seconds_per_sample = 0.0008;
-  // Share of the running batch done before its own rate replaces the last
-  // batch's.
-  double min_live_fraction = 0.1;
+  // Wall seconds of publishing per sample (form outputs and maps, artifact,
+  // outputs into the blob store) on 2 cores; measured on the coarse tube
+  // jobs (docs/benchmarks.md "Scale"). Jobs with a geometry cache add the
+  // cache plan, which this does not estimate.
+  double publish_seconds_per_sample = 0.0005;
 };
 
 struct JobEta {
