@@ -405,7 +405,7 @@ struct Coordinator::Impl {
       if (!tasks.empty()) dims_ = tasks[0].point.key.size();
       BeginBatch(/*samples=*/true, tasks.size());
       auto results = Run(payloads, preferred, &producers);
-      EndBatch(tasks.size());
+      EndBatch(results);
       std::vector<sampling::SampleOutcome> out;
       if (timings) timings->assign(tasks.size(), {});
       for (std::size_t i = 0; i < results.size(); ++i) {
@@ -439,7 +439,7 @@ struct Coordinator::Impl {
       }
       BeginBatch(/*samples=*/false, tasks.size());
       auto results = Run(payloads, preferred);
-      EndBatch(tasks.size());
+      EndBatch(results);
       std::vector<sampling::GeometryChangeResult> out;
       if (timings) timings->assign(tasks.size(), {});
       for (std::size_t i = 0; i < results.size(); ++i) {
@@ -476,12 +476,12 @@ struct Coordinator::Impl {
       batch_started_ = std::chrono::steady_clock::now();
       Publish();
     }
-    void EndBatch(std::size_t size) {
-      if (size == 0) return;
+    void EndBatch(const std::vector<v1::TaskResult>& results) {
+      if (results.empty()) return;
       const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - batch_started_).count();
-      // Batches replayed from the store take no time: they teach nothing.
-      if (seconds < 0.05 * static_cast<double>(size) * 1e-3) return;
-      batches_.back().seconds = seconds;
+      for (const auto& r : results) batches_.back().cpu_seconds += r.cpu_seconds();
+      // Batches replayed from the store take no time: their rate teaches nothing.
+      if (seconds >= 0.05 * static_cast<double>(results.size()) * 1e-3) batches_.back().seconds = seconds;
       Publish();
     }
     void Publish() {

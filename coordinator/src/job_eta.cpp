@@ -11,14 +11,24 @@ JobEta EstimateJobEta(const JobEtaInput& in, const JobEtaOptions& options) {
   // with the sample batch it follows.
   std::vector<double> s;
   std::vector<std::pair<std::size_t, double>> h;  // (index into s, G / S)
-  double seconds_per[2] = {0, 0};                 // [samples?1:0]: last finished batch that ran
+  // Per kind ([1] sample, [0] ΔG): evaluator CPU seconds per task of the
+  // last batch whose results carry it (replayed ones too: it is the
+  // evaluation's own), wall seconds per task of the last batch that ran;
+  // and the load factor (batch wall seconds per evaluator CPU second) of
+  // the last batch that ran.
+  double cpu_per[2] = {0, 0}, wall_per[2] = {0, 0}, load = 0;
   for (const EtaBatch& b : in.batches) {
     if (b.samples) {
       s.push_back(b.tasks);
     } else if (!s.empty() && s.back() > 0) {
       h.emplace_back(s.size() - 1, b.tasks / s.back());
     }
-    if (b.seconds > 0 && b.tasks > 0) seconds_per[b.samples] = b.seconds / b.tasks;
+    if (b.tasks <= 0) continue;
+    if (b.cpu_seconds > 0) cpu_per[b.samples] = b.cpu_seconds / b.tasks;
+    if (b.seconds > 0) {
+      wall_per[b.samples] = b.seconds / b.tasks;
+      load = b.cpu_seconds > 0 ? b.seconds / b.cpu_seconds : 0;
+    }
   }
   double sampled = 0;
   for (double n : s) sampled += n;
@@ -28,14 +38,16 @@ JobEta EstimateJobEta(const JobEtaInput& in, const JobEtaOptions& options) {
   if (running && running->seconds <= 0 && running->tasks > 0) {
     const double done = std::clamp(running->tasks - in.running_left, 0.0, running->tasks);
     if (in.running_seconds > 0 && done >= 1) {
-      const double live = in.running_seconds / done, w = done / running->tasks;
-      double& last = seconds_per[running->samples];
-      last = last > 0 ? (1 - w) * last + w * live : live;
+      const double w = done / running->tasks;
+      const auto blend = [w](double last, double live) { return last > 0 ? (1 - w) * last + w * live : live; };
+      const int k = running->samples;
+      wall_per[k] = blend(wall_per[k], in.running_seconds / done);
+      if (cpu_per[k] > 0) load = blend(load, in.running_seconds / (done * cpu_per[k]));
     }
   }
-  double ts = seconds_per[1], tg = seconds_per[0];
-  if (ts <= 0) ts = tg;
-  if (tg <= 0) tg = ts;
+  double t[2];
+  for (int k : {0, 1}) t[k] = cpu_per[k] > 0 && load > 0 ? cpu_per[k] * load : wall_per[k];
+  double ts = t[1] > 0 ? t[1] : t[0], tg = t[0] > 0 ? t[0] : t[1];
 
   // ΔG tasks per new sample for the rounds to come.
   double hn = static_cast<double>(std::max(in.dimensions, 1));

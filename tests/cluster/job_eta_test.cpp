@@ -96,6 +96,26 @@ TEST(JobEta, TheRunningBatchsOwnRateWeighsInByTheShareOfItDone) {
   EXPECT_NEAR(EstimateJobEta(first, options).seconds, 750 * 0.008 + 2000 * 0.01 + 2.5 * 2000 * 0.008, 1e-9);
 }
 
+TEST(JobEta, TheLoadFactorOfTheRunningBatchPricesBothKinds) {
+  // Evaluator CPU 0.004 s per sample task and 0.008 per ΔG task, run at 2.5
+  // wall seconds per CPU second (kTs, kTg).
+  JobEtaInput in = Upto(6, true);  // S_3 running: 1,600 sample tasks
+  for (auto& b : in.batches)
+    if (b.seconds > 0) b.cpu_seconds = b.tasks * (b.samples ? 0.004 : 0.008);
+  JobEtaOptions options;
+  options.publish_seconds_per_sample = 0;
+  // Half of S_3 done in 16 s: 0.02 wall s per task, 5 per CPU second;
+  // blended half and half with G_2's 2.5: 3.75. The 800 sample tasks left
+  // at 0.004 x 3.75 and G_3 (2.5 x 1,600 ΔG tasks) at 0.008 x 3.75, where
+  // each kind's own last wall time would price G_3 at G_2's 0.02.
+  in.running_left = 800;
+  in.running_seconds = 16;
+  EXPECT_NEAR(EstimateJobEta(in, options).seconds, 800 * 0.004 * 3.75 + 4000 * 0.008 * 3.75, 1e-9);
+  // Without CPU figures: each kind's own (S_3 blended to 0.015, G_2's 0.02).
+  for (auto& b : in.batches) b.cpu_seconds = 0;
+  EXPECT_NEAR(EstimateJobEta(in, options).seconds, 800 * 0.015 + 4000 * 0.02, 1e-9);
+}
+
 TEST(JobEta, ReplayedBatchesTeachNothingAndPublishingCountsDown) {
   JobEtaInput in = Upto(3, false);
   for (auto& b : in.batches) b.seconds = 0;  // all replayed from the store

@@ -20,12 +20,17 @@
 //    concentrate where the valid share is higher). Before the first split
 //    round's ΔG batch, h = first_split_dg_per_sample_factor times the
 //    bootstrap's.
-//  - wall seconds per task of each kind: the last finished batch of that
-//    kind that ran on the workers (replayed batches take no time and are
-//    left out), blended with the running batch's own rate so far in
-//    proportion to the share of it done (a batch's first tasks wait for
-//    its leases and solids, so its early rate is no guide); the blend also
-//    prices later batches of its kind.
+//  - wall seconds per task of each kind: the evaluator CPU seconds per
+//    task of the last batch of that kind (steady from round to round: 5.6
+//    ms per ΔG task of the coarse tube in every round) times the load
+//    factor, the wall seconds per evaluator CPU second of the batches as
+//    they run now: the last batch that ran, blended with the running
+//    batch's own so far in proportion to the share of it done (a batch's
+//    first tasks wait for leases and solids, so its early rate is no
+//    guide). The load of a shared machine changes the wall time per task of
+//    both kinds together, and the load factor carries the latest to both.
+//    Without CPU figures, each kind's own last wall seconds per task
+//    (blended likewise). Replayed batches take no time and give no rate.
 //  - publishing: publish_seconds_per_sample times the predicted samples;
 //    while publishing, that minus the seconds spent so far (at least 0).
 // Pure function, no I/O, thread-compatible.
@@ -40,6 +45,7 @@ struct EtaBatch {
   bool samples = true;   // SampleTasks (S_d) or GeometryChangeTasks (G_d)
   double tasks = 0;
   double seconds = 0;    // wall seconds of the whole batch; 0 = running, or replayed from the store
+  double cpu_seconds = 0;  // evaluator CPU seconds of its tasks (TaskResult.cpu_seconds); 0 = running or unknown
 };
 
 struct JobEtaInput {
