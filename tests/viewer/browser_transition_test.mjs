@@ -13,6 +13,10 @@ import path from 'node:path';
 import { check, clickMap, env, failures, launchBrowser, openPage, startServer, statusOk } from './browser_support.mjs';
 
 const out = env.FABATLAS_TEST_OUTPUT ?? '.';
+// A play waits for one evaluation with every check on the server (1.7 s on
+// an idle host, minutes at nice 15 beside a normal-priority job): the waits
+// are for events, this only bounds them.
+const play = 240000;
 const design = env.FABATLAS_TRANSITION_DESIGN;
 
 // `fabatlas eval DESIGN --at ... --json` at the sample's exact values.
@@ -48,9 +52,9 @@ try {
   const u = await page.evaluate(() => window.fabatlas.properties.u);
   check(cliEval(u).valid === true, `the current design (${u.join(', ')}) is valid by fabatlas eval`);
   await page.click('button[data-transition="fold"]');
-  await page.waitForFunction(() => window.fabatlas.motion && window.fabatlas.motion.frame > 0, null, { timeout: 60000 });
+  await page.waitForFunction(() => window.fabatlas.motion && window.fabatlas.motion.frame > 0, null, { timeout: play });
   const early = await page.evaluate(() => window.fabatlas.motion.t);
-  await page.waitForFunction(() => window.fabatlas.motionPlays === 1, null, { timeout: 60000 });
+  await page.waitForFunction(() => window.fabatlas.motionPlays === 1, null, { timeout: play });
   const played = await page.evaluate(() => {
     const m = window.fabatlas.motion;
     return { ...m, info: document.querySelector('#motion-info').textContent };
@@ -73,7 +77,7 @@ try {
   // the invalid sample next to it plays and rests at its first collision.
   await page.waitForFunction(() => window.fabatlas.map !== null, null, { timeout: 30000 });
   await clickMap(page, 610, 140);
-  await page.waitForFunction(() => window.fabatlas.motionPlays === 2, null, { timeout: 60000 });
+  await page.waitForFunction(() => window.fabatlas.motionPlays === 2, null, { timeout: play });
   const bad = await page.evaluate(() => ({ ...window.fabatlas.motion, info: document.querySelector('#motion-info').textContent,
     reason: window.fabatlas.reason, colours: window.fabatlas.motionObjects().map((m) => [m.name, m.material.color.getHexString()]) }));
   const cli = cliEval(bad.u);
@@ -104,7 +108,16 @@ try {
   await page.waitForFunction((t) => window.fabatlas.motion.t < t, bad.firstCollision.t, { timeout: 10000 });
   check((await page.evaluate(() => window.fabatlas.motion.highlighted.length)) === 0, 'before the first colliding time nothing is red');
 
-  // 4. Back to the preview.
+  // 4. Playing the same sample again reuses the page's answer: no request.
+  let asked = 0;
+  page.on('request', (r) => { if (r.url().includes('/api/state_graph')) asked += 1; });
+  await page.click('#motion-why');
+  await page.waitForFunction(() => window.fabatlas.motionPlays === 3, null, { timeout: play });
+  const again = await page.evaluate(() => window.fabatlas.motion);
+  check(asked === 0 && again.t === bad.firstCollision.t && JSON.stringify(again.u) === JSON.stringify(bad.u),
+    `"Play invalid sample" replays it from the page's copy (${asked} requests), resting at t = ${again.t}`);
+
+  // 5. Back to the preview.
   await page.click('#motion-back');
   check(await page.evaluate(() => window.fabatlas.motion === null), 'back to the preview');
   await statusOk(page, 'at the end');

@@ -494,6 +494,7 @@ function onMapClick(e) {
     if (state.form.transitions.length && ['collision', 'too_little_clearance'].includes(mapData.failures[cell]))
       apiJson('/api/reason?' + query(u)).then((r) => {
         state.reason = r;
+        offerWhy(r);
         if (r.sample >= 0) playTransition(null, r.sample_u, `invalid sample #${r.sample}`);
       }).catch(showError);
     return;
@@ -614,13 +615,27 @@ function showFrame(k) {
   render();
 }
 
+// /api/state_graph answers of the last 4 points played (each is one
+// evaluation with checks on the server, and megabytes): replays are instant.
+const stateGraphs = new Map();
+function stateGraphAt(u) {
+  const key = u.map((v) => String(v)).join(',');
+  if (!stateGraphs.has(key)) {
+    const answer = apiJson('/api/state_graph?frames=61&u=' + key);
+    answer.catch(() => stateGraphs.delete(key));
+    stateGraphs.set(key, answer);
+    if (stateGraphs.size > 4) stateGraphs.delete(stateGraphs.keys().next().value);
+  }
+  return stateGraphs.get(key);
+}
+
 // Plays transition `name` (null: the one that collides first, else the
 // first) of the design at exactly u, then rests at its first colliding time.
 async function playTransition(name, u, label) {
   clearError();
   stopPlaying();
   setStatus(`evaluating the state graph at ${label}…`);
-  const data = await apiJson('/api/state_graph?frames=61&u=' + u.map((v) => String(v)).join(',')).catch((e) => { showError(e); return null; });
+  const data = await stateGraphAt(u).catch((e) => { showError(e); return null; });
   if (!data) return;
   if (!data.objects.length) {
     showError(new Error(`${label}: no geometry to play (${data.failure}: ${data.reason})`));
