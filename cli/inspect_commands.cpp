@@ -23,7 +23,7 @@
 #include <sstream>
 
 #include "commands.h"
-#include "fabatlas/coordinator/publish.h"
+#include "fabatlas/pipeline/artifact_of.h"
 #include "fabatlas/design/design.h"
 #include "fabatlas/error.h"
 #include "fabatlas/geometry/solid.h"
@@ -101,7 +101,7 @@ void Inspect(const InspectArgs& a, int& exit_code) {
       fs::remove_all(dir, ec);
     }
   } cleanup{scratch};
-  const auto files = protocol::Materialize(coordinator::ProtoBundle(art.bundle), scratch);
+  const auto files = protocol::Materialize(pipeline::ProtoBundle(art.bundle), scratch);
   const design::Design design = design::LoadDesign(files.design_file);
   if (design.exposed.size() != art.form.dimensions.size())
     throw InputError(path.string() + ": the bundled design has " + std::to_string(design.exposed.size()) +

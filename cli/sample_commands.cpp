@@ -6,15 +6,9 @@
 #include <memory>
 
 #include "commands.h"
-#include "fabatlas/coordinator/publish.h"
-#include "fabatlas/protocol/job_bundle.h"
-#include "fabatlas/storage/artifact.h"
-#include "fabatlas/design/design.h"
-#include "fabatlas/precompute/design_evaluator.h"
+#include "fabatlas/pipeline/local_executor.h"
+#include "fabatlas/pipeline/run_job.h"
 #include "fabatlas/precompute/form_outputs.h"
-#include "fabatlas/sampling/adaptive_sampler.h"
-#include "fabatlas/sampling/executor.h"
-#include "fabatlas/sampling/job_file.h"
 
 namespace fabatlas::cli {
 
@@ -29,44 +23,30 @@ struct SampleArgs {
 void Sample(const SampleArgs& args) {
   // An OpenSCAD model runs as the job of its import, written under DIR/model.
   const std::string job_path = JobOrModel(args.job, (std::filesystem::path(args.out) / "model").string());
-  sampling::JobFile job = sampling::ReadJobFile(job_path);
-  design::Design design = design::LoadDesign(job.design_path);
-  const cache::CacheOptions cache_options = coordinator::CacheOptionsOf(job);  // bad input before the work
-  int threads = args.threads > 0 ? args.threads : job.threads;
-  sampling::DesignSpace space = precompute::DesignSpaceOf(design, job.subdivisions);
-  precompute::DesignSampleEvaluator evaluator(design);
-  sampling::ThreadPoolExecutor executor(threads);
-  sampling::SamplingSummary summary = sampling::SampleDesignSpace(space, evaluator, executor, job.sampling);
-  const bool form_json = precompute::WritesFormJson(job, summary.form.samples.size());
-  precompute::WriteFormOutputs(design, summary, args.out, form_json);
-  // The same artifact the cluster publishes for this job (docs/artifact.md).
-  const std::string artifact = coordinator::ArtifactFileName(design.name);
-  storage::Artifact published = coordinator::ArtifactOf(protocol::MakeJobBundle(job_path), design.name, job, summary.form);
-  if (args.cache || coordinator::WantsCache(job)) {
-    // The geometry cache (Fab Forms Sec. 6): re-evaluate the valid samples'
-    // geometry, keep every subtree as a blob, plan and store H_opt / H_rfree.
-    const std::filesystem::path blobs = std::filesystem::path(args.out) / "subtree-blobs";
-    coordinator::CacheAssembly assembly = coordinator::CollectSubtreesInProcess(design, summary.form, blobs);
-    assembly.options = cache_options;
-    assembly.store_rfree = coordinator::StoresRfree(job);
-    assembly.stream_geometry = true;  // one entry's geometry in memory at a time
-    const auto added = coordinator::AddCache(published, assembly);
-    const auto written = storage::WriteArtifact(published, std::filesystem::path(args.out) / artifact);
-    std::filesystem::remove_all(blobs);
-    const auto& c = published.manifest.cache;
+  const pipeline::Job job = pipeline::ReadJob(job_path);
+  pipeline::LocalExecutorOptions local;
+  local.threads = args.threads > 0 ? args.threads : job.file.threads;
+  // The geometry cache re-evaluates the valid samples' geometry and keeps
+  // every subtree here as a blob until the artifact is written.
+  local.scratch_dir = std::filesystem::path(args.out) / "subtree-blobs";
+  pipeline::LocalExecutor executor(job.design, local);
+  pipeline::RunOptions options;
+  options.out_dir = args.out;
+  options.cache = args.cache;
+  const pipeline::RunSummary run = pipeline::RunJob(job, executor, options);
+  if (run.cache) {
+    const auto& c = run.cache_manifest;
     std::cout << "cache " << c.strategy << ": H_TOP " << c.top_entries << " subtrees / " << c.top_bytes
               << " B, H_opt " << c.opt_entries << " / " << c.opt_bytes << " B, H_rfree " << c.rfree_entries << " / "
-              << c.rfree_bytes << " B (" << written.cache_entries << " entries stored)\n";
-    if (added.exact.solved())
-      std::cout << "cache plan: exact worst case " << added.exact.worst_seconds() << " s ("
-                << (added.exact.optimal() ? "optimal" : "time limit") << "), H_opt gap "
-                << 100.0 * added.exact.gap() << " %\n";
-  } else {
-    storage::WriteArtifact(published, std::filesystem::path(args.out) / artifact);
+              << c.rfree_bytes << " B (" << run.written.cache_entries << " entries stored)\n";
+    if (run.cache_added.exact.solved())
+      std::cout << "cache plan: exact worst case " << run.cache_added.exact.worst_seconds() << " s ("
+                << (run.cache_added.exact.optimal() ? "optimal" : "time limit") << "), H_opt gap "
+                << 100.0 * run.cache_added.exact.gap() << " %\n";
   }
-  std::cout << precompute::Table3Row(design, summary.statistics) << "\n";
-  std::cout << "wrote " << args.out << "/" << artifact << (form_json ? ", form.json" : "")
-            << ", statistics.json and validity maps\n";
+  std::cout << precompute::Table3Row(job.design, run.sampling.statistics) << "\n";
+  std::cout << "wrote " << args.out << "/" << run.artifact_file << (run.form_json ? ", form.json" : "")
+            << (run.swept_volumes > 0 ? ", swept_volumes.json" : "") << ", statistics.json and validity maps\n";
 }
 
 }  // namespace

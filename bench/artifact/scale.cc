@@ -8,7 +8,7 @@
 //     and wall >= 1 + 0.01 radius^2 + 0.0005 height^2, "unsat_constraints"
 //     otherwise; property volume = pi (radius^2 - bore^2) height; ΔG the
 //     hollow cylinders' symmetric-difference ratio), and publishes it as the
-//     cluster would (coordinator::ArtifactOf: manifest, form, starting points,
+//     cluster would (pipeline::ArtifactOf: manifest, form, starting points,
 //     the job bundle with the real design). Prints samples, times, file size
 //     and the size form.json would have (built in memory, not written).
 //   bench_artifact_scale lookups ART [POINTS=10000] [SEED=1]
@@ -29,7 +29,7 @@
 #include <random>
 #include <string>
 
-#include "fabatlas/coordinator/publish.h"
+#include "fabatlas/pipeline/artifact_of.h"
 #include "fabatlas/protocol/job_bundle.h"
 #include "fabatlas/sampling/adaptive_sampler.h"
 #include "fabatlas/sampling/executor.h"
@@ -91,7 +91,7 @@ int Write(const std::string& job_path, const std::filesystem::path& out) {
   const sampling::SamplingSummary summary = sampling::SampleDesignSpace(space, evaluator, executor, job.sampling);
   const double sample_s = Seconds(start);
   start = Clock::now();
-  const storage::Artifact artifact = coordinator::ArtifactOf(bundle, "tube_wall_3d", job, summary.form);
+  const storage::Artifact artifact = pipeline::ArtifactOf(bundle, "tube_wall_3d", job, summary.form);
   const double assemble_s = Seconds(start);
   start = Clock::now();
   storage::WriteArtifact(artifact, out);

@@ -24,13 +24,13 @@
 #include <unordered_map>
 
 #include "fabatlas/coordinator/job_eta.h"
-#include "fabatlas/coordinator/publish.h"
 #include "fabatlas/design/design.h"
 #include "fabatlas/error.h"
 #include "fabatlas/log/log.h"
 #include "fabatlas/log/metrics_text.h"
-#include "fabatlas/mesh/write_mesh.h"
-#include "fabatlas/precompute/design_evaluator.h"
+#include "fabatlas/pipeline/cache_assembly.h"
+#include "fabatlas/pipeline/executor.h"
+#include "fabatlas/pipeline/run_job.h"
 #include "fabatlas/precompute/form_outputs.h"
 #include "fabatlas/protocol/channel.h"
 #include "fabatlas/protocol/job_bundle.h"
@@ -43,6 +43,7 @@
 #include "fabatlas/v1/blob.grpc.pb.h"
 #include "fabatlas/v1/job.grpc.pb.h"
 #include "fabatlas/v1/worker.grpc.pb.h"
+#include "store_subtrees.h"
 
 namespace fabatlas::coordinator {
 
@@ -371,13 +372,14 @@ struct Coordinator::Impl {
     return out;
   }
 
-  // sampling::Executor whose tasks run on the workers.
-  class RemoteExecutor : public sampling::Executor {
+  // pipeline::Executor whose tasks run on the workers.
+  class RemoteExecutor : public pipeline::Executor {
    public:
-    RemoteExecutor(Impl& impl, std::string job_id, std::string evaluation_digest, int subdivisions,
-                   const sampling::SamplingOptions& sampling)
-        : impl_(impl), job_id_(std::move(job_id)), digest_(std::move(evaluation_digest)),
-          subdivisions_(subdivisions), sampling_(sampling) {}
+    // bundle_digest: the job's bundle blob (JobRecord::bundle_digest).
+    RemoteExecutor(Impl& impl, std::string job_id, std::string bundle_digest, const pipeline::Job& job)
+        : impl_(impl), job_id_(std::move(job_id)), bundle_digest_(std::move(bundle_digest)), job_(job),
+          digest_(protocol::EvaluationDigest(job.bundle)), subdivisions_(job.file.subdivisions),
+          sampling_(job.file.sampling) {}
 
     std::vector<sampling::SampleOutcome> RunSampleTasks(const std::vector<sampling::SampleTask>& tasks,
                                                         sampling::SampleEvaluator&,
@@ -449,7 +451,66 @@ struct Coordinator::Impl {
       return out;
     }
 
-    // Any tasks (here TASK_KIND_SWEPT_VOLUME), run by the workers; results in
+    // Sampling is over: the ETA is the publishing left, and the job's
+    // shared solids are forgotten.
+    void SamplingFinished() override {
+      publish_started_ = std::chrono::steady_clock::now();
+      {
+        std::lock_guard lock(impl_.schedule_mu);
+        if (auto it = impl_.schedules.find(job_id_); it != impl_.schedules.end())
+          it->second.publish_started = publish_started_;
+      }
+      impl_.ForgetShares(bundle_digest_);
+    }
+    // When SamplingFinished was called.
+    std::chrono::steady_clock::time_point publish_started() const { return publish_started_; }
+
+    // TASK_KIND_SWEPT_VOLUME tasks; each worker uploads its cutter surface
+    // as a blob, read back here.
+    std::vector<design::SweptVolumeResult> RunSweptVolumeTasks(
+        const std::vector<pipeline::SweptVolumeTask>& tasks) override {
+      std::vector<v1::TaskPayload> payloads;
+      for (const auto& t : tasks) {
+        v1::TaskPayload p = protocol::SamplePayload({t.point});
+        p.set_kind(v1::TASK_KIND_SWEPT_VOLUME);
+        p.mutable_swept()->set_node_path(t.node_path);
+        payloads.push_back(std::move(p));
+      }
+      std::vector<design::SweptVolumeResult> out;
+      for (const v1::TaskResult& result : Run(payloads)) {
+        const v1::SweptVolumeResult& r = result.swept_volume();
+        design::SweptVolumeResult s;
+        s.volume = r.volume();
+        s.triangles = r.triangles();
+        s.time_steps = r.time_steps();
+        s.active_voxels = r.active_voxels();
+        s.surface_sha256 = r.surface_sha256();
+        if (!r.surface_blob().empty()) {
+          impl_.store->AddJobBlob(job_id_, r.surface_blob());
+          // The blob's digest is the surface's SHA-256 when it holds it.
+          if (r.surface_blob() == r.surface_sha256()) s.surface_bytes = impl_.blobs->Read(r.surface_blob());
+        }
+        out.push_back(std::move(s));
+      }
+      return out;
+    }
+
+    // The subtrees the workers reported while sampling. Every subtree blob
+    // the store names is still here (the collector keeps a running job's
+    // geometry); one that is not is evaluated again, and recorded.
+    pipeline::CacheAssembly CacheSubtrees(const sampling::Form& form) override {
+      for (const auto& row : impl_.store->Subtrees(job_id_))
+        if (!row.blob_digest.empty() && !impl_.blobs->Contains(row.blob_digest))
+          impl_.Event(job_id_, "blob_missing", "subtree " + row.key + " names blob " + row.blob_digest +
+                                                   ", which is not in the store");
+      return CollectSubtreesFromStore(*impl_.store, *impl_.blobs, job_id_, job_.design, form);
+    }
+
+    v1::CachePlanReport RunCachePlan(const v1::CachePlanInput& input) override {
+      return impl_.PlanCacheOnWorkers(job_id_, digest_, subdivisions_, input);
+    }
+
+    // Any tasks, run by the workers; results in
     // order. preferred: lease affinity per task (may be empty); producers:
     // the worker whose result was accepted ("" = already in the store).
     std::vector<v1::TaskResult> Run(const std::vector<v1::TaskPayload>& payloads,
@@ -495,7 +556,9 @@ struct Coordinator::Impl {
     }
 
     Impl& impl_;
-    std::string job_id_, digest_;
+    std::string job_id_, bundle_digest_;
+    const pipeline::Job& job_;
+    std::string digest_;
     int subdivisions_;
     sampling::SamplingOptions sampling_;
     // The worker that evaluated each sample in this run of the driver (it
@@ -504,77 +567,8 @@ struct Coordinator::Impl {
     std::map<sampling::PointKey, std::string> holders_;
     std::vector<EtaBatch> batches_;
     std::size_t dims_ = 1;
-    std::chrono::steady_clock::time_point batch_started_;
+    std::chrono::steady_clock::time_point batch_started_, publish_started_;
   };
-
-  // Seed 004, Sec. 6.7: the cutter of every carve_swept node of the design,
-  // each computed once by a worker as a TASK_KIND_SWEPT_VOLUME task at the
-  // centre of the design space (the middle key of every dimension). Writes
-  // out/swept_volumes.json (per node: volume, triangles, time steps, active
-  // voxels, surface digest) and the cutter surfaces the workers uploaded as
-  // out/swept_<k>.ply, in the frame object's body coordinates. No file when
-  // the design has no carve_swept node.
-  void PublishSweptVolumes(const std::string& job_id, const design::Design& design,
-                           const sampling::DesignSpace& space, RemoteExecutor& executor, const fs::path& out) {
-    std::vector<std::string> paths;
-    std::function<void(const design::Node&, const std::string&)> walk = [&](const design::Node& n,
-                                                                              const std::string& path) {
-      if (n.op == "carve_swept") paths.push_back(path);
-      for (std::size_t i = 0; i < n.children.size(); ++i) walk(n.children[i], path + "/" + std::to_string(i));
-    };
-    walk(design.tree, "root");
-    for (const auto& o : design.objects) walk(o.tree, "object:" + o.name);
-    if (paths.empty()) return;
-    sampling::SampleTask centre;
-    for (int d = 0; d < space.dimension_count(); ++d) {
-      const auto lo = space.key_lo(d), hi = space.key_hi(d);
-      centre.point.key.push_back(space.can_split(d, lo, hi) ? space.split_key(d, lo, hi) : lo);
-    }
-    centre.point.u = space.point(centre.point.key);
-    std::vector<v1::TaskPayload> payloads;
-    for (const auto& path : paths) {
-      v1::TaskPayload p = protocol::SamplePayload(centre);
-      p.set_kind(v1::TASK_KIND_SWEPT_VOLUME);
-      p.mutable_swept()->set_node_path(path);
-      payloads.push_back(std::move(p));
-    }
-    const std::vector<v1::TaskResult> results = executor.Run(payloads);
-    for (const auto& r : results)
-      if (!r.swept_volume().surface_blob().empty()) store->AddJobBlob(job_id, r.swept_volume().surface_blob());
-    auto number = [](double v) {
-      char buf[40];
-      std::snprintf(buf, sizeof buf, "%.17g", v);
-      return std::string(buf);
-    };
-    std::string json = "{\n  \"point\": {";
-    for (int d = 0; d < space.dimension_count(); ++d)
-      json += std::string(d ? ", " : "") + "\"" + space.dimension(d).name + "\": " + number(centre.point.u[d]);
-    json += "},\n  \"swept_volumes\": [";
-    for (std::size_t k = 0; k < results.size(); ++k) {
-      const v1::SweptVolumeResult& r = results[k].swept_volume();
-      std::string mesh_file;
-      if (!r.surface_blob().empty() && r.surface_blob() == r.surface_sha256()) {
-        const std::string bytes = blobs->Read(r.surface_blob());
-        const std::size_t nt = r.triangles();
-        if (bytes.size() >= 12 * nt && (bytes.size() - 12 * nt) % 24 == 0) {
-          mesh::TriangleMesh m;
-          m.vertices.resize((bytes.size() - 12 * nt) / 24);
-          m.triangles.resize(nt);
-          std::memcpy(m.vertices.data(), bytes.data(), 24 * m.vertices.size());
-          std::memcpy(m.triangles.data(), bytes.data() + 24 * m.vertices.size(), 12 * nt);
-          mesh_file = "swept_" + std::to_string(k) + ".ply";
-          mesh::WriteMesh(m, out / mesh_file);
-        }
-      }
-      json += std::string(k ? "," : "") + "\n    {\"node\": \"" + paths[k] + "\", \"computed\": " +
-              (r.surface_sha256().empty() ? "false" : "true") + ", \"volume_mm3\": " + number(r.volume()) +
-              ", \"triangles\": " + std::to_string(r.triangles()) + ", \"time_steps\": " +
-              std::to_string(r.time_steps()) + ", \"active_voxels\": " + std::to_string(r.active_voxels()) +
-              ", \"surface_sha256\": \"" + r.surface_sha256() + "\", \"mesh\": \"" + mesh_file + "\"}";
-    }
-    json += "\n  ]\n}\n";
-    precompute::WriteFileAtomically(out / "swept_volumes.json", json);
-  }
 
   void Event(const std::string& job_id, const std::string& kind, const std::string& message) {
     try {
@@ -589,8 +583,7 @@ struct Coordinator::Impl {
   // the report. Retried like any task; a replayed job finds the stored
   // result. Throws InputError when the task was quarantined.
   v1::CachePlanReport PlanCacheOnWorkers(const std::string& job_id, const std::string& evaluation_digest,
-                                         int subdivisions, const CacheAssembly& assembly) {
-    const v1::CachePlanInput input = CachePlanInputOf(assembly);
+                                         int subdivisions, const v1::CachePlanInput& input) {
     v1::TaskPayload payload;
     payload.set_kind(v1::TASK_KIND_CACHE_PLAN);
     payload.mutable_cache_plan()->set_input_digest(blobs->Put(input.SerializeAsString()));
@@ -611,15 +604,6 @@ struct Coordinator::Impl {
     if (!blobs->Contains(digest) || !report.ParseFromString(blobs->Read(digest)))
       throw InputError("job " + job_id + ": cache plan report " + digest + " is missing or not a CachePlanReport");
     return report;
-  }
-
-  static std::string ExactText(const v1::CachePlanExact& exact) {
-    if (!exact.solved()) return "exact optimum: " + exact.message();
-    char text[160];
-    std::snprintf(text, sizeof text, "exact worst case %.6g s (%s, %lld variables), H_opt gap %.2f %%",
-                  exact.worst_seconds(), exact.optimal() ? "optimal" : "time limit",
-                  static_cast<long long>(exact.variables()), 100.0 * exact.gap());
-    return text;
   }
 
   // Forgets the job's shared solids (its sampling is over).
@@ -697,67 +681,32 @@ struct Coordinator::Impl {
       v1::JobBundle bundle;
       if (!bundle.ParseFromString(blobs->Read(job->bundle_digest)))
         throw InputError("job " + job_id + ": the bundle blob is not a JobBundle");
-      fs::path dir = options.state_dir / "jobs" / job_id;
-      auto files = protocol::Materialize(bundle, dir);
-      sampling::JobFile job_file = sampling::ParseJobFile(bundle.job_file(), files.job_file.string());
-      design::Design design = design::LoadDesign(files.design_file);
-      sampling::DesignSpace space = precompute::DesignSpaceOf(design, job_file.subdivisions);
-      precompute::DesignSampleEvaluator unused_local(design);
-      RemoteExecutor executor(*this, job_id, protocol::EvaluationDigest(bundle), job_file.subdivisions,
-                              job_file.sampling);
+      const fs::path dir = options.state_dir / "jobs" / job_id;
+      const pipeline::Job loaded = pipeline::JobOfBundle(std::move(bundle), dir);
+      RemoteExecutor executor(*this, job_id, job->bundle_digest, loaded);
       Event(job_id, "driver_started", "sampling driver started (replaying stored results)");
-      log::Info("job_started", {{"job", job_id}, {"design", design.name}});
-      sampling::SamplingSummary summary =
-          sampling::SampleDesignSpace(space, unused_local, executor, job_file.sampling);
-      const auto publish_started = std::chrono::steady_clock::now();
-      {
-        std::lock_guard lock(schedule_mu);  // sampling is over: the ETA is the publishing left
-        if (auto it = schedules.find(job_id); it != schedules.end()) it->second.publish_started = publish_started;
-      }
-      ForgetShares(job->bundle_digest);
-      fs::path out = dir / "out";
-      precompute::WriteFormOutputs(design, summary, out,
-                                   precompute::WritesFormJson(job_file, summary.form.samples.size()));
-      PublishSweptVolumes(job_id, design, space, executor, out);
-      // The published artifact (docs/artifact.md): deterministic, atomic.
-      storage::Artifact artifact = ArtifactOf(bundle, design.name, job_file, summary.form);
-      if (WantsCache(job_file)) {
-        // The geometry cache from the subtrees the workers reported (docs/artifact.md).
-        // Every subtree blob the store names is still here (the collector
-        // keeps a running job's geometry); one that is not is evaluated again
-        // below, and recorded.
-        for (const auto& row : store->Subtrees(job_id))
-          if (!row.blob_digest.empty() && !blobs->Contains(row.blob_digest))
-            Event(job_id, "blob_missing", "subtree " + row.key + " names blob " + row.blob_digest +
-                                              ", which is not in the store");
-        CacheAssembly assembly = CollectSubtreesFromStore(*store, *blobs, job_id, design, summary.form);
-        assembly.options = CacheOptionsOf(job_file);
-        assembly.store_rfree = StoresRfree(job_file);
-        assembly.stream_geometry = true;  // one entry's geometry in memory at a time
-        const v1::CachePlanReport report =
-            PlanCacheOnWorkers(job_id, protocol::EvaluationDigest(bundle), job_file.subdivisions, assembly);
-        const auto added = AddCache(artifact, assembly, report);
-        const auto written = storage::WriteArtifact(artifact, out / ArtifactFileName(design.name));
-        Event(job_id, "cache", "geometry cache " + artifact.manifest.cache.strategy + ": " +
-                                   std::to_string(written.cache_entries) + " entries, " +
-                                   std::to_string(written.cache_entries_left_out) + " without geometry; " +
-                                   ExactText(added.exact));
-      } else {
-        storage::WriteArtifact(artifact, out / ArtifactFileName(design.name));
-      }
-      for (const auto& entry : fs::directory_iterator(out)) {
+      log::Info("job_started", {{"job", job_id}, {"design", loaded.design.name}});
+      pipeline::RunOptions run_options;
+      run_options.out_dir = dir / "out";
+      const pipeline::RunSummary run = pipeline::RunJob(loaded, executor, run_options);
+      if (run.cache)
+        Event(job_id, "cache", "geometry cache " + run.cache_manifest.strategy + ": " +
+                                   std::to_string(run.written.cache_entries) + " entries, " +
+                                   std::to_string(run.written.cache_entries_left_out) + " without geometry; " +
+                                   pipeline::ExactText(run.cache_added.exact));
+      for (const auto& entry : fs::directory_iterator(run_options.out_dir)) {
         if (!entry.is_regular_file()) continue;
         std::string name = entry.path().filename().string();
         if (name.find(".tmp") != std::string::npos) continue;
         store->PutJobOutput(job_id, name, blobs->PutFile(entry.path()));
       }
       store->SetJobState(job_id, storage::JobState::kSucceeded, "", NowMs());
-      Event(job_id, "succeeded", precompute::Table3Row(design, summary.statistics));
+      Event(job_id, "succeeded", precompute::Table3Row(loaded.design, run.sampling.statistics));
       log::Info("job_succeeded",
-                {{"job", job_id}, {"design", design.name}, {"samples", summary.statistics.samples},
-                 {"valid_samples", summary.statistics.valid_samples},
+                {{"job", job_id}, {"design", loaded.design.name}, {"samples", run.sampling.statistics.samples},
+                 {"valid_samples", run.sampling.statistics.valid_samples},
                  {"publish_seconds",
-                  std::chrono::duration<double>(std::chrono::steady_clock::now() - publish_started).count()}});
+                  std::chrono::duration<double>(std::chrono::steady_clock::now() - executor.publish_started()).count()}});
       // The published artifact holds what the cache plan kept: the job's
       // geometry blobs go now.
       CollectBlobs("job " + job_id + " published");

@@ -1,4 +1,4 @@
-// The cache part of the artifact (coordinator/publish.h AddCache): a design
+// The cache part of the artifact (pipeline/cache_assembly.h AddCache): a design
 // with two decoupled pieces, like Fab Forms' chess set (Fig. 8), whose
 // samples share the pieces' subtrees. Real level sets, real plan, real file.
 #include <gtest/gtest.h>
@@ -8,7 +8,8 @@
 #include <set>
 
 #include "fabatlas/cache/cost_model.h"
-#include "fabatlas/coordinator/publish.h"
+#include "fabatlas/pipeline/artifact_of.h"
+#include "fabatlas/pipeline/cache_assembly.h"
 #include "fabatlas/design/evaluate_sample.h"
 #include "fabatlas/precompute/design_evaluator.h"
 #include "fabatlas/precompute/preview_times.h"
@@ -18,7 +19,7 @@
 #include "fabatlas/storage/glb.h"
 #include "fabatlas/testing/paths.h"
 
-namespace fabatlas::coordinator {
+namespace fabatlas::pipeline {
 namespace {
 
 namespace fs = std::filesystem;
@@ -172,9 +173,9 @@ TEST(PublishCache, StartingPointsAreValidSamplesOfTheForm) {
 }
 
 }  // namespace
-}  // namespace fabatlas::coordinator
+}  // namespace fabatlas::pipeline
 
-namespace fabatlas::coordinator {
+namespace fabatlas::pipeline {
 namespace {
 
 // A preview through a cache holding a sample's root looks it up before its
@@ -215,4 +216,4 @@ TEST(PreviewCache, CachedRootSkipsItsChildren) {
 }
 
 }  // namespace
-}  // namespace fabatlas::coordinator
+}  // namespace fabatlas::pipeline

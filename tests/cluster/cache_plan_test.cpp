@@ -13,7 +13,8 @@
 
 #include "cluster_process.h"
 #include "fabatlas/coordinator/job_client.h"
-#include "fabatlas/coordinator/publish.h"
+#include "fabatlas/pipeline/local_executor.h"
+#include "fabatlas/pipeline/run_job.h"
 #include "fabatlas/design/design.h"
 #include "fabatlas/precompute/design_evaluator.h"
 #include "fabatlas/protocol/job_bundle.h"
@@ -31,23 +32,20 @@ namespace {
 
 fs::path JobPath() { return SourceDir() / "tests/cluster/data/tube_cache.yaml"; }
 
-// The artifact `fabatlas sample` writes for the job: sampling on a thread
-// pool, subtrees re-evaluated in process, the plan run in process.
+// The artifact `fabatlas sample` writes for the job: the pipeline in this
+// process (sampling on a thread pool, subtrees re-evaluated, the plan run
+// here).
 std::string InProcessArtifact(const fs::path& dir) {
-  sampling::JobFile job = sampling::ReadJobFile(JobPath().string());
-  design::Design design = design::LoadDesign(job.design_path);
-  sampling::DesignSpace space = precompute::DesignSpaceOf(design, job.subdivisions);
-  precompute::DesignSampleEvaluator evaluator(design);
-  sampling::ThreadPoolExecutor executor(2);
-  sampling::SamplingSummary summary = sampling::SampleDesignSpace(space, evaluator, executor, job.sampling);
-  storage::Artifact artifact =
-      coordinator::ArtifactOf(protocol::MakeJobBundle(JobPath()), design.name, job, summary.form);
-  coordinator::CacheAssembly assembly = coordinator::CollectSubtreesInProcess(design, summary.form, dir / "blobs");
-  assembly.options = coordinator::CacheOptionsOf(job);
-  coordinator::AddCache(artifact, assembly);
-  const fs::path path = dir / coordinator::ArtifactFileName(design.name);
-  storage::WriteArtifact(artifact, path);
-  return ReadText(path);
+  const pipeline::Job job = pipeline::ReadJob(JobPath());
+  pipeline::LocalExecutorOptions local;
+  local.threads = 2;
+  local.scratch_dir = dir / "blobs";
+  pipeline::LocalExecutor executor(job.design, local);
+  pipeline::RunOptions options;
+  options.out_dir = dir;
+  const pipeline::RunSummary run = pipeline::RunJob(job, executor, options);
+  EXPECT_TRUE(run.cache);
+  return ReadText(dir / run.artifact_file);
 }
 
 coordinator::JobClient Client(int port) {

@@ -7,6 +7,7 @@
 #include <arpa/inet.h>
 #include <gtest/gtest.h>
 #include <httplib.h>
+#include <nlohmann/json.hpp>
 #include <netinet/in.h>
 #include <sqlite3.h>
 #include <sys/socket.h>
@@ -20,7 +21,7 @@
 #include "cluster_job.h"
 #include "cluster_process.h"
 #include "fabatlas/coordinator/job_client.h"
-#include "fabatlas/coordinator/publish.h"
+#include "fabatlas/pipeline/artifact_of.h"
 #include "fabatlas/design/design.h"
 #include "fabatlas/error.h"
 #include "fabatlas/geometry/solid.h"
@@ -88,7 +89,7 @@ const std::string& ReferenceArtifact() {
     sampling::JobFile job = sampling::ReadJobFile(JobPath().string());
     sampling::Form form = sampling::FormFromJson(ReferenceForm());
     storage::Artifact artifact =
-        coordinator::ArtifactOf(protocol::MakeJobBundle(JobPath()), "tube_wall_2d", job, form);
+        pipeline::ArtifactOf(protocol::MakeJobBundle(JobPath()), "tube_wall_2d", job, form);
     fs::path path = FreshDir("reference-artifact") / kArtifactName;
     storage::WriteArtifact(artifact, path);
     return ReadText(path);
@@ -1017,11 +1018,12 @@ TEST(ClusterSwept, WorkerComputesTheCapsuleOfASphereAlongASegment) {
   ASSERT_EQ(s.state(), v1::JOB_STATE_SUCCEEDED) << s.error() << ReadText(dir / "w0/worker.log");
   auto outputs = Client(c.port).Fetch(id);
   const std::string json = outputs["swept_volumes.json"];
-  ASSERT_NE(json.find("\"node\": \"object:plate\""), std::string::npos) << json;
-  EXPECT_NE(json.find("\"point\": {\"r\": 10}"), std::string::npos) << json;
-  const std::size_t at = json.find("\"volume_mm3\": ");
-  ASSERT_NE(at, std::string::npos) << json;
-  const double volume = std::strtod(json.c_str() + at + 14, nullptr);
+  const nlohmann::json published = nlohmann::json::parse(json);
+  ASSERT_EQ(published["swept_volumes"].size(), 1u) << json;
+  ASSERT_EQ(published["swept_volumes"][0]["node"], "object:plate") << json;
+  EXPECT_EQ(published["point"]["r"], 10.0) << json;
+  EXPECT_EQ(published["swept_volumes"][0]["mesh"], "swept_0.ply") << json;
+  const double volume = published["swept_volumes"][0]["volume_mm3"];
   const double R = 10.5, L = 40;
   const double capsule = M_PI * R * R * L + 4.0 / 3.0 * M_PI * R * R * R;
   EXPECT_NEAR(volume, capsule, 0.01 * capsule) << json;

@@ -15,6 +15,7 @@
 #include "expression.h"
 #include "fabatlas/error.h"
 #include "fabatlas/scad/customizer.h"
+#include "fabatlas/mesh/raw_mesh.h"
 #include "fabatlas/sha256.h"
 #include "node_schema.h"
 #include "openscad_node.h"
@@ -535,16 +536,8 @@ SweptVolumeResult ComputeSweptVolume(const Design& design, const Point& u, const
     r.triangles = surface.triangles.size();
     r.time_steps = summary.time_steps;
     r.active_voxels = summary.active_voxels;
-    std::string bytes;
-    for (const auto& v : surface.vertices) bytes.append(reinterpret_cast<const char*>(v.data()), sizeof(double) * 3);
-    for (const auto& t : surface.triangles) {
-      for (int k = 0; k < 3; ++k) {
-        const std::int32_t i = t[k];
-        bytes.append(reinterpret_cast<const char*>(&i), sizeof i);
-      }
-    }
-    r.surface_sha256 = Sha256Hex(bytes);
-    r.surface_bytes = std::move(bytes);
+    r.surface_bytes = mesh::RawMeshBytes(surface);
+    r.surface_sha256 = Sha256Hex(r.surface_bytes);
     return r;
   } catch (const SampleFailure& e) {
     throw InputError(where + ": " + e.what());

@@ -103,10 +103,10 @@ struct SweptVolumeResult {
   std::size_t triangles = 0;      // of the offset surface
   int time_steps = 0;             // time samples used
   std::size_t active_voxels = 0;  // of the sparse swept distance grid
-  // SHA-256 (hex) of the surface: vertex coordinates as little-endian
-  // doubles, then triangle indices as little-endian int32.
+  // The surface as mesh::RawMeshBytes (mesh::MeshOfRawBytes reads it back
+  // given `triangles`) and their SHA-256 (hex). Both empty when the volume
+  // was not computed.
   std::string surface_sha256;
-  // The bytes hashed above (vertex count = (size - 12 triangles) / 24).
   std::string surface_bytes;
 };
 

@@ -3,7 +3,7 @@
 //
 // One function computes the plan wherever it runs: a cluster worker runs it
 // on the input blob of a TASK_KIND_CACHE_PLAN lease, and `fabatlas sample`
-// runs it in process (coordinator::AddCache), so the artifact of a job is
+// runs it in process (pipeline::LocalExecutor::RunCachePlan), so the artifact of a job is
 // the same bytes either way.
 #pragma once
 
