@@ -18,6 +18,7 @@ cmd = [os.path.abspath(fab), mode, job, "--out", out] + (["--workers", "2"] if m
 state = os.path.join(out, "cluster-state")
 peak = {"state_bytes": 0}
 rss = {}
+cpu_ticks = {}  # last seen utime+stime (clock ticks) of each process of the run
 done = False
 
 def du(p):
@@ -42,6 +43,8 @@ def watch(root_pid):
                 hwm = int(status.split("VmHWM:")[1].split()[0])
                 name = os.path.basename(cmdline[0].decode()) + ("" if int(pid) == root_pid else f"[{pid}]")
                 rss[name] = max(rss.get(name, 0), hwm)
+                fields = open(f"/proc/{pid}/stat").read().rsplit(")", 1)[1].split()
+                cpu_ticks[name] = int(fields[11]) + int(fields[12])
             except (OSError, IndexError, ValueError):
                 pass
         time.sleep(1.0)
@@ -69,4 +72,6 @@ print(json.dumps({
     "sqlite_bytes": os.path.getsize(os.path.join(state, "state.db")) if os.path.exists(os.path.join(state, "state.db")) else 0,
     "artifact_bytes": os.path.getsize(os.path.join(out, artifact[0])) if artifact else 0,
     "rss_peak_mib": {k: round(v / 1024) for k, v in rss.items()},
+    # CPU of each process up to its last second (so slightly under its total): where the CPU went
+    "cpu_s_by_process": {k: round(v / os.sysconf("SC_CLK_TCK"), 1) for k, v in cpu_ticks.items()},
     "load": os.getloadavg()[0]}))
