@@ -1,0 +1,40 @@
+// A job as a worker holds it (see job_cache.h).
+#include "job_cache.h"
+
+#include "fabatlas/design/design.h"
+#include "fabatlas/protocol/job_bundle.h"
+#include "fabatlas/protocol/solid_blob.h"
+#include "fabatlas/sampling/job_file.h"
+
+namespace fabatlas::worker {
+
+std::shared_ptr<JobContext> LoadJobContext(const v1::JobBundle& bundle, const std::filesystem::path& dir,
+                                           std::int64_t memory_mb, UploadBlob upload) {
+  auto ctx = std::make_shared<JobContext>();
+  auto files = protocol::Materialize(bundle, dir);
+  ctx->min_subtree_seconds =
+      sampling::ParseJobFile(bundle.job_file(), files.job_file.string()).cache_min_subtree_seconds;
+  precompute::DesignEvaluatorOptions options;
+  const std::size_t budget = static_cast<std::size_t>(memory_mb) << 20;
+  options.solid_memory_bytes = budget / 16;
+  options.subtree_memory_bytes = budget / 8;
+  ctx->shelf.SetBudget(budget / 16 * 5);
+  JobContext* job = ctx.get();
+  options.on_subtree_computed = [job, upload = std::move(upload)](const std::string& key,
+                                                                  const geometry::Solid& solid, double seconds) {
+    {
+      std::lock_guard lock(job->mu);
+      job->last_seconds[key] = seconds;
+      if (seconds < job->min_subtree_seconds || job->subtree_blobs.count(key)) return;
+    }
+    std::string digest = upload(protocol::SolidBlobOf(solid));
+    if (digest.empty()) return;
+    std::lock_guard lock(job->mu);
+    job->subtree_blobs.emplace(key, digest);
+  };
+  ctx->evaluator =
+      std::make_unique<precompute::DesignSampleEvaluator>(design::LoadDesign(files.design_file), std::move(options));
+  return ctx;
+}
+
+}  // namespace fabatlas::worker

@@ -1,0 +1,47 @@
+// A job as a worker holds it: its design's evaluator, the subtrees it
+// uploaded, its shelf of root solids. One per job bundle digest, loaded on
+// the job's first lease (task_execution.cpp ContextFor).
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <string>
+
+#include "fabatlas/precompute/design_evaluator.h"
+#include "fabatlas/v1/job.pb.h"
+#include "solid_shelf.h"
+
+namespace fabatlas::worker {
+
+struct JobContext {
+  std::unique_ptr<precompute::DesignSampleEvaluator> evaluator;
+  std::string error;                 // set when the job could not be loaded
+  double min_subtree_seconds = 0.1;  // job file cache.min_subtree_seconds
+  std::mutex mu;
+  // Subtree key -> seconds its root took when this worker last computed it
+  // (cache hits report 0; tasks.proto SubtreeRecord.seconds wants this).
+  std::map<std::string, double> last_seconds;
+  // Subtree key -> blob digest, for the subtrees this worker uploaded.
+  std::map<std::string, std::string> subtree_blobs;
+  SolidShelf shelf;
+};
+
+// Uploads bytes as a blob; its digest, or "" when the upload failed.
+using UploadBlob = std::function<std::string(const std::string& bytes)>;
+
+// The job of a bundle, its files written under dir (protocol::Materialize),
+// with the memory budget of WorkerOptions::memory_mb (MiB) split as
+// worker.h documents: 1/16 for the latest root solids as level sets, 5/16
+// for the shelf, 1/8 for the subtree cache. Every subtree the evaluator
+// computes whose root took at least the job file's
+// cache.min_subtree_seconds is uploaded once (`upload`) and recorded in
+// subtree_blobs (tasks.proto "Geometry blobs"). Throws InputError for a job
+// that does not load (the job file or design's one-line message).
+std::shared_ptr<JobContext> LoadJobContext(const v1::JobBundle& bundle, const std::filesystem::path& dir,
+                                           std::int64_t memory_mb, UploadBlob upload);
+
+}  // namespace fabatlas::worker
