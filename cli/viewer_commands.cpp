@@ -43,7 +43,7 @@ std::string DefaultWebDir() {
 struct ServeArgs {
   std::string art, job, host = "127.0.0.1", web = DefaultWebDir(), cache = "opt";
   int port = 8080;
-  int preview_cache_mb = 256;
+  int preview_cache_mb = 192;
 };
 
 // ART: an artifact file, a run directory holding exactly one artifact, or
@@ -185,7 +185,7 @@ void AddViewerCommands(CLI::App& app, int& exit_code) {
   serve->add_option("--host", a->host, "address to listen on (default 127.0.0.1)");
   serve->add_option("--web", a->web, "directory of the built web page (default: PREFIX/share/fabatlas/web when installed, else build/web)");
   serve->add_option("--preview-cache-mb", a->preview_cache_mb,
-                    "memory for encoded previews, filled in the background at start (default 256; 0: none)")
+                    "memory for encoded previews, filled in the background at start (default 192; 0: none)")
       ->check(CLI::Range(0, 1 << 20));
   serve->callback([a] { Serve(*a); });
 }

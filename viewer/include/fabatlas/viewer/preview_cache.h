@@ -26,7 +26,7 @@ struct EncodedPreview {
 struct PreviewCacheOptions {
   // Total glb bytes kept; least recently used previews are dropped beyond it.
   // 0 keeps nothing (every request evaluates).
-  std::size_t max_bytes = std::size_t{256} << 20;
+  std::size_t max_bytes = std::size_t{192} << 20;
 };
 
 // Thread-safe. Concurrent requests for a sample not yet cached wait for one
