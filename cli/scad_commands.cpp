@@ -1,6 +1,7 @@
 // fabatlas import-scad — OpenSCAD Customizer models in (docs/openscad.md),
 // and the on-the-fly import eval, sample, run and submit use for MODEL.scad.
 #include <filesystem>
+#include <algorithm>
 #include <fstream>
 #include <iostream>
 #include <memory>
@@ -8,6 +9,7 @@
 
 #include "commands.h"
 #include "fabatlas/design/design.h"
+#include "fabatlas/design/evaluate_sample.h"
 #include "fabatlas/error.h"
 #include "fabatlas/scad/import_design.h"
 
@@ -35,15 +37,43 @@ void PrintWarnings(const scad::ImportSummary& s) {
   for (const auto& w : s.warnings) std::cerr << "fabatlas: warning: " << w << "\n";
 }
 
+// The largest bounding-box edge (mm) of the model at its defaults, from a
+// coarse native evaluation (geometry only, voxel 1 mm, then 0.25 mm for
+// models smaller than a few voxels); 0 when neither gives geometry. The
+// import picks its voxel size from it (docs/openscad.md, "Voxel size").
+double MeasureModelSize(const std::string& model, const std::vector<std::string>& expose) {
+  fs::path path = model;
+  for (double voxel : {1.0, 0.25}) {
+    scad::ImportOptions probe;
+    probe.expose = expose;
+    probe.voxel_size = voxel;
+    scad::ImportSummary s = scad::ImportScad(model, probe);
+    design::Design d = design::ParseDesign(s.design_yaml, path.parent_path() / (path.stem().string() + ".yaml"));
+    design::EvaluateOptions preview;
+    preview.run_checks = false;
+    design::SampleResult r = design::EvaluateSample(d, design::DefaultPoint(d), preview);
+    if (!r.valid || r.solid.empty()) continue;
+    const geometry::Box3 box = r.solid.BoundingBox();
+    return std::max({box.max[0] - box.min[0], box.max[1] - box.min[1], box.max[2] - box.min[2]});
+  }
+  return 0;
+}
+
+scad::ImportOptions OptionsFor(const std::string& model, const std::vector<std::string>& expose, double voxel) {
+  scad::ImportOptions options;
+  options.expose = expose;
+  options.voxel_size = voxel;
+  if (voxel <= 0) options.model_size = MeasureModelSize(model, expose);
+  return options;
+}
+
 void ImportScadCommand(const ImportArgs& a) {
   if (!IsScadModel(a.model)) throw InputError(a.model + ": not an OpenSCAD model (.scad)");
   if (!(a.voxel >= 0)) throw InputError("--voxel must be a positive size in mm");
   const fs::path out = a.out;
   fs::path job = out;
   job.replace_extension(".job.yaml");
-  scad::ImportOptions options;
-  options.expose = SplitNames(a.expose);
-  options.voxel_size = a.voxel;
+  scad::ImportOptions options = OptionsFor(a.model, SplitNames(a.expose), a.voxel);
   const fs::path out_dir = out.parent_path().empty() ? fs::path(".") : out.parent_path();
   options.model_reference = fs::relative(fs::absolute(a.model), fs::absolute(out_dir)).generic_string();
   options.design_file_name = out.filename().string();
@@ -69,7 +99,7 @@ bool IsScadModel(const std::string& path) { return fs::path(path).extension() ==
 
 design::Design LoadDesignOrModel(const std::string& path) {
   if (!IsScadModel(path)) return design::LoadDesign(path);
-  scad::ImportSummary s = scad::ImportScad(path, {});
+  scad::ImportSummary s = scad::ImportScad(path, OptionsFor(path, {}, 0));
   PrintWarnings(s);
   fs::path model = path;
   return design::ParseDesign(s.design_yaml, model.parent_path() / (model.stem().string() + ".yaml"));
@@ -78,7 +108,7 @@ design::Design LoadDesignOrModel(const std::string& path) {
 std::string JobOrModel(const std::string& path, const std::string& dir) {
   if (!IsScadModel(path)) return path;
   scad::ImportSummary s;
-  fs::path job = scad::WriteImportedJob(path, dir, {}, &s);
+  fs::path job = scad::WriteImportedJob(path, dir, OptionsFor(path, {}, 0), &s);
   PrintWarnings(s);
   return job.string();
 }

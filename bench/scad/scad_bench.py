@@ -2,15 +2,22 @@
 """OpenSCAD models through fabatlas against OpenSCAD itself (docs/openscad.md).
 
   bench/scad/scad_bench.py speed [--repeats 3]   tray, sign.scad, candleStand.scad:
-      OpenSCAD's own STL render wall time vs one fabatlas sample (geometry:
-      .csg export + native CSG; whole sample: with the design's checks),
-      medians of --repeats, volume of each STL.
-  bench/scad/scad_bench.py coverage               every example Debian's openscad ships:
-      evaluated natively (how many CSG subtrees native, how many OpenSCAD
-      rendered) and the volume difference to OpenSCAD's own STL.
+      OpenSCAD's own STL render wall time vs one fabatlas sample of
+      `fabatlas eval MODEL.scad` (imported on the fly, automatic voxel):
+      geometry (.csg export + native CSG, timings.tree), the whole sample
+      (with the imported design's checks, timings.total) and the eval
+      process's wall time (import, model measurement, sample, mesh export);
+      medians of --repeats, interleaved; volumes of OpenSCAD's STL, of the
+      sample's `volume` property and of the mesh fabatlas exports.
+  bench/scad/scad_bench.py coverage [--timeout 120]   every example Debian's
+      openscad ships: does `import-scad` take it (and why not), is it
+      evaluated fully natively or with subtrees OpenSCAD rendered, the volume
+      difference to OpenSCAD's own STL; each program run limited to
+      --timeout seconds; rows are printed as they finish.
 
-Run from the repository root with build/bin/fabatlas built. Volumes are those
-the surfaces enclose (divergence theorem over the STL triangles).
+Run from the repository root with build/bin/fabatlas built, under nice.
+Volumes of meshes are those their surfaces enclose (divergence theorem over
+the STL triangles).
 """
 import json, os, re, statistics, struct, subprocess, sys, tempfile, time, glob
 
@@ -44,25 +51,32 @@ def bbox(path):
     return [max(p[k] for p in pts) - min(p[k] for p in pts) for k in range(3)] if pts else [0, 0, 0]
 
 
-def openscad_stl(model, out, defines=()):
+def openscad_stl(model, out, defines=(), timeout=None):
     args = ["openscad", "--quiet", "-o", out]
     for d in defines:
         args += ["-D", d]
     t = time.monotonic()
-    r = subprocess.run(args + [model], capture_output=True, text=True)
+    try:
+        r = subprocess.run(args + [model], capture_output=True, text=True, timeout=timeout)
+    except subprocess.TimeoutExpired:
+        return time.monotonic() - t, False
     return time.monotonic() - t, r.returncode == 0 and os.path.exists(out)
 
 
-def fabatlas_eval(design, mesh, at=None):
+def fabatlas_eval(design, mesh, at=None, timeout=None):
     args = [FABATLAS, "eval", design, "--json", "--mesh", mesh]
     if at:
         args += ["--at", at]
     t = time.monotonic()
-    r = subprocess.run(args, capture_output=True, text=True)
+    r = subprocess.run(args, capture_output=True, text=True, timeout=timeout)
     wall = time.monotonic() - t
     if r.returncode != 0 and not r.stdout:
-        raise RuntimeError(design + ": " + r.stderr.strip())
+        raise RuntimeError((r.stderr.strip().splitlines() or ["exit %d" % r.returncode])[-1])
     return wall, json.loads(r.stdout)
+
+
+def pct(a, b):
+    return 100 * (a - b) / b
 
 
 def speed(repeats):
@@ -70,72 +84,98 @@ def speed(repeats):
     models = [os.path.join(ROOT, "configs/scad/tray.scad"),
               os.path.join(EXAMPLES, "Parametric/sign.scad"),
               os.path.join(EXAMPLES, "Parametric/candleStand.scad")]
-    print("| model | OpenSCAD STL wall s | fabatlas geometry s (ratio) | fabatlas whole sample s (ratio) | volume OpenSCAD / fabatlas mm^3 (diff) |")
-    print("|---|---|---|---|---|")
+    print("| model | voxel mm | OpenSCAD STL wall s | fabatlas geometry s (ratio) | whole sample s (ratio) | eval process wall s | volume OpenSCAD / property (diff) / mesh (diff) mm^3 |")
+    print("|---|---|---|---|---|---|---|")
     for model in models:
         name = os.path.basename(model)
-        osc, geo, whole = [], [], []
+        osc, geo, whole, walls = [], [], [], []
         ref = os.path.join(tmp, name + ".ref.stl")
         ours = os.path.join(tmp, name + ".ours.stl")
+        j = None
         for _ in range(repeats):  # interleaved, so both see the same load
             t, ok = openscad_stl(model, ref)
             if not ok:
                 raise RuntimeError(model + ": openscad failed")
             osc.append(t)
-            _, j = fabatlas_eval(model, ours)
+            w, j = fabatlas_eval(model, ours)
+            walls.append(w)
             geo.append(j["timings"]["tree"])
             whole.append(j["timings"]["total"])
-        vo, vf = volume(ref), volume(ours)
-        mo, mg, mw = statistics.median(osc), statistics.median(geo), statistics.median(whole)
-        print(f"| {name} | {mo:.3f} | {mg:.3f} ({mg / mo:.2f}) | {mw:.3f} ({mw / mo:.2f}) | {vo:.1f} / {vf:.1f} ({100 * (vf - vo) / vo:+.2f}%) |")
+        vo, vm, vp = volume(ref), volume(ours), j["properties"].get("volume", float("nan"))
+        voxel = ""
+        design = os.path.join(tmp, name + ".yaml")
+        subprocess.run([FABATLAS, "import-scad", model, "--out", design], capture_output=True)
+        if os.path.exists(design):
+            voxel = re.search(r"voxel_size: (\S+)", open(design).read()).group(1)
+        mo, mg, mw, mp = (statistics.median(x) for x in (osc, geo, whole, walls))
+        print(f"| {name} | {voxel} | {mo:.3f} | {mg:.3f} ({mg / mo:.2f}) | {mw:.3f} ({mw / mo:.2f}) | {mp:.3f} | "
+              f"{vo:.1f} / {vp:.1f} ({pct(vp, vo):+.2f}%) / {vm:.1f} ({pct(vm, vo):+.2f}%) |", flush=True)
     print(f"\nload average: {os.getloadavg()}")
 
 
-def coverage():
+def coverage(timeout):
     tmp = tempfile.mkdtemp(prefix="scad-coverage-")
-    rows, native_full = [], 0
+    counts = {"import": 0, "native": 0, "fallback": 0, "failed": 0, "no3d": 0}
     models = sorted(glob.glob(os.path.join(EXAMPLES, "*", "*.scad")))
+    print("| example | import-scad | evaluation | native CSG subtrees | rendered by OpenSCAD | volume OpenSCAD / fabatlas mm^3 (diff) |")
+    print("|---|---|---|---|---|---|", flush=True)
     for model in models:
         rel = os.path.relpath(model, EXAMPLES)
+        imp = subprocess.run([FABATLAS, "import-scad", model, "--out", os.path.join(tmp, "imp.yaml"), "--voxel", "1"],
+                             capture_output=True, text=True, timeout=timeout)
+        if imp.returncode == 0:
+            counts["import"] += 1
+            imported = "yes"
+        else:
+            imported = "no: " + (imp.stderr.strip().splitlines() or ["?"])[-1].split(": ", 2)[-1][:70]
         ref = os.path.join(tmp, "ref.stl")
         if os.path.exists(ref):
             os.remove(ref)
-        _, ok = openscad_stl(model, ref)
+        t, ok = openscad_stl(model, ref, timeout=timeout)
         if not ok or os.path.getsize(ref) < 100:
-            rows.append((rel, "OpenSCAD renders no 3D STL (2D, echo or animation example)", "", ""))
+            counts["no3d"] += 1
+            why = f"OpenSCAD's own render took over {timeout} s" if t >= timeout else "OpenSCAD renders no 3D STL (2D, echo or animation example)"
+            print(f"| {rel} | {imported} | {why} | | | |", flush=True)
             continue
         size = max(bbox(ref))
-        voxel = min(1.0, max(0.1, round(size / 200 / 0.05) * 0.05))
+        voxel = min(1.0, max(0.1, round(size / 150 / 0.05) * 0.05))
         design = os.path.join(tmp, "d.yaml")
         with open(design, "w") as f:
             f.write(f"name: coverage\nvoxel_size: {voxel}\nparameters: {{unused: {{type: real, min: 0, max: 1}}}}\n"
                     f"tree: {{op: openscad, file: {json.dumps(model)}}}\nproperties: [volume]\n")
         ours = os.path.join(tmp, "ours.stl")
+        if os.path.exists(ours):
+            os.remove(ours)
         try:
-            _, j = fabatlas_eval(design, ours)
+            _, j = fabatlas_eval(design, ours, timeout=timeout)
+        except subprocess.TimeoutExpired:
+            counts["failed"] += 1
+            print(f"| {rel} | {imported} | fabatlas took over {timeout} s | | | |", flush=True)
+            continue
         except Exception as e:
-            rows.append((rel, "fabatlas failed: " + str(e)[:120], "", ""))
+            counts["failed"] += 1
+            print(f"| {rel} | {imported} | fabatlas failed: {str(e)[:100]} | | | |", flush=True)
             continue
         ops = [s["op"] for s in j.get("subtrees", [])]
         native = sum(o.startswith("csg:") for o in ops)
         rendered = [o[len("csg-openscad:"):] for o in ops if o.startswith("csg-openscad:")]
-        if not j.get("valid") and not os.path.exists(ours):
-            rows.append((rel, "no geometry: " + str(j.get("failure_reason", ""))[:120], native, ",".join(rendered)))
+        if not j.get("valid") or not os.path.exists(ours):
+            counts["failed"] += 1
+            print(f"| {rel} | {imported} | no geometry: {str(j.get('failure_reason', ''))[:100]} | {native} | {','.join(rendered)} | |", flush=True)
             continue
-        vo, vf = volume(ref), volume(ours)
-        if not rendered:
-            native_full += 1
-        rows.append((rel, f"{vo:.1f} / {vf:.1f} ({100 * (vf - vo) / vo:+.2f}%) at voxel {voxel}", native, ",".join(rendered) or "–"))
-    print("| example | volume OpenSCAD / fabatlas mm^3 (diff) | native CSG subtrees | rendered by OpenSCAD |")
-    print("|---|---|---|---|")
-    for r in rows:
-        print("| " + " | ".join(str(x) for x in r) + " |")
-    print(f"\n{native_full} of {len(models)} examples evaluate fully natively; load average {os.getloadavg()}")
+        vo, vp = volume(ref), j["properties"].get("volume", float("nan"))
+        counts["fallback" if rendered else "native"] += 1
+        kind = "with OpenSCAD subtrees" if rendered else "fully native"
+        print(f"| {rel} | {imported} | {kind} at voxel {voxel} | {native} | {','.join(rendered) or '–'} | "
+              f"{vo:.1f} / {vp:.1f} ({pct(vp, vo):+.2f}%) |", flush=True)
+    print(f"\n{len(models)} examples: {counts['import']} import with import-scad; of the rest of the pipeline "
+          f"{counts['native']} evaluate fully natively, {counts['fallback']} with subtrees OpenSCAD renders, "
+          f"{counts['failed']} fail, {counts['no3d']} have no 3D STL from OpenSCAD itself; load average {os.getloadavg()}")
 
 
 if __name__ == "__main__":
     if len(sys.argv) > 1 and sys.argv[1] == "coverage":
-        coverage()
+        coverage(int(sys.argv[sys.argv.index("--timeout") + 1]) if "--timeout" in sys.argv else 120)
     else:
         repeats = int(sys.argv[sys.argv.index("--repeats") + 1]) if "--repeats" in sys.argv else 3
         speed(repeats)

@@ -237,6 +237,46 @@ TEST(GeometrySolid, FromMeshOfClosedCube) {
   for (double v : c) EXPECT_NEAR(v, 0.75, 0.005);
 }
 
+// A closed convex mesh takes the exact signed-distance path: the regular
+// octahedron |x| + |y| + |z| <= 1 (8 faces, volume 4/3) and a cube whose level
+// set is the Box primitive's (the same exact distance); a non-convex L prism
+// (volume 3) still goes through meshToLevelSet.
+TEST(GeometrySolid, FromMeshOfConvexAndNonConvexMeshes) {
+  fabatlas::mesh::TriangleMesh octa;
+  octa.vertices = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+  for (int sx : {0, 1})
+    for (int sy : {2, 3})
+      for (int sz : {4, 5}) octa.triangles.push_back({sx, sy, sz});
+  const fg::Solid o = fg::FromMesh(Spec(0.02), octa);
+  EXPECT_REL_NEAR(o.Volume(), 4.0 / 3.0, 0.01);
+  const fg::Box3 box = o.BoundingBox();
+  for (int k = 0; k < 3; ++k) {
+    EXPECT_NEAR(box.min[k], -1, 0.02);
+    EXPECT_NEAR(box.max[k], 1, 0.02);
+  }
+  fabatlas::mesh::TriangleMesh cube = CubeMesh(2.0);
+  for (auto& v : cube.vertices)
+    for (double& x : v) x -= 1.0;
+  EXPECT_LT(fg::DeltaG(fg::FromMesh(Spec(0.1), cube), fg::Box(Spec(0.1), {2, 2, 2})), 1e-3);
+
+  // L-shaped prism: the unit squares (0..2) x (0..1) and (0..1) x (1..2), 1 high.
+  fabatlas::mesh::TriangleMesh l;
+  const double pts[6][2] = {{0, 0}, {2, 0}, {2, 1}, {1, 1}, {1, 2}, {0, 2}};
+  for (int z = 0; z < 2; ++z)
+    for (const auto& p : pts) l.vertices.push_back({p[0], p[1], static_cast<double>(z)});
+  const int caps[4][3] = {{0, 1, 2}, {0, 2, 3}, {0, 3, 4}, {0, 4, 5}};
+  for (const auto& t : caps) {
+    l.triangles.push_back({t[0], t[2], t[1]});
+    l.triangles.push_back({6 + t[0], 6 + t[1], 6 + t[2]});
+  }
+  for (int i = 0; i < 6; ++i) {
+    const int j = (i + 1) % 6;
+    l.triangles.push_back({i, j, 6 + j});
+    l.triangles.push_back({i, 6 + j, 6 + i});
+  }
+  EXPECT_REL_NEAR(fg::FromMesh(Spec(0.05), l).Volume(), 3.0, 0.01);
+}
+
 TEST(GeometrySolid, ToMeshOfSphereIsClosedAndEnclosesItsVolume) {
   const fg::Solid s = fg::Sphere(Spec(0.05), 1.0);
   const auto m = s.ToMesh();

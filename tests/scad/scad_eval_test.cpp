@@ -106,3 +106,29 @@ TEST(ScadEval, NativeCsgMatchesOpenScadsOwnRenderAndIsCachedPerSubtree) {
 }
 
 }  // namespace
+
+namespace {
+
+// sign.scad (Debian's Parametric example): its text goes through OpenSCAD's
+// 2D outline (SVG export) and is extruded natively, so no subtree is rendered
+// by OpenSCAD, and the volume matches OpenSCAD's own STL within 2%.
+TEST(ScadEval, TextIsExtrudedFromOpenScadsOutline) {
+  const std::filesystem::path scad = "/usr/share/openscad/examples/Parametric/sign.scad";
+  if (!std::filesystem::exists(scad)) GTEST_SKIP() << "openscad examples not installed";
+  auto dir = fabatlas::testing::FreshTempDir("scad-sign");
+  const std::string stl = (dir / "peer.stl").string();
+  ASSERT_EQ(std::system(("openscad --quiet -o " + stl + " " + scad.string() + " 2>/dev/null").c_str()), 0);
+  const double peer = MeshVolume(fabatlas::mesh::ReadMesh(stl));
+  design::Design d = design::ParseDesign(
+      "name: sign\nvoxel_size: 0.6\nparameters: {radius: {type: real, min: 60, max: 200, default: 80}}\n"
+      "tree: {op: openscad, file: " + scad.string() + ", set: {radius: radius}}\nproperties: [volume]\n",
+      dir / "sign.yaml");
+  design::EvaluateOptions options;
+  options.run_checks = false;
+  design::SampleResult r = design::EvaluateSample(d, design::DefaultPoint(d), options);
+  ASSERT_TRUE(r.valid) << r.failure_reason;
+  for (const auto& s : r.subtrees) EXPECT_NE(s.op.rfind("csg-openscad:", 0), 0u) << s.op;
+  EXPECT_NEAR(r.solid.Volume(), peer, 0.02 * peer);
+}
+
+}  // namespace

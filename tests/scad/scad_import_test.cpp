@@ -4,7 +4,9 @@
 // examples, parameter sets as presets.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <fstream>
+#include <numbers>
 
 #include "fabatlas/design/design.h"
 #include "fabatlas/error.h"
@@ -244,6 +246,44 @@ TEST(Import, ExposeAndItsErrors) {
   EXPECT_THROW(fabatlas::scad::ImportScad(dir / "m.scad", o), fabatlas::InputError);
   std::ofstream(dir / "none.scad") << "a = 1;\ncube(a);\n";
   EXPECT_THROW(fabatlas::scad::ImportScad(dir / "none.scad", {}), fabatlas::InputError);
+}
+
+}  // namespace
+
+#include "fabatlas/scad/region_distance.h"
+#include "fabatlas/scad/svg_outline.h"
+
+namespace {
+
+// A 10 mm square with a 4 mm square hole (even-odd): distances by hand.
+TEST(ScadRegionDistance, SquareWithHoleIsExact) {
+  fabatlas::scad::RegionDistance d({{{0, 0}, {10, 0}, {10, 10}, {0, 10}}, {{3, 3}, {7, 3}, {7, 7}, {3, 7}}});
+  EXPECT_NEAR(d(5, 5), 2, 1e-12);       // in the hole: 2 mm from its edges
+  EXPECT_NEAR(d(1.5, 5), -1.5, 1e-12);  // in the wall: 1.5 mm from the outer edge
+  EXPECT_NEAR(d(2.5, 5), -0.5, 1e-12);  // 0.5 mm from the hole
+  EXPECT_NEAR(d(-3, -4), 5, 1e-12);     // from the corner (0, 0)
+  EXPECT_NEAR(d(20, 5), 10, 1e-12);
+  EXPECT_NEAR(d(10, 5), 0, 1e-12);
+  // A 1000-gon circle of radius 10: the distance of points inside and far out.
+  fabatlas::scad::RegionDistance c({fabatlas::scad::CircleLoop(10, 1000)});
+  EXPECT_NEAR(c(0, 0), -10 * std::cos(std::numbers::pi / 1000), 1e-9);
+  EXPECT_NEAR(c(30, 40), 40, 1e-3);
+  EXPECT_NEAR(c(3, 4), -5, 1e-3);
+}
+
+// OpenSCAD 2021.01's SVG export of a 2D shape (y down) read back.
+TEST(ScadSvgOutline, ReadsLoopsWithYUp) {
+  const std::string svg =
+      "<svg><title>OpenSCAD Model</title>\n<path d=\"\nM 0,-0 L 10,-0 L 10,-5 L 0,-5 z\n"
+      "M 1,-1 L 2,-1 L 2,-2\n z\n\" stroke=\"black\"/>\n</svg>\n";
+  auto loops = fabatlas::scad::ReadSvgOutline(svg, "x.svg");
+  ASSERT_EQ(loops.size(), 2u);
+  ASSERT_EQ(loops[0].size(), 4u);
+  EXPECT_EQ(loops[0][2][0], 10);
+  EXPECT_EQ(loops[0][2][1], 5);
+  EXPECT_EQ(loops[1].size(), 3u);
+  EXPECT_TRUE(fabatlas::scad::ReadSvgOutline("<svg></svg>", "e.svg").empty());
+  EXPECT_THROW(fabatlas::scad::ReadSvgOutline("<path d=\"M 0,0 C 1,1 2,2\"/>", "c.svg"), fabatlas::InputError);
 }
 
 }  // namespace

@@ -13,8 +13,11 @@
 #include <chrono>
 #include <cmath>
 #include <fstream>
+#include <functional>
+#include <limits>
 #include <map>
 #include <mutex>
+#include <optional>
 #include <sstream>
 
 #include "fabatlas/error.h"
@@ -22,6 +25,8 @@
 #include "fabatlas/scad/csg_tree.h"
 #include "fabatlas/scad/customizer.h"
 #include "fabatlas/scad/primitive_mesh.h"
+#include "fabatlas/scad/region_distance.h"
+#include "fabatlas/scad/svg_outline.h"
 #include "fabatlas/sha256.h"
 
 namespace fabatlas::design {
@@ -151,7 +156,11 @@ Loop Apply(const Affine2& t, const Loop& l) {
   return out;
 }
 
-Shape2 Evaluate2(const CsgNode& n, const Affine2& t) {
+// OpenSCAD's own outline of a 2D subtree with no native equivalent (text,
+// offset, projection, 2D imports), in the subtree's coordinates.
+using Render2 = std::function<std::vector<Loop>(const CsgNode&)>;
+
+Shape2 Evaluate2(const CsgNode& n, const Affine2& t, const Render2& render2) {
   Shape2 s;
   const std::string& name = n.name;
   if (name == "circle") {
@@ -203,7 +212,7 @@ Shape2 Evaluate2(const CsgNode& n, const Affine2& t) {
     const Affine2 c = {t[0] * m2[0] + t[1] * m2[3], t[0] * m2[1] + t[1] * m2[4], t[0] * m2[2] + t[1] * m2[5] + t[2],
                        t[3] * m2[0] + t[4] * m2[3], t[3] * m2[1] + t[4] * m2[4], t[3] * m2[2] + t[4] * m2[5] + t[5]};
     s.op = Shape2::Op::kUnion;
-    for (const auto& c2 : n.children) s.parts.push_back(Evaluate2(c2, c));
+    for (const auto& c2 : n.children) s.parts.push_back(Evaluate2(c2, c, render2));
     return s;
   }
   if (name == "group" || name == "union" || name == "render" || name == "color") {
@@ -215,16 +224,17 @@ Shape2 Evaluate2(const CsgNode& n, const Affine2& t) {
   } else if (name == "hull") {
     Shape2 all;
     all.op = Shape2::Op::kUnion;
-    for (const auto& c : n.children) all.parts.push_back(Evaluate2(c, t));
+    for (const auto& c : n.children) all.parts.push_back(Evaluate2(c, t, render2));
     std::vector<scad::Point2> points;
     CollectPoints(all, points);
     Loop h = ConvexHull2(points);
     if (h.size() >= 3) s.loops.push_back(h);
     return s;
   } else {
-    throw NoNativeEquivalent{name};
+    for (const Loop& l : render2(n)) s.loops.push_back(Apply(t, l));
+    return s;
   }
-  for (const auto& c : n.children) s.parts.push_back(Evaluate2(c, t));
+  for (const auto& c : n.children) s.parts.push_back(Evaluate2(c, t, render2));
   return s;
 }
 
@@ -242,6 +252,58 @@ double MinX(const Shape2& s) {
     for (const auto& p : l) m = std::min(m, p[0]);
   for (const auto& p : s.parts) m = std::min(m, MinX(p));
   return m;
+}
+
+// The signed distance (a bound: exact per loop set, min/max across the
+// booleans) to a 2D shape; +infinity for nothing.
+using Distance2 = std::function<double(double, double)>;
+
+Distance2 RegionOf(const Shape2& s) {
+  constexpr double kNothing = std::numeric_limits<double>::infinity();
+  if (s.op == Shape2::Op::kLoops) {
+    auto region = std::make_shared<const scad::RegionDistance>(s.loops);
+    if (region->empty()) return [](double, double) { return kNothing; };
+    return [region](double x, double y) { return (*region)(x, y); };
+  }
+  std::vector<Distance2> parts;
+  for (const auto& p : s.parts) parts.push_back(RegionOf(p));
+  if (parts.empty()) return [](double, double) { return kNothing; };
+  const Shape2::Op op = s.op;
+  return [parts = std::move(parts), op](double x, double y) {
+    double d = parts[0](x, y);
+    for (std::size_t i = 1; i < parts.size(); ++i) {
+      const double e = parts[i](x, y);
+      if (op == Shape2::Op::kUnion) d = std::min(d, e);
+      else if (op == Shape2::Op::kDifference) d = std::max(d, -e);
+      else d = std::max(d, e);
+    }
+    return d;
+  };
+}
+
+void Bounds2(const Shape2& s, scad::Point2& lo, scad::Point2& hi) {
+  for (const auto& l : s.loops)
+    for (const auto& p : l)
+      for (int k = 0; k < 2; ++k) {
+        lo[k] = std::min(lo[k], p[k]);
+        hi[k] = std::max(hi[k], p[k]);
+      }
+  for (const auto& p : s.parts) Bounds2(p, lo, hi);
+}
+
+// The scale s of an affine map whose linear part is s times a rotation or
+// reflection (A^T A = s^2 I), else 0: signed distances map exactly through it.
+double SimilarityScale(const Affine& a) {
+  const double c[3][3] = {{a[0], a[1], a[2]}, {a[4], a[5], a[6]}, {a[8], a[9], a[10]}};
+  double g[3][3];
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) g[i][j] = c[0][i] * c[0][j] + c[1][i] * c[1][j] + c[2][i] * c[2][j];
+  const double s2 = (g[0][0] + g[1][1] + g[2][2]) / 3;
+  if (!(s2 > 0)) return 0;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j)
+      if (std::abs(g[i][j] - (i == j ? s2 : 0)) > 1e-9 * s2) return 0;
+  return std::sqrt(s2);
 }
 
 // Hull of 3D points (CGAL) as a closed triangle mesh.
@@ -269,7 +331,7 @@ mesh::TriangleMesh Hull3(const std::vector<std::array<double, 3>>& points) {
 class CsgEvaluation {
  public:
   CsgEvaluation(OpenScadNodeContext& context, const fs::path& model, const fs::path& work)
-      : c_(context), model_(model), work_(work) {}
+      : c_(context), model_(model), work_(work), render2_([this](const CsgNode& n) { return Outline2(n); }) {}
 
   struct Result {
     Solid solid;
@@ -466,7 +528,7 @@ class CsgEvaluation {
     if (n.name == "linear_extrude") {
       Shape2 s;
       s.op = Shape2::Op::kUnion;
-      for (const auto& c : n.children) s.parts.push_back(Evaluate2(c, {1, 0, 0, 0, 1, 0}));
+      for (const auto& c : n.children) s.parts.push_back(Evaluate2(c, {1, 0, 0, 0, 1, 0}, render2_));
       const double h = n.Number("height", 100), twist = n.Number("twist", 0);
       if (h <= 0) return Solid();
       scad::Point2 scale{1, 1};
@@ -482,12 +544,14 @@ class CsgEvaluation {
       if (slices <= 0)
         slices = twist == 0 ? 1 : std::max(1, static_cast<int>(std::ceil(FragmentsOf(n, MaxX(s)) * std::abs(twist) / 360)));
       const bool center = n.Boolean("center", false);
+      if (twist == 0 && scale[0] == 1 && scale[1] == 1)
+        if (std::optional<Solid> prism = Prism(s, h, center, m)) return *prism;
       return Extruded(s, [&](const Loop& l) { return scad::LinearExtrudeMesh(l, h, center, twist, slices, scale); }, m);
     }
     if (n.name == "rotate_extrude") {
       Shape2 s;
       s.op = Shape2::Op::kUnion;
-      for (const auto& c : n.children) s.parts.push_back(Evaluate2(c, {1, 0, 0, 0, 1, 0}));
+      for (const auto& c : n.children) s.parts.push_back(Evaluate2(c, {1, 0, 0, 0, 1, 0}, render2_));
       if (MinX(s) < 0) throw NoNativeEquivalent{"rotate_extrude of points with x < 0"};
       const double angle = std::clamp(n.Number("angle", 360), -360.0, 360.0);
       const int fragments =
@@ -542,9 +606,105 @@ class CsgEvaluation {
     return FromMesh(std::move(mm), m);
   }
 
+  // OpenSCAD's 2D SVG export of a 2D subtree (its canonical text is a
+  // program): a 2D export is cheap next to a 3D render, and the outline is
+  // then extruded natively. Outlines are remembered per canonical text for
+  // the process (a text's glyphs are the same in every sample with that
+  // text). Throws NoNativeEquivalent when OpenSCAD cannot export it.
+  std::vector<Loop> Outline2(const CsgNode& n) {
+    static std::mutex mutex;
+    static std::map<std::string, std::vector<Loop>> outlines;
+    {
+      std::lock_guard<std::mutex> lock(mutex);
+      if (auto it = outlines.find(n.canonical); it != outlines.end()) return it->second;
+    }
+    const fs::path program = work_ / ("outline-" + std::to_string(++rendered_) + ".scad");
+    const fs::path svg = program.string() + ".svg";
+    {
+      std::ofstream out(program);
+      out << n.canonical << "\n";
+    }
+    scad::OpenScadRun run;
+    if (!scad::RunOpenScad(program, svg, {}, &run)) throw NoNativeEquivalent{n.name + " (no 2D outline: " + run.log_tail + ")"};
+    std::string text;
+    {
+      std::ifstream in(svg, std::ios::binary);
+      std::stringstream ss;
+      ss << in.rdbuf();
+      text = ss.str();
+    }
+    std::vector<Loop> loops;
+    try {
+      loops = scad::ReadSvgOutline(text, model_.filename().string() + ": OpenSCAD's outline of " + n.name);
+    } catch (const InputError& e) {
+      throw NoNativeEquivalent{e.what()};
+    }
+    std::lock_guard<std::mutex> lock(mutex);
+    if (outlines.size() >= 1024) outlines.clear();
+    outlines[n.canonical] = loops;
+    return loops;
+  }
+
+  // A straight linear_extrude (no twist, no scale) under a similarity: the
+  // prism's signed distance from the outline's (exact per loop set), sampled
+  // in the band. Empty when the map is not a similarity (then meshes).
+  std::optional<Solid> Prism(const Shape2& s, double h, bool center, const Affine& m) {
+    const double scale = SimilarityScale(m);
+    if (scale <= 0) return std::nullopt;
+    scad::Point2 lo{std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity()};
+    scad::Point2 hi{-lo[0], -lo[1]};
+    Bounds2(s, lo, hi);
+    if (!(lo[0] <= hi[0] && lo[1] <= hi[1])) return Solid();
+    const double z0 = center ? -h / 2 : 0, zc = z0 + h / 2;
+    Distance2 region = RegionOf(s);
+    geometry::Box3 box{{std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity(),
+                        std::numeric_limits<double>::infinity()},
+                       {-std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity(),
+                        -std::numeric_limits<double>::infinity()}};
+    for (int k = 0; k < 8; ++k) {
+      const double x = k & 1 ? hi[0] : lo[0], y = k & 2 ? hi[1] : lo[1], z = k & 4 ? z0 + h : z0;
+      const double w[3] = {m[0] * x + m[1] * y + m[2] * z + m[3], m[4] * x + m[5] * y + m[6] * z + m[7],
+                           m[8] * x + m[9] * y + m[10] * z + m[11]};
+      for (int a = 0; a < 3; ++a) {
+        box.min[a] = std::min(box.min[a], w[a]);
+        box.max[a] = std::max(box.max[a], w[a]);
+      }
+    }
+    const double inv = 1 / (scale * scale);
+    const double band = c_.grid.half_width_voxels * c_.grid.voxel_size / scale;  // local mm
+    auto shared = std::make_shared<const Distance2>(std::move(region));
+    auto distance = [m, inv, scale, zc, h, band, shared](double x, double y, double z) {
+      const double px = x - m[3], py = y - m[7], pz = z - m[11];  // local = A^T (p - t) / s^2
+      const double qx = (m[0] * px + m[4] * py + m[8] * pz) * inv;
+      const double qy = (m[1] * px + m[5] * py + m[9] * pz) * inv;
+      const double qz = (m[2] * px + m[6] * py + m[10] * pz) * inv;
+      const double b = std::abs(qz - zc) - h / 2;
+      if (b >= band) return scale * b;  // beyond the band above or below: a lower bound
+      // The sampler visits a leaf's voxels z fastest: for a prism standing
+      // along z the outline's distance repeats, so the last one is kept.
+      thread_local const void* last_region = nullptr;
+      thread_local double last_x = 0, last_y = 0, last_a = 0;
+      if (last_region != shared.get() || last_x != qx || last_y != qy) {
+        last_region = shared.get();
+        last_x = qx;
+        last_y = qy;
+        last_a = (*shared)(qx, qy);
+      }
+      const double a = last_a;
+      const double oa = std::max(a, 0.0), ob = std::max(b, 0.0);
+      return scale * (std::sqrt(oa * oa + ob * ob) + std::min(std::max(a, b), 0.0));
+    };
+    try {
+      return geometry::FromDistance(c_.grid, box, distance, "linear_extrude");
+    } catch (const InputError& e) {
+      throw SampleFailure(kNoGeometry, model_.filename().string() + ": linear_extrude: " + e.what());
+    }
+  }
+
   OpenScadNodeContext& c_;
   fs::path model_, work_;
   int rendered_ = 0;
+  Render2 render2_;
 };
 
 // A temporary directory removed when it goes out of scope.

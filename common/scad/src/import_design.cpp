@@ -77,11 +77,19 @@ Exposure ExposureOf(const CustomizerParameter& p) {
   return e;
 }
 
+// The min_thickness check's value: a wall of two 0.4 mm FDM extrusion lines.
+constexpr double kMinThickness = 0.8;
+
 double VoxelFor(const ImportOptions& o) {
   if (o.voxel_size > 0) return o.voxel_size;
   if (o.model_size <= 0) return 0.5;
-  double v = std::round(o.model_size / 200 / 0.05) * 0.05;
-  return std::clamp(v, 0.1, 1.0);
+  // About 150 voxels along the largest edge, in steps of 0.05 mm, within
+  // [5/8, 3/4] of the thinnest printable wall: coarser, a wall at that limit
+  // no longer spans more than a voxel and the shape-diameter check calls the
+  // sign's letters thin; finer, marching cubes' small faces along sharp edges
+  // make a plain 12 mm cube fail it (docs/openscad.md, "Voxel size").
+  const double v = std::clamp(o.model_size / 150, 0.625 * kMinThickness, 0.75 * kMinThickness);
+  return std::round(v * 20) / 20;
 }
 
 }  // namespace
@@ -137,7 +145,11 @@ ImportSummary ImportScad(const std::filesystem::path& model, const ImportOptions
     y << "\n";
   }
   y << "name: " << Yaml(stem) << "\n";
-  y << "voxel_size: " << FormatScadNumber(VoxelFor(options)) << "\n";
+  y << "voxel_size: " << FormatScadNumber(VoxelFor(options));
+  if (options.voxel_size <= 0 && options.model_size > 0)
+    y << "  # the model's largest edge at its defaults, " << FormatScadNumber(std::round(options.model_size * 10) / 10)
+      << " mm, / 150, within [5/8, 3/4] of min_thickness";
+  y << "\n";
   y << "parameters:\n";
   for (const auto& e : exposures) {
     const CustomizerParameter& p = *e.p;
@@ -177,7 +189,7 @@ ImportSummary ImportScad(const std::filesystem::path& model, const ImportOptions
   }
   // Checks: the mesh OpenSCAD produces (polyhedra, subtrees it renders) must
   // be watertight; a wall of two 0.4 mm FDM extrusion lines; stands.
-  y << "checks:\n  - watertight\n  - {type: min_thickness, value: 0.8}\n  - stands\n";
+  y << "checks:\n  - watertight\n  - {type: min_thickness, value: " << FormatScadNumber(kMinThickness) << "}\n  - stands\n";
   y << "properties: [volume, bbox]\n";
 
   // OpenSCAD's parameter sets beside the model become presets.

@@ -18,6 +18,7 @@
 
 #include <array>
 #include <cstddef>
+#include <functional>
 #include <memory>
 #include <string>
 #include <string_view>
@@ -96,11 +97,21 @@ Solid Extrude(const GridSpec& g, const std::vector<Vec2>& polygon, double height
 // has a regular n-gon cross-section (profile r is the circumradius), as the
 // chess pieces and vase of Fab Forms.
 Solid Revolve(const GridSpec& g, const std::vector<Vec2>& profile, int sides);
-// Level set of a closed triangle mesh (OpenVDB meshToLevelSet; orientation
-// does not matter). Open meshes are signed by OpenVDB's flood fill, which may
-// leak; throws InputError if no interior results, or on bad indices/NaNs.
+// Level set of a closed triangle mesh (orientation does not matter): exact
+// signed distance sampled in the band when the mesh is closed and convex (up
+// to 20,000 triangles), else OpenVDB meshToLevelSet. Open meshes are signed
+// by OpenVDB's flood fill, which may leak; throws InputError if no interior results, or on bad indices/NaNs.
 // (Winding-number signing of open meshes is not implemented yet.)
 Solid FromMesh(const GridSpec& g, const mesh::TriangleMesh& m);
+
+// Level set of a signed distance function f(x, y, z) (mm, negative inside)
+// whose interior lies within `bounds`. f must be exact within the narrow band
+// and never exceed the true distance in magnitude elsewhere (a bound, as CSG
+// min/max of exact distances is): blocks of voxels whose centre value rules
+// out the band are skipped, so the cost grows with the surface area. f is
+// called concurrently from TBB tasks. `what` names the shape in errors.
+using DistanceFunction = std::function<double(double x, double y, double z)>;
+Solid FromDistance(const GridSpec& g, const Box3& bounds, const DistanceFunction& f, const char* what);
 
 // ---- Transforms (rotations in degrees, applied as R = Rz*Ry*Rx) ------------
 Solid Translate(const Solid& s, const Vec3& t);

@@ -19,7 +19,8 @@ struct ImportOptions {
   // Empty: the model's file name (design written beside the model).
   std::string model_reference;
   // Level-set voxel size, mm (> 0). 0: from the model's size at its defaults,
-  // `largest bounding-box edge / 200` rounded to 0.05 mm, within [0.1, 1].
+  // `largest bounding-box edge / 150` within [0.5, 0.6] (5/8 and 3/4 of the
+  // min_thickness check's 0.8 mm), rounded to 0.05 mm; 0.5 when unknown.
   double voxel_size = 0;
   // Largest bounding-box edge of the model at its defaults (mm), used when
   // voxel_size is 0; 0 = unknown (voxel 0.5 mm).
