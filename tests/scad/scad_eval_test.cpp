@@ -7,6 +7,7 @@
 #include <fstream>
 #include <numbers>
 
+#include "fabatlas/design/data_files.h"
 #include "fabatlas/design/evaluate_sample.h"
 #include "fabatlas/mesh/read_mesh.h"
 #include "fabatlas/scad/import_design.h"
@@ -129,6 +130,38 @@ TEST(ScadEval, TextIsExtrudedFromOpenScadsOutline) {
   ASSERT_TRUE(r.valid) << r.failure_reason;
   for (const auto& s : r.subtrees) EXPECT_NE(s.op.rfind("csg-openscad:", 0), 0u) << s.op;
   EXPECT_NEAR(r.solid.Volume(), peer, 0.02 * peer);
+}
+
+}  // namespace
+
+namespace {
+
+// include <> beside the model, use <> found through OPENSCADPATH: the model
+// evaluates natively in place, and an on-the-fly job (WriteImportedJob)
+// carries both files, so its copy evaluates the same with OPENSCADPATH unset.
+// A 10 x 10 x 2 plate and a 4-fragment "cylinder" of radius 2 and height 5
+// (a square of diagonal 4: 8 mm^2): 240 mm^3.
+TEST(ScadEval, IncludesAndUsesTravelWithTheModel) {
+  auto dir = fabatlas::testing::FreshTempDir("scad-include");
+  std::filesystem::create_directories(dir / "model/parts");
+  std::filesystem::create_directories(dir / "lib");
+  std::ofstream(dir / "model/m.scad") << "w = 10; // [5:20]\ninclude <parts/base.scad>\nuse <peg.scad> // a library\n"
+                                         "/* use <nothere.scad> */\nbase(w);\npeg();\n";
+  std::ofstream(dir / "model/parts/base.scad") << "module base(w) cube([w, 10, 2]);\n";
+  std::ofstream(dir / "lib/peg.scad") << "module peg() translate([0, 0, 2]) cylinder(r = 2, h = 5, $fn = 4);\n";
+  ::setenv("OPENSCADPATH", (dir / "lib").c_str(), 1);
+  design::Design in_place = Imported(dir / "model/m.scad");
+  EXPECT_NEAR(Volume(in_place, "w=10"), 240, 0.02 * 240);
+
+  const auto job = fabatlas::scad::WriteImportedJob(dir / "model/m.scad", dir / "job", {});
+  EXPECT_TRUE(std::filesystem::exists(dir / "job/parts/base.scad"));
+  EXPECT_TRUE(std::filesystem::exists(dir / "job/peg.scad"));
+  std::vector<std::string> carried;
+  for (const auto& f : design::IndirectDataFiles(in_place.tree, dir / "model")) carried.push_back(f.relative.string());
+  EXPECT_EQ(carried, (std::vector<std::string>{"parts/base.scad", "peg.scad"}));
+  ::unsetenv("OPENSCADPATH");
+  design::Design copy = design::LoadDesign((dir / "job/m.yaml").string());
+  EXPECT_NEAR(Volume(copy, "w=10"), 240, 0.02 * 240);
 }
 
 }  // namespace

@@ -7,6 +7,7 @@
 #include "assembly_node.h"
 #include "fabatlas/assembly/part_library.h"
 #include "fabatlas/assembly/program.h"
+#include "fabatlas/scad/model_files.h"
 
 namespace fabatlas::design {
 
@@ -14,6 +15,18 @@ namespace fs = std::filesystem;
 
 std::vector<DataFile> IndirectDataFiles(const Node& node, const fs::path& design_dir) {
   std::vector<DataFile> out;
+  if (node.op == "openscad") {
+    // What the model includes, uses and imports, beside the model.
+    auto it = node.args.find("file");
+    if (it == node.args.end()) return out;
+    const fs::path model = design_dir / it->second.text;
+    std::error_code ec;
+    if (!fs::is_regular_file(model, ec)) return out;
+    const fs::path model_dir = fs::path(it->second.text).parent_path();
+    for (const scad::ModelFile& f : scad::ModelFiles(model))
+      out.push_back({(model_dir / f.relative).lexically_normal(), f.source});
+    return out;
+  }
   if (node.op != "assembly") return out;
   auto text = [&](const char* name) {
     auto it = node.args.find(name);

@@ -1,5 +1,6 @@
 // An OpenSCAD Customizer model as a fabatlas design (fabatlas/scad/import_design.h).
 #include "fabatlas/scad/import_design.h"
+#include "fabatlas/scad/model_files.h"
 
 #include <nlohmann/json.hpp>
 
@@ -290,6 +291,15 @@ std::filesystem::path WriteImportedJob(const std::filesystem::path& model, const
   json.replace_extension(".json");
   if (fs::is_regular_file(json, ec) && (!fs::exists(dir / (stem + ".json")) || !fs::equivalent(json, dir / (stem + ".json"))))
     write(dir / (stem + ".json"), ReadText(json));
+  // What the model includes, uses and imports, where OpenSCAD finds it from
+  // the copy (model_files.h).
+  for (const ModelFile& f : ModelFiles(model)) {
+    const fs::path to = dir / f.relative;
+    if (fs::exists(to, ec) && fs::equivalent(f.source, to, ec)) continue;
+    fs::create_directories(to.parent_path(), ec);
+    if (!fs::copy_file(f.source, to, fs::copy_options::overwrite_existing, ec))
+      throw InputError(to.string() + ": cannot copy " + f.source.string() + ": " + ec.message());
+  }
   write(dir / (stem + ".yaml"), s.design_yaml);
   write(dir / (stem + ".job.yaml"), s.job_yaml);
   if (summary) *summary = s;

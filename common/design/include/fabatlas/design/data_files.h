@@ -22,8 +22,9 @@ struct DataFile {
 // For an `assembly` node: the part library a program names (when `file` is
 // a program), and every part mesh of the library at `<meshes>/<name>`, where
 // <meshes> is the node's `meshes:` directory or else `assembly_meshes`, read
-// from where the node reads its meshes here (docs/design-format.md). Other
-// operations need none. Throws InputError when a program or library file
+// from where the node reads its meshes here (docs/design-format.md). For an
+// `openscad` node: the files its model includes, uses and imports
+// (scad/model_files.h), beside the model. Other operations need none. Throws InputError when a program or library file
 // does not parse.
 std::vector<DataFile> IndirectDataFiles(const Node& node, const std::filesystem::path& design_dir);
 

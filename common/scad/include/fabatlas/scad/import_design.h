@@ -51,8 +51,9 @@ namespace fabatlas::scad {
 // A model imported on the fly as a job: writes into `dir` (created) a copy of
 // the model (and of MODEL.json when present) as STEM.scad, the design
 // STEM.yaml naming it and the job STEM.job.yaml naming the design, so the
-// job travels as a bundle like any other. Models that `include` or `use`
-// other files by relative path need import-scad beside them instead.
+// job travels as a bundle like any other. The files the model includes,
+// uses and imports (model_files.h) are copied beside it at the relative paths
+// OpenSCAD finds them by.
 // Returns the job file's path; warnings go to `summary` when given.
 std::filesystem::path WriteImportedJob(const std::filesystem::path& model, const std::filesystem::path& dir,
                                        ImportOptions options, ImportSummary* summary = nullptr);
