@@ -287,3 +287,25 @@ TEST(ScadSvgOutline, ReadsLoopsWithYUp) {
 }
 
 }  // namespace
+
+#include "fabatlas/scad/csg_tree.h"
+
+namespace {
+
+// The .csg export keeps background ('%') nodes; OpenSCAD does not render
+// them, so the tree drops them (Debian's offset.scad draws a % cylinder and
+// sphere around its model).
+TEST(ScadCsgTree, BackgroundNodesAreDropped) {
+  auto root = fabatlas::scad::ParseCsg(
+      "%cube(size = [1, 1, 1], center = false);\ncube(size = [2, 2, 2], center = false);\n"
+      "union() {\n\t%sphere(r = 1);\n\tcylinder(h = 1, r1 = 1, r2 = 1, center = false);\n}\n",
+      "m.csg");
+  ASSERT_EQ(root.children.size(), 2u);
+  EXPECT_EQ(root.children[0].name, "cube");
+  ASSERT_EQ(root.children[0].args.at("size").items.size(), 3u);
+  EXPECT_EQ(root.children[0].args.at("size").items[0].number, 2);  // not the % cube
+  ASSERT_EQ(root.children[1].children.size(), 1u);
+  EXPECT_EQ(root.children[1].children[0].name, "cylinder");
+}
+
+}  // namespace

@@ -24,6 +24,7 @@
 #include "fabatlas/mesh/read_mesh.h"
 #include "fabatlas/scad/csg_tree.h"
 #include "fabatlas/scad/customizer.h"
+#include "fabatlas/scad/model_files.h"
 #include "fabatlas/scad/primitive_mesh.h"
 #include "fabatlas/scad/region_distance.h"
 #include "fabatlas/scad/svg_outline.h"
@@ -585,6 +586,7 @@ class CsgEvaluation {
 
   // OpenSCAD renders this subtree alone (its canonical text is a program).
   Solid Rendered(const CsgNode& n, const Affine& m, const std::string& why) {
+    LinkModelFiles();
     const fs::path program = work_ / ("subtree-" + std::to_string(++rendered_) + ".scad");
     const fs::path stl = program.string() + ".stl";
     {
@@ -618,6 +620,7 @@ class CsgEvaluation {
       std::lock_guard<std::mutex> lock(mutex);
       if (auto it = outlines.find(n.canonical); it != outlines.end()) return it->second;
     }
+    LinkModelFiles();
     const fs::path program = work_ / ("outline-" + std::to_string(++rendered_) + ".scad");
     const fs::path svg = program.string() + ".svg";
     {
@@ -701,9 +704,23 @@ class CsgEvaluation {
     }
   }
 
+  // A subtree's program runs in the work directory, where the files the
+  // model imports by relative name (`import("x.dxf")`) must be found too:
+  // they are linked there once (model_files.h).
+  void LinkModelFiles() {
+    if (linked_) return;
+    linked_ = true;
+    std::error_code ec;
+    for (const scad::ModelFile& f : scad::ModelFiles(model_)) {
+      fs::create_directories((work_ / f.relative).parent_path(), ec);
+      fs::create_symlink(fs::absolute(f.source), work_ / f.relative, ec);
+    }
+  }
+
   OpenScadNodeContext& c_;
   fs::path model_, work_;
   int rendered_ = 0;
+  bool linked_ = false;
   Render2 render2_;
 };
 

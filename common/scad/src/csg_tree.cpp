@@ -29,7 +29,8 @@ class Parser {
     root.name = "group";
     Skip();
     while (i_ < s_.size()) {
-      root.children.push_back(Node());
+      CsgNode node = Node();
+      if (!dropped_) root.children.push_back(std::move(node));
       Skip();
     }
     Finish(root);
@@ -138,9 +139,15 @@ class Parser {
     Skip();
     CsgNode n;
     n.line = line_;
-    // Modifiers (! # % *) may prefix a node; '%' and '*' drop it from the
-    // rendered geometry, which the .csg export already did.
-    while (i_ < s_.size() && std::strchr("!#%*", s_[i_])) ++i_;
+    // Modifiers (! # % *) may prefix a node; the .csg export keeps '%'
+    // (background) nodes, which OpenSCAD does not render: the parent drops
+    // them (dropped_).
+    dropped_ = false;
+    while (i_ < s_.size() && std::strchr("!#%*", s_[i_])) {
+      if (s_[i_] == '%' || s_[i_] == '*') dropped_ = true;
+      ++i_;
+    }
+    const bool dropped = dropped_;
     n.name = Ident();
     Expect('(');
     if (!Eat(')')) {
@@ -163,15 +170,21 @@ class Parser {
       } while (Eat(','));
       Expect(')');
     }
-    if (Eat(';')) return n;
+    if (Eat(';')) {
+      dropped_ = dropped;
+      return n;
+    }
     Expect('{');
     while (!Eat('}')) {
       if (i_ >= s_.size()) Fail("missing '}' of " + n.name);
-      n.children.push_back(Node());
+      CsgNode child = Node();
+      if (!dropped_) n.children.push_back(std::move(child));
     }
+    dropped_ = dropped;
     return n;
   }
 
+  bool dropped_ = false;  // the node just parsed had a '%' or '*' modifier
   const std::string& s_;
   std::string file_;
   std::size_t i_ = 0;
