@@ -159,9 +159,12 @@ class Problem {
   const std::vector<int>& diagonal_slots() const { return diag_; }
 
   // Strain energy sum_e int Psi dV (mJ); +inf if any Gauss point has J <= 0.
+  // Summed in a fixed order (deterministic reduce: the same split and join
+  // tree whatever the thread count or scheduling), so a sample's FEM measures
+  // are the same bits in process and on any worker.
   double StrainEnergy(const Eigen::VectorXd& u, const Eigen::VectorXd& alpha) const {
     const std::size_t ne = mesh_.elements.size();
-    return tbb::parallel_reduce(
+    return tbb::parallel_deterministic_reduce(
         tbb::blocked_range<std::size_t>(0, ne, 256), 0.0,
         [&](const tbb::blocked_range<std::size_t>& r, double acc) {
           for (std::size_t e = r.begin(); e < r.end(); ++e) {
