@@ -138,7 +138,7 @@ def coverage(timeout):
             print(f"| {rel} | {imported} | {why} | | | |", flush=True)
             continue
         size = max(bbox(ref))
-        voxel = min(1.0, max(0.1, round(size / 150 / 0.05) * 0.05))
+        voxel = round(min(1.0, max(0.1, round(size / 150 / 0.05) * 0.05)), 2)
         design = os.path.join(tmp, "d.yaml")
         with open(design, "w") as f:
             f.write(f"name: coverage\nvoxel_size: {voxel}\nparameters: {{unused: {{type: real, min: 0, max: 1}}}}\n"
