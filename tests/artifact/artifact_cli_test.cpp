@@ -19,7 +19,9 @@
 #include "fabatlas/storage/artifact.h"
 #include "fabatlas/storage/job_store.h"
 #include "fabatlas/storage/glb.h"
+#include "fabatlas/testing/command_run.h"
 #include "fabatlas/testing/paths.h"
+#include "fabatlas/testing/small_filesystem.h"
 #include "fabatlas/viewer/customiser.h"
 
 namespace {
@@ -29,28 +31,8 @@ using fabatlas::testing::BinDir;
 using fabatlas::testing::FreshTempDir;
 using fabatlas::testing::SourceDir;
 
-struct CommandRun {
-  int status = -1;
-  std::string out, err;
-};
-
-CommandRun Fabatlas(const std::string& args) {
-  static int counter = 0;
-  const fs::path err_path = fs::temp_directory_path() /
-                            ("fabatlas-artifact-err-" + std::to_string(::getpid()) + "-" + std::to_string(counter++));
-  const std::string cmd = (BinDir() / "fabatlas").string() + " " + args + " 2>" + err_path.string();
-  CommandRun r;
-  FILE* pipe = ::popen(cmd.c_str(), "r");
-  std::array<char, 4096> buf;
-  std::size_t n;
-  while ((n = std::fread(buf.data(), 1, buf.size(), pipe)) > 0) r.out.append(buf.data(), n);
-  const int status = ::pclose(pipe);
-  r.status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  std::ifstream e(err_path);
-  r.err.assign(std::istreambuf_iterator<char>(e), {});
-  fs::remove(err_path);
-  return r;
-}
+using fabatlas::testing::CommandRun;
+using fabatlas::testing::Fabatlas;
 
 std::string Bytes(const fs::path& p) {
   std::ifstream in(p, std::ios::binary);
@@ -76,6 +58,34 @@ void ExpectTubeForm(const fabatlas::sampling::Form& form) {
     ++checked;
   }
   EXPECT_GT(checked, 20);
+}
+
+// `fabatlas sample` onto a full disk (a filled 1 MiB tmpfs): one line naming
+// the file it could not write and the full disk, exit status 2, and nothing
+// half-written in the output directory; once space is back the same command
+// publishes the artifact a run on an ordinary disk publishes, byte for byte.
+TEST(ArtifactCli, SampleOntoAFullDiskFailsCleanlyAndSucceedsOnceSpaceIsBack) {
+  if (!fabatlas::testing::SmallFileSystem::Possible()) GTEST_SKIP() << "mounting a small tmpfs needs root";
+  const fs::path dir = FreshTempDir("artifact-full");
+  fabatlas::testing::SmallFileSystem disk(dir / "mnt", 1);
+  ASSERT_TRUE(disk.mounted()) << disk.error();
+  disk.Fill();
+  const fs::path out = disk.dir() / "out";
+  CommandRun full = Fabatlas("sample " + Job().string() + " --out " + out.string());
+  EXPECT_EQ(full.status, 2) << full.out << full.err;
+  EXPECT_EQ(std::count(full.err.begin(), full.err.end(), '\n'), 1) << full.err;
+  EXPECT_NE(full.err.find(": " + out.string() + "/"), std::string::npos) << full.err;
+  EXPECT_NE(full.err.find("disk full"), std::string::npos) << full.err;
+  if (fs::exists(out))
+    for (const auto& entry : fs::recursive_directory_iterator(out))
+      ADD_FAILURE() << "left behind on the full disk: " << entry.path();
+  disk.Free();
+  CommandRun again = Fabatlas("sample " + Job().string() + " --out " + out.string());
+  ASSERT_EQ(again.status, 0) << again.err;
+  CommandRun local = Fabatlas("sample " + Job().string() + " --out " + (dir / "local").string());
+  ASSERT_EQ(local.status, 0) << local.err;
+  EXPECT_TRUE(Bytes(out / "tube_wall_2d.fabatlas") == Bytes(dir / "local/tube_wall_2d.fabatlas"));
+  EXPECT_EQ(Bytes(out / "form.json"), Bytes(dir / "local/form.json"));
 }
 
 TEST(ArtifactCli, RunPublishesTheSameBytesForOneAndTwoWorkersAndInProcess) {

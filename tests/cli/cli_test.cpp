@@ -1,37 +1,21 @@
 // The fabatlas command line as a user runs it: exit codes, one-line errors,
 // JSON output.
 #include <gtest/gtest.h>
-#include <sys/wait.h>
 
+#include <algorithm>
 #include <array>
-#include <cstdio>
+#include <cstdint>
+#include <cstring>
 #include <fstream>
 #include <nlohmann/json.hpp>
 
 #include "../design/design_files.h"
+#include "fabatlas/testing/command_run.h"
 
 namespace {
 
-struct CommandRun {
-  int status = -1;
-  std::string out, err;
-};
-
-CommandRun Fabatlas(const std::string& args) {
-  std::string bin = (fabatlas::testing::BinDir() / "fabatlas").string();
-  auto err_path = std::filesystem::temp_directory_path() / ("fabatlas-cli-err-" + std::to_string(::getpid()));
-  std::string cmd = bin + " " + args + " 2>" + err_path.string();
-  CommandRun r;
-  FILE* pipe = ::popen(cmd.c_str(), "r");
-  std::array<char, 4096> buf;
-  std::size_t n;
-  while ((n = std::fread(buf.data(), 1, buf.size(), pipe)) > 0) r.out.append(buf.data(), n);
-  int status = ::pclose(pipe);
-  r.status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  std::ifstream e(err_path);
-  r.err.assign(std::istreambuf_iterator<char>(e), {});
-  return r;
-}
+using fabatlas::testing::CommandRun;
+using fabatlas::testing::Fabatlas;
 
 std::string Examples() { return (fabatlas::testing::SourceDir() / "configs/designs").string(); }
 
@@ -114,4 +98,112 @@ TEST(Cli, MissingDesignAndBadMesh) {
   EXPECT_EQ(r.status, 2) << r.out;
   EXPECT_EQ(Lines(r.err), 1) << r.err;
   EXPECT_NE(r.err.find("broken.stl"), std::string::npos) << r.err;
+}
+
+namespace {
+
+// A flap hinged on the plate's top-front edge (x axis through y = 10, z = 0),
+// turned 90 degrees, must lie flush with a wall whose front face is at
+// y = 5 - gap: the rotation (dy, dz) -> (-dz, dy) puts the flap's top face
+// on the plane y = 10 - height, so the solved height is exactly gap + 5
+// (Koo et al. Sec. 5, a flush relationship), and only the top moves from its
+// 30 mm, so the deviation is |gap + 5 - 30|.
+constexpr const char* kFlap = R"(name: flap
+parameters: {gap: 30}
+fabrication: {voxel: 1.0, gap: 2.0}
+parts:
+  plate: {box: [0, 10, 0, 10, 0, 10], hold: [x0, x1, y0, y1, z0, z1]}
+  wall:  {box: [0, 10, "-gap", "5 - gap", 0, 10], hold: [x0, x1, y0, y1, z0, z1]}
+  flap:  {box: [0, 10, 10, 16, 0, 30], hold: [y0, y1]}
+joints:
+  h: {type: hinge, child: flap, parent: plate, axis: x, at: [[flap.y0, plate.y1], [flap.z0, plate.z0]]}
+configurations:
+  down: {h: 90}
+relationships:
+  - {type: flush, name: flap against the wall, in: down, faces: [flap.z1, wall.y1]}
+)";
+
+// Vertices of a binary STL: their bounding box (min x y z, max x y z).
+std::array<double, 6> StlBounds(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::string bytes((std::istreambuf_iterator<char>(in)), {});
+  std::array<double, 6> b = {1e300, 1e300, 1e300, -1e300, -1e300, -1e300};
+  if (bytes.size() < 84) return b;
+  std::uint32_t n = 0;
+  std::memcpy(&n, bytes.data() + 80, 4);
+  if (bytes.size() < 84 + std::size_t{n} * 50) return b;
+  for (std::uint32_t t = 0; t < n; ++t)
+    for (int v = 0; v < 3; ++v)
+      for (int k = 0; k < 3; ++k) {
+        float x = 0;
+        std::memcpy(&x, bytes.data() + 84 + t * 50 + 12 + v * 12 + k * 4, 4);
+        b[k] = std::min(b[k], double{x});
+        b[k + 3] = std::max(b[k + 3], double{x});
+      }
+  return b;
+}
+
+}  // namespace
+
+// `fabatlas prototype` as a user runs it: the solved flap height against
+// the analytic one, also after --set; the printable geometry as a closed
+// mesh spanning the solved parts; a conflict named with exit status 3; bad
+// overrides as one line with exit status 2.
+TEST(Cli, PrototypeSolvesFabricatesAndNamesConflicts) {
+  const auto file = fabatlas::testing::TempDesign(kFlap, "flap.yaml");
+  CommandRun r = Fabatlas("prototype " + file.string() + " --json");
+  ASSERT_EQ(r.status, 0) << r.err;
+  auto j = nlohmann::json::parse(r.out);
+  EXPECT_TRUE(j["satisfiable"].get<bool>());
+  auto flap = j["cuboids"]["flap"].get<std::vector<double>>();
+  ASSERT_EQ(flap.size(), 6u);
+  EXPECT_NEAR(flap[5] - flap[4], 35.0, 1e-4);
+  EXPECT_NEAR(flap[4], 0.0, 1e-4);
+  EXPECT_NEAR(j["deviation_mm"].get<double>(), 5.0, 1e-4);
+
+  r = Fabatlas("prototype " + file.string() + " --set gap=40 --json");
+  ASSERT_EQ(r.status, 0) << r.err;
+  j = nlohmann::json::parse(r.out);
+  flap = j["cuboids"]["flap"].get<std::vector<double>>();
+  EXPECT_NEAR(flap[5] - flap[4], 45.0, 1e-4);
+  EXPECT_NEAR(j["deviation_mm"].get<double>(), 15.0, 1e-4);
+
+  // The printable geometry in the base configuration (docs/prototype.md,
+  // Koo et al. Sec. 7): every part's box shrinks by gap/2 = 1 mm on every
+  // face, so the flap's top is at 35 - 1 = 34 and the wall's back at
+  // -30 + 1 = -29 (the hinge's pin and yokes sit around z = 0, y = 10), to
+  // within a voxel (1 mm); three pieces: the plate with its yokes, the flap
+  // with its pin, the wall (the hinge's clearance keeps them apart).
+  const auto stl = file.parent_path() / "flap.stl";
+  r = Fabatlas("prototype " + file.string() + " --stl " + stl.string() + " --json");
+  ASSERT_EQ(r.status, 0) << r.err;
+  j = nlohmann::json::parse(r.out);
+  EXPECT_TRUE(j["mesh"]["closed"].get<bool>()) << j["mesh"].dump();
+  EXPECT_TRUE(j["mesh"]["manifold"].get<bool>()) << j["mesh"].dump();
+  EXPECT_FALSE(j["mesh"]["self_intersecting"].get<bool>()) << j["mesh"].dump();
+  EXPECT_EQ(j["mesh"]["components"], 3) << j["mesh"].dump();
+  const auto b = StlBounds(stl);
+  EXPECT_NEAR(b[5], 34.0, 1.0) << "the flap's top";
+  EXPECT_NEAR(b[1], -29.0, 1.0) << "the wall's back";
+
+  // A door that must cover a 100 mm opening but be at most 80 mm wide.
+  const auto conflict = fabatlas::testing::TempDesign(R"(name: door
+parts:
+  body: {box: [0, 120, 0, 50, 0, 50], hold: [x0, x1, y0, y1, z0, z1],
+         cavities: {opening: {box: [10, 110, 0, 40, 5, 45], open: y0}}}
+  door: {box: [10, 110, -3, 0, 5, 45]}
+relationships:
+  - {type: cover, name: door covers the opening, covering: [door.y1], covered: [body.opening.y0]}
+  - {type: geometric, name: narrow door, expression: "door.w <= 80"}
+  - {type: geometric, name: wide opening, expression: "body.opening.w >= 100"}
+)", "door.yaml");
+  r = Fabatlas("prototype " + conflict.string());
+  EXPECT_EQ(r.status, 3) << r.err;
+  for (const char* name : {"door covers the opening", "narrow door", "wide opening"})
+    EXPECT_NE(r.out.find(name), std::string::npos) << name << "\n" << r.out;
+
+  r = Fabatlas("prototype " + file.string() + " --set gap=wide");
+  EXPECT_EQ(r.status, 2);
+  EXPECT_EQ(Lines(r.err), 1) << r.err;
+  EXPECT_NE(r.err.find("gap=wide"), std::string::npos) << r.err;
 }

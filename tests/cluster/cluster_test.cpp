@@ -48,23 +48,6 @@ using namespace fabatlas::cluster_test;
 
 namespace {
 
-// A TCP port nothing listens on now (bound to 0, read back, released).
-int FreePort() {
-  int fd = ::socket(AF_INET, SOCK_STREAM, 0);
-  sockaddr_in addr{};
-  addr.sin_family = AF_INET;
-  addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  addr.sin_port = 0;
-  socklen_t len = sizeof addr;
-  if (::bind(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr) != 0 ||
-      ::getsockname(fd, reinterpret_cast<sockaddr*>(&addr), &len) != 0) {
-    ::close(fd);
-    return 0;
-  }
-  ::close(fd);
-  return ntohs(addr.sin_port);
-}
-
 fs::path JobPath() { return SourceDir() / "tests/cluster/data/tube_small.yaml"; }
 
 // The form of the job computed in this process on a thread pool.

@@ -13,6 +13,7 @@
 #include "fabatlas/sha256.h"
 #include "fabatlas/storage/blob_store.h"
 #include "fabatlas/storage/job_store.h"
+#include "fabatlas/testing/small_filesystem.h"
 
 namespace fs = std::filesystem;
 using namespace fabatlas::storage;
@@ -472,4 +473,39 @@ TEST(ClusterStorage, ReferencedBlobsAndCollection) {
   // Touch makes an old blob new again.
   EXPECT_TRUE(blobs.Touch(bundle));
   EXPECT_FALSE(blobs.Touch(stray));
+}
+
+// A full disk under the blob store (a 2 MiB tmpfs, filled): a Put fails with
+// one line naming the file and the reason, the blob is not in the store
+// (not listed, not readable), the blobs stored before still verify, and
+// once space is back the same Put succeeds and verifies.
+TEST(ClusterStorage, FullDiskPutFailsCleanlyAndSucceedsOnceSpaceIsBack) {
+  if (!fabatlas::testing::SmallFileSystem::Possible()) GTEST_SKIP() << "mounting a small tmpfs needs root";
+  fs::path dir = FreshDir("blobs_full");
+  fabatlas::testing::SmallFileSystem disk(dir / "mnt", 2);
+  ASSERT_TRUE(disk.mounted()) << disk.error();
+  BlobStore blobs(disk.dir() / "blobs");
+  const std::string before = blobs.Put("stored before the disk filled");
+  disk.Fill();
+  const std::string data(256 << 10, 'b');
+  const std::string digest = fabatlas::Sha256Hex(data);
+  try {
+    blobs.Put(data);
+    ADD_FAILURE() << "a Put succeeded on a full disk";
+  } catch (const fabatlas::ResourceError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find((disk.dir() / "blobs").string()), std::string::npos) << what;
+    EXPECT_NE(what.find("No space left on device"), std::string::npos) << what;
+    EXPECT_EQ(what.find('\n'), std::string::npos) << what;
+  }
+  EXPECT_FALSE(blobs.Contains(digest));
+  auto listed = blobs.List();
+  EXPECT_EQ(listed, std::vector<std::string>{before});
+  EXPECT_THROW(blobs.Read(digest), fabatlas::InputError);
+  EXPECT_TRUE(blobs.Verify(before));
+  disk.Free();
+  EXPECT_EQ(blobs.Put(data), digest);
+  EXPECT_TRUE(blobs.Verify(digest));
+  EXPECT_EQ(blobs.Read(digest), data);
+  EXPECT_TRUE(blobs.Verify(before));
 }

@@ -5,7 +5,6 @@
 #include <gtest/gtest.h>
 #include <netinet/in.h>
 #include <nlohmann/json.hpp>
-#include <sys/mount.h>
 #include <sys/socket.h>
 
 #include <array>
@@ -20,6 +19,7 @@
 #include "fabatlas/coordinator/job_client.h"
 #include "fabatlas/error.h"
 #include "fabatlas/storage/job_store.h"
+#include "fabatlas/testing/small_filesystem.h"
 
 namespace fabatlas::ops_test {
 namespace {
@@ -90,20 +90,6 @@ std::pair<int, std::string> Shell(const fs::path& dir, const std::string& comman
   while ((n = std::fread(buf.data(), 1, buf.size(), pipe)) > 0) out.append(buf.data(), n);
   int status = ::pclose(pipe);
   return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
-}
-
-// The free TCP port the kernel hands out for 127.0.0.1:0 (released at once;
-// a race with another process is possible but unlikely).
-int FreePort() {
-  int fd = ::socket(AF_INET, SOCK_STREAM, 0);
-  sockaddr_in addr{};
-  addr.sin_family = AF_INET;
-  addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  ::bind(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr);
-  socklen_t len = sizeof addr;
-  ::getsockname(fd, reinterpret_cast<sockaddr*>(&addr), &len);
-  ::close(fd);
-  return ntohs(addr.sin_port);
 }
 
 TEST(OpsLogs, JsonLinesTellTheStoryOfAJobWithAKilledWorker) {
@@ -252,15 +238,11 @@ namespace {
 // fabatlas_state_stalled metric), and when space comes back the job
 // finishes with the same form as an in-process run: nothing lost.
 TEST(OpsDiskFull, CoordinatorStateOnAFullFileSystemStallsVisiblyAndLosesNothing) {
-  if (::geteuid() != 0) GTEST_SKIP() << "mounting a small tmpfs needs root";
+  if (!testing::SmallFileSystem::Possible()) GTEST_SKIP() << "mounting a small tmpfs needs root";
   fs::path dir = FreshDir("ops_diskfull");
-  fs::path mnt = dir / "mnt";
-  fs::create_directories(mnt);
-  ASSERT_EQ(::mount("tmpfs", mnt.c_str(), "tmpfs", 0, "size=64m"), 0) << std::strerror(errno);
-  struct Unmount {
-    fs::path p;
-    ~Unmount() { ::umount2(p.c_str(), MNT_DETACH); }
-  } unmount{mnt};
+  testing::SmallFileSystem disk(dir / "mnt", 64);
+  ASSERT_TRUE(disk.mounted()) << disk.error();
+  const fs::path mnt = disk.dir();
   const int metrics_port = FreePort();
   // The log goes beside the small file system, not onto it.
   const fs::path log = dir / "coordinator.log";
@@ -275,12 +257,7 @@ TEST(OpsDiskFull, CoordinatorStateOnAFullFileSystemStallsVisiblyAndLosesNothing)
   // The driver has queued the first round; no worker yet. Now fill the disk.
   for (int i = 0; i < 500 && Client(c.port).Status(id).tasks_queued() == 0; ++i)
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
-  {
-    std::ofstream filler(mnt / "filler", std::ios::binary);
-    std::string block(1 << 20, 'x');
-    while (filler.write(block.data(), static_cast<std::streamsize>(block.size()))) {
-    }
-  }
+  disk.Fill();
   pid_t w = StartWorker(c.port, dir / "w", {"--log-format", "json"});
   v1::JobStatus s;
   for (int i = 0; i < 600 && s.stalled_reason().empty(); ++i) {
@@ -309,7 +286,7 @@ TEST(OpsDiskFull, CoordinatorStateOnAFullFileSystemStallsVisiblyAndLosesNothing)
   EXPECT_TRUE(logged) << ReadText(log);
 
   // Space comes back: the job finishes, and its form is the in-process one.
-  fs::remove(mnt / "filler");
+  disk.Free();
   s = WaitForJob(c.port, id, std::chrono::seconds(240));
   EXPECT_EQ(s.state(), v1::JOB_STATE_SUCCEEDED) << s.error();
   EXPECT_TRUE(s.stalled_reason().empty()) << s.stalled_reason();
@@ -328,6 +305,60 @@ TEST(OpsDiskFull, CoordinatorStateOnAFullFileSystemStallsVisiblyAndLosesNothing)
   bool recovered = false;
   for (const auto& j : JsonLines(log)) recovered |= j["event"] == "state_write_recovered";
   EXPECT_TRUE(recovered);
+}
+
+// A full disk under a worker's cache directory (--cache-dir), where it
+// unpacks each job's bundle: every task it leases fails with one line
+// naming the file and the full disk (worker log task_failed; the
+// coordinator requeues the task), no partial file is left for a later lease
+// to read, the job is neither failed nor quarantined, and once space is
+// back the same worker loads the job and finishes it with the in-process
+// form.
+TEST(OpsDiskFull, WorkerCacheDirOnAFullFileSystemFailsTasksCleanlyAndRecovers) {
+  if (!testing::SmallFileSystem::Possible()) GTEST_SKIP() << "mounting a small tmpfs needs root";
+  fs::path dir = FreshDir("ops_cachefull");
+  testing::SmallFileSystem disk(dir / "mnt", 2);
+  ASSERT_TRUE(disk.mounted()) << disk.error();
+  disk.Fill();
+  CoordinatorProcess c = StartCoordinator(dir / "state", 0, {"--retry-backoff-ms", "50"});
+  ASSERT_GT(c.port, 0) << ReadText(dir / "state/coordinator.log");
+  pid_t w = Spawn({(BinDir() / "fabatlas-worker").string(), "--coordinator", "127.0.0.1:" + std::to_string(c.port),
+                   "--cache-dir", (disk.dir() / "cache").string(), "--log-format", "json"},
+                  dir / "worker.log");
+  std::string id = Client(c.port).Submit(JobPath());
+  ASSERT_TRUE(WaitForText(dir / "worker.log", "task_failed", w)) << ReadText(dir / "worker.log");
+  auto failed = Events(JsonLines(dir / "worker.log"), "task_failed");
+  ASSERT_FALSE(failed.empty());
+  const std::string reason = failed.front().value("reason", "");
+  EXPECT_NE(reason.find((disk.dir() / "cache").string()), std::string::npos) << reason;
+  EXPECT_NE(reason.find("disk full while writing"), std::string::npos) << reason;
+  EXPECT_EQ(reason.find('\n'), std::string::npos) << reason;
+  v1::JobStatus s = Client(c.port).Status(id);
+  EXPECT_EQ(s.state(), v1::JOB_STATE_RUNNING);
+  EXPECT_EQ(s.tasks_quarantined(), 0);
+  EXPECT_EQ(s.tasks_done(), 0);
+  // Nothing half-written: only directories (and the filler) on the disk.
+  for (const auto& entry : fs::recursive_directory_iterator(disk.dir()))
+    EXPECT_TRUE(entry.is_directory() || entry.path().filename() == ".filler") << "left behind: " << entry.path();
+
+  disk.Free();
+  s = WaitForJob(c.port, id, std::chrono::seconds(240));
+  EXPECT_EQ(s.state(), v1::JOB_STATE_SUCCEEDED) << s.error();
+  EXPECT_EQ(s.tasks_quarantined(), 0);
+  auto outputs = Client(c.port).Fetch(id);
+  auto [sample_code, sample_out] = Shell(dir, (BinDir() / "fabatlas").string() + " sample " + JobPath().string() +
+                                                  " --out reference");
+  ASSERT_EQ(sample_code, 0) << sample_out;
+  EXPECT_EQ(outputs["form.json"], ReadText(dir / "reference/form.json"));
+  // The bundle the worker unpacked once space was back is whole.
+  std::set<std::string> unpacked;
+  for (const auto& entry : fs::recursive_directory_iterator(disk.dir() / "cache"))
+    if (entry.is_regular_file()) unpacked.insert(entry.path().filename().string());
+  EXPECT_TRUE(unpacked.count("tube_small.yaml") && unpacked.count("tube_wall_2d.yaml")) << unpacked.size();
+  ::kill(w, SIGTERM);
+  EXPECT_EQ(WaitExit(w, std::chrono::seconds(30)), 0);
+  ::kill(c.pid, SIGTERM);
+  EXPECT_EQ(WaitExit(c.pid, std::chrono::seconds(30)), 0);
 }
 
 }  // namespace

@@ -1,37 +1,17 @@
 // `fabatlas import-scad` and MODEL.scad given to eval and sample, as a user
 // runs them: files written, warnings naming lines, exit status 2 with one line.
 #include <gtest/gtest.h>
-#include <sys/wait.h>
 
-#include <array>
-#include <cstdio>
 #include <fstream>
 #include <nlohmann/json.hpp>
 
+#include "fabatlas/testing/command_run.h"
 #include "fabatlas/testing/paths.h"
 
 namespace {
 
-struct CommandRun {
-  int status = -1;
-  std::string out, err;
-};
-
-CommandRun Fabatlas(const std::string& args, const std::filesystem::path& cwd) {
-  std::string bin = (fabatlas::testing::BinDir() / "fabatlas").string();
-  auto err_path = cwd / "stderr.txt";
-  std::string cmd = "cd " + cwd.string() + " && " + bin + " " + args + " 2>" + err_path.string();
-  CommandRun r;
-  FILE* pipe = ::popen(cmd.c_str(), "r");
-  std::array<char, 4096> buf;
-  std::size_t n;
-  while ((n = std::fread(buf.data(), 1, buf.size(), pipe)) > 0) r.out.append(buf.data(), n);
-  int status = ::pclose(pipe);
-  r.status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  std::ifstream e(err_path);
-  r.err.assign(std::istreambuf_iterator<char>(e), {});
-  return r;
-}
+using fabatlas::testing::CommandRun;
+using fabatlas::testing::Fabatlas;
 
 TEST(ScadCli, ImportWritesDesignAndJobAndNamesMalformedLines) {
   auto dir = fabatlas::testing::FreshTempDir("scad-cli");

@@ -23,6 +23,7 @@
 #include "fabatlas/storage/artifact.h"
 #include "fabatlas/storage/glb.h"
 #include "fabatlas/testing/paths.h"
+#include "fabatlas/testing/small_filesystem.h"
 
 namespace fabatlas::storage {
 namespace {
@@ -316,6 +317,41 @@ TEST(Artifact, KilledWriterNeverLeavesAPartialArtifact) {
     EXPECT_TRUE(name == "job.fabatlas" || name == "timing.fabatlas" || name.find(".tmp-") != std::string::npos) << name;
   }
   std::cout << "write " << write_ms << " ms; kills left the old file " << saw_old << "x, the new one " << saw_new << "x\n";
+}
+
+// A full disk (a 4 MiB tmpfs; the new artifact needs ~24 MiB): publishing
+// over an existing artifact fails with one line naming the file and the
+// full disk, the old artifact stays byte for byte, no temporary file is
+// left behind, and once space is back (the temporary file's was given back
+// at once) the next write succeeds.
+TEST(Artifact, FullDiskKeepsTheOldArtifactAndLeavesNothingBehind) {
+  if (!testing::SmallFileSystem::Possible()) GTEST_SKIP() << "mounting a small tmpfs needs root";
+  const fs::path dir = testing::FreshTempDir("artifact-full");
+  testing::SmallFileSystem disk(dir / "mnt", 4);
+  ASSERT_TRUE(disk.mounted()) << disk.error();
+  const fs::path path = disk.dir() / "job.fabatlas";
+  Artifact small = SmallArtifact();
+  Artifact large = small;
+  for (auto& e : large.cache) e.grid.assign(8 << 20, static_cast<char>('a' + e.bytes / 1000));
+  WriteArtifact(small, path);
+  const std::string old_bytes = ReadBytes(path);
+  try {
+    WriteArtifact(large, path);
+    ADD_FAILURE() << "a 24 MiB artifact was written into 4 MiB";
+  } catch (const ResourceError& e) {
+    const std::string what = e.what();
+    EXPECT_EQ(what, path.string() + ": disk full while writing the artifact");
+    EXPECT_EQ(what.find('\n'), std::string::npos);
+  }
+  EXPECT_TRUE(ReadBytes(path) == old_bytes) << "the old artifact was changed";
+  EXPECT_NO_THROW(ReadArtifact(path));
+  for (const auto& entry : fs::directory_iterator(disk.dir()))
+    EXPECT_EQ(entry.path().filename(), "job.fabatlas") << "left behind: " << entry.path();
+  // Space is back: a write that fits succeeds.
+  Artifact other = small;
+  other.manifest.code_version = "after the full disk";
+  WriteArtifact(other, path);
+  EXPECT_EQ(ReadArtifact(path, {.load_geometry = false}).manifest.code_version, "after the full disk");
 }
 
 TEST(Artifact, WriterRejectsInconsistentContent) {

@@ -1,10 +1,5 @@
 #include "fabatlas/precompute/form_outputs.h"
 
-#include <fcntl.h>
-#include <unistd.h>
-
-#include <cerrno>
-#include <cstring>
 #include <iomanip>
 #include <nlohmann/json.hpp>
 #include <sstream>
@@ -14,37 +9,6 @@
 #include "fabatlas/sampling/validity_map.h"
 
 namespace fabatlas::precompute {
-
-void WriteFileAtomically(const std::filesystem::path& path, const std::string& bytes) {
-  std::filesystem::path tmp = path;
-  tmp += ".tmp-" + std::to_string(::getpid());
-  int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-  if (fd < 0) throw InputError(path.string() + ": cannot create file: " + std::strerror(errno));
-  std::size_t done = 0;
-  while (done < bytes.size()) {
-    ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
-    if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) {
-      int err = errno;
-      ::close(fd);
-      std::filesystem::remove(tmp);
-      if (err == ENOSPC) throw ResourceError(path.string() + ": disk full while writing");
-      throw InputError(path.string() + ": cannot write: " + std::strerror(err));
-    }
-    done += static_cast<std::size_t>(n);
-  }
-  if (::fsync(fd) != 0 || ::close(fd) != 0) {
-    int err = errno;
-    std::filesystem::remove(tmp);
-    throw InputError(path.string() + ": cannot flush to disk: " + std::strerror(err));
-  }
-  std::error_code ec;
-  std::filesystem::rename(tmp, path, ec);
-  if (ec) {
-    std::filesystem::remove(tmp);
-    throw InputError(path.string() + ": cannot rename into place: " + ec.message());
-  }
-}
 
 std::string Table3Row(const design::Design& design, const sampling::SamplingStatistics& s) {
   std::ostringstream out;

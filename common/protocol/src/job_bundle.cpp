@@ -13,6 +13,7 @@
 #include "fabatlas/design/data_files.h"
 #include "fabatlas/design/design.h"
 #include "fabatlas/error.h"
+#include "fabatlas/write_file_atomically.h"
 #include "fabatlas/sampling/job_file.h"
 #include "fabatlas/sha256.h"
 
@@ -30,13 +31,13 @@ std::string ReadFile(const fs::path& path) {
   return out.str();
 }
 
+// Whole or not at all (a full cache directory leaves no partial file that a
+// later lease would read), one line naming the file and the reason.
 void WriteFile(const fs::path& path, const std::string& bytes) {
   std::error_code ec;
   fs::create_directories(path.parent_path(), ec);
-  std::ofstream out(path, std::ios::binary | std::ios::trunc);
-  out << bytes;
-  out.close();
-  if (!out) throw ResourceError(path.string() + ": cannot write");
+  if (ec) throw ResourceError(path.parent_path().string() + ": cannot create the directory: " + ec.message());
+  WriteFileAtomically(path, bytes);
 }
 
 bool StaysInside(const fs::path& relative) {

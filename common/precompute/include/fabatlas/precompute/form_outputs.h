@@ -1,5 +1,5 @@
 // fabatlas/precompute/form_outputs.h — what a finished sampling run leaves on
-// disk and prints: the Form, its seed-001 Table 3 statistics and 2-D validity
+// disk and prints: the Form, its Fab Forms Table 3 statistics and 2-D validity
 // maps. Used by the local run and by the coordinator alike.
 #pragma once
 
@@ -9,6 +9,7 @@
 #include "fabatlas/design/design.h"
 #include "fabatlas/sampling/adaptive_sampler.h"
 #include "fabatlas/sampling/job_file.h"
+#include "fabatlas/write_file_atomically.h"
 
 namespace fabatlas::precompute {
 
@@ -35,8 +36,7 @@ void WriteFormOutputs(const design::Design& design, const sampling::SamplingSumm
 //   "vase  |U|=3  samples 1,234  CPU 0.52 h  valid 6.5%  failures: 77% unsat_constraints, 23% not_watertight"
 std::string Table3Row(const design::Design& design, const sampling::SamplingStatistics& statistics);
 
-// Writes `bytes` to `path` through a temporary file, fsync and rename, so a
-// crash never leaves a partial file under the final name.
-void WriteFileAtomically(const std::filesystem::path& path, const std::string& bytes);
+// Whole files or none (fabatlas/write_file_atomically.h), for the outputs.
+using fabatlas::WriteFileAtomically;
 
 }  // namespace fabatlas::precompute
