@@ -11,6 +11,7 @@
 
 #include "fabatlas/fem/hex_mesh.h"
 #include "fabatlas/fem/static_solve.h"
+#include "cantilever.h"
 #include "elastica.h"
 
 namespace fabatlas::fem {
@@ -35,33 +36,12 @@ TEST(FemBendingReference, ElasticaMatchesMattiasson) {
 // mean vertical tip displacement over the end-face nodes, mm.
 double CantileverTip(double voxel, double alpha, Element element) {
   const double L = 200, h = 4, E = 1000;
-  VoxelSolid v;
-  v.voxel_size = voxel;
-  v.dims = {static_cast<int>(L / voxel), static_cast<int>(h / voxel), static_cast<int>(h / voxel)};
-  v.occupied.assign(static_cast<std::size_t>(v.dims[0]) * v.dims[1] * v.dims[2], 1);
-  const HexMesh mesh = HexMeshFromVoxels(v);
-  const double P = alpha * E * (h * h * h * h / 12) / (L * L);
-  BoundaryConditions bc;
-  FaceTraction tip;
-  tip.total_force = {0, 0, -P};
-  for (const auto& f : BoundaryFaces(mesh)) {
-    bool on_end = true;
-    for (int a : f) on_end = on_end && mesh.nodes[a][0] == L;
-    if (on_end) tip.faces.push_back(f);
-  }
-  bc.tractions.push_back(tip);
-  std::vector<int> end_nodes;
-  for (int n = 0; n < static_cast<int>(mesh.nodes.size()); ++n) {
-    if (mesh.nodes[n][0] == 0.0) bc.FixNode(n);
-    if (mesh.nodes[n][0] == L) end_nodes.push_back(n);
-  }
+  const Cantilever c = MakeCantilever(L, h, voxel, alpha * E * (h * h * h * h / 12) / (L * L));
   StaticSolveOptions o;
   o.element = element;
-  const StaticSolveSummary r = SolveStatic(mesh, Material::FromYoungPoisson(E, 0.0), bc, o);
+  const StaticSolveSummary r = SolveStatic(c.mesh, Material::FromYoungPoisson(E, 0.0), c.bc, o);
   EXPECT_TRUE(r.converged) << r.message;
-  double uz = 0;
-  for (int n : end_nodes) uz += r.displacements[n][2];
-  return -uz / end_nodes.size();
+  return c.TipDeflection(r);
 }
 
 struct Through {
