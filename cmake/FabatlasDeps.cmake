@@ -1,5 +1,5 @@
-# All third-party packages, found once. Order matters (DESIGN.md, "Known CMake
-# pitfalls"): TBB before Ceres and OpenVDB; OpenMesh through its CONFIG file
+# All third-party packages, found once. Order matters (known CMake
+# pitfalls): TBB before Ceres and OpenVDB; OpenMesh through its CONFIG file
 # because CGAL ships a FindOpenMesh of its own.
 find_package(Threads REQUIRED)
 find_package(TBB CONFIG REQUIRED)

@@ -1,4 +1,4 @@
-// prototype_bench [--runs N] [--no-geometry] — solve times of the seed-003
+// prototype_bench [--runs N] [--no-geometry] — solve times of the Koo et al.
 // examples (median wall and CPU over N runs, one thread) and, once each, the
 // printable geometry: time, triangles, mesh report. Results in
 // docs/benchmarks.md ("Works-like prototypes").

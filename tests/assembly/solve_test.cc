@@ -28,7 +28,7 @@ std::string Join(const std::vector<std::string>& v) {
 }  // namespace
 
 TEST(AssemblySolve, SoapBottleOneEyehookFallsTwoHold) {
-  // Seed 000 Fig. 9: same target for both programs; after relaxation under
+  // FabHacks Fig. 9: same target for both programs; after relaxation under
   // gravity the one-eyehook basket swings about its single hook (top row) and
   // the bottle standing in it no longer stays, the two-eyehook one holds.
   const SolveSummary one = SolveAssembly(LoadProgram(Config("soap_bottle_holder_one_hook")));

@@ -1,4 +1,4 @@
-// Printable geometry of the three seed-003 examples: watertight, manifold,
+// Printable geometry of the three Koo et al. examples: watertight, manifold,
 // free of self-intersections, and in separate pieces (print gaps).
 #include <gtest/gtest.h>
 

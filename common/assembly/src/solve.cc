@@ -1099,7 +1099,7 @@ SolveSummary Solve(const Program& prog, const SolveOptions& opt, double perturba
     const auto tipped = RestingFailures(prog, out.poses, opt.friction_angle_deg);
     out.falls_apart.insert(out.falls_apart.end(), tipped.begin(), tipped.end());
   }
-  // Seed 000 4.3.3: the assembly is reported as falling apart when a
+  // FabHacks Sec. 4.3.3: the assembly is reported as falling apart when a
   // connector slides off (above) — and, for a part resting on another, when
   // it slides off or tips over. Relaxation motion alone is not a failure (the paper's demo
   // slides its S-hook to the end of the hanger bar and works).

@@ -1,5 +1,5 @@
 // Total Lagrangian Q1 hexahedra, Neo-Hookean, Newton + line search + load
-// stepping. See static_solve.h for the method; DESIGN.md "FEM check".
+// stepping. See static_solve.h for the method and docs/fem.md.
 #include "fabatlas/fem/static_solve.h"
 
 #include <algorithm>

@@ -3,7 +3,7 @@
 // meaning of every column in docs/artifact.md).
 //
 // What it holds: a manifest (schema version, design hash, code version,
-// sampling parameters, seed-001 Table 3 statistics, a SHA-256 checksum of
+// sampling parameters, Fab Forms Table 3 statistics, a SHA-256 checksum of
 // every table's canonical content), the sampled form (dimensions, the k-d tree
 // of every bootstrap cell, every sample with validity, failure type and
 // properties, every ΔG), the chosen geometry cache (subtrees as exact level

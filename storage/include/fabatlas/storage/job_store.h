@@ -1,6 +1,6 @@
 // fabatlas/storage/job_store.h — the coordinator's durable state in SQLite
 // (WAL mode): jobs, tasks (key, kind, state, attempt, result), leases,
-// workers, job outputs and events (DESIGN.md "Cluster and reliability").
+// workers, job outputs and events (docs/protocol.md, docs/operations.md).
 //
 // Every state change is one SQLite transaction, so a kill -9 at any moment
 // leaves a consistent store; the coordinator resumes from it (restart by
@@ -139,7 +139,7 @@ struct TaskCounts {
 };
 
 // A subtree of a job, over all its accepted sample results (the geometry
-// cache's dependency graph, seed 001 Sec. 6).
+// cache's dependency graph, Fab Forms Sec. 6).
 struct SubtreeRow {
   std::string key, topology, op;
   std::string blob_digest;  // first non-empty digest reported, or ""

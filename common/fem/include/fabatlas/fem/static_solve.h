@@ -82,7 +82,7 @@ struct StaticSolveOptions {
   //   Simo & Armero 1992). Bending-locking free; same unknowns and sparsity
   //   as Q1, about 2-3x its element cost.
   // kQ1: plain trilinear displacements (the published Cook's membrane table
-  //   of DESIGN.md is for this element).
+  //   of docs/fem.md "Validation" is for this element).
   enum class Element { kIncompatibleModes, kQ1 };
   Element element = Element::kIncompatibleModes;
   int load_steps = 4;               // equal load increments
