@@ -1,5 +1,5 @@
 // Fig. 13 curves as a PNG (see cache_curves_plot.h), drawn with
-// stb_easy_font text and written by WritePngFile (png_file.h).
+// picture::Canvas (stb_easy_font text), written as PNG.
 #include "fabatlas/precompute/cache_curves_plot.h"
 
 #include <algorithm>
@@ -7,59 +7,15 @@
 #include <cstdio>
 #include <map>
 
-#include <stb/stb_easy_font.h>
-
 #include "fabatlas/error.h"
 #include "fabatlas/precompute/form_outputs.h"
-#include "png_file.h"
+#include "fabatlas/picture/canvas.h"
 
 namespace fabatlas::precompute {
 
 namespace {
 
-struct Canvas {
-  int w, h;
-  std::vector<unsigned char> rgb;
-  Canvas(int w_, int h_) : w(w_), h(h_), rgb(static_cast<std::size_t>(w_) * h_ * 3, 255) {}
-  void Set(int x, int y, unsigned c) {
-    if (x < 0 || y < 0 || x >= w || y >= h) return;
-    unsigned char* p = &rgb[(static_cast<std::size_t>(y) * w + x) * 3];
-    p[0] = (c >> 16) & 255;
-    p[1] = (c >> 8) & 255;
-    p[2] = c & 255;
-  }
-  void Rect(int x0, int y0, int x1, int y1, unsigned c) {
-    for (int y = y0; y < y1; ++y)
-      for (int x = x0; x < x1; ++x) Set(x, y, c);
-  }
-  // Thick line (Bresenham with a square pen); dashed when dash > 0.
-  void Line(double x0, double y0, double x1, double y1, unsigned c, int pen, int dash = 0) {
-    const double len = std::hypot(x1 - x0, y1 - y0);
-    const int steps = std::max(1, static_cast<int>(std::ceil(len)));
-    for (int i = 0; i <= steps; ++i) {
-      if (dash > 0 && (i / dash) % 2 == 1) continue;
-      const double t = static_cast<double>(i) / steps;
-      const int x = static_cast<int>(std::lround(x0 + t * (x1 - x0)));
-      const int y = static_cast<int>(std::lround(y0 + t * (y1 - y0)));
-      Rect(x - pen / 2, y - pen / 2, x - pen / 2 + pen, y - pen / 2 + pen, c);
-    }
-  }
-  // Text with stb_easy_font (about 6 px per character at scale 1).
-  void Text(int x, int y, const std::string& text, unsigned c, int scale = 2) {
-    static char buffer[99999];
-    const int quads = stb_easy_font_print(0, 0, const_cast<char*>(text.c_str()), nullptr, buffer, sizeof buffer);
-    for (int q = 0; q < quads; ++q) {
-      const float* v = reinterpret_cast<const float*>(buffer + q * 64);
-      // Vertex k of the quad at v + 4k floats (x, y, z, colour).
-      const float qx0 = v[0], qy0 = v[1], qx1 = v[8], qy1 = v[9];
-      Rect(x + static_cast<int>(qx0 * scale), y + static_cast<int>(qy0 * scale), x + static_cast<int>(qx1 * scale),
-           y + static_cast<int>(qy1 * scale), c);
-    }
-  }
-  static int TextWidth(const std::string& text, int scale = 2) {
-    return stb_easy_font_width(const_cast<char*>(text.c_str())) * scale;
-  }
-};
+using picture::Canvas;
 
 unsigned StrategyColour(const std::string& s, bool mean) {
   if (s == "naive" || s == "NAIVE") return mean ? 0xF4A6A6 : 0xC0392B;
@@ -146,7 +102,7 @@ void WriteCacheCurvesPng(const std::vector<storage::CacheCurvePoint>& points, co
     }
   }
 
-  WritePngFile(path, img.rgb, img.w, img.h);
+  img.WritePng(path);
 }
 
 }  // namespace fabatlas::precompute

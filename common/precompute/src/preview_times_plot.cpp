@@ -1,5 +1,5 @@
 // Fig. 14 box plots as a PNG (see preview_times_plot.h): text rasterised with
-// stb_truetype from a TrueType font, image written by WritePngFile (png_file.h).
+// stb_truetype from a TrueType font onto a picture::Canvas, written as PNG.
 #include "fabatlas/precompute/preview_times_plot.h"
 
 #include <algorithm>
@@ -14,65 +14,52 @@
 
 #include "fabatlas/error.h"
 #include "fabatlas/precompute/form_outputs.h"
-#include "png_file.h"
+#include "fabatlas/picture/canvas.h"
 
 namespace fabatlas::precompute {
 
 namespace {
 
-struct Image {
-  int w, h;
-  std::vector<unsigned char> rgb;
-  std::string font_bytes;
-  stbtt_fontinfo font{};
+// The TrueType face of the plot's text, drawn anti-aliased onto the canvas.
+struct Font {
+  std::string bytes;
+  stbtt_fontinfo info{};
 
-  Image(int w_, int h_, const std::filesystem::path& font_file) : w(w_), h(h_), rgb(std::size_t(w_) * h_ * 3, 255) {
-    std::ifstream in(font_file, std::ios::binary);
-    std::ostringstream bytes;
-    bytes << in.rdbuf();
-    font_bytes = bytes.str();
-    const auto* data = reinterpret_cast<const unsigned char*>(font_bytes.data());
-    if (!in || font_bytes.empty() || !stbtt_InitFont(&font, data, stbtt_GetFontOffsetForIndex(data, 0)))
-      throw InputError(font_file.string() + ": cannot read the TrueType font (install fonts-dejavu-core)");
+  explicit Font(const std::filesystem::path& file) {
+    std::ifstream in(file, std::ios::binary);
+    std::ostringstream read;
+    read << in.rdbuf();
+    bytes = read.str();
+    const auto* data = reinterpret_cast<const unsigned char*>(bytes.data());
+    if (!in || bytes.empty() || !stbtt_InitFont(&info, data, stbtt_GetFontOffsetForIndex(data, 0)))
+      throw InputError(file.string() + ": cannot read the TrueType font (install fonts-dejavu-core)");
   }
-  void Blend(int x, int y, unsigned c, double alpha) {
-    if (x < 0 || y < 0 || x >= w || y >= h || alpha <= 0) return;
-    unsigned char* p = &rgb[(std::size_t(y) * w + x) * 3];
-    const int rgb_c[3] = {int((c >> 16) & 255), int((c >> 8) & 255), int(c & 255)};
-    for (int k = 0; k < 3; ++k) p[k] = static_cast<unsigned char>(std::lround(p[k] + alpha * (rgb_c[k] - p[k])));
-  }
-  void Rect(int x0, int y0, int x1, int y1, unsigned c) {
-    for (int y = std::min(y0, y1); y < std::max(y0, y1); ++y)
-      for (int x = std::min(x0, x1); x < std::max(x0, x1); ++x) Blend(x, y, c, 1.0);
-  }
-  void HLine(int x0, int x1, int y, unsigned c, int pen = 1) { Rect(x0, y - pen / 2, x1 + 1, y - pen / 2 + pen, c); }
-  void VLine(int x, int y0, int y1, unsigned c, int pen = 1) { Rect(x - pen / 2, y0, x - pen / 2 + pen, y1 + 1, c); }
   // Width in pixels of `text` at pixel height `px`.
-  int TextWidth(const std::string& text, double px) {
-    const float scale = stbtt_ScaleForPixelHeight(&font, static_cast<float>(px));
+  int Width(const std::string& text, double px) {
+    const float scale = stbtt_ScaleForPixelHeight(&info, static_cast<float>(px));
     int width = 0;
     for (unsigned char ch : text) {
       int advance = 0, lsb = 0;
-      stbtt_GetCodepointHMetrics(&font, ch, &advance, &lsb);
+      stbtt_GetCodepointHMetrics(&info, ch, &advance, &lsb);
       width += static_cast<int>(std::lround(advance * scale));
     }
     return width;
   }
-  // Anti-aliased text with its baseline at y, starting at x (ASCII).
-  void Text(int x, int y, const std::string& text, unsigned c, double px = 16) {
-    const float scale = stbtt_ScaleForPixelHeight(&font, static_cast<float>(px));
+  // Text with its baseline at y, starting at x (ASCII).
+  void Draw(picture::Canvas& canvas, int x, int y, const std::string& text, unsigned c, double px = 16) {
+    const float scale = stbtt_ScaleForPixelHeight(&info, static_cast<float>(px));
     for (unsigned char ch : text) {
       int advance = 0, lsb = 0, bw = 0, bh = 0, ox = 0, oy = 0;
-      stbtt_GetCodepointHMetrics(&font, ch, &advance, &lsb);
-      unsigned char* bitmap = stbtt_GetCodepointBitmap(&font, 0, scale, ch, &bw, &bh, &ox, &oy);
+      stbtt_GetCodepointHMetrics(&info, ch, &advance, &lsb);
+      unsigned char* bitmap = stbtt_GetCodepointBitmap(&info, 0, scale, ch, &bw, &bh, &ox, &oy);
       for (int j = 0; j < bh; ++j)
-        for (int i = 0; i < bw; ++i) Blend(x + ox + i, y + oy + j, c, bitmap[j * bw + i] / 255.0);
+        for (int i = 0; i < bw; ++i) canvas.Blend(x + ox + i, y + oy + j, c, bitmap[j * bw + i] / 255.0);
       stbtt_FreeBitmap(bitmap, nullptr);
       x += static_cast<int>(std::lround(advance * scale));
     }
   }
-  void CentredText(int cx, int y, const std::string& text, unsigned c, double px = 16) {
-    Text(cx - TextWidth(text, px) / 2, y, text, c, px);
+  void DrawCentred(picture::Canvas& canvas, int cx, int y, const std::string& text, unsigned c, double px = 16) {
+    Draw(canvas, cx - Width(text, px) / 2, y, text, c, px);
   }
 };
 
@@ -99,7 +86,8 @@ void WritePreviewTimesPng(const std::vector<PreviewTimesSeries>& series, const s
     for (double t : s.seconds)
       if (t > 0) lo = std::min(lo, t), hi = std::max(hi, t);
   if (!(hi > 0)) throw InputError(path.string() + ": no preview time to plot");
-  Image img(options.width, options.height, options.font_file);
+  Font font(options.font_file);
+  picture::Canvas img(options.width, options.height);
   const int left = 90, right = options.width - 30, top = 80, bottom = options.height - 110;
   // Log axis over whole decades (ms) around the data.
   const double d0 = std::floor(std::log10(lo * 1000)), d1 = std::max(d0 + 1, std::ceil(std::log10(hi * 1000)));
@@ -115,12 +103,12 @@ void WritePreviewTimesPng(const std::vector<PreviewTimesSeries>& series, const s
       img.HLine(left, right, y, m == 1 ? 0xCCCCCC : 0xEEEEEE);
       char label[32];
       std::snprintf(label, sizeof label, ms >= 1 ? "%.0f" : "%g", ms);
-      img.Text(left - 10 - img.TextWidth(label, 14), y + 5, label, 0x333333, 14);
+      font.Draw(img, left - 10 - font.Width(label, 14), y + 5, label, 0x333333, 14);
     }
   img.VLine(left, top, bottom, 0x000000);
   img.HLine(left, right, bottom, 0x000000);
-  img.Text(12, top - 20, "preview time (ms, log scale)", 0x000000, 15);
-  img.Text(left, 32, options.title, 0x000000, 18);
+  font.Draw(img, 12, top - 20, "preview time (ms, log scale)", 0x000000, 15);
+  font.Draw(img, left, 32, options.title, 0x000000, 18);
   const unsigned colours[] = {0x7F7F7F, 0x1F5FA8, 0x7D3C98, 0x2E8B57};
   const int n = static_cast<int>(series.size());
   const int slot = (right - left) / std::max(1, n), box = std::min(120, slot / 2);
@@ -129,9 +117,9 @@ void WritePreviewTimesPng(const std::vector<PreviewTimesSeries>& series, const s
     std::vector<double> v = series[k].seconds;
     std::sort(v.begin(), v.end());
     const unsigned c = colours[k % 4];
-    img.CentredText(cx, bottom + 26, series[k].name, 0x000000, 17);
+    font.DrawCentred(img, cx, bottom + 26, series[k].name, 0x000000, 17);
     if (v.empty()) {
-      img.CentredText(cx, bottom + 48, "n = 0", 0x555555, 14);
+      font.DrawCentred(img, cx, bottom + 48, "n = 0", 0x555555, 14);
       continue;
     }
     double mean = 0;
@@ -150,11 +138,11 @@ void WritePreviewTimesPng(const std::vector<PreviewTimesSeries>& series, const s
     img.HLine(cx - box / 2, cx + box / 2, q2, 0x000000, 3);
     const int my = Y(mean);
     for (int r = 0; r <= 6; ++r) img.HLine(cx - (6 - r), cx + (6 - r), my - r, 0xC0392B), img.HLine(cx - (6 - r), cx + (6 - r), my + r, 0xC0392B);
-    img.CentredText(cx, bottom + 48, "n = " + std::to_string(v.size()) + ", mean " + Ms(mean), 0x333333, 14);
-    img.CentredText(cx, bottom + 68, "median " + Ms(Quantile(v, 0.5)) + ", worst " + Ms(v.back()), 0x333333, 14);
+    font.DrawCentred(img, cx, bottom + 48, "n = " + std::to_string(v.size()) + ", mean " + Ms(mean), 0x333333, 14);
+    font.DrawCentred(img, cx, bottom + 68, "median " + Ms(Quantile(v, 0.5)) + ", worst " + Ms(v.back()), 0x333333, 14);
   }
-  img.Text(left, options.height - 14, "box: quartiles, bar: median, whiskers: fastest and worst, diamond: mean", 0x555555, 13);
-  WritePngFile(path, img.rgb, img.w, img.h);
+  font.Draw(img, left, options.height - 14, "box: quartiles, bar: median, whiskers: fastest and worst, diamond: mean", 0x555555, 13);
+  img.WritePng(path);
 }
 
 }  // namespace fabatlas::precompute

@@ -1,7 +1,5 @@
 #include "fabatlas/sampling/validity_map.h"
 
-#include <png.h>
-
 #include <algorithm>
 #include <cctype>
 #include <cmath>
@@ -11,6 +9,7 @@
 #include <stdexcept>
 
 #include "fabatlas/error.h"
+#include "fabatlas/picture/canvas.h"
 
 namespace fabatlas::sampling {
 
@@ -46,32 +45,17 @@ const Glyph* FindGlyph(char c) {
   return nullptr;
 }
 
-struct Image {
-  int w, h;
-  std::vector<unsigned char> rgb;
-  Image(int w_, int h_) : w(w_), h(h_), rgb(static_cast<size_t>(w_) * h_ * 3, 255) {}
-  void Set(int x, int y, unsigned c) {
-    if (x < 0 || y < 0 || x >= w || y >= h) return;
-    unsigned char* p = &rgb[(static_cast<size_t>(y) * w + x) * 3];
-    p[0] = (c >> 16) & 255;
-    p[1] = (c >> 8) & 255;
-    p[2] = c & 255;
+// Text in the 3x5 bitmap font above, top-left at (x, y).
+void DrawText(picture::Canvas& img, int x, int y, const std::string& s, unsigned c) {
+  for (char ch : s) {
+    const Glyph* g = FindGlyph(ch);
+    if (!g) g = FindGlyph('?' == ch ? ' ' : '_');
+    for (int r = 0; r < 5; ++r)
+      for (int col = 0; col < 3; ++col)
+        if (g->rows[r] & (4 >> col)) img.Rect(x + col * kScale, y + r * kScale, x + (col + 1) * kScale, y + (r + 1) * kScale, c);
+    x += kCharW;
   }
-  void Fill(int x0, int y0, int x1, int y1, unsigned c) {
-    for (int y = y0; y < y1; ++y)
-      for (int x = x0; x < x1; ++x) Set(x, y, c);
-  }
-  void Text(int x, int y, const std::string& s, unsigned c) {
-    for (char ch : s) {
-      const Glyph* g = FindGlyph(ch);
-      if (!g) g = FindGlyph('?' == ch ? ' ' : '_');
-      for (int r = 0; r < 5; ++r)
-        for (int col = 0; col < 3; ++col)
-          if (g->rows[r] & (4 >> col)) Fill(x + col * kScale, y + r * kScale, x + (col + 1) * kScale, y + (r + 1) * kScale, c);
-      x += kCharW;
-    }
-  }
-};
+}
 
 unsigned Blend(unsigned c, double t) {  // t = 0: c, t = 1: white
   auto ch = [&](int s) {
@@ -92,27 +76,6 @@ std::string Format(double v) {
   char buf[32];
   std::snprintf(buf, sizeof buf, "%.3g", v);
   return buf;
-}
-
-void WritePng(const Image& img, const std::string& path) {
-  FILE* f = std::fopen(path.c_str(), "wb");
-  if (!f) throw std::runtime_error(path + ": cannot open for writing");
-  png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, nullptr, nullptr, nullptr);
-  png_infop info = png ? png_create_info_struct(png) : nullptr;
-  if (!png || !info || setjmp(png_jmpbuf(png))) {
-    png_destroy_write_struct(&png, &info);
-    std::fclose(f);
-    throw std::runtime_error(path + ": libpng failed to write the validity map");
-  }
-  png_init_io(png, f);
-  png_set_IHDR(png, info, img.w, img.h, 8, PNG_COLOR_TYPE_RGB, PNG_INTERLACE_NONE,
-               PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
-  png_write_info(png, info);
-  for (int y = 0; y < img.h; ++y)
-    png_write_row(png, const_cast<png_bytep>(&img.rgb[static_cast<size_t>(y) * img.w * 3]));
-  png_write_end(png, nullptr);
-  png_destroy_write_struct(&png, &info);
-  if (std::fclose(f) != 0) throw std::runtime_error(path + ": cannot write");
 }
 
 }  // namespace
@@ -159,7 +122,7 @@ ValidityMapLayout WriteValidityMap(const Form& form, const ValidityMapOptions& o
   legend_w = std::max(legend_w, 20) * kCharW + 30;
   const int W = left + P + gap + legend_w;
   const int H = std::max(top + P + bottom, top + static_cast<int>(types.size() + 6) * 2 * kCharH);
-  Image img(W, H);
+  picture::Canvas img(W, H);
 
   const Dimension& dx = space.dimension(xd);
   const Dimension& dy = space.dimension(yd);
@@ -229,8 +192,8 @@ ValidityMapLayout WriteValidityMap(const Form& form, const ValidityMapOptions& o
   }
   for (const auto& [p, valid] : dots) {
     const int cx = left + p.first, cy = top + p.second;
-    img.Fill(cx - 2, cy - 2, cx + 3, cy + 3, 0x000000);
-    if (valid) img.Fill(cx - 1, cy - 1, cx + 2, cy + 2, 0xFFFFFF);
+    img.Rect(cx - 2, cy - 2, cx + 3, cy + 3, 0x000000);
+    if (valid) img.Rect(cx - 1, cy - 1, cx + 2, cy + 2, 0xFFFFFF);
   }
   // Frame and axes.
   for (int i = -1; i <= P; ++i) {
@@ -252,36 +215,36 @@ ValidityMapLayout WriteValidityMap(const Form& form, const ValidityMapOptions& o
   };
   for (std::int64_t k : ticks(xd)) {
     const int px = left + static_cast<int>(std::lround((space.value(xd, k) - dx.lo) / (dx.hi - dx.lo) * P));
-    img.Fill(px, top + P, px + 1, top + P + 6, 0);
+    img.Rect(px, top + P, px + 1, top + P + 6, 0);
     const std::string s = label(xd, k);
-    img.Text(px - static_cast<int>(s.size()) * kCharW / 2, top + P + 9, s, 0);
+    DrawText(img, px - static_cast<int>(s.size()) * kCharW / 2, top + P + 9, s, 0);
   }
   for (std::int64_t k : ticks(yd)) {
     const int py = top + static_cast<int>(std::lround((dy.hi - space.value(yd, k)) / (dy.hi - dy.lo) * P));
-    img.Fill(left - 6, py, left, py + 1, 0);
+    img.Rect(left - 6, py, left, py + 1, 0);
     const std::string s = label(yd, k);
-    img.Text(left - 8 - static_cast<int>(s.size()) * kCharW, py - kCharH / 2 + 1, s, 0);
+    DrawText(img, left - 8 - static_cast<int>(s.size()) * kCharW, py - kCharH / 2 + 1, s, 0);
   }
-  img.Text(left + P / 2 - static_cast<int>(dx.name.size()) * kCharW / 2, top + P + 9 + 2 * kCharH, dx.name, 0);
-  img.Text(4, 2, dy.name, 0);  // y axis name, top left
+  DrawText(img, left + P / 2 - static_cast<int>(dx.name.size()) * kCharW / 2, top + P + 9 + 2 * kCharH, dx.name, 0);
+  DrawText(img, 4, 2, dy.name, 0);  // y axis name, top left
   // Legend.
   const int lx = left + P + gap;
   int ly = top;
   auto swatch = [&](unsigned c, const std::string& text) {
-    img.Fill(lx, ly, lx + 16, ly + 12, 0);
-    img.Fill(lx + 1, ly + 1, lx + 15, ly + 11, c);
-    img.Text(lx + 22, ly + 1, text, 0);
+    img.Rect(lx, ly, lx + 16, ly + 12, 0);
+    img.Rect(lx + 1, ly + 1, lx + 15, ly + 11, c);
+    DrawText(img, lx + 22, ly + 1, text, 0);
     ly += 2 * kCharH;
   };
   swatch(ValidColour(), "valid");
   for (const auto& t : types) swatch(FailureColour(form, t), t);
   for (const auto& t : types) swatch(Blend(FailureColour(form, t), 0.55), "mixed " + t);
-  img.Fill(lx + 5, ly + 2, lx + 11, ly + 8, 0), img.Fill(lx + 6, ly + 3, lx + 10, ly + 7, 0xFFFFFF);
-  img.Text(lx + 22, ly + 1, "valid sample", 0);
+  img.Rect(lx + 5, ly + 2, lx + 11, ly + 8, 0), img.Rect(lx + 6, ly + 3, lx + 10, ly + 7, 0xFFFFFF);
+  DrawText(img, lx + 22, ly + 1, "valid sample", 0);
   ly += 2 * kCharH;
-  img.Fill(lx + 5, ly + 2, lx + 11, ly + 8, 0);
-  img.Text(lx + 22, ly + 1, "invalid sample", 0);
-  WritePng(img, path);
+  img.Rect(lx + 5, ly + 2, lx + 11, ly + 8, 0);
+  DrawText(img, lx + 22, ly + 1, "invalid sample", 0);
+  img.WritePng(path);
   return ValidityMapLayout{W, H, left, top, P};
 }
 

@@ -34,9 +34,10 @@ struct ValidityMapLayout {
   int plot_left = 0, plot_top = 0, plot_size = 0;
 };
 
-// Writes the PNG to `path`. Throws fabatlas::InputError for bad dimensions or
-// fixed values outside the space, and std::runtime_error if the file cannot
-// be written.
+// Writes the PNG to `path`, whole or not at all (picture::Canvas::WritePng).
+// Throws fabatlas::InputError for bad dimensions or fixed values outside the
+// space, and one-line InputError / ResourceError (full disk) naming `path`
+// when the file cannot be written.
 ValidityMapLayout WriteValidityMap(const Form& form, const ValidityMapOptions& options, const std::string& path);
 
 // The colour used for valid leaves and, for a failure type, the colour of
