@@ -12,26 +12,26 @@
 
 namespace fabatlas::cli {
 
-// validate, eval, dg (cli/design_commands.cpp).
+// validate, eval, dg (cli/design_commands.cc).
 void AddDesignCommands(CLI::App& app, int& exit_code);
 
 // sample: a whole precompute job in this process on a thread pool
-// (cli/sample_commands.cpp).
+// (cli/sample_commands.cc).
 void AddSampleCommands(CLI::App& app, int& exit_code);
 
 // run, submit, status, watch, cancel, fetch, jobs: jobs on the cluster
-// (cli/job_commands.cpp).
+// (cli/job_commands.cc).
 void AddJobCommands(CLI::App& app, int& exit_code);
 
 // inspect: an artifact's Table 3 / Fig. 14 rows and Fig. 13 PNG
-// (cli/inspect_commands.cpp).
+// (cli/inspect_commands.cc).
 void AddInspectCommands(CLI::App& app, int& exit_code);
 
-// prototype: solve a works-like prototype, export STL (cli/prototype_commands.cpp).
+// prototype: solve a works-like prototype, export STL (cli/prototype_commands.cc).
 void AddPrototypeCommands(CLI::App& app, int& exit_code);
 
 // serve, export: the web customiser and its API over HTTP, the design at a
-// point as a file (cli/viewer_commands.cpp).
+// point as a file (cli/viewer_commands.cc).
 void AddViewerCommands(CLI::App& app, int& exit_code);
 
 // The artifact an ART argument names, as serve, export and inspect take it:
@@ -39,10 +39,10 @@ void AddViewerCommands(CLI::App& app, int& exit_code);
 // Throws InputError naming `arg` otherwise.
 std::filesystem::path ArtifactPath(const std::string& arg);
 
-// assemble: solve a FabHacks assembly program (cli/assembly_commands.cpp).
+// assemble: solve a FabHacks assembly program (cli/assembly_commands.cc).
 void AddAssemblyCommands(CLI::App& app, int& exit_code);
 
-// import-scad: an OpenSCAD Customizer model as a design (cli/scad_commands.cpp).
+// import-scad: an OpenSCAD Customizer model as a design (cli/scad_commands.cc).
 void AddScadCommands(CLI::App& app, int& exit_code);
 
 // True for an OpenSCAD model path (.scad).

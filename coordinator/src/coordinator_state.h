@@ -1,13 +1,13 @@
 // The coordinator's state (Coordinator::Impl), internal to
 // fabatlas_coordinator. Its member functions live by responsibility:
-//   coordinator.cpp      server start-up, drain and shutdown;
-//   job_service.cpp, worker_service.cpp, blob_service.cpp  the gRPC services;
-//   scheduler.cpp        workers seen, the lease sweeper, stalls, blob collection;
-//   remote_executor.cpp  task batches through the store to the workers
+//   coordinator.cc      server start-up, drain and shutdown;
+//   job_service.cc, worker_service.cc, blob_service.cc  the gRPC services;
+//   scheduler.cc        workers seen, the lease sweeper, stalls, blob collection;
+//   remote_executor.cc  task batches through the store to the workers
 //                        (RunTasks, Deliver) and the pipeline's RemoteExecutor;
-//   solid_sharing.cpp    FetchSolid / ShareSolids;
-//   job_driver.cpp       one job's driver (pipeline::RunJob), its status;
-//   metrics.cpp          /metrics.
+//   solid_sharing.cc    FetchSolid / ShareSolids;
+//   job_driver.cc       one job's driver (pipeline::RunJob), its status;
+//   metrics.cc          /metrics.
 #pragma once
 
 #include <grpcpp/grpcpp.h>

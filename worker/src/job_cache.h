@@ -1,6 +1,6 @@
 // A job as a worker holds it: its design's evaluator, the subtrees it
 // uploaded, its shelf of root solids. One per job bundle digest, loaded on
-// the job's first lease (task_execution.cpp ContextFor).
+// the job's first lease (task_execution.cc ContextFor).
 #pragma once
 
 #include <cstdint>

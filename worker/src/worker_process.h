@@ -1,10 +1,10 @@
 // The worker process's state (see fabatlas/worker/worker.h), internal to
 // fabatlas_worker. Its member functions live by responsibility:
-//   lease_loop.cpp      Sync long polls, slot threads, heartbeats, solid
+//   lease_loop.cc      Sync long polls, slot threads, heartbeats, solid
 //                       sharing's holder side, stopping (RunWorker);
-//   task_execution.cpp  one lease's task: the job's context (job_cache.h),
+//   task_execution.cc  one lease's task: the job's context (job_cache.h),
 //                       sample / ΔG / swept-volume / cache-plan tasks, blobs;
-//   worker_metrics.cpp  /metrics and /healthz.
+//   worker_metrics.cc  /metrics and /healthz.
 #pragma once
 
 #include <atomic>

@@ -18,7 +18,7 @@ namespace fabatlas::design {
 
 // A mesh that entered the sample from outside fabatlas (a polyhedron of the
 // model, OpenSCAD's render of a subtree, an imported file): what the
-// watertight check inspects (checks.cpp).
+// watertight check inspects (checks.cc).
 struct OutsideMesh {
   std::string what;  // e.g. "model.scad: OpenSCAD's render of text(...)"
   std::string key;   // content key (the subtree's), for remembering reports

@@ -308,7 +308,7 @@ class JobStore {
   // checkpointed. For background_checkpoints.
   int Checkpoint();
 
-  struct Db;  // the SQLite connection (src/job_store.cpp)
+  struct Db;  // the SQLite connection (src/job_store.cc)
 
  private:
   std::filesystem::path path_;

@@ -1,4 +1,4 @@
-// primitives.cpp — level sets of primitives, extrusions, revolutions and
+// primitives.cc — level sets of primitives, extrusions, revolutions and
 // meshes. Analytic shapes are sampled from exact signed distance functions,
 // only in the narrow band: an octree descent skips every block whose centre
 // is farther from the surface than the band plus the block's half diagonal

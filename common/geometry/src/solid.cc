@@ -1,4 +1,4 @@
-// solid.cpp — Solid: measures (volume, centre of mass, bounds), meshing and
+// solid.cc — Solid: measures (volume, centre of mass, bounds), meshing and
 // the deterministic byte encoding. See docs/geometry.md for the method notes.
 #include <openvdb/io/Stream.h>
 #include <openvdb/tools/Interpolation.h>

@@ -1,4 +1,4 @@
-// operations.cpp — transforms, CSG, offsets, arrays and the measures built on
+// operations.cc — transforms, CSG, offsets, arrays and the measures built on
 // them (ΔG of Fab Forms Eq. 2, morphological opening).
 #include <openvdb/tools/Composite.h>
 #include <openvdb/tools/LevelSetRebuild.h>

@@ -93,7 +93,7 @@ TEST(RawMesh, SizesThatDoNotFitAreRefused) {
 }
 
 // The in-process executor computes the capsule of the cluster test
-// (tests/cluster/cluster_test.cpp ClusterSwept): a sphere of radius 10 pushed
+// (tests/cluster/cluster_test.cc ClusterSwept): a sphere of radius 10 pushed
 // 40 mm with a 0.5 mm offset, pi R^2 L + 4/3 pi R^3 with R = 10.5, within 1 %.
 TEST(LocalExecutor, SweptVolumeOfTheCapsule) {
   const design::Design d = Capsule();

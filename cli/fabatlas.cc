@@ -1,5 +1,5 @@
 // fabatlas — the operator's and designer's command line. Subcommands live in
-// cli/*_commands.cpp; this file only dispatches and turns errors into one line
+// cli/*_commands.cc; this file only dispatches and turns errors into one line
 // on stderr with exit status 2 (bad input) or 1 (internal fault).
 #include <CLI/CLI.hpp>
 

@@ -56,7 +56,7 @@ struct LeaseRow {
   std::string worker, state;
 };
 
-// Leases of one task, in attempt order (storage/src/job_store.cpp schema).
+// Leases of one task, in attempt order (storage/src/job_store.cc schema).
 std::vector<LeaseRow> LeasesOf(const fs::path& db_path, const std::string& task_key) {
   std::vector<LeaseRow> rows;
   sqlite3* db = nullptr;
