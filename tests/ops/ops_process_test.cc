@@ -283,8 +283,8 @@ TEST(OpsDiskFull, CoordinatorStateOnAFullFileSystemStallsVisiblyAndLosesNothing)
                                                   " --coordinator 127.0.0.1:" + std::to_string(c.port));
   EXPECT_EQ(status_code, 0);
   EXPECT_NE(status_out.find("STALLED: coordinator cannot write its state"), std::string::npos) << status_out;
-  auto [curl_code, metrics] = Shell(dir, "curl -sf http://127.0.0.1:" + std::to_string(metrics_port) + "/metrics");
-  ASSERT_EQ(curl_code, 0) << metrics;
+  auto [metrics_status, metrics] = HttpGet(metrics_port, "/metrics");
+  ASSERT_EQ(metrics_status, 200) << metrics;
   EXPECT_NE(metrics.find("\nfabatlas_state_stalled 1\n"), std::string::npos) << metrics;
   EXPECT_NE(metrics.find("\nfabatlas_state_free_bytes 0\n"), std::string::npos) << metrics;
   EXPECT_EQ(metrics.find("\nfabatlas_state_write_failures_total 0\n"), std::string::npos) << metrics;
@@ -562,6 +562,78 @@ TEST(OpsDrain, SigtermWaitsForRunningLeasesThenTheJobResumes) {
   EXPECT_EQ(WaitExit(w2, std::chrono::seconds(30)), 0);
   ::kill(c.pid, SIGTERM);
   EXPECT_EQ(WaitExit(c.pid, std::chrono::seconds(30)), 0);
+  fs::remove_all(dir);
+}
+
+// --drain-seconds bounds the drain: a lease whose worker is frozen (SIGSTOP)
+// cannot finish, so the coordinator stops waiting after the bound and exits
+// 0 with the lease still on record (drain_finished says so). Started again,
+// it carries that lease through its grace period, expires it, and another
+// worker recomputes the task: the job ends with the in-process form, and
+// the frozen worker's lease is the one that expired.
+TEST(OpsDrain, DrainSecondsBoundsTheWaitAndAStuckLeaseIsRecomputedAfterRestart) {
+  fs::path dir = FreshDir("ops_drain_bound");
+  // Leases outlive the 1 s drain by far (10 s), so only the bound can end it.
+  CoordinatorProcess c =
+      StartCoordinator(dir / "state", 0, {"--log-format", "json", "--drain-seconds", "1", "--lease-ms", "10000"});
+  ASSERT_GT(c.port, 0) << ReadText(dir / "state/coordinator.log");
+  pid_t stuck = StartWorker(c.port, dir / "stuck", {"--id", "stuck", "--log-format", "json"});
+  ASSERT_TRUE(WaitForText(dir / "stuck/worker.log", "worker_connected", stuck));
+  std::string id = Client(c.port).Submit(JobPath());
+  v1::JobStatus s;
+  for (int i = 0; i < 3000 && s.tasks_leased() == 0; ++i) {
+    s = Client(c.port).Status(id);
+    if (s.tasks_leased() == 0) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  ASSERT_GT(s.tasks_leased(), 0);
+  ::kill(stuck, SIGSTOP);
+  ::kill(c.pid, SIGTERM);
+  // The worker stays frozen: only the bound can end the drain.
+  EXPECT_EQ(WaitExit(c.pid, std::chrono::seconds(60)), 0) << ReadText(dir / "state/coordinator.log");
+  auto lines = JsonLines(dir / "state/coordinator.log");
+  auto started = Events(lines, "drain_started");
+  auto finished = Events(lines, "drain_finished");
+  ASSERT_EQ(started.size(), 1u);
+  ASSERT_EQ(finished.size(), 1u);
+  EXPECT_EQ(started[0]["timeout_ms"], 1000);
+  EXPECT_GE(finished[0]["active_leases"].get<int>(), 1) << finished[0];
+  EXPECT_GE(finished[0]["waited_ms"].get<int>(), 1000) << finished[0];  // it did wait for the lease
+  std::int64_t held = 0;
+  {
+    storage::JobStore store(dir / "state/state.db");
+    held = store.ActiveLeases();
+    EXPECT_GE(held, 1);
+    EXPECT_EQ(store.CheckConsistency(), std::vector<std::string>{});
+  }
+  KillAndReap(stuck);
+
+  c = StartCoordinator(dir / "state", 0, {"--log-format", "json", "--lease-ms", "1500", "--heartbeat-ms", "300"});
+  ASSERT_GT(c.port, 0) << ReadText(dir / "state/coordinator.log");
+  pid_t w = StartWorker(c.port, dir / "w", {"--id", "fresh", "--log-format", "json"});
+  s = WaitForJob(c.port, id, std::chrono::seconds(240));
+  EXPECT_EQ(s.state(), v1::JOB_STATE_SUCCEEDED) << s.error();
+  auto restarted = Events(JsonLines(dir / "state/coordinator.log"), "coordinator_started");
+  ASSERT_EQ(restarted.size(), 2u);
+  EXPECT_EQ(restarted[1]["leases_in_grace"], held);
+  EXPECT_EQ(restarted[1]["jobs_resumed"], 1);
+  std::int64_t stuck_expired = 0;
+  for (const auto& e : Events(JsonLines(dir / "state/coordinator.log"), "lease_expired"))
+    stuck_expired += e["worker"] == "stuck";
+  EXPECT_EQ(stuck_expired, held);
+  auto outputs = Client(c.port).Fetch(id);
+  auto [code, out] = Shell(dir, (BinDir() / "fabatlas").string() + " sample " + JobPath().string() + " --out reference");
+  ASSERT_EQ(code, 0) << out;
+  EXPECT_EQ(outputs["form.json"], ReadText(dir / "reference/form.json"));
+  ::kill(w, SIGTERM);
+  EXPECT_EQ(WaitExit(w, std::chrono::seconds(30)), 0);
+  ::kill(c.pid, SIGTERM);
+  EXPECT_EQ(WaitExit(c.pid, std::chrono::seconds(30)), 0);
+  {
+    storage::JobStore store(dir / "state/state.db");
+    EXPECT_EQ(store.ActiveLeases(), 0);
+    EXPECT_EQ(store.CheckConsistency(), std::vector<std::string>{});
+    for (const auto& task : store.Tasks(id)) EXPECT_EQ(task.completions, 1) << task.key;
+  }
   fs::remove_all(dir);
 }
 
