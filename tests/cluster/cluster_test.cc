@@ -1040,3 +1040,126 @@ TEST(ClusterSwept, WorkerComputesTheCapsuleOfASphereAlongASegment) {
   }
   EXPECT_EQ(swept, 1);
 }
+
+namespace {
+
+// The leases of `worker` in the live store, read-only: lease id -> state
+// (active, completed, returned, expired).
+std::map<std::string, std::string> LeaseStates(const fs::path& db_path, const std::string& worker) {
+  std::map<std::string, std::string> states;
+  sqlite3* db = nullptr;
+  EXPECT_EQ(sqlite3_open_v2(db_path.c_str(), &db, SQLITE_OPEN_READONLY, nullptr), SQLITE_OK);
+  sqlite3_busy_timeout(db, 5000);
+  sqlite3_stmt* st = nullptr;
+  sqlite3_prepare_v2(db, "SELECT lease_id, state FROM leases WHERE worker_id = ?", -1, &st, nullptr);
+  sqlite3_bind_text(st, 1, worker.c_str(), -1, SQLITE_TRANSIENT);
+  while (sqlite3_step(st) == SQLITE_ROW)
+    states[reinterpret_cast<const char*>(sqlite3_column_text(st, 0))] =
+        reinterpret_cast<const char*>(sqlite3_column_text(st, 1));
+  sqlite3_finalize(st);
+  sqlite3_close(db);
+  return states;
+}
+
+// How many leases of `worker` are in `state`.
+int LeasesOf(const fs::path& db, const std::string& worker, const std::string& state) {
+  int n = 0;
+  for (const auto& [id, s] : LeaseStates(db, worker)) n += s == state;
+  return n;
+}
+
+// Waits until `worker` holds at least `n` active leases (or its process
+// exited, or 60 s passed); true when it does.
+bool WaitForLeases(const fs::path& db, const std::string& worker, int n, pid_t pid) {
+  for (int i = 0; i < 3000; ++i) {
+    if (LeasesOf(db, worker, "active") >= n) return true;
+    if (WaitExit(pid, std::chrono::milliseconds(0)) != -1) return false;
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  return false;
+}
+
+// Freezes the worker (SIGSTOP) at a moment it holds at least `n` active
+// leases, which it then keeps until it is thawed; false if that never
+// happened within 100 tries.
+bool FreezeHolding(const fs::path& db, const std::string& worker, int n, pid_t pid) {
+  for (int i = 0; i < 100; ++i) {
+    if (!WaitForLeases(db, worker, n, pid)) return false;
+    ::kill(pid, SIGSTOP);
+    if (LeasesOf(db, worker, "active") >= n) return true;
+    ::kill(pid, SIGCONT);
+  }
+  return false;
+}
+
+}  // namespace
+
+// Workers with several slots (--slots 3) under the two faults an operator
+// causes: a SIGKILL while all three slots hold leases (each of them expires
+// and is recomputed elsewhere), and a SIGTERM while it holds leases (it
+// finishes or returns every one and reports every result before it exits:
+// none of its leases expires). The job publishes the in-process artifact
+// byte for byte and every task is completed once.
+TEST(ClusterFaults, MultiSlotWorkersKilledAndStoppedHoldingLeasesLoseNothing) {
+  fs::path dir = FreshDir("multislot");
+  CoordinatorProcess c = StartCoordinator(dir / "state", 0, kFastLeases);
+  ASSERT_GT(c.port, 0) << ReadText(dir / "state/coordinator.log");
+  const fs::path db = dir / "state/state.db";
+  pid_t killed = StartWorker(c.port, dir / "killed", {"--id", "killed", "--slots", "3"});
+  std::string id = Client(c.port).Submit(JobPath());
+  ASSERT_TRUE(FreezeHolding(db, "killed", 3, killed)) << ReadText(dir / "killed/worker.log");
+  KillAndReap(killed);
+  const int held = LeasesOf(db, "killed", "active");  // a dead process holds them now
+  EXPECT_EQ(held, 3);
+
+  pid_t stopped = StartWorker(c.port, dir / "stopped", {"--id", "stopped", "--slots", "3"});
+  // Once it is under way (three tasks done, so its slots are running tasks
+  // rather than waiting for their first lease), frozen holding leases,
+  // running or queued, which it keeps until it sees SIGTERM.
+  for (int i = 0; i < 3000 && LeasesOf(db, "stopped", "completed") < 3; ++i)
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  ASSERT_GE(LeasesOf(db, "stopped", "completed"), 3) << ReadText(dir / "stopped/worker.log");
+  ASSERT_TRUE(FreezeHolding(db, "stopped", 2, stopped)) << ReadText(dir / "stopped/worker.log");
+  std::set<std::string> frozen_leases;
+  for (const auto& [lease, state] : LeaseStates(db, "stopped"))
+    if (state == "active") frozen_leases.insert(lease);
+  EXPECT_GE(frozen_leases.size(), 2u);
+  ::kill(stopped, SIGTERM);
+  ::kill(stopped, SIGCONT);
+  EXPECT_EQ(WaitExit(stopped, std::chrono::seconds(60)), 0) << ReadText(dir / "stopped/worker.log");
+  const std::string log = ReadText(dir / "stopped/worker.log");
+  const std::string summary = WorkerSummary(dir / "stopped");
+  auto field = [](const std::string& line, const std::string& name) {
+    auto at = line.find(" " + name + "=");
+    return at == std::string::npos ? -1 : std::atoll(line.c_str() + at + name.size() + 2);
+  };
+  EXPECT_EQ(field(summary, "results_acknowledged"), field(summary, "tasks_run")) << summary;
+  // The tasks running when it saw SIGTERM (its worker_stopping line) were
+  // finished and reported: that many of the frozen leases ended completed,
+  // the rest were handed back; none is still active.
+  const auto stopping = log.find("worker_stopping");
+  ASSERT_NE(stopping, std::string::npos) << log;
+  const long long running = field(log.substr(stopping, log.find('\n', stopping) - stopping), "running");
+  ASSERT_GE(running, 0) << log;
+  int completed = 0, returned = 0;
+  const auto after = LeaseStates(db, "stopped");
+  for (const auto& lease : frozen_leases) {
+    completed += after.at(lease) == "completed";
+    returned += after.at(lease) == "returned";
+  }
+  EXPECT_GE(completed, running) << log;
+  EXPECT_EQ(completed + returned, static_cast<int>(frozen_leases.size())) << log;
+  EXPECT_EQ(LeasesOf(db, "stopped", "active"), 0);  // none left behind at exit
+
+  pid_t finisher = StartWorker(c.port, dir / "finisher", {"--id", "finisher", "--slots", "2"});
+  v1::JobStatus s = WaitForJob([&] { return c.port; }, id, std::chrono::seconds(240));
+  EXPECT_EQ(s.state(), v1::JOB_STATE_SUCCEEDED) << s.error();
+  EXPECT_EQ(Client(c.port).Fetch(id)["form.json"], ReferenceForm());
+  EXPECT_TRUE(Client(c.port).Fetch(id)[kArtifactName] == ReferenceArtifact()) << "the artifact differs";
+  EXPECT_EQ(LeasesOf(db, "killed", "expired"), held);  // each of the killed worker's leases expired
+  EXPECT_EQ(LeasesOf(db, "stopped", "expired"), 0);    // the stopped one lost none
+  EXPECT_GE(s.lease_expiries(), held);
+  ::kill(finisher, SIGTERM);
+  EXPECT_EQ(WaitExit(finisher, std::chrono::seconds(30)), 0);
+  StopAndCheckStore(c, dir / "state", id);
+}
