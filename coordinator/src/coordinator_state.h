@@ -167,11 +167,16 @@ struct Coordinator::Impl {
   std::map<std::string, std::int64_t> share_polled;
 
   // The adaptive schedule of each running job as its driver last saw it, for
-  // the ETA (JobStatus.eta_seconds, job_eta.h): the batches so far, when the
-  // running one began and, once sampling is over, when publishing began.
+  // the ETA (JobStatus.eta_seconds, job_eta.h): the batches so far and, once
+  // sampling is over, when publishing began; the
+  // work the workers delivered (Deliver): its total, the total when the
+  // running batch began, and the totals over the last rate window (oldest
+  // first, the first before the window).
   struct Schedule {
     JobEtaInput input;
-    std::chrono::steady_clock::time_point batch_started, publish_started;
+    std::chrono::steady_clock::time_point publish_started;
+    EtaProgress work, work_at_batch_start;
+    std::deque<std::pair<std::chrono::steady_clock::time_point, EtaProgress>> work_history;
   };
   std::mutex schedule_mu;
   std::map<std::string, Schedule> schedules;
@@ -184,6 +189,7 @@ struct Coordinator::Impl {
   struct Delivery {
     const std::string* key;
     const std::string* result;
+    double cpu_seconds = -1;  // a worker's fresh result: its evaluator CPU (for the ETA's rate); -1 = from the store
   };
   // Hands results to the waiting drivers; wakes them only when one has all
   // its results (one wake-up per batch, not per task).

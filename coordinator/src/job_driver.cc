@@ -142,7 +142,12 @@ v1::JobStatus Coordinator::Impl::StatusOf(const storage::JobRecord& job) {
       JobEtaInput in = it->second.input;
       const auto steady_now = std::chrono::steady_clock::now();
       in.running_left = static_cast<double>(c.queued + c.leased);
-      in.running_seconds = std::chrono::duration<double>(steady_now - it->second.batch_started).count();
+      in.running_done.cpu_seconds = it->second.work.cpu_seconds - it->second.work_at_batch_start.cpu_seconds;
+      in.running_done.tasks = it->second.work.tasks - it->second.work_at_batch_start.tasks;
+      for (const auto& [when, total] : it->second.work_history) {
+        in.progress.push_back(total);
+        in.progress.back().seconds_ago = std::chrono::duration<double>(steady_now - when).count();
+      }
       if (it->second.publish_started != std::chrono::steady_clock::time_point{})
         in.publishing_seconds = std::chrono::duration<double>(steady_now - it->second.publish_started).count();
       if (const JobEta eta = EstimateJobEta(in); eta.known) s.set_eta_seconds(eta.seconds);

@@ -28,18 +28,40 @@ std::vector<std::vector<std::string>> SampleBatchAffinity(std::size_t tasks,
 
 void Coordinator::Impl::Deliver(const std::vector<Delivery>& results, const std::string& worker) {
   bool complete = false;
+  std::map<std::string, EtaProgress> work;  // job -> fresh work delivered now
   {
     std::lock_guard lock(results_mu);
     for (const Delivery& d : results) {
       auto range = waiting.equal_range(*d.key);
+      bool counted = false;
       for (auto it = range.first; it != range.second; ++it)
         if (it->second->results.emplace(*d.key, *d.result).second) {
           it->second->workers.emplace(*d.key, worker);
           if (--it->second->pending == 0) complete = true;
+          if (d.cpu_seconds >= 0 && !counted) {
+            EtaProgress& w = work[it->second->job_id];
+            w.cpu_seconds += d.cpu_seconds;
+            w.tasks += 1;
+            counted = true;
+          }
         }
     }
   }
   if (complete) results_cv.notify_all();
+  if (work.empty()) return;
+  // The ETA's rate (job_eta.h): the job's running totals over the last window.
+  const auto now = std::chrono::steady_clock::now();
+  const auto window = std::chrono::duration<double>(JobEtaOptions{}.rate_window_seconds);
+  std::lock_guard lock(schedule_mu);
+  for (const auto& [job, w] : work) {
+    auto it = schedules.find(job);
+    if (it == schedules.end()) continue;
+    Schedule& sch = it->second;
+    sch.work.cpu_seconds += w.cpu_seconds;
+    sch.work.tasks += w.tasks;
+    sch.work_history.emplace_back(now, sch.work);
+    while (sch.work_history.size() > 2 && now - sch.work_history[1].first >= window) sch.work_history.pop_front();
+  }
 }
 
 std::vector<std::string> Coordinator::Impl::RunTasks(const std::string& job_id, const std::vector<std::string>& payloads,
@@ -226,27 +248,25 @@ std::vector<v1::TaskResult> RemoteExecutor::Run(const std::vector<v1::TaskPayloa
 
 void RemoteExecutor::BeginBatch(bool samples, std::size_t size) {
   batches_.push_back({samples, static_cast<double>(size), 0});
-  batch_started_ = std::chrono::steady_clock::now();
-  Publish();
+  Publish(/*batch_begins=*/true);
 }
 
 void RemoteExecutor::EndBatch(const std::vector<v1::TaskResult>& results) {
   if (results.empty()) return;
-  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - batch_started_).count();
   for (const auto& r : results) batches_.back().cpu_seconds += r.cpu_seconds();
-  // Batches replayed from the store take no time: their rate teaches nothing.
-  if (seconds >= 0.05 * static_cast<double>(results.size()) * 1e-3) batches_.back().seconds = seconds;
-  Publish();
+  Publish(/*batch_begins=*/false);
 }
 
-void RemoteExecutor::Publish() {
+void RemoteExecutor::Publish(bool batch_begins) {
   std::lock_guard lock(impl_.schedule_mu);
-  auto& sch = impl_.schedules[job_id_];
+  auto [it, created] = impl_.schedules.try_emplace(job_id_);
+  auto& sch = it->second;
+  if (created) sch.work_history.emplace_back(std::chrono::steady_clock::now(), EtaProgress{});
+  if (batch_begins) sch.work_at_batch_start = sch.work;
   sch.input.batches = batches_;
   sch.input.max_depth = sampling_.max_depth;
   sch.input.max_samples = static_cast<double>(sampling_.max_samples);
   sch.input.dimensions = static_cast<int>(dims_);
-  sch.batch_started = batch_started_;
 }
 
 }  // namespace fabatlas::coordinator

@@ -69,10 +69,10 @@ class RemoteExecutor : public pipeline::Executor {
 
  private:
   // The schedule for the ETA (JobStatus.eta_seconds, job_eta.h): every
-  // batch with its wall seconds, handed to the status calls.
+  // batch with its evaluator CPU, handed to the status calls.
   void BeginBatch(bool samples, std::size_t size);
   void EndBatch(const std::vector<v1::TaskResult>& results);
-  void Publish();
+  void Publish(bool batch_begins);
 
   Coordinator::Impl& impl_;
   std::string job_id_, bundle_digest_;
@@ -86,7 +86,7 @@ class RemoteExecutor : public pipeline::Executor {
   std::map<sampling::PointKey, std::string> holders_;
   std::vector<EtaBatch> batches_;
   std::size_t dims_ = 1;
-  std::chrono::steady_clock::time_point batch_started_, publish_started_;
+  std::chrono::steady_clock::time_point publish_started_;
 };
 
 }  // namespace fabatlas::coordinator

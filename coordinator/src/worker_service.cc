@@ -102,7 +102,8 @@ class WorkerServiceImpl final : public v1::WorkerService::Service {
             ++impl_.completed_total;
             impl_.task_seconds.Observe(ResultKind(req->completed(static_cast<int>(i)).result()),
                                        req->completed(static_cast<int>(i)).result().wall_seconds());
-            accepted.push_back({&completions[i].task_key, &completions[i].result});
+            accepted.push_back({&completions[i].task_key, &completions[i].result,
+                                req->completed(static_cast<int>(i)).result().cpu_seconds()});
             break;
           case storage::CompletionOutcome::kFenced: ++impl_.fenced_total; break;
           case storage::CompletionOutcome::kDuplicate: ++impl_.duplicate_total; break;
