@@ -17,7 +17,7 @@
 #include "fabatlas/error.h"
 #include "fabatlas/mesh/read_mesh.h"
 #include "fabatlas/mesh/write_mesh.h"
-#include "fabatlas/storage/glb.h"
+#include "fabatlas/artifact/glb.h"
 
 namespace fabatlas::cli {
 namespace {
@@ -90,7 +90,7 @@ int Run(const AssembleArgs& args) {
     for (auto& ch : ext) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
     if (ext == ".glb") {
       std::ofstream f(out, std::ios::binary);
-      const std::string bytes = storage::MeshToGlb(m);
+      const std::string bytes = artifact::MeshToGlb(m);
       if (!f || !f.write(bytes.data(), static_cast<std::streamsize>(bytes.size())))
         throw InputError(args.mesh_out + ": cannot write");
     } else {

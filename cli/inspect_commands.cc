@@ -31,7 +31,7 @@
 #include "fabatlas/precompute/preview_times.h"
 #include "fabatlas/precompute/preview_times_plot.h"
 #include "fabatlas/protocol/job_bundle.h"
-#include "fabatlas/storage/artifact.h"
+#include "fabatlas/artifact/artifact.h"
 #include "fabatlas/viewer/snap.h"
 
 namespace fabatlas::cli {
@@ -89,8 +89,8 @@ void Inspect(const InspectArgs& a, int& exit_code) {
   if (a.points < 0) throw InputError("inspect: --points must be >= 0");
   // Metadata only: the cache's geometry is read set by set below, so the
   // memory holds the form and one preview cache, not the whole file.
-  const storage::Artifact art = storage::ReadArtifact(path, {.load_geometry = false});
-  const storage::Manifest& m = art.manifest;
+  const artifact::Artifact art = artifact::ReadArtifact(path, {.load_geometry = false});
+  const artifact::Manifest& m = art.manifest;
 
   // The design, from the artifact's own bundle.
   const fs::path scratch = fs::temp_directory_path() / ("fabatlas-inspect-" + std::to_string(::getpid()));
@@ -136,19 +136,19 @@ void Inspect(const InspectArgs& a, int& exit_code) {
     // One cache in memory at a time (H_opt, then H_rfree), and only when
     // the artifact stores every entry of it (H_rfree's entries beyond H_opt
     // are stored only with `cache: {store_rfree: true}`, docs/artifact.md).
-    auto measure = [&](bool storage::CacheEntry::*member, std::int64_t entries) -> std::optional<precompute::PreviewTimes> {
+    auto measure = [&](bool artifact::CacheEntry::*member, std::int64_t entries) -> std::optional<precompute::PreviewTimes> {
       std::int64_t stored = 0;
       for (const auto& e : art.cache) stored += e.*member;
       if (stored != entries) return std::nullopt;
       precompute::FrozenSubtreeCache cache;
-      storage::ReadCacheGeometry(
-          path, [&](const storage::CacheEntry& e) { return e.*member; },
-          [&](storage::CacheEntry& e) { cache.Add(e.key, geometry::Solid::Deserialize(e.grid)); });
+      artifact::ReadCacheGeometry(
+          path, [&](const artifact::CacheEntry& e) { return e.*member; },
+          [&](artifact::CacheEntry& e) { cache.Add(e.key, geometry::Solid::Deserialize(e.grid)); });
       return precompute::MeasurePreviewTimes(design, points, &cache);
     };
     if (!m.cache.strategy.empty() && !art.cache.empty()) {
-      t_opt = measure(&storage::CacheEntry::in_opt, m.cache.opt_entries);
-      t_rfree = measure(&storage::CacheEntry::in_rfree, m.cache.rfree_entries);
+      t_opt = measure(&artifact::CacheEntry::in_opt, m.cache.opt_entries);
+      t_rfree = measure(&artifact::CacheEntry::in_rfree, m.cache.rfree_entries);
     }
   }
 

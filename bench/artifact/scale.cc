@@ -35,7 +35,7 @@
 #include "fabatlas/sampling/executor.h"
 #include "fabatlas/sampling/form_json.h"
 #include "fabatlas/sampling/job_file.h"
-#include "fabatlas/storage/artifact.h"
+#include "fabatlas/artifact/artifact.h"
 #include "fabatlas/viewer/customiser.h"
 
 using namespace fabatlas;
@@ -91,10 +91,10 @@ int Write(const std::string& job_path, const std::filesystem::path& out) {
   const sampling::SamplingSummary summary = sampling::SampleDesignSpace(space, evaluator, executor, job.sampling);
   const double sample_s = Seconds(start);
   start = Clock::now();
-  const storage::Artifact artifact = pipeline::ArtifactOf(bundle, "tube_wall_3d", job, summary.form);
+  const artifact::Artifact artifact = pipeline::ArtifactOf(bundle, "tube_wall_3d", job, summary.form);
   const double assemble_s = Seconds(start);
   start = Clock::now();
-  storage::WriteArtifact(artifact, out);
+  artifact::WriteArtifact(artifact, out);
   const double write_s = Seconds(start);
   std::printf("samples %zu (valid %lld), leaves %lld, ΔG values %zu\n", summary.form.samples.size(),
               static_cast<long long>(summary.statistics.valid_samples),

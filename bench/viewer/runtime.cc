@@ -24,7 +24,7 @@
 #include "fabatlas/precompute/design_evaluator.h"
 #include "fabatlas/precompute/preview_times.h"
 #include "fabatlas/viewer/customiser.h"
-#include "fabatlas/storage/glb.h"
+#include "fabatlas/artifact/glb.h"
 
 using namespace fabatlas;
 using Clock = std::chrono::steady_clock;
@@ -78,7 +78,7 @@ std::vector<double> PreviewTimes(const viewer::Customiser& c, const std::vector<
     if (subtrees) *subtrees += p.subtrees;
     if (mesh_ms) {
       const auto t0 = Clock::now();
-      const std::string glb = storage::MeshToGlb(p.solid.ToMesh());
+      const std::string glb = artifact::MeshToGlb(p.solid.ToMesh());
       mesh_ms->push_back(Ms(Clock::now() - t0));
     }
   }

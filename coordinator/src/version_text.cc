@@ -2,7 +2,7 @@
 #include "fabatlas/coordinator/version_text.h"
 
 #include "fabatlas/protocol/tasks.h"
-#include "fabatlas/storage/artifact.h"
+#include "fabatlas/artifact/artifact.h"
 #include "fabatlas/storage/job_store.h"
 #include "fabatlas/version.h"
 
@@ -10,7 +10,7 @@ namespace fabatlas::coordinator {
 
 std::string VersionText(const std::string& program) {
   return program + " " + kVersion + " (task code " + protocol::kCodeVersion +
-         ", protocol fabatlas.v1, artifact schema " + std::to_string(storage::kArtifactSchemaVersion) +
+         ", protocol fabatlas.v1, artifact schema " + std::to_string(artifact::kArtifactSchemaVersion) +
          ", job store schema " + std::to_string(storage::kJobStoreSchemaVersion) + ")";
 }
 

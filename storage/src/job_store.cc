@@ -7,7 +7,7 @@
 #include <set>
 
 #include "fabatlas/error.h"
-#include "sqlite_statement.h"
+#include "fabatlas/sqlite/statement.h"
 
 namespace fabatlas::storage {
 
@@ -94,13 +94,13 @@ namespace {
 // A statement from the store's cache of prepared statements (preparing
 // costs more than running most of them); a fresh one, finalised after use,
 // when the cached one is in use further up the stack.
-class Stmt : public internal::SqliteStatement {
+class Stmt : public sqlite::Statement {
  public:
   Stmt(JobStore::Db& db, const char* sql) : Stmt(db, sql, Borrow(db, sql)) {}
 
  private:
   Stmt(JobStore::Db& db, const char* sql, bool* in_use)
-      : SqliteStatement(db.handle, sql, [&db](const std::string& what) { db.Fail(what); },
+      : Statement(db.handle, sql, [&db](const std::string& what) { db.Fail(what); },
                         in_use ? db.statements.at(sql).first : nullptr,
                         in_use ? std::function<void()>([in_use] { *in_use = false; }) : nullptr) {}
   // The cached statement for `sql`, prepared on first use, marked in use;

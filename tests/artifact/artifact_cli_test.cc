@@ -16,9 +16,9 @@
 
 #include "fabatlas/error.h"
 #include "fabatlas/sampling/form.h"
-#include "fabatlas/storage/artifact.h"
+#include "fabatlas/artifact/artifact.h"
 #include "fabatlas/storage/job_store.h"
-#include "fabatlas/storage/glb.h"
+#include "fabatlas/artifact/glb.h"
 #include "fabatlas/testing/command_run.h"
 #include "fabatlas/testing/paths.h"
 #include "fabatlas/testing/small_filesystem.h"
@@ -102,7 +102,7 @@ TEST(ArtifactCli, RunPublishesTheSameBytesForOneAndTwoWorkersAndInProcess) {
   EXPECT_TRUE(a == Bytes(dir / "two/tube_wall_2d.fabatlas")) << "1 vs 2 workers";
   EXPECT_TRUE(a == Bytes(dir / "local/tube_wall_2d.fabatlas")) << "cluster vs in-process";
 
-  const auto artifact = fabatlas::storage::ReadArtifact(dir / "one/tube_wall_2d.fabatlas");
+  const auto artifact = fabatlas::artifact::ReadArtifact(dir / "one/tube_wall_2d.fabatlas");
   ExpectTubeForm(artifact.form);
   EXPECT_EQ(artifact.manifest.design_name, "tube_wall_2d");
   EXPECT_EQ(artifact.bundle.job_file_name, "tube_small.yaml");
@@ -125,7 +125,7 @@ TEST(ArtifactCli, CachedJobPublishesTheSameBytesOnTheClusterAndInProcess) {
   ASSERT_EQ(run.status, 0) << run.err;
   CommandRun local = Fabatlas("sample " + job.string() + " --out " + (dir / "local").string());
   ASSERT_EQ(local.status, 0) << local.err;
-  const auto a = fabatlas::storage::ReadArtifact(dir / "run/tube_wall_2d.fabatlas");
+  const auto a = fabatlas::artifact::ReadArtifact(dir / "run/tube_wall_2d.fabatlas");
   EXPECT_EQ(a.manifest.cache.strategy, "opt_max");
   EXPECT_GT(a.cache.size(), 0u);
   EXPECT_EQ(a.manifest.cache.top_entries, a.manifest.statistics.valid_samples);
@@ -172,12 +172,12 @@ TEST(ArtifactCli, DamagedArtifactsAreOneLineErrorsWithStatus2) {
   // As a newer fabatlas would write it: user_version (header offset 60) one
   // above what this reader knows.
   std::string newer = bytes;
-  newer[63] = static_cast<char>(fabatlas::storage::kArtifactSchemaVersion + 1);
+  newer[63] = static_cast<char>(fabatlas::artifact::kArtifactSchemaVersion + 1);
   std::ofstream(dir / "newer.fabatlas", std::ios::binary) << newer;
   for (const auto& [file, what] : std::vector<std::pair<std::string, std::string>>{
            {"cut.fabatlas", "truncated"}, {"text.fabatlas", "not a fabatlas artifact"}, {"none.fabatlas", "no such file"},
            {"newer.fabatlas", "written by a newer fabatlas (schema version " +
-                                  std::to_string(fabatlas::storage::kArtifactSchemaVersion + 1)}}) {
+                                  std::to_string(fabatlas::artifact::kArtifactSchemaVersion + 1)}}) {
     CommandRun r = Fabatlas("inspect " + (dir / file).string());
     EXPECT_EQ(r.status, 2) << file;
     EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
@@ -195,7 +195,7 @@ TEST(ArtifactCli, SampleWithCacheStoresHoptAndHrfreeEntriesThatInspectReloads) {
   CommandRun run = Fabatlas("sample " + job.string() + " --cache --out " + (dir / "out").string());
   ASSERT_EQ(run.status, 0) << run.err;
   EXPECT_NE(run.out.find("cache opt_max: H_TOP"), std::string::npos) << run.out;
-  const auto a = fabatlas::storage::ReadArtifact(dir / "out/tube_wall_2d.fabatlas");
+  const auto a = fabatlas::artifact::ReadArtifact(dir / "out/tube_wall_2d.fabatlas");
   const auto& c = a.manifest.cache;
   EXPECT_EQ(c.strategy, "opt_max");
   // H_TOP is one root per valid sample.
@@ -205,7 +205,7 @@ TEST(ArtifactCli, SampleWithCacheStoresHoptAndHrfreeEntriesThatInspectReloads) {
   std::int64_t rfree = 0;
   for (const auto& e : a.cache) {
     rfree += e.in_rfree;
-    EXPECT_FALSE(fabatlas::storage::GlbToMesh(e.glb).empty()) << e.key;
+    EXPECT_FALSE(fabatlas::artifact::GlbToMesh(e.glb).empty()) << e.key;
   }
   EXPECT_EQ(rfree, c.rfree_entries);
   EXPECT_FALSE(a.cache_curves.empty());
@@ -229,7 +229,7 @@ TEST(ArtifactCli, SampleWithCacheStoresHoptAndHrfreeEntriesThatInspectReloads) {
                                     << static_cast<double>(budget) / (1 << 20) << "}\n";
   CommandRun tight = Fabatlas("sample " + (dir / "tight.yaml").string() + " --out " + (dir / "tight").string());
   ASSERT_EQ(tight.status, 0) << tight.err;
-  const auto t = fabatlas::storage::ReadArtifact(dir / "tight/tube_wall_2d.fabatlas", {.load_geometry = false});
+  const auto t = fabatlas::artifact::ReadArtifact(dir / "tight/tube_wall_2d.fabatlas", {.load_geometry = false});
   EXPECT_EQ(t.manifest.cache.rfree_entries, c.rfree_entries);
   EXPECT_EQ(t.manifest.cache.rfree_bytes, c.rfree_bytes);
   EXPECT_LT(t.manifest.cache.budget_bytes, c.rfree_bytes);
@@ -255,13 +255,13 @@ TEST(ArtifactCli, SampleWithCacheStoresHoptAndHrfreeEntriesThatInspectReloads) {
 // a real `fabatlas run` (command in its README). Later readers must read it.
 TEST(ArtifactCli, CheckedInVersion1ArtifactStaysReadable) {
   const fs::path v1 = SourceDir() / "tests/data/artifact_v1/tube_wall_2d.fabatlas";
-  const auto a = fabatlas::storage::ReadArtifact(v1);
+  const auto a = fabatlas::artifact::ReadArtifact(v1);
   EXPECT_EQ(a.manifest.schema_version, 1);
   EXPECT_EQ(a.manifest.design_name, "tube_wall_2d");
   EXPECT_EQ(a.manifest.statistics.samples, static_cast<std::int64_t>(a.form.samples.size()));
   ExpectTubeForm(a.form);
   // The stored statistics are those of the stored form.
-  const auto recomputed = fabatlas::storage::StatisticsOf(a.form);
+  const auto recomputed = fabatlas::artifact::StatisticsOf(a.form);
   EXPECT_EQ(recomputed.valid_samples, a.manifest.statistics.valid_samples);
   EXPECT_DOUBLE_EQ(recomputed.valid_volume_percent, a.manifest.statistics.valid_volume_percent);
   // The valid region is convex (the epigraph of a parabola cut by a half
@@ -295,8 +295,8 @@ TEST(ArtifactCli, EightDimensionalJobEndToEnd) {
                           (dir / "out").string());
   ASSERT_EQ(r.status, 0) << r.err;
   const fs::path path = dir / "out/box_8d.fabatlas";
-  const auto a = fabatlas::storage::ReadArtifact(path);
-  EXPECT_EQ(a.manifest.schema_version, fabatlas::storage::kArtifactSchemaVersion);
+  const auto a = fabatlas::artifact::ReadArtifact(path);
+  EXPECT_EQ(a.manifest.schema_version, fabatlas::artifact::kArtifactSchemaVersion);
   ASSERT_EQ(a.form.dimensions.size(), 8u);
   auto truly_valid = [](const std::vector<double>& u) { return u[0] + u[1] <= 4.5; };
   // 3^8 would be the whole subdivision-2 grid; the bootstrap alone is 2^8.
@@ -339,7 +339,7 @@ TEST(ArtifactCli, EightDimensionalJobEndToEnd) {
   CommandRun inspect = Fabatlas("inspect " + path.string() + " --points 5 --json");
   ASSERT_EQ(inspect.status, 0) << inspect.err;
   const auto j = nlohmann::json::parse(inspect.out);
-  EXPECT_EQ(j["schema_version"], fabatlas::storage::kArtifactSchemaVersion);
+  EXPECT_EQ(j["schema_version"], fabatlas::artifact::kArtifactSchemaVersion);
   EXPECT_EQ(j["table3"]["samples"], a.form.samples.size());
   EXPECT_EQ(j["fig14"]["t_nocache"]["points"], 5);
 }
@@ -349,12 +349,12 @@ TEST(ArtifactCli, EightDimensionalJobEndToEnd) {
 // one u column per dimension instead of u0..u5.
 TEST(ArtifactCli, Version1ArtifactMigratesToTheCurrentVersion) {
   const fs::path v1 = SourceDir() / "tests/data/artifact_v1/tube_wall_2d.fabatlas";
-  const auto old = fabatlas::storage::ReadArtifact(v1);
+  const auto old = fabatlas::artifact::ReadArtifact(v1);
   const fs::path path = FreshTempDir("artifact-migrate") / "tube_wall_2d.fabatlas";
-  fabatlas::storage::WriteArtifact(old, path);
-  const auto now = fabatlas::storage::ReadArtifact(path);
+  fabatlas::artifact::WriteArtifact(old, path);
+  const auto now = fabatlas::artifact::ReadArtifact(path);
   EXPECT_EQ(old.manifest.schema_version, 1);
-  EXPECT_EQ(now.manifest.schema_version, fabatlas::storage::kArtifactSchemaVersion);
+  EXPECT_EQ(now.manifest.schema_version, fabatlas::artifact::kArtifactSchemaVersion);
   ASSERT_EQ(now.form.samples.size(), old.form.samples.size());
   for (std::size_t i = 0; i < old.form.samples.size(); ++i) {
     EXPECT_EQ(now.form.samples[i].u, old.form.samples[i].u);

@@ -15,8 +15,8 @@
 #include "fabatlas/precompute/preview_times.h"
 #include "fabatlas/geometry/solid.h"
 #include "fabatlas/sha256.h"
-#include "fabatlas/storage/artifact.h"
-#include "fabatlas/storage/glb.h"
+#include "fabatlas/artifact/artifact.h"
+#include "fabatlas/artifact/glb.h"
 #include "fabatlas/testing/paths.h"
 
 namespace fabatlas::pipeline {
@@ -75,7 +75,7 @@ struct ChessLike {
 
 TEST(PublishCache, ChessLikeDesignPlansHoptHrfreeHtopAndTheFileHoldsTheCache) {
   ChessLike chess;
-  storage::Artifact art = storage::ReadArtifact(testing::SourceDir() / "tests/data/artifact_v1/tube_wall_2d.fabatlas");
+  artifact::Artifact art = artifact::ReadArtifact(testing::SourceDir() / "tests/data/artifact_v1/tube_wall_2d.fabatlas");
   const CacheAssemblySummary summary = AddCache(art, chess.assembly);
   const auto& m = art.manifest.cache;
   EXPECT_EQ(m.strategy, "opt_max");
@@ -111,7 +111,7 @@ TEST(PublishCache, ChessLikeDesignPlansHoptHrfreeHtopAndTheFileHoldsTheCache) {
   {
     ChessLike spheres_only;
     spheres_only.assembly.options.min_seconds = (union_seconds + sphere_seconds) / 2;
-    storage::Artifact p = art;
+    artifact::Artifact p = art;
     AddCache(p, spheres_only.assembly);
     std::int64_t sphere_bytes = 0;
     for (const auto& r : chess.assembly.subtrees)
@@ -134,14 +134,14 @@ TEST(PublishCache, ChessLikeDesignPlansHoptHrfreeHtopAndTheFileHoldsTheCache) {
   EXPECT_EQ(strategies, (std::set<std::string>{"naive", "opt_ave", "opt_max"}));
 
   const fs::path path = testing::FreshTempDir("publish") / "chess.fabatlas";
-  storage::WriteArtifact(art, path);
-  const storage::Artifact back = storage::ReadArtifact(path);
+  artifact::WriteArtifact(art, path);
+  const artifact::Artifact back = artifact::ReadArtifact(path);
   ASSERT_EQ(back.cache.size(), static_cast<std::size_t>(summary.entries));
   for (const auto& e : back.cache) {
     EXPECT_EQ(e.grid, chess.grids.at(e.key));
     // The glTF mesh is the level set's surface: for a sphere piece, every
     // vertex lies within a voxel of the radius.
-    const mesh::TriangleMesh mesh = storage::GlbToMesh(e.glb);
+    const mesh::TriangleMesh mesh = artifact::GlbToMesh(e.glb);
     EXPECT_GT(mesh.triangles.size(), 100u);
     auto it = chess.sphere_radius.find(e.key);
     if (it == chess.sphere_radius.end()) continue;
@@ -151,7 +151,7 @@ TEST(PublishCache, ChessLikeDesignPlansHoptHrfreeHtopAndTheFileHoldsTheCache) {
   // A budget below H_rfree chooses less, and only entries that fit.
   ChessLike tight;
   tight.assembly.options.budget_bytes = static_cast<std::uint64_t>(m.rfree_bytes / 2);
-  storage::Artifact small = art;
+  artifact::Artifact small = art;
   AddCache(small, tight.assembly);
   EXPECT_LE(small.manifest.cache.opt_bytes, m.rfree_bytes / 2);
   EXPECT_EQ(small.manifest.cache.rfree_bytes, m.rfree_bytes);
@@ -162,7 +162,7 @@ TEST(PublishCache, ChessLikeDesignPlansHoptHrfreeHtopAndTheFileHoldsTheCache) {
 }
 
 TEST(PublishCache, StartingPointsAreValidSamplesOfTheForm) {
-  storage::Artifact art = storage::ReadArtifact(testing::SourceDir() / "tests/data/artifact_v1/tube_wall_2d.fabatlas");
+  artifact::Artifact art = artifact::ReadArtifact(testing::SourceDir() / "tests/data/artifact_v1/tube_wall_2d.fabatlas");
   AddStartingPoints(art);
   ASSERT_FALSE(art.starting_points.empty());
   for (const auto& p : art.starting_points) {

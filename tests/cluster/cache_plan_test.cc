@@ -21,7 +21,7 @@
 #include "fabatlas/sampling/adaptive_sampler.h"
 #include "fabatlas/sampling/executor.h"
 #include "fabatlas/sampling/job_file.h"
-#include "fabatlas/storage/artifact.h"
+#include "fabatlas/artifact/artifact.h"
 #include "fabatlas/storage/job_store.h"
 #include "fabatlas/v1/tasks.pb.h"
 
@@ -129,7 +129,7 @@ TEST(ClusterCachePlan, PlanTaskSurvivesAWorkerKilledMidPlanAndPublishesTheSameBy
   v1::TaskResult result;
   ASSERT_TRUE(result.ParseFromString(plans[0].result));
   EXPECT_EQ(result.cache_plan().report_digest().size(), 64u);
-  const storage::Artifact artifact = storage::ReadArtifact(dir / "reference" / "tube_wall_2d.fabatlas");
+  const artifact::Artifact artifact = artifact::ReadArtifact(dir / "reference" / "tube_wall_2d.fabatlas");
   EXPECT_EQ(result.cache_plan().opt_entries(), artifact.manifest.cache.opt_entries);
   EXPECT_EQ(result.cache_plan().rfree_entries(), artifact.manifest.cache.rfree_entries);
   EXPECT_GT(artifact.manifest.cache.opt_entries, 0);

@@ -38,7 +38,7 @@
 #include "fabatlas/protocol/job_bundle.h"
 #include "fabatlas/protocol/solid_blob.h"
 #include "fabatlas/v1/tasks.pb.h"
-#include "fabatlas/storage/artifact.h"
+#include "fabatlas/artifact/artifact.h"
 #include "fabatlas/sha256.h"
 #include "fabatlas/storage/blob_store.h"
 #include "fabatlas/storage/job_store.h"
@@ -71,10 +71,10 @@ const std::string& ReferenceArtifact() {
   static const std::string bytes = [] {
     sampling::JobFile job = sampling::ReadJobFile(JobPath().string());
     sampling::Form form = sampling::FormFromJson(ReferenceForm());
-    storage::Artifact artifact =
+    artifact::Artifact artifact =
         pipeline::ArtifactOf(protocol::MakeJobBundle(JobPath()), "tube_wall_2d", job, form);
     fs::path path = FreshDir("reference-artifact") / kArtifactName;
-    storage::WriteArtifact(artifact, path);
+    artifact::WriteArtifact(artifact, path);
     return ReadText(path);
   }();
   return bytes;

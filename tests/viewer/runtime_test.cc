@@ -12,7 +12,7 @@
 #include "fabatlas/error.h"
 #include "fabatlas/sampling/adaptive_sampler.h"
 #include "fabatlas/sampling/executor.h"
-#include "fabatlas/storage/artifact.h"
+#include "fabatlas/artifact/artifact.h"
 #include "fabatlas/testing/paths.h"
 #include "fabatlas/viewer/customiser.h"
 #include "fabatlas/viewer/leaf_corners.h"
@@ -72,8 +72,8 @@ class Gap : public sampling::SampleEvaluator {
 // real artifact: the tube_wall_2d job as `fabatlas run` published it (schema
 // version 1; viewer_api_test does the same on the viewer_tube_run fixture).
 TEST(ViewerLeafCorners, TableGivesTheAnswersOfTheSampleIdSearchOnARealArtifact) {
-  const storage::Artifact art =
-      storage::ReadArtifact(testing::SourceDir() / "tests/data/artifact_v1/tube_wall_2d.fabatlas");
+  const artifact::Artifact art =
+      artifact::ReadArtifact(testing::SourceDir() / "tests/data/artifact_v1/tube_wall_2d.fabatlas");
   const LeafCorners corners(art.form);
   ExpectCornerTableMatchesSampleIdSearch(art.form, corners, 2000);
 

@@ -12,8 +12,8 @@
 #include "fabatlas/error.h"
 #include "fabatlas/precompute/design_evaluator.h"
 #include "fabatlas/sampling/form_json.h"
-#include "fabatlas/storage/artifact.h"
-#include "fabatlas/storage/glb.h"
+#include "fabatlas/artifact/artifact.h"
+#include "fabatlas/artifact/glb.h"
 
 namespace fabatlas::viewer {
 
@@ -84,7 +84,7 @@ void WriteBundled(const std::filesystem::path& dir, const std::string& name, con
 CustomiserSource LoadArtifact(const std::filesystem::path& artifact, CacheChoice cache) {
   // Metadata only; the chosen cache's geometry is read entry by entry below,
   // so loading holds the form and that cache, never the whole file.
-  storage::Artifact art = storage::ReadArtifact(artifact, {.load_geometry = false});
+  artifact::Artifact art = artifact::ReadArtifact(artifact, {.load_geometry = false});
   CustomiserSource source;
   source.form = std::move(art.form);
   source.name = art.manifest.design_name;
@@ -112,9 +112,9 @@ CustomiserSource LoadArtifact(const std::filesystem::path& artifact, CacheChoice
                       : cache == CacheChoice::kOpt               ? "H_opt"
                                                                  : "H_rfree";
   if (has_cache && cache != CacheChoice::kNone)
-    storage::ReadCacheGeometry(
-        artifact, [&](const storage::CacheEntry& e) { return cache == CacheChoice::kOpt ? e.in_opt : e.in_rfree; },
-        [&](storage::CacheEntry& e) {
+    artifact::ReadCacheGeometry(
+        artifact, [&](const artifact::CacheEntry& e) { return cache == CacheChoice::kOpt ? e.in_opt : e.in_rfree; },
+        [&](artifact::CacheEntry& e) {
           source.cache.emplace(e.key, std::make_pair(geometry::Solid::Deserialize(e.grid), e.cost_seconds));
         });
   return source;
@@ -183,7 +183,7 @@ std::shared_ptr<const EncodedPreview> Customiser::PreviewGlb(std::int64_t sample
         const PreviewResult p = Preview(id);
         EncodedPreview e;
         e.sample = id;
-        e.glb = storage::MeshToGlb(p.solid.ToMesh());
+        e.glb = artifact::MeshToGlb(p.solid.ToMesh());
         e.seconds = p.seconds;
         e.subtrees = p.subtrees;
         e.cache_hits = p.cache_hits;

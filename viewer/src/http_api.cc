@@ -10,7 +10,7 @@
 #include "fabatlas/design/state_graph.h"
 #include "fabatlas/error.h"
 #include "fabatlas/precompute/design_evaluator.h"
-#include "fabatlas/storage/glb.h"
+#include "fabatlas/artifact/glb.h"
 #include "fabatlas/viewer/export_design.h"
 #include "fabatlas/viewer/failure_reason.h"
 #include "fabatlas/viewer/property_limits.h"

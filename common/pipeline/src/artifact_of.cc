@@ -8,8 +8,8 @@
 
 namespace fabatlas::pipeline {
 
-storage::JobBundle PlainBundle(const v1::JobBundle& bundle) {
-  storage::JobBundle b;
+artifact::JobBundle PlainBundle(const v1::JobBundle& bundle) {
+  artifact::JobBundle b;
   b.job_file_name = bundle.job_file_name();
   b.job_file = bundle.job_file();
   b.design_file_name = bundle.design_file_name();
@@ -18,7 +18,7 @@ storage::JobBundle PlainBundle(const v1::JobBundle& bundle) {
   return b;
 }
 
-v1::JobBundle ProtoBundle(const storage::JobBundle& b) {
+v1::JobBundle ProtoBundle(const artifact::JobBundle& b) {
   v1::JobBundle bundle;
   bundle.set_job_file_name(b.job_file_name);
   bundle.set_job_file(b.job_file);
@@ -28,11 +28,11 @@ v1::JobBundle ProtoBundle(const storage::JobBundle& b) {
   return bundle;
 }
 
-storage::Artifact ArtifactOf(const v1::JobBundle& bundle, const std::string& design_name,
+artifact::Artifact ArtifactOf(const v1::JobBundle& bundle, const std::string& design_name,
                              const sampling::JobFile& job, const sampling::Form& form) {
-  storage::Artifact a;
+  artifact::Artifact a;
   a.form = form;
-  storage::Manifest& m = a.manifest;
+  artifact::Manifest& m = a.manifest;
   m.design_name = design_name;
   m.design_hash = protocol::EvaluationDigest(bundle);
   m.code_version = protocol::kCodeVersion;
@@ -40,13 +40,13 @@ storage::Artifact ArtifactOf(const v1::JobBundle& bundle, const std::string& des
   m.max_depth = job.sampling.max_depth;
   m.dg_threshold = job.sampling.dg_threshold;
   m.max_samples = job.sampling.max_samples;
-  m.statistics = storage::StatisticsOf(form);
+  m.statistics = artifact::StatisticsOf(form);
   a.bundle = PlainBundle(bundle);
   AddStartingPoints(a);
   return a;
 }
 
-void AddStartingPoints(storage::Artifact& artifact, const cache::StartingPointOptions& options) {
+void AddStartingPoints(artifact::Artifact& artifact, const cache::StartingPointOptions& options) {
   artifact.starting_points.clear();
   for (const auto& p : cache::ChooseStartingPoints(artifact.form, options))
     artifact.starting_points.push_back({p.sample_id, p.component, p.u});

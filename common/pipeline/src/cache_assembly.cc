@@ -6,7 +6,7 @@
 
 #include "fabatlas/geometry/solid.h"
 #include "fabatlas/protocol/cache_plan.h"
-#include "fabatlas/storage/glb.h"
+#include "fabatlas/artifact/glb.h"
 
 namespace fabatlas::pipeline {
 
@@ -27,12 +27,12 @@ v1::CachePlanInput CachePlanInputOf(const CacheAssembly& a) {
   return input;
 }
 
-CacheAssemblySummary AddCache(storage::Artifact& artifact, const CacheAssembly& a,
+CacheAssemblySummary AddCache(artifact::Artifact& artifact, const CacheAssembly& a,
                               const v1::CachePlanReport& report) {
   CacheAssemblySummary summary;
   summary.exact = report.exact();
   const cache::CacheOptions& options = a.options;
-  storage::CacheSummary& m = artifact.manifest.cache;
+  artifact::CacheSummary& m = artifact.manifest.cache;
   m.strategy = cache::StrategyName(options.strategy);
   m.budget_bytes = options.budget_bytes == std::numeric_limits<std::uint64_t>::max()
                        ? 0
@@ -57,20 +57,20 @@ CacheAssemblySummary AddCache(storage::Artifact& artifact, const CacheAssembly& 
   artifact.cache.clear();
   artifact.cache_geometry = nullptr;
   // The geometry of an entry: the subtree's grid and its zero iso-surface.
-  auto fill = [grid_of = a.grid_of](storage::CacheEntry& e) {
+  auto fill = [grid_of = a.grid_of](artifact::CacheEntry& e) {
     try {
       e.grid = grid_of ? grid_of(e.key) : std::string();
     } catch (const std::exception&) {
       e.grid.clear();
     }
     if (e.grid.empty()) return false;
-    e.glb = storage::MeshToGlb(geometry::Solid::Deserialize(e.grid).ToMesh());
+    e.glb = artifact::MeshToGlb(geometry::Solid::Deserialize(e.grid).ToMesh());
     return true;
   };
   if (a.stream_geometry) artifact.cache_geometry = fill;
   for (const auto& r : report.entries()) {
     if (!r.in_opt() && !a.store_rfree) continue;  // H_rfree beyond H_opt: sizes in the manifest only
-    storage::CacheEntry e;
+    artifact::CacheEntry e;
     e.key = r.key();
     e.op = r.op();
     e.children.assign(r.children().begin(), r.children().end());
@@ -88,7 +88,7 @@ CacheAssemblySummary AddCache(storage::Artifact& artifact, const CacheAssembly& 
   return summary;
 }
 
-CacheAssemblySummary AddCache(storage::Artifact& artifact, const CacheAssembly& assembly) {
+CacheAssemblySummary AddCache(artifact::Artifact& artifact, const CacheAssembly& assembly) {
   return AddCache(artifact, assembly, protocol::RunCachePlan(CachePlanInputOf(assembly)));
 }
 

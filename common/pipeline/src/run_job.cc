@@ -52,7 +52,7 @@ RunSummary RunJob(const Job& job, Executor& executor, const RunOptions& options)
 
   // 4. The artifact (docs/artifact.md), with the geometry cache (Fab Forms
   // Sec. 6) when asked for.
-  storage::Artifact artifact = ArtifactOf(job.bundle, job.design.name, job.file, form);
+  artifact::Artifact artifact = ArtifactOf(job.bundle, job.design.name, job.file, form);
   if (wants_cache) {
     CacheAssembly assembly = executor.CacheSubtrees(form);
     assembly.options = cache_options;
@@ -63,11 +63,11 @@ RunSummary RunJob(const Job& job, Executor& executor, const RunOptions& options)
     summary.cache_manifest = artifact.manifest.cache;
     // 5. Written while assembly.grid_of still serves the entries' geometry.
     summary.artifact_file = ArtifactFileName(job.design.name);
-    summary.written = storage::WriteArtifact(artifact, options.out_dir / summary.artifact_file);
+    summary.written = artifact::WriteArtifact(artifact, options.out_dir / summary.artifact_file);
     return summary;
   }
   summary.artifact_file = ArtifactFileName(job.design.name);
-  summary.written = storage::WriteArtifact(artifact, options.out_dir / summary.artifact_file);
+  summary.written = artifact::WriteArtifact(artifact, options.out_dir / summary.artifact_file);
   return summary;
 }
 

@@ -42,10 +42,10 @@ double NiceStep(double range, int ticks) {
 
 }  // namespace
 
-void WriteCacheCurvesPng(const std::vector<storage::CacheCurvePoint>& points, const std::filesystem::path& path,
+void WriteCacheCurvesPng(const std::vector<artifact::CacheCurvePoint>& points, const std::filesystem::path& path,
                          const CacheCurvesPlotOptions& options) {
   if (points.empty()) throw InputError(path.string() + ": no cache curves to plot");
-  std::map<std::string, std::vector<storage::CacheCurvePoint>> curves;
+  std::map<std::string, std::vector<artifact::CacheCurvePoint>> curves;
   for (const auto& p : points) curves[p.strategy].push_back(p);
   double max_mib = 0, max_s = 0;
   for (auto& [name, c] : curves) {

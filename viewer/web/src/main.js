@@ -323,7 +323,7 @@ function initView() {
   scene.add(sun);
   controls = new OrbitControls(camera, renderer.domElement);
   controls.addEventListener('change', render);
-  modelGroup = new THREE.Group();  // glTF is metres, +Y up (storage/glb.h)
+  modelGroup = new THREE.Group();  // glTF is metres, +Y up (artifact/glb.h)
   scene.add(modelGroup);
   window.addEventListener('resize', () => {
     renderer.setSize(host.clientWidth, host.clientHeight);
@@ -507,7 +507,7 @@ function onMapClick(e) {
 // Reconfigurables (Sec. 5): /api/state_graph evaluates the design at exactly
 // a point with its checks; the page moves each object's mesh (body frame,
 // mm, z up) by the poses it sends, in a group that turns mm / z up into the
-// preview's metres / +Y up (as storage/glb.h's node transform does).
+// preview's metres / +Y up (as artifact/glb.h's node transform does).
 let motionData = null, motionGroup = null, motionMeshes = [], whereBox = null, motionTimer = null;
 const collidingMaterial = new THREE.MeshStandardMaterial({ color: 0xd62828, roughness: 0.5, metalness: 0.05 });
 const PLAY_SECONDS = 2.5;

@@ -52,7 +52,7 @@ struct CustomiserSource {
 // none (every preview evaluates the whole tree).
 enum class CacheChoice { kOpt, kRfree, kNone };
 
-// A published artifact (storage/artifact.h, docs/artifact.md): its form,
+// A published artifact (artifact/artifact.h, docs/artifact.md): its form,
 // starting points, the chosen cache entries and, from its job bundle, the
 // design (written to a fresh scratch directory so mesh and OpenSCAD files
 // resolve) and the job file's materials. Throws InputError naming the file
@@ -115,7 +115,7 @@ class Customiser {
   // with_cache = false ignores the cache (the "no cache" baseline).
   PreviewResult Preview(std::int64_t sample, bool with_cache = true) const;
 
-  // The sample's preview as glTF binary (storage::MeshToGlb), from the
+  // The sample's preview as glTF binary (artifact::MeshToGlb), from the
   // bounded cache of encoded previews (preview_cache.h) or evaluated with
   // Preview() and stored; `hit` says which.
   std::shared_ptr<const EncodedPreview> PreviewGlb(std::int64_t sample, bool* hit = nullptr) const;

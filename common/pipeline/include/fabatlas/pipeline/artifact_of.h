@@ -12,26 +12,26 @@
 #include "fabatlas/cache/starting_points.h"
 #include "fabatlas/sampling/form.h"
 #include "fabatlas/sampling/job_file.h"
-#include "fabatlas/storage/artifact.h"
+#include "fabatlas/artifact/artifact.h"
 #include "fabatlas/v1/job.pb.h"
 
 namespace fabatlas::pipeline {
 
 // The job's inputs as the artifact stores them.
-storage::JobBundle PlainBundle(const v1::JobBundle& bundle);
+artifact::JobBundle PlainBundle(const v1::JobBundle& bundle);
 // And back (e.g. to protocol::Materialize an artifact's bundle).
-v1::JobBundle ProtoBundle(const storage::JobBundle& bundle);
+v1::JobBundle ProtoBundle(const artifact::JobBundle& bundle);
 
 // The artifact of a job whose sampling finished: manifest (design name and
 // hash, code version, sampling parameters, statistics), the form and the
 // bundle, and the starting points (AddStartingPoints). No cache: AddCache
 // adds it when the samples' subtrees are known.
-storage::Artifact ArtifactOf(const v1::JobBundle& bundle, const std::string& design_name,
+artifact::Artifact ArtifactOf(const v1::JobBundle& bundle, const std::string& design_name,
                              const sampling::JobFile& job, const sampling::Form& form);
 
 // Fab Forms Sec. 7.4 starting points of the artifact's form
 // (cache::ChooseStartingPoints).
-void AddStartingPoints(storage::Artifact& artifact, const cache::StartingPointOptions& options = {});
+void AddStartingPoints(artifact::Artifact& artifact, const cache::StartingPointOptions& options = {});
 
 // "<design name>.fabatlas", with characters other than [A-Za-z0-9._-] as '_'.
 std::string ArtifactFileName(const std::string& design_name);

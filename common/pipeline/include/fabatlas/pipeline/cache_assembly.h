@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "fabatlas/cache/optimize_cache.h"
-#include "fabatlas/storage/artifact.h"
+#include "fabatlas/artifact/artifact.h"
 #include "fabatlas/v1/tasks.pb.h"
 
 namespace fabatlas::pipeline {
@@ -53,7 +53,7 @@ struct CacheAssembly {
 struct CacheAssemblySummary {
   // Cache entries with geometry (H_opt ∪ H_rfree) and chosen subtrees whose
   // geometry was missing; with stream_geometry: the entries planned and 0
-  // (storage::ArtifactWriteSummary has the counts).
+  // (artifact::ArtifactWriteSummary has the counts).
   std::int64_t entries = 0;
   std::int64_t missing = 0;
   v1::CachePlanExact exact;  // the report's exact optimum (not in the artifact)
@@ -71,12 +71,12 @@ v1::CachePlanInput CachePlanInputOf(const CacheAssembly& assembly);
 // every subtree of H_opt ∪ H_rfree as an entry (grid from assembly.grid_of +
 // glTF binary mesh) with its membership flags. The plan's costs are the
 // deterministic model of docs/cache.md, so the artifact stays byte-identical.
-CacheAssemblySummary AddCache(storage::Artifact& artifact, const CacheAssembly& assembly,
+CacheAssemblySummary AddCache(artifact::Artifact& artifact, const CacheAssembly& assembly,
                               const v1::CachePlanReport& report);
 
 // The same with the plan computed here, in process:
 // AddCache(artifact, assembly, protocol::RunCachePlan(CachePlanInputOf(assembly))).
-CacheAssemblySummary AddCache(storage::Artifact& artifact, const CacheAssembly& assembly);
+CacheAssemblySummary AddCache(artifact::Artifact& artifact, const CacheAssembly& assembly);
 
 // "exact worst case 1.23 s (optimal, 120 variables), H_opt gap 0.00 %", or
 // "exact optimum: <why not solved>".

@@ -9,7 +9,7 @@
 //   4. the artifact (artifact_of.h); when the job file asks for a cache (or
 //      RunOptions::cache), the subtrees (Executor::CacheSubtrees), the plan
 //      (Executor::RunCachePlan) and its entries (cache_assembly.h AddCache);
-//   5. <design>.fabatlas (storage::WriteArtifact), atomically.
+//   5. <design>.fabatlas (artifact::WriteArtifact), atomically.
 // Every output is a pure function of the job and the task results, so the
 // same job gives the same bytes on every executor.
 #pragma once
@@ -22,7 +22,7 @@
 #include "fabatlas/pipeline/executor.h"
 #include "fabatlas/sampling/adaptive_sampler.h"
 #include "fabatlas/sampling/job_file.h"
-#include "fabatlas/storage/artifact.h"
+#include "fabatlas/artifact/artifact.h"
 #include "fabatlas/v1/job.pb.h"
 
 namespace fabatlas::pipeline {
@@ -55,8 +55,8 @@ struct RunSummary {
   std::size_t swept_volumes = 0; // carve_swept nodes published
   bool cache = false;            // a cache was planned
   CacheAssemblySummary cache_added;
-  storage::CacheSummary cache_manifest;  // the artifact's manifest.cache
-  storage::ArtifactWriteSummary written;
+  artifact::CacheSummary cache_manifest;  // the artifact's manifest.cache
+  artifact::ArtifactWriteSummary written;
 };
 
 // Runs the job's pipeline (above) on `executor` and writes its outputs into

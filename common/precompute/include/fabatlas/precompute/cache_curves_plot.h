@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "fabatlas/storage/artifact.h"
+#include "fabatlas/artifact/artifact.h"
 
 namespace fabatlas::precompute {
 
@@ -21,7 +21,7 @@ struct CacheCurvesPlotOptions {
 // OPT-AVE purple, OPT-MAX blue, as in Fig. 13), with a legend and axis
 // ticks. Written atomically. Throws InputError when `points` is empty or the
 // file cannot be written.
-void WriteCacheCurvesPng(const std::vector<storage::CacheCurvePoint>& points, const std::filesystem::path& path,
+void WriteCacheCurvesPng(const std::vector<artifact::CacheCurvePoint>& points, const std::filesystem::path& path,
                          const CacheCurvesPlotOptions& options = {});
 
 }  // namespace fabatlas::precompute

@@ -1,4 +1,4 @@
-// fabatlas/storage/glb.h — triangle meshes as glTF 2.0 binary (GLB), the mesh
+// fabatlas/artifact/glb.h — triangle meshes as glTF 2.0 binary (GLB), the mesh
 // format of the artifact's cache entries (docs/artifact.md), written and read
 // with tinygltf so standard tools (Blender, three.js, gltf-validator) open it.
 #pragma once
@@ -8,7 +8,7 @@
 
 #include "fabatlas/mesh/triangle_mesh.h"
 
-namespace fabatlas::storage {
+namespace fabatlas::artifact {
 
 // One scene, one node, one mesh with one triangle primitive: POSITION as
 // float32 VEC3 in the design's millimetres, z up (with min/max bounds, as
@@ -26,4 +26,4 @@ std::string MeshToGlb(const mesh::TriangleMesh& mesh);
 // `source` when the bytes are not such a GLB.
 mesh::TriangleMesh GlbToMesh(std::string_view glb, const std::string& source = "glb");
 
-}  // namespace fabatlas::storage
+}  // namespace fabatlas::artifact

@@ -1,6 +1,7 @@
-// storage/src/sqlite_statement.h (internal to fabatlas_storage) — one
-// prepared SQLite statement: bind its parameters, step through its rows, read
-// their columns. The one wrapper the job store and the artifact file use.
+// fabatlas/sqlite/statement.h — one prepared SQLite statement: bind its
+// parameters, step through its rows, read their columns. The one wrapper the
+// job store (storage/) and the artifact file (artifact/) use; include it only
+// from .cc files (it includes sqlite3.h).
 //
 // Bind*(i, value) sets parameter i (from 1); Column*(c) reads column c (from
 // 0) of the current row. Next() steps to the next row, false at the end;
@@ -21,9 +22,9 @@
 #include <string>
 #include <utility>
 
-namespace fabatlas::storage::internal {
+namespace fabatlas::sqlite {
 
-class SqliteStatement {
+class Statement {
  public:
   using Fail = std::function<void(const std::string& what)>;
 
@@ -31,13 +32,13 @@ class SqliteStatement {
   // `prepared` (a statement the caller keeps, e.g. in a cache of prepared
   // statements), uses that one and on destruction resets it, clears its
   // bindings and calls `release` instead.
-  SqliteStatement(sqlite3* db, const std::string& sql, Fail fail, sqlite3_stmt* prepared = nullptr,
+  Statement(sqlite3* db, const std::string& sql, Fail fail, sqlite3_stmt* prepared = nullptr,
                   std::function<void()> release = {})
       : db_(db), stmt_(prepared), fail_(std::move(fail)), release_(std::move(release)) {
     if (!stmt_ && sqlite3_prepare_v2(db_, sql.c_str(), -1, &stmt_, nullptr) != SQLITE_OK) Failed("prepare");
     if (!prepared) release_ = nullptr;
   }
-  ~SqliteStatement() {
+  ~Statement() {
     if (!release_) {
       sqlite3_finalize(stmt_);
       return;
@@ -45,17 +46,17 @@ class SqliteStatement {
     Reset();
     release_();
   }
-  SqliteStatement(const SqliteStatement&) = delete;
-  SqliteStatement& operator=(const SqliteStatement&) = delete;
+  Statement(const Statement&) = delete;
+  Statement& operator=(const Statement&) = delete;
 
-  SqliteStatement& Bind(int i, std::int64_t v) { return Check(sqlite3_bind_int64(stmt_, i, v), "bind"); }
-  SqliteStatement& BindReal(int i, double v) { return Check(sqlite3_bind_double(stmt_, i, v), "bind"); }
-  SqliteStatement& BindNull(int i) { return Check(sqlite3_bind_null(stmt_, i), "bind"); }
-  SqliteStatement& BindText(int i, const std::string& v) {
+  Statement& Bind(int i, std::int64_t v) { return Check(sqlite3_bind_int64(stmt_, i, v), "bind"); }
+  Statement& BindReal(int i, double v) { return Check(sqlite3_bind_double(stmt_, i, v), "bind"); }
+  Statement& BindNull(int i) { return Check(sqlite3_bind_null(stmt_, i), "bind"); }
+  Statement& BindText(int i, const std::string& v) {
     return Check(sqlite3_bind_text64(stmt_, i, v.data(), v.size(), SQLITE_TRANSIENT, SQLITE_UTF8), "bind");
   }
   // Bytes as a BLOB.
-  SqliteStatement& Bind(int i, const std::string& v) {
+  Statement& Bind(int i, const std::string& v) {
     return Check(sqlite3_bind_blob64(stmt_, i, v.data(), v.size(), SQLITE_TRANSIENT), "bind");
   }
 
@@ -89,7 +90,7 @@ class SqliteStatement {
   }
 
  private:
-  SqliteStatement& Check(int rc, const char* what) {
+  Statement& Check(int rc, const char* what) {
     if (rc != SQLITE_OK) Failed(what);
     return *this;
   }
@@ -104,4 +105,4 @@ class SqliteStatement {
   std::function<void()> release_;
 };
 
-}  // namespace fabatlas::storage::internal
+}  // namespace fabatlas::sqlite

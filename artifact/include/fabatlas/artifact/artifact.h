@@ -1,4 +1,4 @@
-// fabatlas/storage/artifact.h — the published artifact of a job: one SQLite
+// fabatlas/artifact/artifact.h — the published artifact of a job: one SQLite
 // database file, `<design>.fabatlas` (schema and the
 // meaning of every column in docs/artifact.md).
 //
@@ -38,7 +38,7 @@
 
 #include "fabatlas/sampling/form.h"
 
-namespace fabatlas::storage {
+namespace fabatlas::artifact {
 
 // The schema version WriteArtifact writes.
 inline constexpr int kArtifactSchemaVersion = 2;
@@ -185,4 +185,4 @@ ArtifactWriteSummary WriteArtifact(const Artifact& artifact, const std::filesyst
 // shares, counts), as sampling::SampleDesignSpace reports them.
 ArtifactStatistics StatisticsOf(const sampling::Form& form);
 
-}  // namespace fabatlas::storage
+}  // namespace fabatlas::artifact

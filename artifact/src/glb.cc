@@ -1,5 +1,5 @@
 // Meshes as glTF binary through tinygltf (see glb.h).
-#include "fabatlas/storage/glb.h"
+#include "fabatlas/artifact/glb.h"
 
 #include <tiny_gltf.h>
 
@@ -11,7 +11,7 @@
 
 #include "fabatlas/error.h"
 
-namespace fabatlas::storage {
+namespace fabatlas::artifact {
 
 std::string MeshToGlb(const mesh::TriangleMesh& m) {
   tinygltf::Model model;
@@ -153,4 +153,4 @@ mesh::TriangleMesh GlbToMesh(std::string_view glb, const std::string& source) {
   return out;
 }
 
-}  // namespace fabatlas::storage
+}  // namespace fabatlas::artifact

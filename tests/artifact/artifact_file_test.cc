@@ -1,4 +1,4 @@
-// The artifact file (storage/artifact.h): round trip, byte-identical output,
+// The artifact file (artifact/artifact.h): round trip, byte-identical output,
 // atomic publication under SIGKILL, one-line errors for damaged files, glTF
 // meshes that tinygltf reads back, and the checked-in version-1 artifact.
 #include <gtest/gtest.h>
@@ -20,12 +20,12 @@
 #include "fabatlas/sampling/adaptive_sampler.h"
 #include "fabatlas/sampling/executor.h"
 #include "fabatlas/sampling/form_json.h"
-#include "fabatlas/storage/artifact.h"
-#include "fabatlas/storage/glb.h"
+#include "fabatlas/artifact/artifact.h"
+#include "fabatlas/artifact/glb.h"
 #include "fabatlas/testing/paths.h"
 #include "fabatlas/testing/small_filesystem.h"
 
-namespace fabatlas::storage {
+namespace fabatlas::artifact {
 namespace {
 
 namespace fs = std::filesystem;
@@ -367,4 +367,4 @@ TEST(Artifact, WriterRejectsInconsistentContent) {
 }
 
 }  // namespace
-}  // namespace fabatlas::storage
+}  // namespace fabatlas::artifact

@@ -1,6 +1,6 @@
 // The published artifact as one SQLite file (see artifact.h and
 // docs/artifact.md for the schema).
-#include "fabatlas/storage/artifact.h"
+#include "fabatlas/artifact/artifact.h"
 
 #include <fcntl.h>
 #include <sqlite3.h>
@@ -22,9 +22,9 @@
 #include "fabatlas/sha256.h"
 #include "fabatlas/sampling/design_space.h"
 #include "fabatlas/sampling/adaptive_sampler.h"
-#include "sqlite_statement.h"
+#include "fabatlas/sqlite/statement.h"
 
-namespace fabatlas::storage {
+namespace fabatlas::artifact {
 
 namespace fs = std::filesystem;
 
@@ -117,10 +117,10 @@ class Db {
 };
 
 // A prepared statement of the artifact file; SQLite errors are Corrupt.
-class Stmt : public internal::SqliteStatement {
+class Stmt : public sqlite::Statement {
  public:
   Stmt(Db& db, const std::string& sql)
-      : SqliteStatement(db.get(), sql, [&db](const std::string& what) {
+      : Statement(db.get(), sql, [&db](const std::string& what) {
           (void)what;
           throw Corrupt(std::string("SQLite: ") + sqlite3_errmsg(db.get()));
         }) {}
@@ -871,4 +871,4 @@ Artifact ReadArtifact(const fs::path& path, const ArtifactReadOptions& options) 
   }
 }
 
-}  // namespace fabatlas::storage
+}  // namespace fabatlas::artifact
