@@ -1,6 +1,7 @@
 // What the customiser's browser tests share: a real `fabatlas serve` on a
 // free port, headless Chromium (Debian's, through playwright-core), the
-// ok/FAIL log, waiting for the page to be quiet, the status line.
+// ok/FAIL log, one test's run from start to exit status (runBrowserTest),
+// waiting for the page to be quiet, the status line.
 import { spawn } from 'node:child_process';
 import path from 'node:path';
 import { chromium } from 'playwright-core';
@@ -24,6 +25,25 @@ export function startServer(run) {
     child.stderr.on('data', onData);
     child.on('exit', (code) => { clearTimeout(timer); reject(new Error(`fabatlas serve exited ${code}: ${text}`)); });
   });
+}
+
+// Runs one browser test: `fabatlas serve RUN` and Chromium, then
+// `body({ server, browser })`; a throw is a failure. Closes both and exits the
+// process with status 1 if any check failed, else 0.
+export async function runBrowserTest(run, body) {
+  let server, browser;
+  try {
+    server = await startServer(run);
+    browser = await launchBrowser();
+    await body({ server, browser });
+  } catch (e) {
+    failures.push(String(e.stack ?? e));
+    console.log('FAIL ' + (e.stack ?? e));
+  } finally {
+    if (browser) await browser.close();
+    if (server) server.child.kill('SIGTERM');
+  }
+  process.exit(failures.length ? 1 : 0);
 }
 
 export function launchBrowser() {
