@@ -146,9 +146,10 @@ class Worker {
   // (protocol::RunCachePlan), the report uploaded before it is named.
   v1::TaskResult PlanCache(const v1::CachePlanTask& task);
 
-  // EvaluateSample (seed 001 Alg. 2) and the sample's subtree records
-  // (tasks.proto SampleResult). The root solid of a valid sample stays in
-  // the evaluator's memory for ΔG, shared only on request (ShareLoop).
+  // EvaluateSample (Fab Forms Alg. 2, docs/references.md) and the sample's
+  // subtree records (tasks.proto SampleResult). The root solid of a valid
+  // sample stays in the evaluator's memory for ΔG, shared only on request
+  // (ShareLoop).
   v1::TaskResult EvaluateSample(JobContext& ctx, const sampling::SamplePoint& point);
 
   // The root solid of a sample for ΔG: from this worker's memory, else the
