@@ -159,6 +159,13 @@ class TreeEvaluation {
     return identities_.emplace(&node, std::move(id)).first->second;
   }
 
+  // An `openscad` node's one child is its CSG root, known only once OpenSCAD
+  // has run; a cache hit names the child it had when computed.
+  static std::vector<std::string> CsgRootOf(const std::string& node_key) {
+    const std::string root = RecallCsgRoot(node_key);
+    return root.empty() ? std::vector<std::string>{} : std::vector<std::string>{root};
+  }
+
   static SubtreeRecord RecordOf(const Node& node, const Identity& id, const std::string& path) {
     SubtreeRecord record;
     record.path = path;
@@ -180,6 +187,7 @@ class TreeEvaluation {
         SubtreeRecord record = RecordOf(node, id, path);
         record.from_cache = true;
         record.bytes = hit->MemoryBytes();
+        if (node.op == "openscad") record.children = CsgRootOf(id.key);
         records_->push_back(std::move(record));
         RecallOutside(id.key, &outside_);
         return {*hit, id.key, id.topology};
@@ -213,6 +221,7 @@ class TreeEvaluation {
       if (auto hit = options_.cache->Find(record.key)) {
         out.solid = *hit;
         record.from_cache = true;
+        if (node.op == "openscad") record.children = CsgRootOf(record.key);
         RecallOutside(record.key, &outside_);
       }
     }
@@ -241,6 +250,7 @@ class TreeEvaluation {
         OpenScadNodeResult scad = EvaluateOpenScadNode(node, args, design_.file.parent_path(), context);
         out.solid = std::move(scad.solid);
         if (!scad.root_key.empty()) record.children = {scad.root_key};
+        RememberCsgRoot(record.key, scad.root_key);
         openscad_seconds = scad.export_seconds;
       } else {
         out.solid = ApplyOperation(node, args, inputs, grid_, design_.file.parent_path(), &outside_);

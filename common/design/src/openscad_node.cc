@@ -340,8 +340,7 @@ class CsgEvaluation {
   };
 
   Result Evaluate3(const CsgNode& n, const Affine& m, const std::string& path) {
-    const std::string key = Sha256Hex("csg|voxel=" + scad::FormatScadNumber(c_.grid.voxel_size) + "|m=" + AffineText(m) +
-                                      "|" + n.canonical);
+    const std::string key = KeyOf(n, m);
     SubtreeRecord record;
     record.key = key;
     record.topology = Sha256Hex("csg|" + Topology(n));
@@ -351,6 +350,12 @@ class CsgEvaluation {
       if (auto hit = c_.cache->Find(key)) {
         record.from_cache = true;
         record.bytes = hit->MemoryBytes();
+        // The children it was computed from (the cache graph requires one
+        // set of children per key), from their keys alone.
+        Affine inner;
+        if (ChildFrame(n, m, &inner))
+          for (const auto& c : n.children)
+            if (!IsTwoD(c.name)) record.children.push_back(KeyOf(c, inner));
         if (c_.records) c_.records->push_back(record);
         RecallOutside(key, c_.outside);
         return {*hit, key};
@@ -360,16 +365,8 @@ class CsgEvaluation {
     const std::size_t outside_before = c_.outside ? c_.outside->size() : 0;
     // Children first (3D nodes whose children are 3D), each its own record.
     std::vector<Result> kids;
-    bool boolean = n.name == "group" || n.name == "union" || n.name == "render" || n.name == "color" ||
-                   n.name == "difference" || n.name == "intersection" || n.name == "multmatrix";
-    Affine inner = m;
-    if (n.name == "multmatrix") {
-      try {
-        inner = Compose(m, MatrixOf(n));
-      } catch (const NoNativeEquivalent&) {
-        boolean = false;  // rendered by OpenSCAD below
-      }
-    }
+    Affine inner;
+    const bool boolean = ChildFrame(n, m, &inner);
     if (boolean) {
       for (std::size_t i = 0; i < n.children.size(); ++i) {
         if (IsTwoD(n.children[i].name)) continue;  // OpenSCAD ignores 2D objects among 3D ones
@@ -412,6 +409,27 @@ class CsgEvaluation {
   }
 
  private:
+  // The cache key of subtree n under the composed transform m.
+  std::string KeyOf(const CsgNode& n, const Affine& m) const {
+    return Sha256Hex("csg|voxel=" + scad::FormatScadNumber(c_.grid.voxel_size) + "|m=" + AffineText(m) + "|" +
+                     n.canonical);
+  }
+
+  // Whether n is evaluated from its 3D children (booleans and multmatrix
+  // with a native matrix), and the transform they are evaluated under.
+  static bool ChildFrame(const CsgNode& n, const Affine& m, Affine* inner) {
+    *inner = m;
+    const bool boolean = n.name == "group" || n.name == "union" || n.name == "render" || n.name == "color" ||
+                         n.name == "difference" || n.name == "intersection" || n.name == "multmatrix";
+    if (n.name != "multmatrix") return boolean;
+    try {
+      *inner = Compose(m, MatrixOf(n));
+    } catch (const NoNativeEquivalent&) {
+      return false;  // rendered by OpenSCAD
+    }
+    return true;
+  }
+
   static std::string Topology(const CsgNode& n) {
     std::string t = n.name + "(";
     for (const auto& c : n.children) t += Topology(c) + ";";
@@ -756,6 +774,23 @@ void RecallOutside(const std::string& subtree_key, std::vector<OutsideMesh>* out
   std::lock_guard<std::mutex> lock(outside_mutex);
   auto it = outside_by_subtree.find(subtree_key);
   if (it != outside_by_subtree.end()) out->insert(out->end(), it->second.begin(), it->second.end());
+}
+
+namespace {
+std::mutex csg_root_mutex;
+std::map<std::string, std::string> csg_root_by_node;
+}  // namespace
+
+void RememberCsgRoot(const std::string& node_key, const std::string& csg_root_key) {
+  if (csg_root_key.empty()) return;
+  std::lock_guard<std::mutex> lock(csg_root_mutex);
+  csg_root_by_node[node_key] = csg_root_key;
+}
+
+std::string RecallCsgRoot(const std::string& node_key) {
+  std::lock_guard<std::mutex> lock(csg_root_mutex);
+  auto it = csg_root_by_node.find(node_key);
+  return it == csg_root_by_node.end() ? std::string() : it->second;
 }
 
 OpenScadNodeResult EvaluateOpenScadNode(const Node& node, const ResolvedArgs& args, const fs::path& dir,

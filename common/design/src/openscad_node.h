@@ -31,6 +31,14 @@ struct OutsideMesh {
 void RememberOutside(const std::string& subtree_key, const std::vector<OutsideMesh>& meshes);
 void RecallOutside(const std::string& subtree_key, std::vector<OutsideMesh>* out);
 
+// The CSG root key an `openscad` node (by its key) had when it was computed,
+// kept for the process, so that the node's record found in a cache names
+// the same child as when it was computed (the cache graph requires one set
+// of children per key). Recall returns "" when this process never computed
+// the node. Thread-safe; one pair of keys per distinct node evaluated.
+void RememberCsgRoot(const std::string& node_key, const std::string& csg_root_key);
+std::string RecallCsgRoot(const std::string& node_key);
+
 struct OpenScadNodeContext {
   geometry::GridSpec grid;
   SubtreeCache* cache = nullptr;               // looked up and offered per CSG subtree

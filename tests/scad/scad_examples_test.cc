@@ -1,0 +1,205 @@
+// The OpenSCAD designs of Fab Forms Table 2 as example jobs
+// (configs/jobs/yinyang_cup2.yaml, toy_car.yaml, holey_vase.yaml): each
+// job's design loads with the paper's number of exposed parameters, one
+// sample evaluates valid with every check, and its volume matches OpenSCAD's
+// own STL render of the same design at the same solved values. The peer is
+// an OpenSCAD program that writes the design's own nodes (revolve, box,
+// cylinder, arrays) in OpenSCAD and includes the same .scad model with the
+// values the `openscad` node passes, so the two sides share nothing but the
+// model file and the numbers.
+//
+// Tolerance, 2% of OpenSCAD's volume (the issue's bar for native against
+// OpenSCAD volumes): the sample's volume is the level set's at the design's
+// voxel (0.8–1 mm), whose zero crossing is placed to a small fraction of a
+// voxel; the difference is that offset times the surface area. Measured at
+// these points: cup -0.61%, car and vase in docs/benchmarks.md ("Fab Forms
+// Table 3"); a missing wheel, handle or hole ring changes the volume by
+// 4-30%, far outside it.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <map>
+#include <sstream>
+
+#include "fabatlas/design/evaluate_sample.h"
+#include "fabatlas/mesh/read_mesh.h"
+#include "fabatlas/sampling/job_file.h"
+#include "fabatlas/testing/paths.h"
+
+namespace {
+
+namespace design = fabatlas::design;
+namespace fs = std::filesystem;
+using fabatlas::testing::SourceDir;
+
+// Volume of a closed triangle mesh (divergence theorem), mm^3.
+double MeshVolume(const fabatlas::mesh::TriangleMesh& m) {
+  double v = 0;
+  for (const auto& t : m.triangles) {
+    const auto& a = m.vertices[t[0]];
+    const auto& b = m.vertices[t[1]];
+    const auto& c = m.vertices[t[2]];
+    v += a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) + a[2] * (b[0] * c[1] - b[1] * c[0]);
+  }
+  return std::abs(v) / 6;
+}
+
+// The design of configs/jobs/<name>.yaml, loaded as the job names it.
+design::Design JobDesign(const std::string& name) {
+  const fabatlas::sampling::JobFile job =
+      fabatlas::sampling::ReadJobFile((SourceDir() / "configs/jobs" / (name + ".yaml")).string());
+  return design::LoadDesign(job.design_path);
+}
+
+// One sample at the design's defaults, every check run; must be valid.
+design::SampleResult DefaultSample(const design::Design& d) {
+  design::SampleResult r = design::EvaluateSample(d, design::ParsePoint(d, "", "--at"));
+  EXPECT_TRUE(r.valid) << r.failure << ": " << r.failure_reason;
+  return r;
+}
+
+// `name = value;` for each solved value the peer program uses.
+std::string Values(const design::SampleResult& r, std::initializer_list<const char*> names) {
+  std::ostringstream s;
+  s.precision(17);
+  for (const char* n : names) s << n << " = " << r.values.at(n) << ";\n";
+  return s.str();
+}
+
+// OpenSCAD's own render of `program` (written to DIR/peer.scad): its volume.
+double OpenScadVolume(const fs::path& dir, const std::string& program) {
+  std::ofstream(dir / "peer.scad") << program;
+  const std::string stl = (dir / "peer.stl").string();
+  const std::string cmd = "openscad --quiet -o " + stl + " " + (dir / "peer.scad").string() + " 2>/dev/null";
+  EXPECT_EQ(std::system(cmd.c_str()), 0) << cmd;
+  return MeshVolume(fabatlas::mesh::ReadMesh(stl));
+}
+
+// The sample's volume against OpenSCAD's, within the tolerance above; the
+// figures are printed for docs/benchmarks.md.
+void ExpectVolume(const char* design, double ours, double peer) {
+  std::printf("%s: fabatlas %.1f mm^3, OpenSCAD %.1f mm^3 (%+.2f%%)\n", design, ours, peer, 100 * (ours - peer) / peer);
+  EXPECT_NEAR(ours, peer, 0.02 * peer);
+}
+
+std::string Model(const char* file) { return (SourceDir() / "configs/scad" / file).string(); }
+
+TEST(ScadExampleJobs, YinYangCup2MatchesOpenScad) {
+  design::Design d = JobDesign("yinyang_cup2");
+  EXPECT_EQ(d.exposed.size(), 3u);  // Fab Forms Table 2
+  design::SampleResult r = DefaultSample(d);
+  ASSERT_TRUE(r.valid);
+  // The body as the design's smooth revolutions (128 fragments: 0.04% below
+  // the circle), the handle as the model with the node's -D values.
+  const std::string program = Values(r, {"radius", "foot_r", "foot_h", "height", "wall", "inner_r", "handle_x",
+                                         "handle_z", "handle_reach", "handle_thick"}) +
+                              "module handle() { include <" + Model("yinyang_handle.scad") +
+                              ">\n reach = handle_reach; thick = handle_thick; }\n"
+                              "difference() {\n"
+                              "  rotate_extrude($fn = 128) polygon([[0, 0], [foot_r, 0], [radius, foot_h], [radius, height], [0, height]]);\n"
+                              "  rotate_extrude($fn = 128) polygon([[0, wall], [foot_r - wall, wall], [inner_r, foot_h + wall], [inner_r, height + 2], [0, height + 2]]);\n"
+                              "}\n"
+                              "difference() {\n"
+                              "  translate([handle_x, 0, handle_z]) handle();\n"
+                              "  translate([0, 0, wall]) cylinder(r = inner_r, h = height, $fn = 128);\n"
+                              "}\n";
+  ExpectVolume("yinyang_cup2", r.properties.at("volume"), OpenScadVolume(fabatlas::testing::FreshTempDir("scad-cup2"), program));
+}
+
+TEST(ScadExampleJobs, ToyCarMatchesOpenScad) {
+  design::Design d = JobDesign("toy_car");
+  EXPECT_EQ(d.exposed.size(), 4u);  // Fab Forms Table 2
+  design::SampleResult r = DefaultSample(d);
+  ASSERT_TRUE(r.valid);
+  const std::string program =
+      Values(r, {"length", "body_w", "body_h", "axle_z", "cabin_x", "cabin_l", "cabin_w", "cabin_height", "window_l",
+                 "window_h", "wheelbase", "track", "wheel_radius", "tyre_w", "spokes"}) +
+      "module wheel() { include <" + Model("toy_car_wheel.scad") +
+      ">\n radius = wheel_radius; width = tyre_w; spokes = spokes_; }\n"
+      "spokes_ = spokes;\n"
+      "union() {\n"
+      "  translate([0, 0, axle_z]) cube([length, body_w, body_h], center = true);\n"
+      "  translate([cabin_x, 0, axle_z + body_h / 2 + cabin_height / 2]) difference() {\n"
+      "    cube([cabin_l, cabin_w, cabin_height], center = true);\n"
+      "    cube([window_l, cabin_w + 4, window_h], center = true);\n"
+      "  }\n"
+      "  for (x = [-wheelbase / 2, wheelbase / 2]) {\n"
+      "    translate([x, 0, axle_z]) rotate([90, 0, 0]) cylinder(r = 2.5, h = track, center = true, $fn = 96);\n"
+      "    for (y = [-track / 2, track / 2]) translate([x, y, axle_z]) rotate([90, 0, 0]) wheel();\n"
+      "  }\n"
+      "}\n";
+  ExpectVolume("toy_car", r.properties.at("volume"), OpenScadVolume(fabatlas::testing::FreshTempDir("scad-car"), program));
+}
+
+TEST(ScadExampleJobs, HoleyVaseMatchesOpenScad) {
+  design::Design d = JobDesign("holey_vase");
+  EXPECT_EQ(d.exposed.size(), 6u);  // Fab Forms Table 2
+  design::SampleResult r = DefaultSample(d);
+  ASSERT_TRUE(r.valid);
+  // fabatlas's n-sided revolve has a vertex on +x; OpenSCAD's rotate_extrude
+  // starts at -x, hence the half turn.
+  const std::string program =
+      Values(r, {"sides", "base_r", "bulge_r", "bulge_z", "neck_r", "wall", "holes", "hole_r", "hole_z", "drill"}) +
+      "module drills() { include <" + Model("holey_vase_holes.scad") +
+      ">\n count = holes; radius = hole_r; reach = drill; }\n"
+      "difference() {\n"
+      "  rotate([0, 0, 180]) rotate_extrude($fn = sides) polygon([[0, 0], [base_r, 0], [bulge_r, bulge_z], [neck_r, 100], [0, 100]]);\n"
+      "  rotate([0, 0, 180]) rotate_extrude($fn = sides) polygon([[0, 4], [base_r - wall, 4], [bulge_r - wall, bulge_z], [neck_r - wall, 102], [0, 102]]);\n"
+      "  translate([0, 0, hole_z]) drills();\n"
+      "}\n";
+  ExpectVolume("holey_vase", r.properties.at("volume"), OpenScadVolume(fabatlas::testing::FreshTempDir("scad-vase"), program));
+}
+
+// The cup's handle is the same model at the same values for two radii: the
+// second sample finds the `openscad` node in the cache, and its record
+// names the same CSG root as the first, as the cache plan requires (one set
+// of children per key; `fabatlas sample --cache` stopped with "recorded
+// with different children" when a hit recorded none).
+TEST(ScadExampleJobs, CachedOpenScadNodeKeepsItsCsgChild) {
+  design::Design d = JobDesign("yinyang_cup2");
+  design::InMemorySubtreeCache cache;
+  design::EvaluateOptions options;
+  options.cache = &cache;
+  options.run_checks = false;
+  std::vector<design::SubtreeRecord> handles;
+  for (const char* at : {"radius=30", "radius=31"}) {
+    design::SampleResult r = design::EvaluateSample(d, design::ParsePoint(d, at, "--at"), options);
+    ASSERT_TRUE(r.valid) << at << ": " << r.failure_reason;
+    for (const auto& s : r.subtrees)
+      if (s.op == "openscad") handles.push_back(s);
+  }
+  ASSERT_EQ(handles.size(), 2u);
+  EXPECT_EQ(handles[0].key, handles[1].key);
+  EXPECT_FALSE(handles[0].from_cache);
+  EXPECT_TRUE(handles[1].from_cache);
+  ASSERT_EQ(handles[0].children.size(), 1u);
+  EXPECT_EQ(handles[1].children, handles[0].children);
+}
+
+// The same for CSG subtrees inside the model: 8 and 9 holes share the first
+// drill (the same cylinder under the same rotation); its record found in
+// the cache names the same children as when it was computed.
+TEST(ScadExampleJobs, CachedCsgSubtreesKeepTheirChildren) {
+  design::Design d = JobDesign("holey_vase");
+  design::InMemorySubtreeCache cache;
+  design::EvaluateOptions options;
+  options.cache = &cache;
+  options.run_checks = false;
+  std::map<std::string, std::vector<std::string>> children;
+  int hits_with_children = 0;
+  for (const char* at : {"holes=8", "holes=9"}) {
+    design::SampleResult r = design::EvaluateSample(d, design::ParsePoint(d, at, "--at"), options);
+    ASSERT_TRUE(r.valid) << at << ": " << r.failure_reason;
+    for (const auto& s : r.subtrees) {
+      auto [it, first] = children.emplace(s.key, s.children);
+      if (!first) EXPECT_EQ(s.children, it->second) << s.op << " " << s.path;
+      hits_with_children += s.from_cache && s.op.rfind("csg:", 0) == 0 && !s.children.empty();
+    }
+  }
+  EXPECT_GT(hits_with_children, 0);
+}
+
+}  // namespace
