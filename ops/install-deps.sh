@@ -24,6 +24,8 @@ APT_PACKAGES=(
   calculix-ccx libfcl-dev
   munge slurmctld slurmd slurm-client
   python3-distributed
+  # tests: certificates made by the TLS test, the journal syncs --fsync-commits makes
+  openssl strace
 )
 # Node.js and npm: the machine's own if present, else Debian's.
 command -v npm >/dev/null 2>&1 || APT_PACKAGES+=(nodejs npm)
