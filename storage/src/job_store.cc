@@ -151,6 +151,88 @@ std::string LeaseIdOf(const std::string& key, std::int64_t attempt) {
   return key.substr(0, 16) + "." + std::to_string(attempt);
 }
 
+// A job's task counts by a scan of its tasks (or of all tasks for "").
+TaskCounts ScanCounts(JobStore::Db& db, const std::string& job_id) {
+  std::string where = job_id.empty() ? "" : " WHERE job_id = ?";
+  Stmt s(db, ("SELECT state, COUNT(*), SUM(sample_valid = 1), SUM(sample_valid >= 0), "
+              "SUM(expiries), SUM(fenced) FROM tasks" + where + " GROUP BY state").c_str());
+  if (!job_id.empty()) s.BindText(1, job_id);
+  TaskCounts c;
+  while (s.Next()) {
+    std::int64_t n = s.ColumnInt(1);
+    c.total += n;
+    switch (static_cast<TaskState>(s.ColumnInt(0))) {
+      case TaskState::kQueued: c.queued += n; break;
+      case TaskState::kLeased: c.leased += n; break;
+      case TaskState::kDone: c.done += n; break;
+      case TaskState::kQuarantined: c.quarantined += n; break;
+    }
+    if (s.ColumnInt(0) >= 2) {
+      c.samples_valid += s.ColumnInt(2);
+      c.samples_done += s.ColumnInt(3);
+    }
+    c.lease_expiries += s.ColumnInt(4);
+    c.fenced_results += s.ColumnInt(5);
+  }
+  return c;
+}
+
+std::int64_t& CountOf(TaskCounts& c, TaskState state) {
+  switch (state) {
+    case TaskState::kQueued: return c.queued;
+    case TaskState::kLeased: return c.leased;
+    case TaskState::kDone: return c.done;
+    case TaskState::kQuarantined: break;
+  }
+  return c.quarantined;
+}
+
+// The changes one transaction makes to its jobs' task counts, applied to the
+// counts kept in memory (JobStore::counts_) once it commits: a transaction
+// rolled back moves nothing.
+class CountDeltas {
+ public:
+  // A new task (queued).
+  void Added(const std::string& job_id) {
+    ++deltas_[job_id].total;
+    ++deltas_[job_id].queued;
+  }
+  void Moved(const std::string& job_id, TaskState from, TaskState to) {
+    TaskCounts& d = deltas_[job_id];
+    --CountOf(d, from);
+    ++CountOf(d, to);
+  }
+  // A sample task finished (done or quarantined), valid or not.
+  void Sampled(const std::string& job_id, bool valid) {
+    ++deltas_[job_id].samples_done;
+    if (valid) ++deltas_[job_id].samples_valid;
+  }
+  void Expired(const std::string& job_id) { ++deltas_[job_id].lease_expiries; }
+  void Fenced(const std::string& job_id) { ++deltas_[job_id].fenced_results; }
+
+  void ApplyTo(std::map<std::string, TaskCounts>& counts) const {
+    for (const auto& [job_id, d] : deltas_) {
+      auto it = counts.find(job_id);
+      if (it == counts.end()) continue;  // not asked for yet: its first CountTasks scans
+      TaskCounts& c = it->second;
+      c.total += d.total;
+      c.queued += d.queued;
+      c.leased += d.leased;
+      c.done += d.done;
+      c.quarantined += d.quarantined;
+      c.samples_done += d.samples_done;
+      c.samples_valid += d.samples_valid;
+      c.lease_expiries += d.lease_expiries;
+      c.fenced_results += d.fenced_results;
+    }
+  }
+
+ private:
+  std::map<std::string, TaskCounts> deltas_;
+};
+
+constexpr int kSampleKind = 1;  // fabatlas.v1.TASK_KIND_SAMPLE
+
 }  // namespace
 
 JobStore::JobStore(const std::filesystem::path& path, JobStoreOptions options)
@@ -315,15 +397,19 @@ std::map<std::string, std::string> JobStore::AddTasks(const std::vector<NewTask>
   Stmt find(*db_, "SELECT result FROM tasks WHERE key = ? AND state IN (2, 3)");
   Stmt prefer(*db_, "INSERT OR IGNORE INTO task_affinity (worker_id, rank, task_seq) VALUES (?,?,?)");
   std::map<std::string, std::string> finished;
+  CountDeltas deltas;
+  std::int64_t preferring = 0;
   for (const NewTask& task : tasks) {
     insert.BindText(1, task.key).BindText(2, task.job_id).Bind(3, std::int64_t{task.kind});
     insert.Bind(4, task.payload).Bind(5, std::int64_t{task.preferred_workers.empty() ? 0 : 1});
     insert.Run();
     insert.Reset();
-    if (!task.preferred_workers.empty() && sqlite3_changes(db_->handle) == 1) {
+    const bool inserted = sqlite3_changes(db_->handle) == 1;
+    if (inserted) deltas.Added(task.job_id);
+    if (!task.preferred_workers.empty() && inserted) {
       // rank: how many workers share the preference (fewer = more this worker's own)
       std::int64_t seq = sqlite3_last_insert_rowid(db_->handle);
-      ++preferring_tasks_;
+      ++preferring;
       for (const auto& worker : task.preferred_workers) {
         prefer.BindText(1, worker).Bind(2, static_cast<std::int64_t>(task.preferred_workers.size())).Bind(3, seq);
         prefer.Run();
@@ -335,6 +421,8 @@ std::map<std::string, std::string> JobStore::AddTasks(const std::vector<NewTask>
     find.Reset();
   }
   t.Commit();
+  preferring_tasks_ += preferring;
+  deltas.ApplyTo(counts_);
   return finished;
 }
 
@@ -435,10 +523,12 @@ std::vector<LeaseGrant> JobStore::GrantLeases(const std::string& worker_id, int 
   Stmt lease(*db_,
              "INSERT OR REPLACE INTO leases (lease_id, task_key, attempt, worker_id, granted_ms, "
              "deadline_ms, state) VALUES (?,?,?,?,?,?,'active')");
+  CountDeltas deltas;
   for (const LeaseGrant& g : grants) {
     update.Bind(1, g.attempt).BindText(2, g.task_key);
     update.Run();
     update.Reset();
+    deltas.Moved(g.job_id, TaskState::kQueued, TaskState::kLeased);
     lease.BindText(1, g.lease_id).BindText(2, g.task_key).Bind(3, g.attempt).BindText(4, worker_id);
     lease.Bind(5, now_ms).Bind(6, g.deadline_ms);
     lease.Run();
@@ -463,6 +553,7 @@ std::vector<LeaseGrant> JobStore::GrantLeases(const std::string& worker_id, int 
   }
   t.Commit();
   preferring_tasks_ -= static_cast<std::int64_t>(unprefer.size());
+  deltas.ApplyTo(counts_);
   return grants;
 }
 
@@ -537,6 +628,7 @@ std::vector<CompletionOutcome> JobStore::Complete(const std::vector<Completion>&
                   "UPDATE tasks SET state = 3, result = ?, completions = completions + 1, "
                   "sample_valid = CASE WHEN kind = 1 THEN 0 ELSE -1 END WHERE key = ?");
   Stmt event(*db_, "INSERT INTO events (time_ms, job_id, kind, message) VALUES (?,?,?,?)");
+  CountDeltas deltas;
   for (const Completion& c : completions) {
     task.BindText(1, c.task_key);
     if (!task.Next()) {
@@ -563,6 +655,7 @@ std::vector<CompletionOutcome> JobStore::Complete(const std::vector<Completion>&
       fenced.BindText(1, c.task_key);
       fenced.Run();
       fenced.Reset();
+      deltas.Fenced(job_id);
     } else if (c.failed) {
       lease_state = "failed";
       failures.BindText(1, c.task_key).BindText(2, c.lease_id);
@@ -576,12 +669,15 @@ std::vector<CompletionOutcome> JobStore::Complete(const std::vector<Completion>&
         quarantine.Bind(1, quarantine_result(kind)).BindText(2, c.task_key);
         quarantine.Run();
         quarantine.Reset();
+        deltas.Moved(job_id, TaskState::kLeased, TaskState::kQuarantined);
+        if (kind == kSampleKind) deltas.Sampled(job_id, false);
       } else {
         outcome = CompletionOutcome::kRequeued;
         std::int64_t delay = retry_backoff_ms << std::min<std::int64_t>(std::max<std::int64_t>(failed_leases - 1, 0), 20);
         requeue.Bind(1, now_ms + std::min<std::int64_t>(delay, 30000)).BindText(2, c.task_key);
         requeue.Run();
         requeue.Reset();
+        deltas.Moved(job_id, TaskState::kLeased, TaskState::kQueued);
       }
       event.Bind(1, now_ms).BindText(2, job_id).BindText(3, kind_name);
       event.BindText(4, "task " + c.task_key.substr(0, 16) + " lease " + c.lease_id + " failed (" +
@@ -595,6 +691,8 @@ std::vector<CompletionOutcome> JobStore::Complete(const std::vector<Completion>&
       done.Bind(1, c.result).Bind(2, std::int64_t{c.sample_valid}).BindText(3, c.task_key);
       done.Run();
       done.Reset();
+      deltas.Moved(job_id, TaskState::kLeased, TaskState::kDone);
+      if (c.sample_valid >= 0) deltas.Sampled(job_id, c.sample_valid == 1);
       std::int64_t position = 0;
       for (const SubtreeUse& u : c.subtrees) {
         std::string children;
@@ -617,6 +715,7 @@ std::vector<CompletionOutcome> JobStore::Complete(const std::vector<Completion>&
     outcomes.push_back(outcome);
   }
   t.Commit();
+  deltas.ApplyTo(counts_);
   return outcomes;
 }
 
@@ -657,26 +756,34 @@ int JobStore::ReturnUnknownLeases(const std::string& worker_id,
                                   const std::vector<std::string>& known) {
   std::lock_guard lock(mutex_);
   std::set<std::string> keep(known.begin(), known.end());
-  std::vector<std::pair<std::string, std::string>> lost;  // lease id, task key
+  struct Lost {
+    std::string lease_id, task_key, job_id;
+  };
+  std::vector<Lost> lost;
   {
-    Stmt s(*db_, "SELECT lease_id, task_key FROM leases WHERE worker_id = ? AND state = 'active'");
+    Stmt s(*db_,
+           "SELECT l.lease_id, l.task_key, t.job_id FROM leases l JOIN tasks t ON t.key = l.task_key "
+           "WHERE l.worker_id = ? AND l.state = 'active'");
     s.BindText(1, worker_id);
     while (s.Next())
-      if (!keep.count(s.ColumnText(0))) lost.emplace_back(s.ColumnText(0), s.ColumnText(1));
+      if (!keep.count(s.ColumnText(0))) lost.push_back({s.ColumnText(0), s.ColumnText(1), s.ColumnText(2)});
   }
   if (lost.empty()) return 0;
   Transaction t(*db_);
   Stmt lease(*db_, "UPDATE leases SET state = 'returned' WHERE lease_id = ?");
   Stmt task(*db_, "UPDATE tasks SET state = 0 WHERE key = ? AND state = 1");
-  for (const auto& [id, key] : lost) {
-    lease.BindText(1, id);
+  CountDeltas deltas;
+  for (const Lost& l : lost) {
+    lease.BindText(1, l.lease_id);
     lease.Run();
     lease.Reset();
-    task.BindText(1, key);
+    task.BindText(1, l.task_key);
     task.Run();
     task.Reset();
+    if (sqlite3_changes(db_->handle) == 1) deltas.Moved(l.job_id, TaskState::kLeased, TaskState::kQueued);
   }
   t.Commit();
+  deltas.ApplyTo(counts_);
   return static_cast<int>(lost.size());
 }
 
@@ -715,6 +822,7 @@ std::vector<ExpiredLease> JobStore::ExpireLeases(
                   "completions + 1, sample_valid = CASE WHEN kind = 1 THEN 0 ELSE -1 END "
                   "WHERE key = ? AND state = 1");
   Stmt event(*db_, "INSERT INTO events (time_ms, job_id, kind, message) VALUES (?,?,?,?)");
+  CountDeltas deltas;
   for (std::size_t i = 0; i < expired.size(); ++i) {
     ExpiredLease& e = expired[i];
     lease.BindText(1, e.lease_id);
@@ -728,12 +836,21 @@ std::vector<ExpiredLease> JobStore::ExpireLeases(
       quarantine.BindText(3, e.task_key);
       quarantine.Run();
       quarantine.Reset();
+      if (sqlite3_changes(db_->handle) == 1) {
+        deltas.Moved(e.job_id, TaskState::kLeased, TaskState::kQuarantined);
+        deltas.Expired(e.job_id);
+        if (kinds[i] == kSampleKind) deltas.Sampled(e.job_id, false);
+      }
     } else {
       std::int64_t delay = backoff_ms << std::min<std::int64_t>(expiries[i] - 1, 20);
       delay = std::min<std::int64_t>(delay, 30000);
       requeue.Bind(1, expiries[i]).Bind(2, now_ms + delay).BindText(3, e.task_key);
       requeue.Run();
       requeue.Reset();
+      if (sqlite3_changes(db_->handle) == 1) {
+        deltas.Moved(e.job_id, TaskState::kLeased, TaskState::kQueued);
+        deltas.Expired(e.job_id);
+      }
     }
     event.Bind(1, now_ms).BindText(2, e.job_id).BindText(3, kind);
     event.BindText(4, "task " + e.task_key.substr(0, 16) + " lease " + e.lease_id + " of worker " +
@@ -742,6 +859,7 @@ std::vector<ExpiredLease> JobStore::ExpireLeases(
     event.Reset();
   }
   t.Commit();
+  deltas.ApplyTo(counts_);
   return expired;
 }
 
@@ -754,28 +872,10 @@ void JobStore::ExtendAllLeases(std::int64_t deadline_ms) {
 
 TaskCounts JobStore::CountTasks(const std::string& job_id) {
   std::lock_guard lock(mutex_);
-  std::string where = job_id.empty() ? "" : " WHERE job_id = ?";
-  Stmt s(*db_, ("SELECT state, COUNT(*), SUM(sample_valid = 1), SUM(sample_valid >= 0), "
-                "SUM(expiries), SUM(fenced) FROM tasks" + where + " GROUP BY state").c_str());
-  if (!job_id.empty()) s.BindText(1, job_id);
-  TaskCounts c;
-  while (s.Next()) {
-    std::int64_t n = s.ColumnInt(1);
-    c.total += n;
-    switch (static_cast<TaskState>(s.ColumnInt(0))) {
-      case TaskState::kQueued: c.queued += n; break;
-      case TaskState::kLeased: c.leased += n; break;
-      case TaskState::kDone: c.done += n; break;
-      case TaskState::kQuarantined: c.quarantined += n; break;
-    }
-    if (s.ColumnInt(0) >= 2) {
-      c.samples_valid += s.ColumnInt(2);
-      c.samples_done += s.ColumnInt(3);
-    }
-    c.lease_expiries += s.ColumnInt(4);
-    c.fenced_results += s.ColumnInt(5);
-  }
-  return c;
+  if (job_id.empty()) return ScanCounts(*db_, job_id);
+  auto it = counts_.find(job_id);
+  if (it == counts_.end()) it = counts_.emplace(job_id, ScanCounts(*db_, job_id)).first;
+  return it->second;
 }
 
 std::int64_t JobStore::ActiveLeases() {
@@ -918,6 +1018,18 @@ std::vector<std::string> JobStore::CheckConsistency() {
   {
     Stmt s(*db_, "SELECT key FROM tasks WHERE state IN (0, 1) AND completions != 0");
     while (s.Next()) problems.push_back("unfinished task " + s.ColumnText(0) + " has a result");
+  }
+  for (const auto& [job_id, kept] : counts_) {
+    const TaskCounts scanned = ScanCounts(*db_, job_id);
+    auto text = [](const TaskCounts& c) {
+      return std::to_string(c.total) + " tasks (" + std::to_string(c.queued) + " queued, " +
+             std::to_string(c.leased) + " leased, " + std::to_string(c.done) + " done, " +
+             std::to_string(c.quarantined) + " quarantined), " + std::to_string(c.samples_done) + " samples (" +
+             std::to_string(c.samples_valid) + " valid), " + std::to_string(c.lease_expiries) + " expiries, " +
+             std::to_string(c.fenced_results) + " fenced";
+    };
+    if (text(kept) != text(scanned))
+      problems.push_back("job " + job_id + " counts " + text(kept) + " in memory but " + text(scanned) + " in its tasks");
   }
   return problems;
 }

@@ -8,6 +8,7 @@
 #include <chrono>
 #include <filesystem>
 #include <fstream>
+#include <tuple>
 
 #include "fabatlas/error.h"
 #include "fabatlas/sha256.h"
@@ -412,6 +413,71 @@ TEST(ClusterStorage, FailuresBackOffAndQuarantineAfterThreeWorkers) {
   EXPECT_EQ(store.CountTasks("job1").quarantined, 1);
   EXPECT_EQ(store.FindTask(Key(0))->result, "quarantined kind 1");
   EXPECT_TRUE(store.CheckConsistency().empty());
+}
+
+// A job's task counts are kept in memory once asked for (CountTasks) and
+// moved by every change: after each kind of change they equal a scan of the
+// tasks (CheckConsistency compares them) and, at the end, a store opened
+// afresh on the same file, which scans.
+TEST(ClusterStorage, TaskCountsKeptInMemoryEqualAScan) {
+  fs::path dir = FreshDir("counts");
+  JobStore store(dir / "state.db");
+  auto quarantine = [](int kind) { return "quarantined kind " + std::to_string(kind); };
+  auto consistent = [&](const std::string& step) {
+    std::vector<std::string> problems = store.CheckConsistency();
+    EXPECT_TRUE(problems.empty()) << step << ": " << (problems.empty() ? "" : problems[0]);
+  };
+  EXPECT_EQ(store.CountTasks("job1").total, 0);  // kept from before the job exists
+  AddRunningJob(store, 8);
+  store.AddTasks({{Key(0), "job1", 1, "again"}, {Key(8), "job1", 2, "geometry change"}});  // one new
+  consistent("added");
+  auto g = store.GrantLeases("w1", 7, 1000, 500);
+  ASSERT_EQ(g.size(), 7u);
+  consistent("granted");
+  Completion failed{g[4].lease_id, g[4].task_key, g[4].attempt, "", true, -1};
+  failed.error = "cannot load";
+  Completion failed_twice{g[5].lease_id, g[5].task_key, g[5].attempt, "", true, -1};
+  failed_twice.error = "cannot load";
+  auto outcomes = store.Complete({{g[0].lease_id, g[0].task_key, 1, "valid", false, 1},
+                                  {g[1].lease_id, g[1].task_key, 1, "invalid", false, 0},
+                                  {g[1].lease_id, g[1].task_key, 1, "again", false, 0},
+                                  failed},
+                                 1100, 10, 1, quarantine);
+  EXPECT_EQ(outcomes, (std::vector<CompletionOutcome>{CompletionOutcome::kAccepted, CompletionOutcome::kAccepted,
+                                                      CompletionOutcome::kDuplicate, CompletionOutcome::kQuarantined}));
+  consistent("completed");
+  EXPECT_EQ(store.Complete({failed_twice}, 1100, 10)[0], CompletionOutcome::kRequeued);
+  consistent("requeued");
+  EXPECT_EQ(store.ReturnUnknownLeases("w1", {g[2].lease_id, g[3].lease_id}), 1);  // g[6] returned
+  consistent("returned");
+  EXPECT_EQ(store.ExpireLeases(1600, 0, 2, quarantine).size(), 2u);  // g[2], g[3]: requeued
+  consistent("expired");
+  EXPECT_EQ(store.Complete({{g[2].lease_id, g[2].task_key, 1, "late", false, 1}}, 1600, 10)[0],
+            CompletionOutcome::kFenced);
+  consistent("fenced");
+  auto again = store.GrantLeases("w2", 1, 1600, 100);
+  ASSERT_EQ(again.size(), 1u);
+  EXPECT_EQ(store.ExpireLeases(1800, 0, 1, quarantine).size(), 1u);  // quarantined
+  consistent("quarantined on expiry");
+  const TaskCounts c = store.CountTasks("job1");
+  // 9 tasks: 2 done (g0 valid, g1 invalid), 2 quarantined (g4 on failure,
+  // the expired regrant), 5 queued (2 never leased, g5 requeued, g6
+  // returned, one of g2/g3 back after its expiry).
+  EXPECT_EQ(c.total, 9);
+  EXPECT_EQ(c.done, 2);
+  EXPECT_EQ(c.quarantined, 2);
+  EXPECT_EQ(c.queued, 5);
+  EXPECT_EQ(c.leased, 0);
+  EXPECT_EQ(c.samples_done, 4);
+  EXPECT_EQ(c.samples_valid, 1);
+  EXPECT_EQ(c.lease_expiries, 3);
+  EXPECT_EQ(c.fenced_results, 1);
+  JobStore scanned(dir / "state.db");
+  const TaskCounts s = scanned.CountTasks("job1");
+  EXPECT_EQ(std::make_tuple(s.total, s.queued, s.leased, s.done, s.quarantined, s.samples_done, s.samples_valid,
+                            s.lease_expiries, s.fenced_results),
+            std::make_tuple(c.total, c.queued, c.leased, c.done, c.quarantined, c.samples_done, c.samples_valid,
+                            c.lease_expiries, c.fenced_results));
 }
 
 // Blob lifecycle (docs/protocol.md "Blob lifecycle"): the store references a

@@ -258,7 +258,10 @@ class JobStore {
   // Gives every active lease until now_ms + grace_ms (used at start-up, so
   // workers that kept running while the coordinator was down can report).
   void ExtendAllLeases(std::int64_t deadline_ms);
-  // Counts for one job, or for all jobs when job_id is empty.
+  // Counts for one job, or for all jobs when job_id is empty. A job's counts
+  // are read from the tasks once (a scan of its tasks) and then kept in
+  // memory, moved by every change this store commits, so a status poll costs
+  // O(1) however many tasks the job has; all jobs' counts are a scan.
   TaskCounts CountTasks(const std::string& job_id);
   std::int64_t ActiveLeases();
 
@@ -299,8 +302,9 @@ class JobStore {
 
   // Invariants, for tests and `fabatlas-coordinator --check`: every finished
   // task completed exactly once, no active lease on a task that is not
-  // leased, every leased task has exactly one active lease. Returns one line
-  // per violation (empty = consistent).
+  // leased, every leased task has exactly one active lease, and every job's
+  // counts kept in memory (CountTasks) equal a scan of its tasks. Returns one
+  // line per violation (empty = consistent).
   std::vector<std::string> CheckConsistency();
 
   // Copies committed WAL pages into the database file (a PASSIVE checkpoint
@@ -317,6 +321,9 @@ class JobStore {
   std::mutex mutex_;
   std::map<std::string, std::pair<int, std::int64_t>> touched_;  // worker -> (slots, last write ms)
   std::int64_t preferring_tasks_ = 0;  // tasks with tasks.affine = 1 (lease affinity)
+  // CountTasks of each job asked for so far, moved by every committed change
+  // (job_store.cc CountDeltas); under mutex_.
+  std::map<std::string, TaskCounts> counts_;
   std::mutex checkpoint_mutex_;
   std::unique_ptr<Db> checkpoint_db_;
 };
