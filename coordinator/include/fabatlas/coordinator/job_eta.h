@@ -91,8 +91,9 @@ struct JobEtaOptions {
   double first_split_dg_per_sample_factor = 2.5;
   // CPU seconds per task beyond its evaluator: the coordinator's lease,
   // result and store work and the worker's outside the evaluator (measured
-  // on the coarse tube 10k job, docs/benchmarks.md "Scale").
-  double overhead_cpu_seconds_per_task = 0.001;
+  // on the coarse tube 10k job: 107 of its 300 CPU seconds were not the
+  // evaluator's, over 37,354 tasks; docs/benchmarks.md "Scale").
+  double overhead_cpu_seconds_per_task = 0.0029;
   // Length of the sliding window the rate is measured over, wall seconds.
   double rate_window_seconds = 60;
   // Wall seconds of publishing per sample (form outputs and maps, artifact,
