@@ -8,13 +8,16 @@
 // values the `openscad` node passes, so the two sides share nothing but the
 // model file and the numbers.
 //
-// Tolerance, 2% of OpenSCAD's volume (the issue's bar for native against
-// OpenSCAD volumes): the sample's volume is the level set's at the design's
-// voxel (0.8–1 mm), whose zero crossing is placed to a small fraction of a
-// voxel; the difference is that offset times the surface area. Measured at
-// these points: cup -0.61%, car and vase in docs/benchmarks.md ("Fab Forms
-// Table 3"); a missing wheel, handle or hole ring changes the volume by
-// 4-30%, far outside it.
+// Tolerance, 1% of OpenSCAD's volume (half the issue's 2% bar for native
+// against OpenSCAD volumes), so that each design's OpenSCAD part matters:
+// leaving out the hole ring changes the vase's volume by 2.7%, one wheel the
+// car's by 3.4%, the handle the cup's by about 8% (OpenSCAD renders of the
+// parts alone at these values). The sample's volume is the level set's at
+// the design's voxel (0.8-1 mm); its zero crossing lies within a small
+// fraction of a voxel of the surface, so the difference is about that
+// offset times the surface area: measured at these points cup -0.61% (about
+// 34,000 mm^2 of surface: a mean offset of 0.007 mm), car -0.07%, vase
+// -0.07%. Both sides are deterministic for a given OpenSCAD.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -82,7 +85,7 @@ double OpenScadVolume(const fs::path& dir, const std::string& program) {
 // figures are printed for docs/benchmarks.md.
 void ExpectVolume(const char* design, double ours, double peer) {
   std::printf("%s: fabatlas %.1f mm^3, OpenSCAD %.1f mm^3 (%+.2f%%)\n", design, ours, peer, 100 * (ours - peer) / peer);
-  EXPECT_NEAR(ours, peer, 0.02 * peer);
+  EXPECT_NEAR(ours, peer, 0.01 * peer);
 }
 
 std::string Model(const char* file) { return (SourceDir() / "configs/scad" / file).string(); }
