@@ -455,6 +455,44 @@ TEST(OpsCli, JsonOutputOfSubmitWatchStatusJobsAndRun) {
   fs::remove_all(dir);
 }
 
+// What submit, fetch and jobs cannot do, each said in one line with exit
+// status 2, paths as typed: a job file that is not there, one naming a
+// design that is not there, fetching a job that has not finished (nothing
+// written) and a job that does not exist; jobs lists the running job.
+TEST(OpsCli, SubmitFetchAndJobsRefuseWhatTheyCannotDoInOneLine) {
+  fs::path dir = FreshDir("ops_refusals");
+  CoordinatorProcess c = StartCoordinator(dir / "state", 0, {"--log-level", "warn"});
+  ASSERT_GT(c.port, 0) << ReadText(dir / "state/coordinator.log");
+  const std::string bin = (BinDir() / "fabatlas").string();
+  const std::string at = " --coordinator 127.0.0.1:" + std::to_string(c.port);
+  auto expect_refused = [&](const std::string& args, const std::string& says) {
+    auto [code, out] = Shell(dir, bin + " " + args + at);
+    EXPECT_EQ(code, 2) << args << ": " << out;
+    EXPECT_EQ(std::count(out.begin(), out.end(), '\n'), 1) << args << ": " << out;
+    EXPECT_NE(out.find(says), std::string::npos) << args << ": " << out;
+  };
+  expect_refused("submit nothing.yaml", "nothing.yaml");
+  std::ofstream(dir / "bad.yaml") << "design: nowhere.yaml\n";
+  expect_refused("submit bad.yaml", "nowhere.yaml");
+  // No worker: the job stays RUNNING.
+  auto [submit_code, submit_out] = Stdout(dir, bin + " submit " + JobPath().string() + at);
+  ASSERT_EQ(submit_code, 0) << submit_out;
+  const std::string id = submit_out.substr(0, submit_out.find_first_of(" \n"));
+  ASSERT_EQ(id.size(), 16u) << submit_out;
+  expect_refused("fetch " + id + " --out early", "is JOB_STATE_RUNNING");
+  EXPECT_FALSE(fs::exists(dir / "early"));
+  expect_refused("fetch 0123456789abcdef --out none", "NOT_FOUND");
+  EXPECT_FALSE(fs::exists(dir / "none"));
+  auto [jobs_code, jobs_out] = Stdout(dir, bin + " jobs" + at);
+  EXPECT_EQ(jobs_code, 0) << jobs_out;
+  EXPECT_EQ(std::count(jobs_out.begin(), jobs_out.end(), '\n'), 1) << jobs_out;
+  EXPECT_NE(jobs_out.find(id), std::string::npos) << jobs_out;
+  EXPECT_NE(jobs_out.find("RUNNING"), std::string::npos) << jobs_out;
+  ::kill(c.pid, SIGTERM);
+  EXPECT_EQ(WaitExit(c.pid, std::chrono::seconds(30)), 0);
+  if (!HasFailure()) fs::remove_all(dir);
+}
+
 // Every subcommand's --help exits 0, shows defaults and speaks the user's
 // words (no bare "seed 001" references to the papers); the benchmarks'
 // --help prints usage instead of running them.
