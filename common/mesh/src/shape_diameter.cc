@@ -67,6 +67,10 @@ ShapeDiameterSummary ShapeDiameter(const TriangleMesh& mesh, const ShapeDiameter
   if (options.rays < 1 || options.rays > 10000) {
     throw InputError("shape diameter: rays must be in [1, 10000], got " + std::to_string(options.rays));
   }
+  if (!(options.wall_angle_degrees > 0 && options.wall_angle_degrees <= 180)) {
+    throw InputError("shape diameter: wall_angle_degrees must be in (0, 180], got " +
+                     std::to_string(options.wall_angle_degrees));
+  }
   if (!(options.cone_angle_degrees > 0 && options.cone_angle_degrees < 180)) {
     throw InputError("shape diameter: cone_angle_degrees must be in (0, 180), got " +
                      std::to_string(options.cone_angle_degrees));
@@ -135,6 +139,7 @@ ShapeDiameterSummary ShapeDiameter(const TriangleMesh& mesh, const ShapeDiameter
 
   // Fixed ray pattern in the cone frame: polar angle uniform in (0, cone/2),
   // azimuth by the golden angle. Weight 1/theta (Shapira et al. 2008).
+  const double min_opposition = std::cos(options.wall_angle_degrees * std::numbers::pi / 180.0);
   const int n_rays = options.rays;
   const double half = 0.5 * options.cone_angle_degrees * std::numbers::pi / 180.0;
   const double golden = std::numbers::pi * (3.0 - std::sqrt(5.0));
@@ -182,6 +187,12 @@ ShapeDiameterSummary ShapeDiameter(const TriangleMesh& mesh, const ShapeDiameter
         // Valid only on the inner side of a wall: the hit face's outward normal
         // points along the ray.
         if (Dot(normal[rh.hit.primID], dir) <= 0) continue;
+        // ... and only on the far side of a wall: the hit face turns back
+        // towards this one (normals more than 180 - wall_angle degrees
+        // apart). A neighbouring face across a convex edge (a cube's, 90
+        // degrees) is no wall: near such an edge its short rays would outvote
+        // the opposite face's in the median and the outlier test.
+        if (Dot(normal[rh.hit.primID], normal[f]) > -min_opposition) continue;
         hits.push_back({static_cast<double>(rh.ray.tfar), r[3]});
       }
       if (hits.empty()) continue;

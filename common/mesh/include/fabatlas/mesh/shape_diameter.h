@@ -16,6 +16,13 @@ struct ShapeDiameterOptions {
   int rays = 30;
   // Full opening angle of the ray cone around the inward normal, degrees.
   double cone_angle_degrees = 120.0;
+  // A hit counts only on the far side of a wall: the hit face's outward
+  // normal within this angle of the ray face's inward normal (degrees, in
+  // (0, 180]). 60: the two sides of a wall at most 60 degrees from parallel,
+  // so the neighbouring face across a convex edge (90 degrees at a cube's) is
+  // not read as a wall, while a wedge sharper than 60 degrees still is. 180:
+  // every inner-side hit counts (Shapira et al.'s SDF as published).
+  double wall_angle_degrees = 60.0;
   // Faces thinner than this (mm) count in ShapeDiameterSummary::area_fraction_below.
   double thin_threshold = 1.0;
   // When > 0 and the mesh has more faces, only every k-th face (k = ceil(faces
@@ -44,7 +51,8 @@ struct ShapeDiameterSummary {
 // centroid at polar angle theta_i = (i + 1/2) / n * cone/2 around the inward
 // normal and azimuth i * golden angle (a fixed pattern, no randomness); a hit
 // counts only when it reaches the inner side of a face (that face's outward
-// normal points along the ray). Hit lengths further than one standard deviation
+// normal points along the ray) that faces back at the ray's face (normals
+// more than 180 - wall_angle_degrees apart). Hit lengths further than one standard deviation
 // from their median are dropped; the face value is the weighted median of the
 // rest with Shapira's weights 1/theta. Raw SDF, no smoothing or normalisation.
 // Rays are traced in float32 with Embree 3 over a TBB parallel loop; results
