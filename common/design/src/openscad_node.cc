@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <fstream>
@@ -22,6 +23,7 @@
 
 #include "fabatlas/error.h"
 #include "fabatlas/mesh/read_mesh.h"
+#include "fabatlas/geometry/convex_mesh_distance.h"
 #include "fabatlas/scad/csg_tree.h"
 #include "fabatlas/scad/customizer.h"
 #include "fabatlas/scad/model_files.h"
@@ -329,17 +331,92 @@ mesh::TriangleMesh Hull3(const std::vector<std::array<double, 3>>& points) {
   return out;
 }
 
+// A subtree's signed distance bound not sampled yet: exact within `band` of
+// its surface (the band of the grid it will be sampled on), beyond it a
+// lower bound in magnitude (as geometry::FromDistance requires); `bounds` is
+// its material's bounding box.
+struct Field {
+  geometry::DistanceFunction distance;
+  geometry::Box3 bounds;
+};
+
+enum class Combine { kUnion, kDifference, kIntersection };
+
+// Distance from p to box b when outside it (a lower bound of the distance to
+// anything inside b); <= 0 inside.
+double BoxOutside(const geometry::Box3& b, double x, double y, double z) {
+  const double qx = std::max(b.min[0] - x, x - b.max[0]), qy = std::max(b.min[1] - y, y - b.max[1]),
+               qz = std::max(b.min[2] - z, z - b.max[2]);
+  const double ox = std::max(qx, 0.0), oy = std::max(qy, 0.0), oz = std::max(qz, 0.0);
+  return ox > 0 || oy > 0 || oz > 0 ? std::sqrt(ox * ox + oy * oy + oz * oz) : std::max({qx, qy, qz});
+}
+
+// The CSG of fields as OpenVDB's CSG combines level sets (min for union,
+// max(a, -b) for difference, max for intersection: the same voxel values in
+// the band). An operand whose box lies `band` or farther from p contributes
+// its box distance without being evaluated: that leaves every value within
+// the band exact and every value beyond it a bound. nullptr: no material.
+std::shared_ptr<const Field> CombineFields(Combine op, std::vector<std::shared_ptr<const Field>> in, double band) {
+  std::vector<std::shared_ptr<const Field>> parts;
+  for (std::size_t i = 0; i < in.size(); ++i) {
+    if (!in[i]) {
+      if (op == Combine::kIntersection || (op == Combine::kDifference && i == 0)) return nullptr;
+      continue;
+    }
+    parts.push_back(in[i]);
+  }
+  if (parts.empty()) return nullptr;
+  if (parts.size() == 1) return parts[0];
+  geometry::Box3 box = parts[0]->bounds;
+  for (std::size_t i = 1; i < parts.size() && op != Combine::kDifference; ++i)
+    for (int k = 0; k < 3; ++k) {
+      if (op == Combine::kUnion) {
+        box.min[k] = std::min(box.min[k], parts[i]->bounds.min[k]);
+        box.max[k] = std::max(box.max[k], parts[i]->bounds.max[k]);
+      } else {
+        box.min[k] = std::max(box.min[k], parts[i]->bounds.min[k]);
+        box.max[k] = std::min(box.max[k], parts[i]->bounds.max[k]);
+      }
+    }
+  for (int k = 0; k < 3; ++k)
+    if (box.min[k] > box.max[k]) return nullptr;  // an intersection of disjoint boxes
+  auto field = std::make_shared<Field>();
+  field->bounds = box;
+  field->distance = [parts = std::move(parts), op, band](double x, double y, double z) {
+    auto value = [&](const Field& f) {
+      const double b = BoxOutside(f.bounds, x, y, z);
+      return b >= band ? b : f.distance(x, y, z);
+    };
+    double d = value(*parts[0]);
+    for (std::size_t i = 1; i < parts.size(); ++i) {
+      const double e = value(*parts[i]);
+      if (op == Combine::kUnion) d = std::min(d, e);
+      else if (op == Combine::kDifference) d = std::max(d, -e);
+      else d = std::max(d, e);
+    }
+    return d;
+  };
+  return field;
+}
+
 class CsgEvaluation {
  public:
   CsgEvaluation(OpenScadNodeContext& context, const fs::path& model, const fs::path& work)
       : c_(context), model_(model), work_(work), render2_([this](const CsgNode& n) { return Outline2(n); }) {}
 
+  // A subtree's geometry: a level set, or (while every node below is a
+  // convex primitive, a straight prism or a boolean of them) its signed
+  // distance bound not sampled yet, so a whole CSG tree of such nodes is
+  // sampled once in its result's band instead of once per leaf plus a grid
+  // copy per boolean. Both empty: no material.
   struct Result {
     Solid solid;
+    std::shared_ptr<const Field> field;
     std::string key;
   };
 
-  Result Evaluate3(const CsgNode& n, const Affine& m, const std::string& path) {
+  // need_solid: sample a field result (the root of the evaluation).
+  Result Evaluate3(const CsgNode& n, const Affine& m, const std::string& path, bool need_solid = false) {
     const std::string key = KeyOf(n, m);
     SubtreeRecord record;
     record.key = key;
@@ -358,10 +435,10 @@ class CsgEvaluation {
             if (!IsTwoD(c.name)) record.children.push_back(KeyOf(c, inner));
         if (c_.records) c_.records->push_back(record);
         RecallOutside(key, c_.outside);
-        return {*hit, key};
+        return {*hit, nullptr, key};
       }
     }
-    Solid solid;
+    Result result{Solid(), nullptr, key};
     const std::size_t outside_before = c_.outside ? c_.outside->size() : 0;
     // Children first (3D nodes whose children are 3D), each its own record.
     std::vector<Result> kids;
@@ -375,37 +452,50 @@ class CsgEvaluation {
     }
     const auto start = Clock::now();
     if (boolean) {
-      if (n.name == "difference") {
-        if (!kids.empty()) {
-          solid = kids[0].solid;
-          for (std::size_t i = 1; i < kids.size(); ++i) solid = geometry::Difference(solid, kids[i].solid);
-        }
-      } else if (n.name == "intersection") {
-        if (!kids.empty()) {
-          solid = kids[0].solid;
-          for (std::size_t i = 1; i < kids.size(); ++i) solid = geometry::Intersection(solid, kids[i].solid);
-        }
+      const Combine op = n.name == "difference" ? Combine::kDifference
+                         : n.name == "intersection" ? Combine::kIntersection
+                                                    : Combine::kUnion;
+      bool all_fields = true;
+      for (const auto& k : kids) all_fields = all_fields && (k.field || k.solid.empty());
+      if (all_fields) {
+        std::vector<std::shared_ptr<const Field>> fields;
+        for (const auto& k : kids) fields.push_back(k.field);
+        result.field = CombineFields(op, fields, c_.grid.half_width_voxels * c_.grid.voxel_size);
       } else {
-        for (const auto& k : kids) solid = geometry::Union(solid, k.solid);
+        std::vector<Solid> solids;
+        for (const auto& k : kids) solids.push_back(k.field ? Sample(*k.field) : k.solid);
+        if (op == Combine::kUnion) {
+          for (const auto& k : solids) result.solid = geometry::Union(result.solid, k);
+        } else if (!solids.empty()) {
+          result.solid = solids[0];
+          for (std::size_t i = 1; i < solids.size(); ++i)
+            result.solid = op == Combine::kDifference ? geometry::Difference(result.solid, solids[i])
+                                                      : geometry::Intersection(result.solid, solids[i]);
+        }
       }
     } else {
       try {
-        solid = Leaf(n, m);
+        result = Leaf(n, m);
+        result.key = key;
       } catch (const NoNativeEquivalent& e) {
         record.op = kCsgRenderedOp + n.name;
-        solid = Rendered(n, m, e.what);
+        result.solid = Rendered(n, m, e.what);
       }
     }
+    if (need_solid && result.field) {
+      result.solid = Sample(*result.field);
+      result.field = nullptr;
+    }
     record.seconds = Since(start);
-    record.bytes = solid.MemoryBytes();
+    record.bytes = result.solid.MemoryBytes();
     for (const auto& k : kids) record.children.push_back(k.key);
-    if (c_.cache) {
-      c_.cache->Offer(key, solid, record.seconds);
+    if (c_.cache && !result.field) {
+      c_.cache->Offer(key, result.solid, record.seconds);
       if (c_.outside && c_.outside->size() > outside_before)
         RememberOutside(key, std::vector<OutsideMesh>(c_.outside->begin() + outside_before, c_.outside->end()));
     }
     if (c_.records) c_.records->push_back(std::move(record));
-    return {solid, key};
+    return result;
   }
 
  private:
@@ -440,6 +530,33 @@ class CsgEvaluation {
     if (m.triangles.empty()) return Solid();
     Transform(m, a);
     return geometry::FromMesh(c_.grid, m);
+  }
+
+  // A closed convex mesh (OpenSCAD's cubes, spheres, cylinders, hulls) under
+  // a: its exact distance as a field; a level set when it is not convex.
+  Result Convex(mesh::TriangleMesh m, const Affine& a) {
+    if (m.triangles.empty()) return {};
+    Transform(m, a);
+    geometry::DistanceFunction d = geometry::ConvexMeshDistance(m, c_.grid.half_width_voxels * c_.grid.voxel_size);
+    if (!d) return {geometry::FromMesh(c_.grid, m), nullptr, ""};
+    auto field = std::make_shared<Field>();
+    field->distance = std::move(d);
+    field->bounds = {m.vertices[0], m.vertices[0]};
+    for (const auto& v : m.vertices)
+      for (int k = 0; k < 3; ++k) {
+        field->bounds.min[k] = std::min(field->bounds.min[k], v[k]);
+        field->bounds.max[k] = std::max(field->bounds.max[k], v[k]);
+      }
+    return {Solid(), field, ""};
+  }
+
+  // A field sampled in its band (geometry::FromDistance).
+  Solid Sample(const Field& f) {
+    try {
+      return geometry::FromDistance(c_.grid, f.bounds, f.distance, "csg");
+    } catch (const InputError& e) {
+      throw SampleFailure(kNoGeometry, model_.filename().string() + ": " + e.what());
+    }
   }
 
   void Outside(const std::string& what, const std::string& key, const mesh::TriangleMesh& m) {
@@ -537,19 +654,19 @@ class CsgEvaluation {
     throw NoNativeEquivalent{n.name};
   }
 
-  Solid Leaf(const CsgNode& n, const Affine& m) {
-    if (n.name == "cube" || n.name == "sphere" || n.name == "cylinder") return FromMesh(PrimitiveMesh(n), m);
+  Result Leaf(const CsgNode& n, const Affine& m) {
+    if (n.name == "cube" || n.name == "sphere" || n.name == "cylinder") return Convex(PrimitiveMesh(n), m);
     if (n.name == "polyhedron") {
       mesh::TriangleMesh mm = PrimitiveMesh(n);
       Outside(model_.filename().string() + ": polyhedron (CSG line " + std::to_string(n.line) + ")", Sha256Hex(n.canonical), mm);
-      return FromMesh(std::move(mm), m);
+      return {FromMesh(std::move(mm), m), nullptr, ""};
     }
     if (n.name == "linear_extrude") {
       Shape2 s;
       s.op = Shape2::Op::kUnion;
       for (const auto& c : n.children) s.parts.push_back(Evaluate2(c, {1, 0, 0, 0, 1, 0}, render2_));
       const double h = n.Number("height", 100), twist = n.Number("twist", 0);
-      if (h <= 0) return Solid();
+      if (h <= 0) return {};
       scad::Point2 scale{1, 1};
       if (auto it = n.args.find("scale"); it != n.args.end()) {
         if (it->second.type == CsgValue::Type::kVector) {
@@ -564,8 +681,9 @@ class CsgEvaluation {
         slices = twist == 0 ? 1 : std::max(1, static_cast<int>(std::ceil(FragmentsOf(n, MaxX(s)) * std::abs(twist) / 360)));
       const bool center = n.Boolean("center", false);
       if (twist == 0 && scale[0] == 1 && scale[1] == 1)
-        if (std::optional<Solid> prism = Prism(s, h, center, m)) return *prism;
-      return Extruded(s, [&](const Loop& l) { return scad::LinearExtrudeMesh(l, h, center, twist, slices, scale); }, m);
+        if (std::optional<Result> prism = Prism(s, h, center, m)) return *prism;
+      return {Extruded(s, [&](const Loop& l) { return scad::LinearExtrudeMesh(l, h, center, twist, slices, scale); }, m),
+              nullptr, ""};
     }
     if (n.name == "rotate_extrude") {
       Shape2 s;
@@ -575,13 +693,13 @@ class CsgEvaluation {
       const double angle = std::clamp(n.Number("angle", 360), -360.0, 360.0);
       const int fragments =
           static_cast<int>(std::ceil(std::max(FragmentsOf(n, MaxX(s)) * std::abs(angle) / 360, 1.0)));
-      return Extruded(s, [&](const Loop& l) { return scad::RotateExtrudeMesh(l, angle, fragments); }, m);
+      return {Extruded(s, [&](const Loop& l) { return scad::RotateExtrudeMesh(l, angle, fragments); }, m), nullptr, ""};
     }
     if (n.name == "hull") {
       std::vector<std::array<double, 3>> points;
       for (const auto& c : n.children) HullPoints(c, kIdentity, points);
-      if (points.size() < 4) return Solid();
-      return FromMesh(Hull3(points), m);
+      if (points.size() < 4) return {};
+      return Convex(Hull3(points), m);
     }
     if (n.name == "import") {
       auto f = n.args.find("file");
@@ -597,7 +715,7 @@ class CsgEvaluation {
         throw SampleFailure(kNoGeometry, e.what());
       }
       Outside(file.string() + " (imported by " + model_.filename().string() + ")", Sha256Hex(n.canonical), mm);
-      return FromMesh(std::move(mm), m);
+      return {FromMesh(std::move(mm), m), nullptr, ""};
     }
     throw NoNativeEquivalent{n.name};
   }
@@ -667,15 +785,15 @@ class CsgEvaluation {
   }
 
   // A straight linear_extrude (no twist, no scale) under a similarity: the
-  // prism's signed distance from the outline's (exact per loop set), sampled
-  // in the band. Empty when the map is not a similarity (then meshes).
-  std::optional<Solid> Prism(const Shape2& s, double h, bool center, const Affine& m) {
+  // prism's signed distance from the outline's (exact per loop set), as a
+  // field. Empty when the map is not a similarity (then meshes).
+  std::optional<Result> Prism(const Shape2& s, double h, bool center, const Affine& m) {
     const double scale = SimilarityScale(m);
     if (scale <= 0) return std::nullopt;
     scad::Point2 lo{std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity()};
     scad::Point2 hi{-lo[0], -lo[1]};
     Bounds2(s, lo, hi);
-    if (!(lo[0] <= hi[0] && lo[1] <= hi[1])) return Solid();
+    if (!(lo[0] <= hi[0] && lo[1] <= hi[1])) return Result{};
     const double z0 = center ? -h / 2 : 0, zc = z0 + h / 2;
     Distance2 region = RegionOf(s);
     geometry::Box3 box{{std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity(),
@@ -694,7 +812,10 @@ class CsgEvaluation {
     const double inv = 1 / (scale * scale);
     const double band = c_.grid.half_width_voxels * c_.grid.voxel_size / scale;  // local mm
     auto shared = std::make_shared<const Distance2>(std::move(region));
-    auto distance = [m, inv, scale, zc, h, band, shared](double x, double y, double z) {
+    // An id per outline, never reused (a freed outline's address may be).
+    static std::atomic<std::uint64_t> next_id{0};
+    const std::uint64_t id = ++next_id;
+    auto distance = [m, inv, scale, zc, h, band, shared, id](double x, double y, double z) {
       const double px = x - m[3], py = y - m[7], pz = z - m[11];  // local = A^T (p - t) / s^2
       const double qx = (m[0] * px + m[4] * py + m[8] * pz) * inv;
       const double qy = (m[1] * px + m[5] * py + m[9] * pz) * inv;
@@ -703,10 +824,10 @@ class CsgEvaluation {
       if (b >= band) return scale * b;  // beyond the band above or below: a lower bound
       // The sampler visits a leaf's voxels z fastest: for a prism standing
       // along z the outline's distance repeats, so the last one is kept.
-      thread_local const void* last_region = nullptr;
+      thread_local std::uint64_t last_region = 0;
       thread_local double last_x = 0, last_y = 0, last_a = 0;
-      if (last_region != shared.get() || last_x != qx || last_y != qy) {
-        last_region = shared.get();
+      if (last_region != id || last_x != qx || last_y != qy) {
+        last_region = id;
         last_x = qx;
         last_y = qy;
         last_a = (*shared)(qx, qy);
@@ -715,11 +836,10 @@ class CsgEvaluation {
       const double oa = std::max(a, 0.0), ob = std::max(b, 0.0);
       return scale * (std::sqrt(oa * oa + ob * ob) + std::min(std::max(a, b), 0.0));
     };
-    try {
-      return geometry::FromDistance(c_.grid, box, distance, "linear_extrude");
-    } catch (const InputError& e) {
-      throw SampleFailure(kNoGeometry, model_.filename().string() + ": linear_extrude: " + e.what());
-    }
+    auto field = std::make_shared<Field>();
+    field->distance = distance;
+    field->bounds = box;
+    return Result{Solid(), field, ""};
   }
 
   // A subtree's program runs in the work directory, where the files the
@@ -841,7 +961,7 @@ OpenScadNodeResult EvaluateOpenScadNode(const Node& node, const ResolvedArgs& ar
     throw SampleFailure(kNoGeometry, e.what());
   }
   CsgEvaluation evaluation(context, model, work.path);
-  CsgEvaluation::Result r = evaluation.Evaluate3(root, kIdentity, context.path + "/csg");
+  CsgEvaluation::Result r = evaluation.Evaluate3(root, kIdentity, context.path + "/csg", /*need_solid=*/true);
   result.solid = r.solid;
   result.root_key = r.key;
   return result;

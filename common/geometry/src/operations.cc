@@ -195,17 +195,9 @@ Solid Union(const Solid& a, const Solid& b) {
   return detail::MakeSolid(openvdb::tools::csgUnionCopy(*a.impl()->grid, *OnSpecOf(a, b)), a.impl()->spec);
 }
 
-namespace {
-
-// Faces the two operands share (a cap of a hole cut to the same height, a
-// box face flush with another's) make max(d_a, -d_b) exactly 0 on a plane of
-// voxel centres with no material on either side: a sheet of zero thickness
-// that the mesh extraction (iso a hair above 0) would close into a slab. A
-// voxel with 0 <= value <= iso whose two neighbours along some axis are both
-// outside is such a sub-voxel sheet: it takes the smaller neighbour value.
-// Genuine material is negative and never changes. Returns the voxels repaired.
-// Then the inactive values are signed again from the narrow band.
-std::size_t RemoveZeroSheets(FloatGrid& grid, double voxel_size) {
+// A sub-voxel sheet between flush faces (solid_impl.h): such a voxel takes the
+// smaller neighbour value; genuine material is negative and never changes.
+std::size_t detail::RemoveZeroSheets(FloatGrid& grid, double voxel_size) {
   const float iso = static_cast<float>(kMeshIso * voxel_size);
   std::vector<std::pair<openvdb::Coord, float>> fixes;
   auto acc = grid.getConstAccessor();
@@ -234,13 +226,12 @@ std::size_t RemoveZeroSheets(FloatGrid& grid, double voxel_size) {
   return fixes.size();
 }
 
-}  // namespace
 
 Solid Difference(const Solid& a, const Solid& b) {
   if (!a.impl()) return a;
   if (!b.impl()) return a;
   FloatGrid::Ptr out = openvdb::tools::csgDifferenceCopy(*a.impl()->grid, *OnSpecOf(a, b));
-  RemoveZeroSheets(*out, a.voxel_size());
+  detail::RemoveZeroSheets(*out, a.voxel_size());
   return detail::MakeSolid(out, a.impl()->spec);
 }
 

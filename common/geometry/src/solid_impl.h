@@ -44,6 +44,13 @@ void CheckActiveVoxelEstimate(const GridSpec& spec, double estimated_active, con
 // Wrap a finished grid as a Solid (sets class, name; grid must be canonical).
 Solid MakeSolid(openvdb::FloatGrid::Ptr grid, const GridSpec& spec);
 
+// Faces two CSG operands share make max(d_a, -d_b) exactly 0 on a plane of
+// voxel centres with no material on either side: a zero-thickness sheet the
+// mesh extraction would close into a slab. Such voxels (0 <= value <= iso,
+// both neighbours along some axis outside) take the smaller neighbour value,
+// then inactive values are signed again (operations.cc). Returns the voxels
+// repaired.
+std::size_t RemoveZeroSheets(openvdb::FloatGrid& grid, double voxel_size);
 // Throws InputError with `where: message` unless value is finite and > 0.
 void RequirePositive(double value, const char* where, const char* name);
 
