@@ -415,7 +415,8 @@ class CsgEvaluation {
     std::string key;
   };
 
-  // need_solid: sample a field result (the root of the evaluation).
+  // need_solid: sample a field result (the root of the evaluation). Fields
+  // are combined only without a subtree cache.
   Result Evaluate3(const CsgNode& n, const Affine& m, const std::string& path, bool need_solid = false) {
     const std::string key = KeyOf(n, m);
     SubtreeRecord record;
@@ -482,7 +483,9 @@ class CsgEvaluation {
         result.solid = Rendered(n, m, e.what);
       }
     }
-    if (need_solid && result.field) {
+    // With a subtree cache every node becomes a level set, so that each one
+    // can be offered and found again in later samples (Fab Forms Sec. 6).
+    if (result.field && (need_solid || c_.cache)) {
       result.solid = Sample(*result.field);
       result.field = nullptr;
     }
