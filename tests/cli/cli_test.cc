@@ -102,27 +102,6 @@ TEST(Cli, MissingDesignAndBadMesh) {
 
 namespace {
 
-// A flap hinged on the plate's top-front edge (x axis through y = 10, z = 0),
-// turned 90 degrees, must lie flush with a wall whose front face is at
-// y = 5 - gap: the rotation (dy, dz) -> (-dz, dy) puts the flap's top face
-// on the plane y = 10 - height, so the solved height is exactly gap + 5
-// (Koo et al. Sec. 5, a flush relationship), and only the top moves from its
-// 30 mm, so the deviation is |gap + 5 - 30|.
-constexpr const char* kFlap = R"(name: flap
-parameters: {gap: 30}
-fabrication: {voxel: 1.0, gap: 2.0}
-parts:
-  plate: {box: [0, 10, 0, 10, 0, 10], hold: [x0, x1, y0, y1, z0, z1]}
-  wall:  {box: [0, 10, "-gap", "5 - gap", 0, 10], hold: [x0, x1, y0, y1, z0, z1]}
-  flap:  {box: [0, 10, 10, 16, 0, 30], hold: [y0, y1]}
-joints:
-  h: {type: hinge, child: flap, parent: plate, axis: x, at: [[flap.y0, plate.y1], [flap.z0, plate.z0]]}
-configurations:
-  down: {h: 90}
-relationships:
-  - {type: flush, name: flap against the wall, in: down, faces: [flap.z1, wall.y1]}
-)";
-
 // Vertices of a binary STL: their bounding box (min x y z, max x y z).
 std::array<double, 6> StlBounds(const std::filesystem::path& path) {
   std::ifstream in(path, std::ios::binary);
@@ -150,7 +129,9 @@ std::array<double, 6> StlBounds(const std::filesystem::path& path) {
 // mesh spanning the solved parts; a conflict named with exit status 3; bad
 // overrides as one line with exit status 2.
 TEST(Cli, PrototypeSolvesFabricatesAndNamesConflicts) {
-  const auto file = fabatlas::testing::TempDesign(kFlap, "flap.yaml");
+  // The flap of tests/prototype/data/flap.yaml: solved height gap + 5,
+  // deviation |gap + 5 - 30|.
+  const auto file = fabatlas::testing::SourceDir() / "tests/prototype/data/flap.yaml";
   CommandRun r = Fabatlas("prototype " + file.string() + " --json");
   ASSERT_EQ(r.status, 0) << r.err;
   auto j = nlohmann::json::parse(r.out);
@@ -174,7 +155,7 @@ TEST(Cli, PrototypeSolvesFabricatesAndNamesConflicts) {
   // -30 + 1 = -29 (the hinge's pin and yokes sit around z = 0, y = 10), to
   // within a voxel (1 mm); three pieces: the plate with its yokes, the flap
   // with its pin, the wall (the hinge's clearance keeps them apart).
-  const auto stl = file.parent_path() / "flap.stl";
+  const auto stl = fabatlas::testing::FreshTempDir("prototype") / "flap.stl";
   r = Fabatlas("prototype " + file.string() + " --stl " + stl.string() + " --json");
   ASSERT_EQ(r.status, 0) << r.err;
   j = nlohmann::json::parse(r.out);

@@ -21,23 +21,11 @@ bool Mentions(const std::vector<std::string>& items, const std::string& what) {
   return false;
 }
 
-// A flap hinged on the x axis at the plate's top-front edge, swung 90 degrees,
-// must lie flush with a wall 35 mm in front of the hinge: a rotation of
-// (dy, dz) -> (-dz, dy) about the edge maps the flap's top face onto the
-// plane y = 10 - height, so the height must become exactly 35 mm.
+// The flap of tests/prototype/data/flap.yaml (gap 30): swung 90 degrees, its
+// top face lies on the plane y = 10 - height and must be flush with the wall
+// 35 mm in front of the hinge, so the height must become exactly 35 mm.
 TEST(PrototypeSolve, HingedFlapFlushWithWallHasAnalyticHeight) {
-  Prototype p = ParsePrototype(R"(
-parts:
-  plate: {box: [0, 10, 0, 10, 0, 10], hold: [x0, x1, y0, y1, z0, z1]}
-  wall:  {box: [0, 10, -30, -25, 0, 10], hold: [x0, x1, y0, y1, z0, z1]}
-  flap:  {box: [0, 10, 10, 12, 0, 30], hold: [y0, y1]}
-joints:
-  h: {type: hinge, child: flap, parent: plate, axis: x, at: [[flap.y0, plate.y1], [flap.z0, plate.z0]]}
-configurations:
-  down: {h: 90}
-relationships:
-  - {type: flush, name: flap against the wall, in: down, faces: [flap.z1, wall.y1]}
-)", "flap.yaml");
+  Prototype p = LoadPrototype(testing::SourceDir() / "tests/prototype/data/flap.yaml");
   SolveSummary s = SolvePrototype(p);
   ASSERT_TRUE(s.satisfiable) << s.Explain();
   auto f = s.cuboids.at("flap");
