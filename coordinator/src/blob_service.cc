@@ -9,20 +9,16 @@
 
 namespace fabatlas::coordinator {
 
-namespace fs = std::filesystem;
-using grpc::ServerContext;
-using grpc::Status;
-using grpc::StatusCode;
 
 namespace {
 
-class BlobServiceImpl final : public v1::BlobService::Service {
+class BlobServiceImpl final : public ServiceOn<v1::BlobService::Service> {
  public:
-  explicit BlobServiceImpl(Coordinator::Impl& impl) : impl_(impl) {}
+  using ServiceOn::ServiceOn;
 
   Status FindMissing(ServerContext* ctx, const v1::FindMissingRequest* req,
                      v1::FindMissingResponse* resp) override {
-    if (Status s = protocol::CheckToken(*ctx, impl_.options.token); !s.ok()) return s;
+    if (Status s = Authorise(*ctx); !s.ok()) return s;
     for (const auto& d : req->digests())
       if (!impl_.blobs->Contains(d)) resp->add_missing_digests(d);
     return Status::OK;
@@ -30,20 +26,18 @@ class BlobServiceImpl final : public v1::BlobService::Service {
 
   Status QueryWriteStatus(ServerContext* ctx, const v1::QueryWriteStatusRequest* req,
                           v1::QueryWriteStatusResponse* resp) override {
-    if (Status s = protocol::CheckToken(*ctx, impl_.options.token); !s.ok()) return s;
-    try {
+    if (Status s = Authorise(*ctx); !s.ok()) return s;
+    return Guarded([&]() -> Status {
       resp->set_committed_size(impl_.blobs->CommittedSize(req->digest()));
       // A held blob is fresh again for the collector's cutoff: the caller
       // skips the upload and goes on to name it.
       resp->set_complete(impl_.blobs->Touch(req->digest()));
       return Status::OK;
-    } catch (const std::exception& e) {
-      return FromException(e);
-    }
+    });
   }
 
   Status Write(ServerContext* ctx, grpc::ServerReader<v1::WriteChunk>* reader, v1::WriteResponse* resp) override {
-    if (Status s = protocol::CheckToken(*ctx, impl_.options.token); !s.ok()) return s;
+    if (Status s = Authorise(*ctx); !s.ok()) return s;
     v1::WriteChunk chunk;
     std::string digest;
     std::int64_t held = 0;
@@ -79,7 +73,7 @@ class BlobServiceImpl final : public v1::BlobService::Service {
   }
 
   Status Read(ServerContext* ctx, const v1::ReadRequest* req, grpc::ServerWriter<v1::ReadChunk>* writer) override {
-    if (Status s = protocol::CheckToken(*ctx, impl_.options.token); !s.ok()) return s;
+    if (Status s = Authorise(*ctx); !s.ok()) return s;
     std::int64_t size = impl_.blobs->Size(req->digest());
     if (size < 0) {
       // Someone needed a blob the store does not hold (collected too early,
@@ -88,20 +82,15 @@ class BlobServiceImpl final : public v1::BlobService::Service {
       log::Warn("blob_missing", {{"digest", req->digest()}});
       return Status(StatusCode::NOT_FOUND, "no blob " + req->digest());
     }
-    try {
+    return Guarded([&]() -> Status {
       for (std::int64_t offset = req->offset(); offset < size; offset += protocol::kBlobChunkBytes) {
         v1::ReadChunk chunk;
         chunk.set_data(impl_.blobs->Read(req->digest(), offset, protocol::kBlobChunkBytes));
         if (!writer->Write(chunk)) break;
       }
-    } catch (const std::exception& e) {
-      return FromException(e);
-    }
-    return Status::OK;
+      return Status::OK;
+    });
   }
-
- private:
-  Coordinator::Impl& impl_;
 };
 
 }  // namespace

@@ -14,23 +14,20 @@
 namespace fabatlas::coordinator {
 
 namespace fs = std::filesystem;
-using grpc::ServerContext;
-using grpc::Status;
-using grpc::StatusCode;
 
 namespace {
 
-class JobServiceImpl final : public v1::JobService::Service {
+class JobServiceImpl final : public ServiceOn<v1::JobService::Service> {
  public:
-  explicit JobServiceImpl(Coordinator::Impl& impl) : impl_(impl) {}
+  using ServiceOn::ServiceOn;
 
   Status Submit(ServerContext* ctx, const v1::SubmitRequest* req, v1::SubmitResponse* resp) override {
-    if (Status s = protocol::CheckToken(*ctx, impl_.options.token); !s.ok()) return s;
+    if (Status s = Authorise(*ctx); !s.ok()) return s;
     const std::string& digest = req->bundle_digest();
     if (!storage::IsDigest(digest)) return Invalid("bundle_digest is not a SHA-256 hex digest");
     if (!impl_.blobs->Contains(digest))
       return Status(StatusCode::FAILED_PRECONDITION, "bundle " + digest + " not uploaded");
-    try {
+    return Guarded([&]() -> Status {
       v1::JobBundle bundle;
       if (!bundle.ParseFromString(impl_.blobs->Read(digest))) return Invalid("bundle is not a JobBundle");
       std::string id = digest.substr(0, 16);
@@ -55,13 +52,11 @@ class JobServiceImpl final : public v1::JobService::Service {
       resp->set_job_id(id);
       resp->set_created(created);
       return Status::OK;
-    } catch (const std::exception& e) {
-      return FromException(e);
-    }
+    });
   }
 
   Status GetStatus(ServerContext* ctx, const v1::GetStatusRequest* req, v1::JobStatus* resp) override {
-    if (Status s = protocol::CheckToken(*ctx, impl_.options.token); !s.ok()) return s;
+    if (Status s = Authorise(*ctx); !s.ok()) return s;
     auto job = impl_.store->FindJob(req->job_id());
     if (!job) return Status(StatusCode::NOT_FOUND, "no job " + req->job_id());
     *resp = impl_.StatusOf(*job);
@@ -70,7 +65,7 @@ class JobServiceImpl final : public v1::JobService::Service {
 
   Status Watch(ServerContext* ctx, const v1::GetStatusRequest* req,
                grpc::ServerWriter<v1::JobStatus>* writer) override {
-    if (Status s = protocol::CheckToken(*ctx, impl_.options.token); !s.ok()) return s;
+    if (Status s = Authorise(*ctx); !s.ok()) return s;
     std::string last;
     while (!ctx->IsCancelled() && !impl_.stopping) {
       auto job = impl_.store->FindJob(req->job_id());
@@ -91,7 +86,7 @@ class JobServiceImpl final : public v1::JobService::Service {
   }
 
   Status Cancel(ServerContext* ctx, const v1::CancelRequest* req, v1::JobStatus* resp) override {
-    if (Status s = protocol::CheckToken(*ctx, impl_.options.token); !s.ok()) return s;
+    if (Status s = Authorise(*ctx); !s.ok()) return s;
     auto job = impl_.store->FindJob(req->job_id());
     if (!job) return Status(StatusCode::NOT_FOUND, "no job " + req->job_id());
     if (!Terminal(job->state)) {
@@ -109,34 +104,29 @@ class JobServiceImpl final : public v1::JobService::Service {
   }
 
   Status ListJobs(ServerContext* ctx, const v1::ListJobsRequest*, v1::ListJobsResponse* resp) override {
-    if (Status s = protocol::CheckToken(*ctx, impl_.options.token); !s.ok()) return s;
+    if (Status s = Authorise(*ctx); !s.ok()) return s;
     for (const auto& job : impl_.store->Jobs()) *resp->add_jobs() = impl_.StatusOf(job);
     return Status::OK;
   }
 
   Status FetchResult(ServerContext* ctx, const v1::FetchResultRequest* req,
                      v1::FetchResultResponse* resp) override {
-    if (Status s = protocol::CheckToken(*ctx, impl_.options.token); !s.ok()) return s;
+    if (Status s = Authorise(*ctx); !s.ok()) return s;
     auto job = impl_.store->FindJob(req->job_id());
     if (!job) return Status(StatusCode::NOT_FOUND, "no job " + req->job_id());
     if (job->state != storage::JobState::kSucceeded)
       return Status(StatusCode::FAILED_PRECONDITION,
                     "job " + job->id + " is " + v1::JobState_Name(static_cast<v1::JobState>(job->state)));
-    try {
+    return Guarded([&]() -> Status {
       for (const auto& [name, digest] : impl_.store->JobOutputs(job->id)) {
         v1::JobOutput* out = resp->add_outputs();
         out->set_name(name);
         out->set_digest(digest);
         out->set_size_bytes(static_cast<std::int64_t>(impl_.blobs->Size(digest)));
       }
-    } catch (const std::exception& e) {
-      return FromException(e);
-    }
-    return Status::OK;
+      return Status::OK;
+    });
   }
-
- private:
-  Coordinator::Impl& impl_;
 };
 
 }  // namespace

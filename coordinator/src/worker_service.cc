@@ -11,16 +11,12 @@
 
 namespace fabatlas::coordinator {
 
-namespace fs = std::filesystem;
-using grpc::ServerContext;
-using grpc::Status;
-using grpc::StatusCode;
 
 namespace {
 
-class WorkerServiceImpl final : public v1::WorkerService::Service {
+class WorkerServiceImpl final : public ServiceOn<v1::WorkerService::Service> {
  public:
-  explicit WorkerServiceImpl(Coordinator::Impl& impl) : impl_(impl) {}
+  using ServiceOn::ServiceOn;
 
   // A sample result's point key and subtree records, for the store's
   // subtree tables (JobStore::Subtrees).
@@ -48,10 +44,11 @@ class WorkerServiceImpl final : public v1::WorkerService::Service {
   }
 
   Status Sync(ServerContext* ctx, const v1::SyncRequest* req, v1::SyncResponse* resp) override {
-    if (Status s = protocol::CheckToken(*ctx, impl_.options.token); !s.ok()) return s;
+    if (Status s = Authorise(*ctx); !s.ok()) return s;
     if (req->worker_id().empty()) return Invalid("worker_id is empty");
     const auto& o = impl_.options;
-    try {
+    const auto failed_write = [&](const ResourceError& e) { impl_.StateWriteFailed("sync", e.what()); };
+    return Guarded([&]() -> Status {
       std::int64_t now = NowMs();
       if (req->leaving()) {
         {
@@ -163,40 +160,31 @@ class WorkerServiceImpl final : public v1::WorkerService::Service {
         lease->set_deadline_unix_ms(g.deadline_ms);
       }
       return Status::OK;
-    } catch (const ResourceError& e) {
-      impl_.StateWriteFailed("sync", e.what());
-      return FromException(e);
-    } catch (const std::exception& e) {
-      return FromException(e);
-    }
+    }, failed_write);
   }
 
   Status FetchSolid(ServerContext* ctx, const v1::FetchSolidRequest* req, v1::FetchSolidResponse* resp) override {
-    if (Status s = protocol::CheckToken(*ctx, impl_.options.token); !s.ok()) return s;
+    if (Status s = Authorise(*ctx); !s.ok()) return s;
     if (req->worker_id().empty()) return Invalid("worker_id is empty");
     if (req->solid().point_key_size() == 0) return Invalid("solid.point_key is empty");
-    try {
+    return Guarded([&]() -> Status {
       resp->set_digest(impl_.FetchSolid(*req, ctx));
       return Status::OK;
-    } catch (const std::exception& e) {
-      return FromException(e);
-    }
+    });
   }
 
   Status ShareSolids(ServerContext* ctx, const v1::ShareSolidsRequest* req, v1::ShareSolidsResponse* resp) override {
-    if (Status s = protocol::CheckToken(*ctx, impl_.options.token); !s.ok()) return s;
+    if (Status s = Authorise(*ctx); !s.ok()) return s;
     if (req->worker_id().empty()) return Invalid("worker_id is empty");
-    try {
+    return Guarded([&]() -> Status {
       impl_.ShareSolids(*req, resp, ctx);
       return Status::OK;
-    } catch (const std::exception& e) {
-      return FromException(e);
-    }
+    });
   }
 
   Status Heartbeat(ServerContext* ctx, const v1::HeartbeatRequest* req, v1::HeartbeatResponse* resp) override {
-    if (Status s = protocol::CheckToken(*ctx, impl_.options.token); !s.ok()) return s;
-    try {
+    if (Status s = Authorise(*ctx); !s.ok()) return s;
+    return Guarded([&]() -> Status {
       std::int64_t now = NowMs();
       // A heartbeat shows the worker alive as a Sync does (a 1-slot worker
       // does not Sync while its task runs).
@@ -205,13 +193,8 @@ class WorkerServiceImpl final : public v1::WorkerService::Service {
       for (const auto& id : impl_.store->ExtendLeases(req->worker_id(), ids, now + impl_.options.lease_ms))
         resp->add_revoked_lease_ids(id);
       return Status::OK;
-    } catch (const std::exception& e) {
-      return FromException(e);
-    }
+    });
   }
-
- private:
-  Coordinator::Impl& impl_;
 };
 
 }  // namespace
