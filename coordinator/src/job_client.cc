@@ -33,6 +33,17 @@ void JobClient::Fail(const std::string& what, const grpc::Status& status) const 
   throw InputError("coordinator " + target_ + " (" + what + "): " + name + ": " + reason);
 }
 
+template <class Response, class Call>
+Response JobClient::Unary(const std::string& what, std::chrono::milliseconds timeout, Call call) const {
+  auto stub = v1::JobService::NewStub(channel_);
+  grpc::ClientContext ctx;
+  protocol::Prepare(ctx, security_, timeout);
+  Response resp;
+  grpc::Status s = call(*stub, &ctx, &resp);
+  if (!s.ok()) Fail(what, s);
+  return resp;
+}
+
 std::string JobClient::UploadBlob(const std::string& bytes) {
   auto stub = v1::BlobService::NewStub(channel_);
   std::string digest;
@@ -53,28 +64,19 @@ std::string JobClient::DownloadBlob(const std::string& digest) {
 std::string JobClient::Submit(const std::filesystem::path& job_file, bool* created) {
   v1::JobBundle bundle = protocol::MakeJobBundle(job_file);
   std::string digest = UploadBlob(protocol::BundleBytes(bundle));
-  auto stub = v1::JobService::NewStub(channel_);
-  grpc::ClientContext ctx;
-  protocol::Prepare(ctx, security_, timeout_);
   v1::SubmitRequest req;
   req.set_bundle_digest(digest);
-  v1::SubmitResponse resp;
-  grpc::Status s = stub->Submit(&ctx, req, &resp);
-  if (!s.ok()) Fail("submit " + job_file.string(), s);
+  const auto resp = Unary<v1::SubmitResponse>("submit " + job_file.string(), timeout_,
+                                              [&](auto& stub, auto* ctx, auto* r) { return stub.Submit(ctx, req, r); });
   if (created) *created = resp.created();
   return resp.job_id();
 }
 
 v1::JobStatus JobClient::Status(const std::string& job_id) {
-  auto stub = v1::JobService::NewStub(channel_);
-  grpc::ClientContext ctx;
-  protocol::Prepare(ctx, security_, timeout_);
   v1::GetStatusRequest req;
   req.set_job_id(job_id);
-  v1::JobStatus resp;
-  grpc::Status s = stub->GetStatus(&ctx, req, &resp);
-  if (!s.ok()) Fail("status " + job_id, s);
-  return resp;
+  return Unary<v1::JobStatus>("status " + job_id, timeout_,
+                              [&](auto& stub, auto* ctx, auto* r) { return stub.GetStatus(ctx, req, r); });
 }
 
 v1::JobStatus JobClient::Watch(const std::string& job_id,
@@ -126,36 +128,24 @@ v1::JobStatus JobClient::Watch(const std::string& job_id,
 }
 
 v1::JobStatus JobClient::Cancel(const std::string& job_id) {
-  auto stub = v1::JobService::NewStub(channel_);
-  grpc::ClientContext ctx;
-  protocol::Prepare(ctx, security_, timeout_);
   v1::CancelRequest req;
   req.set_job_id(job_id);
-  v1::JobStatus resp;
-  grpc::Status s = stub->Cancel(&ctx, req, &resp);
-  if (!s.ok()) Fail("cancel " + job_id, s);
-  return resp;
+  return Unary<v1::JobStatus>("cancel " + job_id, timeout_,
+                              [&](auto& stub, auto* ctx, auto* r) { return stub.Cancel(ctx, req, r); });
 }
 
 std::vector<v1::JobStatus> JobClient::List() {
-  auto stub = v1::JobService::NewStub(channel_);
-  grpc::ClientContext ctx;
-  protocol::Prepare(ctx, security_, timeout_);
-  v1::ListJobsResponse resp;
-  grpc::Status s = stub->ListJobs(&ctx, v1::ListJobsRequest(), &resp);
-  if (!s.ok()) Fail("list jobs", s);
+  const auto resp = Unary<v1::ListJobsResponse>("list jobs", timeout_, [&](auto& stub, auto* ctx, auto* r) {
+    return stub.ListJobs(ctx, v1::ListJobsRequest(), r);
+  });
   return {resp.jobs().begin(), resp.jobs().end()};
 }
 
 std::map<std::string, std::string> JobClient::Fetch(const std::string& job_id) {
-  auto stub = v1::JobService::NewStub(channel_);
-  grpc::ClientContext ctx;
-  protocol::Prepare(ctx, security_, timeout_ * 5);
   v1::FetchResultRequest req;
   req.set_job_id(job_id);
-  v1::FetchResultResponse resp;
-  grpc::Status s = stub->FetchResult(&ctx, req, &resp);
-  if (!s.ok()) Fail("fetch " + job_id, s);
+  const auto resp = Unary<v1::FetchResultResponse>(
+      "fetch " + job_id, timeout_ * 5, [&](auto& stub, auto* ctx, auto* r) { return stub.FetchResult(ctx, req, r); });
   std::map<std::string, std::string> files;
   for (const auto& out : resp.outputs()) files[out.name()] = DownloadBlob(out.digest());
   return files;

@@ -49,6 +49,10 @@ class JobClient {
 
  private:
   [[noreturn]] void Fail(const std::string& what, const grpc::Status& status) const;
+  // One unary JobService rpc, `call(stub, context, response)`, with this
+  // client's security and `timeout`; its response, or Fail(what).
+  template <class Response, class Call>
+  Response Unary(const std::string& what, std::chrono::milliseconds timeout, Call call) const;
   std::string target_;
   protocol::ClientSecurity security_;
   std::chrono::milliseconds timeout_;
