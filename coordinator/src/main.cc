@@ -71,11 +71,6 @@ int main(int argc, char** argv) {
     coordinator.Shutdown();
     return 0;
   } catch (const fabatlas::InputError& e) {
-    // One line: a JSON log line under --log-format json, else plain text.
-    if (log_flags.format == "json")
-      fabatlas::log::Error("coordinator_exit", {{"error", e.what()}, {"status", fabatlas::kExitBadInput}});
-    else
-      std::cerr << "fabatlas-coordinator: " << e.what() << "\n";
-    return fabatlas::kExitBadInput;
+    return log_flags.BadInputExit("fabatlas-coordinator", "coordinator_exit", e);
   }
 }

@@ -71,11 +71,6 @@ int main(int argc, char** argv) {
                                         {"solids_shared", summary.solids_shared}});
     return 0;
   } catch (const fabatlas::InputError& e) {
-    // One line: a JSON log line under --log-format json, else plain text.
-    if (log_flags.format == "json")
-      fabatlas::log::Error("worker_exit", {{"error", e.what()}, {"status", fabatlas::kExitBadInput}});
-    else
-      std::cerr << "fabatlas-worker: " << e.what() << "\n";
-    return fabatlas::kExitBadInput;
+    return log_flags.BadInputExit("fabatlas-worker", "worker_exit", e);
   }
 }

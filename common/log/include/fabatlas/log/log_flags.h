@@ -3,12 +3,16 @@
 //   log::LogFlags flags;
 //   flags.Add(app);            // before parsing
 //   flags.Apply();             // after parsing; throws InputError for bad values
+//   catch (const InputError& e) { return flags.BadInputExit("fabatlas-worker", "worker_exit", e); }
 #pragma once
 
 #include <CLI/CLI.hpp>
 
+#include <exception>
+#include <iostream>
 #include <string>
 
+#include "fabatlas/error.h"
 #include "fabatlas/log/log.h"
 
 namespace fabatlas::log {
@@ -25,6 +29,17 @@ struct LogFlags {
         ->capture_default_str();
   }
   void Apply() const { Configure({ParseLevel(level), ParseFormat(format)}); }
+
+  // A program's exit on bad input, as one line on stderr: under
+  // --log-format json a log line `event` with the error and the exit status,
+  // else "<program>: <error>". Returns kExitBadInput (2).
+  int BadInputExit(const std::string& program, const std::string& event, const std::exception& e) const {
+    if (format == "json")
+      Error(event, {{"error", e.what()}, {"status", kExitBadInput}});
+    else
+      std::cerr << program << ": " << e.what() << "\n";
+    return kExitBadInput;
+  }
 };
 
 }  // namespace fabatlas::log
