@@ -1,7 +1,6 @@
 #include "fabatlas/sampling/validity_map.h"
 
 #include <algorithm>
-#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <map>
@@ -15,47 +14,12 @@ namespace fabatlas::sampling {
 
 namespace {
 
-// 3x5 bitmap font: five rows of three bits (MSB left) per glyph.
-struct Glyph {
-  char c;
-  unsigned char rows[5];
-};
-constexpr Glyph kFont[] = {
-    {'0', {7, 5, 5, 5, 7}}, {'1', {2, 6, 2, 2, 7}}, {'2', {7, 1, 7, 4, 7}}, {'3', {7, 1, 7, 1, 7}},
-    {'4', {5, 5, 7, 1, 1}}, {'5', {7, 4, 7, 1, 7}}, {'6', {7, 4, 7, 5, 7}}, {'7', {7, 1, 1, 1, 1}},
-    {'8', {7, 5, 7, 5, 7}}, {'9', {7, 5, 7, 1, 7}}, {'A', {2, 5, 7, 5, 5}}, {'B', {6, 5, 6, 5, 6}},
-    {'C', {3, 4, 4, 4, 3}}, {'D', {6, 5, 5, 5, 6}}, {'E', {7, 4, 6, 4, 7}}, {'F', {7, 4, 6, 4, 4}},
-    {'G', {3, 4, 5, 5, 3}}, {'H', {5, 5, 7, 5, 5}}, {'I', {7, 2, 2, 2, 7}}, {'J', {1, 1, 1, 5, 2}},
-    {'K', {5, 5, 6, 5, 5}}, {'L', {4, 4, 4, 4, 7}}, {'M', {5, 7, 7, 5, 5}}, {'N', {6, 5, 5, 5, 5}},
-    {'O', {2, 5, 5, 5, 2}}, {'P', {6, 5, 6, 4, 4}}, {'Q', {2, 5, 5, 6, 3}}, {'R', {6, 5, 6, 5, 5}},
-    {'S', {3, 4, 2, 1, 6}}, {'T', {7, 2, 2, 2, 2}}, {'U', {5, 5, 5, 5, 7}}, {'V', {5, 5, 5, 5, 2}},
-    {'W', {5, 5, 7, 7, 5}}, {'X', {5, 5, 2, 5, 5}}, {'Y', {5, 5, 2, 2, 2}}, {'Z', {7, 1, 2, 4, 7}},
-    {'.', {0, 0, 0, 0, 2}},  {'-', {0, 0, 7, 0, 0}}, {'_', {0, 0, 0, 0, 7}}, {' ', {0, 0, 0, 0, 0}},
-    {'(', {2, 4, 4, 4, 2}},  {')', {2, 1, 1, 1, 2}}, {'=', {0, 7, 0, 7, 0}}, {':', {0, 2, 0, 2, 0}},
-    {'+', {0, 2, 7, 2, 0}},  {'%', {5, 1, 2, 4, 5}}, {'/', {1, 1, 2, 4, 4}}, {',', {0, 0, 0, 2, 4}},
-};
+// Labels in the canvas's pixel font (picture::Canvas::Text) at scale 2:
+// about 12 px a character, 14 px high.
 constexpr int kScale = 2;
-constexpr int kCharW = 4 * kScale;  // 3 columns + 1 spacing
-constexpr int kCharH = 6 * kScale;
+constexpr int kCharH = 7 * kScale;
 
-const Glyph* FindGlyph(char c) {
-  c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
-  for (const Glyph& g : kFont)
-    if (g.c == c) return &g;
-  return nullptr;
-}
-
-// Text in the 3x5 bitmap font above, top-left at (x, y).
-void DrawText(picture::Canvas& img, int x, int y, const std::string& s, unsigned c) {
-  for (char ch : s) {
-    const Glyph* g = FindGlyph(ch);
-    if (!g) g = FindGlyph('?' == ch ? ' ' : '_');
-    for (int r = 0; r < 5; ++r)
-      for (int col = 0; col < 3; ++col)
-        if (g->rows[r] & (4 >> col)) img.Rect(x + col * kScale, y + r * kScale, x + (col + 1) * kScale, y + (r + 1) * kScale, c);
-    x += kCharW;
-  }
-}
+int TextWidth(const std::string& s) { return picture::Canvas::TextWidth(s, kScale); }
 
 unsigned Blend(unsigned c, double t) {  // t = 0: c, t = 1: white
   auto ch = [&](int s) {
@@ -118,8 +82,8 @@ ValidityMapLayout WriteValidityMap(const Form& form, const ValidityMapOptions& o
   const int left = 80, top = 20, bottom = 60, gap = 30;
   const auto types = FailureTypes(form);
   int legend_w = 0;
-  for (const auto& t : types) legend_w = std::max<int>(legend_w, static_cast<int>(t.size()) + 10);
-  legend_w = std::max(legend_w, 20) * kCharW + 30;
+  for (const auto& t : types) legend_w = std::max(legend_w, TextWidth("mixed " + t));
+  legend_w = std::max(legend_w, TextWidth("invalid sample")) + 22 + 8;
   const int W = left + P + gap + legend_w;
   const int H = std::max(top + P + bottom, top + static_cast<int>(types.size() + 6) * 2 * kCharH);
   picture::Canvas img(W, H);
@@ -217,33 +181,33 @@ ValidityMapLayout WriteValidityMap(const Form& form, const ValidityMapOptions& o
     const int px = left + static_cast<int>(std::lround((space.value(xd, k) - dx.lo) / (dx.hi - dx.lo) * P));
     img.Rect(px, top + P, px + 1, top + P + 6, 0);
     const std::string s = label(xd, k);
-    DrawText(img, px - static_cast<int>(s.size()) * kCharW / 2, top + P + 9, s, 0);
+    img.Text(px - TextWidth(s) / 2, top + P + 9, s, 0, kScale);
   }
   for (std::int64_t k : ticks(yd)) {
     const int py = top + static_cast<int>(std::lround((dy.hi - space.value(yd, k)) / (dy.hi - dy.lo) * P));
     img.Rect(left - 6, py, left, py + 1, 0);
     const std::string s = label(yd, k);
-    DrawText(img, left - 8 - static_cast<int>(s.size()) * kCharW, py - kCharH / 2 + 1, s, 0);
+    img.Text(left - 8 - TextWidth(s), py - kCharH / 2 + 1, s, 0, kScale);
   }
-  DrawText(img, left + P / 2 - static_cast<int>(dx.name.size()) * kCharW / 2, top + P + 9 + 2 * kCharH, dx.name, 0);
-  DrawText(img, 4, 2, dy.name, 0);  // y axis name, top left
+  img.Text(left + P / 2 - TextWidth(dx.name) / 2, top + P + 9 + 2 * kCharH, dx.name, 0, kScale);
+  img.Text(4, 2, dy.name, 0, kScale);  // y axis name, top left
   // Legend.
   const int lx = left + P + gap;
   int ly = top;
   auto swatch = [&](unsigned c, const std::string& text) {
     img.Rect(lx, ly, lx + 16, ly + 12, 0);
     img.Rect(lx + 1, ly + 1, lx + 15, ly + 11, c);
-    DrawText(img, lx + 22, ly + 1, text, 0);
+    img.Text(lx + 22, ly + 1, text, 0, kScale);
     ly += 2 * kCharH;
   };
   swatch(ValidColour(), "valid");
   for (const auto& t : types) swatch(FailureColour(form, t), t);
   for (const auto& t : types) swatch(Blend(FailureColour(form, t), 0.55), "mixed " + t);
   img.Rect(lx + 5, ly + 2, lx + 11, ly + 8, 0), img.Rect(lx + 6, ly + 3, lx + 10, ly + 7, 0xFFFFFF);
-  DrawText(img, lx + 22, ly + 1, "valid sample", 0);
+  img.Text(lx + 22, ly + 1, "valid sample", 0, kScale);
   ly += 2 * kCharH;
   img.Rect(lx + 5, ly + 2, lx + 11, ly + 8, 0);
-  DrawText(img, lx + 22, ly + 1, "invalid sample", 0);
+  img.Text(lx + 22, ly + 1, "invalid sample", 0, kScale);
   img.WritePng(path);
   return ValidityMapLayout{W, H, left, top, P};
 }
