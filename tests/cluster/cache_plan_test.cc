@@ -11,10 +11,10 @@
 #include <string>
 #include <vector>
 
+#include "cluster_job.h"
 #include "cluster_process.h"
+#include "in_process_job.h"
 #include "fabatlas/coordinator/job_client.h"
-#include "fabatlas/pipeline/local_executor.h"
-#include "fabatlas/pipeline/run_job.h"
 #include "fabatlas/design/design.h"
 #include "fabatlas/precompute/design_evaluator.h"
 #include "fabatlas/protocol/job_bundle.h"
@@ -36,20 +36,9 @@ fs::path JobPath() { return SourceDir() / "tests/cluster/data/tube_cache.yaml"; 
 // process (sampling on a thread pool, subtrees re-evaluated, the plan run
 // here).
 std::string InProcessArtifact(const fs::path& dir) {
-  const pipeline::Job job = pipeline::ReadJob(JobPath());
-  pipeline::LocalExecutorOptions local;
-  local.threads = 2;
-  local.scratch_dir = dir / "blobs";
-  pipeline::LocalExecutor executor(job.design, local);
-  pipeline::RunOptions options;
-  options.out_dir = dir;
-  const pipeline::RunSummary run = pipeline::RunJob(job, executor, options);
+  const pipeline::RunSummary run = RunInProcess(JobPath(), dir);
   EXPECT_TRUE(run.cache);
   return ReadText(dir / run.artifact_file);
-}
-
-coordinator::JobClient Client(int port) {
-  return coordinator::JobClient("127.0.0.1:" + std::to_string(port), {}, std::chrono::seconds(5));
 }
 
 struct LeaseRow {

@@ -15,8 +15,7 @@
 
 #include "cluster_job.h"
 #include "cluster_process.h"
-#include "fabatlas/pipeline/local_executor.h"
-#include "fabatlas/pipeline/run_job.h"
+#include "in_process_job.h"
 #include "fabatlas/storage/blob_store.h"
 #include "fabatlas/storage/job_store.h"
 
@@ -31,15 +30,8 @@ fs::path JobPath() { return SourceDir() / "tests/cluster/data/tube_scale.yaml"; 
 // process (sampling on a thread pool, subtrees re-evaluated, the plan run
 // here). What the cluster must publish.
 std::string ReferenceArtifact(std::int64_t* samples, std::int64_t* geometry_changes) {
-  const pipeline::Job job = pipeline::ReadJob(JobPath());
   const fs::path dir = FreshDir("scale-reference");
-  pipeline::LocalExecutorOptions local;
-  local.threads = 2;
-  local.scratch_dir = dir / "blobs";
-  pipeline::LocalExecutor executor(job.design, local);
-  pipeline::RunOptions options;
-  options.out_dir = dir;
-  const pipeline::RunSummary run = pipeline::RunJob(job, executor, options);
+  const pipeline::RunSummary run = RunInProcess(JobPath(), dir);
   EXPECT_TRUE(run.cache);
   *samples = run.sampling.statistics.samples;
   *geometry_changes = static_cast<std::int64_t>(run.sampling.form.geometry_changes.size());
