@@ -14,6 +14,7 @@
 #include "fabatlas/testing/paths.h"
 #include "fabatlas/viewer/customiser.h"
 #include "fabatlas/viewer/http_api.h"
+#include "viewer_runs.h"
 
 namespace fabatlas::viewer {
 namespace {
@@ -22,9 +23,7 @@ namespace fs = std::filesystem;
 using nlohmann::json;
 
 fs::path Artifact() {
-  const char* dir = std::getenv("FABATLAS_VIEWER_RUN");
-  const fs::path run = dir ? fs::path(dir) : testing::BinDir().parent_path() / "test-fixtures" / "viewer-tube";
-  for (const auto& e : fs::directory_iterator(run))
+  for (const auto& e : fs::directory_iterator(viewer_test::RunDir()))
     if (e.path().extension() == ".fabatlas") return e.path();
   return {};
 }
@@ -140,8 +139,7 @@ TEST_F(Api, StateGraphOfADesignWithoutOneIsABadRequest) {
 // max_volume (17.5 x 6 x 22 mm^3 > 1000): the export answers 400 with the
 // failing check, the same line as `fabatlas export`.
 TEST(ApiExport, ChecksRunAtExactlyThePointBeforeWriting) {
-  const char* dir = std::getenv("FABATLAS_VIEWER_PEG_RUN");
-  const fs::path run = dir ? fs::path(dir) : testing::BinDir().parent_path() / "test-fixtures" / "viewer-peg";
+  const fs::path run = viewer_test::PegRunDir();
   ASSERT_TRUE(fs::exists(run / "peg_rail.fabatlas")) << "run the viewer_peg_run fixture first: " << run;
   const Customiser c(LoadArtifact(run / "peg_rail.fabatlas"));
   const ApiResponse at = HandleApiRequest(c, "/api/intervals", {{"u", "17.5,1,0"}});

@@ -17,6 +17,7 @@
 
 #include "../cluster/cluster_process.h"
 #include "fabatlas/testing/paths.h"
+#include "viewer_runs.h"
 
 namespace fabatlas::viewer {
 namespace {
@@ -25,11 +26,9 @@ namespace fs = std::filesystem;
 using cluster_test::ReadText;
 using cluster_test::Spawn;
 using cluster_test::WaitExit;
+using viewer_test::PegRunDir;
+using viewer_test::RunDir;
 
-fs::path RunDir() {
-  const char* dir = std::getenv("FABATLAS_VIEWER_RUN");
-  return dir ? fs::path(dir) : testing::BinDir().parent_path() / "test-fixtures" / "viewer-tube";
-}
 
 bool TrulyValid(double radius, double wall) { return wall >= 1 + 0.01 * radius * radius && radius - wall >= 2; }
 double TubeVolume(double r, double w) { return std::numbers::pi * (r * r - (r - w) * (r - w)) * 20.0; }
@@ -217,10 +216,6 @@ TEST_F(Export, AnInvalidPointIsRefusedNamingATrulyValidNearestPoint) {
 // The peg rail run (viewer_peg_run: tests/viewer/data/peg_rail_design.yaml,
 // sampled on its bootstrap grid only): the rail is 2 mm high except for a
 // 20 mm bulge at exactly length 17.5, where no sample lies.
-fs::path PegRunDir() {
-  const char* dir = std::getenv("FABATLAS_VIEWER_PEG_RUN");
-  return dir ? fs::path(dir) : testing::BinDir().parent_path() / "test-fixtures" / "viewer-peg";
-}
 double RailHeight(double length) { return 2 + 20 * std::exp(-std::pow((length - 17.5) / 0.4, 2)); }
 
 TEST_F(Export, APointValidOnlyBetweenSamplesIsCheckedAtExactlyThatPoint) {

@@ -16,6 +16,7 @@
 
 #include "../cluster/cluster_process.h"
 #include "fabatlas/testing/paths.h"
+#include "viewer_runs.h"
 
 namespace fabatlas::viewer {
 namespace {
@@ -26,11 +27,8 @@ using cluster_test::KillAndReap;
 using cluster_test::ReadText;
 using cluster_test::Spawn;
 using cluster_test::WaitExit;
+using viewer_test::RunDir;
 
-fs::path RunDir() {
-  const char* dir = std::getenv("FABATLAS_VIEWER_RUN");
-  return dir ? fs::path(dir) : testing::BinDir().parent_path() / "test-fixtures" / "viewer-tube";
-}
 
 class Server : public ::testing::Test {
  protected:
