@@ -54,6 +54,9 @@ class Server : public ::testing::Test {
     }
     ASSERT_GT(port_, 0) << ReadText(log);
     client_ = std::make_unique<httplib::Client>("127.0.0.1", port_);
+    // An export evaluates the design at the point: on a loaded machine that
+    // takes longer than the client's default 5 s, so wait for the answer.
+    client_->set_read_timeout(std::chrono::seconds(120));
   }
   void TearDown() override {
     if (pid_ > 0) KillAndReap(pid_);
