@@ -61,6 +61,9 @@ int Run(const AssembleArgs& args) {
   j["feasible"] = s.feasible;
   j["stable"] = s.stable;
   j["falls_apart"] = s.falls_apart;
+  j["slides"] = nlohmann::json::array();
+  for (const auto& sl : s.slides)
+    j["slides"].push_back({{"slide", sl.where}, {"load_angle_deg", sl.load_angle_deg}, {"held", sl.held}});
   j["target_deviation_mm"] = s.final_target_error_mm;
   j["target_deviation_deg"] = s.final_target_error_deg;
   j["step1_target_deviation_mm"] = s.step1_target_error_mm;
@@ -75,6 +78,12 @@ int Run(const AssembleArgs& args) {
                     {"objective", s.objective_seconds},
                     {"relaxation", s.relaxation_seconds},
                     {"total", s.seconds}};
+  for (std::size_t e = 0; e < prog.connections.size() && e < s.params.size(); ++e) {
+    const auto& c = prog.connections[e];
+    j["connections"].push_back({{"a", prog.instances[c.part_a].name + "." + c.primitive_a},
+                                {"b", prog.instances[c.part_b].name + "." + c.primitive_b},
+                                {"parameters", s.params[e]}});
+  }
   for (std::size_t i = 0; i < prog.instances.size() && i < s.poses.size(); ++i) {
     const Eigen::Isometry3d& p = s.poses[i];
     const Eigen::Vector3d t = p.translation();
@@ -106,6 +115,9 @@ int Run(const AssembleArgs& args) {
   std::cout << args.file << ": " << prog.instances.size() << " parts, " << cycles << " cycles\n"
             << "  feasible: " << (s.feasible ? "yes" : "no") << ", stable: " << (s.stable ? "yes" : "no") << "\n";
   for (const auto& f : s.falls_apart) std::cout << "  falls apart: " << f << "\n";
+  for (const auto& sl : s.slides)
+    std::cout << "  " << sl.where << ": load " << std::setprecision(1) << sl.load_angle_deg << std::setprecision(3)
+              << " deg from the rod's normal plane, " << (sl.held ? "held by friction" : "slid") << "\n";
   for (const auto& m : s.messages) std::cout << "  " << m << "\n";
   if (s.feasible)
     std::cout << "  target deviation: " << s.final_target_error_mm << " mm, " << s.final_target_error_deg
@@ -128,6 +140,8 @@ void AddAssemblyCommands(CLI::App& app, int& exit_code) {
   c->add_option("--starts", args->options.restarts, "feasibility starts (default 16)");
   c->add_option("--objective-starts", args->options.objective_starts,
                 "feasible starts that run the target objective (default 4)");
+  c->add_flag("--no-slide-friction", [args](std::int64_t) { args->options.slide_friction = false; },
+              "connectors slide along rods without friction (the paper's model; docs/assembly.md)");
   c->add_option("--mesh-dir", args->mesh_dir, "part meshes (default $FABATLAS_SHARED_DIR/data/fabhacks/meshes)");
   c->callback([args, &exit_code] { exit_code = Run(*args); });
 }

@@ -2,9 +2,11 @@
 // 20 steps over [0, 45.7] mm, ring XS/S/M/L); reports per ring size the
 // best variation (smallest relaxed target deviation among feasible ones) next
 // to the extension the paper chose. Usage:
-//   assembly_clip_lights_bench [--library configs/assemblies/parts.yaml] [--flip-clip]
+//   assembly_clip_lights_bench [--library configs/assemblies/parts.yaml] [--flip-clip] [--no-slide-friction] [--all]
 // --flip-clip attaches the clip to the bar with alignment flip
-// (ClipLightsParams::flip_clip).
+// (ClipLightsParams::flip_clip); --no-slide-friction solves without static
+// friction along rods (SolveOptions::slide_friction); --all prints every
+// variation's outcome on stderr.
 #include <chrono>
 #include <ctime>
 #include <map>
@@ -19,11 +21,14 @@ using namespace fabatlas::assembly;
 
 int main(int argc, char** argv) {
   std::string lib = "configs/assemblies/parts.yaml";
-  bool flip_clip = false;
+  bool flip_clip = false, all = false;
+  SolveOptions options;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--library" && i + 1 < argc) lib = argv[++i];
     else if (a == "--flip-clip") flip_clip = true;
+    else if (a == "--no-slide-friction") options.slide_friction = false;
+    else if (a == "--all") all = true;
     else {
       std::fprintf(stderr, "assembly_clip_lights_bench: unknown argument %s\n", a.c_str());
       return fabatlas::kExitBadInput;
@@ -48,7 +53,11 @@ int main(int argc, char** argv) {
         for (int k = 0; k < 20; ++k) {
           // l = 2.285 k: the paper's 20 values (its four choices are multiples of 45.7/20).
           const ClipLightsParams p{n, 2.285 * k, rings[ri], flip_clip};
-          const ClipLightsResult r = EvaluateClipLights(p, lib);
+          const ClipLightsResult r = EvaluateClipLights(p, lib, 25, options);
+          if (all)
+            std::fprintf(stderr, "%s n=%d l=%.3f feasible=%d stable=%d deviation=%.3f falls=%zu slides=%zu\n",
+                         ToString(rings[ri]), n, p.extension, r.feasible, r.stable, r.target_deviation_mm,
+                         r.summary.falls_apart.size(), r.summary.slides.size());
           ++evaluated;
           ++terminations[r.summary.relaxation_termination];
           max_iterations = std::max(max_iterations, r.summary.relaxation_iterations);
@@ -59,7 +68,8 @@ int main(int argc, char** argv) {
             best_stable = r.stable;
           }
         }
-      const ClipLightsResult at_paper = EvaluateClipLights({paper_n[ri], paper[ri], rings[ri], flip_clip}, lib);
+      const ClipLightsResult at_paper =
+          EvaluateClipLights({paper_n[ri], paper[ri], rings[ri], flip_clip}, lib, 25, options);
       std::printf("| %s | %d | %.2f | %.1f | %s | %d, %.3f | %.1f | %s |\n", ToString(rings[ri]), best.pairs,
                   best.extension, best_dev, best_stable ? "yes" : "no", paper_n[ri], paper[ri],
                   at_paper.target_deviation_mm, at_paper.stable ? "yes" : "no");

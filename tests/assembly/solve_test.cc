@@ -3,6 +3,7 @@
 // Table 5 example and shows it working (Figs. 1, 5, 8, 10, 12): each must be
 // feasible and must not fall apart; the one-eyehook soap bottle of Fig. 9
 // must.
+#include <cmath>
 #include <cstdlib>
 #include <string>
 
@@ -98,4 +99,91 @@ TEST(AssemblySolve, ChainByChainStartBringsTheReadingNookToItsTarget) {
   EXPECT_GT(a.step1_target_error_mm, 80);
   EXPECT_LT(b.step1_target_error_mm, 26);
   EXPECT_LT(b.step1_target_error_deg, 4);
+}
+
+namespace {
+// One S-hook hanging from the middle of an open 500 mm rod tilted `tilt_deg`
+// above the horizontal (R = Rz(90)·Rx(90 − tilt) turns the rod's z axis to
+// (cos tilt, 0, sin tilt)). Its load is its weight, vertical, so the angle of
+// the load past the rod's normal plane is the tilt.
+SolveSummary HookOnTiltedRod(double tilt_deg, bool friction) {
+  const std::string a = std::to_string(90 - tilt_deg);
+  const Program p = ParseProgram("start_with: {name: env, part: DemoRod, frame: [[0, 0, 400], [" + a +
+                                     ", 0, 90]]}\n"
+                                     "end_with: {name: dh, part: DoubleHook, frame: [[0, 0, 370], [0, 0, 0]]}\n"
+                                     "steps:\n  - {attach: dh.hook1, to: env.rod}\n",
+                                 "tilted_rod.yaml", fabatlas::testing::SourceDir().string() +
+                                                        "/configs/assemblies/parts.yaml");
+  SolveOptions o;
+  o.slide_friction = friction;
+  return SolveAssembly(p, o);
+}
+}  // namespace
+
+TEST(AssemblySolve, StaticFrictionHoldsAHookOnARodTiltedLessThanTheFrictionAngle) {
+  // Static friction along rods (docs/assembly.md): held while the load is
+  // within friction_angle_deg (20°) of the rod's normal plane.
+  for (double tilt : {5.0, 15.0}) {
+    const SolveSummary s = HookOnTiltedRod(tilt, true);
+    ASSERT_TRUE(s.feasible);
+    ASSERT_EQ(s.slides.size(), 1u);
+    EXPECT_EQ(s.slides[0].where, "env.rod.t (dh.hook1)");
+    EXPECT_NEAR(s.slides[0].load_angle_deg, tilt, 0.1);
+    EXPECT_TRUE(s.slides[0].held);
+    EXPECT_TRUE(s.stable) << tilt << ": " << Join(s.falls_apart);
+    // Without friction (the paper's model) the same hook runs off the rod's lower, open end.
+    const SolveSummary f = HookOnTiltedRod(tilt, false);
+    EXPECT_FALSE(f.stable) << tilt;
+    ASSERT_EQ(f.falls_apart.size(), 1u);
+    EXPECT_EQ(f.falls_apart[0], "env.rod.t at min");
+  }
+  const SolveSummary s = HookOnTiltedRod(25, true);
+  ASSERT_EQ(s.slides.size(), 1u);
+  EXPECT_NEAR(s.slides[0].load_angle_deg, 25, 0.1);
+  EXPECT_FALSE(s.slides[0].held);
+  EXPECT_FALSE(s.stable);
+  ASSERT_EQ(s.falls_apart.size(), 1u);
+  EXPECT_EQ(s.falls_apart[0], "env.rod.t at min");
+}
+
+TEST(AssemblySolve, DemoSHookStaysOnTheBarUnlessFrictionless) {
+  // FabHacks Fig. 10: without friction "the S-hook and ring could slide to
+  // either end of the hanger's rod"; they do (t = 1, 39 mm from where step 1
+  // put them). With static friction the S-hook's load is its chain's weight,
+  // vertical, so its angle past the bar's normal plane is the bar's tilt once
+  // the hanger has swung (7.7°), inside the friction angle: it stays.
+  const Program p = LoadProgram(Config("demo"));
+  const SolveSummary s = SolveAssembly(p);
+  ASSERT_TRUE(s.stable) << Join(s.falls_apart);
+  ASSERT_EQ(s.slides.size(), 2u);
+  EXPECT_EQ(s.slides[1].where, "hanger.rod.t (dh.hook1)");
+  EXPECT_TRUE(s.slides[1].held);
+  const Eigen::Vector3d bar = s.poses[1].linear() * ToIsometry(p.PartOf(1).Find("rod")->frame).linear().col(2);
+  const double tilt = std::asin(std::abs(bar.z())) * 180 / M_PI;
+  EXPECT_NEAR(s.slides[1].load_angle_deg, tilt, 0.05);
+  EXPECT_LT(tilt, 20);
+  EXPECT_GT(s.params[1][0], 0.85);
+  EXPECT_LT(s.params[1][0], 0.95);
+  SolveOptions frictionless;
+  frictionless.slide_friction = false;
+  const SolveSummary f = SolveAssembly(p, frictionless);
+  ASSERT_TRUE(f.stable) << Join(f.falls_apart);  // the bar is clamped at its ends
+  EXPECT_NEAR(f.params[1][0], 1.0, 1e-6);
+}
+
+TEST(AssemblySolve, ReadingNookHookIsPulledOffThePegBeyondTheFrictionAngle) {
+  // The turnbuckle's hook hangs at the free tip of the 30°-up wall peg rod2
+  // (t = 0, where step 1 needs it for the published hoop frame). Held by
+  // friction there, the relaxed structure pulls it 35–36° past the peg's
+  // normal plane, beyond the 20° friction angle (μ = 0.36 would need to be
+  // ≥ 0.7); let go, it runs off the tip (docs/assembly.md "Reading nook").
+  const SolveSummary s = SolveAssembly(LoadProgram(Config("reading_nook")));
+  ASSERT_TRUE(s.feasible);
+  ASSERT_EQ(s.slides.size(), 1u);
+  EXPECT_EQ(s.slides[0].where, "room.rod2.t (tb.hook1)");
+  EXPECT_FALSE(s.slides[0].held);
+  EXPECT_GT(s.slides[0].load_angle_deg, 30);
+  EXPECT_FALSE(s.stable);
+  ASSERT_EQ(s.falls_apart.size(), 1u);
+  EXPECT_EQ(s.falls_apart[0], "room.rod2.t at min");
 }

@@ -559,6 +559,16 @@ double Halton(int index, int base) {
   return r;
 }
 
+// One slide along a rod, tube or edge that static friction acts on
+// (SolveOptions::slide_friction): parameter `index` of block `block`.
+struct SlideState {
+  int block, index;
+  bool stuck = false;            // held at its value by friction
+  double axial = 0, normal = 0;  // load along / across the axis (J/mm = kN), last evaluated
+  double angle_deg = 0;          // atan(axial / normal), degrees, last evaluated
+  double slip_angle_deg = 0;     // the angle at which it was let go
+};
+
 class Solver {
  public:
   Solver(const Program& prog, const SolveOptions& opt) : prog_(prog), opt_(opt) {
@@ -767,8 +777,11 @@ class Solver {
 
   // BOUNDED_AND_OPEN parameters at a bound with outward energy gradient
   // (FabHacks, 4.3.3).
+  // With slide friction, a connector on a rod pushed against an open end
+  // stays on when its load there is inside the friction cone.
   std::vector<std::string> FallsApart(ceres::Problem& problem) {
     std::vector<std::string> out;
+    if (opt_.slide_friction) EvaluateSlideLoads();
     ceres::Problem::EvaluateOptions eo;
     for (auto& b : blocks_) eo.parameter_blocks.push_back(b.data());
     eo.residual_blocks = {assembly_block_};  // gravity + closure, not the gauge anchor
@@ -782,7 +795,9 @@ class Solver {
                                            : prog_.instances[c.part_b].name + "." + c.primitive_b;
       const auto& specs = Spec(static_cast<int>(b));
       for (size_t i = 0; i < specs.size(); ++i) {
-        if (specs[i].kind != ParamKind::kBoundedAndOpen || specs[i].held) continue;
+        if (specs[i].kind != ParamKind::kBoundedAndOpen || specs[i].held || kin_.held[b][i]) continue;
+        const SlideState* slide = FindSlide(static_cast<int>(b), static_cast<int>(i));
+        if (slide && slide->angle_deg <= opt_.friction_angle_deg) continue;
         const double x = blocks_[b][i], g = grad[internal::kParamBlock * b + i];
         const double eps = 1e-6 * (specs[i].max - specs[i].min);
         if (std::getenv("FABATLAS_ASSEMBLY_DEBUG") && (x <= specs[i].min + eps || x >= specs[i].max - eps))
@@ -792,6 +807,53 @@ class Solver {
         else if (x >= specs[i].max - eps && g < -1e-9 && !specs[i].blocked_max)
           out.push_back(where + "." + specs[i].name + " at max");
       }
+    }
+    return out;
+  }
+
+  // Static friction along rods (SolveOptions::slide_friction). Every t of a
+  // rod, tube or edge on a connection the relaxation does not hold is a
+  // slide; StickSlides holds each at its current value (the step-1 pose,
+  // where the parts were put).
+  void StickSlides() {
+    slides_.clear();
+    for (size_t b = 0; b < blocks_.size(); ++b) {
+      const auto& c = prog_.connections[b / 2];
+      if (c.held_in_relaxation) continue;
+      const Primitive& p = b % 2 == 0 ? prog_.PrimitiveA(c) : prog_.PrimitiveB(c);
+      if (p.type != PrimitiveType::kRod && p.type != PrimitiveType::kTube && p.type != PrimitiveType::kEdge) continue;
+      const auto& specs = Spec(static_cast<int>(b));
+      for (size_t i = 0; i < specs.size(); ++i)
+        if (specs[i].name == "t" && !specs[i].held && !kin_.held[b][i]) {
+          slides_.push_back({static_cast<int>(b), static_cast<int>(i)});
+          SetStuck(slides_.back(), true);
+        }
+    }
+  }
+
+  // Lets go of every stuck slide whose load leaves the friction cone
+  // (atan(axial/normal) > friction_angle_deg); returns how many.
+  int ReleaseSlipping() {
+    EvaluateSlideLoads();
+    int released = 0;
+    for (SlideState& sl : slides_)
+      if (sl.stuck && sl.angle_deg > opt_.friction_angle_deg) {
+        sl.slip_angle_deg = sl.angle_deg;
+        SetStuck(sl, false);
+        ++released;
+      }
+    return released;
+  }
+
+  std::vector<SolveSummary::Slide> SlideReport() const {
+    std::vector<SolveSummary::Slide> out;
+    for (const SlideState& sl : slides_) {
+      const auto& c = prog_.connections[sl.block / 2];
+      const bool a = sl.block % 2 == 0;
+      const std::string host = prog_.instances[a ? c.part_a : c.part_b].name + "." + (a ? c.primitive_a : c.primitive_b);
+      const std::string guest = prog_.instances[a ? c.part_b : c.part_a].name + "." + (a ? c.primitive_b : c.primitive_a);
+      out.push_back({host + "." + Spec(sl.block)[sl.index].name + " (" + guest + ")",
+                     sl.stuck ? sl.angle_deg : sl.slip_angle_deg, sl.stuck});
     }
     return out;
   }
@@ -859,6 +921,99 @@ class Solver {
     return u;
   }
 
+  void SetStuck(SlideState& sl, bool stuck) {
+    sl.stuck = stuck;
+    kin_.held[sl.block][sl.index] = stuck;
+    kin_.held_value[sl.block][sl.index] = blocks_[sl.block][sl.index];
+  }
+
+  const SlideState* FindSlide(int b, int i) const {
+    for (const SlideState& sl : slides_)
+      if (sl.block == b && sl.index == i) return &sl;
+    return nullptr;
+  }
+
+  // The load on each slide at the current parameters (J/mm). Along the axis:
+  // the relaxation energy's gradient in t (gravity, the cycles' penalty and
+  // the spacing of shared rods) over the length t runs along, evaluated as
+  // if the slide were free — what friction (or an end) must hold. Across it:
+  // the force F the connection transmits, less its component along the
+  // slide's world direction a (dM/dt). F of a cycle-closing connection is its
+  // penalty force 2σ_r·g (g the position residual, mm); F of a tree
+  // connection holds up the subtree below it: minus the sum of its parts'
+  // weights m·g and of the penalty forces of cycles reaching into it.
+  void EvaluateSlideLoads() {
+    if (slides_.empty()) return;
+    const int n = static_cast<int>(prog_.instances.size());
+    const std::vector<Eigen::Isometry3d> pose = Poses();
+    std::vector<Eigen::Vector3d> force(n, Eigen::Vector3d::Zero());
+    for (int i = 1; i < n; ++i) force[i].z() = -std::max(0.0, prog_.PartOf(i).mass) * 1e-6 * opt_.gravity / 1000;
+    std::vector<Eigen::Vector3d> closing_force(prog_.connections.size(), Eigen::Vector3d::Zero());
+    for (int e : kin_.closing) {
+      const auto& c = prog_.connections[e];
+      Mat4<double> ma, mb;
+      kin_.Frames<double>(e, blocks_[2 * e].data(), blocks_[2 * e + 1].data(), ma, mb);
+      const Eigen::Vector3d pa = (pose[c.part_a].matrix() * ma * kin_.align[e]).topRightCorner<3, 1>();
+      const Eigen::Vector3d pb = (pose[c.part_b].matrix() * mb).topRightCorner<3, 1>();
+      closing_force[e] = 2 * opt_.relaxation_penalty * (pa - pb);  // on part b, towards a
+      force[c.part_b] += closing_force[e];
+      force[c.part_a] -= closing_force[e];
+    }
+    // Gradient of the relaxation energy with the slides free.
+    std::vector<char> was_held;
+    for (const SlideState& sl : slides_) {
+      was_held.push_back(kin_.held[sl.block][sl.index]);
+      kin_.held[sl.block][sl.index] = false;
+    }
+    AssemblyCost cost(Residual(Phase::kRelaxation, opt_.relaxation_penalty));
+    std::vector<double> r(cost.num_residuals());
+    std::vector<std::vector<double>> jac(blocks_.size());
+    std::vector<double*> jp(blocks_.size(), nullptr);
+    for (const SlideState& sl : slides_) {
+      jac[sl.block].resize(r.size() * internal::kParamBlock);
+      jp[sl.block] = jac[sl.block].data();
+    }
+    const std::vector<double*> x = Pointers();
+    cost.Evaluate(x.data(), r.data(), jp.data());
+    for (size_t k = 0; k < slides_.size(); ++k) kin_.held[slides_[k].block][slides_[k].index] = was_held[k];
+
+    std::vector<int> parent(n, -1), tree_edge(prog_.connections.size(), -1);
+    for (const auto& [e, child] : kin_.tree) {
+      const auto& c = prog_.connections[e];
+      parent[child] = child == c.part_b ? c.part_a : c.part_b;
+      tree_edge[e] = child;
+    }
+    for (SlideState& sl : slides_) {
+      double grad = 0;
+      for (size_t k = 0; k < r.size(); ++k) grad += jac[sl.block][k * internal::kParamBlock + sl.index] * r[k];
+      sl.axial = std::abs(grad) / Units(sl.block)[sl.index];
+      const int e = sl.block / 2;
+      const auto& c = prog_.connections[e];
+      const Primitive& p = sl.block % 2 == 0 ? prog_.PrimitiveA(c) : prog_.PrimitiveB(c);
+      const int host = sl.block % 2 == 0 ? c.part_a : c.part_b;
+      double xs[internal::kParamBlock];
+      kin_.Effective<double>(sl.block, blocks_[sl.block].data(), xs);
+      const FrameDerivatives fd = ConnectorFrameDerivatives(
+          sl.block % 2 == 0 ? kin_.base_a[e] : kin_.base_b[e], p, xs, kin_.sym_axis[sl.block]);
+      const Eigen::Vector3d dir = (pose[host].linear() * fd.d[sl.index].topRightCorner<3, 1>()).normalized();
+      Eigen::Vector3d f = closing_force[e];
+      if (tree_edge[e] >= 0) {
+        f.setZero();
+        for (int i = 1; i < n; ++i) {
+          bool below = false;
+          for (int u = i; u >= 0 && !below; u = parent[u]) below = u == tree_edge[e];
+          if (below) f -= force[i];
+        }
+      }
+      sl.normal = (f - f.dot(dir) * dir).norm();
+      sl.angle_deg = std::atan2(sl.axial, sl.normal) * 180 / M_PI;
+      if (std::getenv("FABATLAS_ASSEMBLY_DEBUG"))
+        std::fprintf(stderr, "slide %d.%d%s: axial %.6g (|F.a| %.6g), normal %.6g J/mm, %.2f deg, t = %g\n",
+                     sl.block, sl.index, sl.stuck ? " (held)" : "", sl.axial, std::abs(f.dot(dir)), sl.normal,
+                     sl.angle_deg, blocks_[sl.block][sl.index]);
+    }
+  }
+
   const std::vector<ParamSpec>& Spec(int b) const {
     const auto& c = prog_.connections[b / 2];
     return b % 2 == 0 ? c.params_a : c.params_b;
@@ -919,6 +1074,7 @@ class Solver {
   TargetForm target_;
   ceres::ResidualBlockId assembly_block_ = nullptr;  // of the last Build
   std::vector<Block> anchor_;                       // gauge anchor of the relaxation
+  std::vector<SlideState> slides_;                  // static friction along rods (StickSlides)
 };
 
 void TargetErrors(const Program& prog, const Eigen::Isometry3d& pose, double& mm, double& deg) {
@@ -1072,11 +1228,22 @@ SolveSummary Solve(const Program& prog, const SolveOptions& opt, double perturba
     solver.SetRelaxationAnchor();
     std::unique_ptr<ceres::Problem> problem;
     const auto tr = std::chrono::steady_clock::now();
-    const ceres::Solver::Summary rs = solver.Run(Phase::kRelaxation, opt.relaxation_penalty, &problem);
+    // Static friction along rods: relax with every slide held, let go of
+    // those whose load leaves the friction cone and relax again from there,
+    // until every slide still held is inside it (at most one more relaxation
+    // per slide: a slide let go is not held again).
+    if (opt.slide_friction) solver.StickSlides();
+    for (;;) {
+      const ceres::Solver::Summary rs = solver.Run(Phase::kRelaxation, opt.relaxation_penalty, &problem);
+      if (out.relaxation_termination != "NO_CONVERGENCE")
+        out.relaxation_termination = ceres::TerminationTypeToString(rs.termination_type);
+      out.relaxation_iterations += static_cast<int>(rs.iterations.size()) - 1;
+      ++out.relaxation_runs;
+      if (!opt.slide_friction || solver.ReleaseSlipping() == 0) break;
+    }
     out.relaxation_seconds = Since(tr);
-    out.relaxation_termination = ceres::TerminationTypeToString(rs.termination_type);
-    out.relaxation_iterations = static_cast<int>(rs.iterations.size()) - 1;
     out.falls_apart = solver.FallsApart(*problem);
+    out.slides = solver.SlideReport();
   }
   out.poses = solver.Poses();
   for (size_t e = 0; e < prog.connections.size(); ++e) {
@@ -1101,8 +1268,8 @@ SolveSummary Solve(const Program& prog, const SolveOptions& opt, double perturba
   }
   // FabHacks Sec. 4.3.3: the assembly is reported as falling apart when a
   // connector slides off (above) — and, for a part resting on another, when
-  // it slides off or tips over. Relaxation motion alone is not a failure (the paper's demo
-  // slides its S-hook to the end of the hanger bar and works).
+  // it slides off or tips over. Relaxation motion alone is not a failure (in the paper's
+  // frictionless model the demo slides its S-hook to the end of the hanger bar and works).
   out.stable = opt.relax && out.falls_apart.empty();
   out.target_reached = out.final_target_error_mm <= opt.target_tolerance_mm &&
                        (!prog.target_match_rotation || out.final_target_error_deg <= opt.target_tolerance_deg);

@@ -21,9 +21,11 @@
 //     σ_r Σ‖g_j‖² over all poses and parameters (clip parameters and is_fixed
 //     connections held), mass = mesh volume × 1 g/cm³, g = 9.8 m/s² along −z.
 //     A weak anchor ½k‖s − s_step1‖² fixes the gauge of parts free to turn
-//     about the vertical. Then every BOUNDED_AND_OPEN parameter pinned at a
-//     bound whose energy gradient points out of its interval is reported as
-//     falling apart.
+//     about the vertical. Connectors on rods start held by static friction
+//     and are let go, relaxing again, while any one's load leaves the
+//     friction cone (slide_friction). Then every BOUNDED_AND_OPEN parameter
+//     pinned at a bound whose energy gradient points out of its interval
+//     (and, on a rod, outside the friction cone) is reported as falling apart.
 // Single-threaded (Ceres with one thread); deterministic.
 #pragma once
 
@@ -82,6 +84,17 @@ struct SolveOptions {
   // beyond this angle: atan μ for μ = 0.36, the low end of wood, paper and
   // plastic on each other (docs/assembly.md "Falling apart").
   double friction_angle_deg = 20;
+  // Static friction along rods: a connector on a rod, tube or edge that is
+  // not held (not is_fixed, clip or resting contact; a hook on a peg, a ring
+  // on a bar) stays where step 1 put it while the load along the axis is at
+  // most μ times the load across it, |F·a| ≤ μ‖F − (F·a)a‖, with the same
+  // μ = tan(friction_angle_deg); a slide whose load leaves that cone slides
+  // freely, and a connector pushed against an open end falls off only if it
+  // is outside the cone there (docs/assembly.md "Static friction along rods").
+  // false: the paper's model, in which such connectors slide without
+  // friction (FabHacks Sec. 4.3.3; only is_fixed connections are "formed by
+  // static friction", Sec. 4.2).
+  bool slide_friction = true;
   // Step 1 stops trying further feasible starts once the target is within:
   double early_exit_mm = 1.0;
   // ... and after this many feasible starts have run step 1.
@@ -103,12 +116,27 @@ struct SolveSummary {
   // What falls apart after relaxation: "hook1.hook.theta at max" (a connector
   // slides off an open end), "bottle.surface tips over (...)".
   std::vector<std::string> falls_apart;
+  // Every slide along a rod, tube or edge that static friction acts on
+  // (SolveOptions::slide_friction): "room.rod2.t (tb.hook1)", the angle of
+  // its load past the axis's normal plane, atan(|F·a| / ‖F − (F·a)a‖), in
+  // degrees, and whether friction held it (angle ≤ friction_angle_deg; the
+  // angle is the final one) or it slid (the angle at which it started to).
+  struct Slide {
+    std::string where;
+    double load_angle_deg = 0;
+    bool held = false;
+  };
+  std::vector<Slide> slides;
   std::vector<std::string> messages;     // pre-check issues and solver notes
   int starts_tried = 0;
   // Step 2 as Ceres ended it: "CONVERGENCE", "NO_CONVERGENCE" (iteration cap),
   // ... ; empty if step 2 did not run.
+  // With static friction along rods step 2 may run more than once
+  // (`relaxation_runs`): iterations are summed, and the termination is the
+  // last run's unless an earlier one hit the iteration cap.
   std::string relaxation_termination;
   int relaxation_iterations = 0;
+  int relaxation_runs = 0;
   double seconds = 0;  // wall time of the whole solve
   // Wall time per step, as FabHacks Table 5's columns: quick reject (the
   // pre-checks), feasibility (cycle closure over all starts tried; Table 5's
