@@ -1235,8 +1235,7 @@ SolveSummary Solve(const Program& prog, const SolveOptions& opt, double perturba
     if (opt.slide_friction) solver.StickSlides();
     for (;;) {
       const ceres::Solver::Summary rs = solver.Run(Phase::kRelaxation, opt.relaxation_penalty, &problem);
-      if (out.relaxation_termination != "NO_CONVERGENCE")
-        out.relaxation_termination = ceres::TerminationTypeToString(rs.termination_type);
+      out.relaxation_termination = ceres::TerminationTypeToString(rs.termination_type);
       out.relaxation_iterations += static_cast<int>(rs.iterations.size()) - 1;
       ++out.relaxation_runs;
       if (!opt.slide_friction || solver.ReleaseSlipping() == 0) break;

@@ -132,8 +132,9 @@ struct SolveSummary {
   // Step 2 as Ceres ended it: "CONVERGENCE", "NO_CONVERGENCE" (iteration cap),
   // ... ; empty if step 2 did not run.
   // With static friction along rods step 2 may run more than once
-  // (`relaxation_runs`): iterations are summed, and the termination is the
-  // last run's unless an earlier one hit the iteration cap.
+  // (`relaxation_runs`): iterations are summed and the termination is the
+  // last run's (an earlier run only decides which slides are let go; one
+  // that ends at the iteration cap hands on where it stopped).
   std::string relaxation_termination;
   int relaxation_iterations = 0;
   int relaxation_runs = 0;
