@@ -29,12 +29,17 @@ fs::path JobPath() { return SourceDir() / "tests/cluster/data/tube_scale.yaml"; 
 // The artifact `fabatlas sample` writes for the job: the pipeline in this
 // process (sampling on a thread pool, subtrees re-evaluated, the plan run
 // here). What the cluster must publish.
-std::string ReferenceArtifact(std::int64_t* samples, std::int64_t* geometry_changes) {
+// samples: the form's; tasks: the cluster's sample and ΔG tasks (an edge
+// needs a ΔG task only between two valid samples, adaptive_sampler.cc).
+std::string ReferenceArtifact(std::int64_t* samples, std::int64_t* tasks) {
   const fs::path dir = FreshDir("scale-reference");
   const pipeline::RunSummary run = RunInProcess(JobPath(), dir);
   EXPECT_TRUE(run.cache);
+  const sampling::Form& form = run.sampling.form;
   *samples = run.sampling.statistics.samples;
-  *geometry_changes = static_cast<std::int64_t>(run.sampling.form.geometry_changes.size());
+  *tasks = *samples;
+  for (const auto& [edge, dg] : form.geometry_changes)
+    *tasks += form.samples[edge.first].outcome.valid && form.samples[edge.second].outcome.valid;
   return ReadText(dir / run.artifact_file);
 }
 
@@ -49,14 +54,9 @@ TEST(ClusterScale, TenThousandSamplesUnderWorkerAndCoordinatorKillsPublishTheSam
     fs::copy_file(BinDir() / program, dir / "bin" / program);
   ::setenv("FABATLAS_BIN_DIR", (dir / "bin").c_str(), 1);
 
-  std::int64_t samples = 0, geometry_changes = 0;
-  const std::string reference = ReferenceArtifact(&samples, &geometry_changes);
+  std::int64_t samples = 0, tasks = 0;
+  const std::string reference = ReferenceArtifact(&samples, &tasks);
   ASSERT_GE(samples, 10000);
-  // The job's progress in tasks, against one task per sample and per ΔG:
-  // edges between two invalid samples need no task, so this job ends at
-  // 77.9 % of the estimate (26,397 of 33,893 tasks; both counts are
-  // deterministic).
-  const std::int64_t tasks = samples + geometry_changes;
 
   const std::vector<std::string> fast = {"--lease-ms", "1500", "--heartbeat-ms", "300", "--retry-backoff-ms", "50",
                                          "--quarantine-after", "1000"};
@@ -73,9 +73,9 @@ TEST(ClusterScale, TenThousandSamplesUnderWorkerAndCoordinatorKillsPublishTheSam
   const auto started = std::chrono::steady_clock::now();
   v1::JobStatus s = WaitForJob([&] { return port; }, id, std::chrono::seconds(3300), [&](const v1::JobStatus& st) {
     if (st.tasks_done() <= done_at_last_kill) return;  // one fault per stretch of new progress
-    // Faults follow the job's progress: the coordinator at 30 % of the
-    // estimate (bootstrap ΔG) and at 70 % (the last round's ΔG), a worker
-    // holding leases every 6 % up to 72 %.
+    // Faults follow the job's progress in sample and ΔG tasks (known
+    // exactly from the reference run): the coordinator at 30 % and 70 %, a
+    // worker holding leases every 6 % up to 72 %.
     const std::int64_t progress = st.tasks_done() * 100 / tasks;
     const int coordinator_at[] = {30, 70};
     if (coordinator_kills < 2 && progress >= coordinator_at[coordinator_kills]) {
