@@ -17,6 +17,7 @@
 #include "fabatlas/design/evaluate_sample.h"
 #include "fabatlas/design/state_graph.h"
 #include "fabatlas/error.h"
+#include "fabatlas/mesh/enclosed_volume.h"
 
 using namespace fabatlas;
 using fabatlas::testing::TempDesign;
@@ -344,13 +345,7 @@ TEST(DesignReconfigurable, ExactSubtractionRejectsBadMeshes) {
   mesh::TriangleMesh cutter;
   cube(1, 1, 1, 2, &cutter);
   const mesh::TriangleMesh carved = design::ExactMeshBoolean("difference", {good, cutter});
-  double volume = 0;  // 8 - 1 (the corner cube the cutter takes)
-  for (const auto& t : carved.triangles) {
-    const auto &a = carved.vertices[t[0]], &b = carved.vertices[t[1]], &c = carved.vertices[t[2]];
-    volume += (a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) +
-               a[2] * (b[0] * c[1] - b[1] * c[0])) / 6;
-  }
-  EXPECT_NEAR(volume, 7.0, 1e-9);
+  EXPECT_NEAR(mesh::EnclosedVolume(carved), 7.0, 1e-9);  // 8 - 1 (the corner cube the cutter takes)
 
   auto failure_of = [&](const mesh::TriangleMesh& bad) {
     try {

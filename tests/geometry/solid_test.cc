@@ -9,6 +9,7 @@
 #include <numbers>
 
 #include "fabatlas/error.h"
+#include "fabatlas/mesh/enclosed_volume.h"
 
 namespace fg = fabatlas::geometry;
 using fabatlas::InputError;
@@ -217,17 +218,6 @@ fabatlas::mesh::TriangleMesh CubeMesh(double s) {
   return m;
 }
 
-double EnclosedVolume(const fabatlas::mesh::TriangleMesh& m) {  // divergence theorem
-  double v = 0;
-  for (const auto& t : m.triangles) {
-    const auto& a = m.vertices[t[0]];
-    const auto& b = m.vertices[t[1]];
-    const auto& c = m.vertices[t[2]];
-    v += (a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) +
-          a[2] * (b[0] * c[1] - b[1] * c[0])) / 6.0;
-  }
-  return v;
-}
 }  // namespace
 
 TEST(GeometrySolid, FromMeshOfClosedCube) {
@@ -289,7 +279,7 @@ TEST(GeometrySolid, ToMeshOfSphereIsClosedAndEnclosesItsVolume) {
     ASSERT_EQ(count, 1);
     ASSERT_EQ(edges.count({e.second, e.first}), 1u);
   }
-  EXPECT_REL_NEAR(EnclosedVolume(m), SphereVolume(1.0), 0.01);  // positive: outward normals
+  EXPECT_REL_NEAR(fabatlas::mesh::EnclosedVolume(m), SphereVolume(1.0), 0.01);  // positive: outward normals
   // The mesh turns back into the same solid.
   EXPECT_NEAR(fg::DeltaG(fg::FromMesh(Spec(0.05), m), s), 0.0, 0.01);
 }

@@ -9,6 +9,7 @@
 
 #include "fabatlas/design/data_files.h"
 #include "fabatlas/design/evaluate_sample.h"
+#include "fabatlas/mesh/enclosed_volume.h"
 #include "fabatlas/mesh/read_mesh.h"
 #include "fabatlas/scad/import_design.h"
 #include "fabatlas/testing/paths.h"
@@ -54,17 +55,8 @@ TEST(ScadEval, StringDropdownChangesTheGeometry) {
 
 namespace {
 
-// Volume of a closed triangle mesh (divergence theorem), mm^3.
-double MeshVolume(const fabatlas::mesh::TriangleMesh& m) {
-  double v = 0;
-  for (const auto& t : m.triangles) {
-    const auto& a = m.vertices[t[0]];
-    const auto& b = m.vertices[t[1]];
-    const auto& c = m.vertices[t[2]];
-    v += a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) + a[2] * (b[0] * c[1] - b[1] * c[0]);
-  }
-  return std::abs(v) / 6;
-}
+// Volume of a closed triangle mesh whatever its orientation, mm^3.
+double MeshVolume(const fabatlas::mesh::TriangleMesh& m) { return std::abs(fabatlas::mesh::EnclosedVolume(m)); }
 
 TEST(ScadEval, NativeCsgMatchesOpenScadsOwnRenderAndIsCachedPerSubtree) {
   const std::filesystem::path scad = "/usr/share/openscad/examples/Parametric/candleStand.scad";

@@ -9,6 +9,7 @@
 #include <numbers>
 
 #include "fabatlas/error.h"
+#include "fabatlas/mesh/enclosed_volume.h"
 #include "test_shapes.h"
 
 namespace fabatlas::swept {
@@ -16,7 +17,7 @@ namespace {
 
 TEST(Carve, CarvedPlateNoLongerCollidesWithMovingSphere) {
   const auto plate = testing::BoxMesh({-6, -6, -1}, {6, 6, 1});
-  const auto ball = testing::Icosphere(2.0, 3);
+  const auto ball = testing::IcoSphere(2.0, 3);
   const RigidMotion still;
   const RigidMotion through = RigidMotion::Line({0, 0, -5}, {0, 0, 5});
   std::vector<Transform> check;
@@ -31,14 +32,14 @@ TEST(Carve, CarvedPlateNoLongerCollidesWithMovingSphere) {
   // The plate keeps its outer faces exactly; the hole is a cylinder of radius
   // 2 + eps through the 2 mm plate (the capsule's straight part).
   const double expected = 12.0 * 12.0 * 2.0 - std::numbers::pi * 2.2 * 2.2 * 2.0;
-  EXPECT_NEAR(EnclosedVolume(carved) / expected, 1.0, 0.01);
+  EXPECT_NEAR(mesh::EnclosedVolume(carved) / expected, 1.0, 0.01);
 }
 
 TEST(Carve, RelativeMotionInPartFrame) {
   // Both parts move together by the same translation: no relative motion, so
   // carving removes only the ball's own (offset) volume where they overlap.
   const auto plate = testing::BoxMesh({-6, -6, -1}, {6, 6, 1});
-  const auto ball = testing::Icosphere(2.0, 3);
+  const auto ball = testing::IcoSphere(2.0, 3);
   const RigidMotion shared = RigidMotion::Line({0, 0, 0}, {30, 0, 0});
   SweptVolumeOptions o;
   o.voxel_size = 0.1;
@@ -46,7 +47,7 @@ TEST(Carve, RelativeMotionInPartFrame) {
   const auto carved = CarveSweptVolume(plate, shared, ball, shared, o);
   // Sphere of radius 2.2 cut by the slab |z| <= 1: volume pi (r^2 h - h^3/3) * 2 with h = 1.
   const double cap = std::numbers::pi * (2.2 * 2.2 * 1.0 - 1.0 / 3.0) * 2.0;
-  EXPECT_NEAR(EnclosedVolume(carved) / (288.0 - cap), 1.0, 0.01);
+  EXPECT_NEAR(mesh::EnclosedVolume(carved) / (288.0 - cap), 1.0, 0.01);
 }
 
 TEST(Carve, OpenMeshIsInputError) {

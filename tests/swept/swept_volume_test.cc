@@ -7,6 +7,7 @@
 #include <numbers>
 
 #include "fabatlas/error.h"
+#include "fabatlas/mesh/enclosed_volume.h"
 #include "test_shapes.h"
 
 namespace fabatlas::swept {
@@ -17,7 +18,7 @@ constexpr double kPi = std::numbers::pi;
 double CapsuleVolume(double r, double length) { return kPi * r * r * length + 4.0 / 3.0 * kPi * r * r * r; }
 
 TEST(SweptVolume, SphereAlongSegmentIsCapsule) {
-  const auto sphere = testing::Icosphere(5.0, 5);  // 20480 triangles
+  const auto sphere = testing::IcoSphere(5.0, 5);  // 20480 triangles
   const auto motion = RigidMotion::Line({0, 0, 0}, {20, 0, 0});
   SweptVolumeOptions o;
   o.voxel_size = 0.25;
@@ -26,8 +27,8 @@ TEST(SweptVolume, SphereAlongSegmentIsCapsule) {
   const auto field = ComputeSweptDistance(sphere, motion, o, &s);
   EXPECT_GE(s.time_steps, 81);  // 20 mm at <= one voxel per step
   // Zero level set: capsule of radius 5; offset surface: radius 5.5.
-  const double v0 = EnclosedVolume(field.Surface(0.0));
-  const double v1 = EnclosedVolume(field.Surface(0.5));
+  const double v0 = mesh::EnclosedVolume(field.Surface(0.0));
+  const double v1 = mesh::EnclosedVolume(field.Surface(0.5));
   EXPECT_NEAR(v0 / CapsuleVolume(5.0, 20.0), 1.0, 0.01);
   EXPECT_NEAR(v1 / CapsuleVolume(5.5, 20.0), 1.0, 0.01);
   // Distances at points with known answers (capsule axis on x from 0 to 20).
@@ -47,7 +48,7 @@ TEST(SweptVolume, BoxTurningAboutOffAxisIsAnnulus) {
   o.voxel_size = 0.2;
   const auto field = ComputeSweptDistance(box, motion, o);
   const double expected = kPi * (65.0 - 16.0) * 6.0;
-  EXPECT_NEAR(EnclosedVolume(field.Surface(0.0)) / expected, 1.0, 0.01);
+  EXPECT_NEAR(mesh::EnclosedVolume(field.Surface(0.0)) / expected, 1.0, 0.01);
   ASSERT_GE(field.band_half_width(), 0.6);
   EXPECT_NEAR(field.Value({0, 0, 0}), field.band_half_width(), 1e-6);  // 4 mm away: clamped to the band
   EXPECT_NEAR(field.Value({0, -6, 2.7}), -0.3, 0.05);                   // 0.3 mm inside the top face
@@ -58,7 +59,7 @@ TEST(SweptVolume, CoarseTimeStepsWidenTheBandAndStaySigned) {
   // Only 3 poses 8 mm apart for a radius-5 sphere: the band grows to cover
   // the jump, so the centre of the middle sphere (3 mm outside the first
   // pose) still ends at -5 and not at +3.
-  const auto sphere = testing::Icosphere(5.0, 4);
+  const auto sphere = testing::IcoSphere(5.0, 4);
   std::vector<Transform> poses(3);
   for (int i = 0; i < 3; ++i) poses[i].translation = {8.0 * i, 0, 0};
   SweptVolumeOptions o;
@@ -72,7 +73,7 @@ TEST(SweptVolume, CoarseTimeStepsWidenTheBandAndStaySigned) {
 }
 
 TEST(SweptVolume, SolidResultMatchesMesh) {
-  const auto sphere = testing::Icosphere(3.0, 4);
+  const auto sphere = testing::IcoSphere(3.0, 4);
   SweptVolumeOptions o;
   o.voxel_size = 0.25;
   o.offset = 0.5;
@@ -89,12 +90,12 @@ TEST(SweptVolume, SolidBodyAlongSegmentIsCapsule) {
   SweptVolumeOptions o;
   o.voxel_size = 0.2;
   const auto field = ComputeSweptDistance(ball, RigidMotion::Line({0, 0, 0}, {0, 8, 0}), o);
-  EXPECT_NEAR(EnclosedVolume(field.Surface(0.0)) / CapsuleVolume(3.0, 8.0), 1.0, 0.01);
+  EXPECT_NEAR(mesh::EnclosedVolume(field.Surface(0.0)) / CapsuleVolume(3.0, 8.0), 1.0, 0.01);
   EXPECT_THROW(ComputeSweptDistance(geometry::Solid(), RigidMotion(), o), InputError);
 }
 
 TEST(SweptVolume, BadInputIsInputError) {
-  const auto sphere = testing::Icosphere(1.0, 1);
+  const auto sphere = testing::IcoSphere(1.0, 1);
   SweptVolumeOptions o;
   o.voxel_size = -1;
   EXPECT_THROW(ComputeSweptDistance(sphere, RigidMotion(), o), InputError);

@@ -7,48 +7,14 @@
 #include <numbers>
 #include <utility>
 
+#include "../mesh/synthetic_meshes.h"
 #include "fabatlas/mesh/triangle_mesh.h"
 
 namespace fabatlas::swept::testing {
 
-// Icosphere of the given radius (vertices on the sphere), outward.
-inline mesh::TriangleMesh Icosphere(double radius, int subdivisions) {
-  mesh::TriangleMesh m;
-  const double p = (1 + std::sqrt(5.0)) / 2;
-  m.vertices = {{-1, p, 0}, {1, p, 0}, {-1, -p, 0}, {1, -p, 0}, {0, -1, p}, {0, 1, p},
-                {0, -1, -p}, {0, 1, -p}, {p, 0, -1}, {p, 0, 1}, {-p, 0, -1}, {-p, 0, 1}};
-  m.triangles = {{0, 11, 5}, {0, 5, 1}, {0, 1, 7},   {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
-                 {11, 10, 2}, {10, 7, 6}, {7, 1, 8}, {3, 9, 4},  {3, 4, 2},   {3, 2, 6}, {3, 6, 8},
-                 {3, 8, 9},  {4, 9, 5},  {2, 4, 11}, {6, 2, 10}, {8, 6, 7},   {9, 8, 1}};
-  for (int s = 0; s < subdivisions; ++s) {
-    std::map<std::pair<int, int>, int> mid;
-    auto midpoint = [&](int a, int b) {
-      auto key = std::minmax(a, b);
-      auto it = mid.find(key);
-      if (it != mid.end()) return it->second;
-      const auto& va = m.vertices[a];
-      const auto& vb = m.vertices[b];
-      m.vertices.push_back({(va[0] + vb[0]) / 2, (va[1] + vb[1]) / 2, (va[2] + vb[2]) / 2});
-      const int id = static_cast<int>(m.vertices.size()) - 1;
-      mid.emplace(key, id);
-      return id;
-    };
-    std::vector<std::array<std::int32_t, 3>> next;
-    for (const auto& t : m.triangles) {
-      const int a = midpoint(t[0], t[1]), b = midpoint(t[1], t[2]), c = midpoint(t[2], t[0]);
-      next.push_back({t[0], a, c});
-      next.push_back({t[1], b, a});
-      next.push_back({t[2], c, b});
-      next.push_back({a, b, c});
-    }
-    m.triangles = std::move(next);
-  }
-  for (auto& v : m.vertices) {
-    const double n = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
-    for (auto& x : v) x *= radius / n;
-  }
-  return m;
-}
+// Icosphere of the given radius (vertices on the sphere), outward: the mesh
+// tests' IcoSphere.
+using mesh::testing::IcoSphere;
 
 // Axis-aligned box [lo, hi], 12 triangles, outward.
 inline mesh::TriangleMesh BoxMesh(const std::array<double, 3>& lo, const std::array<double, 3>& hi) {

@@ -8,10 +8,12 @@
 #include <mutex>
 #include <sstream>
 
+#include "convex_hull_2d.h"
 #include "fabatlas/error.h"
 #include "fabatlas/fem/fem_check.h"
 #include "fabatlas/mesh/mesh_report.h"
 #include "fabatlas/mesh/shape_diameter.h"
+#include "fabatlas/mesh/surface_area.h"
 #include "fabatlas/swept/spacetime_clearance.h"
 #include "fabatlas/swept/spacetime_collision.h"
 #include "operations.h"
@@ -489,34 +491,10 @@ CheckOutcome RunCheck(const CheckSpec& spec, CheckContext& context) {
   return o;
 }
 
-double SurfaceArea(const geometry::Solid& solid) {
-  mesh::TriangleMesh m = solid.ToMesh();
-  double area = 0;
-  for (const auto& t : m.triangles) {
-    const auto &a = m.vertices[t[0]], &b = m.vertices[t[1]], &c = m.vertices[t[2]];
-    double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, v[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
-    double n[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
-    area += 0.5 * std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
-  }
-  return area;
-}
+double SurfaceArea(const geometry::Solid& solid) { return mesh::SurfaceArea(solid.ToMesh()); }
 
 double DistanceInsideConvexHull(std::vector<geometry::Vec2> pts, const geometry::Vec2& p) {
-  std::sort(pts.begin(), pts.end());
-  pts.erase(std::unique(pts.begin(), pts.end()), pts.end());
-  if (pts.size() < 3) return -std::numeric_limits<double>::infinity();
-  // Andrew's monotone chain, counter-clockwise.
-  std::vector<geometry::Vec2> hull(2 * pts.size());
-  std::size_t k = 0;
-  for (std::size_t i = 0; i < pts.size(); ++i) {
-    while (k >= 2 && Cross(hull[k - 2], hull[k - 1], pts[i]) <= 0) --k;
-    hull[k++] = pts[i];
-  }
-  for (std::size_t i = pts.size() - 1, t = k + 1; i > 0; --i) {
-    while (k >= t && Cross(hull[k - 2], hull[k - 1], pts[i - 1]) <= 0) --k;
-    hull[k++] = pts[i - 1];
-  }
-  hull.resize(k - 1);
+  const std::vector<geometry::Vec2> hull = ConvexHull2D(std::move(pts));  // counter-clockwise
   if (hull.size() < 3) return -std::numeric_limits<double>::infinity();
   // Inside: distance to the nearest edge line; outside: distance to the hull.
   bool inside = true;

@@ -15,6 +15,7 @@
 #include "expression.h"
 #include "fabatlas/error.h"
 #include "fabatlas/scad/customizer.h"
+#include "fabatlas/mesh/enclosed_volume.h"
 #include "fabatlas/mesh/raw_mesh.h"
 #include "fabatlas/sha256.h"
 #include "node_schema.h"
@@ -542,7 +543,7 @@ SweptVolumeResult ComputeSweptVolume(const Design& design, const Point& u, const
         SweptCutter(moving, transition->motions[ObjectIndex(design, text("moving"))], f_frame, number("offset", 0),
                     static_cast<int>(number("time_steps", 2)), tree.grid(), node->place, &summary);
     SweptVolumeResult r;
-    r.volume = swept::EnclosedVolume(surface);
+    r.volume = mesh::EnclosedVolume(surface);
     r.triangles = surface.triangles.size();
     r.time_steps = summary.time_steps;
     r.active_voxels = summary.active_voxels;

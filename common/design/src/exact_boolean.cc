@@ -3,6 +3,7 @@
 #include <map>
 
 #include "fabatlas/error.h"
+#include "fabatlas/mesh/enclosed_volume.h"
 #include "fabatlas/mesh/exact_boolean.h"
 #include "operations.h"
 
@@ -51,15 +52,6 @@ std::vector<mesh::TriangleMesh> Shells(const mesh::TriangleMesh& m) {
   return out;
 }
 
-double SignedVolume(const mesh::TriangleMesh& m) {
-  double v = 0;
-  for (const auto& t : m.triangles) {
-    const auto &a = m.vertices[t[0]], &b = m.vertices[t[1]], &c = m.vertices[t[2]];
-    v += (a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) + a[2] * (b[0] * c[1] - b[1] * c[0])) / 6;
-  }
-  return v;
-}
-
 }  // namespace
 
 geometry::Solid ExactBoolean(const std::string& op, const std::vector<geometry::Solid>& children,
@@ -79,7 +71,7 @@ geometry::Solid SolidOfExactResult(const mesh::TriangleMesh& result, const geome
   geometry::Solid material, cavities;
   for (const mesh::TriangleMesh& shell : Shells(result)) {
     geometry::Solid s = geometry::FromMesh(grid, shell);
-    if (SignedVolume(shell) >= 0) material = material.empty() ? s : geometry::Union(material, s);
+    if (mesh::EnclosedVolume(shell) >= 0) material = material.empty() ? s : geometry::Union(material, s);
     else cavities = cavities.empty() ? s : geometry::Union(cavities, s);
   }
   return cavities.empty() ? material : geometry::Difference(material, cavities);

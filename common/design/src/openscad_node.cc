@@ -21,6 +21,7 @@
 #include <optional>
 #include <sstream>
 
+#include "convex_hull_2d.h"
 #include "fabatlas/error.h"
 #include "fabatlas/mesh/read_mesh.h"
 #include "fabatlas/geometry/convex_mesh_distance.h"
@@ -124,27 +125,6 @@ bool PointInLoop(const scad::Point2& p, const Loop& loop) {
   return inside;
 }
 
-Loop ConvexHull2(std::vector<scad::Point2> pts) {
-  std::sort(pts.begin(), pts.end());
-  pts.erase(std::unique(pts.begin(), pts.end()), pts.end());
-  if (pts.size() < 3) return pts;
-  auto cross = [](const scad::Point2& o, const scad::Point2& a, const scad::Point2& b) {
-    return (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0]);
-  };
-  std::vector<scad::Point2> h(2 * pts.size());
-  std::size_t k = 0;
-  for (std::size_t i = 0; i < pts.size(); ++i) {
-    while (k >= 2 && cross(h[k - 2], h[k - 1], pts[i]) <= 0) --k;
-    h[k++] = pts[i];
-  }
-  for (std::size_t i = pts.size() - 1, t = k + 1; i > 0; --i) {
-    while (k >= t && cross(h[k - 2], h[k - 1], pts[i - 1]) <= 0) --k;
-    h[k++] = pts[i - 1];
-  }
-  h.resize(k - 1);
-  return h;
-}
-
 void CollectPoints(const Shape2& s, std::vector<scad::Point2>& out) {
   for (const auto& l : s.loops) out.insert(out.end(), l.begin(), l.end());
   for (const auto& p : s.parts) CollectPoints(p, out);
@@ -230,7 +210,7 @@ Shape2 Evaluate2(const CsgNode& n, const Affine2& t, const Render2& render2) {
     for (const auto& c : n.children) all.parts.push_back(Evaluate2(c, t, render2));
     std::vector<scad::Point2> points;
     CollectPoints(all, points);
-    Loop h = ConvexHull2(points);
+    Loop h = ConvexHull2D(points);
     if (h.size() >= 3) s.loops.push_back(h);
     return s;
   } else {

@@ -14,6 +14,9 @@
 #include <numeric>
 #include <string>
 #include <utility>
+
+#include "fabatlas/mesh/enclosed_volume.h"
+#include "fabatlas/mesh/surface_area.h"
 #include <vector>
 
 namespace fabatlas::mesh {
@@ -129,23 +132,9 @@ MeshReport InspectMesh(const TriangleMesh& mesh, const InspectOptions& options) 
   }
   std::array<double, 3> centre;
   for (int a = 0; a < 3; ++a) centre[a] = 0.5 * (report.bbox_min[a] + report.bbox_max[a]);
-  double volume6 = 0.0;
-  double area2 = 0.0;
-  for (const auto& t : tris) {
-    std::array<std::array<double, 3>, 3> p;
-    for (int k = 0; k < 3; ++k)
-      for (int a = 0; a < 3; ++a) p[k][a] = points[t[k]][a] - centre[a];
-    const double cx = p[1][1] * p[2][2] - p[1][2] * p[2][1];
-    const double cy = p[1][2] * p[2][0] - p[1][0] * p[2][2];
-    const double cz = p[1][0] * p[2][1] - p[1][1] * p[2][0];
-    volume6 += p[0][0] * cx + p[0][1] * cy + p[0][2] * cz;
-    const double u[3] = {p[1][0] - p[0][0], p[1][1] - p[0][1], p[1][2] - p[0][2]};
-    const double w[3] = {p[2][0] - p[0][0], p[2][1] - p[0][1], p[2][2] - p[0][2]};
-    const double nx = u[1] * w[2] - u[2] * w[1], ny = u[2] * w[0] - u[0] * w[2], nz = u[0] * w[1] - u[1] * w[0];
-    area2 += std::sqrt(nx * nx + ny * ny + nz * nz);
-  }
-  report.volume = volume6 / 6.0;
-  report.area = area2 / 2.0;
+  const TriangleMesh used{points, tris};
+  report.volume = EnclosedVolume(used, centre);
+  report.area = SurfaceArea(used, centre);
 
   // 4. Edges: (lo, hi, forward?) per triangle side, sorted so equal edges are adjacent.
   struct HalfEdge {

@@ -302,15 +302,4 @@ geometry::Solid SweptOffsetSolid(const geometry::GridSpec& g, const mesh::Triang
   return geometry::FromMesh(g, SweptOffsetSurface(body, motion, options));
 }
 
-double EnclosedVolume(const mesh::TriangleMesh& m) {
-  double v = 0;
-  for (const auto& t : m.triangles) {
-    const auto& a = m.vertices[t[0]];
-    const auto& b = m.vertices[t[1]];
-    const auto& c = m.vertices[t[2]];
-    v += a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) + a[2] * (b[0] * c[1] - b[1] * c[0]);
-  }
-  return v / 6.0;
-}
-
 }  // namespace fabatlas::swept

@@ -136,8 +136,4 @@ mesh::TriangleMesh SweptOffsetSurface(const mesh::TriangleMesh& body, const Rigi
 geometry::Solid SweptOffsetSolid(const geometry::GridSpec& g, const mesh::TriangleMesh& body,
                                  const RigidMotion& motion, const SweptVolumeOptions& options = {});
 
-// Signed volume enclosed by a closed, outward-oriented triangle mesh
-// (divergence theorem), mm^3.
-double EnclosedVolume(const mesh::TriangleMesh& m);
-
 }  // namespace fabatlas::swept
