@@ -25,6 +25,7 @@
 #include <vector>
 
 #include "../../tests/swept/test_shapes.h"
+#include "fabatlas/swept/box_tree.h"
 #include "fabatlas/swept/swept_volume.h"
 
 namespace {
@@ -80,35 +81,33 @@ double PointTriangleDistance2(const Vec3& p, const Vec3& a, const Vec3& b, const
   return dist2({a[0] + ab[0] * v + ac[0] * w, a[1] + ab[1] * v + ac[1] * w, a[2] + ab[2] * v + ac[2] * w});
 }
 
+// The mesh's triangles in a BoxTree of their bounding boxes.
 class TriangleTree {
  public:
-  explicit TriangleTree(const TriangleMesh& m) : mesh_(m) {
-    order_.resize(m.triangles.size());
-    std::iota(order_.begin(), order_.end(), 0);
-    nodes_.reserve(2 * order_.size());
-    Build(0, static_cast<int>(order_.size()));
-  }
+  explicit TriangleTree(const TriangleMesh& m) : mesh_(m), tree_(TriangleBoxes(m)) {}
 
   // Distance from p to the mesh, or `cutoff` if it is farther (nodes beyond
   // the cutoff are pruned: the seed's culling of far grid vertices during the
   // tree evaluation).
   double Distance(const Vec3& p, double cutoff = std::numeric_limits<double>::infinity()) const {
     double best = cutoff * cutoff;
+    const auto& nodes = tree_.nodes();
+    if (nodes.empty()) return cutoff;
     int stack[128];
     int top = 0;
     stack[top++] = 0;
     while (top > 0) {
-      const Node& n = nodes_[stack[--top]];
-      if (BoxDistance2(n, p) >= best) continue;
+      const auto& n = nodes[stack[--top]];
+      if (BoxDistance2(n.box, p) >= best) continue;
       if (n.count > 0) {
         for (int i = n.first; i < n.first + n.count; ++i) {
-          const auto& t = mesh_.triangles[order_[i]];
+          const auto& t = mesh_.triangles[tree_.order()[i]];
           best = std::min(best, PointTriangleDistance2(p, mesh_.vertices[t[0]], mesh_.vertices[t[1]],
                                                       mesh_.vertices[t[2]]));
         }
         continue;
       }
-      const double dl = BoxDistance2(nodes_[n.left], p), dr = BoxDistance2(nodes_[n.right], p);
+      const double dl = BoxDistance2(nodes[n.left].box, p), dr = BoxDistance2(nodes[n.right].box, p);
       // Push the farther child first so the nearer one is visited first.
       if (dl < dr) {
         stack[top++] = n.right;
@@ -122,60 +121,32 @@ class TriangleTree {
   }
 
  private:
-  struct Node {
-    Vec3 lo, hi;
-    int left = -1, right = -1, first = 0, count = 0;
-  };
-  static double BoxDistance2(const Node& n, const Vec3& p) {
+  using Tree = fabatlas::swept::BoxTree<3>;
+  static std::vector<Tree::Box> TriangleBoxes(const TriangleMesh& m) {
+    std::vector<Tree::Box> boxes;
+    boxes.reserve(m.triangles.size());
+    for (const auto& t : m.triangles) {
+      Tree::Box b{{{1e300, 1e300, 1e300}, {-1e300, -1e300, -1e300}}};
+      for (int v : t)
+        for (int k = 0; k < 3; ++k) {
+          b[0][k] = std::min(b[0][k], m.vertices[v][k]);
+          b[1][k] = std::max(b[1][k], m.vertices[v][k]);
+        }
+      boxes.push_back(b);
+    }
+    return boxes;
+  }
+  static double BoxDistance2(const Tree::Box& b, const Vec3& p) {
     double d = 0;
     for (int k = 0; k < 3; ++k) {
-      const double e = std::max({n.lo[k] - p[k], 0.0, p[k] - n.hi[k]});
+      const double e = std::max({b[0][k] - p[k], 0.0, p[k] - b[1][k]});
       d += e * e;
     }
     return d;
   }
-  Vec3 Centroid(int t) const {
-    const auto& tri = mesh_.triangles[t];
-    Vec3 c{0, 0, 0};
-    for (int i = 0; i < 3; ++i)
-      for (int k = 0; k < 3; ++k) c[k] += mesh_.vertices[tri[i]][k] / 3.0;
-    return c;
-  }
-  int Build(int first, int last) {
-    const int id = static_cast<int>(nodes_.size());
-    nodes_.emplace_back();
-    Node n;
-    n.lo = {1e300, 1e300, 1e300};
-    n.hi = {-1e300, -1e300, -1e300};
-    for (int i = first; i < last; ++i) {
-      for (int v : mesh_.triangles[order_[i]]) {
-        for (int k = 0; k < 3; ++k) {
-          n.lo[k] = std::min(n.lo[k], mesh_.vertices[v][k]);
-          n.hi[k] = std::max(n.hi[k], mesh_.vertices[v][k]);
-        }
-      }
-    }
-    if (last - first <= 4) {
-      n.first = first;
-      n.count = last - first;
-      nodes_[id] = n;
-      return id;
-    }
-    int axis = 0;
-    for (int k = 1; k < 3; ++k)
-      if (n.hi[k] - n.lo[k] > n.hi[axis] - n.lo[axis]) axis = k;
-    const int mid = (first + last) / 2;
-    std::nth_element(order_.begin() + first, order_.begin() + mid, order_.begin() + last,
-                     [&](int a, int b) { return Centroid(a)[axis] < Centroid(b)[axis]; });
-    n.left = Build(first, mid);
-    n.right = Build(mid, last);
-    nodes_[id] = n;
-    return id;
-  }
 
   const TriangleMesh& mesh_;
-  std::vector<int> order_;
-  std::vector<Node> nodes_;
+  Tree tree_;
 };
 
 struct Lattice {

@@ -50,15 +50,6 @@ double PointBoxDistance(const Vec3& p, const SpatialBox& b) {
   return std::sqrt(s);
 }
 
-SpatialBox PosedBox(const mesh::TriangleMesh& m, const Transform& f) {
-  SpatialBox b{{1e300, 1e300, 1e300}, {-1e300, -1e300, -1e300}};
-  for (const auto& v : m.vertices) {
-    const Vec3 q = f.Apply(v);
-    for (int k = 0; k < 3; ++k) b.min[k] = std::min(b.min[k], q[k]), b.max[k] = std::max(b.max[k], q[k]);
-  }
-  return b;
-}
-
 }  // namespace
 
 ClearanceReport MinimumClearance(const std::vector<MovingPart>& parts, const ClearanceOptions& options) {

@@ -23,6 +23,7 @@
 #include <string>
 
 #include "fabatlas/error.h"
+#include "fabatlas/swept/box_tree.h"
 #include "fabatlas/swept/continuous_contact.h"
 
 namespace fabatlas::swept {
@@ -43,7 +44,7 @@ struct BodyIndex {
   std::unique_ptr<Inside> inside;
 };
 
-using Box4 = std::array<std::array<double, 4>, 2>;  // [min, max] over (x, y, z, t)
+using Box4 = BoxTree<4>::Box;  // [min, max] over (x, y, z, t)
 
 bool Overlap(const Box4& a, const Box4& b) {
   for (int k = 0; k < 4; ++k)
@@ -112,68 +113,27 @@ std::vector<std::pair<int, int>> EmbreeOverlaps(const std::vector<Box4>& boxes, 
   return out;
 }
 
-// A bounding volume hierarchy over 4D boxes; leaves hold up to 4 proxies.
-class ProxyTree {
- public:
-  explicit ProxyTree(const std::vector<Box4>& boxes) : boxes_(boxes), order_(boxes.size()) {
-    std::iota(order_.begin(), order_.end(), 0);
-    if (!boxes.empty()) Build(0, static_cast<int>(boxes.size()));
-  }
-  template <typename F>
-  void Query(const Box4& q, F&& visit) const {
-    if (nodes_.empty()) return;
-    std::vector<int> stack{0};
-    while (!stack.empty()) {
-      const Node& n = nodes_[stack.back()];
-      stack.pop_back();
-      if (!Overlap(n.box, q)) continue;
-      if (n.count > 0) {
-        for (int i = n.first; i < n.first + n.count; ++i)
-          if (Overlap(boxes_[order_[i]], q)) visit(order_[i]);
-      } else {
-        stack.push_back(n.left);
-        stack.push_back(n.right);
+// Visits every proxy whose box overlaps q, through a BoxTree of the proxies'
+// 4D boxes (leaves of up to 4 proxies).
+template <typename F>
+void VisitOverlaps(const BoxTree<4>& tree, const Box4& q, F&& visit) {
+  if (tree.nodes().empty()) return;
+  std::vector<int> stack{0};
+  while (!stack.empty()) {
+    const auto& n = tree.nodes()[stack.back()];
+    stack.pop_back();
+    if (!Overlap(n.box, q)) continue;
+    if (n.count > 0) {
+      for (int i = n.first; i < n.first + n.count; ++i) {
+        const int item = tree.order()[i];
+        if (Overlap(tree.box(item), q)) visit(item);
       }
+    } else {
+      stack.push_back(n.left);
+      stack.push_back(n.right);
     }
   }
-
- private:
-  struct Node {
-    Box4 box;
-    int left = -1, right = -1, first = 0, count = 0;
-  };
-  int Build(int first, int last) {
-    const int id = static_cast<int>(nodes_.size());
-    nodes_.emplace_back();
-    Node n;
-    n.box = boxes_[order_[first]];
-    for (int i = first + 1; i < last; ++i)
-      for (int k = 0; k < 4; ++k) {
-        n.box[0][k] = std::min(n.box[0][k], boxes_[order_[i]][0][k]);
-        n.box[1][k] = std::max(n.box[1][k], boxes_[order_[i]][1][k]);
-      }
-    if (last - first <= 4) {
-      n.first = first;
-      n.count = last - first;
-      nodes_[id] = n;
-      return id;
-    }
-    int axis = 0;
-    for (int k = 1; k < 4; ++k)
-      if (n.box[1][k] - n.box[0][k] > n.box[1][axis] - n.box[0][axis]) axis = k;
-    const int mid = (first + last) / 2;
-    std::nth_element(order_.begin() + first, order_.begin() + mid, order_.begin() + last, [&](int a, int b) {
-      return boxes_[a][0][axis] + boxes_[a][1][axis] < boxes_[b][0][axis] + boxes_[b][1][axis];
-    });
-    n.left = Build(first, mid);
-    n.right = Build(mid, last);
-    nodes_[id] = n;
-    return id;
-  }
-  const std::vector<Box4>& boxes_;
-  std::vector<int> order_;
-  std::vector<Node> nodes_;
-};
+}
 
 void CheckPart(const mesh::TriangleMesh& m, std::size_t p) {
   const std::string where = "collision: part " + std::to_string(p);
@@ -206,6 +166,15 @@ Surface Posed(const mesh::TriangleMesh& m, const Transform& f, std::size_t p) {
 
 }  // namespace
 
+SpatialBox PosedBox(const mesh::TriangleMesh& m, const Transform& f) {
+  SpatialBox b{{1e300, 1e300, 1e300}, {-1e300, -1e300, -1e300}};
+  for (const auto& v : m.vertices) {
+    const Vec3 q = f.Apply(v);
+    for (int k = 0; k < 3; ++k) b.min[k] = std::min(b.min[k], q[k]), b.max[k] = std::max(b.max[k], q[k]);
+  }
+  return b;
+}
+
 CollisionReport DetectCollisions(const std::vector<MovingPart>& parts, const SpacetimeOptions& options) {
   if (options.time_steps < 2) throw InputError("collision: time_steps must be >= 2");
   const int n = options.time_steps;
@@ -219,11 +188,7 @@ CollisionReport DetectCollisions(const std::vector<MovingPart>& parts, const Spa
   for (std::size_t p = 0; p < np; ++p) {
     for (int i = 0; i < n; ++i) {
       const Transform f = parts[p].motion.At(static_cast<double>(i) / (n - 1));
-      SpatialBox b{{1e300, 1e300, 1e300}, {-1e300, -1e300, -1e300}};
-      for (const auto& v : parts[p].mesh.vertices) {
-        const Vec3 q = f.Apply(v);
-        for (int k = 0; k < 3; ++k) b.min[k] = std::min(b.min[k], q[k]), b.max[k] = std::max(b.max[k], q[k]);
-      }
+      const SpatialBox b = PosedBox(parts[p].mesh, f);
       for (int k = 0; k < 3; ++k) extent = std::max(extent, b.max[k] - b.min[k]);
       pose[p].push_back(f);
       aabb[p].push_back(b);
@@ -273,8 +238,8 @@ CollisionReport DetectCollisions(const std::vector<MovingPart>& parts, const Spa
   };
   const auto broad0 = std::chrono::steady_clock::now();
   if (options.broad_phase == SpacetimeOptions::BroadPhase::kHierarchy) {
-    const ProxyTree tree(boxes);
-    for (std::size_t q = 0; q < boxes.size(); ++q) tree.Query(boxes[q], [&](int r) { consider(q, r); });
+    const BoxTree<4> tree(boxes);
+    for (std::size_t q = 0; q < boxes.size(); ++q) VisitOverlaps(tree, boxes[q], [&](int r) { consider(q, r); });
   } else if (options.broad_phase == SpacetimeOptions::BroadPhase::kEmbree) {
     std::vector<int> interval;
     for (const auto& o : owner) interval.push_back(o.second);

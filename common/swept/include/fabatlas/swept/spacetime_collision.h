@@ -61,6 +61,9 @@ struct SpatialBox {
   Vec3 max{0, 0, 0};
 };
 
+// The axis-aligned box of a mesh's vertices placed by `f` (world frame).
+SpatialBox PosedBox(const mesh::TriangleMesh& m, const Transform& f);
+
 struct CollisionInterval {
   // First and last colliding sample; for a collision found only between
   // two samples, its first and last contact time (within the tolerance).
