@@ -8,11 +8,9 @@
 #include <algorithm>
 #include <random>
 
-#include <google/protobuf/io/coded_stream.h>
-#include <google/protobuf/io/zero_copy_stream_impl_lite.h>
-
 #include "fabatlas/error.h"
 #include "fabatlas/protocol/cache_plan.h"
+#include "fabatlas/protocol/canonical_bytes.h"
 #include "synthetic_graphs.h"
 
 namespace fabatlas::protocol {
@@ -39,16 +37,6 @@ v1::CachePlanInput Input(const cache::testing::SyntheticGraph& g) {
   return input;
 }
 
-std::string Bytes(const v1::CachePlanReport& report) {
-  std::string out;
-  google::protobuf::io::StringOutputStream stream(&out);
-  google::protobuf::io::CodedOutputStream coded(&stream);
-  coded.SetSerializationDeterministic(true);
-  report.SerializeToCodedStream(&coded);
-  coded.Trim();
-  return out;
-}
-
 TEST(PlanTask, SameBitsForShuffledAndRepeatedRecords) {
   for (std::uint64_t seed = 1; seed <= 12; ++seed) {
     cache::testing::SyntheticDesign d;
@@ -62,7 +50,7 @@ TEST(PlanTask, SameBitsForShuffledAndRepeatedRecords) {
     for (const auto& n : g.nodes) records.push_back(Record(n));
     std::sort(records.begin(), records.end(), [](const auto& a, const auto& b) { return a.key() < b.key(); });
     for (const auto& r : records) *once.add_subtrees() = r;
-    const std::string expected = Bytes(RunCachePlan(once));
+    const std::string expected = CanonicalBytes(RunCachePlan(once));
 
     // Each key 1-7 times, shuffled: samples reporting in process, retries.
     std::mt19937_64 rng(seed);
@@ -75,7 +63,7 @@ TEST(PlanTask, SameBitsForShuffledAndRepeatedRecords) {
       std::shuffle(repeated.begin(), repeated.end(), rng);
       v1::CachePlanInput input = Input(g);
       for (const auto& r : repeated) *input.add_subtrees() = r;
-      EXPECT_TRUE(Bytes(RunCachePlan(input)) == expected) << "the report differs: seed " << seed << " trial " << trial;
+      EXPECT_TRUE(CanonicalBytes(RunCachePlan(input)) == expected) << "the report differs: seed " << seed << " trial " << trial;
     }
   }
 }

@@ -1,9 +1,6 @@
 // Job bundles (see job_bundle.h).
 #include "fabatlas/protocol/job_bundle.h"
 
-#include <google/protobuf/io/coded_stream.h>
-#include <google/protobuf/io/zero_copy_stream_impl_lite.h>
-
 #include <fstream>
 #include <algorithm>
 #include <functional>
@@ -13,6 +10,7 @@
 #include "fabatlas/design/data_files.h"
 #include "fabatlas/design/design.h"
 #include "fabatlas/error.h"
+#include "fabatlas/protocol/canonical_bytes.h"
 #include "fabatlas/write_file_atomically.h"
 #include "fabatlas/sampling/job_file.h"
 #include "fabatlas/sha256.h"
@@ -113,16 +111,7 @@ v1::JobBundle MakeJobBundle(const fs::path& job_file) {
   return bundle;
 }
 
-std::string BundleBytes(const v1::JobBundle& bundle) {
-  std::string out;
-  {
-    google::protobuf::io::StringOutputStream stream(&out);
-    google::protobuf::io::CodedOutputStream coded(&stream);
-    coded.SetSerializationDeterministic(true);
-    bundle.SerializeToCodedStream(&coded);
-  }
-  return out;
-}
+std::string BundleBytes(const v1::JobBundle& bundle) { return CanonicalBytes(bundle); }
 
 std::string EvaluationDigest(const v1::JobBundle& bundle) {
   v1::JobBundle evaluation;
