@@ -12,6 +12,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <initializer_list>
 #include <string>
 #include <time.h>
 #include <vector>
@@ -117,32 +118,21 @@ int main(int argc, char** argv) {
                 u.setting, u.iou, a.samples, a.setting, a.iou, double(a.samples) / double(u.samples));
     std::fflush(stdout);
   };
-  if (points > 0) {
-    HollowCylinder2D ev;
+  // One design's rows: the fewest samples each method needs to reach each
+  // IoU target (uniform grids of up to max_n per axis).
+  auto reach = [&](const char* name, auto ev, const auto& truly_valid, std::initializer_list<double> targets,
+                   int max_n) {
     Reach u{0, 1, 0}, a{0, 0, 0};
-    for (double target : {0.95, 0.98, 0.99}) {
-      u = UniformToTarget(ev, HollowCylinder2D::TrulyValid, target, points, u.setting, 400);
-      a = AdaptiveToTarget(ev, HollowCylinder2D::TrulyValid, target, points, threshold, subdivisions, a.setting);
-      row("hollow cylinder 2-D", target, u, a);
+    for (double target : targets) {
+      u = UniformToTarget(ev, truly_valid, target, points, u.setting, max_n);
+      a = AdaptiveToTarget(ev, truly_valid, target, points, threshold, subdivisions, a.setting);
+      row(name, target, u, a);
     }
-  }
+  };
   if (points > 0) {
-    BudgetCylinder2D ev;
-    Reach u{0, 1, 0}, a{0, 0, 0};
-    for (double target : {0.95, 0.98}) {
-      u = UniformToTarget(ev, BudgetCylinder2D::TrulyValid, target, points, u.setting, 400);
-      a = AdaptiveToTarget(ev, BudgetCylinder2D::TrulyValid, target, points, threshold, subdivisions, a.setting);
-      row("budget cylinder 2-D", target, u, a);
-    }
-  }
-  if (points > 0) {
-    HollowCylinder3D ev;
-    Reach u{0, 1, 0}, a{0, 0, 0};
-    for (double target : {0.95, 0.97}) {
-      u = UniformToTarget(ev, HollowCylinder3D::TrulyValid, target, points, u.setting, 100);
-      a = AdaptiveToTarget(ev, HollowCylinder3D::TrulyValid, target, points, threshold, subdivisions, a.setting);
-      row("hollow cylinder 3-D", target, u, a);
-    }
+    reach("hollow cylinder 2-D", HollowCylinder2D(), HollowCylinder2D::TrulyValid, {0.95, 0.98, 0.99}, 400);
+    reach("budget cylinder 2-D", BudgetCylinder2D(), BudgetCylinder2D::TrulyValid, {0.95, 0.98}, 400);
+    reach("hollow cylinder 3-D", HollowCylinder3D(), HollowCylinder3D::TrulyValid, {0.95, 0.97}, 100);
   }
   std::fflush(stdout);
   if (repeats <= 0) return 0;
