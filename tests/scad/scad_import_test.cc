@@ -308,4 +308,25 @@ TEST(ScadCsgTree, BackgroundNodesAreDropped) {
   EXPECT_EQ(root.children[1].children[0].name, "cylinder");
 }
 
+// OpenSCAD's lexical rules (User Manual: comments, strings), which the .csg
+// parser shares with the Customizer reader: both comment kinds are skipped,
+// their lines counted, and escapes in strings applied.
+TEST(ScadCsgTree, CommentsAndStringsFollowOpenScadsLexicalRules) {
+  auto root = fabatlas::scad::ParseCsg(
+      "// exported\n/* two\nlines */ text(text = \"a\\\"b\\n\");\n\ncube(size = 1);\n", "m.csg");
+  ASSERT_EQ(root.children.size(), 2u);
+  EXPECT_EQ(root.children[0].line, 3);
+  EXPECT_EQ(root.children[0].args.at("text").text, "a\"b\n");
+  EXPECT_EQ(root.children[1].line, 5);
+  // An unterminated block comment runs to the end of the text; an
+  // unterminated string is an error at the line the text ends on.
+  EXPECT_EQ(fabatlas::scad::ParseCsg("cube(size = 1);\n/* cube(size = 2);\n", "m.csg").children.size(), 1u);
+  try {
+    fabatlas::scad::ParseCsg("cube(size = 1);\ntext(text = \"x\n", "m.csg");
+    ADD_FAILURE() << "an unterminated string was accepted";
+  } catch (const fabatlas::InputError& e) {
+    EXPECT_STREQ(e.what(), "m.csg:3: unterminated string");
+  }
+}
+
 }  // namespace

@@ -14,6 +14,7 @@
 
 #include "fabatlas/error.h"
 #include "fabatlas/scad/customizer.h"
+#include "fabatlas/scad/source_text.h"
 
 extern char** environ;
 
@@ -43,19 +44,10 @@ class Parser {
   }
 
   void Skip() {
-    while (i_ < s_.size()) {
-      char c = s_[i_];
-      if (c == '\n') {
-        ++line_;
-        ++i_;
-      } else if (std::isspace(static_cast<unsigned char>(c))) {
-        ++i_;
-      } else if (c == '/' && i_ + 1 < s_.size() && s_[i_ + 1] == '/') {
-        while (i_ < s_.size() && s_[i_] != '\n') ++i_;
-      } else {
-        break;
-      }
-    }
+    SourcePosition p{i_, line_};
+    SkipBlank(s_, p);
+    i_ = p.at;
+    line_ = p.line;
   }
 
   bool Eat(char c) {
@@ -95,20 +87,13 @@ class Parser {
       return v;
     }
     if (c == '"') {
-      ++i_;
+      SourcePosition p{i_, line_};
+      bool terminated = false;
       v.type = CsgValue::Type::kString;
-      while (i_ < s_.size() && s_[i_] != '"') {
-        if (s_[i_] == '\\' && i_ + 1 < s_.size()) {
-          char e = s_[i_ + 1];
-          v.text += e == 'n' ? '\n' : e == 't' ? '\t' : e == 'r' ? '\r' : e;
-          i_ += 2;
-        } else {
-          if (s_[i_] == '\n') ++line_;
-          v.text += s_[i_++];
-        }
-      }
-      if (i_ >= s_.size()) Fail("unterminated string");
-      ++i_;
+      v.text = ReadStringLiteral(s_, p, terminated);
+      i_ = p.at;
+      line_ = p.line;
+      if (!terminated) Fail("unterminated string");
       return v;
     }
     if (std::isdigit(static_cast<unsigned char>(c)) || c == '-' || c == '+' || c == '.') {

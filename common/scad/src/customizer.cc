@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "fabatlas/error.h"
+#include "fabatlas/scad/source_text.h"
 
 namespace fabatlas::scad {
 namespace {
@@ -44,61 +45,40 @@ bool ParseNumber(const std::string& s, double& out) {
 // comments end at the end of the text.
 std::vector<Token> Lex(const std::string& s) {
   std::vector<Token> out;
-  int line = 1;
-  std::size_t i = 0, n = s.size();
-  while (i < n) {
-    char c = s[i];
-    if (c == '\n') {
-      ++line;
-      ++i;
-    } else if (std::isspace(static_cast<unsigned char>(c))) {
-      ++i;
-    } else if (c == '/' && i + 1 < n && s[i + 1] == '/') {
-      std::size_t e = s.find('\n', i);
-      if (e == std::string::npos) e = n;
-      out.push_back({Token::Kind::kLineComment, s.substr(i + 2, e - i - 2), line});
-      i = e;
-    } else if (c == '/' && i + 1 < n && s[i + 1] == '*') {
-      std::size_t e = s.find("*/", i + 2);
-      std::size_t stop = e == std::string::npos ? n : e;
-      Token t{Token::Kind::kBlockComment, s.substr(i + 2, stop - i - 2), line};
-      for (std::size_t k = i; k < stop; ++k) line += s[k] == '\n';
-      out.push_back(t);
-      i = e == std::string::npos ? n : e + 2;
+  const std::size_t n = s.size();
+  SourcePosition p;
+  for (SkipWhiteSpace(s, p); p.at < n; SkipWhiteSpace(s, p)) {
+    const std::size_t i = p.at;
+    const int line = p.line;
+    const char c = s[i];
+    std::string text;
+    if (SkipComment(s, p, &text)) {
+      out.push_back({s[i + 1] == '/' ? Token::Kind::kLineComment : Token::Kind::kBlockComment, text, line});
     } else if (c == '"') {
-      Token t{Token::Kind::kString, "", line};
-      ++i;
-      while (i < n && s[i] != '"') {
-        if (s[i] == '\\' && i + 1 < n) {
-          char e = s[i + 1];
-          t.text += e == 'n' ? '\n' : e == 't' ? '\t' : e == 'r' ? '\r' : e;
-          i += 2;
-        } else {
-          if (s[i] == '\n') ++line;
-          t.text += s[i++];
-        }
-      }
-      ++i;
-      out.push_back(t);
+      bool terminated = false;
+      text = ReadStringLiteral(s, p, terminated);
+      out.push_back({Token::Kind::kString, text, line});
     } else if (std::isdigit(static_cast<unsigned char>(c)) || (c == '.' && i + 1 < n && std::isdigit(static_cast<unsigned char>(s[i + 1])))) {
-      std::size_t b = i;
-      while (i < n && (std::isdigit(static_cast<unsigned char>(s[i])) || s[i] == '.')) ++i;
-      if (i < n && (s[i] == 'e' || s[i] == 'E')) {
-        std::size_t k = i + 1;
+      std::size_t e = i;
+      while (e < n && (std::isdigit(static_cast<unsigned char>(s[e])) || s[e] == '.')) ++e;
+      if (e < n && (s[e] == 'e' || s[e] == 'E')) {
+        std::size_t k = e + 1;
         if (k < n && (s[k] == '+' || s[k] == '-')) ++k;
         if (k < n && std::isdigit(static_cast<unsigned char>(s[k]))) {
-          i = k;
-          while (i < n && std::isdigit(static_cast<unsigned char>(s[i]))) ++i;
+          e = k;
+          while (e < n && std::isdigit(static_cast<unsigned char>(s[e]))) ++e;
         }
       }
-      out.push_back({Token::Kind::kNumber, s.substr(b, i - b), line});
+      out.push_back({Token::Kind::kNumber, s.substr(i, e - i), line});
+      p.at = e;
     } else if (std::isalpha(static_cast<unsigned char>(c)) || c == '_' || c == '$') {
-      std::size_t b = i;
-      while (i < n && (std::isalnum(static_cast<unsigned char>(s[i])) || s[i] == '_' || s[i] == '$')) ++i;
-      out.push_back({Token::Kind::kIdent, s.substr(b, i - b), line});
+      std::size_t e = i;
+      while (e < n && (std::isalnum(static_cast<unsigned char>(s[e])) || s[e] == '_' || s[e] == '$')) ++e;
+      out.push_back({Token::Kind::kIdent, s.substr(i, e - i), line});
+      p.at = e;
     } else {
       out.push_back({Token::Kind::kSymbol, std::string(1, c), line});
-      ++i;
+      ++p.at;
     }
   }
   return out;

@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "fabatlas/error.h"
+#include "fabatlas/scad/source_text.h"
 
 namespace fabatlas::scad {
 namespace {
@@ -18,20 +19,17 @@ namespace fs = std::filesystem;
 std::string WithoutComments(const std::string& t) {
   std::string out;
   out.reserve(t.size());
-  for (std::size_t i = 0; i < t.size(); ++i) {
-    if (t[i] == '"') {
-      const std::size_t start = i++;
-      while (i < t.size() && t[i] != '"') i += t[i] == '\\' ? 2 : 1;
-      out.append(t, start, std::min(i, t.size() - 1) - start + 1);
-    } else if (t.compare(i, 2, "//") == 0) {
-      while (i < t.size() && t[i] != '\n') ++i;
-      out += '\n';
-    } else if (t.compare(i, 2, "/*") == 0) {
-      const std::size_t end = t.find("*/", i + 2);
-      i = end == std::string::npos ? t.size() : end + 1;
-      out += ' ';
+  SourcePosition p;
+  while (p.at < t.size()) {
+    const std::size_t start = p.at;
+    if (t[start] == '"') {
+      bool terminated = false;
+      ReadStringLiteral(t, p, terminated);
+      out.append(t, start, p.at - start);
+    } else if (SkipComment(t, p)) {
+      if (t[start + 1] == '*') out += ' ';
     } else {
-      out += t[i];
+      out += t[p.at++];
     }
   }
   return out;
