@@ -80,18 +80,26 @@ MeshReport InspectMesh(const TriangleMesh& mesh, const InspectOptions& options) 
   const std::size_t nv_in = mesh.vertices.size();
   const std::int64_t nv_signed = static_cast<std::int64_t>(nv_in);
 
-  // 1. Merge vertices with bit-identical coordinates.
-  std::vector<std::int32_t> order(nv_in);
-  std::iota(order.begin(), order.end(), 0);
-  std::sort(order.begin(), order.end(), [&](std::int32_t a, std::int32_t b) {
-    return mesh.vertices[a] < mesh.vertices[b] || (mesh.vertices[a] == mesh.vertices[b] && a < b);
-  });
+  const bool topology_only = options.topology_only;
+
+  // 1. Merge vertices with bit-identical coordinates (topology_only: the
+  //    mesh's own indices).
   std::vector<std::int32_t> merged(nv_in);
+  std::iota(merged.begin(), merged.end(), 0);
   std::vector<std::array<double, 3>> points;
-  points.reserve(nv_in);
-  for (std::size_t k = 0; k < nv_in; ++k) {
-    if (k == 0 || mesh.vertices[order[k]] != mesh.vertices[order[k - 1]]) points.push_back(mesh.vertices[order[k]]);
-    merged[order[k]] = static_cast<std::int32_t>(points.size() - 1);
+  if (topology_only) {
+    points = mesh.vertices;
+  } else {
+    std::vector<std::int32_t> order(nv_in);
+    std::iota(order.begin(), order.end(), 0);
+    std::sort(order.begin(), order.end(), [&](std::int32_t a, std::int32_t b) {
+      return mesh.vertices[a] < mesh.vertices[b] || (mesh.vertices[a] == mesh.vertices[b] && a < b);
+    });
+    points.reserve(nv_in);
+    for (std::size_t k = 0; k < nv_in; ++k) {
+      if (k == 0 || mesh.vertices[order[k]] != mesh.vertices[order[k - 1]]) points.push_back(mesh.vertices[order[k]]);
+      merged[order[k]] = static_cast<std::int32_t>(points.size() - 1);
+    }
   }
   report.merged_vertices = static_cast<std::int64_t>(nv_in - points.size());
 
@@ -111,14 +119,15 @@ MeshReport InspectMesh(const TriangleMesh& mesh, const InspectOptions& options) 
     const auto& a = points[m[0]];
     const auto& b = points[m[1]];
     const auto& c = points[m[2]];
-    const bool flat = CGAL::collinear(Point(a[0], a[1], a[2]), Point(b[0], b[1], b[2]), Point(c[0], c[1], c[2]));
+    const bool flat = !topology_only &&
+                      CGAL::collinear(Point(a[0], a[1], a[2]), Point(b[0], b[1], b[2]), Point(c[0], c[1], c[2]));
     if (flat) ++report.degenerate_triangles;
     tris.push_back(m);
     collinear.push_back(flat ? 1 : 0);
   }
 
   // 3. Measures: bbox of used vertices, area, signed volume about the bbox centre.
-  if (!tris.empty()) {
+  if (!tris.empty() && !topology_only) {
     report.bbox_min = {INFINITY, INFINITY, INFINITY};
     report.bbox_max = {-INFINITY, -INFINITY, -INFINITY};
     for (const auto& t : tris) {
@@ -132,34 +141,47 @@ MeshReport InspectMesh(const TriangleMesh& mesh, const InspectOptions& options) 
   }
   std::array<double, 3> centre;
   for (int a = 0; a < 3; ++a) centre[a] = 0.5 * (report.bbox_min[a] + report.bbox_max[a]);
-  const TriangleMesh used{points, tris};
-  report.volume = EnclosedVolume(used, centre);
-  report.area = SurfaceArea(used, centre);
-
-  // 4. Edges: (lo, hi, forward?) per triangle side, sorted so equal edges are adjacent.
-  struct HalfEdge {
-    std::int32_t lo, hi;
-    bool forward;  // traversed lo -> hi
-    bool operator<(const HalfEdge& o) const { return lo != o.lo ? lo < o.lo : hi < o.hi; }
-  };
-  std::vector<HalfEdge> edges;
-  edges.reserve(tris.size() * 3);
-  for (const auto& t : tris) {
-    for (int k = 0; k < 3; ++k) {
-      const std::int32_t a = t[k], b = t[(k + 1) % 3];
-      edges.push_back({std::min(a, b), std::max(a, b), a < b});
-    }
+  if (!topology_only) {
+    const TriangleMesh used{points, tris};
+    report.volume = EnclosedVolume(used, centre);
+    report.area = SurfaceArea(used, centre);
   }
-  std::sort(edges.begin(), edges.end());
-  for (std::size_t i = 0; i < edges.size();) {
-    std::size_t j = i;
-    int forward = 0;
-    while (j < edges.size() && edges[j].lo == edges[i].lo && edges[j].hi == edges[i].hi) forward += edges[j++].forward;
-    const std::size_t n = j - i;
-    if (n == 1) ++report.border_edges;
-    else if (n > 2) ++report.non_manifold_edges;
-    else if (forward != 1) ++report.inconsistent_edges;
-    i = j;
+
+  // 4. Edges: the triangle sides (hi, forward?) listed under their lower
+  //    vertex lo (a bucket per vertex, then each short bucket sorted), so
+  //    equal edges are adjacent.
+  struct HalfEdge {
+    std::int32_t hi;
+    bool forward;  // traversed lo -> hi
+    bool operator<(const HalfEdge& o) const { return hi < o.hi; }
+  };
+  {
+    std::vector<std::int32_t> first(points.size() + 1, 0);
+    for (const auto& t : tris)
+      for (int k = 0; k < 3; ++k) ++first[std::min(t[k], t[(k + 1) % 3]) + 1];
+    std::partial_sum(first.begin(), first.end(), first.begin());
+    std::vector<HalfEdge> edges(first.back());
+    std::vector<std::int32_t> fill(first.begin(), first.end() - 1);
+    for (const auto& t : tris) {
+      for (int k = 0; k < 3; ++k) {
+        const std::int32_t a = t[k], b = t[(k + 1) % 3];
+        edges[fill[std::min(a, b)]++] = {std::max(a, b), a < b};
+      }
+    }
+    for (std::size_t v = 0; v < points.size(); ++v) {
+      const auto begin = edges.begin() + first[v], end = edges.begin() + first[v + 1];
+      std::sort(begin, end);
+      for (auto i = begin; i != end;) {
+        auto j = i;
+        int forward = 0;
+        while (j != end && j->hi == i->hi) forward += (j++)->forward;
+        const auto n = j - i;
+        if (n == 1) ++report.border_edges;
+        else if (n > 2) ++report.non_manifold_edges;
+        else if (forward != 1) ++report.inconsistent_edges;
+        i = j;
+      }
+    }
   }
 
   // 5. Vertex manifoldness: the faces around a vertex must form one fan
@@ -194,7 +216,7 @@ MeshReport InspectMesh(const TriangleMesh& mesh, const InspectOptions& options) 
   }
 
   // 6. Components: vertex-connected pieces.
-  {
+  if (!topology_only) {
     DisjointSets pieces(points.size());
     std::vector<char> used(points.size(), 0);
     for (const auto& t : tris) {
@@ -214,7 +236,9 @@ MeshReport InspectMesh(const TriangleMesh& mesh, const InspectOptions& options) 
     report.manifold_reason = "mesh has " + Plural(report.non_manifold_edges, "non-manifold edge") + " (3+ faces) and " +
                              Plural(report.non_manifold_vertices, "non-manifold vertex", "non-manifold vertices") + " (several fans)";
   }
-  if (!report.closed) {
+  if (topology_only) {
+    // outward not inspected: stays false, no reason
+  } else if (!report.closed) {
     report.outward = false;
     report.outward_reason = "orientation undefined: mesh is not closed";
   } else if (report.non_manifold_edges > 0) {
@@ -229,7 +253,7 @@ MeshReport InspectMesh(const TriangleMesh& mesh, const InspectOptions& options) 
   }
 
   // 7. Self-intersection (CGAL), on non-collinear triangles.
-  if (options.check_self_intersection && !tris.empty()) {
+  if (options.check_self_intersection && !topology_only && !tris.empty()) {
     std::vector<Point> soup_points;
     soup_points.reserve(points.size());
     for (const auto& p : points) soup_points.emplace_back(p[0], p[1], p[2]);

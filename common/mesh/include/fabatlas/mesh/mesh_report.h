@@ -16,6 +16,17 @@ struct InspectOptions {
   // Stop counting intersecting triangle pairs after this many; the count in the
   // report is then a lower bound (MeshReport::intersecting_pairs_capped).
   std::int64_t max_intersecting_pairs = 1000;
+  // Only the topology over the mesh's own vertex indices: border, non-manifold
+  // and inconsistently oriented edges, non-manifold vertices (so the verdicts
+  // closed and manifold). No merge of coincident vertices, no collinearity
+  // test, no measures (volume, area, bbox), no components, no orientation
+  // verdict (outward stays false, without a reason) and no self-intersection
+  // test. For meshes whose vertices are
+  // shared by index by construction (the level-set extraction,
+  // geometry::Solid::ToMesh): the watertight check's cheap guarantee on the
+  // sample's own surface. About 4x cheaper than the default path without
+  // self-intersections.
+  bool topology_only = false;
 };
 
 struct MeshReport {
