@@ -30,6 +30,7 @@
 #include "fabatlas/scad/model_files.h"
 #include "fabatlas/scad/primitive_mesh.h"
 #include "fabatlas/scad/region_distance.h"
+#include "fabatlas/scad/region_outline.h"
 #include "fabatlas/scad/svg_outline.h"
 #include "fabatlas/sha256.h"
 
@@ -123,6 +124,29 @@ bool PointInLoop(const scad::Point2& p, const Loop& loop) {
     if ((a[1] > p[1]) != (b[1] > p[1]) && p[0] < (b[0] - a[0]) * (p[1] - a[1]) / (b[1] - a[1]) + a[0]) inside = !inside;
   }
   return inside;
+}
+
+// Whether p lies in the shape: an odd number of a loop set's loops, then the booleans.
+bool Inside(const Shape2& s, const scad::Point2& p) {
+  if (s.op == Shape2::Op::kLoops) {
+    bool in = false;
+    for (const auto& l : s.loops) in ^= PointInLoop(p, l);
+    return in;
+  }
+  if (s.parts.empty()) return false;
+  bool in = Inside(s.parts[0], p);
+  for (std::size_t i = 1; i < s.parts.size(); ++i) {
+    const bool x = Inside(s.parts[i], p);
+    if (s.op == Shape2::Op::kUnion) in = in || x;
+    else if (s.op == Shape2::Op::kDifference) in = in && !x;
+    else in = in && x;
+  }
+  return in;
+}
+
+void CollectLoops(const Shape2& s, std::vector<Loop>& out) {
+  out.insert(out.end(), s.loops.begin(), s.loops.end());
+  for (const auto& p : s.parts) CollectLoops(p, out);
 }
 
 void CollectPoints(const Shape2& s, std::vector<scad::Point2>& out) {
@@ -659,14 +683,29 @@ class CsgEvaluation {
           scale = {Num(it->second, 1), Num(it->second, 1)};
         }
       }
-      int slices = static_cast<int>(n.Number("slices", 0));
-      if (slices <= 0)
-        slices = twist == 0 ? 1 : std::max(1, static_cast<int>(std::ceil(FragmentsOf(n, MaxX(s)) * std::abs(twist) / 360)));
       const bool center = n.Boolean("center", false);
       if (twist == 0 && scale[0] == 1 && scale[1] == 1)
         if (std::optional<Result> prism = Prism(s, h, center, m)) return *prism;
-      return {Extruded(s, [&](const Loop& l) { return scad::LinearExtrudeMesh(l, h, center, twist, slices, scale); }, m),
-              nullptr, ""};
+      // Twisted or scaled: the walls are built from the outline of the whole
+      // 2D child, as OpenSCAD builds them (a twisted wall's triangles are not
+      // those of its loops' own extrusions, so their 3D booleans differ).
+      std::vector<Loop> loops;
+      CollectLoops(s, loops);
+      const scad::Region2 region = scad::ResolveRegion(loops, [&](const scad::Point2& p) { return Inside(s, p); });
+      if (region.triangles.empty()) return {};
+      double r_sqr = 0, delta_sqr = 0;
+      for (const auto& loop : region.loops)
+        for (int i : loop) {
+          const scad::Point2& p = region.points[i];
+          r_sqr = std::max(r_sqr, p[0] * p[0] + p[1] * p[1]);
+          const double dx = p[0] * (1 - scale[0]), dy = p[1] * (1 - scale[1]);
+          delta_sqr = std::max(delta_sqr, dx * dx + dy * dy);
+        }
+      int slices = static_cast<int>(n.Number("slices", 0));
+      if (slices <= 0)
+        slices = scad::ExtrudeSlices(r_sqr, delta_sqr, h, twist, scale, n.Number("$fn", 0), n.Number("$fs", 2),
+                                     n.Number("$fa", 12));
+      return {FromMesh(scad::LinearExtrudeMesh(region, h, center, twist, slices, scale), m), nullptr, ""};
     }
     if (n.name == "rotate_extrude") {
       Shape2 s;

@@ -163,31 +163,88 @@ std::vector<std::array<int, 3>> TriangulateLoop(const Loop& loop) {
   return tris;
 }
 
-TriangleMesh LinearExtrudeMesh(const Loop& loop, double height, bool center, double twist, int slices,
+TriangleMesh LinearExtrudeMesh(const Region2& region, double height, bool center, double twist, int slices,
                                const Point2& scale) {
   TriangleMesh m;
-  const int n = static_cast<int>(loop.size());
+  const int n = static_cast<int>(region.points.size());
   slices = std::max(1, slices);
   const double z0 = center ? -height / 2 : 0;
+  // Layer s: rotated by -twist * s / slices, then scaled (OpenSCAD's order).
   for (int s = 0; s <= slices; ++s) {
     const double t = static_cast<double>(s) / slices;
     const double a = -twist * t;  // positive twist turns clockwise going up
     const double sx = 1 + (scale[0] - 1) * t, sy = 1 + (scale[1] - 1) * t;
-    for (const Point2& p : loop) {
-      const double x = p[0] * sx, y = p[1] * sy;
-      m.vertices.push_back({x * CosDeg(a) - y * SinDeg(a), x * SinDeg(a) + y * CosDeg(a), z0 + height * t});
-    }
+    for (const Point2& p : region.points)
+      m.vertices.push_back({sx * (CosDeg(a) * p[0] - SinDeg(a) * p[1]), sy * (SinDeg(a) * p[0] + CosDeg(a) * p[1]),
+                            z0 + height * t});
   }
-  const auto tris = TriangulateLoop(loop);
-  AddCap(m, tris, 0, true);
-  AddCap(m, tris, slices * n, false);
-  for (int s = 0; s < slices; ++s)
-    for (int i = 0; i < n; ++i) {
-      const int j = (i + 1) % n;
-      m.triangles.push_back({s * n + i, s * n + j, (s + 1) * n + j});
-      m.triangles.push_back({s * n + i, (s + 1) * n + j, (s + 1) * n + i});
-    }
+  AddCap(m, region.triangles, 0, true);
+  AddCap(m, region.triangles, slices * n, false);
+  auto squared = [&](int i, int j) {
+    const auto& u = m.vertices[i];
+    const auto& v = m.vertices[j];
+    return (u[0] - v[0]) * (u[0] - v[0]) + (u[1] - v[1]) * (u[1] - v[1]);
+  };
+  for (const auto& loop : region.loops) {
+    const int k = static_cast<int>(loop.size());
+    Loop points;
+    for (int i : loop) points.push_back(region.points[i]);
+    // Equal diagonals (an edge on a line through the axis): OpenSCAD splits
+    // along the one from the edge's end up to its start when the twist is
+    // negative, the other one when positive, and the other way round on holes.
+    const bool tie_end_up = (twist < 0) != (SignedArea(points) < 0);
+    for (int s = 0; s < slices; ++s)
+      for (int i = 0; i < k; ++i) {
+        const int p1 = s * n + loop[i], c1 = s * n + loop[(i + 1) % k];  // this layer: previous, current vertex
+        const int p2 = p1 + n, c2 = c1 + n;                                 // the layer above
+        const double d_c1p2 = squared(c1, p2), d_p1c2 = squared(p1, c2);
+        const double tolerance = 1e-9 * std::max(d_c1p2, d_p1c2);
+        const bool end_up = std::abs(d_c1p2 - d_p1c2) <= tolerance ? tie_end_up : d_c1p2 < d_p1c2;
+        if (end_up) {
+          m.triangles.push_back({p1, c1, p2});
+          m.triangles.push_back({c1, c2, p2});
+        } else {
+          m.triangles.push_back({p1, c1, c2});
+          m.triangles.push_back({p1, c2, p2});
+        }
+      }
+  }
   return m;
+}
+
+int ExtrudeSlices(double r_sqr, double delta_sqr, double height, double twist, const Point2& scale, double fn,
+                  double fs, double fa) {
+  constexpr double kFine = 1e-8;  // OpenSCAD's GRID_FINE
+  twist = std::abs(twist);
+  const bool uniform = scale[0] == scale[1];
+  auto diagonal = [&] {
+    if (std::sqrt(delta_sqr) < kFine || !std::isfinite(fn)) return 1;
+    if (fn > 0) return std::max(static_cast<int>(fn), 1);
+    return std::max(static_cast<int>(std::ceil(std::sqrt(delta_sqr + height * height) / fs)), 1);
+  };
+  if (twist == 0) return uniform ? 1 : diagonal();
+  auto twisted = [&] {
+    const int min_slices = std::max(static_cast<int>(std::ceil(twist / 120)), 1);
+    const double r = std::sqrt(r_sqr);
+    if (r < kFine || !std::isfinite(fn)) return min_slices;
+    if (fn > 0) return std::max(static_cast<int>(std::ceil(twist * fn / 360)), min_slices);
+    const double rad = twist * std::numbers::pi / 180;
+    double length;  // of the path the outermost vertex follows
+    if (!uniform || scale[0] == 1) {
+      const double c = height / rad;  // a helix
+      length = rad * std::sqrt(r_sqr + c * c);
+    } else {  // a conical spiral: a section of an Archimedes spiral, then the height
+      const double sc = scale[0];
+      const double end = sc > 1 ? rad * sc / (sc - 1) : rad / (1 - sc), start = end - rad;
+      const double a = r / end;
+      auto arc = [&](double th) { return 0.5 * a * (th * std::sqrt(1 + th * th) + std::asinh(th)); };
+      const double spiral = arc(end) - arc(start);
+      length = std::sqrt(spiral * spiral + height * height);
+    }
+    const int by_fa = static_cast<int>(std::ceil(twist / fa)), by_fs = static_cast<int>(std::ceil(length / fs));
+    return std::max(std::min(by_fa, by_fs), min_slices);
+  };
+  return uniform ? twisted() : std::max(twisted(), diagonal());
 }
 
 TriangleMesh RotateExtrudeMesh(const Loop& loop, double angle, int fragments) {
