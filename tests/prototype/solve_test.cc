@@ -162,6 +162,13 @@ TEST(PrototypeSolve, BadInputNamesThePlace) {
     EXPECT_NE(std::string(e.what()).find("bad.yaml:4:"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("unknown part 'b'"), std::string::npos) << e.what();
   }
+  // A missing key has no line of its own: the error names the file alone.
+  try {
+    ParsePrototype("parts:\n  a: {box: [0, 1, 0, 1, 0, 1]}\njoints:\n  j: {child: a, parent: a}\n", "bad.yaml");
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()).rfind("bad.yaml: ", 0), 0u) << e.what();
+  }
   EXPECT_THROW(LoadPrototype(Example("cabinet"), {{"no_such", 1}}), InputError);
   EXPECT_THROW(ParsePrototype("parts:\n  a: {box: [0, 1, 0, 1, 1, 0]}\n", "x.yaml"), InputError);
 }

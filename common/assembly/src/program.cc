@@ -7,6 +7,7 @@
 
 #include "connector_frames.h"
 #include "fabatlas/assembly/frame.h"
+#include "fabatlas/yaml_place.h"
 
 #include "yaml_errors.h"
 
@@ -120,8 +121,7 @@ Program Build(const YAML::Node& root, const std::string& file, std::string libra
     if (!c.IsMap() || !((c["attach"] && c["to"]) || (c["connect"] && c["with"])))
       Fail(file, c, "a step is {attach: part.primitive, to: part.primitive} or {connect: ..., with: ...}");
     Connection con;
-    const auto m = c.Mark();
-    con.where = file + ":" + std::to_string(m.line + 1) + ":" + std::to_string(m.column + 1);
+    con.where = YamlPlace(file, c.Mark()).str();
     con.closing = static_cast<bool>(c["connect"]);
     for (const auto& kv : c) {
       const std::string k = kv.first.as<std::string>();
@@ -227,8 +227,7 @@ Program ParseProgram(const std::string& text, const std::string& name, const std
   try {
     root = YAML::Load(text);
   } catch (const YAML::Exception& e) {
-    throw InputError(name + ":" + std::to_string(e.mark.line + 1) + ":" + std::to_string(e.mark.column + 1) + ": " +
-                     e.msg);
+    FailAt(YamlPlace(name, e.mark), e.msg);
   }
   return Build(root, name, library_path, mesh_dir);
 }

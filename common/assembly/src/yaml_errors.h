@@ -6,12 +6,12 @@
 #include <yaml-cpp/yaml.h>
 
 #include "fabatlas/error.h"
+#include "fabatlas/yaml_place.h"
 
 namespace fabatlas::assembly::internal {
 
 [[noreturn]] inline void Fail(const std::string& file, const YAML::Node& n, const std::string& msg) {
-  const auto m = n.Mark();
-  throw InputError(file + ":" + std::to_string(m.line + 1) + ":" + std::to_string(m.column + 1) + ": " + msg);
+  FailAt(YamlPlace(file, n.Mark()), msg);
 }
 
 inline YAML::Node LoadYamlFile(const std::string& file) {
@@ -20,8 +20,7 @@ inline YAML::Node LoadYamlFile(const std::string& file) {
   } catch (const YAML::BadFile&) {
     throw InputError(file + ": cannot open file");
   } catch (const YAML::Exception& e) {
-    throw InputError(file + ":" + std::to_string(e.mark.line + 1) + ":" + std::to_string(e.mark.column + 1) +
-                     ": " + e.msg);
+    FailAt(YamlPlace(file, e.mark), e.msg);
   }
 }
 

@@ -11,14 +11,10 @@
 #include "expression.h"
 #include "fabatlas/design/design.h"
 #include "fabatlas/error.h"
+#include "fabatlas/yaml_place.h"
 #include "node_schema.h"
 
 namespace fabatlas::design {
-
-std::string SourcePlace::str() const {
-  if (line <= 0) return file;
-  return file + ":" + std::to_string(line) + ":" + std::to_string(column);
-}
 
 const ExposedParameter* Design::FindExposed(const std::string& name) const {
   for (const auto& p : exposed)
@@ -44,18 +40,10 @@ class Reader {
  public:
   explicit Reader(std::string file) : file_(std::move(file)) {}
 
-  SourcePlace At(const YAML::Node& n) const {
-    YAML::Mark m = n.Mark();
-    if (m.is_null()) return {file_, 0, 0};
-    return {file_, m.line + 1, m.column + 1};
-  }
+  SourcePlace At(const YAML::Node& n) const { return YamlPlace(file_, n.Mark()); }
 
-  [[noreturn]] void Fail(const YAML::Node& n, const std::string& what) const {
-    throw InputError(At(n).str() + ": " + what);
-  }
-  [[noreturn]] void Fail(const SourcePlace& p, const std::string& what) const {
-    throw InputError(p.str() + ": " + what);
-  }
+  [[noreturn]] void Fail(const YAML::Node& n, const std::string& what) const { FailAt(At(n), what); }
+  [[noreturn]] void Fail(const SourcePlace& p, const std::string& what) const { FailAt(p, what); }
 
   std::string String(const YAML::Node& n, const std::string& what) const {
     if (!n.IsScalar()) Fail(n, what + " must be a single value");
@@ -414,8 +402,7 @@ Design ParseDesign(const std::string& text, const std::filesystem::path& path) {
   try {
     root = YAML::Load(d.canonical_text);
   } catch (const YAML::Exception& e) {
-    throw InputError(file + ":" + std::to_string(e.mark.line + 1) + ":" + std::to_string(e.mark.column + 1) +
-                     ": malformed YAML: " + e.msg);
+    FailAt(YamlPlace(file, e.mark), "malformed YAML: " + e.msg);
   }
   if (!root.IsMap()) throw InputError(file + ": a design file must be a YAML map (name, parameters, tree, ...)");
   r.OnlyKeys(root, {"name", "voxel_size", "parameters", "variables", "constraints", "tree", "checks", "properties", "description",

@@ -8,6 +8,7 @@
 
 #include "affine.h"
 #include "fabatlas/error.h"
+#include "fabatlas/yaml_place.h"
 #include "fabatlas/prototype/prototype.h"
 
 namespace fabatlas::prototype {
@@ -20,11 +21,8 @@ class Reader {
   Reader(const std::string& file, const std::map<std::string, double>& overrides)
       : file_(file), overrides_(overrides) {}
 
-  std::string Where(const YAML::Node& n) const {
-    auto m = n.Mark();
-    return file_ + ":" + std::to_string(m.line + 1) + ":" + std::to_string(m.column + 1);
-  }
-  [[noreturn]] void Fail(const YAML::Node& n, const std::string& msg) const { throw InputError(Where(n) + ": " + msg); }
+  std::string Where(const YAML::Node& n) const { return YamlPlace(file_, n.Mark()).str(); }
+  [[noreturn]] void Fail(const YAML::Node& n, const std::string& msg) const { FailAt(YamlPlace(file_, n.Mark()), msg); }
 
   void Keys(const YAML::Node& n, const std::set<std::string>& allowed, const std::string& what) const {
     if (!n.IsMap()) Fail(n, what + " must be a map");
@@ -350,14 +348,12 @@ Prototype ParsePrototype(const std::string& text, const std::string& file,
   try {
     root = YAML::Load(text);
   } catch (const YAML::Exception& e) {
-    throw InputError(file + ":" + std::to_string(e.mark.line + 1) + ":" + std::to_string(e.mark.column + 1) + ": " +
-                     e.msg);
+    FailAt(YamlPlace(file, e.mark), e.msg);
   }
   try {
     return Reader(file, overrides).Read(root);
   } catch (const YAML::Exception& e) {
-    throw InputError(file + ":" + std::to_string(e.mark.line + 1) + ":" + std::to_string(e.mark.column + 1) + ": " +
-                     e.msg);
+    FailAt(YamlPlace(file, e.mark), e.msg);
   }
 }
 

@@ -8,15 +8,14 @@
 #include <yaml-cpp/yaml.h>
 
 #include "fabatlas/error.h"
+#include "fabatlas/yaml_place.h"
 
 namespace fabatlas::sampling {
 
 namespace {
 
 [[noreturn]] void Fail(const std::string& path, const YAML::Mark& mark, const std::string& msg) {
-  if (mark.line < 0) throw InputError(path + ": " + msg);
-  throw InputError(path + ":" + std::to_string(mark.line + 1) + ":" + std::to_string(mark.column + 1) +
-                   ": " + msg);
+  FailAt(YamlPlace(path, mark), msg);
 }
 
 std::string Scalar(const std::string& path, const YAML::Node& node, const std::string& what) {

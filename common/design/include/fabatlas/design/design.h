@@ -13,15 +13,12 @@
 #include <string>
 #include <vector>
 
+#include "fabatlas/source_place.h"
+
 namespace fabatlas::design {
 
 // Where something was written: "file:line:col" for messages.
-struct SourcePlace {
-  std::string file;
-  int line = 0;    // 1-based; 0 = unknown
-  int column = 0;  // 1-based
-  std::string str() const;
-};
+using ::fabatlas::SourcePlace;
 
 enum class ParameterKind { kReal, kInteger, kEnumerated };
 
