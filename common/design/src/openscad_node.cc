@@ -27,6 +27,7 @@
 #include "fabatlas/geometry/convex_mesh_distance.h"
 #include "fabatlas/scad/csg_tree.h"
 #include "fabatlas/scad/customizer.h"
+#include "fabatlas/scad/evaluate_model.h"
 #include "fabatlas/scad/model_files.h"
 #include "fabatlas/scad/primitive_mesh.h"
 #include "fabatlas/scad/region_distance.h"
@@ -945,13 +946,21 @@ OpenScadNodeResult EvaluateOpenScadNode(const Node& node, const ResolvedArgs& ar
   const bool native = args.Text("render", "native") == "native";
   const fs::path out = work.path / (native ? "model.csg" : "model.stl");
   scad::OpenScadRun run;
-  try {
-    if (!scad::RunOpenScad(model, out, overrides, &run))
-      throw SampleFailure(kNoGeometry, node.place.str() + ": openscad failed: " + run.log_tail);
-  } catch (const SampleFailure&) {
-    throw;
-  } catch (const InputError& e) {
-    throw DesignFault(node.place.str() + ": " + e.what());
+  // The CSG tree from fabatlas's own evaluation of the model where it
+  // implements the model's language (evaluate_model.h), else OpenSCAD's export.
+  scad::ModelEvaluation own;
+  if (native) own = scad::EvaluateModel(model, overrides);
+  if (own.evaluated) {
+    run.seconds = own.seconds;
+  } else {
+    try {
+      if (!scad::RunOpenScad(model, out, overrides, &run))
+        throw SampleFailure(kNoGeometry, node.place.str() + ": openscad failed: " + run.log_tail);
+    } catch (const SampleFailure&) {
+      throw;
+    } catch (const InputError& e) {
+      throw DesignFault(node.place.str() + ": " + e.what());
+    }
   }
   OpenScadNodeResult result;
   result.export_seconds = run.seconds;
@@ -969,8 +978,8 @@ OpenScadNodeResult EvaluateOpenScadNode(const Node& node, const ResolvedArgs& ar
     result.solid = geometry::FromMesh(context.grid, m);
     return result;
   }
-  std::string text;
-  {
+  std::string text = std::move(own.csg);
+  if (!own.evaluated) {
     std::ifstream in(out, std::ios::binary);
     std::stringstream ss;
     ss << in.rdbuf();

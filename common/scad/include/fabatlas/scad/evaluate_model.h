@@ -1,0 +1,61 @@
+// fabatlas/scad/evaluate_model.h — a Customizer model's evaluated CSG tree
+// computed by fabatlas itself, without starting OpenSCAD: the text OpenSCAD
+// 2021.01's `openscad -o model.csg -D name=value ... model.scad` writes, for
+// the language subset such models use. Whatever the evaluator does not
+// implement makes it decline (never guess), and the caller asks OpenSCAD.
+//
+// The subset (OpenSCAD User Manual, "The OpenSCAD Language"):
+//  - assignments (evaluated before the instantiations of their scope, as
+//    OpenSCAD does), numbers, strings, booleans, undef, vectors, ranges
+//    (`[a:b]`, `[a:s:b]`, OpenSCAD's count rule; `[a:b]` with a > b runs from b
+//    to a, OpenSCAD's deprecated behaviour), list comprehensions (`for`,
+//    `if`/`else`, `let`, `each`), `?:`, `let`, indexing and `.x/.y/.z`, the
+//    arithmetic of numbers, vectors and matrices, comparisons and logic;
+//  - `module` and `function` definitions with parameters and defaults,
+//    `children()`, `children(i)`, `$children`; `$`-variables scoped
+//    dynamically, the others lexically; `for`, `if`/`else`, `let` statements;
+//    `*` (disabled) statements; `echo` (ignored), `assert`;
+//  - built-in functions: trigonometry in degrees (exact at multiples of 30
+//    and 45 as OpenSCAD's), abs, sign, sqrt, pow, exp, ln, log, floor, ceil,
+//    round, min, max, norm, cross, len, concat, str (of strings and whole
+//    numbers), chr, ord, lookup, is_undef/is_num/is_bool/is_string/is_list;
+//  - built-in modules: cube, sphere, cylinder, polyhedron, square, circle,
+//    polygon, text (ASCII), translate, rotate, scale, mirror, multmatrix,
+//    color (as a vector), union, difference, intersection, hull, group,
+//    render, linear_extrude, rotate_extrude.
+// Declined (the caller falls back to OpenSCAD's own export): include/use,
+// import, surface, minkowski, offset, projection, resize, intersection_for,
+// colour names, `!`/`#`/`%` modifiers, function literals, rands/search, any
+// operation on undef or of mismatched types (OpenSCAD warns and goes on with
+// undef), a variable assigned twice in one scope, recursion deeper than
+// 10,000 calls, loops of more than 1,000,000 iterations, a failed assert.
+//
+// Numbers are written as OpenSCAD writes them (6 significant digits, C's %g),
+// so an equal tree gives equal text and equal subtree keys.
+#pragma once
+
+#include <filesystem>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace fabatlas::scad {
+
+struct ModelEvaluation {
+  bool evaluated = false;  // false: the evaluator declined; ask OpenSCAD
+  std::string csg;         // the .csg text (when evaluated)
+  std::string declined;    // why not, "MODEL.scad:LINE: what" (when declined)
+  double seconds = 0;      // wall time of reading, parsing and evaluating
+};
+
+// Evaluates `model` with the top-level assignments of `overrides` (name,
+// OpenSCAD literal, as `-D name=literal` passes them) replaced or added.
+// Never throws for any model text; thread-safe (no shared state).
+ModelEvaluation EvaluateModel(const std::filesystem::path& model,
+                              const std::vector<std::pair<std::string, std::string>>& overrides);
+
+// The same for model text in memory (`file` names it in `declined`).
+ModelEvaluation EvaluateModelText(const std::string& text, const std::string& file,
+                                  const std::vector<std::pair<std::string, std::string>>& overrides);
+
+}  // namespace fabatlas::scad

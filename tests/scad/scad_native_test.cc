@@ -1,0 +1,210 @@
+// fabatlas's own evaluation of OpenSCAD models (evaluate_model.h) against
+// OpenSCAD 2021.01's `.csg` export of the same model at the same values: the
+// same text, byte for byte, for the tray, sign.scad, candleStand.scad, the
+// Fab Forms example models, the Customizer files of the import tests and
+// every Debian example the evaluator takes; models it does not take are
+// declined naming the line, and then OpenSCAD's export is used (the
+// fallback path, exercised through the openscad node).
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "fabatlas/design/evaluate_sample.h"
+#include "fabatlas/scad/csg_tree.h"
+#include "fabatlas/scad/evaluate_model.h"
+#include "fabatlas/testing/paths.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+namespace scad = fabatlas::scad;
+namespace design = fabatlas::design;
+using Overrides = std::vector<std::pair<std::string, std::string>>;
+
+std::string Read(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+// OpenSCAD's own export of `model` with `overrides`.
+std::string OpenScadCsg(const fs::path& model, const Overrides& overrides, const fs::path& dir) {
+  const fs::path out = dir / "peer.csg";
+  fs::remove(out);
+  scad::OpenScadRun run;
+  EXPECT_TRUE(scad::RunOpenScad(model, out, overrides, &run)) << model << ": " << run.log_tail;
+  return Read(out);
+}
+
+void ExpectSameAsOpenScad(const fs::path& model, const Overrides& overrides, const fs::path& dir) {
+  const scad::ModelEvaluation own = scad::EvaluateModel(model, overrides);
+  std::string at;
+  for (const auto& [k, v] : overrides) at += " -D " + k + "=" + v;
+  ASSERT_TRUE(own.evaluated) << model << at << ": " << own.declined;
+  EXPECT_EQ(own.csg, OpenScadCsg(model, overrides, dir)) << model << at;
+}
+
+const fs::path kExamples = "/usr/share/openscad/examples";
+
+TEST(ScadNative, TrayCandleStandSignAndTheExampleModelsAreOpenScadsExport) {
+  const fs::path dir = fabatlas::testing::FreshTempDir("scad-native");
+  const fs::path source = fabatlas::testing::SourceDir();
+  const fs::path tray = source / "configs/scad/tray.scad";
+  ExpectSameAsOpenScad(tray, {}, dir);
+  // holes = 0: OpenSCAD's [0 : -1] runs from -1 to 0 (its deprecated swap).
+  ExpectSameAsOpenScad(tray, {{"holes", "0"}, {"shape", "\"square\""}, {"wall", "0.4"}, {"width", "120"}}, dir);
+  ExpectSameAsOpenScad(tray, {{"holes", "8"}, {"wall", "5.8"}, {"width", "31"}}, dir);
+  const fs::path candle = kExamples / "Parametric/candleStand.scad";
+  ExpectSameAsOpenScad(candle, {}, dir);
+  ExpectSameAsOpenScad(candle, {{"count", "3"}, {"length", "70"}}, dir);
+  ExpectSameAsOpenScad(candle, {{"count", "14"}, {"centerCandle", "false"}}, dir);
+  const fs::path sign = kExamples / "Parametric/sign.scad";
+  ExpectSameAsOpenScad(sign, {}, dir);
+  ExpectSameAsOpenScad(sign, {{"Message", "\"Thank You\""}, {"resolution", "30"}, {"radius", "123"}}, dir);
+  for (const char* model : {"yinyang_handle.scad", "toy_car_wheel.scad", "holey_vase_holes.scad"})
+    ExpectSameAsOpenScad(source / "configs/scad" / model, {}, dir);
+}
+
+// The language the evaluator implements, each form against OpenSCAD: scopes
+// (assignments before instantiations, $-variables dynamic), modules with
+// defaults and children, functions with recursion, list comprehensions,
+// ranges, if/else, let, vector and matrix arithmetic, the built-in modules.
+TEST(ScadNative, LanguageFormsAreOpenScadsExport) {
+  const fs::path dir = fabatlas::testing::FreshTempDir("scad-native-forms");
+  const char* programs[] = {
+      // scopes: use before assignment at the top, $fn in a child block, in a module, passed as an argument
+      "cylinder(h, r);\nh = 3; r = 2;\ndifference() { $fn = 12; cylinder(h = 2, r = 3); sphere(1); }\n"
+      "module m(a, b = 2) { $fa = 5; cube([a, b, 1]); children(); children(1); }\n"
+      "m(1) { sphere(2); cylinder(r = 1, h = 2, $fn = 7); }\nm(b = 4, a = 2, $fs = 0.5) sphere(1);\n",
+      // children and $children through two modules, children(i) out of range
+      "module ring(n) for (a = [0 : n - 1]) rotate(a * 360 / n) translate([5, 0]) children();\n"
+      "module both() { ring(5) children(0); echo($children); children(3); }\nboth() { cube(1); sphere(1); }\n",
+      // functions, recursion, comprehensions, ranges, let, ?:, lookup, str, len, concat
+      "function fact(n) = n <= 1 ? 1 : n * fact(n - 1);\nfunction pts(n, r) = [for (i = [0 : n - 1]) "
+      "let(a = i * 360 / n) r * [cos(a), sin(a)]];\nv = [for (i = [1:3]) i * 2, each [7, 8], if (true) 9 else 10, "
+      "for (i = [10 : -3 : 0]) if (i % 2 == 0) i];\nlinear_extrude(height = fact(3), twist = 30, slices = 4) "
+      "polygon(pts(7, 4));\ntranslate([len(v), v[3], lookup(2.5, [[1, 10], [2, 20], [3, 40]])]) cube(concat([1], [2, 3]));\n"
+      "text(str(\"n\", 12, \"x\"), size = 4, halign = \"center\");\nfor (i = [0 : 0.25 : 1], j = [1, 2]) "
+      "translate([i, j, 0]) cube(0.1);\n",
+      // if/else chains, let statements, disabled statements, matrices, mirror, scale, multmatrix, colour
+      "a = 3;\nif (a > 5) cube(1); else if (a > 2) sphere(a); else cylinder(1);\nif (false) cube(9);\n"
+      "let (b = a * 2) translate([b, 0, 0]) cube(b);\n*cube(100);\nm = [[1, 2], [3, 4]] * [[0, 1], [1, 0]];\n"
+      "translate(m[0] * 2) mirror([1, 1, 0]) scale([1, 2]) color([0.5, 0.2, 0.1], 0.5) cube(1);\n"
+      "multmatrix([[1, 0.2, 0, 1], [0, 1, 0, 2], [0, 0, 1, 3]]) rotate(33, [1, 1, 0]) rotate([90, 45, 30]) cube(2);\n"
+      "rotate_extrude(angle = 270, $fn = 24) translate([10, 0]) square([2, 3], center = true);\n"
+      "hull() { sphere(d = 3); translate([5, 0, 0]) cylinder(d1 = 2, d2 = 1, h = 3, center = true); }\n"
+      "intersection() { cube(5, center = true); sphere(3); }\nunion();\nrender() polyhedron(points = [[0, 0, 0], "
+      "[1, 0, 0], [0, 1, 0], [0, 0, 1]], faces = [[0, 1, 2], [0, 3, 1], [0, 2, 3], [1, 3, 2]]);\n"
+      "linear_extrude(5, scale = 0.5, center = true) circle(d = 4.5);\nx = 2 ^ 3 + -1 % 3;\ncube(x);\n",
+      // number text: nodes as C's %g, matrices and vectors OpenSCAD's own way (ties away from zero, 1e+6, 2.5e-7)
+      "translate([100.0625, 1e6, 2.5e-7]) cube([100.0625, 1e-5, 123456789]);\n"
+      "polygon([[1e6, 1e-5], [123456789, -2.5e-7], [0.0001, 100000], [-0.00012345678, 1234567]]);\n"
+      "// colours by name and hex, modifiers, offset, projection, convexity as a whole number\n"
+      "color(\"LightBlue\") cube(1);\ncolor(\"#ff000080\") sphere(1);\ncolor(\"red\", 0.5) cylinder(1);\n"
+      "%cube(2);\ntranslate([1, 0, 0]) #sphere(2);\n%if (true) cube(3);\n%for (i = [0 : 1]) cube(i);\n"
+      "offset(r = 1) square(1);\noffset(delta = 1, chamfer = true) square(1);\nprojection(cut = true) cube(1);\n"
+      "linear_extrude(height = 3, convexity = 3.7, slices = 2.5) circle(1);\n"
+      "// names starting with digits, echo and assert in expressions and as statements, 2D cross, str\n"
+      "function 3d(v) = [v.x, v.y, 0];\ny = echo(\"y\") assert(true) cross([1, 2], [3, 4]);\n"
+      "translate(3d([y, 2])) cube(1);\nassert(true);\nassert(true) cube(1);\necho(\"e\") cube(2);\n"
+      "text(str(\"6! = \", 720, \" \", 0.5));\n",
+  };
+  int k = 0;
+  for (const char* program : programs) {
+    const fs::path model = dir / ("form" + std::to_string(k++) + ".scad");
+    std::ofstream(model) << program;
+    ExpectSameAsOpenScad(model, {}, dir);
+  }
+}
+
+// Every example Debian's openscad ships: what the evaluator takes is
+// OpenSCAD's export; the rest is declined naming a line of the example.
+TEST(ScadNative, DebianExamplesTakenAreOpenScadsExportTheRestDeclined) {
+  const fs::path dir = fabatlas::testing::FreshTempDir("scad-native-examples");
+  int taken = 0, declined = 0;
+  std::vector<fs::path> models;
+  for (const auto& group : fs::directory_iterator(kExamples))
+    if (group.is_directory())
+      for (const auto& f : fs::directory_iterator(group.path()))
+        if (f.path().extension() == ".scad") models.push_back(f.path());
+  std::sort(models.begin(), models.end());
+  for (const fs::path& model : models) {
+    const scad::ModelEvaluation own = scad::EvaluateModel(model, {});
+    if (!own.evaluated) {
+      ++declined;
+      EXPECT_EQ(own.declined.rfind(model.string() + ":", 0), 0u) << own.declined;
+      continue;
+    }
+    ++taken;
+    EXPECT_EQ(own.csg, OpenScadCsg(model, {}, dir)) << model;
+  }
+  std::cout << taken << " of " << models.size() << " examples evaluated natively, " << declined << " declined\n";
+  EXPECT_GE(taken, 33);
+}
+
+TEST(ScadNative, WhatItDoesNotImplementIsDeclinedNamingTheLine) {
+  const std::pair<const char*, const char*> cases[] = {
+      {"cube(1);\nminkowski() { cube(1); sphere(1); }\n", "m.scad:2: module minkowski()"},
+      {"include <lib.scad>\ncube(1);\n", "m.scad:1: include <...>"},
+      {"\n!cube(1);\n", "m.scad:2: modifier '!'"},
+      {"a = undef;\ncube(a + 1);\n", "m.scad:2: operator + on these operands"},
+      {"color(\"notacolour\") cube(1);\n", "m.scad:1: colour 'notacolour'"},
+      {"text(\"\\u263A\");\n", "m.scad:1: a \\x or \\u escape"},
+      {"a = 1;\na = 2;\ncube(a);\n", "m.scad:2: 'a' assigned twice in one scope"},
+      {"cube(b);\n", "m.scad:1: unknown variable 'b'"},
+  };
+  for (const auto& [program, reason] : cases) {
+    const scad::ModelEvaluation own = scad::EvaluateModelText(program, "m.scad", {});
+    EXPECT_FALSE(own.evaluated) << program;
+    EXPECT_EQ(own.declined, reason) << program;
+  }
+}
+
+// The openscad node: a model the evaluator takes needs no OpenSCAD (it
+// evaluates with OpenSCAD off the PATH), one it declines is exported by
+// OpenSCAD (and without OpenSCAD fails saying so).
+TEST(ScadNative, TheOpenScadNodeFallsBackToOpenScadsExport) {
+  const fs::path dir = fabatlas::testing::FreshTempDir("scad-native-node");
+  std::ofstream(dir / "plain.scad") << "s = 10;\ncube(s);\n";
+  std::ofstream(dir / "rounded.scad") << "s = 10;\nminkowski() { cube(s - 2); sphere(1, $fn = 8); }\n";
+  auto load = [&](const char* model) {
+    std::ofstream(dir / "d.yaml") << "name: d\nvoxel_size: 0.25\nparameters: {s: {type: real, min: 4, max: 12, default: 10}}\n"
+                                  << "tree: {op: openscad, file: " << model << ", set: {s: s}}\nproperties: [volume]\n";
+    return design::LoadDesign(dir / "d.yaml");
+  };
+  auto volume = [&](const design::Design& d, bool* failed = nullptr) {
+    design::SampleResult r;
+    try {
+      r = design::EvaluateSample(d, design::ParsePoint(d, "s=8", "--at"), {});
+    } catch (const std::exception& e) {
+      if (failed) *failed = true;
+      return 0.0;
+    }
+    if (failed) *failed = !r.valid;
+    return r.valid ? r.solid.Volume() : 0.0;
+  };
+  const design::Design plain = load("plain.scad"), rounded = load("rounded.scad");
+  EXPECT_NEAR(volume(plain), 512, 5);
+  // minkowski of a 6 mm cube and a sphere of radius 1 (8 fragments): OpenSCAD renders it.
+  const double with_openscad = volume(rounded);
+  EXPECT_GT(with_openscad, 6 * 6 * 6 + 6 * 6 * 6);  // the cube and its faces pushed out by 1 mm
+  EXPECT_LT(with_openscad, 8 * 8 * 8);
+  const std::string path = std::getenv("PATH") ? std::getenv("PATH") : "";
+  setenv("PATH", (dir / "no-programs-here").c_str(), 1);
+  const design::Design plain_again = load("plain.scad");
+  EXPECT_NEAR(volume(plain_again), 512, 5);
+  const design::Design rounded_again = load("rounded.scad");
+  bool failed = false;
+  volume(rounded_again, &failed);
+  setenv("PATH", path.c_str(), 1);
+  EXPECT_TRUE(failed) << "the declined model evaluated without OpenSCAD";
+}
+
+}  // namespace
