@@ -132,6 +132,18 @@ ShapeDiameterSummary ShapeDiameter(const TriangleMesh& mesh, const ShapeDiameter
     for (int k = 0; k < 3; ++k) vb[3 * v + k] = static_cast<float>(mesh.vertices[v][k]);
   for (std::size_t f = 0; f < nf; ++f)
     for (int k = 0; k < 3; ++k) ib[3 * f + k] = static_cast<unsigned>(mesh.triangles[f][k]);
+  // The tree's build quality by the work it serves: with fewer than 8 rays
+  // per triangle (a stride sample of a large mesh: 4,000 faces x 30 rays
+  // against the tray's 83k triangles) Embree's quick Morton build (LOW) costs
+  // a third of the default's and the rays take no longer; with many rays per
+  // triangle the default (MEDIUM) tree pays. Hits are exact either way.
+  const std::size_t measured = options.max_faces > 0 && nf > static_cast<std::size_t>(options.max_faces)
+                                   ? static_cast<std::size_t>(options.max_faces)
+                                   : nf;
+  const RTCBuildQuality quality =
+      measured * static_cast<std::size_t>(options.rays) < 8 * nf ? RTC_BUILD_QUALITY_LOW : RTC_BUILD_QUALITY_MEDIUM;
+  rtcSetSceneBuildQuality(embree.scene, quality);
+  rtcSetGeometryBuildQuality(geometry, quality);
   rtcCommitGeometry(geometry);
   rtcAttachGeometry(embree.scene, geometry);
   rtcReleaseGeometry(geometry);
