@@ -4,9 +4,12 @@
   bench/scad/scad_bench.py speed [--repeats 3]   tray, sign.scad, candleStand.scad:
       OpenSCAD's own STL render wall time vs one fabatlas sample of
       `fabatlas eval MODEL.scad` (imported on the fly, automatic voxel):
-      geometry (.csg export + native CSG, timings.tree), the whole sample
-      (with the imported design's checks, timings.total) and the eval
-      process's wall time (import, model measurement, sample, mesh export);
+      geometry (the model's CSG tree, by fabatlas's own evaluation or
+      OpenSCAD's .csg export, + its level sets: timings.tree), the whole
+      sample (a worker's cost for one point: geometry, properties and the
+      imported design's checks, timings.total) and the eval process's wall
+      time (import, model measurement, sample, mesh export); then where the
+      whole sample goes (CSG tree, level sets, properties, each check);
       medians of --repeats, interleaved; volumes of OpenSCAD's STL, of the
       sample's `volume` property and of the mesh fabatlas exports.
   bench/scad/scad_bench.py coverage [--timeout 120]   every example Debian's
@@ -84,11 +87,13 @@ def speed(repeats):
     models = [os.path.join(ROOT, "configs/scad/tray.scad"),
               os.path.join(EXAMPLES, "Parametric/sign.scad"),
               os.path.join(EXAMPLES, "Parametric/candleStand.scad")]
+    breakdown = []
     print("| model | voxel mm | OpenSCAD STL wall s | fabatlas geometry s (ratio) | whole sample s (ratio) | eval process wall s | volume OpenSCAD / property (diff) / mesh (diff) mm^3 |")
     print("|---|---|---|---|---|---|---|")
     for model in models:
         name = os.path.basename(model)
         osc, geo, whole, walls = [], [], [], []
+        parts = {}  # where the whole sample goes: seconds per part, per run
         ref = os.path.join(tmp, name + ".ref.stl")
         ours = os.path.join(tmp, name + ".ours.stl")
         j = None
@@ -101,6 +106,15 @@ def speed(repeats):
             walls.append(w)
             geo.append(j["timings"]["tree"])
             whole.append(j["timings"]["total"])
+            tree = {r["op"]: r["seconds"] for r in j.get("subtrees", []) if r["op"] == "openscad"}
+            run_parts = {"CSG tree (native or .csg export)": tree.get("openscad", float("nan")),
+                         "level sets": j["timings"]["tree"] - tree.get("openscad", 0.0),
+                         "properties": j["timings"].get("properties", 0.0)}
+            for check, c in j["checks"].items():
+                if check not in ("geometry", "constraints"):
+                    run_parts[check] = c["seconds"]
+            for k, v in run_parts.items():
+                parts.setdefault(k, []).append(v)
         vo, vm, vp = volume(ref), volume(ours), j["properties"].get("volume", float("nan"))
         voxel = ""
         design = os.path.join(tmp, name + ".yaml")
@@ -110,6 +124,10 @@ def speed(repeats):
         mo, mg, mw, mp = (statistics.median(x) for x in (osc, geo, whole, walls))
         print(f"| {name} | {voxel} | {mo:.3f} | {mg:.3f} ({mg / mo:.2f}) | {mw:.3f} ({mw / mo:.2f}) | {mp:.3f} | "
               f"{vo:.1f} / {vp:.1f} ({pct(vp, vo):+.2f}%) / {vm:.1f} ({pct(vm, vo):+.2f}%) |", flush=True)
+        breakdown.append(f"{name}: " + ", ".join(f"{k} {statistics.median(v):.3f}" for k, v in parts.items()))
+    print("\nwhere the whole sample goes (medians, s):")
+    for line in breakdown:
+        print("- " + line)
     print(f"\nload average: {os.getloadavg()}")
 
 
