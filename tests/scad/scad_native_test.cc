@@ -160,6 +160,17 @@ TEST(ScadNative, WhatItDoesNotImplementIsDeclinedNamingTheLine) {
       {"a = 1;\na = 2;\ncube(a);\n", "m.scad:2: 'a' assigned twice in one scope"},
       {"cube(b);\n", "m.scad:1: unknown variable 'b'"},
   };
+  // Recursion: 100 levels of a function and of a module are evaluated, a
+  // million are declined within the evaluator's stack budget (no crash).
+  const std::string deep = "function f(n) = n <= 0 ? 0 : 1 + f(n - 1);\nmodule m(n) { if (n > 0) m(n - 1); else cube(f(N)); }\nm(N);\n";
+  auto depth = [&](const std::string& n) {
+    std::string p = deep;
+    for (std::size_t at; (at = p.find('N')) != std::string::npos;) p.replace(at, 1, n);
+    return scad::EvaluateModelText(p, "m.scad", {});
+  };
+  EXPECT_TRUE(depth("100").evaluated) << depth("100").declined;
+  EXPECT_NE(depth("100").csg.find("cube(size = [100, 100, 100]"), std::string::npos);
+  EXPECT_EQ(depth("1000000").declined, "m.scad:2: recursion deeper than the evaluator's stack budget");
   for (const auto& [program, reason] : cases) {
     const scad::ModelEvaluation own = scad::EvaluateModelText(program, "m.scad", {});
     EXPECT_FALSE(own.evaluated) << program;

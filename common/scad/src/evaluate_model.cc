@@ -5,6 +5,8 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdint>
+#include <cstddef>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -959,8 +961,22 @@ void Print(const CsgOut& n, int depth, std::string& out) {
 
 // ---------------------------------------------------------------- evaluator
 
+// The stack the evaluation may use: deep recursion in a model declines (and
+// OpenSCAD evaluates it) well before the smallest thread stack fabatlas runs
+// samples on (TBB's 4 MiB); about 2 KiB per level of a recursive function
+// or module.
+constexpr std::ptrdiff_t kStackBudget = 1024 * 1024;
+
 class Evaluator {
  public:
+  Evaluator() : stack_base_(reinterpret_cast<std::uintptr_t>(__builtin_frame_address(0))) {}
+
+  void Guard(int line) const {
+    const auto here = reinterpret_cast<std::uintptr_t>(__builtin_frame_address(0));
+    if (stack_base_ > here && static_cast<std::ptrdiff_t>(stack_base_ - here) > kStackBudget)
+      throw NotNative{line, "recursion deeper than the evaluator's stack budget"};
+  }
+
   // The statements of one scope: definitions first, then the assignments in
   // order, then the instantiations in order (OpenSCAD's rule).
   void Run(const std::vector<StmtPtr>& body, Scope& scope, std::vector<CsgOut>& out) {
@@ -981,6 +997,7 @@ class Evaluator {
   }
 
   Value Eval(const Expr& e, const Scope& scope) {
+    Guard(e.line);
     switch (e.kind) {
       case Expr::Kind::kNumber: return Value::Number(e.number);
       case Expr::Kind::kString: return Value::String(e.text);
@@ -1434,6 +1451,7 @@ class Evaluator {
   // ------------------------------------------------------------ statements
 
   void Instantiate(const Stmt& s, Scope& scope, std::vector<CsgOut>& out) {
+    Guard(s.line);
     if (!s.modifier.empty()) {
       Stmt plain = s;
       plain.modifier.clear();
@@ -1895,6 +1913,7 @@ class Evaluator {
 
   int depth_ = 0;
   long iterations_ = 0;
+  std::uintptr_t stack_base_;
 };
 
 }  // namespace
