@@ -137,6 +137,26 @@ TEST(ScadExampleJobs, ToyCarMatchesOpenScad) {
   ExpectVolume("toy_car", r.properties.at("volume"), OpenScadVolume(fabatlas::testing::FreshTempDir("scad-car"), program));
 }
 
+// The car's spokes: by the wheel model's geometry (openings of radius
+// 0.45 (rim - hub) centred at (rim + hub) / 2, rim = wheel radius - tyre
+// width, hub 4 mm) two openings leave (rim + hub) sin(pi / spokes) -
+// 0.9 (rim - hub) between them. At wheel radius 20 mm (tyre 7.5 mm) 6 spokes
+// are 0.60 mm wide, thinner than the design's 1.2 mm check, and fail it; 4
+// spokes are 4.3 mm wide and pass; at 30 mm 8 spokes would be -5.0 mm (the
+// openings merge and the hub falls off), which the design's constraints
+// reject. The spokes are under 1% of the car's surface, so this fails when
+// the check allows the default 1% of thin surface.
+TEST(ScadExampleJobs, ToyCarThinSpokesFailMinThickness) {
+  design::Design d = JobDesign("toy_car");
+  auto at = [&](const char* point) { return design::EvaluateSample(d, design::ParsePoint(d, point, "--at")); };
+  const design::SampleResult thin = at("length=110,wheel_radius=20,spokes=6,cabin_height=23");
+  EXPECT_NEAR(thin.values.at("spoke"), 0.60, 0.01);
+  EXPECT_EQ(thin.failure, design::kThinParts) << thin.failure_reason;
+  const design::SampleResult thick = at("length=110,wheel_radius=20,spokes=4,cabin_height=23");
+  EXPECT_TRUE(thick.valid) << thick.failure << ": " << thick.failure_reason;
+  EXPECT_EQ(at("length=110,wheel_radius=30,spokes=8,cabin_height=23").failure, design::kUnsatConstraints);
+}
+
 TEST(ScadExampleJobs, HoleyVaseMatchesOpenScad) {
   design::Design d = JobDesign("holey_vase");
   EXPECT_EQ(d.exposed.size(), 6u);  // Fab Forms Table 2
@@ -148,9 +168,11 @@ TEST(ScadExampleJobs, HoleyVaseMatchesOpenScad) {
       Values(r, {"sides", "base_r", "bulge_r", "bulge_z", "neck_r", "wall", "holes", "hole_r", "hole_z", "drill"}) +
       "module drills() { include <" + Model("holey_vase_holes.scad") +
       ">\n count = holes; radius = hole_r; reach = drill; }\n"
+      "off = wall / cos(180 / sides);  // the cavity's radial offset: `wall` across the flats\n"
       "difference() {\n"
       "  rotate([0, 0, 180]) rotate_extrude($fn = sides) polygon([[0, 0], [base_r, 0], [bulge_r, bulge_z], [neck_r, 100], [0, 100]]);\n"
-      "  rotate([0, 0, 180]) rotate_extrude($fn = sides) polygon([[0, 4], [base_r - wall, 4], [bulge_r - wall, bulge_z], [neck_r - wall, 102], [0, 102]]);\n"
+      "  rotate([0, 0, 180]) rotate_extrude($fn = sides) polygon([[0, 4], [base_r - off, 4], [bulge_r - off, bulge_z], [neck_r - off, 100],\n"
+      "    [neck_r - off + (neck_r - bulge_r) * 2 / (100 - bulge_z), 102], [0, 102]]);\n"
       "  translate([0, 0, hole_z]) drills();\n"
       "}\n";
   ExpectVolume("holey_vase", r.properties.at("volume"), OpenScadVolume(fabatlas::testing::FreshTempDir("scad-vase"), program));
