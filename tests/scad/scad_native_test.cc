@@ -171,6 +171,13 @@ TEST(ScadNative, WhatItDoesNotImplementIsDeclinedNamingTheLine) {
   EXPECT_TRUE(depth("100").evaluated) << depth("100").declined;
   EXPECT_NE(depth("100").csg.find("cube(size = [100, 100, 100]"), std::string::npos);
   EXPECT_EQ(depth("1000000").declined, "m.scad:2: recursion deeper than the evaluator's stack budget");
+  // Exponential work (2^40 calls) declines after a bounded number of steps.
+  EXPECT_EQ(scad::EvaluateModelText("function f(n) = n == 0 ? 1 : f(n - 1) + f(n - 1);\ncube(f(40));\n", "m.scad", {}).declined,
+            "m.scad:1: more than 20 million evaluation steps");
+  // Doubling a vector 30 times declines before it takes the memory.
+  EXPECT_EQ(scad::EvaluateModelText("function g(v, n) = n == 0 ? v : g(concat(v, v), n - 1);\ncube(len(g([1], 30)));\n",
+                                    "m.scad", {}).declined,
+            "m.scad:1: a vector of more than 1,000,000 values");
   for (const auto& [program, reason] : cases) {
     const scad::ModelEvaluation own = scad::EvaluateModelText(program, "m.scad", {});
     EXPECT_FALSE(own.evaluated) << program;

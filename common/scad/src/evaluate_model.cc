@@ -655,6 +655,7 @@ struct Value {
     return x;
   }
   static Value Vector(std::vector<Value> v) {
+    if (v.size() > 1'000'000) throw NotNative{0, "a vector of more than 1,000,000 values"};
     Value x;
     x.kind = Kind::kVector;
     x.items = std::make_shared<const std::vector<Value>>(std::move(v));
@@ -971,7 +972,11 @@ class Evaluator {
  public:
   Evaluator() : stack_base_(reinterpret_cast<std::uintptr_t>(__builtin_frame_address(0))) {}
 
-  void Guard(int line) const {
+  // Called at every expression and statement: bounds the stack and the work
+  // (20 million steps, a second or two; exponential recursion such as
+  // f(n - 1) + f(n - 1) declines instead of running for hours).
+  void Guard(int line) {
+    if (++steps_ > 20'000'000) throw NotNative{line, "more than 20 million evaluation steps"};
     const auto here = reinterpret_cast<std::uintptr_t>(__builtin_frame_address(0));
     if (stack_base_ > here && static_cast<std::ptrdiff_t>(stack_base_ - here) > kStackBudget)
       throw NotNative{line, "recursion deeper than the evaluator's stack budget"};
@@ -1393,6 +1398,7 @@ class Evaluator {
       for (const Value& x : a) {
         if (x.IsVector()) out.insert(out.end(), x.Items().begin(), x.Items().end());
         else out.push_back(x);
+        if (out.size() > 1'000'000) throw NotNative{line, "a vector of more than 1,000,000 values"};
       }
       return Value::Vector(std::move(out));
     }
@@ -1403,6 +1409,7 @@ class Evaluator {
         else if (x.IsNumber() && std::isfinite(x.number)) out += ValueNum(x.number);
         else if (x.kind == Value::Kind::kBool) out += x.boolean ? "true" : "false";
         else throw NotNative{line, "str() of a vector, infinity or undef"};
+        if (out.size() > 10'000'000) throw NotNative{line, "a string of more than 10,000,000 characters"};
       }
       return Value::String(out);
     }
@@ -1913,6 +1920,7 @@ class Evaluator {
 
   int depth_ = 0;
   long iterations_ = 0;
+  long steps_ = 0;
   std::uintptr_t stack_base_;
 };
 

@@ -29,8 +29,10 @@
 // operation on undef or of mismatched types (OpenSCAD warns and goes on with
 // undef), a variable assigned twice in one scope, recursion deeper than
 // 10,000 calls or than 1 MiB of stack (about 250 levels of a recursive
-// function and as many of a module), loops of more
-// than 1,000,000 iterations, a failed assert.
+// function and as many of a module), loops of more than 1,000,000
+// iterations, more than 20 million evaluation steps, vectors of more than a
+// million values or strings of more than ten million characters, a failed
+// assert.
 //
 // Numbers are written as OpenSCAD writes them (6 significant digits, C's %g),
 // so an equal tree gives equal text and equal subtree keys.
