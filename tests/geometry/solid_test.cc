@@ -1,6 +1,7 @@
 // Tests of fabatlas::geometry against analytic volumes, centres and lens
 // formulas (no tolerance below is fitted to our own output).
 #include "fabatlas/geometry/solid.h"
+#include "fabatlas/geometry/convex_mesh_distance.h"
 
 #include <gtest/gtest.h>
 
@@ -225,6 +226,41 @@ TEST(GeometrySolid, FromMeshOfClosedCube) {
   EXPECT_REL_NEAR(s.Volume(), 1.5 * 1.5 * 1.5, 0.01);
   const fg::Vec3 c = s.CenterOfMass();
   for (double v : c) EXPECT_NEAR(v, 0.75, 0.005);
+}
+
+// An axis-aligned box's distance in closed form (ConvexMeshDistance's box
+// path) against the triangle path of the same box turned by 1e-9 rad about a
+// skew axis (the turn moves points by < 1e-7 mm): equal within 1e-6 mm at
+// points inside, on and around a 60 x 40 x 15 box moved off the origin, out
+// to the band the triangle path is exact in.
+TEST(GeometrySolid, ConvexMeshDistanceOfAnAxisAlignedBoxIsTheTrianglePaths) {
+  fabatlas::mesh::TriangleMesh box = CubeMesh(1.0);
+  for (auto& v : box.vertices) v = {v[0] * 60 + 2, v[1] * 40 - 3, v[2] * 15 + 1};
+  fabatlas::mesh::TriangleMesh turned = box;
+  const double a = 1e-9, c = std::cos(a), sn = std::sin(a);
+  for (auto& v : turned.vertices) {  // about the axis (1, 1, 1) / sqrt(3), Rodrigues
+    const double k = 1 / std::sqrt(3.0), t = 1 - c;
+    const double x = v[0], y = v[1], z = v[2];
+    v = {(t * k * k + c) * x + (t * k * k - sn * k) * y + (t * k * k + sn * k) * z,
+         (t * k * k + sn * k) * x + (t * k * k + c) * y + (t * k * k - sn * k) * z,
+         (t * k * k - sn * k) * x + (t * k * k + sn * k) * y + (t * k * k + c) * z};
+  }
+  const double band = 3.0;
+  const fg::DistanceFunction closed = fg::ConvexMeshDistance(box, band), triangles = fg::ConvexMeshDistance(turned, band);
+  ASSERT_TRUE(closed && triangles);
+  int compared = 0;
+  for (double x = -1.3; x <= 65; x += 0.7)
+    for (double y = -6; y <= 40; y += 0.9)
+      for (double z = -2; z <= 19; z += 0.45) {
+        const double d = triangles(x, y, z);
+        if (d >= band) continue;  // beyond the band the triangle path gives a lower bound only
+        EXPECT_NEAR(closed(x, y, z), d, 1e-6) << x << " " << y << " " << z;
+        ++compared;
+      }
+  EXPECT_GT(compared, 10000);
+  EXPECT_NEAR(closed(2, -3, 1), 0, 1e-12);            // a corner
+  EXPECT_NEAR(closed(-1, -7, -3), std::sqrt(9 + 16 + 16), 1e-12);  // 3, 4, 4 mm off the corner
+  EXPECT_NEAR(closed(32, 17, 8.5), -7.5, 1e-12);     // the centre: half the 15 mm height inside
 }
 
 // A closed convex mesh takes the exact signed-distance path: the regular
