@@ -61,8 +61,15 @@ class WorkerServiceImpl final : public ServiceOn<v1::WorkerService::Service> {
       } else {
         impl_.WorkerAlive(req->worker_id(), req->free_slots() + req->in_flight_lease_ids_size(), now);
       }
-      std::vector<storage::Completion> completions;
-      std::vector<std::string> known(req->in_flight_lease_ids().begin(), req->in_flight_lease_ids().end());
+      storage::WorkerSync sync;
+      sync.worker_id = req->worker_id();
+      sync.in_flight.assign(req->in_flight_lease_ids().begin(), req->in_flight_lease_ids().end());
+      sync.now_ms = now;
+      sync.lease_ms = o.lease_ms;
+      sync.retry_backoff_ms = o.retry_backoff_ms;
+      sync.quarantine_after = o.quarantine_after;
+      sync.quarantine_result = QuarantineBytes;
+      std::vector<storage::Completion>& completions = sync.completions;
       for (const auto& c : req->completed()) {
         storage::Completion done;
         done.lease_id = c.lease_id();
@@ -86,10 +93,18 @@ class WorkerServiceImpl final : public ServiceOn<v1::WorkerService::Service> {
         if (!named.empty())
           if (auto task = impl_.store->FindTask(c.task_key())) impl_.store->AddJobBlob(task->job_id, named);
         completions.push_back(std::move(done));
-        known.push_back(c.lease_id());
       }
-      auto outcomes = impl_.store->Complete(completions, now, o.retry_backoff_ms, o.quarantine_after, QuarantineBytes);
+      const bool granting = !(impl_.draining || impl_.stopping || req->leaving());
+      sync.want = granting ? std::min(req->free_slots(), o.max_leases_per_sync) : 0;
+      std::uint64_t epoch;  // new work since this is not waited for below
+      {
+        std::lock_guard lock(impl_.work_mu);
+        epoch = impl_.work_epoch;
+      }
+      // Results, lease bookkeeping and the first grants in one commit.
+      storage::WorkerSyncOutcome synced = impl_.store->SyncWorker(sync);
       if (!completions.empty()) impl_.StateWriteSucceeded();
+      const auto& outcomes = synced.outcomes;
       bool requeued = false;
       std::vector<Coordinator::Impl::Delivery> accepted;
       for (std::size_t i = 0; i < outcomes.size(); ++i) {
@@ -115,39 +130,29 @@ class WorkerServiceImpl final : public ServiceOn<v1::WorkerService::Service> {
       }
       if (!accepted.empty()) impl_.Deliver(accepted, req->worker_id());
       if (requeued) impl_.last_retry_ms = now;
-      if (impl_.store->ReturnUnknownLeases(req->worker_id(), known) > 0) impl_.SignalWork();
-      std::vector<std::string> in_flight(req->in_flight_lease_ids().begin(), req->in_flight_lease_ids().end());
-      // Heartbeats extend leases fully; a Sync only tops up those with less
-      // than half a lease period left (no write on most Syncs).
-      for (const auto& id : impl_.store->ExtendLeases(req->worker_id(), in_flight, now + o.lease_ms, o.lease_ms / 2))
-        resp->add_revoked_lease_ids(id);
+      if (synced.returned > 0) impl_.SignalWork();
+      for (const auto& id : synced.revoked) resp->add_revoked_lease_ids(id);
       resp->set_heartbeat_interval_ms(static_cast<int>(o.heartbeat_ms));
-      if (impl_.draining || impl_.stopping || req->leaving()) {
+      if (!granting) {
         resp->set_draining(impl_.draining || impl_.stopping);
         return Status::OK;
       }
-      int want = std::min(req->free_slots(), o.max_leases_per_sync);
+      int want = sync.want;
       std::int64_t wait_ms = std::min<std::int64_t>(req->max_wait_ms(), o.max_poll_ms);
       auto until = std::chrono::steady_clock::now() + std::chrono::milliseconds(std::max<std::int64_t>(wait_ms, 0));
-      std::vector<storage::LeaseGrant> grants;
-      while (want > 0) {
-        std::uint64_t epoch;
+      std::vector<storage::LeaseGrant>& grants = synced.grants;
+      // Nothing to grant yet: a long poll waits for new work (a Sync that
+      // reports results may wait too, worker.proto Sync: they were stored
+      // and handed on above).
+      while (want > 0 && grants.empty() && wait_ms > 0 && !impl_.stopping && !impl_.draining && !ctx->IsCancelled()) {
         {
-          std::lock_guard lock(impl_.work_mu);
+          std::unique_lock lock(impl_.work_mu);
+          auto slice = std::min(until, std::chrono::steady_clock::now() + std::chrono::milliseconds(250));
+          impl_.work_cv.wait_until(lock, slice, [&] { return impl_.work_epoch != epoch || impl_.stopping.load(); });
           epoch = impl_.work_epoch;
         }
         grants = impl_.store->GrantLeases(req->worker_id(), want, NowMs(), o.lease_ms);
-        // A Sync that reports results may wait too (worker.proto Sync): the
-        // results were stored and handed on above.
-        if (!grants.empty() || wait_ms <= 0 || impl_.stopping || impl_.draining || ctx->IsCancelled()) break;
-        std::unique_lock lock(impl_.work_mu);
-        auto slice = std::min(until, std::chrono::steady_clock::now() + std::chrono::milliseconds(250));
-        impl_.work_cv.wait_until(lock, slice, [&] { return impl_.work_epoch != epoch || impl_.stopping.load(); });
-        if (std::chrono::steady_clock::now() >= until) {
-          lock.unlock();
-          grants = impl_.store->GrantLeases(req->worker_id(), want, NowMs(), o.lease_ms);
-          break;
-        }
+        if (std::chrono::steady_clock::now() >= until) break;
       }
       for (auto& g : grants) {
         v1::Lease* lease = resp->add_leases();

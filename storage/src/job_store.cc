@@ -118,21 +118,31 @@ class Stmt : public sqlite::Statement {
   }
 };
 
-// BEGIN IMMEDIATE ... COMMIT, rolled back if an exception escapes.
+// BEGIN IMMEDIATE ... COMMIT, rolled back if an exception escapes. A
+// deferred one begins at its first Begin() (reads before it need none: the
+// store's one connection is its only writer and mutex_ is held), and
+// commits nothing when it never began.
 class Transaction {
  public:
-  explicit Transaction(JobStore::Db& db) : db_(db) { db_.Exec("BEGIN IMMEDIATE"); }
+  struct Deferred {};
+  explicit Transaction(JobStore::Db& db) : db_(db) { Begin(); }
+  Transaction(JobStore::Db& db, Deferred) : db_(db) {}
   ~Transaction() {
-    if (!done_) sqlite3_exec(db_.handle, "ROLLBACK", nullptr, nullptr, nullptr);
+    if (begun_ && !done_) sqlite3_exec(db_.handle, "ROLLBACK", nullptr, nullptr, nullptr);
+  }
+  void Begin() {
+    if (begun_) return;
+    db_.Exec("BEGIN IMMEDIATE");
+    begun_ = true;
   }
   void Commit() {
-    db_.Exec("COMMIT");
+    if (begun_) db_.Exec("COMMIT");
     done_ = true;
   }
 
  private:
   JobStore::Db& db_;
-  bool done_ = false;
+  bool begun_ = false, done_ = false;
 };
 
 JobRecord ReadJob(const Stmt& s) {
@@ -461,150 +471,17 @@ std::vector<TaskRecord> JobStore::Tasks(const std::string& job_id) {
   return out;
 }
 
-std::vector<LeaseGrant> JobStore::GrantLeases(const std::string& worker_id, int max,
-                                              std::int64_t now_ms, std::int64_t lease_ms) {
-  std::vector<LeaseGrant> grants;
-  if (max <= 0) return grants;
-  std::lock_guard lock(mutex_);
-  // Pick first (this connection is the only writer and mutex_ is held), so an
-  // empty queue costs reads and no write transaction. Lease affinity
-  // (worker.proto): this worker's preferred tasks, then tasks preferring
-  // nobody, then other workers' preferred tasks from the newest.
-  constexpr const char* kColumns =
-      "SELECT t.key, t.job_id, j.bundle_digest, t.attempt, t.kind, t.payload, t.seq, t.affine FROM ";
-  static const std::string own = std::string(kColumns) +
-                                 "task_affinity a JOIN tasks t ON t.seq = a.task_seq JOIN jobs j ON j.id = t.job_id "
-                                 "WHERE a.worker_id = ? AND t.state = 0 AND j.state = 2 AND t.not_before_ms <= ? "
-                                 "ORDER BY a.rank, a.task_seq LIMIT ?";
-  static const std::string neutral = std::string(kColumns) +
-                                     "tasks t JOIN jobs j ON j.id = t.job_id WHERE t.state = 0 AND t.affine = 0 AND "
-                                     "j.state = 2 AND t.not_before_ms <= ? ORDER BY t.seq LIMIT ?";
-  static const std::string others = std::string(kColumns) +
-                                    "tasks t JOIN jobs j ON j.id = t.job_id WHERE t.state = 0 AND t.affine = 1 AND "
-                                    "j.state = 2 AND t.not_before_ms <= ? ORDER BY t.seq DESC LIMIT ?";
-  std::set<std::int64_t> picked;
-  std::vector<std::int64_t> unprefer;  // seq of granted tasks that had a preference
-  auto take = [&](Stmt& pick) {
-    while (static_cast<int>(grants.size()) < max && pick.Next()) {
-      std::int64_t seq = pick.ColumnInt(6);
-      if (!picked.insert(seq).second) continue;
-      if (pick.ColumnInt(7) != 0) unprefer.push_back(seq);
-      LeaseGrant g;
-      g.task_key = pick.ColumnText(0);
-      g.job_id = pick.ColumnText(1);
-      g.bundle_digest = pick.ColumnText(2);
-      g.attempt = pick.ColumnInt(3) + 1;
-      g.kind = static_cast<int>(pick.ColumnInt(4));
-      g.payload = pick.ColumnText(5);
-      g.lease_id = LeaseIdOf(g.task_key, g.attempt);
-      g.deadline_ms = now_ms + lease_ms;
-      grants.push_back(std::move(g));
-    }
-  };
-  if (preferring_tasks_ > 0) {  // skipped while no task prefers anyone (no-op jobs)
-    Stmt pick(*db_, own.c_str());
-    pick.BindText(1, worker_id).Bind(2, now_ms).Bind(3, std::int64_t{max});
-    take(pick);
-  }
-  if (static_cast<int>(grants.size()) < max) {
-    Stmt pick(*db_, neutral.c_str());
-    pick.Bind(1, now_ms).Bind(2, std::int64_t{max - static_cast<int>(grants.size())});
-    take(pick);
-  }
-  if (static_cast<int>(grants.size()) < max) {  // never skipped: no preferred task can starve
-    // Own preferred tasks were all taken above and may come again here.
-    Stmt pick(*db_, others.c_str());
-    pick.Bind(1, now_ms).Bind(2, std::int64_t{max - static_cast<int>(grants.size()) + static_cast<int>(unprefer.size())});
-    take(pick);
-  }
-  if (grants.empty()) return grants;
-  Transaction t(*db_);
-  Stmt update(*db_, "UPDATE tasks SET state = 1, attempt = ? WHERE key = ?");
-  Stmt lease(*db_,
-             "INSERT OR REPLACE INTO leases (lease_id, task_key, attempt, worker_id, granted_ms, "
-             "deadline_ms, state) VALUES (?,?,?,?,?,?,'active')");
-  CountDeltas deltas;
-  for (const LeaseGrant& g : grants) {
-    update.Bind(1, g.attempt).BindText(2, g.task_key);
-    update.Run();
-    update.Reset();
-    deltas.Moved(g.job_id, TaskState::kQueued, TaskState::kLeased);
-    lease.BindText(1, g.lease_id).BindText(2, g.task_key).Bind(3, g.attempt).BindText(4, worker_id);
-    lease.Bind(5, now_ms).Bind(6, g.deadline_ms);
-    lease.Run();
-    lease.Reset();
-  }
-  if (!unprefer.empty()) {
-    Stmt drop(*db_, "DELETE FROM task_affinity WHERE task_seq = ?");
-    Stmt neutral_again(*db_, "UPDATE tasks SET affine = 0 WHERE seq = ?");
-    for (std::int64_t seq : unprefer) {
-      drop.Bind(1, seq);
-      drop.Run();
-      drop.Reset();
-      neutral_again.Bind(1, seq);
-      neutral_again.Run();
-      neutral_again.Reset();
-    }
-  }
-  if (!grants.empty()) {
-    Stmt w(*db_, "UPDATE workers SET last_seen_ms = ? WHERE id = ?");
-    w.Bind(1, now_ms).BindText(2, worker_id);
-    w.Run();
-  }
-  t.Commit();
-  preferring_tasks_ -= static_cast<std::int64_t>(unprefer.size());
-  deltas.ApplyTo(counts_);
-  return grants;
-}
+namespace {
 
-int JobStore::ForgetAffinity(const std::string& worker_id) {
-  std::lock_guard lock(mutex_);
-  std::vector<std::int64_t> seqs;
-  {
-    Stmt s(*db_, "SELECT task_seq FROM task_affinity WHERE worker_id = ?");
-    s.BindText(1, worker_id);
-    while (s.Next()) seqs.push_back(s.ColumnInt(0));
-  }
-  if (seqs.empty()) return 0;
-  Transaction t(*db_);
-  Stmt drop(*db_, "DELETE FROM task_affinity WHERE worker_id = ?");
-  drop.BindText(1, worker_id);
-  drop.Run();
-  Stmt neutral_again(*db_,
-                     "UPDATE tasks SET affine = 0 WHERE seq = ? AND affine = 1 AND NOT EXISTS (SELECT 1 FROM task_affinity a "
-                     "WHERE a.task_seq = ?)");
-  int lost = 0;
-  for (std::int64_t seq : seqs) {
-    neutral_again.Bind(1, seq).Bind(2, seq);
-    neutral_again.Run();
-    lost += sqlite3_changes(db_->handle);
-    neutral_again.Reset();
-  }
-  t.Commit();
-  preferring_tasks_ -= lost;
-  return lost;
-}
-
-void JobStore::ClearAffinity() {
-  std::lock_guard lock(mutex_);
-  Transaction t(*db_);
-  db_->Exec("DELETE FROM task_affinity");
-  db_->Exec("UPDATE tasks SET affine = 0 WHERE affine != 0");
-  t.Commit();
-  preferring_tasks_ = 0;
-}
-
-std::vector<CompletionOutcome> JobStore::Complete(const std::vector<Completion>& completions,
-                                                  std::int64_t now_ms, std::int64_t retry_backoff_ms,
-                                                  int quarantine_after,
-                                                  const std::function<std::string(int kind)>& quarantine_result) {
+// Complete's work inside the caller's transaction (begun).
+std::vector<CompletionOutcome> CompleteIn(JobStore::Db& db, const std::vector<Completion>& completions,
+                                          std::int64_t now_ms, std::int64_t retry_backoff_ms, int quarantine_after,
+                                          const std::function<std::string(int kind)>& quarantine_result,
+                                          CountDeltas& deltas) {
   std::vector<CompletionOutcome> outcomes;
-  if (completions.empty()) return outcomes;
-  std::lock_guard lock(mutex_);
-  Transaction t(*db_);
-  Stmt task(*db_, "SELECT state, attempt, job_id, kind FROM tasks WHERE key = ?");
-  Stmt lease(*db_, "SELECT state FROM leases WHERE lease_id = ? AND task_key = ? AND attempt = ?");
-  Stmt subtree(*db_,
+  Stmt task(db, "SELECT state, attempt, job_id, kind FROM tasks WHERE key = ?");
+  Stmt lease(db, "SELECT state FROM leases WHERE lease_id = ? AND task_key = ? AND attempt = ?");
+  Stmt subtree(db,
                "INSERT INTO subtrees (job_id, key, topology, op, digest, bytes, children, seconds_sum, "
                "seconds_count, last_seconds, uses) VALUES (?,?,?,?,?,?,?,?,?,?,1) "
                "ON CONFLICT (job_id, key) DO UPDATE SET "
@@ -612,23 +489,22 @@ std::vector<CompletionOutcome> JobStore::Complete(const std::vector<Completion>&
                "seconds_sum = seconds_sum + excluded.seconds_sum, "
                "seconds_count = seconds_count + excluded.seconds_count, "
                "last_seconds = excluded.last_seconds, uses = uses + 1");
-  Stmt use(*db_,
+  Stmt use(db,
            "INSERT OR IGNORE INTO sample_subtrees (task_key, position, job_id, point_key, subtree_key) "
            "VALUES (?,?,?,?,?)");
-  Stmt set_lease(*db_, "UPDATE leases SET state = ? WHERE lease_id = ? AND state = 'active'");
-  Stmt done(*db_,
+  Stmt set_lease(db, "UPDATE leases SET state = ? WHERE lease_id = ? AND state = 'active'");
+  Stmt done(db,
             "UPDATE tasks SET state = 2, result = ?, completions = completions + 1, "
             "sample_valid = ? WHERE key = ?");
-  Stmt fenced(*db_, "UPDATE tasks SET fenced = fenced + 1 WHERE key = ?");
-  Stmt requeue(*db_, "UPDATE tasks SET state = 0, not_before_ms = ? WHERE key = ?");
-  Stmt failures(*db_,
+  Stmt fenced(db, "UPDATE tasks SET fenced = fenced + 1 WHERE key = ?");
+  Stmt requeue(db, "UPDATE tasks SET state = 0, not_before_ms = ? WHERE key = ?");
+  Stmt failures(db,
                 "SELECT COUNT(*), COUNT(DISTINCT worker_id) FROM leases WHERE task_key = ? AND "
                 "(state = 'failed' OR lease_id = ?)");
-  Stmt quarantine(*db_,
+  Stmt quarantine(db,
                   "UPDATE tasks SET state = 3, result = ?, completions = completions + 1, "
                   "sample_valid = CASE WHEN kind = 1 THEN 0 ELSE -1 END WHERE key = ?");
-  Stmt event(*db_, "INSERT INTO events (time_ms, job_id, kind, message) VALUES (?,?,?,?)");
-  CountDeltas deltas;
+  Stmt event(db, "INSERT INTO events (time_ms, job_id, kind, message) VALUES (?,?,?,?)");
   for (const Completion& c : completions) {
     task.BindText(1, c.task_key);
     if (!task.Next()) {
@@ -714,6 +590,232 @@ std::vector<CompletionOutcome> JobStore::Complete(const std::vector<Completion>&
     set_lease.Reset();
     outcomes.push_back(outcome);
   }
+  return outcomes;
+}
+
+// GrantLeases' choice of tasks, by reads only (so an empty queue costs no
+// write transaction): up to `max` grants; unprefer gets the seq of granted
+// tasks that had a preference. any_preferring: some task prefers a worker.
+std::vector<LeaseGrant> PickLeases(JobStore::Db& db, const std::string& worker_id, int max, std::int64_t now_ms,
+                                   std::int64_t lease_ms, bool any_preferring, std::vector<std::int64_t>& unprefer) {
+  std::vector<LeaseGrant> grants;
+  if (max <= 0) return grants;
+  // Lease affinity
+  // (worker.proto): this worker's preferred tasks, then tasks preferring
+  // nobody, then other workers' preferred tasks from the newest.
+  constexpr const char* kColumns =
+      "SELECT t.key, t.job_id, j.bundle_digest, t.attempt, t.kind, t.payload, t.seq, t.affine FROM ";
+  static const std::string own = std::string(kColumns) +
+                                 "task_affinity a JOIN tasks t ON t.seq = a.task_seq JOIN jobs j ON j.id = t.job_id "
+                                 "WHERE a.worker_id = ? AND t.state = 0 AND j.state = 2 AND t.not_before_ms <= ? "
+                                 "ORDER BY a.rank, a.task_seq LIMIT ?";
+  static const std::string neutral = std::string(kColumns) +
+                                     "tasks t JOIN jobs j ON j.id = t.job_id WHERE t.state = 0 AND t.affine = 0 AND "
+                                     "j.state = 2 AND t.not_before_ms <= ? ORDER BY t.seq LIMIT ?";
+  static const std::string others = std::string(kColumns) +
+                                    "tasks t JOIN jobs j ON j.id = t.job_id WHERE t.state = 0 AND t.affine = 1 AND "
+                                    "j.state = 2 AND t.not_before_ms <= ? ORDER BY t.seq DESC LIMIT ?";
+  std::set<std::int64_t> picked;
+  auto take = [&](Stmt& pick) {
+    while (static_cast<int>(grants.size()) < max && pick.Next()) {
+      std::int64_t seq = pick.ColumnInt(6);
+      if (!picked.insert(seq).second) continue;
+      if (pick.ColumnInt(7) != 0) unprefer.push_back(seq);
+      LeaseGrant g;
+      g.task_key = pick.ColumnText(0);
+      g.job_id = pick.ColumnText(1);
+      g.bundle_digest = pick.ColumnText(2);
+      g.attempt = pick.ColumnInt(3) + 1;
+      g.kind = static_cast<int>(pick.ColumnInt(4));
+      g.payload = pick.ColumnText(5);
+      g.lease_id = LeaseIdOf(g.task_key, g.attempt);
+      g.deadline_ms = now_ms + lease_ms;
+      grants.push_back(std::move(g));
+    }
+  };
+  if (any_preferring) {  // skipped while no task prefers anyone (no-op jobs)
+    Stmt pick(db, own.c_str());
+    pick.BindText(1, worker_id).Bind(2, now_ms).Bind(3, std::int64_t{max});
+    take(pick);
+  }
+  if (static_cast<int>(grants.size()) < max) {
+    Stmt pick(db, neutral.c_str());
+    pick.Bind(1, now_ms).Bind(2, std::int64_t{max - static_cast<int>(grants.size())});
+    take(pick);
+  }
+  if (static_cast<int>(grants.size()) < max) {  // never skipped: no preferred task can starve
+    // Own preferred tasks were all taken above and may come again here.
+    Stmt pick(db, others.c_str());
+    pick.Bind(1, now_ms).Bind(2, std::int64_t{max - static_cast<int>(grants.size()) + static_cast<int>(unprefer.size())});
+    take(pick);
+  }
+  return grants;
+}
+
+// Writes picked grants (PickLeases) inside the caller's transaction (begun):
+// tasks leased, lease rows, preferences of the granted tasks dropped.
+void WriteLeasesIn(JobStore::Db& db, const std::string& worker_id, std::int64_t now_ms,
+                   const std::vector<LeaseGrant>& grants, const std::vector<std::int64_t>& unprefer,
+                   CountDeltas& deltas) {
+  Stmt update(db, "UPDATE tasks SET state = 1, attempt = ? WHERE key = ?");
+  Stmt lease(db,
+             "INSERT OR REPLACE INTO leases (lease_id, task_key, attempt, worker_id, granted_ms, "
+             "deadline_ms, state) VALUES (?,?,?,?,?,?,'active')");
+  for (const LeaseGrant& g : grants) {
+    update.Bind(1, g.attempt).BindText(2, g.task_key);
+    update.Run();
+    update.Reset();
+    deltas.Moved(g.job_id, TaskState::kQueued, TaskState::kLeased);
+    lease.BindText(1, g.lease_id).BindText(2, g.task_key).Bind(3, g.attempt).BindText(4, worker_id);
+    lease.Bind(5, now_ms).Bind(6, g.deadline_ms);
+    lease.Run();
+    lease.Reset();
+  }
+  if (!unprefer.empty()) {
+    Stmt drop(db, "DELETE FROM task_affinity WHERE task_seq = ?");
+    Stmt neutral_again(db, "UPDATE tasks SET affine = 0 WHERE seq = ?");
+    for (std::int64_t seq : unprefer) {
+      drop.Bind(1, seq);
+      drop.Run();
+      drop.Reset();
+      neutral_again.Bind(1, seq);
+      neutral_again.Run();
+      neutral_again.Reset();
+    }
+  }
+  Stmt w(db, "UPDATE workers SET last_seen_ms = ? WHERE id = ?");
+  w.Bind(1, now_ms).BindText(2, worker_id);
+  w.Run();
+}
+
+// A worker's active lease.
+struct ActiveLease {
+  std::string lease_id, task_key, job_id;
+  std::int64_t deadline_ms = 0;
+};
+
+// The worker's active leases (one read, shared by ReturnUnknownLeases and
+// ExtendLeases).
+std::vector<ActiveLease> ActiveLeasesOf(JobStore::Db& db, const std::string& worker_id) {
+  std::vector<ActiveLease> out;
+  Stmt s(db,
+         "SELECT l.lease_id, l.task_key, t.job_id, l.deadline_ms FROM leases l JOIN tasks t ON t.key = l.task_key "
+         "WHERE l.worker_id = ? AND l.state = 'active'");
+  s.BindText(1, worker_id);
+  while (s.Next()) out.push_back({s.ColumnText(0), s.ColumnText(1), s.ColumnText(2), s.ColumnInt(3)});
+  return out;
+}
+
+// ReturnUnknownLeases: the active leases not in `known` go back to the
+// queue, inside `t` (begun when there is one). Returns how many.
+int ReturnUnknownIn(JobStore::Db& db, Transaction& t, const std::vector<ActiveLease>& active,
+                    const std::vector<std::string>& known, CountDeltas& deltas) {
+  std::set<std::string> keep(known.begin(), known.end());
+  int returned = 0;
+  for (const ActiveLease& l : active) {
+    if (keep.count(l.lease_id)) continue;
+    t.Begin();
+    Stmt lease(db, "UPDATE leases SET state = 'returned' WHERE lease_id = ?");
+    lease.BindText(1, l.lease_id);
+    lease.Run();
+    Stmt task(db, "UPDATE tasks SET state = 0 WHERE key = ? AND state = 1");
+    task.BindText(1, l.task_key);
+    task.Run();
+    if (sqlite3_changes(db.handle) == 1) deltas.Moved(l.job_id, TaskState::kLeased, TaskState::kQueued);
+    ++returned;
+  }
+  return returned;
+}
+
+// ExtendLeases inside `t` (begun only when a deadline moves): the listed
+// ids that are active leases due before deadline_ms - slack_ms move to
+// deadline_ms; returns the listed ids that are not active leases.
+std::vector<std::string> ExtendIn(JobStore::Db& db, Transaction& t, const std::string& worker_id,
+                                  const std::vector<ActiveLease>& active, const std::vector<std::string>& lease_ids,
+                                  std::int64_t deadline_ms, std::int64_t slack_ms) {
+  std::map<std::string, std::int64_t> deadlines;
+  for (const ActiveLease& l : active) deadlines.emplace(l.lease_id, l.deadline_ms);
+  std::vector<std::string> revoked;
+  for (const std::string& id : lease_ids) {
+    auto it = deadlines.find(id);
+    if (it == deadlines.end()) {
+      revoked.push_back(id);
+      continue;
+    }
+    if (it->second >= deadline_ms - slack_ms) continue;
+    t.Begin();
+    Stmt s(db,
+           "UPDATE leases SET deadline_ms = MAX(deadline_ms, ?) WHERE lease_id = ? AND worker_id = ? "
+           "AND state = 'active'");
+    s.Bind(1, deadline_ms).BindText(2, id).BindText(3, worker_id);
+    s.Run();
+  }
+  return revoked;
+}
+
+}  // namespace
+
+std::vector<LeaseGrant> JobStore::GrantLeases(const std::string& worker_id, int max,
+                                              std::int64_t now_ms, std::int64_t lease_ms) {
+  std::lock_guard lock(mutex_);
+  std::vector<std::int64_t> unprefer;
+  std::vector<LeaseGrant> grants = PickLeases(*db_, worker_id, max, now_ms, lease_ms, preferring_tasks_ > 0, unprefer);
+  if (grants.empty()) return grants;
+  Transaction t(*db_);
+  CountDeltas deltas;
+  WriteLeasesIn(*db_, worker_id, now_ms, grants, unprefer, deltas);
+  t.Commit();
+  preferring_tasks_ -= static_cast<std::int64_t>(unprefer.size());
+  deltas.ApplyTo(counts_);
+  return grants;
+}
+
+int JobStore::ForgetAffinity(const std::string& worker_id) {
+  std::lock_guard lock(mutex_);
+  std::vector<std::int64_t> seqs;
+  {
+    Stmt s(*db_, "SELECT task_seq FROM task_affinity WHERE worker_id = ?");
+    s.BindText(1, worker_id);
+    while (s.Next()) seqs.push_back(s.ColumnInt(0));
+  }
+  if (seqs.empty()) return 0;
+  Transaction t(*db_);
+  Stmt drop(*db_, "DELETE FROM task_affinity WHERE worker_id = ?");
+  drop.BindText(1, worker_id);
+  drop.Run();
+  Stmt neutral_again(*db_,
+                     "UPDATE tasks SET affine = 0 WHERE seq = ? AND affine = 1 AND NOT EXISTS (SELECT 1 FROM task_affinity a "
+                     "WHERE a.task_seq = ?)");
+  int lost = 0;
+  for (std::int64_t seq : seqs) {
+    neutral_again.Bind(1, seq).Bind(2, seq);
+    neutral_again.Run();
+    lost += sqlite3_changes(db_->handle);
+    neutral_again.Reset();
+  }
+  t.Commit();
+  preferring_tasks_ -= lost;
+  return lost;
+}
+
+void JobStore::ClearAffinity() {
+  std::lock_guard lock(mutex_);
+  Transaction t(*db_);
+  db_->Exec("DELETE FROM task_affinity");
+  db_->Exec("UPDATE tasks SET affine = 0 WHERE affine != 0");
+  t.Commit();
+  preferring_tasks_ = 0;
+}
+
+std::vector<CompletionOutcome> JobStore::Complete(const std::vector<Completion>& completions,
+                                                  std::int64_t now_ms, std::int64_t retry_backoff_ms,
+                                                  int quarantine_after,
+                                                  const std::function<std::string(int kind)>& quarantine_result) {
+  if (completions.empty()) return {};
+  std::lock_guard lock(mutex_);
+  Transaction t(*db_);
+  CountDeltas deltas;
+  auto outcomes = CompleteIn(*db_, completions, now_ms, retry_backoff_ms, quarantine_after, quarantine_result, deltas);
   t.Commit();
   deltas.ApplyTo(counts_);
   return outcomes;
@@ -722,32 +824,11 @@ std::vector<CompletionOutcome> JobStore::Complete(const std::vector<Completion>&
 std::vector<std::string> JobStore::ExtendLeases(const std::string& worker_id,
                                                 const std::vector<std::string>& lease_ids,
                                                 std::int64_t deadline_ms, std::int64_t slack_ms) {
-  std::vector<std::string> revoked;
-  if (lease_ids.empty()) return revoked;
+  if (lease_ids.empty()) return {};
   std::lock_guard lock(mutex_);
   // Read first: a Sync that lists leases extended moments ago writes nothing.
-  std::map<std::string, std::int64_t> active;  // lease id -> deadline
-  {
-    Stmt s(*db_, "SELECT lease_id, deadline_ms FROM leases WHERE worker_id = ? AND state = 'active'");
-    s.BindText(1, worker_id);
-    while (s.Next()) active.emplace(s.ColumnText(0), s.ColumnInt(1));
-  }
-  std::vector<const std::string*> extend;
-  for (const std::string& id : lease_ids) {
-    auto it = active.find(id);
-    if (it == active.end()) revoked.push_back(id);
-    else if (it->second < deadline_ms - slack_ms) extend.push_back(&id);
-  }
-  if (extend.empty()) return revoked;
-  Transaction t(*db_);
-  Stmt s(*db_,
-         "UPDATE leases SET deadline_ms = MAX(deadline_ms, ?) WHERE lease_id = ? AND worker_id = ? "
-         "AND state = 'active'");
-  for (const std::string* id : extend) {
-    s.Bind(1, deadline_ms).BindText(2, *id).BindText(3, worker_id);
-    s.Run();
-    s.Reset();
-  }
+  Transaction t(*db_, Transaction::Deferred{});
+  auto revoked = ExtendIn(*db_, t, worker_id, ActiveLeasesOf(*db_, worker_id), lease_ids, deadline_ms, slack_ms);
   t.Commit();
   return revoked;
 }
@@ -755,36 +836,41 @@ std::vector<std::string> JobStore::ExtendLeases(const std::string& worker_id,
 int JobStore::ReturnUnknownLeases(const std::string& worker_id,
                                   const std::vector<std::string>& known) {
   std::lock_guard lock(mutex_);
-  std::set<std::string> keep(known.begin(), known.end());
-  struct Lost {
-    std::string lease_id, task_key, job_id;
-  };
-  std::vector<Lost> lost;
-  {
-    Stmt s(*db_,
-           "SELECT l.lease_id, l.task_key, t.job_id FROM leases l JOIN tasks t ON t.key = l.task_key "
-           "WHERE l.worker_id = ? AND l.state = 'active'");
-    s.BindText(1, worker_id);
-    while (s.Next())
-      if (!keep.count(s.ColumnText(0))) lost.push_back({s.ColumnText(0), s.ColumnText(1), s.ColumnText(2)});
-  }
-  if (lost.empty()) return 0;
-  Transaction t(*db_);
-  Stmt lease(*db_, "UPDATE leases SET state = 'returned' WHERE lease_id = ?");
-  Stmt task(*db_, "UPDATE tasks SET state = 0 WHERE key = ? AND state = 1");
+  Transaction t(*db_, Transaction::Deferred{});
   CountDeltas deltas;
-  for (const Lost& l : lost) {
-    lease.BindText(1, l.lease_id);
-    lease.Run();
-    lease.Reset();
-    task.BindText(1, l.task_key);
-    task.Run();
-    task.Reset();
-    if (sqlite3_changes(db_->handle) == 1) deltas.Moved(l.job_id, TaskState::kLeased, TaskState::kQueued);
-  }
+  const int returned = ReturnUnknownIn(*db_, t, ActiveLeasesOf(*db_, worker_id), known, deltas);
   t.Commit();
   deltas.ApplyTo(counts_);
-  return static_cast<int>(lost.size());
+  return returned;
+}
+
+WorkerSyncOutcome JobStore::SyncWorker(const WorkerSync& sync) {
+  WorkerSyncOutcome out;
+  std::lock_guard lock(mutex_);
+  Transaction t(*db_, Transaction::Deferred{});
+  CountDeltas deltas;
+  if (!sync.completions.empty()) {
+    t.Begin();
+    out.outcomes = CompleteIn(*db_, sync.completions, sync.now_ms, sync.retry_backoff_ms, sync.quarantine_after,
+                              sync.quarantine_result, deltas);
+  }
+  // Read after the completions: the leases they ended are no longer active.
+  const std::vector<ActiveLease> active = ActiveLeasesOf(*db_, sync.worker_id);
+  std::vector<std::string> known = sync.in_flight;
+  for (const Completion& c : sync.completions) known.push_back(c.lease_id);
+  out.returned = ReturnUnknownIn(*db_, t, active, known, deltas);
+  out.revoked = ExtendIn(*db_, t, sync.worker_id, active, sync.in_flight, sync.now_ms + sync.lease_ms,
+                         sync.lease_ms / 2);
+  std::vector<std::int64_t> unprefer;
+  out.grants = PickLeases(*db_, sync.worker_id, sync.want, sync.now_ms, sync.lease_ms, preferring_tasks_ > 0, unprefer);
+  if (!out.grants.empty()) {
+    t.Begin();
+    WriteLeasesIn(*db_, sync.worker_id, sync.now_ms, out.grants, unprefer, deltas);
+  }
+  t.Commit();
+  preferring_tasks_ -= static_cast<std::int64_t>(unprefer.size());
+  deltas.ApplyTo(counts_);
+  return out;
 }
 
 std::vector<ExpiredLease> JobStore::ExpireLeases(

@@ -149,6 +149,67 @@ TEST(ClusterStorage, LeasesUnknownToTheWorkerAreReturned) {
   EXPECT_TRUE(store.CheckConsistency().empty());
 }
 
+// SyncWorker is Complete, ReturnUnknownLeases, ExtendLeases and GrantLeases
+// in that order, in one transaction: the same outcome as the four calls on
+// a twin store, and when one completion cannot be stored (here its
+// quarantine result throws) nothing of the Sync is (no result, no returned
+// lease, no grant).
+TEST(ClusterStorage, SyncWorkerIsTheFourCallsInOneTransaction) {
+  fs::path dir = FreshDir("store_sync");
+  JobStore calls(dir / "calls.db"), sync(dir / "sync.db");
+  WorkerSync in;
+  in.worker_id = "w1";
+  in.lease_ms = 1000;
+  in.want = 2;
+  in.retry_backoff_ms = 10;
+  for (JobStore* store : {&calls, &sync}) {
+    AddRunningJob(*store, 6);
+    auto g = store->GrantLeases("w1", 3, 0, 1000);  // deadlines 1000
+    ASSERT_EQ(g.size(), 3u);
+    in.completions = {{g[0].lease_id, g[0].task_key, 1, "r0", false, 1}};
+    in.in_flight = {g[1].lease_id, "gone.1"};  // g[2] unknown to the worker: returned
+  }
+  in.now_ms = 700;  // g[1] has 300 ms left, under half a lease: topped up to 1700
+  auto outcomes = calls.Complete(in.completions, in.now_ms, in.retry_backoff_ms);
+  const int returned = calls.ReturnUnknownLeases("w1", {in.in_flight[0], in.in_flight[1], in.completions[0].lease_id});
+  auto revoked = calls.ExtendLeases("w1", in.in_flight, in.now_ms + in.lease_ms, in.lease_ms / 2);
+  auto grants = calls.GrantLeases("w1", in.want, in.now_ms, in.lease_ms);
+
+  // A completion whose storing throws rolls the whole Sync back.
+  WorkerSync failing = in;
+  failing.completions.push_back({in.in_flight[0], Key(1), 1, "", true, -1});
+  failing.quarantine_after = 1;
+  failing.quarantine_result = [](int) -> std::string { throw fabatlas::ResourceError("disk full"); };
+  EXPECT_THROW(sync.SyncWorker(failing), fabatlas::ResourceError);
+  EXPECT_EQ(sync.CountTasks("job1").done, 0);
+  EXPECT_EQ(sync.CountTasks("job1").leased, 3);
+  EXPECT_EQ(sync.ActiveLeases(), 3);
+  EXPECT_TRUE(sync.CheckConsistency().empty());
+
+  WorkerSyncOutcome out = sync.SyncWorker(in);
+  EXPECT_EQ(out.outcomes, outcomes);
+  EXPECT_EQ(out.outcomes, std::vector<CompletionOutcome>{CompletionOutcome::kAccepted});
+  EXPECT_EQ(out.returned, returned);
+  EXPECT_EQ(out.returned, 1);
+  EXPECT_EQ(out.revoked, revoked);
+  EXPECT_EQ(out.revoked, std::vector<std::string>{"gone.1"});
+  ASSERT_EQ(out.grants.size(), grants.size());
+  ASSERT_EQ(out.grants.size(), 2u);
+  for (std::size_t i = 0; i < grants.size(); ++i) {
+    EXPECT_EQ(out.grants[i].lease_id, grants[i].lease_id);
+    EXPECT_EQ(out.grants[i].deadline_ms, 1700);
+  }
+  for (JobStore* store : {&calls, &sync}) {
+    EXPECT_TRUE(store->CheckConsistency().empty());
+    const TaskCounts c = store->CountTasks("job1");
+    EXPECT_EQ(c.done, 1);
+    EXPECT_EQ(c.leased, 3);  // g[1] and the two new grants
+    EXPECT_EQ(c.queued, 2);
+    EXPECT_EQ(store->ExtendLeases("w1", {in.in_flight[0]}, 1700).size(), 0u);  // g[1] still active
+  }
+  EXPECT_EQ(calls.Tasks("job1")[1].attempt, sync.Tasks("job1")[1].attempt);
+}
+
 TEST(ClusterStorage, CancelledJobsAreNotLeased) {
   fs::path dir = FreshDir("store5");
   JobStore store(dir / "state.db");

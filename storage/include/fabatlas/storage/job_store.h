@@ -125,6 +125,28 @@ enum class CompletionOutcome {
                  // with the quarantine result, like an expiry quarantine
 };
 
+// One worker's Sync (worker.proto) against the store: what it reports and
+// asks for (JobStore::SyncWorker).
+struct WorkerSync {
+  std::string worker_id;
+  std::vector<Completion> completions;  // results it reports
+  std::vector<std::string> in_flight;   // leases it still holds (running or queued)
+  std::int64_t now_ms = 0;
+  std::int64_t lease_ms = 0;            // leases granted or topped up run until now_ms + lease_ms
+  int want = 0;                         // leases to grant at most (0: none)
+  // As for Complete.
+  std::int64_t retry_backoff_ms = 0;
+  int quarantine_after = 0;
+  std::function<std::string(int kind)> quarantine_result;
+};
+
+struct WorkerSyncOutcome {
+  std::vector<CompletionOutcome> outcomes;  // one per completion, in order
+  int returned = 0;                 // its active leases it no longer knows, queued again
+  std::vector<std::string> revoked; // in_flight ids that are not active leases of the worker
+  std::vector<LeaseGrant> grants;   // new leases
+};
+
 struct ExpiredLease {
   std::string lease_id, task_key, job_id, worker_id;
   std::int64_t attempt = 0;   // the lease's attempt number (fencing)
@@ -238,6 +260,15 @@ class JobStore {
                                           std::int64_t now_ms, std::int64_t retry_backoff_ms,
                                           int quarantine_after = 0,
                                           const std::function<std::string(int kind)>& quarantine_result = {});
+  // A worker's Sync in one transaction (one commit at most, none when
+  // nothing changes): Complete(completions), then ReturnUnknownLeases(
+  // in_flight + the completions' leases), ExtendLeases(in_flight, now_ms +
+  // lease_ms, slack lease_ms / 2), then GrantLeases(want). The same outcome
+  // as those calls in that order; a kill -9 keeps all of it or none (a
+  // worker whose Sync got no answer reports again: its results are accepted
+  // or acknowledged as duplicates, and leases it never heard of are returned
+  // by its next Sync or expire).
+  WorkerSyncOutcome SyncWorker(const WorkerSync& sync);
   // Moves the deadline of the worker's listed active leases to deadline_ms,
   // leaving (not writing) those already due at deadline_ms - slack_ms or
   // later. Returns the listed ids that are not active leases of this worker.
