@@ -1,6 +1,8 @@
 // A job as a worker holds it (see job_cache.h).
 #include "job_cache.h"
 
+#include <algorithm>
+
 #include "fabatlas/design/design.h"
 #include "fabatlas/protocol/job_bundle.h"
 #include "fabatlas/protocol/solid_blob.h"
@@ -16,10 +18,17 @@ std::shared_ptr<JobContext> LoadJobContext(const v1::JobBundle& bundle, const st
       sampling::ParseJobFile(bundle.job_file(), files.job_file.string()).cache_min_subtree_seconds;
   precompute::DesignEvaluatorOptions options;
   const std::size_t budget = static_cast<std::size_t>(memory_mb) << 20;
-  options.solid_memory_bytes = budget / 16;
+  const std::size_t solids = budget / 16 * 6, level_sets_at_least = budget / 16;
   options.subtree_memory_bytes = budget / 8;
-  ctx->shelf.SetBudget(budget / 16 * 5);
+  ctx->shelf.SetBudget(solids - level_sets_at_least);
   JobContext* job = ctx.get();
+  options.solid_memory_budget = [job, solids, level_sets_at_least] {
+    const std::size_t shelved = job->shelf.bytes();
+    return std::max(level_sets_at_least, shelved < solids ? solids - shelved : 0);
+  };
+  options.on_solid_dropped = [job](const sampling::PointKey& key, const geometry::Solid& solid) {
+    if (!job->shelf.Holds(key)) job->shelf.Put(key, protocol::SolidBlobOf(solid));
+  };
   options.on_subtree_computed = [job, upload = std::move(upload)](const std::string& key,
                                                                   const geometry::Solid& solid, double seconds) {
     {
@@ -35,6 +44,12 @@ std::shared_ptr<JobContext> LoadJobContext(const v1::JobBundle& bundle, const st
   ctx->evaluator =
       std::make_unique<precompute::DesignSampleEvaluator>(design::LoadDesign(files.design_file), std::move(options));
   return ctx;
+}
+
+std::optional<std::string> HeldSolidBlob(JobContext& ctx, const sampling::PointKey& key) {
+  if (ctx.evaluator)
+    if (auto solid = ctx.evaluator->RememberedSolid(key)) return protocol::SolidBlobOf(*solid);
+  return ctx.shelf.Get(key);
 }
 
 }  // namespace fabatlas::worker

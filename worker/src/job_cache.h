@@ -9,6 +9,7 @@
 #include <map>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <string>
 
 #include "fabatlas/precompute/design_evaluator.h"
@@ -35,13 +36,22 @@ using UploadBlob = std::function<std::string(const std::string& bytes)>;
 
 // The job of a bundle, its files written under dir (protocol::Materialize),
 // with the memory budget of WorkerOptions::memory_mb (MiB) split as
-// worker.h documents: 1/16 for the latest root solids as level sets, 5/16
-// for the shelf, 1/8 for the subtree cache. Every subtree the evaluator
+// worker.h documents: 3/8 for root solids, as level sets in the evaluator's
+// memory (at least 1/16, and whatever the shelf leaves) and compressed on
+// the shelf (at most 5/16; a level set is compressed onto it when the
+// evaluator's memory drops it, not before), 1/8 for the subtree cache.
+// Every subtree the evaluator
 // computes whose root took at least the job file's
 // cache.min_subtree_seconds is uploaded once (`upload`) and recorded in
 // subtree_blobs (tasks.proto "Geometry blobs"). Throws InputError for a job
 // that does not load (the job file or design's one-line message).
 std::shared_ptr<JobContext> LoadJobContext(const v1::JobBundle& bundle, const std::filesystem::path& dir,
                                            std::int64_t memory_mb, UploadBlob upload);
+
+// The root solid of the valid sample at `key` as blob bytes
+// (protocol/solid_blob.h), if this worker holds it: compressed now from the
+// evaluator's memory, else from the shelf. For sharing (worker.proto
+// ShareSolids).
+std::optional<std::string> HeldSolidBlob(JobContext& ctx, const sampling::PointKey& key);
 
 }  // namespace fabatlas::worker

@@ -346,7 +346,7 @@ void Worker::ShareLoop() {
         if (auto it = jobs_.find(ref.job_bundle_digest()); it != jobs_.end()) job = it->second;
       }
       if (job)
-        if (auto blob = job->shelf.Get(sampling::PointKey(ref.point_key().begin(), ref.point_key().end()))) {
+        if (auto blob = HeldSolidBlob(*job, sampling::PointKey(ref.point_key().begin(), ref.point_key().end()))) {
           answer.set_digest(Upload(*blob));
           if (!answer.digest().empty()) ++solids_shared_;
         }

@@ -24,6 +24,11 @@ void SolidShelf::Put(const sampling::PointKey& key, std::string blob) {
   }
 }
 
+bool SolidShelf::Holds(const sampling::PointKey& key) {
+  std::lock_guard lock(mu_);
+  return index_.count(key) > 0;
+}
+
 std::size_t SolidShelf::bytes() {
   std::lock_guard lock(mu_);
   return bytes_;

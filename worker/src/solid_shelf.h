@@ -1,8 +1,9 @@
-// The worker's shelf of root solids: valid samples' root solids as blob
-// bytes (protocol/solid_blob.h, zstd: several times smaller than the level
-// set), least recently used dropped first once the budget is exceeded. ΔG
-// tasks take their solids from here when the evaluator's own (uncompressed,
-// smaller) memory dropped them, and solids are shared from here as they are
+// The worker's shelf of root solids: the root solids the evaluator's memory
+// of level sets dropped, as blob bytes (protocol/solid_blob.h, zstd: several
+// times smaller than the level set; compressed as they leave that memory,
+// job_cache.h), least recently used dropped first once the budget is
+// exceeded. ΔG tasks take their solids from here when the evaluator's
+// memory no longer holds them, and solids are shared from here as they are
 // (worker.proto ShareSolids). Thread-safe.
 #pragma once
 
@@ -25,6 +26,8 @@ class SolidShelf {
   // Puts the blob of the sample at `key`, or marks an already held one as
   // the most recent (its bytes are not replaced).
   void Put(const sampling::PointKey& key, std::string blob);
+  // Whether the blob at `key` is held (its recency unchanged).
+  bool Holds(const sampling::PointKey& key);
   // The blob at `key` (now the most recent), if held.
   std::optional<std::string> Get(const sampling::PointKey& key);
   // Bytes held.

@@ -146,7 +146,6 @@ v1::TaskResult Worker::EvaluateSample(JobContext& ctx, const sampling::SamplePoi
   outcome.properties = r.properties;
   v1::TaskResult result = protocol::SampleResultOf(outcome);
   v1::SampleResult* sample = result.mutable_sample();
-  if (r.valid) ctx.shelf.Put(point.key, protocol::SolidBlobOf(r.solid));
   std::lock_guard lock(ctx.mu);
   for (const design::SubtreeRecord& rec : r.subtrees) {
     v1::SubtreeRecord* out = sample->add_subtrees();

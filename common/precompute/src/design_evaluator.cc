@@ -1,5 +1,7 @@
 #include "fabatlas/precompute/design_evaluator.h"
 
+#include <vector>
+
 #include "fabatlas/design/evaluate_sample.h"
 #include "fabatlas/error.h"
 
@@ -113,16 +115,22 @@ geometry::Solid DesignSampleEvaluator::SolidOf(const sampling::SamplePoint& poin
 }
 
 void DesignSampleEvaluator::Remember(const sampling::PointKey& key, const geometry::Solid& solid) {
-  std::lock_guard<std::mutex> lock(mutex_);
-  if (index_.count(key)) return;
-  lru_.emplace_front(key, solid);
-  index_[key] = lru_.begin();
-  bytes_ += solid.MemoryBytes();
-  while (bytes_ > options_.solid_memory_bytes && lru_.size() > 1) {
-    bytes_ -= lru_.back().second.MemoryBytes();
-    index_.erase(lru_.back().first);
-    lru_.pop_back();
+  const std::size_t budget = options_.solid_memory_budget ? options_.solid_memory_budget() : options_.solid_memory_bytes;
+  std::vector<std::pair<sampling::PointKey, geometry::Solid>> dropped;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (index_.count(key)) return;
+    lru_.emplace_front(key, solid);
+    index_[key] = lru_.begin();
+    bytes_ += solid.MemoryBytes();
+    while (bytes_ > budget && lru_.size() > 1) {
+      bytes_ -= lru_.back().second.MemoryBytes();
+      index_.erase(lru_.back().first);
+      if (options_.on_solid_dropped) dropped.push_back(std::move(lru_.back()));
+      lru_.pop_back();
+    }
   }
+  for (const auto& [k, s] : dropped) options_.on_solid_dropped(k, s);
 }
 
 }  // namespace fabatlas::precompute

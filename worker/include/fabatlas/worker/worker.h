@@ -41,10 +41,12 @@ struct WorkerOptions {
   // and failed by kind, their durations, solid and subtree cache bytes,
   // resident memory) and /healthz (200 working, 503 stopping); empty = off.
   std::string metrics_listen;
-  // Resident memory budget of the whole worker process, MiB (>= 256): 1/16
-  // of it holds the latest root solids as level sets, 5/16 root solids
-  // compressed (zstd, for ΔG and for sharing), 1/8 the subtree cache (all
-  // least recently used first out; a solid evicted everywhere is evaluated
+  // Resident memory budget of the whole worker process, MiB (>= 256): 3/8
+  // of it holds root solids for ΔG and for sharing, the latest as level sets
+  // (at least 1/16 of the budget, and whatever the compressed ones leave)
+  // and older ones compressed (zstd, at most 5/16; a solid is compressed
+  // only when it leaves the level sets), 1/8 the subtree cache (all least
+  // recently used first out; a solid dropped everywhere is evaluated
   // again), the other half is left to the running evaluations, the
   // allocator's slack and the process.
   // Measured peak resident set with 2 slots: docs/benchmarks.md.

@@ -35,6 +35,15 @@ struct DesignEvaluatorOptions {
   // first. A ΔG whose sample was dropped re-evaluates it (results are
   // deterministic, so only time is lost).
   std::size_t solid_memory_bytes = std::size_t{1} << 30;
+  // When set, the budget of root solids asked at each insertion instead of
+  // solid_memory_bytes (a budget shared with other memory, as the cluster
+  // worker's with its shelf of compressed solids). Must be thread-safe.
+  std::function<std::size_t()> solid_memory_budget;
+  // Called for every root solid dropped from memory (least recently used
+  // over the budget), with its sample's key, on the thread that remembered
+  // the solid that pushed it out and outside the evaluator's lock; the
+  // cluster worker compresses it onto its shelf here. Must be thread-safe.
+  std::function<void(const sampling::PointKey& key, const geometry::Solid& solid)> on_solid_dropped;
   // Subtree cache shared by all evaluations (Fab Forms Sec. 6): subtrees whose
   // root took at least min_subtree_seconds are kept.
   std::size_t subtree_memory_bytes = std::size_t{512} << 20;
