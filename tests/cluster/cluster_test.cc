@@ -20,6 +20,7 @@
 
 #include "cluster_job.h"
 #include "cluster_process.h"
+#include "fabatlas/coordinator/coordinator.h"
 #include "fabatlas/coordinator/job_client.h"
 #include "fabatlas/pipeline/artifact_of.h"
 #include "fabatlas/design/design.h"
@@ -356,6 +357,44 @@ TEST(ClusterFaults, StoppedWorkerLosesItsLeaseAndTheTaskMoves) {
   EXPECT_GE(field("tasks_run"), 1) << summary;
   EXPECT_EQ(field("results_acknowledged"), field("tasks_run")) << summary;
   StopAndCheckStore(c, dir / "state", id);
+}
+
+// A worker told to stop while the long poll that carries its last result
+// waits for work: stopping cancels the calls under way (so a coordinator
+// that has gone cannot hold the worker for a poll's deadline), and the
+// worker sends the result again before it exits rather than leaving it
+// unacknowledged. The worker has been connected for longer than its
+// connect timeout (which once made it give up at the first failed Sync of
+// a stop), and one-at-a-time no-op tasks make each result travel in the
+// long poll of an idle worker: RunTasks returns once the coordinator has
+// the result, while that poll waits up to 5 s for more work.
+TEST(ClusterFaults, StoppedWorkerReportsTheResultItsCancelledLongPollCarried) {
+  fs::path dir = FreshDir("stop_in_poll");
+  coordinator::CoordinatorOptions options;
+  options.listen = "127.0.0.1:0";
+  options.state_dir = dir / "state";
+  coordinator::Coordinator c(options);
+  c.Start();
+  pid_t worker = StartWorker(c.port(), dir / "worker", {"--connect-timeout", "1"});
+  int tasks = 0;
+  const auto connected = std::chrono::steady_clock::now() + std::chrono::milliseconds(1500);
+  do {
+    v1::TaskPayload p;
+    p.set_kind(v1::TASK_KIND_NOOP);
+    p.mutable_point_a()->add_key(tasks);
+    const std::string key = Sha256Hex("stop-in-poll/" + std::to_string(tasks++));
+    ASSERT_EQ(c.RunTasks("noop-stop", {p.SerializeAsString()}, {key}).size(), 1u);
+  } while (std::chrono::steady_clock::now() < connected);
+  ::kill(worker, SIGTERM);
+  EXPECT_EQ(WaitExit(worker, std::chrono::seconds(30)), 0);
+  const std::string summary = WorkerSummary(dir / "worker");
+  auto field = [&](const std::string& name) {
+    auto at = summary.find(" " + name + "=");
+    return at == std::string::npos ? -1 : std::atoll(summary.c_str() + at + name.size() + 2);
+  };
+  EXPECT_EQ(field("tasks_run"), tasks) << summary;
+  EXPECT_EQ(field("results_acknowledged"), tasks) << summary;
+  c.Shutdown();
 }
 
 namespace {

@@ -152,6 +152,7 @@ void Worker::EndSync(std::unique_lock<std::mutex>& lock) {
 
 void Worker::SyncLoop() {
   auto started = Clock::now();
+  std::optional<Clock::time_point> failing_since;  // the first failed Sync since the last answer
   std::int64_t backoff_ms = 200;
   bool patient = false;  // wait for a result (or a while) before the next Sync
   while (true) {
@@ -194,10 +195,17 @@ void Worker::SyncLoop() {
       if (status.error_code() == grpc::StatusCode::UNAUTHENTICATED ||
           status.error_code() == grpc::StatusCode::PERMISSION_DENIED)
         throw InputError("coordinator " + o_.coordinator + " refused this worker: " + status.error_message());
-      auto waited = std::chrono::duration_cast<std::chrono::milliseconds>(Clock::now() - started).count();
-      if (!connected_ && waited > o_.connect_timeout_ms)
+      const auto now = Clock::now();
+      if (!failing_since) failing_since = now;
+      auto ms = [&](Clock::time_point since) {
+        return std::chrono::duration_cast<std::chrono::milliseconds>(now - since).count();
+      };
+      if (!connected_ && ms(started) > o_.connect_timeout_ms)
         throw InputError("cannot reach coordinator " + o_.coordinator + ": " + status.error_message());
-      if (stop_ && waited > o_.connect_timeout_ms) return;  // leaving and nobody listens
+      // Leaving and nobody has listened for a while. (Measured from the
+      // first failure, not from the start: a Sync that WatchStop cancelled
+      // carried results, and they go out again on the next one.)
+      if (stop_ && ms(*failing_since) > o_.connect_timeout_ms) return;
       if (stop_ && status.error_code() != grpc::StatusCode::CANCELLED) {
         // Stopping and the coordinator does not answer: what is left (its
         // unreported results, unstarted leases) is recomputed after the
@@ -219,6 +227,7 @@ void Worker::SyncLoop() {
     }
     const bool reconnected = backoff_ms > 200;  // a Sync failed before this one
     backoff_ms = 200;
+    failing_since.reset();
     {
       std::unique_lock lock(mu_);
       if (!connected_) started = Clock::now();

@@ -53,7 +53,10 @@ class Worker {
   // poll or heartbeat to a coordinator that has gone (no answer, no reset)
   // would otherwise hold the worker for its whole deadline. Leases a
   // cancelled long poll was granted are returned by the next Sync (the
-  // coordinator returns leases a worker does not list as in flight).
+  // coordinator returns leases a worker does not list as in flight), and
+  // the results it carried go out again on the next Sync (SyncLoop; a
+  // stopping worker's calls get kStoppingCallMs): a drained worker reports
+  // what it finished before it exits.
   void WatchStop();
 
   // A call to the coordinator, cancelled when the worker stops (WatchStop);
