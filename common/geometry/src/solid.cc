@@ -182,18 +182,29 @@ bool Solid::empty() const {
 
 double Solid::voxel_size() const { return impl_ ? impl_->spec.voxel_size : 0.0; }
 
+namespace {
+// The solid's moments, computed on first use and kept with its grid.
+const std::array<double, 4>& CachedMoments(const Solid::Impl& impl) {
+  std::call_once(impl.moments_once, [&impl] {
+    const Moments m = ComputeMoments(*impl.grid, impl.spec.half_width_voxels);
+    impl.moments = {m.m0, m.m1[0], m.m1[1], m.m1[2]};
+  });
+  return impl.moments;
+}
+}  // namespace
+
 double Solid::Volume() const {
   if (!impl_) return 0.0;
   const double vs = impl_->spec.voxel_size;
-  return ComputeMoments(*impl_->grid, impl_->spec.half_width_voxels).m0 * vs * vs * vs;
+  return CachedMoments(*impl_)[0] * vs * vs * vs;
 }
 
 Vec3 Solid::CenterOfMass() const {
   if (!impl_) return {0, 0, 0};
-  const Moments m = ComputeMoments(*impl_->grid, impl_->spec.half_width_voxels);
-  if (m.m0 <= 0) return {0, 0, 0};
+  const std::array<double, 4>& m = CachedMoments(*impl_);
+  if (m[0] <= 0) return {0, 0, 0};
   const double vs = impl_->spec.voxel_size;
-  return {m.m1[0] / m.m0 * vs, m.m1[1] / m.m0 * vs, m.m1[2] / m.m0 * vs};
+  return {m[1] / m[0] * vs, m[2] / m[0] * vs, m[3] / m[0] * vs};
 }
 
 Box3 Solid::BoundingBox() const {

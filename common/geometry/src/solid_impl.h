@@ -3,6 +3,8 @@
 
 #include <openvdb/openvdb.h>
 
+#include <array>
+#include <mutex>
 #include <string>
 
 #include "fabatlas/error.h"
@@ -16,6 +18,11 @@ namespace fabatlas::geometry {
 struct Solid::Impl {
   openvdb::FloatGrid::Ptr grid;  // never mutated after construction
   GridSpec spec;
+  // The inside's zeroth and first moments (voxel units: m0, m1 x, y, z),
+  // computed once for Volume and CenterOfMass (a sample asks for both: the
+  // volume property and the stands check); thread-safe.
+  mutable std::once_flag moments_once;
+  mutable std::array<double, 4> moments{};
 };
 
 // Iso-value used when meshing a level set, in voxels (see Solid::ToMesh).
