@@ -714,8 +714,8 @@ class CsgEvaluation {
       for (const auto& c : n.children) s.parts.push_back(Evaluate2(c, {1, 0, 0, 0, 1, 0}, render2_));
       if (MinX(s) < 0) throw NoNativeEquivalent{"rotate_extrude of points with x < 0"};
       const double angle = std::clamp(n.Number("angle", 360), -360.0, 360.0);
-      const int fragments =
-          static_cast<int>(std::ceil(std::max(FragmentsOf(n, MaxX(s)) * std::abs(angle) / 360, 1.0)));
+      // OpenSCAD 2021.01 truncates: 31 fragments through 180 degrees are 15 sectors.
+      const int fragments = static_cast<int>(std::max(FragmentsOf(n, MaxX(s)) * std::abs(angle) / 360, 1.0));
       return {Extruded(s, [&](const Loop& l) { return scad::RotateExtrudeMesh(l, angle, fragments); }, m), nullptr, ""};
     }
     if (n.name == "hull") {

@@ -254,7 +254,7 @@ TriangleMesh RotateExtrudeMesh(const Loop& loop, double angle, int fragments) {
   fragments = std::max(1, fragments);
   const int rings = closed ? fragments : fragments + 1;
   for (int r = 0; r < rings; ++r) {
-    const double a = (closed ? 360.0 : angle) * r / fragments;
+    const double a = closed ? 180 + 360.0 * r / fragments : angle * r / fragments;
     for (const Point2& p : loop) m.vertices.push_back({p[0] * CosDeg(a), p[0] * SinDeg(a), p[1]});
   }
   for (int r = 0; r < fragments; ++r) {

@@ -67,7 +67,9 @@ mesh::TriangleMesh LinearExtrudeMesh(const Region2& region, double height, bool 
 int ExtrudeSlices(double r_sqr, double delta_sqr, double height, double twist, const Point2& scale, double fn,
                   double fs, double fa);
 // rotate_extrude of one simple loop in the (x >= 0, y) half-plane about z,
-// through `angle` degrees (360 = closed) in `fragments` steps.
+// through `angle` degrees in `fragments` steps, starting on +x; a closed
+// one (|angle| >= 360) starts on -x, as OpenSCAD 2021.01's (so an odd number
+// of fragments puts a vertex on -x, not +x).
 mesh::TriangleMesh RotateExtrudeMesh(const Loop& loop, double angle, int fragments);
 
 }  // namespace fabatlas::scad
