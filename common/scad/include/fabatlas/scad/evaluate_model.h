@@ -14,28 +14,31 @@
 //  - `module` and `function` definitions with parameters and defaults,
 //    `children()`, `children(i)`, `$children`; `$`-variables scoped
 //    dynamically, the others lexically; `for`, `if`/`else`, `let` statements;
-//    `*` (disabled) statements; `echo` (ignored), `assert`;
+//    `*` (disabled) statements, `%` and `#` modifiers; `echo` and `assert`
+//    as statements and in expressions; names starting with digits;
 //  - built-in functions: trigonometry in degrees (exact at multiples of 30
 //    and 45 as OpenSCAD's), abs, sign, sqrt, pow, exp, ln, log, floor, ceil,
-//    round, min, max, norm, cross, len, concat, str (of strings and whole
-//    numbers), chr, ord, lookup, is_undef/is_num/is_bool/is_string/is_list;
+//    round, min, max, norm, cross (2D and 3D), len, concat, str, chr, ord,
+//    lookup, is_undef/is_num/is_bool/is_string/is_list;
 //  - built-in modules: cube, sphere, cylinder, polyhedron, square, circle,
 //    polygon, text (ASCII), translate, rotate, scale, mirror, multmatrix,
-//    color (as a vector), union, difference, intersection, hull, group,
-//    render, linear_extrude, rotate_extrude.
+//    color (a vector, an SVG colour name or #hex), union, difference,
+//    intersection, hull, group, render, offset, projection, linear_extrude,
+//    rotate_extrude.
 // Declined (the caller falls back to OpenSCAD's own export): include/use,
-// import, surface, minkowski, offset, projection, resize, intersection_for,
-// colour names, `!`/`#`/`%` modifiers, function literals, rands/search, any
-// operation on undef or of mismatched types (OpenSCAD warns and goes on with
-// undef), a variable assigned twice in one scope, recursion deeper than
-// 10,000 calls or than 1 MiB of stack (about 250 levels of a recursive
-// function and as many of a module), loops of more than 1,000,000
-// iterations, more than 20 million evaluation steps, vectors of more than a
-// million values or strings of more than ten million characters, a failed
-// assert.
+// import, surface, minkowski, resize, intersection_for, the `!` modifier,
+// function literals, rands/search/version and other built-ins not above,
+// `\x`/`\u` escapes and non-ASCII text, any operation on undef or of
+// mismatched types (OpenSCAD warns and goes on with undef), a variable
+// assigned twice in one scope, recursion deeper than 10,000 calls or than
+// 1 MiB of stack (about 250 levels of a recursive function and as many of a
+// module), loops of more than 1,000,000 iterations, more than 20 million
+// evaluation steps, vectors of more than a million values or strings of
+// more than ten million characters, a failed assert.
 //
-// Numbers are written as OpenSCAD writes them (6 significant digits, C's %g),
-// so an equal tree gives equal text and equal subtree keys.
+// Numbers are written as OpenSCAD writes them (node fields as C's %g; vectors
+// and matrices with 6 significant digits, exact ties away from zero, `1e+6`,
+// `2.5e-7`), so an equal tree gives equal text and equal subtree keys.
 #pragma once
 
 #include <filesystem>
