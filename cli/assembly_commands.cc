@@ -142,6 +142,10 @@ void AddAssemblyCommands(CLI::App& app, int& exit_code) {
                 "feasible starts that run the target objective (default 4)");
   c->add_flag("--no-slide-friction", [args](std::int64_t) { args->options.slide_friction = false; },
               "connectors slide along rods without friction (the paper's model; docs/assembly.md)");
+  c->add_option("--relaxation-target-weight", args->options.relaxation_target_weight,
+                "start step 2 with the target term at this weight (J/mm², /10 per stage; default 0: none)");
+  c->add_flag("--active-set", args->options.relaxation_active_set,
+              "relax with an active set of parameters held at their bounds (docs/assembly.md)");
   c->add_option("--mesh-dir", args->mesh_dir, "part meshes (default $FABATLAS_SHARED_DIR/data/fabhacks/meshes)");
   c->callback([args, &exit_code] { exit_code = Run(*args); });
 }

@@ -2,7 +2,7 @@
 // (termination type, iterations) and how far the relaxed target moves when
 // every free parameter of the step-1 solution is moved by ±delta before the
 // relaxation (a converged relaxation is reproducible). Usage:
-//   assembly_relaxation_bench [--delta D] [--iterations N] [--datum MM] [--anchor K] [--only NAME] [--configs DIR]
+//   assembly_relaxation_bench [--delta D] [--iterations N] [--datum MM] [--anchor K] [--target-weight W] [--active-set 0|1] [--only NAME] [--configs DIR]
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
@@ -27,12 +27,14 @@ int main(int argc, char** argv) {
     if (a == "--iterations") opt.relaxation_max_iterations = std::atoi(argv[i + 1]);
     if (a == "--datum") opt.relaxation_datum_mm = std::atof(argv[i + 1]);
     if (a == "--anchor") opt.relaxation_anchor_stiffness = std::atof(argv[i + 1]);
+    if (a == "--target-weight") opt.relaxation_target_weight = std::atof(argv[i + 1]);
+    if (a == "--active-set") opt.relaxation_active_set = std::atoi(argv[i + 1]) != 0;
     if (a == "--only") only = argv[i + 1];
     if (a == "--configs") dir = argv[i + 1];
   }
   const char* all[] = {"demo", "toothbrush_holder", "charger_holder", "soap_bottle_holder", "soap_bottle_holder_one_hook",
                        "mug_hanger", "bird_feeder", "paper_towel_holder", "diaper_caddy", "bathroom_basket",
-                       "clip_lights_1", "clip_lights_2", "clip_lights_3", "clip_lights_4"};
+                       "clip_lights_1", "clip_lights_2", "clip_lights_3", "clip_lights_4", "reading_nook"};
   std::printf("| example | termination | iterations | relaxation moves target (mm, deg) | final (mm, deg) | moved at +delta (mm, deg) | moved at -delta (mm, deg) | stable | falls apart | CPU (s) |\n");
   std::printf("|---|---|---|---|---|---|---|---|---|---|\n");
   try {

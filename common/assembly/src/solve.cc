@@ -196,6 +196,11 @@ struct AssemblyResidual {
   const Kinematics* kin;
   Phase phase;
   double closure_weight, rot_scale, target_rot_scale;
+  // Relaxation only: residual scale of the target term (0: none), see
+  // SolveOptions::relaxation_target_weight.
+  double relax_target_scale = 0;
+  bool HasTargetRows() const { return phase == Phase::kObjective || (phase == Phase::kRelaxation && relax_target_scale > 0); }
+  double TargetScale() const { return phase == Phase::kObjective ? 1.0 : relax_target_scale; }
   std::vector<SpacingTerm> spacing;
   std::vector<EnergyTerm> energy;
   const TargetForm* target = nullptr;
@@ -207,7 +212,7 @@ struct AssemblyResidual {
 
   int NumResiduals() const {
     return 12 * static_cast<int>(kin->closing.size()) + static_cast<int>(spacing.size()) +
-           (phase == Phase::kObjective ? 12 : 0) + (phase == Phase::kRelaxation ? static_cast<int>(energy.size()) : 0);
+           (HasTargetRows() ? 12 : 0) + (phase == Phase::kRelaxation ? static_cast<int>(energy.size()) : 0);
   }
 
   template <typename T>
@@ -233,12 +238,13 @@ struct AssemblyResidual {
       const T f = d * T(s.length) - T(s.half_widths);
       r[k++] = f < T(0) ? T(closure_weight) * f : T(0);
     }
-    if (phase == Phase::kObjective) {
+    if (HasTargetRows()) {
       const Mat4<T> q = p[kin->prog->target] * target->offset.template cast<T>();
-      for (int i = 0; i < 3; ++i) r[k++] = q(i, 3) - T(target->t[i]);
+      const double ts = TargetScale();
+      for (int i = 0; i < 3; ++i) r[k++] = T(ts) * (q(i, 3) - T(target->t[i]));
       T w[9];
       target->RotationResidual<T>(q.template topLeftCorner<3, 3>(), w);
-      for (int i = 0; i < 9; ++i) r[k++] = T(target_rot_scale) * w[i];
+      for (int i = 0; i < 9; ++i) r[k++] = T(ts * target_rot_scale) * w[i];
     }
     if (phase == Phase::kRelaxation) {
       // Potential m·g·z (J, z in mm/1000) as ½r² = m g (z + D)² / (2000 D):
@@ -364,6 +370,7 @@ class AssemblyCost : public ceres::CostFunction {
     const double wc = f_.closure_weight, wr = f_.closure_weight * f_.rot_scale;
     const int spacing_row = 12 * static_cast<int>(kin.closing.size());
     const int objective_row = spacing_row + static_cast<int>(f_.spacing.size());
+    const int energy_row = objective_row + (f_.HasTargetRows() ? 12 : 0);
     auto put12 = [&](double* jac, int row, int i, const Eigen::Matrix4d& d, double wt, double wrot) {
       for (int a = 0; a < 3; ++a) jac[(row + a) * internal::kParamBlock + i] = wt * d(a, 3);
       for (int a = 0; a < 3; ++a)
@@ -402,20 +409,21 @@ class AssemblyCost : public ceres::CostFunction {
             if (inb) d -= g * fb[k];
             put12(jac, 12 * static_cast<int>(k), i, d, wc * f_.ClosingScale(k), wr * f_.ClosingScale(k));
           }
-          if (f_.phase == Phase::kObjective && sub[prog.target]) {
+          if (f_.HasTargetRows() && sub[prog.target]) {
             const Eigen::Matrix4d d = g * pose[prog.target] * f_.target->offset;
             double w[9];
             f_.target->Rows<double>(d.topLeftCorner<3, 3>(), w);
-            for (int a = 0; a < 3; ++a) jac[(objective_row + a) * internal::kParamBlock + i] = d(a, 3);
+            const double ts = f_.TargetScale();
+            for (int a = 0; a < 3; ++a) jac[(objective_row + a) * internal::kParamBlock + i] = ts * d(a, 3);
             for (int a = 0; a < 9; ++a)
-              jac[(objective_row + 3 + a) * internal::kParamBlock + i] = f_.target_rot_scale * w[a];
+              jac[(objective_row + 3 + a) * internal::kParamBlock + i] = ts * f_.target_rot_scale * w[a];
           }
           if (f_.phase == Phase::kRelaxation)
             for (size_t k = 0; k < f_.energy.size(); ++k) {
               const EnergyTerm& en = f_.energy[k];
               if (!sub[en.part]) continue;
               const Eigen::Vector4d com_world = pose[en.part] * en.com.homogeneous();
-              jac[(objective_row + static_cast<int>(k)) * internal::kParamBlock + i] = en.scale * g.row(2).dot(com_world);
+              jac[(energy_row + static_cast<int>(k)) * internal::kParamBlock + i] = en.scale * g.row(2).dot(com_world);
             }
         }
       }
@@ -714,12 +722,14 @@ class Solver {
   }
 
   ceres::Solver::Summary Run(Phase phase, double sigma, std::unique_ptr<ceres::Problem>* keep = nullptr,
-                             const Chain* chain = nullptr) {
+                             const Chain* chain = nullptr, int max_iterations = 0) {
     auto problem = std::make_unique<ceres::Problem>();
     Build(*problem, phase, sigma, chain);
     ceres::Solver::Options o;
     o.linear_solver_type = ceres::DENSE_QR;
-    o.max_num_iterations = phase == Phase::kRelaxation ? opt_.relaxation_max_iterations : opt_.max_iterations;
+    o.max_num_iterations = max_iterations > 0                ? max_iterations
+                           : phase == Phase::kRelaxation ? opt_.relaxation_max_iterations
+                                                         : opt_.max_iterations;
     o.num_threads = 1;
     o.logging_type = ceres::SILENT;
     o.function_tolerance = 1e-12;
@@ -744,6 +754,11 @@ class Solver {
 
     ceres::Solver::Summary s;
     ceres::Solve(o, problem.get(), &s);
+    // A held parameter's value is its held value (the gauge anchor may have
+    // moved the unused block entry).
+    for (size_t b = 0; b < blocks_.size(); ++b)
+      for (int i = 0; i < internal::kParamBlock; ++i)
+        if (kin_.held[b][i]) blocks_[b][i] = kin_.held_value[b][i];
     if (std::getenv("FABATLAS_ASSEMBLY_DEBUG"))
       std::fprintf(stderr, "phase %d sigma %g: %s (%s)\n", static_cast<int>(phase), sigma, s.BriefReport().c_str(),
                    s.message.c_str());
@@ -779,32 +794,29 @@ class Solver {
   // (FabHacks, 4.3.3).
   // With slide friction, a connector on a rod pushed against an open end
   // stays on when its load there is inside the friction cone.
-  std::vector<std::string> FallsApart(ceres::Problem& problem) {
+  std::vector<std::string> FallsApart() {
     std::vector<std::string> out;
     if (opt_.slide_friction) EvaluateSlideLoads();
-    ceres::Problem::EvaluateOptions eo;
-    for (auto& b : blocks_) eo.parameter_blocks.push_back(b.data());
-    eo.residual_blocks = {assembly_block_};  // gravity + closure, not the gauge anchor
-    double cost = 0;
-    std::vector<double> grad;
-    problem.Evaluate(eo, &cost, nullptr, &grad, nullptr);
+    const std::vector<double> grad = EnergyGradient();  // gravity + closure, not the gauge anchor
     for (size_t b = 0; b < blocks_.size(); ++b) {
-      if (problem.IsParameterBlockConstant(blocks_[b].data())) continue;
+      if (prog_.connections[b / 2].held_in_relaxation) continue;
       const auto& c = prog_.connections[b / 2];
       const std::string where = b % 2 == 0 ? prog_.instances[c.part_a].name + "." + c.primitive_a
                                            : prog_.instances[c.part_b].name + "." + c.primitive_b;
       const auto& specs = Spec(static_cast<int>(b));
       for (size_t i = 0; i < specs.size(); ++i) {
-        if (specs[i].kind != ParamKind::kBoundedAndOpen || specs[i].held || kin_.held[b][i]) continue;
+        const bool pinned =
+            std::find(pinned_.begin(), pinned_.end(), std::make_pair(int(b), int(i))) != pinned_.end();
+        if (specs[i].kind != ParamKind::kBoundedAndOpen || specs[i].held || (kin_.held[b][i] && !pinned)) continue;
         const SlideState* slide = FindSlide(static_cast<int>(b), static_cast<int>(i));
         if (slide && slide->angle_deg <= opt_.friction_angle_deg) continue;
         const double x = blocks_[b][i], g = grad[internal::kParamBlock * b + i];
         const double eps = 1e-6 * (specs[i].max - specs[i].min);
         if (std::getenv("FABATLAS_ASSEMBLY_DEBUG") && (x <= specs[i].min + eps || x >= specs[i].max - eps))
           std::fprintf(stderr, "at bound: %s.%s = %g, gradient %g\n", where.c_str(), specs[i].name.c_str(), x, g);
-        if (x <= specs[i].min + eps && g > 1e-9 && !specs[i].blocked_min)
+        if (x <= specs[i].min + eps && g > kForceTolerance && !specs[i].blocked_min)
           out.push_back(where + "." + specs[i].name + " at min");
-        else if (x >= specs[i].max - eps && g < -1e-9 && !specs[i].blocked_max)
+        else if (x >= specs[i].max - eps && g < -kForceTolerance && !specs[i].blocked_max)
           out.push_back(where + "." + specs[i].name + " at max");
       }
     }
@@ -845,6 +857,58 @@ class Solver {
     return released;
   }
 
+  // Active set of the relaxation (SolveOptions::relaxation_active_set; the
+  // reference's active-set Newton): pins every bounded parameter that the
+  // relaxation left at a bound with the energy pushing it out of its
+  // interval; if none, unpins the pinned one the energy pushes back in
+  // hardest (per mm or degree; one at a time, as an active-set method drops
+  // one constraint per step — dropping all at once cycles on the reading
+  // nook's ring links). A parameter held otherwise (base form, held
+  // connection, stuck slide) is not touched. Returns how many changed; the
+  // relaxation then runs again with the set held. Bounded
+  // Levenberg-Marquardt alone creeps along a bound it keeps running into.
+  int UpdateActiveSet() {
+    const std::vector<double> grad = EnergyGradient();
+    int pinned = 0;
+    int worst = -1;  // the pinned parameter pushed back in hardest
+    double worst_g = kForceTolerance;
+    for (size_t b = 0; b < blocks_.size(); ++b) {
+      if (prog_.connections[b / 2].held_in_relaxation) continue;
+      const auto& specs = Spec(static_cast<int>(b));
+      const auto units = Units(static_cast<int>(b));
+      for (size_t i = 0; i < specs.size(); ++i) {
+        if (specs[i].kind == ParamKind::kUnbounded || specs[i].held) continue;
+        const double g = grad[internal::kParamBlock * b + i], x = blocks_[b][i];
+        const double eps = 1e-6 * (specs[i].max - specs[i].min);
+        const auto it = std::find(pinned_.begin(), pinned_.end(), std::make_pair(int(b), int(i)));
+        if (it != pinned_.end()) {
+          const double inward = (x <= specs[i].min + eps ? -g : g) / units[i];
+          if (inward > worst_g) worst_g = inward, worst = static_cast<int>(it - pinned_.begin());
+          continue;
+        }
+        if (kin_.held[b][i]) continue;
+        const bool at_min = x <= specs[i].min + eps && g > kForceTolerance;
+        const bool at_max = x >= specs[i].max - eps && g < -kForceTolerance;
+        if (!at_min && !at_max) continue;
+        blocks_[b][i] = at_min ? specs[i].min : specs[i].max;
+        kin_.held[b][i] = true;
+        kin_.held_value[b][i] = blocks_[b][i];
+        pinned_.push_back({static_cast<int>(b), static_cast<int>(i)});
+        ++pinned;
+        if (std::getenv("FABATLAS_ASSEMBLY_DEBUG"))
+          std::fprintf(stderr, "active set: pin %zu.%zu (%s) at %g, gradient %g\n", b, i, specs[i].name.c_str(),
+                       blocks_[b][i], g);
+      }
+    }
+    if (pinned > 0 || worst < 0) return pinned;
+    const auto [b, i] = pinned_[worst];
+    kin_.held[b][i] = false;
+    pinned_.erase(pinned_.begin() + worst);
+    if (std::getenv("FABATLAS_ASSEMBLY_DEBUG"))
+      std::fprintf(stderr, "active set: unpin %d.%d, pushed in by %g per mm or degree\n", b, i, worst_g);
+    return 1;
+  }
+
   std::vector<SolveSummary::Slide> SlideReport() const {
     std::vector<SolveSummary::Slide> out;
     for (const SlideState& sl : slides_) {
@@ -859,6 +923,10 @@ class Solver {
   }
 
   std::vector<Block>& blocks() { return blocks_; }
+
+  // Weight w (J per mm²) of the target term w·‖target error‖² in the
+  // relaxation (SolveOptions::relaxation_target_weight); 0 removes it.
+  void SetRelaxationTargetWeight(double w) { relax_target_scale_ = std::sqrt(2 * w); }
 
   // Step 2 starts here: the gauge anchor is the current parameters.
   void SetRelaxationAnchor() { anchor_ = blocks_; }
@@ -1014,6 +1082,25 @@ class Solver {
     }
   }
 
+  // Gradient of the relaxation energy (gravity, closures, spacing; not the
+  // gauge anchor) in every parameter, pinned ones included (J per unit).
+  std::vector<double> EnergyGradient() {
+    for (const auto& [b, i] : pinned_) kin_.held[b][i] = false;
+    AssemblyCost cost(Residual(Phase::kRelaxation, opt_.relaxation_penalty));
+    std::vector<double> r(cost.num_residuals());
+    std::vector<std::vector<double>> jac(blocks_.size(), std::vector<double>(r.size() * internal::kParamBlock));
+    std::vector<double*> jp;
+    for (auto& j : jac) jp.push_back(j.data());
+    const std::vector<double*> x = Pointers();
+    cost.Evaluate(x.data(), r.data(), jp.data());
+    for (const auto& [b, i] : pinned_) kin_.held[b][i] = true;
+    std::vector<double> grad(blocks_.size() * internal::kParamBlock, 0.0);
+    for (size_t b = 0; b < blocks_.size(); ++b)
+      for (int i = 0; i < internal::kParamBlock; ++i)
+        for (size_t k = 0; k < r.size(); ++k) grad[internal::kParamBlock * b + i] += jac[b][k * internal::kParamBlock + i] * r[k];
+    return grad;
+  }
+
   const std::vector<ParamSpec>& Spec(int b) const {
     const auto& c = prog_.connections[b / 2];
     return b % 2 == 0 ? c.params_a : c.params_b;
@@ -1033,6 +1120,7 @@ class Solver {
                                                     : std::sqrt(2 * sigma);
     f.rot_scale = opt_.rotation_scale_mm;
     f.target_rot_scale = prog_.target_match_rotation ? opt_.target_mm_per_rad : 0.0;
+    if (phase == Phase::kRelaxation) f.relax_target_scale = relax_target_scale_;
     f.spacing = spacing_;
     f.energy = energy_;
     f.target = &target_;
@@ -1042,7 +1130,7 @@ class Solver {
   void Build(ceres::Problem& problem, Phase phase, double sigma, const Chain* chain = nullptr) {
     AssemblyResidual f = Residual(phase, sigma);
     if (chain) f.closing_scale = chain->closing_scale;
-    assembly_block_ = problem.AddResidualBlock(new AssemblyCost(std::move(f)), nullptr, Pointers());
+    problem.AddResidualBlock(new AssemblyCost(std::move(f)), nullptr, Pointers());
     for (size_t b = 0; b < blocks_.size(); ++b) {
       const auto& c = prog_.connections[b / 2];
       double* s = blocks_[b].data();
@@ -1072,9 +1160,11 @@ class Solver {
   std::vector<SpacingTerm> spacing_;
   std::vector<EnergyTerm> energy_;
   TargetForm target_;
-  ceres::ResidualBlockId assembly_block_ = nullptr;  // of the last Build
   std::vector<Block> anchor_;                       // gauge anchor of the relaxation
   std::vector<SlideState> slides_;                  // static friction along rods (StickSlides)
+  double relax_target_scale_ = 0;                   // SetRelaxationTargetWeight
+  std::vector<std::pair<int, int>> pinned_;         // active set: (block, index) held at a bound
+  static constexpr double kForceTolerance = 1e-9;   // J per unit
 };
 
 void TargetErrors(const Program& prog, const Eigen::Isometry3d& pose, double& mm, double& deg) {
@@ -1160,6 +1250,11 @@ internal::JacobianCheck internal::CheckJacobian(const Program& program, int star
 }
 
 namespace {
+// Relaxation runs after which the active set is no longer updated (each
+// update pins or unpins at least one parameter; a guard against cycling).
+constexpr int kMaxRelaxationRuns = 400;
+constexpr int kActiveSetRound = 1000;  // iterations per round of an active-set relaxation
+
 SolveSummary Solve(const Program& prog, const SolveOptions& opt, double perturbation) {
   const auto t0 = std::chrono::steady_clock::now();
   SolveSummary out;
@@ -1226,22 +1321,49 @@ SolveSummary Solve(const Program& prog, const SolveOptions& opt, double perturba
   if (opt.relax) {
     if (perturbation != 0) solver.Perturb(perturbation);
     solver.SetRelaxationAnchor();
-    std::unique_ptr<ceres::Problem> problem;
     const auto tr = std::chrono::steady_clock::now();
     // Static friction along rods: relax with every slide held, let go of
     // those whose load leaves the friction cone and relax again from there,
     // until every slide still held is inside it (at most one more relaxation
     // per slide: a slide let go is not held again).
     if (opt.slide_friction) solver.StickSlides();
+    // Optionally the reference implementation's continuation first
+    // (SolveOptions::relaxation_target_weight): the target term w·‖error‖²,
+    // w divided by 10 at every convergence, the slides held throughout;
+    // then the energy alone.
+    for (double w = opt.relaxation_target_weight; w > opt.relaxation_target_weight_end; w *= 0.1) {
+      solver.SetRelaxationTargetWeight(w);
+      const ceres::Solver::Summary rs = solver.Run(Phase::kRelaxation, opt.relaxation_penalty);
+      out.relaxation_iterations += static_cast<int>(rs.iterations.size()) - 1;
+      ++out.relaxation_runs;
+    }
+    solver.SetRelaxationTargetWeight(0);
+    // With the active set, step 2 runs in rounds of at most
+    // kActiveSetRound iterations and updates the set after each, so a
+    // parameter that runs into a bound is held there within a round instead
+    // of LM creeping along it; a round that ends at its cap with the set
+    // unchanged goes on, up to relaxation_max_iterations in all since the
+    // last change.
+    int since_change = 0;
     for (;;) {
-      const ceres::Solver::Summary rs = solver.Run(Phase::kRelaxation, opt.relaxation_penalty, &problem);
+      const ceres::Solver::Summary rs = solver.Run(Phase::kRelaxation, opt.relaxation_penalty, nullptr, nullptr,
+                                                   opt.relaxation_active_set ? kActiveSetRound : 0);
       out.relaxation_termination = ceres::TerminationTypeToString(rs.termination_type);
       out.relaxation_iterations += static_cast<int>(rs.iterations.size()) - 1;
       ++out.relaxation_runs;
+      if (opt.relaxation_active_set && out.relaxation_runs < kMaxRelaxationRuns) {
+        if (solver.UpdateActiveSet() > 0) {
+          since_change = 0;
+          continue;
+        }
+        since_change += static_cast<int>(rs.iterations.size()) - 1;
+        if (rs.termination_type == ceres::NO_CONVERGENCE && since_change < opt.relaxation_max_iterations) continue;
+      }
       if (!opt.slide_friction || solver.ReleaseSlipping() == 0) break;
+      since_change = 0;
     }
     out.relaxation_seconds = Since(tr);
-    out.falls_apart = solver.FallsApart(*problem);
+    out.falls_apart = solver.FallsApart();
     out.slides = solver.SlideReport();
   }
   out.poses = solver.Poses();

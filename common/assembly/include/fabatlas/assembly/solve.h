@@ -23,7 +23,10 @@
 //     A weak anchor ½k‖s − s_step1‖² fixes the gauge of parts free to turn
 //     about the vertical. Connectors on rods start held by static friction
 //     and are let go, relaxing again, while any one's load leaves the
-//     friction cone (slide_friction). Then every BOUNDED_AND_OPEN parameter
+//     friction cone (slide_friction). Optionally (relaxation_active_set)
+//     parameters that reach a bound are held there and released when pushed
+//     back in, and (relaxation_target_weight) the relaxation starts from the
+//     reference's continuation on the target term. Then every BOUNDED_AND_OPEN parameter
 //     pinned at a bound whose energy gradient points out of its interval
 //     (and, on a rod, outside the friction cone) is reported as falling apart.
 // Single-threaded (Ceres with one thread); deterministic.
@@ -70,6 +73,18 @@ struct SolveOptions {
   // for angles) so a part free to turn about the vertical stays where step 1
   // put it; 0 disables. See AnchorCost in solve.cc.
   double relaxation_anchor_stiffness = 1e-9;
+  // Continuation from the target: step 2 first minimises energy +
+  // w·‖target error‖² (w in J per mm², the step-1 target residual) with w =
+  // relaxation_target_weight, then w/10, … while w > relaxation_target_weight_end,
+  // then the energy alone. 0: the energy alone from the start.
+  double relaxation_target_weight = 0;
+  // Active set (the reference's active-set Newton): after a relaxation run,
+  // hold every bounded parameter left at a bound with the energy pushing it
+  // out, release the held one pushed back in hardest, and run again until
+  // the set is stable. Bounded Levenberg-Marquardt alone creeps along a
+  // bound it keeps running into and stops short of the constrained minimum.
+  bool relaxation_active_set = false;
+  double relaxation_target_weight_end = 1e-9;
   // The potential m g z is the least-squares term m g (z + D)²/(2000 D),
   // exact in gradient up to |z|/D. The cost (≈ m g D/2000 J) bounds the
   // energy resolution to ~1e-16 of it; a smaller D adds curvature that
