@@ -29,7 +29,12 @@ namespace PMP = CGAL::Polygon_mesh_processing;
 
 class DisjointSets {
  public:
-  explicit DisjointSets(std::size_t n) : parent_(n) { std::iota(parent_.begin(), parent_.end(), 0); }
+  explicit DisjointSets(std::size_t n) { Reset(n); }
+  // n singletons again, reusing the storage.
+  void Reset(std::size_t n) {
+    parent_.resize(n);
+    std::iota(parent_.begin(), parent_.end(), 0);
+  }
   std::size_t Find(std::size_t x) {
     while (parent_[x] != x) x = parent_[x] = parent_[parent_[x]];
     return x;
@@ -197,6 +202,7 @@ MeshReport InspectMesh(const TriangleMesh& mesh, const InspectOptions& options) 
       for (std::int32_t v : tris[f]) incident[fill[v]++] = static_cast<std::int32_t>(f);
   }
   std::vector<std::pair<std::int32_t, std::int32_t>> around;  // (other vertex, local face)
+  DisjointSets fans(0);                                        // the faces' fans around one vertex
   for (std::size_t v = 0; v < points.size(); ++v) {
     const std::int32_t deg = start[v + 1] - start[v];
     if (deg <= 1) continue;
@@ -207,7 +213,7 @@ MeshReport InspectMesh(const TriangleMesh& mesh, const InspectOptions& options) 
         if (w != static_cast<std::int32_t>(v)) around.push_back({w, k});
     }
     std::sort(around.begin(), around.end());
-    DisjointSets fans(deg);
+    fans.Reset(static_cast<std::size_t>(deg));
     for (std::size_t i = 1; i < around.size(); ++i)
       if (around[i].first == around[i - 1].first) fans.Join(around[i].second, around[i - 1].second);
     std::int32_t roots = 0;
