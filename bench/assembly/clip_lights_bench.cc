@@ -2,16 +2,20 @@
 // 20 steps over [0, 45.7] mm, ring XS/S/M/L); reports per ring size the
 // best variation (smallest relaxed target deviation among feasible ones) next
 // to the extension the paper chose. Usage:
-//   assembly_clip_lights_bench [--library configs/assemblies/parts.yaml] [--flip-clip] [--no-slide-friction] [--all]
+//   assembly_clip_lights_bench [--library configs/assemblies/parts.yaml] [--flip-clip] [--no-slide-friction]
+//                              [--active-set] [--relaxation-target-weight W] [--all]
 // --flip-clip attaches the clip to the bar with alignment flip
 // (ClipLightsParams::flip_clip); --no-slide-friction solves without static
-// friction along rods (SolveOptions::slide_friction); --all prints every
+// friction along rods (SolveOptions::slide_friction); --active-set and
+// --relaxation-target-weight relax as the reference does
+// (SolveOptions::relaxation_active_set, relaxation_target_weight); --all prints every
 // variation's outcome on stderr.
 #include <chrono>
 #include <ctime>
 #include <map>
 #include <algorithm>
 #include <cstdio>
+#include <cstdlib>
 #include <string>
 
 #include "fabatlas/assembly/clip_lights.h"
@@ -28,6 +32,8 @@ int main(int argc, char** argv) {
     if (a == "--library" && i + 1 < argc) lib = argv[++i];
     else if (a == "--flip-clip") flip_clip = true;
     else if (a == "--no-slide-friction") options.slide_friction = false;
+    else if (a == "--active-set") options.relaxation_active_set = true;
+    else if (a == "--relaxation-target-weight" && i + 1 < argc) options.relaxation_target_weight = std::atof(argv[++i]);
     else if (a == "--all") all = true;
     else {
       std::fprintf(stderr, "assembly_clip_lights_bench: unknown argument %s\n", a.c_str());
