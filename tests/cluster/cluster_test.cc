@@ -1,6 +1,6 @@
 // The cluster with real processes on loopback (label cluster): a job through
 // a fabatlas-coordinator and fabatlas-worker processes gives the same form,
-// byte for byte, as the in-process ThreadPoolExecutor run, whatever the number
+// byte for byte, as the job run in this process (in_process_job.h), whatever the number
 // of workers and whatever faults are injected (SIGKILL / SIGSTOP of workers,
 // kill -9 of the coordinator). After each run the durable store is checked:
 // every task key completed once, no orphaned lease, every blob verifies.
@@ -20,26 +20,17 @@
 
 #include "cluster_job.h"
 #include "cluster_process.h"
+#include "in_process_job.h"
 #include "fabatlas/coordinator/coordinator.h"
 #include "fabatlas/coordinator/job_client.h"
-#include "fabatlas/pipeline/artifact_of.h"
-#include "fabatlas/design/design.h"
 #include "fabatlas/error.h"
 #include "fabatlas/geometry/solid.h"
 #include "fabatlas/mesh/read_mesh.h"
 #include "fabatlas/v1/tasks.pb.h"
-#include "fabatlas/precompute/design_evaluator.h"
 #include "fabatlas/protocol/blob_transfer.h"
 #include "fabatlas/protocol/channel.h"
 #include "fabatlas/v1/worker.grpc.pb.h"
-#include "fabatlas/sampling/adaptive_sampler.h"
-#include "fabatlas/sampling/executor.h"
-#include "fabatlas/sampling/form_json.h"
-#include "fabatlas/sampling/job_file.h"
-#include "fabatlas/protocol/job_bundle.h"
 #include "fabatlas/protocol/solid_blob.h"
-#include "fabatlas/v1/tasks.pb.h"
-#include "fabatlas/artifact/artifact.h"
 #include "fabatlas/sha256.h"
 #include "fabatlas/storage/blob_store.h"
 #include "fabatlas/storage/job_store.h"
@@ -51,33 +42,24 @@ namespace {
 
 fs::path JobPath() { return SourceDir() / "tests/cluster/data/tube_small.yaml"; }
 
-// The form of the job computed in this process on a thread pool.
-const std::string& ReferenceForm() {
-  static const std::string form = [] {
-    sampling::JobFile job = sampling::ReadJobFile(JobPath().string());
-    design::Design design = design::LoadDesign(job.design_path);
-    sampling::DesignSpace space = precompute::DesignSpaceOf(design, job.subdivisions);
-    precompute::DesignSampleEvaluator evaluator(design);
-    sampling::ThreadPoolExecutor executor(2);
-    return sampling::FormToJson(sampling::SampleDesignSpace(space, evaluator, executor, job.sampling).form);
+// The job run in this process as `fabatlas sample` runs it (in_process_job.h):
+// every cluster run must publish exactly its form.json and its artifact
+// (docs/artifact.md), whatever the worker count and the faults.
+const char* const kArtifactName = "tube_wall_2d.fabatlas";
+const fs::path& ReferenceDir() {
+  static const fs::path dir = [] {
+    const fs::path d = FreshDir("reference");
+    EXPECT_EQ(RunInProcess(JobPath(), d).artifact_file, kArtifactName);
+    return d;
   }();
+  return dir;
+}
+const std::string& ReferenceForm() {
+  static const std::string form = ReadText(ReferenceDir() / "form.json");
   return form;
 }
-
-// The published artifact of the job (docs/artifact.md), computed in this
-// process from the reference form: every cluster run must publish exactly
-// these bytes, whatever the worker count and the faults.
-const char* const kArtifactName = "tube_wall_2d.fabatlas";
 const std::string& ReferenceArtifact() {
-  static const std::string bytes = [] {
-    sampling::JobFile job = sampling::ReadJobFile(JobPath().string());
-    sampling::Form form = sampling::FormFromJson(ReferenceForm());
-    artifact::Artifact artifact =
-        pipeline::ArtifactOf(protocol::MakeJobBundle(JobPath()), "tube_wall_2d", job, form);
-    fs::path path = FreshDir("reference-artifact") / kArtifactName;
-    artifact::WriteArtifact(artifact, path);
-    return ReadText(path);
-  }();
+  static const std::string bytes = ReadText(ReferenceDir() / kArtifactName);
   return bytes;
 }
 
