@@ -16,6 +16,8 @@
 #include <nlohmann/json.hpp>
 #include <set>
 #include <sstream>
+#include <type_traits>
+#include <utility>
 
 #include "fabatlas/error.h"
 #include "fabatlas/exact_decimal.h"
@@ -307,36 +309,52 @@ void InsertManifest(Db& db, const std::map<std::string, std::string>& rows) {
   }
 }
 
+// The manifest's fields under their keys (docs/artifact.md "manifest"), the
+// one list the writer and the reader go through: visit(key, field) for each,
+// in this order, with `m` a Manifest or a const Manifest. The failure shares
+// and the checksums, keyed by prefix, are left to the callers.
+template <typename M, typename Visit>
+void ForEachManifestField(M& m, Visit&& visit) {
+  visit("design_name", m.design_name);
+  visit("design_hash", m.design_hash);
+  visit("code_version", m.code_version);
+  visit("sampling.subdivisions", m.subdivisions);
+  visit("sampling.max_depth", m.max_depth);
+  visit("sampling.dg_threshold", m.dg_threshold);
+  visit("sampling.max_samples", m.max_samples);
+  visit("statistics.samples", m.statistics.samples);
+  visit("statistics.valid_samples", m.statistics.valid_samples);
+  visit("statistics.leaves", m.statistics.leaves);
+  visit("statistics.geometry_changes", m.statistics.geometry_changes);
+  visit("statistics.valid_volume_percent", m.statistics.valid_volume_percent);
+  visit("cache.strategy", m.cache.strategy);
+  visit("cache.budget_bytes", m.cache.budget_bytes);
+  visit("cache.threshold_seconds", m.cache.threshold_seconds);
+  visit("cache.cost_model", m.cache.cost_model);
+  visit("cache.top_entries", m.cache.top_entries);
+  visit("cache.top_bytes", m.cache.top_bytes);
+  visit("cache.opt_entries", m.cache.opt_entries);
+  visit("cache.opt_bytes", m.cache.opt_bytes);
+  visit("cache.rfree_entries", m.cache.rfree_entries);
+  visit("cache.rfree_bytes", m.cache.rfree_bytes);
+}
+
+const char* const kFailureSharePrefix = "statistics.failure_share.";
+const char* const kChecksumPrefix = "checksum.";
+
 std::map<std::string, std::string> ManifestRows(const Artifact& a) {
-  const Manifest& m = a.manifest;
+  Manifest m = a.manifest;
+  m.subdivisions = a.form.subdivisions;  // the form's is the one that holds
   std::map<std::string, std::string> r;
   r["format"] = "fabatlas.artifact";
   r["schema_version"] = std::to_string(kArtifactSchemaVersion);
-  r["design_name"] = m.design_name;
-  r["design_hash"] = m.design_hash;
-  r["code_version"] = m.code_version;
-  r["sampling.subdivisions"] = std::to_string(a.form.subdivisions);
-  r["sampling.max_depth"] = std::to_string(m.max_depth);
-  r["sampling.dg_threshold"] = ExactDecimal(m.dg_threshold);
-  r["sampling.max_samples"] = std::to_string(m.max_samples);
-  const ArtifactStatistics& s = m.statistics;
-  r["statistics.samples"] = std::to_string(s.samples);
-  r["statistics.valid_samples"] = std::to_string(s.valid_samples);
-  r["statistics.leaves"] = std::to_string(s.leaves);
-  r["statistics.geometry_changes"] = std::to_string(s.geometry_changes);
-  r["statistics.valid_volume_percent"] = ExactDecimal(s.valid_volume_percent);
-  for (const auto& [type, share] : s.failure_shares) r["statistics.failure_share." + type] = ExactDecimal(share);
-  const CacheSummary& c = m.cache;
-  r["cache.strategy"] = c.strategy;
-  r["cache.budget_bytes"] = std::to_string(c.budget_bytes);
-  r["cache.threshold_seconds"] = ExactDecimal(c.threshold_seconds);
-  r["cache.cost_model"] = c.cost_model;
-  r["cache.top_entries"] = std::to_string(c.top_entries);
-  r["cache.top_bytes"] = std::to_string(c.top_bytes);
-  r["cache.opt_entries"] = std::to_string(c.opt_entries);
-  r["cache.opt_bytes"] = std::to_string(c.opt_bytes);
-  r["cache.rfree_entries"] = std::to_string(c.rfree_entries);
-  r["cache.rfree_bytes"] = std::to_string(c.rfree_bytes);
+  ForEachManifestField(std::as_const(m), [&r](const char* key, const auto& field) {
+    using T = std::decay_t<decltype(field)>;
+    if constexpr (std::is_same_v<T, std::string>) r[key] = field;
+    else if constexpr (std::is_same_v<T, double>) r[key] = ExactDecimal(field);
+    else r[key] = std::to_string(field);
+  });
+  for (const auto& [type, share] : m.statistics.failure_shares) r[kFailureSharePrefix + type] = ExactDecimal(share);
   return r;
 }
 
@@ -526,34 +544,17 @@ Artifact Read(Db& db, int version, const ArtifactReadOptions& options) {
                   std::to_string(version) + ")");
   Manifest& man = a.manifest;
   man.schema_version = version;
-  man.design_name = m.Text("design_name");
-  man.design_hash = m.Text("design_hash");
-  man.code_version = m.Text("code_version");
-  man.subdivisions = static_cast<int>(m.Int("sampling.subdivisions"));
-  man.max_depth = static_cast<int>(m.Int("sampling.max_depth"));
-  man.dg_threshold = m.Real("sampling.dg_threshold");
-  man.max_samples = m.Int("sampling.max_samples");
-  man.statistics.samples = m.Int("statistics.samples");
-  man.statistics.valid_samples = m.Int("statistics.valid_samples");
-  man.statistics.leaves = m.Int("statistics.leaves");
-  man.statistics.geometry_changes = m.Int("statistics.geometry_changes");
-  man.statistics.valid_volume_percent = m.Real("statistics.valid_volume_percent");
-  const std::string share_prefix = "statistics.failure_share.";
-  for (const auto& [key, value] : rows)
+  ForEachManifestField(man, [&m](const char* key, auto& field) {
+    using T = std::decay_t<decltype(field)>;
+    if constexpr (std::is_same_v<T, std::string>) field = m.Text(key);
+    else if constexpr (std::is_same_v<T, double>) field = m.Real(key);
+    else field = static_cast<T>(m.Int(key));
+  });
+  const std::string share_prefix = kFailureSharePrefix, checksum_prefix = kChecksumPrefix;
+  for (const auto& [key, value] : rows) {
     if (key.rfind(share_prefix, 0) == 0) man.statistics.failure_shares[key.substr(share_prefix.size())] = m.Real(key);
-  man.cache.strategy = m.Text("cache.strategy");
-  man.cache.budget_bytes = m.Int("cache.budget_bytes");
-  man.cache.threshold_seconds = m.Real("cache.threshold_seconds");
-  man.cache.cost_model = m.Text("cache.cost_model");
-  man.cache.top_entries = m.Int("cache.top_entries");
-  man.cache.top_bytes = m.Int("cache.top_bytes");
-  man.cache.opt_entries = m.Int("cache.opt_entries");
-  man.cache.opt_bytes = m.Int("cache.opt_bytes");
-  man.cache.rfree_entries = m.Int("cache.rfree_entries");
-  man.cache.rfree_bytes = m.Int("cache.rfree_bytes");
-  const std::string checksum_prefix = "checksum.";
-  for (const auto& [key, value] : rows)
     if (key.rfind(checksum_prefix, 0) == 0) man.checksums[key.substr(checksum_prefix.size())] = value;
+  }
 
   if (options.verify_checksums) {
     for (const auto& t : kTables) {
@@ -782,7 +783,7 @@ ArtifactWriteSummary WriteArtifact(const Artifact& artifact, const fs::path& pat
       db.Exec(kSchema);
       InsertContent(db, artifact, summary);
       auto rows = ManifestRows(artifact);
-      for (const auto& t : kTables) rows[std::string("checksum.") + t.table] = TableChecksum(db, t);
+      for (const auto& t : kTables) rows[kChecksumPrefix + std::string(t.table)] = TableChecksum(db, t);
       InsertManifest(db, rows);
       db.Exec("COMMIT");
     }
