@@ -145,7 +145,10 @@ class Transaction {
   bool begun_ = false, done_ = false;
 };
 
-JobRecord ReadJob(const Stmt& s) {
+// A job row: the columns of kJobColumns, in their order.
+constexpr const char* kJobColumns =
+    "SELECT id, bundle_digest, design_name, state, error, created_ms, finished_ms FROM jobs ";
+JobRecord ReadJob(const sqlite::Statement& s) {
   JobRecord j;
   j.id = s.ColumnText(0);
   j.bundle_digest = s.ColumnText(1);
@@ -357,9 +360,7 @@ bool JobStore::CreateJob(const JobRecord& job) {
 
 std::optional<JobRecord> JobStore::FindJob(const std::string& id) {
   std::lock_guard lock(mutex_);
-  Stmt s(*db_,
-         "SELECT id, bundle_digest, design_name, state, error, created_ms, finished_ms FROM jobs "
-         "WHERE id = ?");
+  Stmt s(*db_, (std::string(kJobColumns) + "WHERE id = ?").c_str());
   s.BindText(1, id);
   if (!s.Next()) return std::nullopt;
   return ReadJob(s);
@@ -367,12 +368,8 @@ std::optional<JobRecord> JobStore::FindJob(const std::string& id) {
 
 std::vector<JobRecord> JobStore::Jobs() {
   std::lock_guard lock(mutex_);
-  Stmt s(*db_,
-         "SELECT id, bundle_digest, design_name, state, error, created_ms, finished_ms FROM jobs "
-         "ORDER BY created_ms, id");
-  std::vector<JobRecord> jobs;
-  while (s.Next()) jobs.push_back(ReadJob(s));
-  return jobs;
+  Stmt s(*db_, (std::string(kJobColumns) + "ORDER BY created_ms, id").c_str());
+  return s.Rows(ReadJob);
 }
 
 void JobStore::SetJobState(const std::string& id, JobState state, const std::string& error,
@@ -439,7 +436,7 @@ std::map<std::string, std::string> JobStore::AddTasks(const std::vector<NewTask>
 namespace {
 constexpr const char* kTaskColumns =
     "SELECT key, job_id, kind, payload, state, attempt, expiries, completions, result FROM tasks ";
-TaskRecord ReadTask(const Stmt& s) {
+TaskRecord ReadTask(const sqlite::Statement& s) {
   TaskRecord r;
   r.key = s.ColumnText(0);
   r.job_id = s.ColumnText(1);
@@ -466,9 +463,7 @@ std::vector<TaskRecord> JobStore::Tasks(const std::string& job_id) {
   std::lock_guard lock(mutex_);
   Stmt s(*db_, (std::string(kTaskColumns) + "WHERE job_id = ? ORDER BY seq").c_str());
   s.BindText(1, job_id);
-  std::vector<TaskRecord> out;
-  while (s.Next()) out.push_back(ReadTask(s));
-  return out;
+  return s.Rows(ReadTask);
 }
 
 namespace {
@@ -977,28 +972,26 @@ std::vector<SubtreeRow> JobStore::Subtrees(const std::string& job_id) {
          "SELECT key, topology, op, digest, bytes, children, seconds_sum, seconds_count, last_seconds, uses "
          "FROM subtrees WHERE job_id = ? ORDER BY key");
   s.BindText(1, job_id);
-  std::vector<SubtreeRow> out;
-  while (s.Next()) {
+  return s.Rows([](const sqlite::Statement& row) {
     SubtreeRow r;
-    r.key = s.ColumnText(0);
-    r.topology = s.ColumnText(1);
-    r.op = s.ColumnText(2);
-    r.blob_digest = s.ColumnText(3);
-    r.bytes = s.ColumnInt(4);
-    std::string children = s.ColumnText(5);
+    r.key = row.ColumnText(0);
+    r.topology = row.ColumnText(1);
+    r.op = row.ColumnText(2);
+    r.blob_digest = row.ColumnText(3);
+    r.bytes = row.ColumnInt(4);
+    const std::string children = row.ColumnText(5);
     for (std::size_t at = 0; at < children.size();) {
       std::size_t comma = children.find(',', at);
       if (comma == std::string::npos) comma = children.size();
       r.children.push_back(children.substr(at, comma - at));
       at = comma + 1;
     }
-    r.seconds_sum = s.ColumnReal(6);
-    r.seconds_count = s.ColumnInt(7);
-    r.last_seconds = s.ColumnReal(8);
-    r.uses = s.ColumnInt(9);
-    out.push_back(std::move(r));
-  }
-  return out;
+    r.seconds_sum = row.ColumnReal(6);
+    r.seconds_count = row.ColumnInt(7);
+    r.last_seconds = row.ColumnReal(8);
+    r.uses = row.ColumnInt(9);
+    return r;
+  });
 }
 
 std::vector<SampleSubtrees> JobStore::SampleSubtreeKeys(const std::string& job_id) {
@@ -1031,9 +1024,7 @@ std::vector<std::string> JobStore::ReferencedBlobs() {
          "AND s.digest != '' "
          "UNION SELECT b.digest FROM job_blobs b JOIN jobs j ON j.id = b.job_id WHERE j.state IN (1, 2) "
          "ORDER BY 1");
-  std::vector<std::string> out;
-  while (s.Next()) out.push_back(s.ColumnText(0));
-  return out;
+  return s.Rows([](const sqlite::Statement& row) { return row.ColumnText(0); });
 }
 
 std::int64_t JobStore::OldestActiveLeaseMs() {
@@ -1076,9 +1067,9 @@ std::vector<Event> JobStore::Events(const std::string& job_id) {
   std::lock_guard lock(mutex_);
   Stmt s(*db_, "SELECT time_ms, job_id, kind, message FROM events WHERE job_id = ? ORDER BY id");
   s.BindText(1, job_id);
-  std::vector<Event> out;
-  while (s.Next()) out.push_back({s.ColumnInt(0), s.ColumnText(1), s.ColumnText(2), s.ColumnText(3)});
-  return out;
+  return s.Rows([](const sqlite::Statement& row) {
+    return Event{row.ColumnInt(0), row.ColumnText(1), row.ColumnText(2), row.ColumnText(3)};
+  });
 }
 
 std::vector<std::string> JobStore::CheckConsistency() {

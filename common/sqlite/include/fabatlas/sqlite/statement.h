@@ -5,6 +5,7 @@
 //
 // Bind*(i, value) sets parameter i (from 1); Column*(c) reads column c (from
 // 0) of the current row. Next() steps to the next row, false at the end;
+// Rows(read) collects the remaining rows, each as read(statement) makes it;
 // Run() steps to the end (rows are skipped) and resets the statement for the
 // next bindings; Reset() only resets. Blobs and texts are copied on binding.
 // Any failing SQLite call calls `fail(what)`, which must throw (the job store
@@ -20,7 +21,9 @@
 #include <cstdlib>
 #include <functional>
 #include <string>
+#include <type_traits>
 #include <utility>
+#include <vector>
 
 namespace fabatlas::sqlite {
 
@@ -66,6 +69,14 @@ class Statement {
     if (rc == SQLITE_ROW) return true;
     if (rc != SQLITE_DONE) Failed("step");
     return false;
+  }
+  // The remaining rows in order, each as `read(*this)` makes it from the
+  // current row.
+  template <typename Read>
+  auto Rows(Read&& read) {
+    std::vector<std::decay_t<decltype(read(*this))>> out;
+    while (Next()) out.push_back(read(*this));
+    return out;
   }
   void Run() {
     while (Next()) {
