@@ -104,6 +104,14 @@ std::pair<int, std::string> Shell(const fs::path& dir, const std::string& comman
   return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
 }
 
+// form.json of the job as `fabatlas sample` computes it in this process
+// (run in `dir`, outputs in dir/reference): what the cluster must publish.
+std::string InProcessForm(const fs::path& dir) {
+  auto [code, out] = Shell(dir, (BinDir() / "fabatlas").string() + " sample " + JobPath().string() + " --out reference");
+  EXPECT_EQ(code, 0) << out;
+  return ReadText(dir / "reference/form.json");
+}
+
 TEST(OpsLogs, JsonLinesTellTheStoryOfAJobWithAKilledWorker) {
   fs::path dir = FreshDir("ops_logs");
   const int coordinator_metrics = FreePort(), worker_metrics = FreePort();
@@ -303,10 +311,7 @@ TEST(OpsDiskFull, CoordinatorStateOnAFullFileSystemStallsVisiblyAndLosesNothing)
   EXPECT_EQ(s.state(), v1::JOB_STATE_SUCCEEDED) << s.error();
   EXPECT_TRUE(s.stalled_reason().empty()) << s.stalled_reason();
   auto outputs = Client(c.port).Fetch(id);
-  auto [sample_code, sample_out] = Shell(dir, (BinDir() / "fabatlas").string() + " sample " + JobPath().string() +
-                                                  " --out reference");
-  ASSERT_EQ(sample_code, 0) << sample_out;
-  EXPECT_EQ(outputs["form.json"], ReadText(dir / "reference/form.json"));
+  EXPECT_EQ(outputs["form.json"], InProcessForm(dir));
   // The stall ends once no write has failed for 5 s; the job may finish
   // sooner, so wait for the recovery line rather than for the job.
   EXPECT_TRUE(WaitForText(log, "state_write_recovered", c.pid)) << ReadText(log);
@@ -358,10 +363,7 @@ TEST(OpsDiskFull, WorkerCacheDirOnAFullFileSystemFailsTasksCleanlyAndRecovers) {
   EXPECT_EQ(s.state(), v1::JOB_STATE_SUCCEEDED) << s.error();
   EXPECT_EQ(s.tasks_quarantined(), 0);
   auto outputs = Client(c.port).Fetch(id);
-  auto [sample_code, sample_out] = Shell(dir, (BinDir() / "fabatlas").string() + " sample " + JobPath().string() +
-                                                  " --out reference");
-  ASSERT_EQ(sample_code, 0) << sample_out;
-  EXPECT_EQ(outputs["form.json"], ReadText(dir / "reference/form.json"));
+  EXPECT_EQ(outputs["form.json"], InProcessForm(dir));
   // The bundle the worker unpacked once space was back is whole.
   std::set<std::string> unpacked;
   for (const auto& entry : fs::recursive_directory_iterator(disk.dir() / "cache"))
@@ -540,6 +542,33 @@ TEST(OpsCli, HelpShowsDefaultsInTheUsersWords) {
 namespace fabatlas::ops_test {
 namespace {
 
+// What the drain tests start from: a coordinator, one worker connected to it
+// and the test job submitted, the worker holding a lease.
+struct LeaseHeld {
+  CoordinatorProcess coordinator;
+  pid_t worker = -1;
+  std::string job_id;
+};
+
+// Starts a coordinator in dir/state with `coordinator_args`, a worker in
+// dir/<worker_dir> with `worker_args`, submits the job and returns once the
+// worker holds a lease (event-driven: the job's status says so).
+void StartUntilALeaseIsHeld(const fs::path& dir, const std::vector<std::string>& coordinator_args,
+                            const std::string& worker_dir, const std::vector<std::string>& worker_args,
+                            LeaseHeld& run) {
+  run.coordinator = StartCoordinator(dir / "state", 0, coordinator_args);
+  ASSERT_GT(run.coordinator.port, 0) << ReadText(dir / "state/coordinator.log");
+  run.worker = StartWorker(run.coordinator.port, dir / worker_dir, worker_args);
+  ASSERT_TRUE(WaitForText(dir / worker_dir / "worker.log", "worker_connected", run.worker));
+  run.job_id = Client(run.coordinator.port).Submit(JobPath());
+  v1::JobStatus s;
+  for (int i = 0; i < 3000 && s.tasks_leased() == 0; ++i) {
+    s = Client(run.coordinator.port).Status(run.job_id);
+    if (s.tasks_leased() == 0) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  ASSERT_GT(s.tasks_leased(), 0);
+}
+
 // SIGTERM to a coordinator while a worker holds a lease: it stops handing
 // out leases, waits for the running one (up to --drain-seconds), accepts
 // its result and exits 0; started again (here with --fsync-commits, one
@@ -547,19 +576,14 @@ namespace {
 // run's form.
 TEST(OpsDrain, SigtermWaitsForRunningLeasesThenTheJobResumes) {
   fs::path dir = FreshDir("ops_drain");
-  CoordinatorProcess c =
-      StartCoordinator(dir / "state", 0, {"--log-format", "json", "--drain-seconds", "120", "--lease-ms", "60000"});
-  ASSERT_GT(c.port, 0) << ReadText(dir / "state/coordinator.log");
-  pid_t w = StartWorker(c.port, dir / "w", {"--log-format", "json", "--connect-timeout", "120"});
-  ASSERT_TRUE(WaitForText(dir / "w/worker.log", "worker_connected", w));
-  std::string id = Client(c.port).Submit(JobPath());
+  LeaseHeld run;
+  ASSERT_NO_FATAL_FAILURE(StartUntilALeaseIsHeld(
+      dir, {"--log-format", "json", "--drain-seconds", "120", "--lease-ms", "60000"}, "w",
+      {"--log-format", "json", "--connect-timeout", "120"}, run));
+  CoordinatorProcess c = run.coordinator;
+  const pid_t w = run.worker;
+  const std::string id = run.job_id;
   // The worker holds a lease: freeze it there.
-  v1::JobStatus s;
-  for (int i = 0; i < 3000 && s.tasks_leased() == 0; ++i) {
-    s = Client(c.port).Status(id);
-    if (s.tasks_leased() == 0) std::this_thread::sleep_for(std::chrono::milliseconds(5));
-  }
-  ASSERT_GT(s.tasks_leased(), 0);
   ::kill(w, SIGSTOP);
   const std::int64_t done_before = Client(c.port).Status(id).tasks_done();
   ::kill(c.pid, SIGTERM);
@@ -587,12 +611,10 @@ TEST(OpsDrain, SigtermWaitsForRunningLeasesThenTheJobResumes) {
   ::kill(w, SIGTERM);  // it was pointed at the old port
   EXPECT_EQ(WaitExit(w, std::chrono::seconds(60)), 0) << ReadText(dir / "w/worker.log");
   pid_t w2 = StartWorker(c.port, dir / "w2", {"--log-format", "json"});
-  s = WaitForJob(c.port, id, std::chrono::seconds(240));
+  v1::JobStatus s = WaitForJob(c.port, id, std::chrono::seconds(240));
   EXPECT_EQ(s.state(), v1::JOB_STATE_SUCCEEDED) << s.error();
   auto outputs = Client(c.port).Fetch(id);
-  auto [code, out] = Shell(dir, (BinDir() / "fabatlas").string() + " sample " + JobPath().string() + " --out reference");
-  ASSERT_EQ(code, 0) << out;
-  EXPECT_EQ(outputs["form.json"], ReadText(dir / "reference/form.json"));
+  EXPECT_EQ(outputs["form.json"], InProcessForm(dir));
   auto resumed = Events(JsonLines(dir / "state/coordinator.log"), "coordinator_started");
   ASSERT_EQ(resumed.size(), 2u);
   EXPECT_EQ(resumed[1]["jobs_resumed"], 1);
@@ -612,18 +634,12 @@ TEST(OpsDrain, SigtermWaitsForRunningLeasesThenTheJobResumes) {
 TEST(OpsDrain, DrainSecondsBoundsTheWaitAndAStuckLeaseIsRecomputedAfterRestart) {
   fs::path dir = FreshDir("ops_drain_bound");
   // Leases outlive the 1 s drain by far (10 s), so only the bound can end it.
-  CoordinatorProcess c =
-      StartCoordinator(dir / "state", 0, {"--log-format", "json", "--drain-seconds", "1", "--lease-ms", "10000"});
-  ASSERT_GT(c.port, 0) << ReadText(dir / "state/coordinator.log");
-  pid_t stuck = StartWorker(c.port, dir / "stuck", {"--id", "stuck", "--log-format", "json"});
-  ASSERT_TRUE(WaitForText(dir / "stuck/worker.log", "worker_connected", stuck));
-  std::string id = Client(c.port).Submit(JobPath());
-  v1::JobStatus s;
-  for (int i = 0; i < 3000 && s.tasks_leased() == 0; ++i) {
-    s = Client(c.port).Status(id);
-    if (s.tasks_leased() == 0) std::this_thread::sleep_for(std::chrono::milliseconds(5));
-  }
-  ASSERT_GT(s.tasks_leased(), 0);
+  LeaseHeld run;
+  ASSERT_NO_FATAL_FAILURE(StartUntilALeaseIsHeld(dir, {"--log-format", "json", "--drain-seconds", "1", "--lease-ms", "10000"},
+                                                 "stuck", {"--id", "stuck", "--log-format", "json"}, run));
+  CoordinatorProcess c = run.coordinator;
+  const pid_t stuck = run.worker;
+  const std::string id = run.job_id;
   ::kill(stuck, SIGSTOP);
   ::kill(c.pid, SIGTERM);
   // The worker stays frozen: only the bound can end the drain.
@@ -648,7 +664,7 @@ TEST(OpsDrain, DrainSecondsBoundsTheWaitAndAStuckLeaseIsRecomputedAfterRestart) 
   c = StartCoordinator(dir / "state", 0, {"--log-format", "json", "--lease-ms", "1500", "--heartbeat-ms", "300"});
   ASSERT_GT(c.port, 0) << ReadText(dir / "state/coordinator.log");
   pid_t w = StartWorker(c.port, dir / "w", {"--id", "fresh", "--log-format", "json"});
-  s = WaitForJob(c.port, id, std::chrono::seconds(240));
+  v1::JobStatus s = WaitForJob(c.port, id, std::chrono::seconds(240));
   EXPECT_EQ(s.state(), v1::JOB_STATE_SUCCEEDED) << s.error();
   auto restarted = Events(JsonLines(dir / "state/coordinator.log"), "coordinator_started");
   ASSERT_EQ(restarted.size(), 2u);
@@ -659,9 +675,7 @@ TEST(OpsDrain, DrainSecondsBoundsTheWaitAndAStuckLeaseIsRecomputedAfterRestart) 
     stuck_expired += e["worker"] == "stuck";
   EXPECT_EQ(stuck_expired, held);
   auto outputs = Client(c.port).Fetch(id);
-  auto [code, out] = Shell(dir, (BinDir() / "fabatlas").string() + " sample " + JobPath().string() + " --out reference");
-  ASSERT_EQ(code, 0) << out;
-  EXPECT_EQ(outputs["form.json"], ReadText(dir / "reference/form.json"));
+  EXPECT_EQ(outputs["form.json"], InProcessForm(dir));
   ::kill(w, SIGTERM);
   EXPECT_EQ(WaitExit(w, std::chrono::seconds(30)), 0);
   ::kill(c.pid, SIGTERM);
