@@ -28,6 +28,7 @@
 #include <sstream>
 
 #include "fabatlas/design/evaluate_sample.h"
+#include "fabatlas/mesh/enclosed_volume.h"
 #include "fabatlas/mesh/read_mesh.h"
 #include "fabatlas/sampling/job_file.h"
 #include "fabatlas/testing/paths.h"
@@ -37,18 +38,6 @@ namespace {
 namespace design = fabatlas::design;
 namespace fs = std::filesystem;
 using fabatlas::testing::SourceDir;
-
-// Volume of a closed triangle mesh (divergence theorem), mm^3.
-double MeshVolume(const fabatlas::mesh::TriangleMesh& m) {
-  double v = 0;
-  for (const auto& t : m.triangles) {
-    const auto& a = m.vertices[t[0]];
-    const auto& b = m.vertices[t[1]];
-    const auto& c = m.vertices[t[2]];
-    v += a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) + a[2] * (b[0] * c[1] - b[1] * c[0]);
-  }
-  return std::abs(v) / 6;
-}
 
 // The design of configs/jobs/<name>.yaml, loaded as the job names it.
 design::Design JobDesign(const std::string& name) {
@@ -78,48 +67,69 @@ double OpenScadVolume(const fs::path& dir, const std::string& program) {
   const std::string stl = (dir / "peer.stl").string();
   const std::string cmd = "openscad --quiet -o " + stl + " " + (dir / "peer.scad").string() + " 2>/dev/null";
   EXPECT_EQ(std::system(cmd.c_str()), 0) << cmd;
-  return MeshVolume(fabatlas::mesh::ReadMesh(stl));
-}
-
-// The sample's volume against OpenSCAD's, within the tolerance above; the
-// figures are printed for docs/benchmarks.md.
-void ExpectVolume(const char* design, double ours, double peer) {
-  std::printf("%s: fabatlas %.1f mm^3, OpenSCAD %.1f mm^3 (%+.2f%%)\n", design, ours, peer, 100 * (ours - peer) / peer);
-  EXPECT_NEAR(ours, peer, 0.01 * peer);
+  return std::abs(fabatlas::mesh::EnclosedVolume(fabatlas::mesh::ReadMesh(stl)));
 }
 
 std::string Model(const char* file) { return (SourceDir() / "configs/scad" / file).string(); }
 
-TEST(ScadExampleJobs, YinYangCup2MatchesOpenScad) {
-  design::Design d = JobDesign("yinyang_cup2");
-  EXPECT_EQ(d.exposed.size(), 3u);  // Fab Forms Table 2
+// The design of configs/jobs/<job>.yaml against OpenSCAD: the paper's number
+// of exposed parameters (Fab Forms Table 2), a valid sample at the defaults,
+// and its volume within the tolerance above of OpenSCAD's render of `peer`
+// (after the solved `values` as OpenSCAD variables). The figures are printed
+// for docs/benchmarks.md.
+void ExpectMatchesOpenScad(const std::string& job, std::size_t exposed, std::initializer_list<const char*> values,
+                           const std::string& peer) {
+  design::Design d = JobDesign(job);
+  EXPECT_EQ(d.exposed.size(), exposed);
   design::SampleResult r = DefaultSample(d);
   ASSERT_TRUE(r.valid);
+  const double ours = r.properties.at("volume");
+  const double theirs = OpenScadVolume(fabatlas::testing::FreshTempDir("scad-" + job), Values(r, values) + peer);
+  std::printf("%s: fabatlas %.1f mm^3, OpenSCAD %.1f mm^3 (%+.2f%%)\n", job.c_str(), ours, theirs,
+              100 * (ours - theirs) / theirs);
+  EXPECT_NEAR(ours, theirs, 0.01 * theirs);
+}
+
+// The samples of the job's design at `points` in order, sharing one subtree
+// cache, checks off: what the cache plan records.
+std::vector<design::SampleResult> CachedSamples(const std::string& job, std::initializer_list<const char*> points) {
+  design::Design d = JobDesign(job);
+  design::InMemorySubtreeCache cache;
+  design::EvaluateOptions options;
+  options.cache = &cache;
+  options.run_checks = false;
+  std::vector<design::SampleResult> out;
+  for (const char* at : points) {
+    out.push_back(design::EvaluateSample(d, design::ParsePoint(d, at, "--at"), options));
+    EXPECT_TRUE(out.back().valid) << at << ": " << out.back().failure_reason;
+  }
+  return out;
+}
+
+TEST(ScadExampleJobs, YinYangCup2MatchesOpenScad) {
   // The body as the design's smooth revolutions (128 fragments: 0.04% below
   // the circle), the handle as the model with the node's -D values.
-  const std::string program = Values(r, {"radius", "foot_r", "foot_h", "height", "wall", "inner_r", "handle_x",
-                                         "handle_z", "handle_reach", "handle_thick"}) +
-                              "module handle() { include <" + Model("yinyang_handle.scad") +
-                              ">\n reach = handle_reach; thick = handle_thick; }\n"
-                              "difference() {\n"
-                              "  rotate_extrude($fn = 128) polygon([[0, 0], [foot_r, 0], [radius, foot_h], [radius, height], [0, height]]);\n"
-                              "  rotate_extrude($fn = 128) polygon([[0, wall], [foot_r - wall, wall], [inner_r, foot_h + wall], [inner_r, height + 2], [0, height + 2]]);\n"
-                              "}\n"
-                              "difference() {\n"
-                              "  translate([handle_x, 0, handle_z]) handle();\n"
-                              "  translate([0, 0, wall]) cylinder(r = inner_r, h = height, $fn = 128);\n"
-                              "}\n";
-  ExpectVolume("yinyang_cup2", r.properties.at("volume"), OpenScadVolume(fabatlas::testing::FreshTempDir("scad-cup2"), program));
+  ExpectMatchesOpenScad(
+      "yinyang_cup2", 3,
+      {"radius", "foot_r", "foot_h", "height", "wall", "inner_r", "handle_x", "handle_z", "handle_reach",
+       "handle_thick"},
+      "module handle() { include <" + Model("yinyang_handle.scad") +
+      ">\n reach = handle_reach; thick = handle_thick; }\n"
+      "difference() {\n"
+      "  rotate_extrude($fn = 128) polygon([[0, 0], [foot_r, 0], [radius, foot_h], [radius, height], [0, height]]);\n"
+      "  rotate_extrude($fn = 128) polygon([[0, wall], [foot_r - wall, wall], [inner_r, foot_h + wall], [inner_r, height + 2], [0, height + 2]]);\n"
+      "}\n"
+      "difference() {\n"
+      "  translate([handle_x, 0, handle_z]) handle();\n"
+      "  translate([0, 0, wall]) cylinder(r = inner_r, h = height, $fn = 128);\n"
+      "}\n");
 }
 
 TEST(ScadExampleJobs, ToyCarMatchesOpenScad) {
-  design::Design d = JobDesign("toy_car");
-  EXPECT_EQ(d.exposed.size(), 4u);  // Fab Forms Table 2
-  design::SampleResult r = DefaultSample(d);
-  ASSERT_TRUE(r.valid);
-  const std::string program =
-      Values(r, {"length", "body_w", "body_h", "axle_z", "cabin_x", "cabin_l", "cabin_w", "cabin_height", "window_l",
-                 "window_h", "wheelbase", "track", "wheel_radius", "tyre_w", "spokes"}) +
+  ExpectMatchesOpenScad(
+      "toy_car", 4,
+      {"length", "body_w", "body_h", "axle_z", "cabin_x", "cabin_l", "cabin_w", "cabin_height", "window_l",
+       "window_h", "wheelbase", "track", "wheel_radius", "tyre_w", "spokes"},
       "module wheel() { include <" + Model("toy_car_wheel.scad") +
       ">\n radius = wheel_radius; width = tyre_w; spokes = spokes_; }\n"
       "spokes_ = spokes;\n"
@@ -133,8 +143,7 @@ TEST(ScadExampleJobs, ToyCarMatchesOpenScad) {
       "    translate([x, 0, axle_z]) rotate([90, 0, 0]) cylinder(r = 2.5, h = track, center = true, $fn = 96);\n"
       "    for (y = [-track / 2, track / 2]) translate([x, y, axle_z]) rotate([90, 0, 0]) wheel();\n"
       "  }\n"
-      "}\n";
-  ExpectVolume("toy_car", r.properties.at("volume"), OpenScadVolume(fabatlas::testing::FreshTempDir("scad-car"), program));
+      "}\n");
 }
 
 // The car's spokes: by the wheel model's geometry (openings of radius
@@ -158,14 +167,10 @@ TEST(ScadExampleJobs, ToyCarThinSpokesFailMinThickness) {
 }
 
 TEST(ScadExampleJobs, HoleyVaseMatchesOpenScad) {
-  design::Design d = JobDesign("holey_vase");
-  EXPECT_EQ(d.exposed.size(), 6u);  // Fab Forms Table 2
-  design::SampleResult r = DefaultSample(d);
-  ASSERT_TRUE(r.valid);
   // fabatlas's n-sided revolve has a vertex on +x; OpenSCAD's rotate_extrude
   // starts at -x, hence the half turn.
-  const std::string program =
-      Values(r, {"sides", "base_r", "bulge_r", "bulge_z", "neck_r", "wall", "holes", "hole_r", "hole_z", "drill"}) +
+  ExpectMatchesOpenScad(
+      "holey_vase", 6, {"sides", "base_r", "bulge_r", "bulge_z", "neck_r", "wall", "holes", "hole_r", "hole_z", "drill"},
       "module drills() { include <" + Model("holey_vase_holes.scad") +
       ">\n count = holes; radius = hole_r; reach = drill; }\n"
       "off = wall / cos(180 / sides);  // the cavity's radial offset: `wall` across the flats\n"
@@ -174,8 +179,7 @@ TEST(ScadExampleJobs, HoleyVaseMatchesOpenScad) {
       "  rotate([0, 0, 180]) rotate_extrude($fn = sides) polygon([[0, 4], [base_r - off, 4], [bulge_r - off, bulge_z], [neck_r - off, 100],\n"
       "    [neck_r - off + (neck_r - bulge_r) * 2 / (100 - bulge_z), 102], [0, 102]]);\n"
       "  translate([0, 0, hole_z]) drills();\n"
-      "}\n";
-  ExpectVolume("holey_vase", r.properties.at("volume"), OpenScadVolume(fabatlas::testing::FreshTempDir("scad-vase"), program));
+      "}\n");
 }
 
 // The cup's handle is the same model at the same values for two radii: the
@@ -184,18 +188,10 @@ TEST(ScadExampleJobs, HoleyVaseMatchesOpenScad) {
 // of children per key; `fabatlas sample --cache` stopped with "recorded
 // with different children" when a hit recorded none).
 TEST(ScadExampleJobs, CachedOpenScadNodeKeepsItsCsgChild) {
-  design::Design d = JobDesign("yinyang_cup2");
-  design::InMemorySubtreeCache cache;
-  design::EvaluateOptions options;
-  options.cache = &cache;
-  options.run_checks = false;
   std::vector<design::SubtreeRecord> handles;
-  for (const char* at : {"radius=30", "radius=31"}) {
-    design::SampleResult r = design::EvaluateSample(d, design::ParsePoint(d, at, "--at"), options);
-    ASSERT_TRUE(r.valid) << at << ": " << r.failure_reason;
+  for (const design::SampleResult& r : CachedSamples("yinyang_cup2", {"radius=30", "radius=31"}))
     for (const auto& s : r.subtrees)
       if (s.op == "openscad") handles.push_back(s);
-  }
   ASSERT_EQ(handles.size(), 2u);
   EXPECT_EQ(handles[0].key, handles[1].key);
   EXPECT_FALSE(handles[0].from_cache);
@@ -208,16 +204,9 @@ TEST(ScadExampleJobs, CachedOpenScadNodeKeepsItsCsgChild) {
 // drill (the same cylinder under the same rotation); its record found in
 // the cache names the same children as when it was computed.
 TEST(ScadExampleJobs, CachedCsgSubtreesKeepTheirChildren) {
-  design::Design d = JobDesign("holey_vase");
-  design::InMemorySubtreeCache cache;
-  design::EvaluateOptions options;
-  options.cache = &cache;
-  options.run_checks = false;
   std::map<std::string, std::vector<std::string>> children;
   int hits_with_children = 0;
-  for (const char* at : {"holes=8", "holes=9"}) {
-    design::SampleResult r = design::EvaluateSample(d, design::ParsePoint(d, at, "--at"), options);
-    ASSERT_TRUE(r.valid) << at << ": " << r.failure_reason;
+  for (const design::SampleResult& r : CachedSamples("holey_vase", {"holes=8", "holes=9"})) {
     for (const auto& s : r.subtrees) {
       auto [it, first] = children.emplace(s.key, s.children);
       if (!first) EXPECT_EQ(s.children, it->second) << s.op << " " << s.path;
