@@ -692,13 +692,13 @@ struct ActiveLease {
 // The worker's active leases (one read, shared by ReturnUnknownLeases and
 // ExtendLeases).
 std::vector<ActiveLease> ActiveLeasesOf(JobStore::Db& db, const std::string& worker_id) {
-  std::vector<ActiveLease> out;
   Stmt s(db,
          "SELECT l.lease_id, l.task_key, t.job_id, l.deadline_ms FROM leases l JOIN tasks t ON t.key = l.task_key "
          "WHERE l.worker_id = ? AND l.state = 'active'");
   s.BindText(1, worker_id);
-  while (s.Next()) out.push_back({s.ColumnText(0), s.ColumnText(1), s.ColumnText(2), s.ColumnInt(3)});
-  return out;
+  return s.Rows([](const sqlite::Statement& row) {
+    return ActiveLease{row.ColumnText(0), row.ColumnText(1), row.ColumnText(2), row.ColumnInt(3)};
+  });
 }
 
 // ReturnUnknownLeases: the active leases not in `known` go back to the
