@@ -178,6 +178,13 @@ TEST(ScadNative, WhatItDoesNotImplementIsDeclinedNamingTheLine) {
   EXPECT_EQ(scad::EvaluateModelText("function g(v, n) = n == 0 ? v : g(concat(v, v), n - 1);\ncube(len(g([1], 30)));\n",
                                     "m.scad", {}).declined,
             "m.scad:1: a vector of more than 1,000,000 values");
+  // Growing a 300,000-value vector by one at each of 100 levels of recursion
+  // (each level keeps its copy: 30 million values, gigabytes) declines at
+  // two million values built.
+  EXPECT_EQ(scad::EvaluateModelText("function g(v, n) = n == 0 ? len(v) : g(concat(v, [n]), n - 1);\n"
+                                    "cube(g([for (i = [1 : 300000]) i], 100) > 0 ? 1 : 2);\n",
+                                    "m.scad", {}).declined,
+            "m.scad: more than 2 million vector values built");
   for (const auto& [program, reason] : cases) {
     const scad::ModelEvaluation own = scad::EvaluateModelText(program, "m.scad", {});
     EXPECT_FALSE(own.evaluated) << program;

@@ -629,6 +629,12 @@ class Parser {
 // ---------------------------------------------------------------- values
 
 struct Value {
+  // Vector values built by this thread's evaluation (reset for each model):
+  // bounds the memory a model can hold (about 100 bytes a value, at most two
+  // million values), which the step count does not (one concat copies a
+  // whole vector).
+  static thread_local std::size_t values_built;
+
   enum class Kind { kUndef, kBool, kNumber, kString, kVector, kRange } kind = Kind::kUndef;
   double number = 0;  // kNumber
   bool boolean = false;
@@ -656,6 +662,7 @@ struct Value {
   }
   static Value Vector(std::vector<Value> v) {
     if (v.size() > 1'000'000) throw NotNative{0, "a vector of more than 1,000,000 values"};
+    if ((values_built += v.size()) > 2'000'000) throw NotNative{0, "more than 2 million vector values built"};
     Value x;
     x.kind = Kind::kVector;
     x.items = std::make_shared<const std::vector<Value>>(std::move(v));
@@ -676,6 +683,8 @@ struct Value {
     return false;
   }
 };
+
+thread_local std::size_t Value::values_built = 0;
 
 bool Equal(const Value& a, const Value& b) {
   if (a.kind != b.kind) return false;
@@ -1930,6 +1939,7 @@ ModelEvaluation EvaluateModelText(const std::string& text, const std::string& fi
                                   const std::vector<std::pair<std::string, std::string>>& overrides) {
   const auto start = std::chrono::steady_clock::now();
   ModelEvaluation result;
+  Value::values_built = 0;
   try {
     Parser parser(Lex(text));
     std::vector<StmtPtr> program = parser.Program();

@@ -33,8 +33,9 @@
 // assigned twice in one scope, recursion deeper than 10,000 calls or than
 // 1 MiB of stack (about 250 levels of a recursive function and as many of a
 // module), loops of more than 1,000,000 iterations, more than 20 million
-// evaluation steps, vectors of more than a million values or strings of
-// more than ten million characters, a failed assert.
+// evaluation steps, vectors of more than a million values, more than two
+// million vector values built in all (about 200 MB), strings of more than
+// ten million characters, a failed assert.
 //
 // Numbers are written as OpenSCAD writes them (node fields as C's %g; vectors
 // and matrices with 6 significant digits, exact ties away from zero, `1e+6`,
