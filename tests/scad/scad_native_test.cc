@@ -114,7 +114,9 @@ TEST(ScadNative, LanguageFormsAreOpenScadsExport) {
       "// names starting with digits, echo and assert in expressions and as statements, 2D cross, str\n"
       "function 3d(v) = [v.x, v.y, 0];\ny = echo(\"y\") assert(true) cross([1, 2], [3, 4]);\n"
       "translate(3d([y, 2])) cube(1);\nassert(true);\nassert(true) cube(1);\necho(\"e\") cube(2);\n"
-      "text(str(\"6! = \", 720, \" \", 0.5));\n",
+      "text(str(\"6! = \", 720, \" \", 0.5));\n"
+      "intersection_for(i = [0 : 2]) rotate([0, 0, i * 30]) cube(10, center = true);\n"
+      "intersection_for(n = [1 : 6]) { rotate([0, 0, n * 60]) translate([5, 0, 0]) sphere(r = 12); }\n",
   };
   int k = 0;
   for (const char* program : programs) {
@@ -146,7 +148,7 @@ TEST(ScadNative, DebianExamplesTakenAreOpenScadsExportTheRestDeclined) {
     EXPECT_EQ(own.csg, OpenScadCsg(model, {}, dir)) << model;
   }
   std::cout << taken << " of " << models.size() << " examples evaluated natively, " << declined << " declined\n";
-  EXPECT_GE(taken, 33);
+  EXPECT_GE(taken, 34);
 }
 
 TEST(ScadNative, WhatItDoesNotImplementIsDeclinedNamingTheLine) {
@@ -159,6 +161,8 @@ TEST(ScadNative, WhatItDoesNotImplementIsDeclinedNamingTheLine) {
       {"text(\"\\u263A\");\n", "m.scad:1: a \\x or \\u escape"},
       {"a = 1;\na = 2;\ncube(a);\n", "m.scad:2: 'a' assigned twice in one scope"},
       {"cube(b);\n", "m.scad:1: unknown variable 'b'"},
+      {"intersection_for(i = [1, 2]) { cube(i); sphere(i); }\n",
+       "m.scad:1: intersection_for with an iteration making other than one node"},
   };
   // Recursion: 100 levels of a function and of a module are evaluated, a
   // million are declined within the evaluator's stack budget (no crash).

@@ -166,7 +166,7 @@ struct FunctionDef {
 };
 
 struct Stmt {
-  enum class Kind { kAssign, kCall, kBlock, kIf, kFor, kLet, kModuleDef, kFunctionDef, kDisabled } kind;
+  enum class Kind { kAssign, kCall, kBlock, kIf, kFor, kIntersectionFor, kLet, kModuleDef, kFunctionDef, kDisabled } kind;
   int line = 0;
   std::string name;               // assigned variable, called or defined module/function
   std::string modifier;           // a call's "%" or "#"
@@ -301,7 +301,13 @@ class Parser {
       s->children = ChildStatement();
       return s;
     }
-    if (word == "intersection_for") Fail("intersection_for");
+    if (word == "intersection_for") {
+      ++i_;
+      s->kind = Stmt::Kind::kIntersectionFor;
+      s->bindings = Arguments();
+      s->children = ChildStatement();
+      return s;
+    }
     if (Is("=", 1)) {
       s->kind = Stmt::Kind::kAssign;
       s->name = Ident();
@@ -1509,6 +1515,23 @@ class Evaluator {
         out.push_back(std::move(group));
         return;
       }
+      case Stmt::Kind::kIntersectionFor: {
+        // OpenSCAD exports intersection() of every iteration's nodes side by
+        // side, which is the intersection only when each iteration makes one
+        // node (its render intersects each iteration's union): declined
+        // otherwise.
+        CsgOut both{"intersection()", {}};
+        Loop(s.bindings, 0, scope, [&](const Scope& bound) {
+          Scope inner;
+          inner.lexical = inner.dynamic = &bound;
+          const std::size_t before = both.children.size();
+          Run(s.children, inner, both.children);
+          if (both.children.size() != before + 1)
+            throw NotNative{s.line, "intersection_for with an iteration making other than one node"};
+        });
+        out.push_back(std::move(both));
+        return;
+      }
       case Stmt::Kind::kLet: {
         CsgOut group{"group()", {}};
         Scope bound;
@@ -1581,7 +1604,7 @@ class Evaluator {
   // counts module instantiations, not assignments or definitions).
   static std::size_t Instantiates(const Stmt& s) {
     return s.kind == Stmt::Kind::kCall || s.kind == Stmt::Kind::kIf || s.kind == Stmt::Kind::kFor ||
-                   s.kind == Stmt::Kind::kLet || s.kind == Stmt::Kind::kBlock
+                   s.kind == Stmt::Kind::kIntersectionFor || s.kind == Stmt::Kind::kLet || s.kind == Stmt::Kind::kBlock
                ? 1
                : 0;
   }

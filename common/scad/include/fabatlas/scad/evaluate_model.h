@@ -13,7 +13,8 @@
 //    arithmetic of numbers, vectors and matrices, comparisons and logic;
 //  - `module` and `function` definitions with parameters and defaults,
 //    `children()`, `children(i)`, `$children`; `$`-variables scoped
-//    dynamically, the others lexically; `for`, `if`/`else`, `let` statements;
+//    dynamically, the others lexically; `for`, `if`/`else`, `let` statements,
+//    `intersection_for` when each iteration makes one node;
 //    `*` (disabled) statements, `%` and `#` modifiers; `echo` and `assert`
 //    as statements and in expressions; names starting with digits;
 //  - built-in functions: trigonometry in degrees (exact at multiples of 30
@@ -26,7 +27,7 @@
 //    intersection, hull, group, render, offset, projection, linear_extrude,
 //    rotate_extrude.
 // Declined (the caller falls back to OpenSCAD's own export): include/use,
-// import, surface, minkowski, resize, intersection_for, the `!` modifier,
+// import, surface, minkowski, resize, the `!` modifier,
 // function literals, rands/search/version and other built-ins not above,
 // `\x`/`\u` escapes and non-ASCII text, any operation on undef or of
 // mismatched types (OpenSCAD warns and goes on with undef), a variable
