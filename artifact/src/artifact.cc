@@ -818,11 +818,26 @@ std::unique_ptr<Db> OpenArtifact(const fs::path& path) {
   return std::make_unique<Db>(uri_text, SQLITE_OPEN_READONLY | SQLITE_OPEN_URI);
 }
 
+// Runs `read` on the artifact at `path`: what it finds wrong (Corrupt, or any
+// exception but an InputError) becomes one InputError naming the file.
+template <typename Read>
+auto ReadingArtifact(const fs::path& path, Read&& read) -> decltype(read()) {
+  try {
+    return read();
+  } catch (const Corrupt& e) {
+    throw InputError(path.string() + ": " + e.what());
+  } catch (const InputError&) {
+    throw;
+  } catch (const std::exception& e) {
+    throw InputError(path.string() + ": corrupt artifact: " + e.what());
+  }
+}
+
 }  // namespace
 
 void ReadCacheGeometry(const fs::path& path, const std::function<bool(const CacheEntry&)>& want,
                        const std::function<void(CacheEntry& entry)>& visit) {
-  try {
+  ReadingArtifact(path, [&] {
     CheckHeader(path);
     auto db = OpenArtifact(path);
     // Metadata of every row first (small), then each wanted row's geometry
@@ -849,27 +864,15 @@ void ReadCacheGeometry(const fs::path& path, const std::function<bool(const Cach
       e.glb.clear();
       e.glb.shrink_to_fit();
     }
-  } catch (const Corrupt& e) {
-    throw InputError(path.string() + ": " + e.what());
-  } catch (const InputError&) {
-    throw;
-  } catch (const std::exception& e) {
-    throw InputError(path.string() + ": corrupt artifact: " + e.what());
-  }
+  });
 }
 
 Artifact ReadArtifact(const fs::path& path, const ArtifactReadOptions& options) {
-  try {
+  return ReadingArtifact(path, [&] {
     const int version = CheckHeader(path);
     auto db = OpenArtifact(path);
     return Read(*db, version, options);
-  } catch (const Corrupt& e) {
-    throw InputError(path.string() + ": " + e.what());
-  } catch (const InputError&) {
-    throw;
-  } catch (const std::exception& e) {
-    throw InputError(path.string() + ": corrupt artifact: " + e.what());
-  }
+  });
 }
 
 }  // namespace fabatlas::artifact
