@@ -20,6 +20,7 @@
 #include <mutex>
 #include <optional>
 #include <sstream>
+#include <utility>
 
 #include "convex_hull_2d.h"
 #include "fabatlas/error.h"
@@ -246,20 +247,21 @@ Shape2 Evaluate2(const CsgNode& n, const Affine2& t, const Render2& render2) {
   return s;
 }
 
-double MaxX(const Shape2& s) {
-  double m = 0;
+// The least and the greatest x over the shape's points and the axis x = 0
+// (what rotate_extrude turns about): {min(0, x...), max(0, x...)}.
+std::pair<double, double> XRangeWithAxis(const Shape2& s) {
+  std::pair<double, double> r{0, 0};
+  auto take = [&r](double lo, double hi) {
+    r.first = std::min(r.first, lo);
+    r.second = std::max(r.second, hi);
+  };
   for (const auto& l : s.loops)
-    for (const auto& p : l) m = std::max(m, p[0]);
-  for (const auto& p : s.parts) m = std::max(m, MaxX(p));
-  return m;
-}
-
-double MinX(const Shape2& s) {
-  double m = 0;
-  for (const auto& l : s.loops)
-    for (const auto& p : l) m = std::min(m, p[0]);
-  for (const auto& p : s.parts) m = std::min(m, MinX(p));
-  return m;
+    for (const auto& p : l) take(p[0], p[0]);
+  for (const auto& p : s.parts) {
+    const auto [lo, hi] = XRangeWithAxis(p);
+    take(lo, hi);
+  }
+  return r;
 }
 
 // The signed distance (a bound: exact per loop set, min/max across the
@@ -712,10 +714,11 @@ class CsgEvaluation {
       Shape2 s;
       s.op = Shape2::Op::kUnion;
       for (const auto& c : n.children) s.parts.push_back(Evaluate2(c, {1, 0, 0, 0, 1, 0}, render2_));
-      if (MinX(s) < 0) throw NoNativeEquivalent{"rotate_extrude of points with x < 0"};
+      const auto [min_x, max_x] = XRangeWithAxis(s);
+      if (min_x < 0) throw NoNativeEquivalent{"rotate_extrude of points with x < 0"};
       const double angle = std::clamp(n.Number("angle", 360), -360.0, 360.0);
       // OpenSCAD 2021.01 truncates: 31 fragments through 180 degrees are 15 sectors.
-      const int fragments = static_cast<int>(std::max(FragmentsOf(n, MaxX(s)) * std::abs(angle) / 360, 1.0));
+      const int fragments = static_cast<int>(std::max(FragmentsOf(n, max_x) * std::abs(angle) / 360, 1.0));
       return {Extruded(s, [&](const Loop& l) { return scad::RotateExtrudeMesh(l, angle, fragments); }, m), nullptr, ""};
     }
     if (n.name == "hull") {
