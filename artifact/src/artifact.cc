@@ -24,6 +24,7 @@
 #include "fabatlas/sha256.h"
 #include "fabatlas/sampling/design_space.h"
 #include "fabatlas/sampling/adaptive_sampler.h"
+#include "fabatlas/sampling/point_key_text.h"
 #include "fabatlas/sqlite/statement.h"
 
 namespace fabatlas::artifact {
@@ -189,30 +190,12 @@ std::string TableChecksum(Db& db, const TableOrder& t) {
 
 // ---- text encodings -------------------------------------------------------------
 
-std::string JoinInts(const std::vector<std::int64_t>& v) {
-  std::string out;
-  for (std::size_t i = 0; i < v.size(); ++i) out += (i ? "," : "") + std::to_string(v[i]);
-  return out;
-}
+std::string JoinInts(const std::vector<std::int64_t>& v) { return sampling::PointKeyText(v); }
 
 std::vector<std::int64_t> SplitInts(const std::string& text, const char* what) {
-  std::vector<std::int64_t> out;
-  if (text.empty()) return out;
-  std::size_t start = 0;
-  while (true) {
-    std::size_t end = text.find(',', start);
-    std::string part = text.substr(start, end == std::string::npos ? std::string::npos : end - start);
-    try {
-      std::size_t used = 0;
-      out.push_back(std::stoll(part, &used));
-      if (used != part.size()) throw std::invalid_argument(part);
-    } catch (const std::exception&) {
-      throw Corrupt(std::string("malformed ") + what + " '" + text + "'");
-    }
-    if (end == std::string::npos) break;
-    start = end + 1;
-  }
-  return out;
+  auto ints = sampling::ParsePointKeyText(text);
+  if (!ints) throw Corrupt(std::string("malformed ") + what + " '" + text + "'");
+  return *ints;
 }
 
 std::string JoinStrings(const std::vector<std::string>& v) {

@@ -3,13 +3,12 @@
 #include <algorithm>
 
 #include "coordinator_state.h"
+#include "fabatlas/sampling/point_key_text.h"
 
 namespace fabatlas::coordinator {
 
 std::string Coordinator::Impl::SolidKey(const v1::SolidRef& ref) {
-  std::string key = ref.job_bundle_digest() + ":";
-  for (int i = 0; i < ref.point_key_size(); ++i) key += (i ? "," : "") + std::to_string(ref.point_key(i));
-  return key;
+  return ref.job_bundle_digest() + ":" + sampling::PointKeyText({ref.point_key().begin(), ref.point_key().end()});
 }
 
 void Coordinator::Impl::ForgetShares(const std::string& bundle_digest) {

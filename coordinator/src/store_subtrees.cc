@@ -7,11 +7,13 @@
 #include <memory>
 #include <mutex>
 #include <set>
+#include <stdexcept>
 
 #include "fabatlas/design/evaluate_sample.h"
 #include "fabatlas/geometry/solid.h"
 #include "fabatlas/precompute/design_evaluator.h"
 #include "fabatlas/protocol/solid_blob.h"
+#include "fabatlas/sampling/point_key_text.h"
 #include "fabatlas/storage/blob_store.h"
 #include "fabatlas/storage/job_store.h"
 
@@ -39,15 +41,9 @@ class CaptureCache final : public design::SubtreeCache {
 };
 
 sampling::PointKey ParsePointKey(const std::string& text) {
-  sampling::PointKey key;
-  std::size_t start = 0;
-  while (start <= text.size()) {
-    std::size_t end = text.find(',', start);
-    if (end == std::string::npos) end = text.size();
-    key.push_back(std::stoll(text.substr(start, end - start)));
-    start = end + 1;
-  }
-  return key;
+  auto key = sampling::ParsePointKeyText(text);
+  if (!key || key->empty()) throw std::runtime_error("the job store holds a malformed point key '" + text + "'");
+  return *key;
 }
 
 }  // namespace

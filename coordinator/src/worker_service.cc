@@ -7,6 +7,7 @@
 #include "coordinator_state.h"
 #include "fabatlas/error.h"
 #include "fabatlas/log/log.h"
+#include "fabatlas/sampling/point_key_text.h"
 #include "services.h"
 
 namespace fabatlas::coordinator {
@@ -25,8 +26,7 @@ class WorkerServiceImpl final : public ServiceOn<v1::WorkerService::Service> {
     if (sample.subtrees_size() == 0) return;
     v1::TaskPayload payload;
     if (auto task = impl_.store->FindTask(c.task_key()); task && payload.ParseFromString(task->payload))
-      for (int i = 0; i < payload.point_a().key_size(); ++i)
-        done->point_key += (i ? "," : "") + std::to_string(payload.point_a().key(i));
+      done->point_key = sampling::PointKeyText({payload.point_a().key().begin(), payload.point_a().key().end()});
     for (const auto& r : sample.subtrees()) {
       storage::SubtreeUse u;
       u.key = r.key();

@@ -11,6 +11,7 @@
 #include "fabatlas/error.h"
 #include "fabatlas/sampling/form_json.h"
 #include "fabatlas/sampling/job_file.h"
+#include "fabatlas/sampling/point_key_text.h"
 #include "fabatlas/sampling/validity_map.h"
 
 namespace fabatlas::sampling {
@@ -157,6 +158,18 @@ TEST(SamplingValidityMap, PixelsShowValidAndFailureRegions) {
   EXPECT_NE(ValidColour(), FailureColour(s.form, "min_thickness"));
   std::filesystem::remove(path);
   EXPECT_THROW(WriteValidityMap(s.form, ValidityMapOptions{0, 0, {}, 100}, path), InputError);
+}
+
+// Keys as text: decimal integers between commas, and only those read back.
+TEST(PointKeyText, RoundTripsAndRejectsWhatItDoesNotWrite) {
+  const std::vector<std::int64_t> key = {3, 0, -2, INT64_MIN, INT64_MAX};
+  EXPECT_EQ(PointKeyText({3, 0, -2}), "3,0,-2");
+  EXPECT_EQ(PointKeyText({}), "");
+  EXPECT_EQ(ParsePointKeyText(PointKeyText(key)), key);
+  ASSERT_TRUE(ParsePointKeyText(""));
+  EXPECT_TRUE(ParsePointKeyText("")->empty());
+  for (const char* bad : {"3,,2", "3,", ",3", "3,x", "1.5", "3 ", "99999999999999999999"})
+    EXPECT_FALSE(ParsePointKeyText(bad)) << bad;
 }
 
 }  // namespace

@@ -4,6 +4,7 @@
 #include <cctype>
 
 #include "fabatlas/sha256.h"
+#include "fabatlas/sampling/point_key_text.h"
 
 namespace fabatlas::protocol {
 
@@ -24,10 +25,7 @@ void Fill(const sampling::SamplePoint& from, v1::SamplePoint* to) {
 }
 
 void AppendKey(std::string& text, const v1::SamplePoint& point) {
-  for (int i = 0; i < point.key_size(); ++i) {
-    if (i) text += ',';
-    text += std::to_string(point.key(i));
-  }
+  text += sampling::PointKeyText({point.key().begin(), point.key().end()});
   text += '\n';
 }
 
