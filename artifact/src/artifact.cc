@@ -21,6 +21,7 @@
 
 #include "fabatlas/error.h"
 #include "fabatlas/exact_decimal.h"
+#include "fabatlas/key_list_text.h"
 #include "fabatlas/sha256.h"
 #include "fabatlas/sampling/design_space.h"
 #include "fabatlas/sampling/adaptive_sampler.h"
@@ -190,27 +191,10 @@ std::string TableChecksum(Db& db, const TableOrder& t) {
 
 // ---- text encodings -------------------------------------------------------------
 
-std::string JoinInts(const std::vector<std::int64_t>& v) { return sampling::PointKeyText(v); }
-
 std::vector<std::int64_t> SplitInts(const std::string& text, const char* what) {
   auto ints = sampling::ParsePointKeyText(text);
   if (!ints) throw Corrupt(std::string("malformed ") + what + " '" + text + "'");
   return *ints;
-}
-
-std::string JoinStrings(const std::vector<std::string>& v) {
-  std::string out;
-  for (std::size_t i = 0; i < v.size(); ++i) out += (i ? "," : "") + v[i];
-  return out;
-}
-
-std::vector<std::string> SplitStrings(const std::string& text) {
-  std::vector<std::string> out;
-  if (text.empty()) return out;
-  std::stringstream in(text);
-  std::string part;
-  while (std::getline(in, part, ',')) out.push_back(part);
-  return out;
 }
 
 const char* StopName(sampling::LeafStop s) {
@@ -361,12 +345,12 @@ void InsertContent(Db& db, const Artifact& a, ArtifactWriteSummary& summary) {
     Stmt s(db, "INSERT INTO nodes VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?)");
     for (std::size_t ti = 0; ti < form.trees.size(); ++ti) {
       const auto& tree = form.trees[ti];
-      t.Bind(1, static_cast<std::int64_t>(ti)).BindText(2, JoinInts({tree.cell.begin(), tree.cell.end()}));
+      t.Bind(1, static_cast<std::int64_t>(ti)).BindText(2, sampling::PointKeyText({tree.cell.begin(), tree.cell.end()}));
       t.Run();
       for (std::size_t ni = 0; ni < tree.nodes.size(); ++ni) {
         const auto& node = tree.nodes[ni];
         s.Bind(1, static_cast<std::int64_t>(ti)).Bind(2, static_cast<std::int64_t>(ni)).Bind(3, node.depth);
-        s.BindText(4, JoinInts(node.lo)).BindText(5, JoinInts(node.hi)).Bind(6, node.split_dimension);
+        s.BindText(4, sampling::PointKeyText(node.lo)).BindText(5, sampling::PointKeyText(node.hi)).Bind(6, node.split_dimension);
         s.Bind(7, node.split_key).Bind(8, node.children[0]).Bind(9, node.children[1]).BindText(10, StopName(node.stop));
         s.Run();
       }
@@ -382,7 +366,7 @@ void InsertContent(Db& db, const Artifact& a, ArtifactWriteSummary& summary) {
       const auto& sample = form.samples[i];
       if (static_cast<int>(sample.u.size()) != n || static_cast<int>(sample.key.size()) != n)
         throw InputError("artifact: sample " + std::to_string(i) + " has the wrong dimension");
-      s.Bind(1, static_cast<std::int64_t>(i)).BindText(2, JoinInts(sample.key));
+      s.Bind(1, static_cast<std::int64_t>(i)).BindText(2, sampling::PointKeyText(sample.key));
       for (int d = 0; d < n; ++d) s.BindReal(3 + d, sample.u[d]);
       s.Bind(3 + n, sample.outcome.valid ? 1 : 0).BindText(4 + n, sample.outcome.failure_type);
       s.Run();
@@ -418,7 +402,7 @@ void InsertContent(Db& db, const Artifact& a, ArtifactWriteSummary& summary) {
       }
       const CacheEntry& e = streamed.grid.empty() ? *entries[i] : streamed;
       ++summary.cache_entries;
-      s.BindText(1, e.key).BindText(2, e.op).BindText(3, JoinStrings(e.children)).Bind(4, e.bytes).BindReal(5, e.cost_seconds);
+      s.BindText(1, e.key).BindText(2, e.op).BindText(3, KeyListText(e.children)).Bind(4, e.bytes).BindReal(5, e.cost_seconds);
       s.Bind(6, e.in_opt ? 1 : 0).Bind(7, e.in_rfree ? 1 : 0).Bind(8, e.grid).BindText(9, Sha256Hex(e.grid)).Bind(10, e.glb);
       s.Run();
     }
@@ -508,7 +492,7 @@ CacheEntry CacheEntryMetadata(Stmt& s) {
   CacheEntry e;
   e.key = s.ColumnText(0);
   e.op = s.ColumnText(1);
-  e.children = SplitStrings(s.ColumnText(2));
+  e.children = ParseKeyListText(s.ColumnText(2));
   e.bytes = s.ColumnInt(3);
   e.cost_seconds = s.ColumnReal(4);
   e.in_opt = s.ColumnInt(5) != 0;

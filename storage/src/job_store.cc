@@ -7,6 +7,7 @@
 #include <set>
 
 #include "fabatlas/error.h"
+#include "fabatlas/key_list_text.h"
 #include "fabatlas/sqlite/statement.h"
 
 namespace fabatlas::storage {
@@ -566,8 +567,7 @@ std::vector<CompletionOutcome> CompleteIn(JobStore::Db& db, const std::vector<Co
       if (c.sample_valid >= 0) deltas.Sampled(job_id, c.sample_valid == 1);
       std::int64_t position = 0;
       for (const SubtreeUse& u : c.subtrees) {
-        std::string children;
-        for (const auto& child : u.children) children += (children.empty() ? "" : ",") + child;
+        const std::string children = KeyListText(u.children);
         subtree.BindText(1, job_id).BindText(2, u.key).BindText(3, u.topology).BindText(4, u.op);
         subtree.BindText(5, u.blob_digest).Bind(6, u.bytes).BindText(7, children);
         subtree.BindReal(8, u.measured ? u.seconds : 0.0).Bind(9, std::int64_t{u.measured ? 1 : 0});
@@ -979,13 +979,7 @@ std::vector<SubtreeRow> JobStore::Subtrees(const std::string& job_id) {
     r.op = row.ColumnText(2);
     r.blob_digest = row.ColumnText(3);
     r.bytes = row.ColumnInt(4);
-    const std::string children = row.ColumnText(5);
-    for (std::size_t at = 0; at < children.size();) {
-      std::size_t comma = children.find(',', at);
-      if (comma == std::string::npos) comma = children.size();
-      r.children.push_back(children.substr(at, comma - at));
-      at = comma + 1;
-    }
+    r.children = ParseKeyListText(row.ColumnText(5));
     r.seconds_sum = row.ColumnReal(6);
     r.seconds_count = row.ColumnInt(7);
     r.last_seconds = row.ColumnReal(8);
