@@ -746,17 +746,26 @@ class CsgEvaluation {
     throw NoNativeEquivalent{n.name};
   }
 
-  // OpenSCAD renders this subtree alone (its canonical text is a program).
-  Solid Rendered(const CsgNode& n, const Affine& m, const std::string& why) {
+  // OpenSCAD exports this subtree alone (its canonical text is a program,
+  // written as work_/<stem>-<k>.scad) to that path + `extension`, returned in
+  // `out`; false with `run` telling why when it cannot.
+  bool ExportSubtree(const CsgNode& n, const std::string& stem, const std::string& extension, fs::path& out,
+                     scad::OpenScadRun& run) {
     LinkModelFiles();
-    const fs::path program = work_ / ("subtree-" + std::to_string(++rendered_) + ".scad");
-    const fs::path stl = program.string() + ".stl";
+    const fs::path program = work_ / (stem + "-" + std::to_string(++rendered_) + ".scad");
+    out = program.string() + extension;
     {
-      std::ofstream out(program);
-      out << n.canonical << "\n";
+      std::ofstream text(program);
+      text << n.canonical << "\n";
     }
+    return scad::RunOpenScad(program, out, {}, &run);
+  }
+
+  // OpenSCAD renders this subtree alone.
+  Solid Rendered(const CsgNode& n, const Affine& m, const std::string& why) {
+    fs::path stl;
     scad::OpenScadRun run;
-    if (!scad::RunOpenScad(program, stl, {}, &run))
+    if (!ExportSubtree(n, "subtree", ".stl", stl, run))
       throw SampleFailure(kNoGeometry, model_.string() + ": OpenSCAD could not render " + n.name + " (CSG line " +
                                            std::to_string(n.line) + ", no native " + why + "): " + run.log_tail);
     mesh::TriangleMesh mm;
@@ -782,15 +791,9 @@ class CsgEvaluation {
       std::lock_guard<std::mutex> lock(mutex);
       if (auto it = outlines.find(n.canonical); it != outlines.end()) return it->second;
     }
-    LinkModelFiles();
-    const fs::path program = work_ / ("outline-" + std::to_string(++rendered_) + ".scad");
-    const fs::path svg = program.string() + ".svg";
-    {
-      std::ofstream out(program);
-      out << n.canonical << "\n";
-    }
+    fs::path svg;
     scad::OpenScadRun run;
-    if (!scad::RunOpenScad(program, svg, {}, &run)) throw NoNativeEquivalent{n.name + " (no 2D outline: " + run.log_tail + ")"};
+    if (!ExportSubtree(n, "outline", ".svg", svg, run)) throw NoNativeEquivalent{n.name + " (no 2D outline: " + run.log_tail + ")"};
     std::string text;
     {
       std::ifstream in(svg, std::ios::binary);
