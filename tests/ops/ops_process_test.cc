@@ -8,6 +8,7 @@
 #include <nlohmann/json.hpp>
 #include <sys/socket.h>
 
+#include <algorithm>
 #include <array>
 #include <cerrno>
 #include <cstdio>
@@ -166,13 +167,16 @@ TEST(OpsLogs, JsonLinesTellTheStoryOfAJobWithAKilledWorker) {
                             "lease_expired", "job_succeeded", "signal_received", "drain_started", "drain_finished",
                             "coordinator_stopped"})
     EXPECT_FALSE(Events(coordinator, event).empty()) << "coordinator logged no " << event;
-  // The expiry names the task, the worker that died and the attempt.
+  // The expiry names the task, the worker that died and the attempt. (w1
+  // may also have held a lease taken in advance, a 1-slot worker of short
+  // tasks does: that one expires beside it.)
   auto expired = Events(coordinator, "lease_expired");
-  ASSERT_FALSE(expired.empty());
-  EXPECT_EQ(expired[0]["worker"], "w1");
-  EXPECT_EQ(expired[0]["task"].get<std::string>().substr(0, 1), "0");
-  EXPECT_EQ(expired[0]["attempt"], 1);
-  EXPECT_EQ(expired[0]["job"], id);
+  auto crashed = std::find_if(expired.begin(), expired.end(),
+                              [](const auto& e) { return e["task"].template get<std::string>().substr(0, 1) == "0"; });
+  ASSERT_NE(crashed, expired.end());
+  EXPECT_EQ((*crashed)["worker"], "w1");
+  EXPECT_EQ((*crashed)["attempt"], 1);
+  EXPECT_EQ((*crashed)["job"], id);
   std::set<std::string> joined;
   for (const auto& j : Events(coordinator, "worker_joined")) joined.insert(j["worker"].get<std::string>());
   EXPECT_EQ(joined, (std::set<std::string>{"w1", "w2"}));
