@@ -117,6 +117,10 @@ TEST(ScadNative, LanguageFormsAreOpenScadsExport) {
       "text(str(\"6! = \", 720, \" \", 0.5));\n"
       "intersection_for(i = [0 : 2]) rotate([0, 0, i * 30]) cube(10, center = true);\n"
       "intersection_for(n = [1 : 6]) { rotate([0, 0, n * 60]) translate([5, 0, 0]) sphere(r = 12); }\n",
+      // binary operators: each precedence level against the next, left associativity
+      "p = 1 + 2 * 3 - 8 / 4 % 3;\nq = p < 6 == false || p >= 5 && !(p != 5);\nr = 2 * 3 % 4 - 1 - 1;\n"
+      "s = false && true || true;\nt = 1 < 2 == 2 > 1 != false;\n"
+      "translate([p, r, 10 - 4 - 3]) cube([q ? 2 : 3, s ? 4 : 5, t ? 6 : 7]);\n",
   };
   int k = 0;
   for (const char* program : programs) {

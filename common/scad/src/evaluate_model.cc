@@ -389,7 +389,7 @@ class Parser {
       return e;
     }
     if (IsWord("function")) Fail("function literal");
-    ExprPtr c = LogicOr();
+    ExprPtr c = BinaryChain();
     if (!Is("?")) return c;
     ++i_;
     ExprPtr a = Expression();
@@ -402,61 +402,27 @@ class Parser {
     return e;
   }
 
-  ExprPtr LogicOr() {
-    ExprPtr a = LogicAnd();
-    while (Is("||")) {
-      const int line = Peek().line;
-      ++i_;
-      a = Binary("||", a, LogicAnd(), line);
-    }
-    return a;
+  // OpenSCAD's binary operators, one level per row from the loosest binding
+  // to the tightest; every level is left-associative. Below the last row
+  // come the unary operators and then ^ (Exponent).
+  static constexpr std::size_t kBinaryLevels = 6;
+  static constexpr const char* kBinaryOperators[kBinaryLevels][4] = {
+      {"||"}, {"&&"}, {"==", "!="}, {"<", ">", "<=", ">="}, {"+", "-"}, {"*", "/", "%"}};
+
+  // The operator of `level` at the cursor, or nullptr.
+  const char* BinaryOperatorAt(std::size_t level) const {
+    for (const char* op : kBinaryOperators[level])
+      if (op && Is(op)) return op;
+    return nullptr;
   }
-  ExprPtr LogicAnd() {
-    ExprPtr a = Equality();
-    while (Is("&&")) {
+  // An operand chain of `level`'s operators (level 0: ||, the loosest).
+  ExprPtr BinaryChain(std::size_t level = 0) {
+    if (level == kBinaryLevels) return Unary();
+    ExprPtr a = BinaryChain(level + 1);
+    while (const char* op = BinaryOperatorAt(level)) {
       const int line = Peek().line;
       ++i_;
-      a = Binary("&&", a, Equality(), line);
-    }
-    return a;
-  }
-  ExprPtr Equality() {
-    ExprPtr a = Comparison();
-    while (Is("==") || Is("!=")) {
-      const std::string op = Peek().text;
-      const int line = Peek().line;
-      ++i_;
-      a = Binary(op, a, Comparison(), line);
-    }
-    return a;
-  }
-  ExprPtr Comparison() {
-    ExprPtr a = Addition();
-    while (Is("<") || Is(">") || Is("<=") || Is(">=")) {
-      const std::string op = Peek().text;
-      const int line = Peek().line;
-      ++i_;
-      a = Binary(op, a, Addition(), line);
-    }
-    return a;
-  }
-  ExprPtr Addition() {
-    ExprPtr a = Multiplication();
-    while (Is("+") || Is("-")) {
-      const std::string op = Peek().text;
-      const int line = Peek().line;
-      ++i_;
-      a = Binary(op, a, Multiplication(), line);
-    }
-    return a;
-  }
-  ExprPtr Multiplication() {
-    ExprPtr a = Unary();
-    while (Is("*") || Is("/") || Is("%")) {
-      const std::string op = Peek().text;
-      const int line = Peek().line;
-      ++i_;
-      a = Binary(op, a, Unary(), line);
+      a = Binary(op, a, BinaryChain(level + 1), line);
     }
     return a;
   }
