@@ -152,6 +152,14 @@ struct Expr {
   std::vector<Binding> bindings;  // call arguments, let / for bindings
 };
 
+// A new expression node of `kind` read at source line `line`.
+std::shared_ptr<Expr> NewExpr(Expr::Kind kind, int line) {
+  auto e = std::make_shared<Expr>();
+  e->kind = kind;
+  e->line = line;
+  return e;
+}
+
 struct Stmt;
 using StmtPtr = std::shared_ptr<const Stmt>;
 
@@ -360,9 +368,7 @@ class Parser {
   }
 
   ExprPtr Binary(const std::string& op, ExprPtr a, ExprPtr b, int line) {
-    auto e = std::make_shared<Expr>();
-    e->kind = Expr::Kind::kBinary;
-    e->line = line;
+    auto e = NewExpr(Expr::Kind::kBinary, line);
     e->text = op;
     e->items = {std::move(a), std::move(b)};
     return e;
@@ -372,17 +378,13 @@ class Parser {
     const int line = Peek().line;
     if (IsWord("let") && Is("(", 1)) {
       ++i_;
-      auto e = std::make_shared<Expr>();
-      e->kind = Expr::Kind::kLet;
-      e->line = line;
+      auto e = NewExpr(Expr::Kind::kLet, line);
       e->bindings = Arguments();
       e->items = {Expression()};
       return e;
     }
     if ((IsWord("echo") || IsWord("assert")) && Is("(", 1)) {  // echo(...) expr, assert(...) expr
-      auto e = std::make_shared<Expr>();
-      e->kind = IsWord("echo") ? Expr::Kind::kEcho : Expr::Kind::kAssert;
-      e->line = line;
+      auto e = NewExpr(IsWord("echo") ? Expr::Kind::kEcho : Expr::Kind::kAssert, line);
       ++i_;
       e->bindings = Arguments();
       e->items = {Expression()};
@@ -395,9 +397,7 @@ class Parser {
     ExprPtr a = Expression();
     Expect(":");
     ExprPtr b = Expression();
-    auto e = std::make_shared<Expr>();
-    e->kind = Expr::Kind::kTernary;
-    e->line = line;
+    auto e = NewExpr(Expr::Kind::kTernary, line);
     e->items = {c, a, b};
     return e;
   }
@@ -428,9 +428,7 @@ class Parser {
   }
   ExprPtr Unary() {
     if (Is("+") || Is("-") || Is("!")) {
-      auto e = std::make_shared<Expr>();
-      e->kind = Expr::Kind::kUnary;
-      e->line = Peek().line;
+      auto e = NewExpr(Expr::Kind::kUnary, Peek().line);
       e->text = Peek().text;
       ++i_;
       e->items = {Unary()};
@@ -451,25 +449,19 @@ class Parser {
       const int line = Peek().line;
       if (Is("(")) {
         if (a->kind != Expr::Kind::kIdent) Fail("call of a computed function");
-        auto e = std::make_shared<Expr>();
-        e->kind = Expr::Kind::kCall;
-        e->line = line;
+        auto e = NewExpr(Expr::Kind::kCall, line);
         e->text = a->text;
         e->bindings = Arguments();
         a = e;
       } else if (Is("[")) {
         ++i_;
-        auto e = std::make_shared<Expr>();
-        e->kind = Expr::Kind::kIndex;
-        e->line = line;
+        auto e = NewExpr(Expr::Kind::kIndex, line);
         e->items = {a, Expression()};
         Expect("]");
         a = e;
       } else if (Is(".")) {
         ++i_;
-        auto e = std::make_shared<Expr>();
-        e->kind = Expr::Kind::kMember;
-        e->line = line;
+        auto e = NewExpr(Expr::Kind::kMember, line);
         e->text = Ident();
         e->items = {a};
         a = e;
@@ -482,17 +474,13 @@ class Parser {
     const Token& t = Peek();
     const int line = t.line;
     if (t.kind == Tok::kNumber) {
-      auto e = std::make_shared<Expr>();
-      e->kind = Expr::Kind::kNumber;
-      e->line = line;
+      auto e = NewExpr(Expr::Kind::kNumber, line);
       e->number = t.number;
       ++i_;
       return e;
     }
     if (t.kind == Tok::kString) {
-      auto e = std::make_shared<Expr>();
-      e->kind = Expr::Kind::kString;
-      e->line = line;
+      auto e = NewExpr(Expr::Kind::kString, line);
       e->text = t.text;
       ++i_;
       return e;
@@ -526,9 +514,7 @@ class Parser {
   ExprPtr Bracket() {
     const int line = Peek().line;
     Expect("[");
-    auto e = std::make_shared<Expr>();
-    e->kind = Expr::Kind::kVector;
-    e->line = line;
+    auto e = NewExpr(Expr::Kind::kVector, line);
     if (Is("]")) {
       ++i_;
       return e;
@@ -560,18 +546,14 @@ class Parser {
   ExprPtr Element() {
     const int line = Peek().line;
     if ((IsWord("for") || IsWord("let")) && Is("(", 1)) {
-      auto e = std::make_shared<Expr>();
-      e->kind = IsWord("for") ? Expr::Kind::kCompFor : Expr::Kind::kCompLet;
-      e->line = line;
+      auto e = NewExpr(IsWord("for") ? Expr::Kind::kCompFor : Expr::Kind::kCompLet, line);
       ++i_;
       e->bindings = Arguments();
       e->items = {Element()};
       return e;
     }
     if (IsWord("if") && Is("(", 1)) {
-      auto e = std::make_shared<Expr>();
-      e->kind = Expr::Kind::kCompIf;
-      e->line = line;
+      auto e = NewExpr(Expr::Kind::kCompIf, line);
       ++i_;
       Expect("(");
       e->items.push_back(Expression());
@@ -584,9 +566,7 @@ class Parser {
       return e;
     }
     if (IsWord("each")) {
-      auto e = std::make_shared<Expr>();
-      e->kind = Expr::Kind::kEach;
-      e->line = line;
+      auto e = NewExpr(Expr::Kind::kEach, line);
       ++i_;
       e->items = {Element()};
       return e;
