@@ -66,6 +66,12 @@ void Coordinator::Impl::Drive(const std::string& job_id) {
                                  std::to_string(run.written.cache_entries) + " entries, " +
                                  std::to_string(run.written.cache_entries_left_out) + " without geometry; " +
                                  pipeline::ExactText(run.cache_added.exact));
+    // A kept subtree whose geometry no worker could give back is missing from
+    // the artifact: say so where operators look, not only in the job's events.
+    if (run.written.cache_entries_left_out > 0)
+      log::Warn("cache_entries_left_out", {{"job", job_id},
+                                           {"entries", run.written.cache_entries},
+                                           {"left_out", run.written.cache_entries_left_out}});
     for (const auto& entry : fs::directory_iterator(run_options.out_dir)) {
       if (!entry.is_regular_file()) continue;
       std::string name = entry.path().filename().string();
