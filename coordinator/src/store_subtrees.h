@@ -19,11 +19,9 @@ namespace fabatlas::coordinator {
 // (JobStore::Subtrees, SampleSubtreeKeys), the valid samples' roots in
 // sample-id order, and geometry from the blobs the workers uploaded; a chosen
 // subtree without a blob (its measured time was under the upload threshold)
-// is computed here by re-evaluating a valid sample that contains it, or one
-// that contains its nearest ancestor when no valid sample lists it (a worker's
-// cache hit on a CSG subtree records it without its descendants); geometry
-// is deterministic, so the artifact does not depend on which worker measured
-// what. `grid_of` keeps references to store, blobs, design and form.
+// is computed here by re-evaluating a sample that contains it (geometry is
+// deterministic, so the artifact does not depend on which worker measured
+// what). `grid_of` keeps references to store, blobs, design and form.
 pipeline::CacheAssembly CollectSubtreesFromStore(storage::JobStore& store, storage::BlobStore& blobs,
                                                  const std::string& job_id, const design::Design& design,
                                                  const sampling::Form& form);

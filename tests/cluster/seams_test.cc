@@ -8,20 +8,13 @@
 #include <map>
 #include <string>
 
-#include "fabatlas/design/evaluate_sample.h"
-#include "fabatlas/design/subtree_cache.h"
-#include "fabatlas/geometry/solid.h"
-#include "fabatlas/precompute/design_evaluator.h"
 #include "fabatlas/protocol/job_bundle.h"
 #include "fabatlas/sampling/sample_evaluator.h"
 #include "fabatlas/sha256.h"
-#include "fabatlas/storage/blob_store.h"
-#include "fabatlas/storage/job_store.h"
 #include "fabatlas/testing/paths.h"
 #include "job_cache.h"
 #include "remote_executor.h"
 #include "solid_shelf.h"
-#include "store_subtrees.h"
 
 namespace fabatlas {
 namespace {
@@ -89,69 +82,6 @@ TEST(LoadJobContext, EvaluatesAndUploadsEverySubtreeOnce) {
   for (const auto& s : r.subtrees) EXPECT_EQ(ctx->subtree_blobs.count(s.key), 1u) << s.key;
   ctx->evaluator->Evaluate(point);
   EXPECT_EQ(uploaded.size(), r.subtrees.size());
-  fs::remove_all(dir);
-}
-
-// The geometry of a chosen subtree that only invalid samples list: a worker
-// that finds a CSG subtree in its cache reports it without its descendants
-// (openscad_node.cc), so the valid sample lists the tube's root alone and its
-// two cylinders are listed (without a blob: under the upload threshold) only
-// by an invalid sample. CollectSubtreesFromStore serves their geometry by
-// evaluating the valid sample, the same bytes as an evaluation in process;
-// before, it found no valid sample listing them and the artifact lost them
-// (the holey vase's 437 of 439 H_rfree entries).
-TEST(CollectSubtreesFromStore, ServesAChildOnlyInvalidSamplesList) {
-  const fs::path dir = fs::temp_directory_path() / ("fabatlas_seams_store_" + std::to_string(::getpid()));
-  fs::remove_all(dir);
-  const design::Design design = design::LoadDesign(testing::SourceDir() / "configs/designs/tube_wall_2d.yaml");
-  std::vector<double> u;
-  for (const auto& p : design.exposed) u.push_back(p.default_value);
-  design::InMemorySubtreeCache computed;
-  design::EvaluateOptions evaluate;
-  evaluate.cache = &computed;
-  evaluate.run_checks = false;
-  const design::SampleResult r = design::EvaluateSample(design, precompute::DesignPointOf(design, u), evaluate);
-  ASSERT_EQ(r.subtrees.size(), 3u);  // the two cylinders, then their difference
-  const design::SubtreeRecord& root = r.subtrees.back();
-  ASSERT_EQ(root.children.size(), 2u);
-
-  storage::JobStore store(dir / "state.db");
-  storage::BlobStore blobs(dir / "blobs");
-  ASSERT_TRUE(store.CreateJob({"job1", std::string(64, 'a'), design.name, storage::JobState::kRunning, "", 1, 0}));
-  EXPECT_TRUE(store.AddTasks({{"t0", "job1", 1, "p0"}, {"t1", "job1", 1, "p1"}}).empty());
-  const auto grants = store.GrantLeases("w1", 2, 1000, 500);
-  ASSERT_EQ(grants.size(), 2u);
-  auto use = [](const design::SubtreeRecord& rec, bool measured) {
-    storage::SubtreeUse out;
-    out.key = rec.key;
-    out.topology = rec.topology;
-    out.op = rec.op;
-    out.seconds = rec.seconds;
-    out.measured = measured;
-    out.bytes = static_cast<std::int64_t>(rec.bytes);
-    out.children = rec.children;
-    return out;
-  };
-  storage::Completion invalid{grants[0].lease_id, grants[0].task_key, 1, "r0", false, 0};
-  invalid.point_key = "0,0";
-  for (const auto& rec : r.subtrees) invalid.subtrees.push_back(use(rec, true));
-  storage::Completion valid{grants[1].lease_id, grants[1].task_key, 1, "r1", false, 1};
-  valid.point_key = "0,1";
-  valid.subtrees = {use(root, false)};
-  for (auto outcome : store.Complete({invalid, valid}, 1100, 0))
-    EXPECT_EQ(outcome, storage::CompletionOutcome::kAccepted);
-
-  sampling::Form form;
-  form.samples = {{{0, 0}, u, {}}, {{0, 1}, u, {}}};
-  form.samples[1].outcome.valid = true;
-  form.sample_ids = {{{0, 0}, 0}, {{0, 1}, 1}};
-  const pipeline::CacheAssembly a = coordinator::CollectSubtreesFromStore(store, blobs, "job1", design, form);
-  ASSERT_EQ(a.sample_roots, std::vector<std::string>{root.key});
-  for (const auto& rec : r.subtrees) {
-    const auto expected = computed.Find(rec.key);
-    ASSERT_TRUE(expected) << rec.key;
-    EXPECT_EQ(Sha256Hex(a.grid_of(rec.key)), Sha256Hex(expected->Serialize())) << rec.op << " " << rec.key;
-  }
   fs::remove_all(dir);
 }
 

@@ -3,7 +3,11 @@
 #include <gtest/gtest.h>
 
 #include <fstream>
+#include <map>
 #include <nlohmann/json.hpp>
+#include <set>
+
+#include "fabatlas/storage/job_store.h"
 
 #include "fabatlas/testing/command_run.h"
 #include "fabatlas/testing/paths.h"
@@ -58,6 +62,46 @@ TEST(ScadCli, SampleAModelDirectly) {
     ++checked;
   }
   EXPECT_GE(checked, 6);
+}
+
+// A cluster job (`fabatlas run`: a coordinator and a worker process over
+// gRPC) on a model whose samples share a CSG subtree: the drilled slab's
+// union of two cubes is the same at every radius, so the worker finds it in
+// its cache from the second sample on. Every sample must still list every
+// descendant of every subtree it lists (the store's sample -> subtree keys
+// relation is closed under children): the cache plan may keep a child of a
+// hit, and the coordinator takes a kept subtree's geometry from a valid
+// sample listing it. Before, a hit was recorded without its descendants, so
+// the union's cubes were listed only by the samples that computed them.
+TEST(ScadCli, ClusterRunRecordsTheDescendantsOfCachedCsgSubtrees) {
+  auto dir = fabatlas::testing::FreshTempDir("scad-cli-run");
+  std::ofstream(dir / "drilled.scad") << "r = 2; // [1:4]\n"
+                                         "difference() {\n"
+                                         "  union() { cube([20, 20, 10]); translate([5, 5, 10]) cube([10, 10, 5]); }\n"
+                                         "  translate([10, 10, -1]) cylinder(r = r, h = 20, $fn = 24);\n"
+                                         "}\n";
+  CommandRun r = Fabatlas("run drilled.scad --workers 1 --slots 1 --quiet --out out", dir);
+  ASSERT_EQ(r.status, 0) << r.err;
+
+  fabatlas::storage::JobStore store(dir / "out/cluster-state/state.db");
+  const auto jobs = store.Jobs();
+  ASSERT_EQ(jobs.size(), 1u);
+  std::map<std::string, std::vector<std::string>> children;
+  int hits = 0;
+  for (const auto& row : store.Subtrees(jobs[0].id)) {
+    children[row.key] = row.children;
+    hits += row.uses > row.seconds_count;  // found in the worker's cache at least once
+  }
+  EXPECT_GT(hits, 0);  // the union of cubes, at least
+  const auto samples = store.SampleSubtreeKeys(jobs[0].id);
+  EXPECT_GE(samples.size(), 4u);
+  for (const auto& s : samples) {
+    const std::set<std::string> listed(s.subtree_keys.begin(), s.subtree_keys.end());
+    for (const auto& key : s.subtree_keys)
+      for (const auto& child : children[key])
+        EXPECT_TRUE(listed.count(child)) << "sample " << s.point_key << " lists " << key.substr(0, 8)
+                                         << " without its child " << child.substr(0, 8);
+  }
 }
 
 }  // namespace

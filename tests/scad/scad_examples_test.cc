@@ -25,6 +25,7 @@
 #include <cstdlib>
 #include <fstream>
 #include <map>
+#include <set>
 #include <sstream>
 
 #include "fabatlas/design/evaluate_sample.h"
@@ -104,6 +105,18 @@ std::vector<design::SampleResult> CachedSamples(const std::string& job, std::ini
     EXPECT_TRUE(out.back().valid) << at << ": " << out.back().failure_reason;
   }
   return out;
+}
+
+// Every child key r's records name is itself recorded in r (sampling
+// records the descendants of a subtree found in the cache too: the cache
+// plan may keep any of them, and a cluster job's coordinator takes a kept
+// subtree's geometry from a valid sample listing it).
+void ExpectClosedUnderChildren(const design::SampleResult& r) {
+  std::set<std::string> listed;
+  for (const auto& s : r.subtrees) listed.insert(s.key);
+  for (const auto& s : r.subtrees)
+    for (const auto& child : s.children)
+      EXPECT_TRUE(listed.count(child)) << s.op << " " << s.path << " without its child " << child.substr(0, 8);
 }
 
 TEST(ScadExampleJobs, YinYangCup2MatchesOpenScad) {
@@ -204,9 +217,11 @@ TEST(ScadExampleJobs, HoleyVaseMatchesOpenScad) {
 // with different children" when a hit recorded none).
 TEST(ScadExampleJobs, CachedOpenScadNodeKeepsItsCsgChild) {
   std::vector<design::SubtreeRecord> handles;
-  for (const design::SampleResult& r : CachedSamples("yinyang_cup2", {"radius=30", "radius=31"}))
+  for (const design::SampleResult& r : CachedSamples("yinyang_cup2", {"radius=30", "radius=31"})) {
+    ExpectClosedUnderChildren(r);  // the hit brings the handle's CSG subtrees
     for (const auto& s : r.subtrees)
       if (s.op == "openscad") handles.push_back(s);
+  }
   ASSERT_EQ(handles.size(), 2u);
   EXPECT_EQ(handles[0].key, handles[1].key);
   EXPECT_FALSE(handles[0].from_cache);
@@ -222,6 +237,7 @@ TEST(ScadExampleJobs, CachedCsgSubtreesKeepTheirChildren) {
   std::map<std::string, std::vector<std::string>> children;
   int hits_with_children = 0;
   for (const design::SampleResult& r : CachedSamples("holey_vase", {"holes=8", "holes=9"})) {
+    ExpectClosedUnderChildren(r);
     for (const auto& s : r.subtrees) {
       auto [it, first] = children.emplace(s.key, s.children);
       if (!first) EXPECT_EQ(s.children, it->second) << s.op << " " << s.path;

@@ -161,10 +161,13 @@ class TreeEvaluation {
   }
 
   // An `openscad` node's one child is its CSG root, known only once OpenSCAD
-  // has run; a cache hit names the child it had when computed.
-  static std::vector<std::string> CsgRootOf(const std::string& node_key) {
-    const std::string root = RecallCsgRoot(node_key);
-    return root.empty() ? std::vector<std::string>{} : std::vector<std::string>{root};
+  // has run; a cache hit names the child it had when computed and, when
+  // `records` is not null, appends the records of the CSG subtrees below it.
+  static std::vector<std::string> CsgRootOf(const std::string& node_key, const std::string& path,
+                                            std::vector<SubtreeRecord>* records) {
+    std::vector<std::string> root;
+    RecallDescendants(node_key, path, records, &root);
+    return root;
   }
 
   static SubtreeRecord RecordOf(const Node& node, const Identity& id, const std::string& path) {
@@ -188,7 +191,7 @@ class TreeEvaluation {
         SubtreeRecord record = RecordOf(node, id, path);
         record.from_cache = true;
         record.bytes = hit->MemoryBytes();
-        if (node.op == "openscad") record.children = CsgRootOf(id.key);
+        if (node.op == "openscad") record.children = CsgRootOf(id.key, path, nullptr);
         records_->push_back(std::move(record));
         RecallOutside(id.key, &outside_);
         return {*hit, id.key, id.topology};
@@ -222,7 +225,7 @@ class TreeEvaluation {
       if (auto hit = options_.cache->Find(record.key)) {
         out.solid = *hit;
         record.from_cache = true;
-        if (node.op == "openscad") record.children = CsgRootOf(record.key);
+        if (node.op == "openscad") record.children = CsgRootOf(record.key, path, records_);
         RecallOutside(record.key, &outside_);
       }
     }
@@ -251,7 +254,8 @@ class TreeEvaluation {
         OpenScadNodeResult scad = EvaluateOpenScadNode(node, args, design_.file.parent_path(), context);
         out.solid = std::move(scad.solid);
         if (!scad.root_key.empty()) record.children = {scad.root_key};
-        RememberCsgRoot(record.key, scad.root_key);
+        if (!scad.root_key.empty() && options_.cache)
+          RememberSubtree(record.key, {record.topology, record.op, 0, {scad.root_key}, {"/csg"}});
         openscad_seconds = scad.export_seconds;
       } else {
         out.solid = ApplyOperation(node, args, inputs, grid_, design_.file.parent_path(), &outside_);

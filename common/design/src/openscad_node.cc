@@ -435,12 +435,15 @@ class CsgEvaluation {
       if (auto hit = c_.cache->Find(key)) {
         record.from_cache = true;
         record.bytes = hit->MemoryBytes();
-        // The children it was computed from (the cache graph requires one
-        // set of children per key), from their keys alone.
-        Affine inner;
-        if (ChildFrame(n, m, &inner))
-          for (const auto& c : n.children)
-            if (!IsTwoD(c.name)) record.children.push_back(KeyOf(c, inner));
+        // The records of its descendants as this process computed them
+        // (RememberSubtree), else (a cache filled elsewhere) only the keys
+        // of the children it was computed from.
+        if (!RecallDescendants(key, path, c_.records, &record.children)) {
+          Affine inner;
+          if (ChildFrame(n, m, &inner))
+            for (const auto& c : n.children)
+              if (!IsTwoD(c.name)) record.children.push_back(KeyOf(c, inner));
+        }
         if (c_.records) c_.records->push_back(record);
         RecallOutside(key, c_.outside);
         return {*hit, nullptr, key};
@@ -450,12 +453,14 @@ class CsgEvaluation {
     const std::size_t outside_before = c_.outside ? c_.outside->size() : 0;
     // Children first (3D nodes whose children are 3D), each its own record.
     std::vector<Result> kids;
+    std::vector<std::string> kid_paths;  // below path
     Affine inner;
     const bool boolean = ChildFrame(n, m, &inner);
     if (boolean) {
       for (std::size_t i = 0; i < n.children.size(); ++i) {
         if (IsTwoD(n.children[i].name)) continue;  // OpenSCAD ignores 2D objects among 3D ones
-        kids.push_back(Evaluate3(n.children[i], inner, path + "/" + std::to_string(i)));
+        kid_paths.push_back("/" + std::to_string(i));
+        kids.push_back(Evaluate3(n.children[i], inner, path + kid_paths.back()));
       }
     }
     const auto start = Clock::now();
@@ -503,6 +508,7 @@ class CsgEvaluation {
       c_.cache->Offer(key, result.solid, record.seconds);
       if (c_.outside && c_.outside->size() > outside_before)
         RememberOutside(key, std::vector<OutsideMesh>(c_.outside->begin() + outside_before, c_.outside->end()));
+      RememberSubtree(key, {record.topology, record.op, record.bytes, record.children, kid_paths});
     }
     if (c_.records) c_.records->push_back(std::move(record));
     return result;
@@ -926,20 +932,42 @@ void RecallOutside(const std::string& subtree_key, std::vector<OutsideMesh>* out
 }
 
 namespace {
-std::mutex csg_root_mutex;
-std::map<std::string, std::string> csg_root_by_node;
+std::mutex computed_mutex;
+std::map<std::string, ComputedSubtree> computed_by_key;
+
+// Appends the records of key's descendants (post-order); computed_mutex held.
+void AppendDescendants(const ComputedSubtree& s, const std::string& path, std::vector<SubtreeRecord>* records) {
+  for (std::size_t i = 0; i < s.children.size(); ++i) {
+    auto it = computed_by_key.find(s.children[i]);
+    if (it == computed_by_key.end()) continue;  // remembered together with its parent, so never
+    const std::string child_path = path + s.child_paths[i];
+    AppendDescendants(it->second, child_path, records);
+    SubtreeRecord r;
+    r.key = it->first;
+    r.topology = it->second.topology;
+    r.path = child_path;
+    r.op = it->second.op;
+    r.from_cache = true;
+    r.bytes = it->second.bytes;
+    r.children = it->second.children;
+    records->push_back(std::move(r));
+  }
+}
 }  // namespace
 
-void RememberCsgRoot(const std::string& node_key, const std::string& csg_root_key) {
-  if (csg_root_key.empty()) return;
-  std::lock_guard<std::mutex> lock(csg_root_mutex);
-  csg_root_by_node[node_key] = csg_root_key;
+void RememberSubtree(const std::string& key, ComputedSubtree subtree) {
+  std::lock_guard<std::mutex> lock(computed_mutex);
+  computed_by_key.insert_or_assign(key, std::move(subtree));
 }
 
-std::string RecallCsgRoot(const std::string& node_key) {
-  std::lock_guard<std::mutex> lock(csg_root_mutex);
-  auto it = csg_root_by_node.find(node_key);
-  return it == csg_root_by_node.end() ? std::string() : it->second;
+bool RecallDescendants(const std::string& key, const std::string& path, std::vector<SubtreeRecord>* records,
+                       std::vector<std::string>* children) {
+  std::lock_guard<std::mutex> lock(computed_mutex);
+  auto it = computed_by_key.find(key);
+  if (it == computed_by_key.end()) return false;
+  if (records) AppendDescendants(it->second, path, records);
+  *children = it->second.children;
+  return true;
 }
 
 OpenScadNodeResult EvaluateOpenScadNode(const Node& node, const ResolvedArgs& args, const fs::path& dir,

@@ -31,13 +31,32 @@ struct OutsideMesh {
 void RememberOutside(const std::string& subtree_key, const std::vector<OutsideMesh>& meshes);
 void RecallOutside(const std::string& subtree_key, std::vector<OutsideMesh>* out);
 
-// The CSG root key an `openscad` node (by its key) had when it was computed,
-// kept for the process, so that the node's record found in a cache names
-// the same child as when it was computed (the cache graph requires one set
-// of children per key). Recall returns "" when this process never computed
-// the node. Thread-safe; one pair of keys per distinct node evaluated.
-void RememberCsgRoot(const std::string& node_key, const std::string& csg_root_key);
-std::string RecallCsgRoot(const std::string& node_key);
+// What a subtree computed with a subtree cache was (its record without path
+// and time) and where its children sit below it, kept for the process, so
+// that the subtree later found in the cache is recorded with the same
+// children (the cache graph requires one set of children per key) and with
+// the records of all its descendants, as sampling promises
+// (EvaluateOptions::lookup_before_children = false): the cache plan may keep
+// any descendant of a hit, and a cluster job's coordinator takes a kept
+// subtree's geometry from a valid sample that lists it. Kept for the CSG
+// subtrees of `openscad` nodes and for the nodes themselves (their one child
+// is the CSG root, "/csg" below them); other design nodes evaluate their
+// children before looking themselves up. Thread-safe; one entry (about
+// 300 B) per distinct subtree computed, kept for the process.
+struct ComputedSubtree {
+  std::string topology, op;
+  std::size_t bytes = 0;
+  std::vector<std::string> children;     // keys, in tree order
+  std::vector<std::string> child_paths;  // each child's path below this one ("/0", "/csg")
+};
+void RememberSubtree(const std::string& key, ComputedSubtree subtree);
+
+// When this process computed `key`: sets *children to its children and, when
+// `records` is not null, appends the records of its descendants (post-order,
+// from_cache, 0 s, paths below `path`); returns false (nothing changed)
+// otherwise.
+bool RecallDescendants(const std::string& key, const std::string& path, std::vector<SubtreeRecord>* records,
+                       std::vector<std::string>* children);
 
 struct OpenScadNodeContext {
   geometry::GridSpec grid;
