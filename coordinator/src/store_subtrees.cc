@@ -2,11 +2,9 @@
 #include "store_subtrees.h"
 
 #include <algorithm>
-#include <deque>
 #include <map>
 #include <memory>
 #include <mutex>
-#include <set>
 #include <stdexcept>
 
 #include "fabatlas/design/evaluate_sample.h"
@@ -67,36 +65,22 @@ pipeline::CacheAssembly CollectSubtreesFromStore(storage::JobStore& store, stora
   }
   for (const auto& [id, keys] : sample_keys) a.sample_roots.push_back(keys.back());
   auto samples = std::make_shared<std::map<std::int64_t, std::vector<std::string>>>(std::move(sample_keys));
-  // The subtrees each key is a child of.
-  auto parents = std::make_shared<std::map<std::string, std::vector<std::string>>>();
-  for (const auto& s : a.subtrees)
-    for (const auto& child : s.children) (*parents)[child].push_back(s.key);
-  a.grid_of = [&blobs, &design, &form, digests, samples, parents](const std::string& key) -> std::string {
+  a.grid_of = [&blobs, &design, &form, digests, samples](const std::string& key) -> std::string {
     if (auto it = digests->find(key); it != digests->end() && blobs.Contains(it->second))
       return protocol::GridOfBlob(blobs.Read(it->second));  // workers upload zstd frames
-    // The first valid sample (in id order) that lists the key, else one that
-    // lists its nearest ancestor: a worker that finds a CSG subtree in its
-    // cache records it without its descendants (openscad_node.cc), so a
-    // chosen child may be listed by invalid samples only; evaluating without
-    // a cache computes every subtree below the ancestor.
-    std::set<std::string> seen = {key};
-    std::deque<std::string> queue = {key};
-    while (!queue.empty()) {
-      const std::string k = queue.front();
-      queue.pop_front();
-      for (const auto& [id, keys] : *samples) {
-        if (std::find(keys.begin(), keys.end(), k) == keys.end()) continue;
-        CaptureCache capture(key);
-        design::EvaluateOptions options;
-        options.cache = &capture;
-        options.keep_solid = false;
-        options.run_checks = false;
-        design::EvaluateSample(design, precompute::DesignPointOf(design, form.samples[id].u), options);
-        return capture.grid();
-      }
-      if (auto it = parents->find(k); it != parents->end())
-        for (const auto& parent : it->second)
-          if (seen.insert(parent).second) queue.push_back(parent);
+    // The first valid sample (in id order) that lists the key: the plan keeps
+    // only subtrees below valid samples' roots, and a sample lists every
+    // descendant of what it lists (a cache hit is recorded with its
+    // descendants' records, openscad_node.h RememberSubtree).
+    for (const auto& [id, keys] : *samples) {
+      if (std::find(keys.begin(), keys.end(), key) == keys.end()) continue;
+      CaptureCache capture(key);
+      design::EvaluateOptions options;
+      options.cache = &capture;
+      options.keep_solid = false;
+      options.run_checks = false;
+      design::EvaluateSample(design, precompute::DesignPointOf(design, form.samples[id].u), options);
+      return capture.grid();
     }
     return {};
   };

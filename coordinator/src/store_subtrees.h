@@ -19,9 +19,14 @@ namespace fabatlas::coordinator {
 // (JobStore::Subtrees, SampleSubtreeKeys), the valid samples' roots in
 // sample-id order, and geometry from the blobs the workers uploaded; a chosen
 // subtree without a blob (its measured time was under the upload threshold)
-// is computed here by re-evaluating a sample that contains it (geometry is
+// is computed here by re-evaluating a valid sample that lists it (geometry is
 // deterministic, so the artifact does not depend on which worker measured
-// what). `grid_of` keeps references to store, blobs, design and form.
+// what). The cache plan keeps only subtrees below valid samples' roots, and a
+// sample lists every descendant of each subtree it lists (a cache hit is
+// recorded with its descendants), so some valid sample always lists a kept
+// subtree; one that none gives back is left out of the artifact and counted
+// (log event cache_entries_left_out). `grid_of` keeps references to store,
+// blobs, design and form.
 pipeline::CacheAssembly CollectSubtreesFromStore(storage::JobStore& store, storage::BlobStore& blobs,
                                                  const std::string& job_id, const design::Design& design,
                                                  const sampling::Form& form);
