@@ -11,6 +11,7 @@
 #include "fabatlas/design/design.h"
 #include "fabatlas/error.h"
 #include "fabatlas/scad/customizer.h"
+#include "fabatlas/scad/evaluate_model.h"
 #include "fabatlas/scad/import_design.h"
 #include "fabatlas/testing/paths.h"
 
@@ -311,6 +312,20 @@ TEST(ScadCsgTree, BackgroundNodesAreDropped) {
 // OpenSCAD's lexical rules (User Manual: comments, strings), which the .csg
 // parser shares with the Customizer reader: both comment kinds are skipped,
 // their lines counted, and escapes in strings applied.
+// The Customizer reader and the native evaluator read a model's names with
+// one lexer (lex_source.h): OpenSCAD takes `8bit` as a name (`openscad -o
+// m.csg -D 8bit=5` on this model writes `cube(size = [5, 5, 5], center =
+// false);`), so it is a parameter, and -D reaches it natively too.
+TEST(Customizer, NamesAreReadAsTheNativeEvaluatorReadsThem) {
+  const std::string model = "8bit = 3; // [1:8]\ncube(8bit);\n";
+  const CustomizerModel m = fabatlas::scad::ReadCustomizer(model, "m.scad");
+  ASSERT_TRUE(Has(m, "8bit"));
+  EXPECT_EQ(Find(m, "8bit").widget, W::kSlider);
+  const auto own = fabatlas::scad::EvaluateModelText(model, "m.scad", {{"8bit", "5"}});
+  ASSERT_TRUE(own.evaluated) << own.declined;
+  EXPECT_NE(own.csg.find("cube(size = [5, 5, 5], center = false);"), std::string::npos) << own.csg;
+}
+
 TEST(ScadCsgTree, CommentsAndStringsFollowOpenScadsLexicalRules) {
   auto root = fabatlas::scad::ParseCsg(
       "// exported\n/* two\nlines */ text(text = \"a\\\"b\\n\");\n\ncube(size = 1);\n", "m.csg");

@@ -10,16 +10,12 @@
 #include <sstream>
 
 #include "fabatlas/error.h"
-#include "fabatlas/scad/source_text.h"
+#include "fabatlas/scad/lex_source.h"
 
 namespace fabatlas::scad {
 namespace {
 
-struct Token {
-  enum class Kind { kIdent, kNumber, kString, kSymbol, kLineComment, kBlockComment } kind;
-  std::string text;  // identifier, number text, unescaped string, symbol, comment body
-  int line = 0;      // line of the token's first character
-};
+using Token = SourceToken;
 
 std::string Trim(const std::string& s) {
   std::size_t a = s.find_first_not_of(" \t\r\n");
@@ -41,47 +37,12 @@ bool ParseNumber(const std::string& s, double& out) {
   return true;
 }
 
-// The tokens of an OpenSCAD file, comments included; unterminated strings and
-// comments end at the end of the text.
+// The tokens of an OpenSCAD file, comments included (lex_source.h); its
+// problems are OpenSCAD's to report, so they are not looked at here.
 std::vector<Token> Lex(const std::string& s) {
-  std::vector<Token> out;
-  const std::size_t n = s.size();
-  SourcePosition p;
-  for (SkipWhiteSpace(s, p); p.at < n; SkipWhiteSpace(s, p)) {
-    const std::size_t i = p.at;
-    const int line = p.line;
-    const char c = s[i];
-    std::string text;
-    if (SkipComment(s, p, &text)) {
-      out.push_back({s[i + 1] == '/' ? Token::Kind::kLineComment : Token::Kind::kBlockComment, text, line});
-    } else if (c == '"') {
-      bool terminated = false;
-      text = ReadStringLiteral(s, p, terminated);
-      out.push_back({Token::Kind::kString, text, line});
-    } else if (std::isdigit(static_cast<unsigned char>(c)) || (c == '.' && i + 1 < n && std::isdigit(static_cast<unsigned char>(s[i + 1])))) {
-      std::size_t e = i;
-      while (e < n && (std::isdigit(static_cast<unsigned char>(s[e])) || s[e] == '.')) ++e;
-      if (e < n && (s[e] == 'e' || s[e] == 'E')) {
-        std::size_t k = e + 1;
-        if (k < n && (s[k] == '+' || s[k] == '-')) ++k;
-        if (k < n && std::isdigit(static_cast<unsigned char>(s[k]))) {
-          e = k;
-          while (e < n && std::isdigit(static_cast<unsigned char>(s[e]))) ++e;
-        }
-      }
-      out.push_back({Token::Kind::kNumber, s.substr(i, e - i), line});
-      p.at = e;
-    } else if (std::isalpha(static_cast<unsigned char>(c)) || c == '_' || c == '$') {
-      std::size_t e = i;
-      while (e < n && (std::isalnum(static_cast<unsigned char>(s[e])) || s[e] == '_' || s[e] == '$')) ++e;
-      out.push_back({Token::Kind::kIdent, s.substr(i, e - i), line});
-      p.at = e;
-    } else {
-      out.push_back({Token::Kind::kSymbol, std::string(1, c), line});
-      ++p.at;
-    }
-  }
-  return out;
+  LexOptions options;
+  options.keep_comments = true;
+  return LexSource(s, options).tokens;
 }
 
 // tokens[b, e) as a literal value, if they are one.

@@ -1,6 +1,6 @@
 // A Customizer model's CSG tree evaluated natively (fabatlas/scad/evaluate_model.h):
-// lexer, parser, evaluator and the .csg writer, declining with NotNative for
-// anything outside the subset.
+// parser (of lex_source.h's tokens), evaluator and the .csg writer,
+// declining with NotNative for anything outside the subset.
 #include "fabatlas/scad/evaluate_model.h"
 
 #include <algorithm>
@@ -19,7 +19,7 @@
 #include <utility>
 #include <vector>
 
-#include "fabatlas/scad/source_text.h"
+#include "fabatlas/scad/lex_source.h"
 
 namespace fabatlas::scad {
 namespace {
@@ -33,98 +33,15 @@ struct NotNative {
 
 // ---------------------------------------------------------------- lexer
 
-enum class Tok { kEnd, kNumber, kString, kIdent, kPunct };
+using Token = SourceToken;
+using Tok = SourceToken::Kind;
 
-struct Token {
-  Tok kind = Tok::kEnd;
-  std::string text;  // identifier, punctuation or string value
-  double number = 0;
-  int line = 1;
-};
-
-// Digits followed by a letter or '_' (not an exponent `1e5`, `2E-3`).
-bool DigitsThenName(const std::string& src, std::size_t at) {
-  while (at < src.size() && std::isdigit(static_cast<unsigned char>(src[at]))) ++at;
-  if (at >= src.size()) return false;
-  const char c = src[at];
-  if (c == 'e' || c == 'E') {
-    std::size_t e = at + 1;
-    if (e < src.size() && (src[e] == '+' || src[e] == '-')) ++e;
-    if (e < src.size() && std::isdigit(static_cast<unsigned char>(src[e]))) return false;
-  }
-  return std::isalpha(static_cast<unsigned char>(c)) || c == '_';
-}
-
+// The tokens of src, comments dropped (lex_source.h), ending with kEnd;
+// declines at the first place lexing does not read as OpenSCAD does.
 std::vector<Token> Lex(const std::string& src) {
-  std::vector<Token> out;
-  SourcePosition p;
-  static const char* const kTwo[] = {"<=", ">=", "==", "!=", "&&", "||"};
-  for (;;) {
-    SkipBlank(src, p);
-    if (p.at >= src.size()) break;
-    Token t;
-    t.line = p.line;
-    const char c = src[p.at];
-    if (c == '"') {
-      for (std::size_t q = p.at + 1; q < src.size() && src[q] != '"'; ++q)
-        if (src[q] == '\\' && q + 1 < src.size()) {
-          if (src[q + 1] == 'x' || src[q + 1] == 'u' || src[q + 1] == 'U') throw NotNative{p.line, "a \\x or \\u escape"};
-          ++q;
-        }
-      bool terminated = false;
-      t.kind = Tok::kString;
-      t.text = ReadStringLiteral(src, p, terminated);
-      if (!terminated) throw NotNative{t.line, "unterminated string"};
-    } else if (std::isdigit(static_cast<unsigned char>(c)) && DigitsThenName(src, p.at)) {
-      // OpenSCAD takes `8bit_font` as a name
-      std::size_t end = p.at;
-      while (end < src.size() && (std::isalnum(static_cast<unsigned char>(src[end])) || src[end] == '_')) ++end;
-      t.kind = Tok::kIdent;
-      t.text = src.substr(p.at, end - p.at);
-      p.at = end;
-    } else if (std::isdigit(static_cast<unsigned char>(c)) ||
-               (c == '.' && p.at + 1 < src.size() && std::isdigit(static_cast<unsigned char>(src[p.at + 1])))) {
-      std::size_t end = p.at;
-      while (end < src.size() && (std::isdigit(static_cast<unsigned char>(src[end])) || src[end] == '.')) ++end;
-      if (end < src.size() && (src[end] == 'e' || src[end] == 'E')) {
-        std::size_t e = end + 1;
-        if (e < src.size() && (src[e] == '+' || src[e] == '-')) ++e;
-        if (e < src.size() && std::isdigit(static_cast<unsigned char>(src[e]))) {
-          end = e;
-          while (end < src.size() && std::isdigit(static_cast<unsigned char>(src[end]))) ++end;
-        }
-      }
-      t.kind = Tok::kNumber;
-      t.text = src.substr(p.at, end - p.at);
-      try {
-        t.number = std::stod(t.text);
-      } catch (...) {
-        throw NotNative{t.line, "number '" + t.text + "'"};
-      }
-      p.at = end;
-      if (end < src.size() && (std::isalpha(static_cast<unsigned char>(src[end])) || src[end] == '_'))
-        throw NotNative{t.line, "identifier starting with a digit"};
-    } else if (std::isalpha(static_cast<unsigned char>(c)) || c == '_' || c == '$') {
-      std::size_t end = p.at + 1;
-      while (end < src.size() && (std::isalnum(static_cast<unsigned char>(src[end])) || src[end] == '_')) ++end;
-      t.kind = Tok::kIdent;
-      t.text = src.substr(p.at, end - p.at);
-      p.at = end;
-    } else {
-      t.kind = Tok::kPunct;
-      t.text = std::string(1, c);
-      for (const char* two : kTwo)
-        if (src.compare(p.at, 2, two) == 0) t.text = two;
-      if (t.text.size() == 1 && std::string("()[]{},;=:?.+-*/%^!<>#").find(c) == std::string::npos)
-        throw NotNative{t.line, std::string("character '") + c + "'"};
-      p.at += t.text.size();
-    }
-    out.push_back(std::move(t));
-  }
-  Token end;
-  end.line = p.line;
-  out.push_back(end);
-  return out;
+  LexSummary lexed = LexSource(src);
+  if (lexed.problem_line != 0) throw NotNative{lexed.problem_line, lexed.problem};
+  return std::move(lexed.tokens);
 }
 
 // ---------------------------------------------------------------- syntax
@@ -204,7 +121,7 @@ class Parser {
 
  private:
   const Token& Peek(std::size_t k = 0) const { return t_[std::min(i_ + k, t_.size() - 1)]; }
-  bool Is(const char* punct, std::size_t k = 0) const { return Peek(k).kind == Tok::kPunct && Peek(k).text == punct; }
+  bool Is(const char* punct, std::size_t k = 0) const { return Peek(k).kind == Tok::kSymbol && Peek(k).text == punct; }
   bool IsWord(const char* word) const { return Peek().kind == Tok::kIdent && Peek().text == word; }
   [[noreturn]] void Fail(const std::string& what) const { throw NotNative{Peek().line, what}; }
   void Expect(const char* punct) {

@@ -1,7 +1,7 @@
 // fabatlas/scad/source_text.h — scanning OpenSCAD source text (.scad files
 // and OpenSCAD's .csg export): white space, comments and string literals, the
 // pieces every reader of that text steps over or keeps. One implementation
-// for the Customizer's lexer (customizer.cc), the .csg parser (csg_tree.cc)
+// for the lexer of .scad files (lex_source.h), the .csg parser (csg_tree.cc)
 // and the scan for the files a model reads (model_files.cc). Lexical rules
 // as in the OpenSCAD User Manual: `//` line and `/* */` block comments, double
 // quoted strings with backslash escapes.
