@@ -108,62 +108,122 @@ struct Moments {
   }
 };
 
-// Zeroth and first moments of the interior indicator, in voxel units.
+// Interior (negative) tiles above the leaf level, as index boxes: the root's
+// tiles and the internal nodes' own. Node by node: the tree-level value
+// iterator visits every tile slot through the whole tree's iterator stack
+// (about 1.5 ms for the tray's grid, docs/benchmarks.md "OpenSCAD").
+template <typename F>
+void ForEachInteriorTile(const FloatTree& tree, F&& visit) {
+  using Upper = FloatTree::RootNodeType::ChildNodeType;  // 4096 voxels a side
+  using Lower = Upper::ChildNodeType;                    // 128 voxels a side
+  for (auto it = tree.root().cbeginValueAll(); it; ++it)
+    if (*it < 0) visit(openvdb::CoordBBox::createCube(it.getCoord(), Upper::DIM));
+  std::vector<const Upper*> upper;
+  tree.getNodes(upper);
+  for (const Upper* node : upper)
+    for (auto it = node->cbeginValueAll(); it; ++it)
+      if (*it < 0) visit(openvdb::CoordBBox::createCube(it.getCoord(), Lower::DIM));
+  std::vector<const Lower*> lower;
+  tree.getNodes(lower);
+  for (const Lower* node : lower)
+    for (auto it = node->cbeginValueAll(); it; ++it)
+      if (*it < 0) visit(openvdb::CoordBBox::createCube(it.getCoord(), LeafT::DIM));
+}
+
+// The measures of the interior, in one pass over the grid.
+struct Measures {
+  Moments moments;  // voxel units
+  Box3 box;         // mm; all zero when nothing is inside
+};
+
+// Zeroth and first moments of the interior indicator, in voxel units, and the
+// interior's bounding box.
 //
-// Method: the indicator is smoothed, H(-phi/eps), and summed over every voxel.
-// The leading error of that sum is c * eps^2 * (total mean curvature of the
-// surface, including sharp creases, where max/min CSG makes it large), so we
-// sum with two smoothing widths, eps1 = 1 and eps2 = 2 voxels, in one pass and
-// Richardson-extrapolate to eps = 0: M = (eps2^2 M(eps1) - eps1^2 M(eps2)) /
-// (eps2^2 - eps1^2). eps2 is capped by the narrow-band half width so every
+// Moments: the indicator is smoothed, H(-phi/eps), and summed over every
+// voxel. The leading error of that sum is c * eps^2 * (total mean curvature of
+// the surface, including sharp creases, where max/min CSG makes it large), so
+// we sum with two smoothing widths, eps1 = 1 and eps2 = 2 voxels, in one pass
+// and Richardson-extrapolate to eps = 0: M = (eps2^2 M(eps1) - eps1^2 M(eps2))
+// / (eps2^2 - eps1^2). eps2 is capped by the narrow-band half width so every
 // smoothed value comes from stored distances.
+//
+// Box: a voxel inside the solid at distance |phi| from the surface: the
+// surface reaches at least |phi| beyond it along every axis direction it
+// faces, and the extreme voxel along an axis gives the extent to within
+// interpolation accuracy; an interior tile counts whole.
 //
 // Leaves are processed in parallel into per-leaf slots and summed in a fixed
 // order, so results are bit-identical whatever the thread count.
-Moments ComputeMoments(const FloatGrid& grid, double half_width_voxels) {
+Measures ComputeMeasures(const FloatGrid& grid, double half_width_voxels) {
   const FloatTree& tree = grid.tree();
   const double vs = grid.voxelSize()[0];
+  const double deep = 0.99 * grid.background();
   const double e1 = 1.0, e2 = std::min(2.0, half_width_voxels);  // voxels
   const double eps1 = e1 * vs, eps2 = e2 * vs;                   // mm
+  constexpr double inf = std::numeric_limits<double>::infinity();
+  struct LeafMeasures {
+    std::array<Moments, 2> m;
+    Box3 box{{inf, inf, inf}, {-inf, -inf, -inf}};
+  };
   std::vector<const LeafT*> leaves;
   tree.getNodes(leaves);
-  std::vector<std::array<Moments, 2>> per_leaf(leaves.size());
+  std::vector<LeafMeasures> per_leaf(leaves.size());
   tbb::parallel_for(tbb::blocked_range<size_t>(0, leaves.size()), [&](const tbb::blocked_range<size_t>& r) {
     for (size_t i = r.begin(); i != r.end(); ++i) {
-      std::array<Moments, 2> m;
-      for (auto it = leaves[i]->cbeginValueAll(); it; ++it) {
-        const double phi = *it;
-        if (phi >= eps2) continue;
-        const openvdb::Coord c = it.getCoord();
-        m[0].Add(InsideWeight(phi, eps1), c);
-        m[1].Add(InsideWeight(phi, eps2), c);
-      }
+      LeafMeasures m;
+      const float* values = leaves[i]->buffer().data();
+      const openvdb::Coord origin = leaves[i]->origin();
+      // Offset order of the leaf (x major, then y, then z), as its iterators.
+      for (int x = 0, n = 0; x < 8; ++x)
+        for (int y = 0; y < 8; ++y)
+          for (int z = 0; z < 8; ++z, ++n) {
+            const double phi = values[n];
+            if (phi >= eps2) continue;
+            const openvdb::Coord c = origin.offsetBy(x, y, z);
+            m.m[0].Add(InsideWeight(phi, eps1), c);
+            m.m[1].Add(InsideWeight(phi, eps2), c);
+            if (phi >= 0) continue;
+            const double r = phi > -deep ? -phi : 0.0;
+            const double p[3] = {c.x() * vs, c.y() * vs, c.z() * vs};
+            for (int k = 0; k < 3; ++k) {
+              m.box.min[k] = std::min(m.box.min[k], p[k] - r);
+              m.box.max[k] = std::max(m.box.max[k], p[k] + r);
+            }
+          }
       per_leaf[i] = m;
     }
   });
   std::array<Moments, 2> sum;
+  Box3 box{{inf, inf, inf}, {-inf, -inf, -inf}};
+  auto grow = [&box](const Box3& b) {
+    for (int k = 0; k < 3; ++k) {
+      box.min[k] = std::min(box.min[k], b.min[k]);
+      box.max[k] = std::max(box.max[k], b.max[k]);
+    }
+  };
   for (const auto& m : per_leaf) {
-    sum[0].Add(m[0]);
-    sum[1].Add(m[1]);
+    sum[0].Add(m.m[0]);
+    sum[1].Add(m.m[1]);
+    grow(m.box);
   }
   const double a = e2 * e2 / (e2 * e2 - e1 * e1), b = -e1 * e1 / (e2 * e2 - e1 * e1);
-  Moments total;
+  Measures out;
+  Moments& total = out.moments;
   total.m0 = a * sum[0].m0 + b * sum[1].m0;
   for (int k = 0; k < 3; ++k) total.m1[k] = a * sum[0].m1[k] + b * sum[1].m1[k];
   if (total.m0 < 0) total = Moments{};
   // Interior tiles (inactive, negative) above the leaf level count fully.
-  auto it = tree.cbeginValueAll();
-  it.setMaxDepth(FloatTree::ValueAllCIter::LEAF_DEPTH - 1);
-  for (; it; ++it) {
-    if (*it >= 0) continue;
-    const openvdb::CoordBBox bb = it.getBoundingBox();
+  ForEachInteriorTile(tree, [&](const openvdb::CoordBBox& bb) {
     const double n = static_cast<double>(bb.volume());
     total.m0 += n;
     total.m1[0] += n * 0.5 * (bb.min().x() + bb.max().x());
     total.m1[1] += n * 0.5 * (bb.min().y() + bb.max().y());
     total.m1[2] += n * 0.5 * (bb.min().z() + bb.max().z());
-  }
-  return total;
+    grow({{bb.min().x() * vs, bb.min().y() * vs, bb.min().z() * vs},
+          {bb.max().x() * vs, bb.max().y() * vs, bb.max().z() * vs}});
+  });
+  if (box.min[0] <= box.max[0]) out.box = box;
+  return out;
 }
 
 }  // namespace
@@ -174,34 +234,42 @@ Solid::Solid(std::shared_ptr<const Impl> impl) : impl_(std::move(impl)) {}
 bool Solid::empty() const {
   if (!impl_) return true;
   const FloatTree& tree = impl_->grid->tree();
-  for (auto it = tree.cbeginValueAll(); it; ++it) {
-    if (*it < 0) return false;
+  // The band's leaves first: a solid with material has negative voxels there.
+  std::vector<const LeafT*> leaves;
+  tree.getNodes(leaves);
+  for (const LeafT* leaf : leaves) {
+    const float* values = leaf->buffer().data();
+    for (openvdb::Index n = 0; n < LeafT::SIZE; ++n)
+      if (values[n] < 0) return false;
   }
-  return true;
+  bool inside = false;
+  ForEachInteriorTile(tree, [&inside](const openvdb::CoordBBox&) { inside = true; });
+  return !inside;
 }
 
 double Solid::voxel_size() const { return impl_ ? impl_->spec.voxel_size : 0.0; }
 
 namespace {
-// The solid's moments, computed on first use and kept with its grid.
-const std::array<double, 4>& CachedMoments(const Solid::Impl& impl) {
-  std::call_once(impl.moments_once, [&impl] {
-    const Moments m = ComputeMoments(*impl.grid, impl.spec.half_width_voxels);
-    impl.moments = {m.m0, m.m1[0], m.m1[1], m.m1[2]};
+// The solid's measures, computed on first use and kept with its grid.
+const Solid::Impl& WithMeasures(const Solid::Impl& impl) {
+  std::call_once(impl.measures_once, [&impl] {
+    const Measures m = ComputeMeasures(*impl.grid, impl.spec.half_width_voxels);
+    impl.moments = {m.moments.m0, m.moments.m1[0], m.moments.m1[1], m.moments.m1[2]};
+    impl.box = m.box;
   });
-  return impl.moments;
+  return impl;
 }
 }  // namespace
 
 double Solid::Volume() const {
   if (!impl_) return 0.0;
   const double vs = impl_->spec.voxel_size;
-  return CachedMoments(*impl_)[0] * vs * vs * vs;
+  return WithMeasures(*impl_).moments[0] * vs * vs * vs;
 }
 
 Vec3 Solid::CenterOfMass() const {
   if (!impl_) return {0, 0, 0};
-  const std::array<double, 4>& m = CachedMoments(*impl_);
+  const std::array<double, 4>& m = WithMeasures(*impl_).moments;
   if (m[0] <= 0) return {0, 0, 0};
   const double vs = impl_->spec.voxel_size;
   return {m[1] / m[0] * vs, m[2] / m[0] * vs, m[3] / m[0] * vs};
@@ -209,39 +277,7 @@ Vec3 Solid::CenterOfMass() const {
 
 Box3 Solid::BoundingBox() const {
   if (!impl_) return {};
-  const FloatGrid& grid = *impl_->grid;
-  const double vs = impl_->spec.voxel_size;
-  const double deep = 0.99 * grid.background();
-  constexpr double inf = std::numeric_limits<double>::infinity();
-  Box3 box{{inf, inf, inf}, {-inf, -inf, -inf}};
-  bool any = false;
-  auto grow = [&](const Vec3& lo, const Vec3& hi) {
-    any = true;
-    for (int k = 0; k < 3; ++k) {
-      box.min[k] = std::min(box.min[k], lo[k]);
-      box.max[k] = std::max(box.max[k], hi[k]);
-    }
-  };
-  // A voxel inside the solid at distance |phi| from the surface: the surface
-  // reaches at least |phi| beyond it along every axis direction it faces, and
-  // the extreme voxel along an axis gives the extent to within interpolation
-  // accuracy.
-  for (auto it = grid.tree().cbeginValueAll(); it; ++it) {
-    const float v = *it;
-    if (v >= 0) continue;
-    if (it.isVoxelValue()) {
-      const openvdb::Coord c = it.getCoord();
-      const Vec3 p{c.x() * vs, c.y() * vs, c.z() * vs};
-      const double r = (v > -deep) ? -static_cast<double>(v) : 0.0;
-      grow({p[0] - r, p[1] - r, p[2] - r}, {p[0] + r, p[1] + r, p[2] + r});
-    } else {
-      const openvdb::CoordBBox b = it.getBoundingBox();
-      grow({b.min().x() * vs, b.min().y() * vs, b.min().z() * vs},
-           {b.max().x() * vs, b.max().y() * vs, b.max().z() * vs});
-    }
-  }
-  if (!any) return {};
-  return box;
+  return WithMeasures(*impl_).box;
 }
 
 std::size_t Solid::MemoryBytes() const {

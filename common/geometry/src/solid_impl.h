@@ -18,11 +18,13 @@ namespace fabatlas::geometry {
 struct Solid::Impl {
   openvdb::FloatGrid::Ptr grid;  // never mutated after construction
   GridSpec spec;
-  // The inside's zeroth and first moments (voxel units: m0, m1 x, y, z),
-  // computed once for Volume and CenterOfMass (a sample asks for both: the
-  // volume property and the stands check); thread-safe.
-  mutable std::once_flag moments_once;
+  // The inside's zeroth and first moments (voxel units: m0, m1 x, y, z) and
+  // its bounding box (mm), computed together once for Volume, CenterOfMass
+  // and BoundingBox (a sample asks for all three: the volume and bbox
+  // properties and the stands check); thread-safe.
+  mutable std::once_flag measures_once;
   mutable std::array<double, 4> moments{};
+  mutable Box3 box{};
 };
 
 // Iso-value used when meshing a level set, in voxels (see Solid::ToMesh).
