@@ -199,31 +199,44 @@ Solid Union(const Solid& a, const Solid& b) {
 // smaller neighbour value; genuine material is negative and never changes.
 std::size_t detail::RemoveZeroSheets(FloatGrid& grid, double voxel_size) {
   const float iso = static_cast<float>(kMeshIso * voxel_size);
-  std::vector<std::pair<openvdb::Coord, float>> fixes;
-  auto acc = grid.getConstAccessor();
-  for (auto it = grid.tree().cbeginValueOn(); it; ++it) {
-    const float v = *it;
-    if (v < 0 || v > iso || !it.isVoxelValue()) continue;
-    const openvdb::Coord c = it.getCoord();
-    for (int axis = 0; axis < 3; ++axis) {
-      openvdb::Coord lo = c, hi = c;
-      lo[axis] -= 1;
-      hi[axis] += 1;
-      const float a = acc.getValue(lo), b = acc.getValue(hi);
-      if (a > iso && b > iso) {
-        fixes.emplace_back(c, std::min(a, b));
-        break;
+  // Found leaf by leaf in parallel (every fix reads the unrepaired grid),
+  // then applied.
+  std::vector<const LeafT*> leaves;
+  grid.tree().getNodes(leaves);
+  std::vector<std::vector<std::pair<openvdb::Coord, float>>> per_leaf(leaves.size());
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, leaves.size()), [&](const tbb::blocked_range<size_t>& r) {
+    auto acc = grid.getConstAccessor();
+    for (size_t i = r.begin(); i != r.end(); ++i) {
+      const float* values = leaves[i]->buffer().data();
+      for (auto on = leaves[i]->getValueMask().beginOn(); on; ++on) {
+        const float v = values[on.pos()];
+        if (v < 0 || v > iso) continue;
+        const openvdb::Coord c = leaves[i]->offsetToGlobalCoord(on.pos());
+        for (int axis = 0; axis < 3; ++axis) {
+          openvdb::Coord lo = c, hi = c;
+          lo[axis] -= 1;
+          hi[axis] += 1;
+          const float a = acc.getValue(lo), b = acc.getValue(hi);
+          if (a > iso && b > iso) {
+            per_leaf[i].emplace_back(c, std::min(a, b));
+            break;
+          }
+        }
       }
     }
-  }
+  });
+  std::size_t fixed = 0;
   auto out = grid.getAccessor();
-  for (const auto& [c, v] : fixes) out.setValue(c, v);
+  for (const auto& fixes : per_leaf) {
+    for (const auto& [c, v] : fixes) out.setValue(c, v);
+    fixed += fixes.size();
+  }
   // OpenVDB's CSG keeps the first operand's inactive interior values where
   // the second operand removed material (a hole's inside stays "inside"):
   // re-sign every inactive value from the active band, as the volume and
   // centre of mass read them.
   openvdb::tools::signedFloodFill(grid.tree());
-  return fixes.size();
+  return fixed;
 }
 
 
