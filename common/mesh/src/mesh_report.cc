@@ -8,8 +8,11 @@
 #include <CGAL/Polygon_mesh_processing/polygon_soup_to_polygon_mesh.h>
 #include <CGAL/Polygon_mesh_processing/self_intersections.h>
 #include <CGAL/Surface_mesh.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_reduce.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <numeric>
 #include <string>
@@ -91,19 +94,19 @@ MeshReport InspectMesh(const TriangleMesh& mesh, const InspectOptions& options) 
   //    mesh's own indices).
   std::vector<std::int32_t> merged(nv_in);
   std::iota(merged.begin(), merged.end(), 0);
-  std::vector<std::array<double, 3>> points;
-  if (topology_only) {
-    points = mesh.vertices;
-  } else {
+  std::vector<std::array<double, 3>> merged_points;
+  const std::vector<std::array<double, 3>>& points = topology_only ? mesh.vertices : merged_points;
+  if (!topology_only) {
     std::vector<std::int32_t> order(nv_in);
     std::iota(order.begin(), order.end(), 0);
     std::sort(order.begin(), order.end(), [&](std::int32_t a, std::int32_t b) {
       return mesh.vertices[a] < mesh.vertices[b] || (mesh.vertices[a] == mesh.vertices[b] && a < b);
     });
-    points.reserve(nv_in);
+    merged_points.reserve(nv_in);
     for (std::size_t k = 0; k < nv_in; ++k) {
-      if (k == 0 || mesh.vertices[order[k]] != mesh.vertices[order[k - 1]]) points.push_back(mesh.vertices[order[k]]);
-      merged[order[k]] = static_cast<std::int32_t>(points.size() - 1);
+      if (k == 0 || mesh.vertices[order[k]] != mesh.vertices[order[k - 1]])
+        merged_points.push_back(mesh.vertices[order[k]]);
+      merged[order[k]] = static_cast<std::int32_t>(merged_points.size() - 1);
     }
   }
   report.merged_vertices = static_cast<std::int64_t>(nv_in - points.size());
@@ -155,17 +158,21 @@ MeshReport InspectMesh(const TriangleMesh& mesh, const InspectOptions& options) 
   // 4. Edges: the triangle sides (hi, forward?) listed under their lower
   //    vertex lo (a bucket per vertex, then each short bucket sorted), so
   //    equal edges are adjacent.
+  // 5. Vertex manifoldness: the faces around a vertex must form one fan
+  //    (connected through edges incident to that vertex).
+  //    Both per vertex, over vertex ranges in parallel (TBB); the counts are
+  //    sums, the same whatever the schedule.
   struct HalfEdge {
     std::int32_t hi;
     bool forward;  // traversed lo -> hi
     bool operator<(const HalfEdge& o) const { return hi < o.hi; }
   };
+  std::vector<std::int32_t> first(points.size() + 1, 0);
+  for (const auto& t : tris)
+    for (int k = 0; k < 3; ++k) ++first[std::min(t[k], t[(k + 1) % 3]) + 1];
+  std::partial_sum(first.begin(), first.end(), first.begin());
+  std::vector<HalfEdge> edges(first.back());
   {
-    std::vector<std::int32_t> first(points.size() + 1, 0);
-    for (const auto& t : tris)
-      for (int k = 0; k < 3; ++k) ++first[std::min(t[k], t[(k + 1) % 3]) + 1];
-    std::partial_sum(first.begin(), first.end(), first.begin());
-    std::vector<HalfEdge> edges(first.back());
     std::vector<std::int32_t> fill(first.begin(), first.end() - 1);
     for (const auto& t : tris) {
       for (int k = 0; k < 3; ++k) {
@@ -173,24 +180,7 @@ MeshReport InspectMesh(const TriangleMesh& mesh, const InspectOptions& options) 
         edges[fill[std::min(a, b)]++] = {std::max(a, b), a < b};
       }
     }
-    for (std::size_t v = 0; v < points.size(); ++v) {
-      const auto begin = edges.begin() + first[v], end = edges.begin() + first[v + 1];
-      std::sort(begin, end);
-      for (auto i = begin; i != end;) {
-        auto j = i;
-        int forward = 0;
-        while (j != end && j->hi == i->hi) forward += (j++)->forward;
-        const auto n = j - i;
-        if (n == 1) ++report.border_edges;
-        else if (n > 2) ++report.non_manifold_edges;
-        else if (forward != 1) ++report.inconsistent_edges;
-        i = j;
-      }
-    }
   }
-
-  // 5. Vertex manifoldness: the faces around a vertex must form one fan
-  //    (connected through edges incident to that vertex).
   std::vector<std::int32_t> start(points.size() + 1, 0);
   for (const auto& t : tris)
     for (std::int32_t v : t) ++start[v + 1];
@@ -201,25 +191,85 @@ MeshReport InspectMesh(const TriangleMesh& mesh, const InspectOptions& options) 
     for (std::size_t f = 0; f < tris.size(); ++f)
       for (std::int32_t v : tris[f]) incident[fill[v]++] = static_cast<std::int32_t>(f);
   }
-  std::vector<std::pair<std::int32_t, std::int32_t>> around;  // (other vertex, local face)
-  DisjointSets fans(0);                                        // the faces' fans around one vertex
-  for (std::size_t v = 0; v < points.size(); ++v) {
-    const std::int32_t deg = start[v + 1] - start[v];
-    if (deg <= 1) continue;
-    around.clear();
-    for (std::int32_t k = 0; k < deg; ++k) {
-      const auto& t = tris[incident[start[v] + k]];
-      for (std::int32_t w : t)
-        if (w != static_cast<std::int32_t>(v)) around.push_back({w, k});
-    }
-    std::sort(around.begin(), around.end());
-    fans.Reset(static_cast<std::size_t>(deg));
-    for (std::size_t i = 1; i < around.size(); ++i)
-      if (around[i].first == around[i - 1].first) fans.Join(around[i].second, around[i - 1].second);
-    std::int32_t roots = 0;
-    for (std::int32_t k = 0; k < deg; ++k) roots += fans.Find(k) == static_cast<std::size_t>(k);
-    if (roots > 1) ++report.non_manifold_vertices;
-  }
+  constexpr std::int32_t kSmallFan = 16;
+  struct Counts {
+    std::int64_t border = 0, non_manifold_edges = 0, inconsistent = 0, non_manifold_vertices = 0;
+  };
+  const Counts counts = tbb::parallel_reduce(
+      tbb::blocked_range<std::size_t>(0, points.size(), 1024), Counts{},
+      [&](const tbb::blocked_range<std::size_t>& range, Counts c) {
+        std::vector<std::pair<std::int32_t, std::int32_t>> around;  // (other vertex, local face)
+        DisjointSets fans(0);                                        // the faces' fans around one vertex
+        for (std::size_t v = range.begin(); v != range.end(); ++v) {
+          const auto begin = edges.begin() + first[v], end = edges.begin() + first[v + 1];
+          std::sort(begin, end);
+          for (auto i = begin; i != end;) {
+            auto j = i;
+            int forward = 0;
+            while (j != end && j->hi == i->hi) forward += (j++)->forward;
+            const auto n = j - i;
+            if (n == 1) ++c.border;
+            else if (n > 2) ++c.non_manifold_edges;
+            else if (forward != 1) ++c.inconsistent;
+            i = j;
+          }
+          const std::int32_t deg = start[v + 1] - start[v];
+          if (deg <= 1) continue;
+          if (deg <= kSmallFan) {
+            // The usual vertex: faces joined pairwise when they share a
+            // corner other than v, on the stack.
+            std::array<std::int32_t, 2 * kSmallFan> other;
+            std::array<std::int8_t, kSmallFan> fan;
+            for (std::int32_t k = 0; k < deg; ++k) {
+              const auto& t = tris[incident[start[v] + k]];
+              const int at = t[0] == static_cast<std::int32_t>(v) ? 0 : t[1] == static_cast<std::int32_t>(v) ? 1 : 2;
+              other[2 * k] = t[(at + 1) % 3];
+              other[2 * k + 1] = t[(at + 2) % 3];
+              fan[k] = static_cast<std::int8_t>(k);
+            }
+            auto find = [&fan](int x) {
+              while (fan[x] != x) x = fan[x] = fan[fan[x]];
+              return x;
+            };
+            for (std::int32_t i = 0; i < deg; ++i)
+              for (std::int32_t j = i + 1; j < deg; ++j)
+                if (other[2 * i] == other[2 * j] || other[2 * i] == other[2 * j + 1] ||
+                    other[2 * i + 1] == other[2 * j] || other[2 * i + 1] == other[2 * j + 1]) {
+                  const int a = find(i), b = find(j);
+                  if (a != b) fan[std::max(a, b)] = static_cast<std::int8_t>(std::min(a, b));
+                }
+            std::int32_t roots = 0;
+            for (std::int32_t k = 0; k < deg; ++k) roots += find(k) == k;
+            if (roots > 1) ++c.non_manifold_vertices;
+            continue;
+          }
+          around.clear();
+          for (std::int32_t k = 0; k < deg; ++k) {
+            const auto& t = tris[incident[start[v] + k]];
+            for (std::int32_t w : t)
+              if (w != static_cast<std::int32_t>(v)) around.push_back({w, k});
+          }
+          std::sort(around.begin(), around.end());
+          fans.Reset(static_cast<std::size_t>(deg));
+          for (std::size_t i = 1; i < around.size(); ++i)
+            if (around[i].first == around[i - 1].first) fans.Join(around[i].second, around[i - 1].second);
+          std::int32_t roots = 0;
+          for (std::int32_t k = 0; k < deg; ++k) roots += fans.Find(k) == static_cast<std::size_t>(k);
+          if (roots > 1) ++c.non_manifold_vertices;
+        }
+        return c;
+      },
+      [](Counts a, const Counts& b) {
+        a.border += b.border;
+        a.non_manifold_edges += b.non_manifold_edges;
+        a.inconsistent += b.inconsistent;
+        a.non_manifold_vertices += b.non_manifold_vertices;
+        return a;
+      });
+  report.border_edges += counts.border;
+  report.non_manifold_edges += counts.non_manifold_edges;
+  report.inconsistent_edges += counts.inconsistent;
+  report.non_manifold_vertices += counts.non_manifold_vertices;
 
   // 6. Components: vertex-connected pieces.
   if (!topology_only) {
