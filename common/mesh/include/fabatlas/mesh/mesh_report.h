@@ -71,8 +71,11 @@ struct MeshReport {
 // Self-intersection uses CGAL::Polygon_mesh_processing::self_intersections on a
 // CGAL::Surface_mesh built with orient_polygon_soup (which splits non-manifold
 // vertices, so triangles meeting only at a non-manifold vertex or edge count as
-// intersecting: they touch). Exact predicates (Epick kernel). Single-threaded;
-// about 0.5 s for 100k triangles. Never throws on any index-valid mesh; an empty
+// intersecting: they touch). Exact predicates (Epick kernel). The per-vertex
+// edge and fan tests run over vertex ranges on TBB's threads (counts summed,
+// the same for any schedule); the rest is single-threaded: about 0.5 s for
+// 100k triangles with self-intersections, 2.7 ms CPU topology_only for the
+// tray's 83k. Never throws on any index-valid mesh; an empty
 // mesh yields closed=false.
 MeshReport InspectMesh(const TriangleMesh& mesh, const InspectOptions& options = {});
 
