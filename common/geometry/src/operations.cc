@@ -211,12 +211,18 @@ std::size_t detail::RemoveZeroSheets(FloatGrid& grid, double voxel_size) {
       for (auto on = leaves[i]->getValueMask().beginOn(); on; ++on) {
         const float v = values[on.pos()];
         if (v < 0 || v > iso) continue;
-        const openvdb::Coord c = leaves[i]->offsetToGlobalCoord(on.pos());
+        const openvdb::Coord local = LeafT::offsetToLocalCoord(on.pos());
+        const openvdb::Coord c = leaves[i]->origin() + local;
         for (int axis = 0; axis < 3; ++axis) {
+          // Neighbours inside the leaf from its buffer, across its faces
+          // through the tree.
+          const openvdb::Index step = 1u << (LeafT::LOG2DIM * (2 - axis));
+          const bool inner = local[axis] > 0 && local[axis] < static_cast<int>(LeafT::DIM) - 1;
           openvdb::Coord lo = c, hi = c;
           lo[axis] -= 1;
           hi[axis] += 1;
-          const float a = acc.getValue(lo), b = acc.getValue(hi);
+          const float a = inner ? values[on.pos() - step] : acc.getValue(lo);
+          const float b = inner ? values[on.pos() + step] : acc.getValue(hi);
           if (a > iso && b > iso) {
             per_leaf[i].emplace_back(c, std::min(a, b));
             break;

@@ -37,6 +37,44 @@ struct BandSampler {
   double vs;
   double band;  // world half width
 
+  // The leaf at `o`'s cube of `size` voxels at local (x, y, z) into its
+  // values and active mask, by the blocks' test: a cube whose centre lies
+  // farther than the band plus its half diagonal is outside the band
+  // throughout, on its centre's side (the values each voxel would give), so
+  // it takes the band value unevaluated; otherwise its eight halves, down to
+  // single voxels. Near thin walls most leaves straddle the band's edge:
+  // this spares about half the distance evaluations.
+  void Fill(const Coord& o, int x, int y, int z, int size, float* values,
+            openvdb::util::NodeMask<LeafT::LOG2DIM>& on) const {
+    const double half = 0.5 * (size - 1);
+    const double d = sdf((o.x() + x + half) * vs, (o.y() + y + half) * vs, (o.z() + z + half) * vs);
+    if (std::abs(d) > band + std::sqrt(3.0) * half * vs) {
+      const float outside = static_cast<float>(d > 0 ? band : -band);
+      for (int i = x; i < x + size; ++i)
+        for (int j = y; j < y + size; ++j)
+          for (int k = z; k < z + size; ++k) values[LeafT::coordToOffset(Coord(i, j, k))] = outside;
+      return;
+    }
+    if (size > 2) {
+      const int h = size / 2;
+      for (int q = 0; q < 8; ++q)
+        Fill(o, x + ((q & 1) ? h : 0), y + ((q & 2) ? h : 0), z + ((q & 4) ? h : 0), h, values, on);
+      return;
+    }
+    for (int i = x; i < x + size; ++i)
+      for (int j = y; j < y + size; ++j)
+        for (int k = z; k < z + size; ++k) {
+          const openvdb::Index n = LeafT::coordToOffset(Coord(i, j, k));
+          const double v = sdf((o.x() + i) * vs, (o.y() + j) * vs, (o.z() + k) * vs);
+          if (std::abs(v) < band) {
+            values[n] = static_cast<float>(v);
+            on.setOn(n);
+          } else {
+            values[n] = static_cast<float>(v > 0 ? band : -band);
+          }
+        }
+  }
+
   // Visit the cube of `size` voxels per edge with minimum corner `o`.
   void Visit(const Coord& o, int size, std::vector<LeafT*>& out) const {
     const double half = 0.5 * (size - 1);
@@ -51,36 +89,12 @@ struct BandSampler {
       return;
     }
     auto* leaf = new LeafT(o, static_cast<float>(band), false);
-    bool any_active = false;
-    // The leaf's eight 4^3 octants by the same test: an octant whose centre
-    // lies farther than the band plus its half diagonal is outside the band
-    // throughout, on its centre's side (the values each voxel would give).
-    // Near thin walls most leaves straddle the band's edge, so this spares
-    // about half the distance evaluations.
-    constexpr int kOctant = LeafT::DIM / 2;
-    const double octant_reach = band + std::sqrt(3.0) * 0.5 * (kOctant - 1) * vs;
-    for (int q = 0; q < 8; ++q) {
-      const int ox = (q & 1) ? kOctant : 0, oy = (q & 2) ? kOctant : 0, oz = (q & 4) ? kOctant : 0;
-      const double centre = 0.5 * (kOctant - 1);
-      const double dq = sdf((o.x() + ox + centre) * vs, (o.y() + oy + centre) * vs, (o.z() + oz + centre) * vs);
-      const bool far = std::abs(dq) > octant_reach;
-      for (int x = ox; x < ox + kOctant; ++x)
-        for (int y = oy; y < oy + kOctant; ++y)
-          for (int z = oz; z < oz + kOctant; ++z) {
-            const openvdb::Index n = LeafT::coordToOffset(Coord(x, y, z));
-            if (far) {
-              leaf->setValueOff(n, static_cast<float>(dq > 0 ? band : -band));
-              continue;
-            }
-            const double v = sdf((o.x() + x) * vs, (o.y() + y) * vs, (o.z() + z) * vs);
-            if (std::abs(v) < band) {
-              leaf->setValueOn(n, static_cast<float>(v));
-              any_active = true;
-            } else {
-              leaf->setValueOff(n, static_cast<float>(v > 0 ? band : -band));
-            }
-          }
-    }
+    float* values = leaf->buffer().data();
+    openvdb::util::NodeMask<LeafT::LOG2DIM> on;
+    constexpr int h = LeafT::DIM / 2;  // the leaf itself passed the test above
+    for (int q = 0; q < 8; ++q) Fill(o, (q & 1) ? h : 0, (q & 2) ? h : 0, (q & 4) ? h : 0, h, values, on);
+    leaf->setValueMask(on);
+    const bool any_active = !on.isOff();
     if (any_active) {
       out.push_back(leaf);
     } else {
