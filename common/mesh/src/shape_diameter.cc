@@ -5,6 +5,7 @@
 #include <embree3/rtcore.h>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
 
 #include <algorithm>
 #include <array>
@@ -90,26 +91,43 @@ ShapeDiameterSummary ShapeDiameter(const TriangleMesh& mesh, const ShapeDiameter
   summary.min = summary.percentile_5 = summary.median = summary.area_fraction_below = nan;
   if (nf == 0) return summary;
 
-  // Face normals, areas and centroids in double.
+  // Face normals, areas and centroids in double, and the bounds of the
+  // faces' corners; over face ranges in parallel (min and max: the same for
+  // any schedule).
   std::vector<Vec> normal(nf), centroid(nf);
   std::vector<double> area(nf);
-  Vec lo = mesh.vertices[mesh.triangles[0][0]], hi = lo;
-  for (std::size_t f = 0; f < nf; ++f) {
-    const auto& t = mesh.triangles[f];
-    const Vec& a = mesh.vertices[t[0]];
-    const Vec& b = mesh.vertices[t[1]];
-    const Vec& c = mesh.vertices[t[2]];
-    const Vec n = Cross(Sub(b, a), Sub(c, a));
-    const double len = Norm(n);
-    area[f] = 0.5 * len;
-    normal[f] = len > 0 ? Vec{n[0] / len, n[1] / len, n[2] / len} : Vec{0, 0, 0};
-    for (int k = 0; k < 3; ++k) centroid[f][k] = (a[k] + b[k] + c[k]) / 3.0;
-    for (const Vec* p : {&a, &b, &c})
-      for (int k = 0; k < 3; ++k) {
-        lo[k] = std::min(lo[k], (*p)[k]);
-        hi[k] = std::max(hi[k], (*p)[k]);
-      }
-  }
+  using Bounds = std::pair<Vec, Vec>;
+  constexpr double inf = std::numeric_limits<double>::infinity();
+  const Bounds bounds = tbb::parallel_reduce(
+      tbb::blocked_range<std::size_t>(0, nf, 1024), Bounds{{inf, inf, inf}, {-inf, -inf, -inf}},
+      [&](const tbb::blocked_range<std::size_t>& range, Bounds box) {
+        for (std::size_t f = range.begin(); f != range.end(); ++f) {
+          const auto& t = mesh.triangles[f];
+          const Vec& a = mesh.vertices[t[0]];
+          const Vec& b = mesh.vertices[t[1]];
+          const Vec& c = mesh.vertices[t[2]];
+          const Vec n = Cross(Sub(b, a), Sub(c, a));
+          const double len = Norm(n);
+          area[f] = 0.5 * len;
+          normal[f] = len > 0 ? Vec{n[0] / len, n[1] / len, n[2] / len} : Vec{0, 0, 0};
+          for (int k = 0; k < 3; ++k) centroid[f][k] = (a[k] + b[k] + c[k]) / 3.0;
+          for (const Vec* p : {&a, &b, &c})
+            for (int k = 0; k < 3; ++k) {
+              box.first[k] = std::min(box.first[k], (*p)[k]);
+              box.second[k] = std::max(box.second[k], (*p)[k]);
+            }
+        }
+        return box;
+      },
+      [](Bounds x, const Bounds& y) {
+        for (int k = 0; k < 3; ++k) {
+          x.first[k] = std::min(x.first[k], y.first[k]);
+          x.second[k] = std::max(x.second[k], y.second[k]);
+        }
+        return x;
+      });
+  const Vec& lo = bounds.first;
+  const Vec& hi = bounds.second;
   const double diagonal = Norm(Sub(hi, lo));
   // Rays start on the face; hits closer than this are the face itself or its
   // float32 rounding (1e-6 of the model size, well below any printable feature).
@@ -119,19 +137,51 @@ ShapeDiameterSummary ShapeDiameter(const TriangleMesh& mesh, const ShapeDiameter
   embree.device = rtcNewDevice(nullptr);
   if (!embree.device) throw std::runtime_error("shape diameter: cannot create Embree device");
   embree.scene = rtcNewScene(embree.device);
-  RTCGeometry geometry = rtcNewGeometry(embree.device, RTC_GEOMETRY_TYPE_TRIANGLE);
+  // The triangles as Embree quads: two consecutive triangles (a, b, c),
+  // (a, d, b) that share their edge a-b, as Solid::ToMesh writes each quad of
+  // the level-set extraction, are the quad (c, a, d, b), which Embree
+  // intersects as the triangles (c, a, b) and (d, b, a): the same two
+  // triangles, in a tree of half as many primitives (the tray's 83k
+  // triangles: build 4.1 -> 1.4 ms, rays 10% faster; hit distances equal to
+  // a few float roundings). Any other triangle is the quad (a, b, c, c),
+  // whose second triangle (c, c, b) is empty.
+  // first[q]: the quad's first triangle; its second is first[q] + 1 when
+  // paired[q].
+  std::vector<std::uint32_t> first;
+  std::vector<char> paired;
+  first.reserve(nf);
+  paired.reserve(nf);
+  for (std::size_t f = 0; f < nf;) {
+    const bool pair = f + 1 < nf && mesh.triangles[f + 1][0] == mesh.triangles[f][0] &&
+                      mesh.triangles[f + 1][2] == mesh.triangles[f][1];
+    first.push_back(static_cast<std::uint32_t>(f));
+    paired.push_back(pair ? 1 : 0);
+    f += pair ? 2 : 1;
+  }
+  const std::size_t nq = first.size();
+  RTCGeometry geometry = rtcNewGeometry(embree.device, RTC_GEOMETRY_TYPE_QUAD);
   auto* vb = static_cast<float*>(rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
                                                           3 * sizeof(float), mesh.vertices.size()));
-  auto* ib = static_cast<unsigned*>(rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
-                                                             3 * sizeof(unsigned), nf));
+  auto* ib = static_cast<unsigned*>(rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT4,
+                                                             4 * sizeof(unsigned), nq));
   if (!vb || !ib) {
     rtcReleaseGeometry(geometry);
     throw std::runtime_error("shape diameter: Embree buffer allocation failed");
   }
-  for (std::size_t v = 0; v < mesh.vertices.size(); ++v)
-    for (int k = 0; k < 3; ++k) vb[3 * v + k] = static_cast<float>(mesh.vertices[v][k]);
-  for (std::size_t f = 0; f < nf; ++f)
-    for (int k = 0; k < 3; ++k) ib[3 * f + k] = static_cast<unsigned>(mesh.triangles[f][k]);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, mesh.vertices.size(), 4096),
+                    [&](const tbb::blocked_range<std::size_t>& range) {
+                      for (std::size_t v = range.begin(); v != range.end(); ++v)
+                        for (int k = 0; k < 3; ++k) vb[3 * v + k] = static_cast<float>(mesh.vertices[v][k]);
+                    });
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nq, 4096), [&](const tbb::blocked_range<std::size_t>& range) {
+    for (std::size_t q = range.begin(); q != range.end(); ++q) {
+      const auto& t = mesh.triangles[first[q]];
+      const std::array<std::int32_t, 4> quad =
+          paired[q] ? std::array<std::int32_t, 4>{t[2], t[0], mesh.triangles[first[q] + 1][1], t[1]}
+                    : std::array<std::int32_t, 4>{t[0], t[1], t[2], t[2]};
+      for (int k = 0; k < 4; ++k) ib[4 * q + k] = static_cast<unsigned>(quad[k]);
+    }
+  });
   // The tree's build quality by the work it serves: with fewer than 8 rays
   // per triangle (a stride sample of a large mesh: 4,000 faces x 30 rays
   // against the tray's 83k triangles) Embree's quick Morton build (LOW) costs
@@ -195,16 +245,20 @@ ShapeDiameterSummary ShapeDiameter(const TriangleMesh& mesh, const ShapeDiameter
         rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
         rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
         rtcIntersect1(embree.scene, &context, &rh);
-        if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID || rh.hit.primID == f) continue;
+        if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) continue;
+        // The hit triangle: a quad's second when u + v > 1 (Embree's quad
+        // parametrisation).
+        const std::size_t hit = first[rh.hit.primID] + (paired[rh.hit.primID] && rh.hit.u + rh.hit.v > 1 ? 1 : 0);
+        if (hit == f) continue;
         // Valid only on the inner side of a wall: the hit face's outward normal
         // points along the ray.
-        if (Dot(normal[rh.hit.primID], dir) <= 0) continue;
+        if (Dot(normal[hit], dir) <= 0) continue;
         // ... and only on the far side of a wall: the hit face turns back
         // towards this one (normals more than 180 - wall_angle degrees
         // apart). A neighbouring face across a convex edge (a cube's, 90
         // degrees) is no wall: near such an edge its short rays would outvote
         // the opposite face's in the median and the outlier test.
-        if (Dot(normal[rh.hit.primID], normal[f]) > -min_opposition) continue;
+        if (Dot(normal[hit], normal[f]) > -min_opposition) continue;
         hits.push_back({static_cast<double>(rh.ray.tfar), r[3]});
       }
       if (hits.empty()) continue;
