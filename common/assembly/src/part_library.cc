@@ -340,11 +340,11 @@ PartLibrary LoadPartLibrary(const std::string& file, const std::string& mesh_dir
         else if (k == "flex") p.flex = e.second.as<bool>();
         else if (k == "clamped") p.clamped = e.second.as<bool>();
         else if (k == "ctl") p.ctl = e.second.as<bool>();
-        else if (k == "blocked") {  // "min" / "max": that end of the slide parameter is blocked
+        else if (k == "blocked") {  // "min" / "max" / "both": that end of the slide parameter is blocked
           const std::string v = AsString(file, e.second, "blocked");
-          if (v == "min") p.blocked_min = true;
-          else if (v == "max") p.blocked_max = true;
-          else Fail(file, e.second, "blocked must be 'min' or 'max'");
+          if (v == "min" || v == "both") p.blocked_min = true;
+          if (v == "max" || v == "both") p.blocked_max = true;
+          if (v != "min" && v != "max" && v != "both") Fail(file, e.second, "blocked must be 'min', 'max' or 'both'");
         } else if (k == "range") {  // hook θ range [min, max] (default [0, arc_angle])
           if (!e.second.IsSequence() || e.second.size() != 2) Fail(file, e.second, "range must be [min, max]");
           p.shape["theta_min"] = AsDouble(file, e.second[0], "range");

@@ -53,7 +53,8 @@ struct Primitive {
   bool flex = false;   // Flex variant: extra orientation DoF phi (hook/ring)
   bool ctl = false;    // Ctl (centre-line) variant of rod, ring, tube: own frame formula
   // Ends of the slide parameter (rod/tube/edge t, hook θ) blocked by the part's
-  // own body ("min" / "max"), see ParamSpec.
+  // own body ("min" / "max" / "both"), see ParamSpec; for rods, checked
+  // against the part's mesh with MeasureRodEnds (rod_ends.h).
   bool blocked_min = false, blocked_max = false;
 
   double Shape(const std::string& key) const;  // throws std::out_of_range
