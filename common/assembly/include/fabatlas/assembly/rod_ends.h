@@ -22,7 +22,8 @@
 // normals.
 //
 // Brute force over all triangles: O(probes × rays × triangles);
-// single-threaded; readingroom.stl's 26,497 triangles take ~0.1 s per probe.
+// single-threaded; triangles farther than max_ray_mm are skipped for the rays
+// (readingroom.stl, 26,497 triangles: ~15 ms per probe).
 #pragma once
 
 #include <vector>
