@@ -278,8 +278,7 @@ TEST(MeshReport, FabHacksMeshesKeepTheirRecordedVerdicts) {
 // The largest FabHacks mesh (104,824 triangles) is closed, manifold and free
 // of self-intersections. Its time is a benchmark, not a test:
 // bench/mesh/bench_mesh (docs/benchmarks.md, Mesh checks).
-// The topology-only pass (the watertight check's guarantee on fabatlas's own
-// extraction) counts over the mesh's vertex indices exactly what the full
+// The topology-only pass counts over the mesh's vertex indices exactly what the full
 // inspection counts after merging, on meshes whose vertices are shared by
 // index: the bunny, the analytic defects above and a FabHacks part with 100k
 // triangles. Nothing is merged: a soup's triangles are each open, and the

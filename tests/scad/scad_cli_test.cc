@@ -64,6 +64,28 @@ TEST(ScadCli, SampleAModelDirectly) {
   EXPECT_GE(checked, 6);
 }
 
+// The watertight check on the sample's own surface can fail: a wall 0.4 mm
+// thick, tilted, at the imported design's voxel of 0.5 mm folds our
+// extraction (closed and manifold all the same), and the check names the
+// fold; at 1 mm the wall is resolved and the check passes.
+TEST(ScadCli, WatertightReportsAFoldOfTheOwnSurfaceAtAWallThinnerThanAVoxel) {
+  auto dir = fabatlas::testing::FreshTempDir("scad-cli-fold");
+  std::ofstream(dir / "fin.scad") << "t = 1; // [0.2:0.1:2]\n"
+                                     "cube([20, 20, 2]);\n"
+                                     "translate([8, 2, 1]) rotate([0, 30, 10]) cube([t, 14, 10]);\n";
+  CommandRun thin = Fabatlas("eval fin.scad --at t=0.4 --json", dir);
+  ASSERT_EQ(thin.status, 0) << thin.err;
+  const auto j = nlohmann::json::parse(thin.out);
+  ASSERT_TRUE(j["checks"].contains("watertight")) << thin.out;
+  EXPECT_FALSE(j["checks"]["watertight"]["passed"].get<bool>());
+  EXPECT_NE(j["checks"]["watertight"]["reason"].get<std::string>().find("the level-set surface folds over itself"),
+            std::string::npos)
+      << j["checks"]["watertight"]["reason"];
+  CommandRun thick = Fabatlas("eval fin.scad --at t=1 --json", dir);
+  ASSERT_EQ(thick.status, 0) << thick.err;
+  EXPECT_TRUE(nlohmann::json::parse(thick.out)["checks"]["watertight"]["passed"].get<bool>()) << thick.out;
+}
+
 // A cluster job (`fabatlas run`: a coordinator and a worker process over
 // gRPC) on a model whose samples share a CSG subtree: the drilled slab's
 // union of two cubes is the same at every radius, so the worker finds it in

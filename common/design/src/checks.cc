@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <map>
 #include <mutex>
@@ -11,6 +12,7 @@
 #include "convex_hull_2d.h"
 #include "fabatlas/error.h"
 #include "fabatlas/fem/fem_check.h"
+#include "fabatlas/geometry/folded_triangles.h"
 #include "fabatlas/mesh/mesh_report.h"
 #include "fabatlas/mesh/shape_diameter.h"
 #include "fabatlas/mesh/surface_area.h"
@@ -37,12 +39,11 @@ double Cross(const geometry::Vec2& o, const geometry::Vec2& a, const geometry::V
 //    OpenSCAD polyhedron or render) gets the full test (CGAL, with
 //    self-intersections), its defects named; reports are remembered per
 //    mesh content for the process, so a mesh is inspected once;
-//  - the sample's own level-set extraction is closed by construction
-//    (marching cubes of a flood-filled narrow band; a difference removes the
-//    zero-thickness sheets shared faces leave, geometry.h), so it gets the
-//    cheap guarantee: closed and manifold by edge counting over its own
-//    vertex indices (InspectOptions::topology_only), no CGAL
-//    self-intersection test (docs/mesh.md, "Which check runs where").
+//  - the sample's own level-set extraction is closed and manifold by
+//    construction, so what it gets is the cheap test of what it can get
+//    wrong: no triangle folded against the level set's outward direction
+//    where a part is thinner than a voxel (geometry/folded_triangles.h;
+//    docs/mesh.md, "Which check runs where").
 CheckOutcome Watertight(CheckContext& c) {
   CheckOutcome o;
   o.passed = true;
@@ -73,13 +74,15 @@ CheckOutcome Watertight(CheckContext& c) {
       }
     }
   }
-  mesh::InspectOptions cheap;
-  cheap.topology_only = true;
-  mesh::MeshReport own = mesh::InspectMesh(c.Mesh(), cheap);
-  if (!own.closed || !own.manifold) {
+  const geometry::FoldedTriangles folds = geometry::FindFoldedTriangles(c.solid(), c.Mesh());
+  if (folds.count > 0) {
+    char where[200];
+    std::snprintf(where, sizeof where, "first near (%.4g, %.4g, %.4g) mm): a part there is thinner than a voxel (%g mm)",
+                  folds.first[0], folds.first[1], folds.first[2], c.solid().voxel_size());
     o.passed = false;
-    o.failure = kNotWatertight;
-    o.reason = "the level-set surface: " + (!own.closed ? own.closed_reason : own.manifold_reason);
+    o.failure = kThinParts;  // the model's cause; the fold is what it does to our surface
+    o.reason = "the level-set surface folds over itself at " + std::to_string(folds.count) + " triangle" +
+               (folds.count == 1 ? "" : "s") + " (" + where + "; a smaller voxel_size resolves it";
   }
   return o;
 }

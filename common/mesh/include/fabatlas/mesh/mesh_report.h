@@ -23,9 +23,9 @@ struct InspectOptions {
   // verdict (outward stays false, without a reason) and no self-intersection
   // test. For meshes whose vertices are
   // shared by index by construction (the level-set extraction,
-  // geometry::Solid::ToMesh): the watertight check's cheap guarantee on the
-  // sample's own surface. About 4x cheaper than the default path without
-  // self-intersections.
+  // geometry::Solid::ToMesh, which is closed and manifold for any signs:
+  // the watertight check tests folds there instead, folded_triangles.h).
+  // About 4x cheaper than the default path without self-intersections.
   bool topology_only = false;
 };
 
