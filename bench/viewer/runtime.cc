@@ -52,15 +52,15 @@ void Print(const char* what, const std::vector<double>& ms) {
 // Records every subtree evaluation offers (for H_all).
 class RecordingCache final : public design::SubtreeCache {
  public:
-  std::optional<geometry::Solid> Find(const std::string& key) override {
+  std::optional<design::CachedSubtree> Find(const std::string& key) override {
     std::lock_guard<std::mutex> lock(mutex_);
     const auto it = entries.find(key);
     if (it == entries.end()) return std::nullopt;
-    return it->second.first;
+    return design::CachedSubtree{it->second.first};
   }
-  void Offer(const std::string& key, const geometry::Solid& solid, double seconds) override {
+  void Offer(const std::string& key, const design::CachedSubtree& subtree, double seconds) override {
     std::lock_guard<std::mutex> lock(mutex_);
-    entries.emplace(key, std::make_pair(solid, seconds));
+    entries.emplace(key, std::make_pair(subtree.solid, seconds));
   }
   std::map<std::string, std::pair<geometry::Solid, double>> entries;
 

@@ -23,10 +23,10 @@ namespace {
 class CaptureCache final : public design::SubtreeCache {
  public:
   explicit CaptureCache(std::string key) : key_(std::move(key)) {}
-  std::optional<geometry::Solid> Find(const std::string&) override { return std::nullopt; }
-  void Offer(const std::string& key, const geometry::Solid& solid, double) override {
+  std::optional<design::CachedSubtree> Find(const std::string&) override { return std::nullopt; }
+  void Offer(const std::string& key, const design::CachedSubtree& subtree, double) override {
     std::lock_guard lock(mutex_);
-    if (key == key_ && grid_.empty()) grid_ = solid.Serialize();
+    if (key == key_ && grid_.empty()) grid_ = subtree.solid.Serialize();
   }
   std::string grid() {
     std::lock_guard lock(mutex_);
@@ -71,7 +71,7 @@ pipeline::CacheAssembly CollectSubtreesFromStore(storage::JobStore& store, stora
     // The first valid sample (in id order) that lists the key: the plan keeps
     // only subtrees below valid samples' roots, and a sample lists every
     // descendant of what it lists (a cache hit is recorded with its
-    // descendants' records, openscad_node.h RememberSubtree).
+    // descendants' records, openscad_node.h SubtreeTrace).
     for (const auto& [id, keys] : *samples) {
       if (std::find(keys.begin(), keys.end(), key) == keys.end()) continue;
       CaptureCache capture(key);

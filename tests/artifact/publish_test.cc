@@ -206,7 +206,7 @@ TEST(PreviewCache, CachedRootSkipsItsChildren) {
 
   // Without the root, a cached child is used and the other child evaluated.
   precompute::FrozenSubtreeCache child;
-  child.Add(first.subtrees[0].key, geometry::Solid::Deserialize(full_cache.Find(first.subtrees[0].key)->Serialize()));
+  child.Add(first.subtrees[0].key, geometry::Solid::Deserialize(full_cache.Find(first.subtrees[0].key)->solid.Serialize()));
   preview.cache = &child;
   const design::SampleResult third = design::EvaluateSample(d, u, preview);
   ASSERT_EQ(third.subtrees.size(), 3u);

@@ -3,7 +3,10 @@
 // dropdown changes the geometry.
 #include <gtest/gtest.h>
 
+#include <malloc.h>
+
 #include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <numbers>
 
@@ -11,7 +14,9 @@
 #include "fabatlas/design/evaluate_sample.h"
 #include "fabatlas/mesh/enclosed_volume.h"
 #include "fabatlas/mesh/read_mesh.h"
+#include "fabatlas/mesh/write_mesh.h"
 #include "fabatlas/scad/import_design.h"
+#include "fabatlas/scad/primitive_mesh.h"
 #include "fabatlas/scad/region_outline.h"
 #include "fabatlas/testing/paths.h"
 
@@ -260,6 +265,85 @@ TEST(ScadEval, RotateExtrudeFacetsAsOpenScad) {
     design::SampleResult r = design::EvaluateSample(d, design::DefaultPoint(d), options);
     ASSERT_TRUE(r.valid) << models[k] << r.failure_reason;
     EXPECT_NEAR(r.solid.Volume(), peer, 0.01 * peer) << models[k];
+  }
+}
+
+}  // namespace
+
+namespace {
+
+// Bytes the process's heap holds in use (glibc: small chunks plus mmapped
+// blocks), for a growth between two moments of this test.
+std::size_t HeapInUse() {
+  const struct mallinfo2 m = mallinfo2();
+  return m.uordblks + m.hblkhd;
+}
+
+// A model importing a fine mesh (a 300-fragment sphere, 89,400 triangles,
+// about 2.2 MB in memory) stretched by the exposed `s`: every sample is a
+// new subtree key whose computation brings that mesh from outside fabatlas.
+design::Design StretchedImport(const std::filesystem::path& dir) {
+  fabatlas::mesh::WriteMesh(fabatlas::scad::SphereMesh(10, 300), dir / "ball.stl");
+  std::ofstream(dir / "stretched.scad") << "s = 1;\nscale([s, 1, 1]) import(\"ball.stl\");\n";
+  return design::ParseDesign(
+      "name: stretched\nvoxel_size: 1\nparameters: {s: {type: real, min: 1, max: 2, default: 1}}\n"
+      "tree: {op: openscad, file: stretched.scad, set: {s: s}}\n",
+      dir / "stretched.yaml");
+}
+
+// What evaluation keeps beside a cached subtree (the records of its
+// descendants, the meshes that came from outside fabatlas) lives in the
+// cache entry and is counted in its budget (Issue: worker memory bounded):
+// over 40 distinct samples under an 8 MiB cache the heap grows by about the
+// budget, not by the 40 imported meshes (about 90 MB) that process-wide
+// side tables kept before.
+TEST(ScadEval, SideDataOfCachedSubtreesStaysWithinTheCacheBudget) {
+  auto dir = fabatlas::testing::FreshTempDir("scad-side-data");
+  design::Design d = StretchedImport(dir);
+  constexpr std::size_t kBudget = std::size_t{8} << 20;
+  design::InMemorySubtreeCache cache(design::InMemorySubtreeCache::Options{0.0, kBudget});
+  design::EvaluateOptions options;
+  options.cache = &cache;
+  options.run_checks = false;
+  options.keep_solid = false;
+  auto sample = [&](int i) {
+    design::SampleResult r =
+        design::EvaluateSample(d, design::ParsePoint(d, "s=" + std::to_string(1 + i / 64.0), "--at"), options);
+    ASSERT_TRUE(r.valid) << r.failure_reason;
+  };
+  sample(0);  // the first sample's one-off allocations (OpenVDB, the model's parse) are not growth
+  const std::size_t before = HeapInUse();
+  for (int i = 1; i <= 40; ++i) sample(i);
+  const std::size_t after = HeapInUse();
+  const double grown_mb = (static_cast<double>(after) - static_cast<double>(before)) / (1 << 20);
+  std::printf("heap grew %.1f MB over 40 samples; cache %zu entries, %.1f MB\n", grown_mb, cache.entries(),
+              static_cast<double>(cache.bytes()) / (1 << 20));
+  EXPECT_LE(cache.bytes(), kBudget);
+  EXPECT_LT(grown_mb, 24.0);
+}
+
+
+// A subtree found in the cache still brings the meshes that entered it from
+// outside fabatlas to the watertight check: a polyhedron cube without its
+// top face (4 open edges) fails the check in the sample that computes it and
+// in the one that finds the whole `openscad` node in the cache.
+TEST(ScadEval, ACachedSubtreeStillBringsItsOutsideMeshToTheWatertightCheck) {
+  auto dir = fabatlas::testing::FreshTempDir("scad-open-cached");
+  std::ofstream(dir / "open.scad") << "w = 10;\npolyhedron(points = [[0,0,0],[w,0,0],[w,w,0],[0,w,0],"
+                                      "[0,0,w],[w,0,w],[w,w,w],[0,w,w]],\n"
+                                      "  faces = [[0,1,2,3],[4,5,1,0],[5,6,2,1],[6,7,3,2],[7,4,0,3]]);\n";
+  design::Design d = design::ParseDesign(
+      "name: open\nvoxel_size: 1\nparameters: {w: {type: real, min: 8, max: 12, default: 10}}\n"
+      "tree: {op: openscad, file: open.scad, set: {w: w}}\nchecks: [watertight]\n",
+      dir / "open.yaml");
+  design::InMemorySubtreeCache cache;
+  design::EvaluateOptions options;
+  options.cache = &cache;
+  for (const char* pass : {"computed", "cached"}) {
+    design::SampleResult r = design::EvaluateSample(d, design::DefaultPoint(d), options);
+    EXPECT_EQ(r.subtrees.back().from_cache, std::string(pass) == "cached");
+    EXPECT_EQ(r.failure, design::kNotWatertight) << pass << ": " << r.failure_reason;
+    EXPECT_NE(r.failure_reason.find("polyhedron"), std::string::npos) << pass << ": " << r.failure_reason;
   }
 }
 

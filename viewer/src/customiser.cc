@@ -25,12 +25,12 @@ class FixedSubtreeCache final : public design::SubtreeCache {
  public:
   explicit FixedSubtreeCache(const std::map<std::string, std::pair<geometry::Solid, double>>& entries)
       : entries_(entries) {}
-  std::optional<geometry::Solid> Find(const std::string& key) override {
+  std::optional<design::CachedSubtree> Find(const std::string& key) override {
     const auto it = entries_.find(key);
     if (it == entries_.end()) return std::nullopt;
-    return it->second.first;
+    return design::CachedSubtree{it->second.first};
   }
-  void Offer(const std::string&, const geometry::Solid&, double) override {}
+  void Offer(const std::string&, const design::CachedSubtree&, double) override {}
 
  private:
   const std::map<std::string, std::pair<geometry::Solid, double>>& entries_;

@@ -160,14 +160,19 @@ class TreeEvaluation {
     return identities_.emplace(&node, std::move(id)).first->second;
   }
 
-  // An `openscad` node's one child is its CSG root, known only once OpenSCAD
-  // has run; a cache hit names the child it had when computed and, when
-  // `records` is not null, appends the records of the CSG subtrees below it.
-  static std::vector<std::string> CsgRootOf(const std::string& node_key, const std::string& path,
-                                            std::vector<SubtreeRecord>* records) {
-    std::vector<std::string> root;
-    RecallDescendants(node_key, path, records, &root);
-    return root;
+  // What a hit's trace brings (openscad_node.h, SubtreeTrace): the outside
+  // meshes of its subtree and, for an `openscad` node (whose one child, its
+  // CSG root, is known only once OpenSCAD has run), the child it had when
+  // computed in `record` and, when `records` is not null, the records of the
+  // CSG subtrees below it.
+  void Recall(const Node& node, const CachedSubtree& hit, const std::string& path, SubtreeRecord& record,
+              std::vector<SubtreeRecord>* records) {
+    if (!hit.trace) return;
+    if (node.op == "openscad" && !hit.trace->op.empty()) {
+      record.children = hit.trace->children;
+      if (records) AppendDescendantRecords(*hit.trace, path, records);
+    }
+    outside_.insert(outside_.end(), hit.trace->outside.begin(), hit.trace->outside.end());
   }
 
   static SubtreeRecord RecordOf(const Node& node, const Identity& id, const std::string& path) {
@@ -190,11 +195,10 @@ class TreeEvaluation {
       if (auto hit = options_.cache->Find(id.key)) {
         SubtreeRecord record = RecordOf(node, id, path);
         record.from_cache = true;
-        record.bytes = hit->MemoryBytes();
-        if (node.op == "openscad") record.children = CsgRootOf(id.key, path, nullptr);
+        record.bytes = hit->solid.MemoryBytes();
+        Recall(node, *hit, path, record, nullptr);
         records_->push_back(std::move(record));
-        RecallOutside(id.key, &outside_);
-        return {*hit, id.key, id.topology};
+        return {hit->solid, id.key, id.topology};
       }
     }
     ResolvedArgs args = Resolve(node);
@@ -223,13 +227,13 @@ class TreeEvaluation {
     Result out{{}, record.key, record.topology};
     if (options_.cache) {
       if (auto hit = options_.cache->Find(record.key)) {
-        out.solid = *hit;
+        out.solid = hit->solid;
         record.from_cache = true;
-        if (node.op == "openscad") record.children = CsgRootOf(record.key, path, records_);
-        RecallOutside(record.key, &outside_);
+        Recall(node, *hit, path, record, records_);
       }
     }
     if (!record.from_cache) {
+      auto trace = std::make_shared<SubtreeTrace>();  // what the cache keeps beside the solid
       std::vector<geometry::Solid> inputs;
       for (auto& c : children) inputs.push_back(std::move(c.solid));
       auto start = Clock::now();
@@ -253,18 +257,23 @@ class TreeEvaluation {
         context.path = path;
         OpenScadNodeResult scad = EvaluateOpenScadNode(node, args, design_.file.parent_path(), context);
         out.solid = std::move(scad.solid);
-        if (!scad.root_key.empty()) record.children = {scad.root_key};
-        if (!scad.root_key.empty() && options_.cache)
-          RememberSubtree(record.key, {record.topology, record.op, 0, {scad.root_key}, {"/csg"}});
+        if (!scad.root_key.empty()) {
+          record.children = {scad.root_key};
+          trace->topology = record.topology;
+          trace->op = record.op;
+          trace->bytes = out.solid.MemoryBytes();
+          trace->children = record.children;
+          trace->child_paths = {"/csg"};
+          trace->child_traces = {scad.root_trace};
+        }
         openscad_seconds = scad.export_seconds;
       } else {
         out.solid = ApplyOperation(node, args, inputs, grid_, design_.file.parent_path(), &outside_);
       }
       record.seconds = openscad_seconds >= 0 ? openscad_seconds : Since(start);
       if (options_.cache) {
-        options_.cache->Offer(record.key, out.solid, record.seconds);
-        if (outside_.size() > outside_before)
-          RememberOutside(record.key, std::vector<OutsideMesh>(outside_.begin() + outside_before, outside_.end()));
+        trace->outside.assign(outside_.begin() + outside_before, outside_.end());
+        options_.cache->Offer(record.key, EntryOf(out.solid, std::move(trace)), record.seconds);
       }
     }
     record.bytes = out.solid.MemoryBytes();

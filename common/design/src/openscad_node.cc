@@ -420,6 +420,7 @@ class CsgEvaluation {
     Solid solid;
     std::shared_ptr<const Field> field;
     std::string key;
+    std::shared_ptr<const SubtreeTrace> trace;  // with a subtree cache (null when found without one)
   };
 
   // need_solid: sample a field result (the root of the evaluation). Fields
@@ -434,19 +435,23 @@ class CsgEvaluation {
     if (c_.cache) {
       if (auto hit = c_.cache->Find(key)) {
         record.from_cache = true;
-        record.bytes = hit->MemoryBytes();
-        // The records of its descendants as this process computed them
-        // (RememberSubtree), else (a cache filled elsewhere) only the keys
+        record.bytes = hit->solid.MemoryBytes();
+        // The records of its descendants and its outside meshes as its
+        // trace holds them, else (a cache filled elsewhere) only the keys
         // of the children it was computed from.
-        if (!RecallDescendants(key, path, c_.records, &record.children)) {
+        const SubtreeTrace* trace = hit->trace.get();
+        if (trace && !trace->op.empty()) {
+          if (c_.records) AppendDescendantRecords(*trace, path, c_.records);
+          record.children = trace->children;
+        } else {
           Affine inner;
           if (ChildFrame(n, m, &inner))
             for (const auto& c : n.children)
               if (!IsTwoD(c.name)) record.children.push_back(KeyOf(c, inner));
         }
+        if (trace && c_.outside) c_.outside->insert(c_.outside->end(), trace->outside.begin(), trace->outside.end());
         if (c_.records) c_.records->push_back(record);
-        RecallOutside(key, c_.outside);
-        return {*hit, nullptr, key};
+        return {hit->solid, nullptr, key, hit->trace};
       }
     }
     Result result{Solid(), nullptr, key};
@@ -505,10 +510,16 @@ class CsgEvaluation {
     record.bytes = result.solid.MemoryBytes();
     for (const auto& k : kids) record.children.push_back(k.key);
     if (c_.cache && !result.field) {
-      c_.cache->Offer(key, result.solid, record.seconds);
-      if (c_.outside && c_.outside->size() > outside_before)
-        RememberOutside(key, std::vector<OutsideMesh>(c_.outside->begin() + outside_before, c_.outside->end()));
-      RememberSubtree(key, {record.topology, record.op, record.bytes, record.children, kid_paths});
+      auto trace = std::make_shared<SubtreeTrace>();
+      trace->topology = record.topology;
+      trace->op = record.op;
+      trace->bytes = record.bytes;
+      trace->children = record.children;
+      trace->child_paths = kid_paths;
+      for (const auto& k : kids) trace->child_traces.push_back(k.trace);
+      if (c_.outside) trace->outside.assign(c_.outside->begin() + outside_before, c_.outside->end());
+      result.trace = trace;
+      c_.cache->Offer(key, EntryOf(result.solid, std::move(trace)), record.seconds);
     }
     if (c_.records) c_.records->push_back(std::move(record));
     return result;
@@ -789,10 +800,14 @@ class CsgEvaluation {
   // program): a 2D export is cheap next to a 3D render, and the outline is
   // then extruded natively. Outlines are remembered per canonical text for
   // the process (a text's glyphs are the same in every sample with that
-  // text). Throws NoNativeEquivalent when OpenSCAD cannot export it.
+  // text), up to kOutlineBytes in all; beyond that all are forgotten at once
+  // and remembering starts again. Throws NoNativeEquivalent when OpenSCAD
+  // cannot export it.
+  static constexpr std::size_t kOutlineBytes = std::size_t{32} << 20;
   std::vector<Loop> Outline2(const CsgNode& n) {
     static std::mutex mutex;
     static std::map<std::string, std::vector<Loop>> outlines;
+    static std::size_t outline_bytes = 0;
     {
       std::lock_guard<std::mutex> lock(mutex);
       if (auto it = outlines.find(n.canonical); it != outlines.end()) return it->second;
@@ -813,9 +828,14 @@ class CsgEvaluation {
     } catch (const InputError& e) {
       throw NoNativeEquivalent{e.what()};
     }
+    std::size_t bytes = n.canonical.size() + sizeof(std::vector<Loop>);
+    for (const Loop& l : loops) bytes += sizeof(Loop) + l.size() * sizeof(scad::Point2);
     std::lock_guard<std::mutex> lock(mutex);
-    if (outlines.size() >= 1024) outlines.clear();
-    outlines[n.canonical] = loops;
+    if (outline_bytes + bytes > kOutlineBytes) {
+      outlines.clear();
+      outline_bytes = 0;
+    }
+    if (outlines.emplace(n.canonical, loops).second) outline_bytes += bytes;
     return loops;
   }
 
@@ -914,60 +934,49 @@ struct WorkDir {
 }  // namespace
 
 namespace {
-std::mutex outside_mutex;
-std::map<std::string, std::vector<OutsideMesh>> outside_by_subtree;
+
+// Memory `t` holds: its own strings and meshes and its children's traces.
+std::size_t TraceBytes(const SubtreeTrace& t) {
+  std::size_t bytes = sizeof(SubtreeTrace) + t.topology.capacity() + t.op.capacity();
+  for (const auto& c : t.children) bytes += sizeof(std::string) + c.capacity();
+  for (const auto& c : t.child_paths) bytes += sizeof(std::string) + c.capacity();
+  for (const auto& c : t.child_traces) bytes += sizeof(c) + (c ? TraceBytes(*c) : 0);
+  for (const OutsideMesh& m : t.outside) {
+    bytes += sizeof(OutsideMesh) + m.what.capacity() + m.key.capacity();
+    if (m.mesh) bytes += sizeof(mesh::TriangleMesh) + m.mesh->vertices.capacity() * sizeof(m.mesh->vertices[0]) +
+                         m.mesh->triangles.capacity() * sizeof(m.mesh->triangles[0]);
+  }
+  return bytes;
+}
+
 }  // namespace
 
-void RememberOutside(const std::string& subtree_key, const std::vector<OutsideMesh>& meshes) {
-  if (meshes.empty()) return;
-  std::lock_guard<std::mutex> lock(outside_mutex);
-  outside_by_subtree[subtree_key] = meshes;
+CachedSubtree EntryOf(Solid solid, std::shared_ptr<const SubtreeTrace> trace) {
+  CachedSubtree entry;
+  entry.solid = std::move(solid);
+  if (trace && (!trace->op.empty() || !trace->outside.empty())) {
+    entry.trace_bytes = TraceBytes(*trace);
+    entry.trace = std::move(trace);
+  }
+  return entry;
 }
 
-void RecallOutside(const std::string& subtree_key, std::vector<OutsideMesh>* out) {
-  if (!out) return;
-  std::lock_guard<std::mutex> lock(outside_mutex);
-  auto it = outside_by_subtree.find(subtree_key);
-  if (it != outside_by_subtree.end()) out->insert(out->end(), it->second.begin(), it->second.end());
-}
-
-namespace {
-std::mutex computed_mutex;
-std::map<std::string, ComputedSubtree> computed_by_key;
-
-// Appends the records of key's descendants (post-order); computed_mutex held.
-void AppendDescendants(const ComputedSubtree& s, const std::string& path, std::vector<SubtreeRecord>* records) {
-  for (std::size_t i = 0; i < s.children.size(); ++i) {
-    auto it = computed_by_key.find(s.children[i]);
-    if (it == computed_by_key.end()) continue;  // remembered together with its parent, so never
-    const std::string child_path = path + s.child_paths[i];
-    AppendDescendants(it->second, child_path, records);
+void AppendDescendantRecords(const SubtreeTrace& trace, const std::string& path, std::vector<SubtreeRecord>* records) {
+  for (std::size_t i = 0; i < trace.children.size() && i < trace.child_traces.size(); ++i) {
+    const SubtreeTrace* child = trace.child_traces[i].get();
+    if (!child || child->op.empty()) continue;  // found in a cache filled elsewhere: no record kept
+    const std::string child_path = path + trace.child_paths[i];
+    AppendDescendantRecords(*child, child_path, records);
     SubtreeRecord r;
-    r.key = it->first;
-    r.topology = it->second.topology;
+    r.key = trace.children[i];
+    r.topology = child->topology;
     r.path = child_path;
-    r.op = it->second.op;
+    r.op = child->op;
     r.from_cache = true;
-    r.bytes = it->second.bytes;
-    r.children = it->second.children;
+    r.bytes = child->bytes;
+    r.children = child->children;
     records->push_back(std::move(r));
   }
-}
-}  // namespace
-
-void RememberSubtree(const std::string& key, ComputedSubtree subtree) {
-  std::lock_guard<std::mutex> lock(computed_mutex);
-  computed_by_key.insert_or_assign(key, std::move(subtree));
-}
-
-bool RecallDescendants(const std::string& key, const std::string& path, std::vector<SubtreeRecord>* records,
-                       std::vector<std::string>* children) {
-  std::lock_guard<std::mutex> lock(computed_mutex);
-  auto it = computed_by_key.find(key);
-  if (it == computed_by_key.end()) return false;
-  if (records) AppendDescendants(it->second, path, records);
-  *children = it->second.children;
-  return true;
 }
 
 OpenScadNodeResult EvaluateOpenScadNode(const Node& node, const ResolvedArgs& args, const fs::path& dir,
@@ -1029,6 +1038,7 @@ OpenScadNodeResult EvaluateOpenScadNode(const Node& node, const ResolvedArgs& ar
   CsgEvaluation::Result r = evaluation.Evaluate3(root, kIdentity, context.path + "/csg", /*need_solid=*/true);
   result.solid = r.solid;
   result.root_key = r.key;
+  result.root_trace = r.trace;
   return result;
 }
 

@@ -25,38 +25,41 @@ struct OutsideMesh {
   std::shared_ptr<const mesh::TriangleMesh> mesh;
 };
 
-// The outside meshes a subtree (by key) contained when it was computed, kept
-// for the process, so that a subtree later found in a cache still brings its
-// outside meshes to the watertight check. Thread-safe.
-void RememberOutside(const std::string& subtree_key, const std::vector<OutsideMesh>& meshes);
-void RecallOutside(const std::string& subtree_key, std::vector<OutsideMesh>* out);
-
-// What a subtree computed with a subtree cache was (its record without path
-// and time) and where its children sit below it, kept for the process, so
-// that the subtree later found in the cache is recorded with the same
-// children (the cache graph requires one set of children per key) and with
-// the records of all its descendants, as sampling promises
-// (EvaluateOptions::lookup_before_children = false): the cache plan may keep
-// any descendant of a hit, and a cluster job's coordinator takes a kept
-// subtree's geometry from a valid sample that lists it. Kept for the CSG
-// subtrees of `openscad` nodes and for the nodes themselves (their one child
-// is the CSG root, "/csg" below them); other design nodes evaluate their
-// children before looking themselves up. Thread-safe; one entry (about
-// 300 B) per distinct subtree computed, kept for the process.
-struct ComputedSubtree {
-  std::string topology, op;
-  std::size_t bytes = 0;
+// What a subtree computed with a subtree cache keeps beside its geometry in
+// the cache entry (subtree_cache.h, CachedSubtree::trace), so that a later
+// hit brings what the computation brought and its memory is bounded by the
+// cache's budget:
+//  - for the CSG subtrees of `openscad` nodes and the nodes themselves (their
+//    one child is the CSG root, "/csg" below them), the subtree's record
+//    without path and time and its children's traces: a hit is recorded
+//    with the same children (the cache graph requires one set of children
+//    per key) and with the records of all its descendants, as sampling
+//    promises (EvaluateOptions::lookup_before_children = false), because
+//    the cache plan may keep any descendant of a hit and a cluster job's
+//    coordinator takes a kept subtree's geometry from a valid sample that
+//    lists it. Other design nodes evaluate their children before looking
+//    themselves up and keep no record (`op` empty);
+//  - the meshes that entered the subtree from outside fabatlas, so that a
+//    hit still brings them to the watertight check.
+// Immutable once built; shared between a parent's trace and its children's.
+struct SubtreeTrace {
+  std::string topology, op;  // op empty: no record kept
+  std::size_t bytes = 0;     // the subtree's grid bytes (its record's)
   std::vector<std::string> children;     // keys, in tree order
   std::vector<std::string> child_paths;  // each child's path below this one ("/0", "/csg")
+  std::vector<std::shared_ptr<const SubtreeTrace>> child_traces;  // per child; null: none kept
+  std::vector<OutsideMesh> outside;      // every outside mesh of the subtree, in evaluation order
 };
-void RememberSubtree(const std::string& key, ComputedSubtree subtree);
 
-// When this process computed `key`: sets *children to its children and, when
-// `records` is not null, appends the records of its descendants (post-order,
-// from_cache, 0 s, paths below `path`); returns false (nothing changed)
-// otherwise.
-bool RecallDescendants(const std::string& key, const std::string& path, std::vector<SubtreeRecord>* records,
-                       std::vector<std::string>* children);
+// The cache entry of a computed subtree: its solid and `trace` (dropped when
+// it holds nothing), with the trace's memory counted (its strings, its
+// meshes and its children's traces: a mesh shared with a descendant's entry
+// is counted in both, so a budget bounds the memory from above).
+CachedSubtree EntryOf(geometry::Solid solid, std::shared_ptr<const SubtreeTrace> trace);
+
+// Appends the records of the descendants `trace` holds (post-order,
+// from_cache, 0 s, paths below `path`) to *records.
+void AppendDescendantRecords(const SubtreeTrace& trace, const std::string& path, std::vector<SubtreeRecord>* records);
 
 struct OpenScadNodeContext {
   geometry::GridSpec grid;
@@ -74,6 +77,7 @@ inline constexpr const char* kCsgRenderedOp = "csg-openscad:";
 struct OpenScadNodeResult {
   geometry::Solid solid;
   std::string root_key;        // the CSG root's key (the node's one child record); empty for render: openscad
+  std::shared_ptr<const SubtreeTrace> root_trace;  // the CSG root's, when computed with a cache
   double export_seconds = 0;   // OpenSCAD's .csg export (or STL render) wall time
 };
 

@@ -2,7 +2,7 @@
 
 namespace fabatlas::design {
 
-std::optional<geometry::Solid> InMemorySubtreeCache::Find(const std::string& key) {
+std::optional<CachedSubtree> InMemorySubtreeCache::Find(const std::string& key) {
   std::lock_guard<std::mutex> lock(mutex_);
   auto it = entries_.find(key);
   if (it == entries_.end()) {
@@ -13,12 +13,12 @@ std::optional<geometry::Solid> InMemorySubtreeCache::Find(const std::string& key
   return it->second;
 }
 
-void InMemorySubtreeCache::Offer(const std::string& key, const geometry::Solid& solid, double seconds) {
+void InMemorySubtreeCache::Offer(const std::string& key, const CachedSubtree& subtree, double seconds) {
   if (seconds < options_.min_seconds) return;
-  std::size_t size = solid.MemoryBytes();
+  std::size_t size = subtree.MemoryBytes();
   std::lock_guard<std::mutex> lock(mutex_);
   if (entries_.count(key) || bytes_ + size > options_.max_bytes) return;
-  entries_.emplace(key, solid);
+  entries_.emplace(key, subtree);
   bytes_ += size;
 }
 

@@ -15,36 +15,43 @@ namespace fabatlas::pipeline {
 
 namespace {
 
-// Serves subtrees computed before (read back from the blob store) and keeps
-// every new one as a blob.
+// Serves subtrees computed before (read back from the blob store, with the
+// trace evaluation offered beside them, so a hit lists its descendants) and
+// keeps every new one as a blob.
 class CollectingCache final : public design::SubtreeCache {
  public:
   explicit CollectingCache(storage::BlobStore& blobs) : blobs_(blobs) {}
-  std::optional<geometry::Solid> Find(const std::string& key) override {
+  std::optional<design::CachedSubtree> Find(const std::string& key) override {
     std::lock_guard lock(mutex_);
-    auto it = digests_.find(key);
-    if (it == digests_.end()) return std::nullopt;
-    return geometry::Solid::Deserialize(blobs_.Read(it->second));
+    auto it = entries_.find(key);
+    if (it == entries_.end()) return std::nullopt;
+    return design::CachedSubtree{geometry::Solid::Deserialize(blobs_.Read(it->second.digest)), it->second.trace,
+                                 it->second.trace_bytes};
   }
-  void Offer(const std::string& key, const geometry::Solid& solid, double) override {
+  void Offer(const std::string& key, const design::CachedSubtree& subtree, double) override {
     {
       std::lock_guard lock(mutex_);
-      if (digests_.count(key)) return;
+      if (entries_.count(key)) return;
     }
-    std::string digest = blobs_.Put(solid.Serialize());
+    std::string digest = blobs_.Put(subtree.solid.Serialize());
     std::lock_guard lock(mutex_);
-    digests_.emplace(key, digest);
+    entries_.emplace(key, Entry{digest, subtree.trace, subtree.trace_bytes});
   }
   std::string DigestOf(const std::string& key) {
     std::lock_guard lock(mutex_);
-    auto it = digests_.find(key);
-    return it == digests_.end() ? std::string() : it->second;
+    auto it = entries_.find(key);
+    return it == entries_.end() ? std::string() : it->second.digest;
   }
 
  private:
+  struct Entry {
+    std::string digest;
+    std::shared_ptr<const design::SubtreeTrace> trace;
+    std::size_t trace_bytes = 0;
+  };
   storage::BlobStore& blobs_;
   std::mutex mutex_;
-  std::map<std::string, std::string> digests_;
+  std::map<std::string, Entry> entries_;
 };
 
 }  // namespace

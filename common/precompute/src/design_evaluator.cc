@@ -41,10 +41,10 @@ class DesignSampleEvaluator::ObservedCache final : public design::SubtreeCache {
  public:
   ObservedCache(design::SubtreeCache& inner, const DesignEvaluatorOptions& options)
       : inner_(inner), options_(options) {}
-  std::optional<geometry::Solid> Find(const std::string& key) override { return inner_.Find(key); }
-  void Offer(const std::string& key, const geometry::Solid& solid, double seconds) override {
-    options_.on_subtree_computed(key, solid, seconds);
-    inner_.Offer(key, solid, seconds);
+  std::optional<design::CachedSubtree> Find(const std::string& key) override { return inner_.Find(key); }
+  void Offer(const std::string& key, const design::CachedSubtree& subtree, double seconds) override {
+    options_.on_subtree_computed(key, subtree.solid, seconds);
+    inner_.Offer(key, subtree, seconds);
   }
 
  private:

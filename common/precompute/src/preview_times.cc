@@ -40,10 +40,10 @@ std::vector<std::vector<double>> RandomValidPoints(const sampling::Form& form, i
   return points;
 }
 
-std::optional<geometry::Solid> FrozenSubtreeCache::Find(const std::string& key) {
+std::optional<design::CachedSubtree> FrozenSubtreeCache::Find(const std::string& key) {
   auto it = entries_.find(key);
   if (it == entries_.end()) return std::nullopt;
-  return it->second;
+  return design::CachedSubtree{it->second};
 }
 
 PreviewTimes MeasurePreviewTimes(const design::Design& design, const std::vector<std::vector<double>>& points,

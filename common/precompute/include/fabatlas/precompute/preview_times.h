@@ -29,8 +29,8 @@ class FrozenSubtreeCache final : public design::SubtreeCache {
  public:
   void Add(const std::string& key, geometry::Solid solid) { entries_[key] = std::move(solid); }
   std::size_t size() const { return entries_.size(); }
-  std::optional<geometry::Solid> Find(const std::string& key) override;
-  void Offer(const std::string&, const geometry::Solid&, double) override {}
+  std::optional<design::CachedSubtree> Find(const std::string& key) override;  // solids only, no traces
+  void Offer(const std::string&, const design::CachedSubtree&, double) override {}
 
  private:
   std::map<std::string, geometry::Solid> entries_;
