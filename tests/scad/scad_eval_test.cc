@@ -320,6 +320,7 @@ TEST(ScadEval, SideDataOfCachedSubtreesStaysWithinTheCacheBudget) {
               static_cast<double>(cache.bytes()) / (1 << 20));
   EXPECT_LE(cache.bytes(), kBudget);
   EXPECT_LT(grown_mb, 24.0);
+  std::filesystem::remove_all(dir);
 }
 
 
@@ -345,6 +346,7 @@ TEST(ScadEval, ACachedSubtreeStillBringsItsOutsideMeshToTheWatertightCheck) {
     EXPECT_EQ(r.failure, design::kNotWatertight) << pass << ": " << r.failure_reason;
     EXPECT_NE(r.failure_reason.find("polyhedron"), std::string::npos) << pass << ": " << r.failure_reason;
   }
+  std::filesystem::remove_all(dir);
 }
 
 }  // namespace
