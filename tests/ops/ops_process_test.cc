@@ -168,8 +168,8 @@ TEST(OpsLogs, JsonLinesTellTheStoryOfAJobWithAKilledWorker) {
                             "coordinator_stopped"})
     EXPECT_FALSE(Events(coordinator, event).empty()) << "coordinator logged no " << event;
   // The expiry names the task, the worker that died and the attempt. (w1
-  // may also have held a lease taken in advance, a 1-slot worker of short
-  // tasks does: that one expires beside it.)
+  // may also have held leases taken in advance, a 1-slot worker of short
+  // tasks does: those expire beside it.)
   auto expired = Events(coordinator, "lease_expired");
   auto crashed = std::find_if(expired.begin(), expired.end(),
                               [](const auto& e) { return e["task"].template get<std::string>().substr(0, 1) == "0"; });

@@ -113,14 +113,15 @@ v1::SyncRequest Worker::NextSyncRequest(bool* leaving) {
   }
   req.set_worker_id(o_.worker_id);
   int busy = static_cast<int>(queue_.size()) + running_;
-  // A 1-slot worker running short tasks asks for one lease more than it
-  // can run, and runs it before it reports (SyncLoop): one Sync per two
-  // tasks.
-  const int wanted = o_.slots + (slots_.empty() && short_tasks_ ? 1 : 0);
+  // A 1-slot worker running short tasks asks for leases beyond the one it
+  // can run, and runs them before it reports (SyncLoop): one Sync per up to
+  // kResultsPerSync tasks.
+  const int wanted = o_.slots + (slots_.empty() && short_tasks_ ? kResultsPerSync - 1 : 0);
   req.set_free_slots(stop_ ? 0 : std::max(0, wanted - busy));
   for (const auto& id : in_flight_) req.add_in_flight_lease_ids(id);
   for (auto& c : done_) *req.add_completed() = std::move(c);
   done_.clear();
+  held_seconds_ = 0;
   req.set_leaving(*leaving);
   bool idle = in_flight_.empty() && !stop_;
   req.set_max_wait_ms(idle ? static_cast<int>(o_.poll_ms) : 0);
@@ -248,15 +249,17 @@ void Worker::SyncLoop() {
       // while it runs (the heartbeat thread keeps its lease), and the
       // result goes out on the next Sync from this thread: two thread
       // hand-offs fewer per task than through a slot thread.
-      // Short tasks: the lease taken in advance runs before the Sync, so
-      // one Sync reports two results (a longer task reports at once: its
-      // result is not held back, nor the lease behind it from others).
+      // Short tasks: the leases taken in advance run before the Sync, so
+      // one Sync reports up to kResultsPerSync results, held back no longer
+      // than about kShortTaskSeconds of work (a longer task reports at
+      // once: its result is not held back, nor the leases behind it from
+      // others).
       if (std::optional<v1::Lease> lease = TakeLease()) {
         RunLease(*lease);
         while (true) {
           {
             std::lock_guard lock(mu_);
-            if (!short_tasks_ || done_.size() >= 2) break;
+            if (!short_tasks_ || done_.size() >= kResultsPerSync || held_seconds_ >= kShortTaskSeconds) break;
           }
           std::optional<v1::Lease> next = TakeLease();
           if (!next) break;
@@ -418,6 +421,7 @@ void Worker::RunLease(const v1::Lease& lease) {
                               {"reason", done.error()}});
   std::lock_guard lock(mu_);
   short_tasks_ = seconds < kShortTaskSeconds;
+  held_seconds_ += seconds;
   ++tasks_by_kind_[kind];
   if (!done.error().empty()) ++failures_by_kind_[kind];
   --running_;

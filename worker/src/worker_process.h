@@ -185,11 +185,16 @@ class Worker {
   bool syncing_ = false;           // a Sync is under way (one at a time)
   bool sync_loop_waits_ = false;   // the sync loop waits for a slot thread's Sync
   // The last task took less than kShortTaskSeconds: a 1-slot worker then
-  // takes one lease in advance and reports two results per Sync, halving
-  // the Syncs (each a round trip and a store commit) of jobs of short
-  // tasks; a longer task ends this, so no result or lease waits behind it.
+  // takes up to kResultsPerSync - 1 leases in advance and runs them before
+  // it reports, until the results it holds took kShortTaskSeconds together,
+  // so one Sync (a round trip and a store commit) carries up to
+  // kResultsPerSync results of a job of short tasks and none waits behind
+  // more than about kShortTaskSeconds of work; a longer task ends this, so
+  // no result or lease waits behind it.
   bool short_tasks_ = false;
+  double held_seconds_ = 0;  // tasks of the results in done_ took this long together
   static constexpr double kShortTaskSeconds = 0.1;
+  static constexpr int kResultsPerSync = 8;
   std::int64_t heartbeat_ms_ = 2000;
   std::vector<std::thread> slots_;
   std::thread heartbeat_, share_;
