@@ -9,7 +9,10 @@
       sample (a worker's cost for one point: geometry, properties and the
       imported design's checks, timings.total) and the eval process's wall
       time (import, model measurement, sample, mesh export); then where the
-      whole sample goes (CSG tree, level sets, properties, each check);
+      whole sample goes (CSG tree, level sets, properties, the surface the
+      checks read, each check: they run side by side, so their times
+      overlap); the CPU seconds (user + system) of the OpenSCAD and the eval
+      processes;
       medians of --repeats, interleaved; volumes of OpenSCAD's STL, of the
       sample's `volume` property and of the mesh fabatlas exports.
   bench/scad/scad_bench.py coverage [--timeout 120]   every example Debian's
@@ -26,7 +29,7 @@ Run from the repository root with build/bin/fabatlas built, under nice.
 Volumes of meshes are those their surfaces enclose (divergence theorem over
 the STL triangles).
 """
-import json, os, re, statistics, struct, subprocess, sys, tempfile, time, glob
+import json, os, re, resource, statistics, struct, subprocess, sys, tempfile, time, glob
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 FABATLAS = os.environ.get("FABATLAS_BIN", os.path.join(ROOT, "build", "bin", "fabatlas"))
@@ -56,6 +59,12 @@ def volume(path):
 def bbox(path):
     pts = [p for t in stl_triangles(path) for p in t]
     return [max(p[k] for p in pts) - min(p[k] for p in pts) for k in range(3)] if pts else [0, 0, 0]
+
+
+def children_cpu():
+    """User + system CPU seconds of the finished child processes so far."""
+    r = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return r.ru_utime + r.ru_stime
 
 
 def openscad_stl(model, out, defines=(), timeout=None):
@@ -92,28 +101,33 @@ def speed(repeats):
               os.path.join(EXAMPLES, "Parametric/sign.scad"),
               os.path.join(EXAMPLES, "Parametric/candleStand.scad")]
     breakdown = []
-    print("| model | voxel mm | OpenSCAD STL wall s | fabatlas geometry s (ratio) | whole sample s (ratio) | eval process wall s | volume OpenSCAD / property (diff) / mesh (diff) mm^3 |")
+    print("| model | voxel mm | OpenSCAD STL wall s (process CPU) | fabatlas geometry s (ratio) | whole sample s (ratio) | eval process wall s (process CPU) | volume OpenSCAD / property (diff) / mesh (diff) mm^3 |")
     print("|---|---|---|---|---|---|---|")
     for model in models:
         name = os.path.basename(model)
-        osc, geo, whole, walls = [], [], [], []
+        osc, geo, whole, walls, osc_cpu, eval_cpu = [], [], [], [], [], []
         parts = {}  # where the whole sample goes: seconds per part, per run
         ref = os.path.join(tmp, name + ".ref.stl")
         ours = os.path.join(tmp, name + ".ours.stl")
         j = None
         for _ in range(repeats):  # interleaved, so both see the same load
+            c = children_cpu()
             t, ok = openscad_stl(model, ref)
             if not ok:
                 raise RuntimeError(model + ": openscad failed")
             osc.append(t)
+            osc_cpu.append(children_cpu() - c)
+            c = children_cpu()
             w, j = fabatlas_eval(model, ours)
+            eval_cpu.append(children_cpu() - c)
             walls.append(w)
             geo.append(j["timings"]["tree"])
             whole.append(j["timings"]["total"])
             tree = {r["op"]: r["seconds"] for r in j.get("subtrees", []) if r["op"] == "openscad"}
             run_parts = {"CSG tree (native or .csg export)": tree.get("openscad", float("nan")),
                          "level sets": j["timings"]["tree"] - tree.get("openscad", 0.0),
-                         "properties": j["timings"].get("properties", 0.0)}
+                         "properties": j["timings"].get("properties", 0.0),
+                         "surface (extracted once for the checks)": j["timings"].get("surface", 0.0)}
             for check, c in j["checks"].items():
                 if check not in ("geometry", "constraints"):
                     run_parts[check] = c["seconds"]
@@ -125,11 +139,12 @@ def speed(repeats):
         subprocess.run([FABATLAS, "import-scad", model, "--out", design], capture_output=True)
         if os.path.exists(design):
             voxel = re.search(r"voxel_size: (\S+)", open(design).read()).group(1)
-        mo, mg, mw, mp = (statistics.median(x) for x in (osc, geo, whole, walls))
-        print(f"| {name} | {voxel} | {mo:.3f} | {mg:.3f} ({mg / mo:.2f}) | {mw:.3f} ({mw / mo:.2f}) | {mp:.3f} | "
+        mo, mg, mw, mp, co, ce = (statistics.median(x) for x in (osc, geo, whole, walls, osc_cpu, eval_cpu))
+        print(f"| {name} | {voxel} | {mo:.3f} (CPU {co:.3f}) | {mg:.3f} ({mg / mo:.2f}) | {mw:.3f} ({mw / mo:.2f}) | {mp:.3f} (CPU {ce:.3f}) | "
               f"{vo:.1f} / {vp:.1f} ({pct(vp, vo):+.2f}%) / {vm:.1f} ({pct(vm, vo):+.2f}%) |", flush=True)
         breakdown.append(f"{name}: " + ", ".join(f"{k} {statistics.median(v):.3f}" for k, v in parts.items()))
-    print("\nwhere the whole sample goes (medians, s):")
+    print("\nwhere the whole sample goes (medians, s; the checks run side by side after the surface, so their"
+          " times overlap):")
     for line in breakdown:
         print("- " + line)
     print(f"\nload average: {os.getloadavg()}")

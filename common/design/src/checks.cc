@@ -9,6 +9,8 @@
 #include <mutex>
 #include <sstream>
 
+#include <tbb/task_group.h>
+
 #include "convex_hull_2d.h"
 #include "fabatlas/error.h"
 #include "fabatlas/fem/fem_check.h"
@@ -471,13 +473,14 @@ CheckOutcome TargetReached(const CheckSpec& spec, CheckContext& c) {
 }  // namespace
 
 const mesh::TriangleMesh& CheckContext::Mesh() {
-  if (!mesh_) mesh_ = solid_.ToMesh();
-  return *mesh_;
+  std::call_once(mesh_once_, [this] { mesh_ = solid_.ToMesh(); });
+  return mesh_;
 }
 
 double CheckContext::Number(const CheckSpec& spec, const std::string& name, double fallback) {
   auto it = spec.args.find(name);
   if (it == spec.args.end()) return fallback;
+  std::lock_guard<std::mutex> lock(number_mutex_);
   return Expression(it->second.text, scope_, it->second.place).Evaluate();
 }
 
@@ -496,6 +499,51 @@ CheckOutcome RunCheck(const CheckSpec& spec, CheckContext& context) {
   o.name = spec.name;
   o.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return o;
+}
+
+namespace {
+// Checks that only read the sample's solid and its surface.
+bool SurfaceCheck(const CheckSpec& spec) {
+  return spec.type == "watertight" || spec.type == "min_thickness" || spec.type == "stands" ||
+         spec.type == "max_volume";
+}
+// ... and of those, the ones that read the surface mesh.
+bool ReadsMesh(const CheckSpec& spec) {
+  if (spec.type == "min_thickness") {
+    auto it = spec.args.find("method");
+    return it == spec.args.end() || it->second.text != "opening";
+  }
+  return spec.type == "watertight" || spec.type == "stands";
+}
+}  // namespace
+
+std::vector<CheckOutcome> RunChecks(const std::vector<CheckSpec>& specs, CheckContext& context,
+                                    double* surface_seconds) {
+  std::vector<CheckOutcome> outcomes(specs.size());
+  std::vector<std::exception_ptr> errors(specs.size());
+  if (surface_seconds) *surface_seconds = 0;
+  if (std::any_of(specs.begin(), specs.end(), ReadsMesh)) {
+    auto start = std::chrono::steady_clock::now();
+    context.Mesh();
+    if (surface_seconds)
+      *surface_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  }
+  tbb::task_group group;
+  for (std::size_t i = 0; i < specs.size(); ++i)
+    if (SurfaceCheck(specs[i]))
+      group.run([&, i] {
+        try {
+          outcomes[i] = RunCheck(specs[i], context);
+        } catch (...) {
+          errors[i] = std::current_exception();
+        }
+      });
+  group.wait();
+  for (std::size_t i = 0; i < specs.size(); ++i) {
+    if (errors[i]) std::rethrow_exception(errors[i]);  // the first in the design's order
+    if (!SurfaceCheck(specs[i])) outcomes[i] = RunCheck(specs[i], context);
+  }
+  return outcomes;
 }
 
 double SurfaceArea(const geometry::Solid& solid) { return mesh::SurfaceArea(solid.ToMesh()); }

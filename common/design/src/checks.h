@@ -2,7 +2,7 @@
 #pragma once
 
 #include <functional>
-#include <optional>
+#include <mutex>
 
 #include "assembly_node.h"
 #include "expression.h"
@@ -40,10 +40,24 @@ class CheckContext {
   const Design& design_;
   const geometry::Solid& solid_;
   Scope& scope_;
-  std::optional<mesh::TriangleMesh> mesh_;
+  std::once_flag mesh_once_;
+  mesh::TriangleMesh mesh_;
+  std::mutex number_mutex_;  // checks running side by side share the scope
 };
 
 CheckOutcome RunCheck(const CheckSpec& spec, CheckContext& context);
+
+// Every check of `specs`, outcomes in the same order. The checks that only
+// read the sample's solid and its surface (watertight, min_thickness, stands,
+// max_volume) run side by side as TBB tasks (their own parallel loops nest),
+// after the surface they share has been extracted once (its wall time in
+// *surface_seconds when given; 0 when no check reads it); then the others
+// (fem, collision_free, assembly_*, target_reached), one after another in the
+// design's order. Each outcome's seconds are its own wall time: those of
+// checks side by side overlap. An exception of a check is rethrown after the
+// side-by-side checks have finished, the first in the design's order.
+std::vector<CheckOutcome> RunChecks(const std::vector<CheckSpec>& specs, CheckContext& context,
+                                    double* surface_seconds = nullptr);
 
 // Surface area of the solid's zero iso-surface, mm^2.
 double SurfaceArea(const geometry::Solid& solid);

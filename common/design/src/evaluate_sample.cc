@@ -442,11 +442,12 @@ SampleResult EvaluateSample(const Design& design, const Point& u, const Evaluate
       context.assembly = [&]() { return tree.Assembly(); };
       context.outside = &tree.Outside();
       context.state_graph = options.state_graph;
-      for (const CheckSpec& spec : design.checks) {
-        CheckOutcome outcome = RunCheck(spec, context);
+      double surface_seconds = 0;
+      for (CheckOutcome& outcome : RunChecks(design.checks, context, &surface_seconds)) {
         if (!outcome.passed) fail(outcome.failure, outcome.reason);
         r.checks.push_back(std::move(outcome));
       }
+      if (surface_seconds > 0) r.timings["surface"] = surface_seconds;
       r.timings["checks"] = Since(checks_start);
     }
     // Reconfigurables: what a collision_free check did not record (no such

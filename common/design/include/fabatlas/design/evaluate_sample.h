@@ -86,7 +86,10 @@ struct SampleResult {
   std::map<std::string, double> values;  // every parameter after solving
   geometry::Solid solid;                 // root geometry (empty when invalid before geometry)
   std::vector<SubtreeRecord> subtrees;   // post-order, root last
-  std::map<std::string, double> timings; // solve, tree, checks, properties, total (wall seconds)
+  // Wall seconds: solve, tree, checks (surface included), surface (the
+  // extraction of the surface the checks read, when one does), properties,
+  // total.
+  std::map<std::string, double> timings;
 };
 
 // Fab Forms Alg. 2. Bad values at this point (a negative radius after solving)
