@@ -91,11 +91,18 @@ ShapeDiameterSummary ShapeDiameter(const TriangleMesh& mesh, const ShapeDiameter
   summary.min = summary.percentile_5 = summary.median = summary.area_fraction_below = nan;
   if (nf == 0) return summary;
 
-  // Face normals, areas and centroids in double, and the bounds of the
-  // faces' corners; over face ranges in parallel (min and max: the same for
-  // any schedule).
-  std::vector<Vec> normal(nf), centroid(nf);
-  std::vector<double> area(nf);
+  // The measured faces: every stride-th.
+  const std::size_t stride =
+      options.max_faces > 0 && nf > static_cast<std::size_t>(options.max_faces)
+          ? (nf + static_cast<std::size_t>(options.max_faces) - 1) / static_cast<std::size_t>(options.max_faces)
+          : 1;
+
+  // The measured faces' normals, areas and centroids in double, and the
+  // bounds of all faces' corners; over face ranges in parallel (min and max:
+  // the same for any schedule).
+  const std::size_t measured_faces = (nf + stride - 1) / stride;
+  std::vector<Vec> normal(measured_faces), centroid(measured_faces);  // of face i * stride
+  std::vector<double> area(measured_faces);
   using Bounds = std::pair<Vec, Vec>;
   constexpr double inf = std::numeric_limits<double>::infinity();
   const Bounds bounds = tbb::parallel_reduce(
@@ -106,11 +113,14 @@ ShapeDiameterSummary ShapeDiameter(const TriangleMesh& mesh, const ShapeDiameter
           const Vec& a = mesh.vertices[t[0]];
           const Vec& b = mesh.vertices[t[1]];
           const Vec& c = mesh.vertices[t[2]];
-          const Vec n = Cross(Sub(b, a), Sub(c, a));
-          const double len = Norm(n);
-          area[f] = 0.5 * len;
-          normal[f] = len > 0 ? Vec{n[0] / len, n[1] / len, n[2] / len} : Vec{0, 0, 0};
-          for (int k = 0; k < 3; ++k) centroid[f][k] = (a[k] + b[k] + c[k]) / 3.0;
+          if (f % stride == 0) {
+            const Vec n = Cross(Sub(b, a), Sub(c, a));
+            const double len = Norm(n);
+            const std::size_t i = f / stride;
+            area[i] = 0.5 * len;
+            normal[i] = len > 0 ? Vec{n[0] / len, n[1] / len, n[2] / len} : Vec{0, 0, 0};
+            for (int k = 0; k < 3; ++k) centroid[i][k] = (a[k] + b[k] + c[k]) / 3.0;
+          }
           for (const Vec* p : {&a, &b, &c})
             for (int k = 0; k < 3; ++k) {
               box.first[k] = std::min(box.first[k], (*p)[k]);
@@ -212,19 +222,15 @@ ShapeDiameterSummary ShapeDiameter(const TriangleMesh& mesh, const ShapeDiameter
     pattern[i] = {std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi), std::cos(theta), 1.0 / theta};
   }
 
-  const std::size_t stride =
-      options.max_faces > 0 && nf > static_cast<std::size_t>(options.max_faces)
-          ? (nf + static_cast<std::size_t>(options.max_faces) - 1) / static_cast<std::size_t>(options.max_faces)
-          : 1;
-  summary.faces_measured = static_cast<std::int64_t>((nf + stride - 1) / stride);
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, (nf + stride - 1) / stride), [&](const tbb::blocked_range<std::size_t>& range) {
+  summary.faces_measured = static_cast<std::int64_t>(measured_faces);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, measured_faces), [&](const tbb::blocked_range<std::size_t>& range) {
     std::vector<std::pair<double, double>> hits;  // (length, weight)
     std::vector<double> lengths;
     RTCIntersectContext context;
     for (std::size_t i = range.begin(); i != range.end(); ++i) {
       const std::size_t f = i * stride;
-      if (area[f] <= 0) continue;
-      const Vec axis = {-normal[f][0], -normal[f][1], -normal[f][2]};
+      if (area[i] <= 0) continue;
+      const Vec axis = {-normal[i][0], -normal[i][1], -normal[i][2]};
       Vec t, b;
       Basis(axis, &t, &b);
       hits.clear();
@@ -233,9 +239,9 @@ ShapeDiameterSummary ShapeDiameter(const TriangleMesh& mesh, const ShapeDiameter
                          r[0] * t[2] + r[1] * b[2] + r[2] * axis[2]};
         rtcInitIntersectContext(&context);
         RTCRayHit rh{};
-        rh.ray.org_x = static_cast<float>(centroid[f][0]);
-        rh.ray.org_y = static_cast<float>(centroid[f][1]);
-        rh.ray.org_z = static_cast<float>(centroid[f][2]);
+        rh.ray.org_x = static_cast<float>(centroid[i][0]);
+        rh.ray.org_y = static_cast<float>(centroid[i][1]);
+        rh.ray.org_z = static_cast<float>(centroid[i][2]);
         rh.ray.dir_x = static_cast<float>(dir[0]);
         rh.ray.dir_y = static_cast<float>(dir[1]);
         rh.ray.dir_z = static_cast<float>(dir[2]);
@@ -250,15 +256,24 @@ ShapeDiameterSummary ShapeDiameter(const TriangleMesh& mesh, const ShapeDiameter
         // parametrisation).
         const std::size_t hit = first[rh.hit.primID] + (paired[rh.hit.primID] && rh.hit.u + rh.hit.v > 1 ? 1 : 0);
         if (hit == f) continue;
+        // The hit face's unit normal from Embree's geometric normal (the
+        // counter-clockwise one, as ours; rounded to float, equal to the
+        // double one to 1e-9 in cosine on the tray): reading ours would be a
+        // cache miss per ray into an array of every face's.
+        const double ng_length = std::sqrt(static_cast<double>(rh.hit.Ng_x) * rh.hit.Ng_x +
+                                           static_cast<double>(rh.hit.Ng_y) * rh.hit.Ng_y +
+                                           static_cast<double>(rh.hit.Ng_z) * rh.hit.Ng_z);
+        if (!(ng_length > 0)) continue;
+        const Vec hit_normal = {rh.hit.Ng_x / ng_length, rh.hit.Ng_y / ng_length, rh.hit.Ng_z / ng_length};
         // Valid only on the inner side of a wall: the hit face's outward normal
         // points along the ray.
-        if (Dot(normal[hit], dir) <= 0) continue;
+        if (Dot(hit_normal, dir) <= 0) continue;
         // ... and only on the far side of a wall: the hit face turns back
         // towards this one (normals more than 180 - wall_angle degrees
         // apart). A neighbouring face across a convex edge (a cube's, 90
         // degrees) is no wall: near such an edge its short rays would outvote
         // the opposite face's in the median and the outlier test.
-        if (Dot(normal[hit], normal[f]) > -min_opposition) continue;
+        if (Dot(hit_normal, normal[i]) > -min_opposition) continue;
         hits.push_back({static_cast<double>(rh.ray.tfar), r[3]});
       }
       if (hits.empty()) continue;
@@ -288,9 +303,9 @@ ShapeDiameterSummary ShapeDiameter(const TriangleMesh& mesh, const ShapeDiameter
       ++summary.faces_without_value;
       continue;
     }
-    valued.push_back({summary.per_face[f], area[f]});
-    total += area[f];
-    if (summary.per_face[f] < options.thin_threshold) below += area[f];
+    valued.push_back({summary.per_face[f], area[f / stride]});
+    total += area[f / stride];
+    if (summary.per_face[f] < options.thin_threshold) below += area[f / stride];
   }
   if (valued.empty() || !(total > 0)) return summary;
   std::sort(valued.begin(), valued.end());
