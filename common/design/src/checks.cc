@@ -76,11 +76,15 @@ CheckOutcome Watertight(CheckContext& c) {
       }
     }
   }
+  // Folds covering less than one voxel face (a single triangle at the tip of
+  // a sharp wedge) are below what the grid resolves at all; more is a part
+  // the sample's surface does not represent.
   const geometry::FoldedTriangles folds = geometry::FindFoldedTriangles(c.solid(), c.Mesh());
-  if (folds.count > 0) {
+  const double voxel = c.solid().voxel_size();
+  if (folds.area > voxel * voxel) {
     char where[200];
     std::snprintf(where, sizeof where, "first near (%.4g, %.4g, %.4g) mm): a part there is thinner than a voxel (%g mm)",
-                  folds.first[0], folds.first[1], folds.first[2], c.solid().voxel_size());
+                  folds.first[0], folds.first[1], folds.first[2], voxel);
     o.passed = false;
     o.failure = kThinParts;  // the model's cause; the fold is what it does to our surface
     o.reason = "the level-set surface folds over itself at " + std::to_string(folds.count) + " triangle" +

@@ -61,6 +61,7 @@ FoldedTriangles FindFoldedTriangles(const Solid& s, const mesh::TriangleMesh& me
     if (sampler.wsSample(inward) <= iso) continue;
     if (out.count == 0) out.first = {centroid[0], centroid[1], centroid[2]};
     ++out.count;
+    out.area += 0.5 * std::sqrt(normal[0] * normal[0] + normal[1] * normal[1] + normal[2] * normal[2]);
   }
   return out;
 }

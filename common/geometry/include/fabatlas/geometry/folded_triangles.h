@@ -13,7 +13,8 @@
 // gradient at its centroid (the solid's outward direction there) and whose
 // material ends within a voxel: one voxel inward along the gradient the
 // level set is outside again. Inward-facing triangles in a crease where two
-// parts meet (material continues behind them) are not counted.
+// parts meet (material continues behind them) are not counted. The
+// watertight check fails when the folds cover more than one voxel face.
 #pragma once
 
 #include <cstdint>
@@ -24,7 +25,8 @@
 namespace fabatlas::geometry {
 
 struct FoldedTriangles {
-  std::int64_t count = 0;  // triangles facing against the gradient
+  std::int64_t count = 0;  // folded triangles
+  double area = 0;         // their total area, mm^2
   Vec3 first{0, 0, 0};     // centroid (mm) of the first one, in mesh order
 };
 
