@@ -18,13 +18,15 @@ std::shared_ptr<JobContext> LoadJobContext(const v1::JobBundle& bundle, const st
       sampling::ParseJobFile(bundle.job_file(), files.job_file.string()).cache_min_subtree_seconds;
   precompute::DesignEvaluatorOptions options;
   const std::size_t budget = static_cast<std::size_t>(memory_mb) << 20;
-  const std::size_t solids = budget / 16 * 6, level_sets_at_least = budget / 16;
+  const std::size_t geometry = budget / 2, level_sets_at_least = budget / 16;
   options.subtree_memory_bytes = budget / 8;
-  ctx->shelf.SetBudget(solids - level_sets_at_least);
+  options.min_subtree_seconds = ctx->min_subtree_seconds;
+  ctx->shelf.SetBudget(budget / 16 * 5);
   JobContext* job = ctx.get();
-  options.solid_memory_budget = [job, solids, level_sets_at_least] {
-    const std::size_t shelved = job->shelf.bytes();
-    return std::max(level_sets_at_least, shelved < solids ? solids - shelved : 0);
+  options.solid_memory_budget = [job, geometry, level_sets_at_least] {
+    // job->evaluator is set before the first evaluation remembers a solid.
+    const std::size_t held = job->shelf.bytes() + job->evaluator->subtree_bytes();
+    return std::max(level_sets_at_least, held < geometry ? geometry - held : 0);
   };
   options.on_solid_dropped = [job](const sampling::PointKey& key, const geometry::Solid& solid) {
     if (!job->shelf.Holds(key)) job->shelf.Put(key, protocol::SolidBlobOf(solid));

@@ -36,14 +36,15 @@ using UploadBlob = std::function<std::string(const std::string& bytes)>;
 
 // The job of a bundle, its files written under dir (protocol::Materialize),
 // with the memory budget of WorkerOptions::memory_mb (MiB) split as
-// worker.h documents: 3/8 for root solids, as level sets in the evaluator's
-// memory (at least 1/16, and whatever the shelf leaves) and compressed on
-// the shelf (at most 5/16; a level set is compressed onto it when the
-// evaluator's memory drops it, not before), 1/8 for the subtree cache.
-// Every subtree the evaluator
-// computes whose root took at least the job file's
-// cache.min_subtree_seconds is uploaded once (`upload`) and recorded in
-// subtree_blobs (tasks.proto "Geometry blobs"). Throws InputError for a job
+// worker.h documents: half of it for geometry, shared by the subtree cache
+// (at most 1/8), root solids compressed on the shelf (at most 5/16; a level
+// set is compressed onto it when the evaluator's memory drops it, not
+// before) and root solids as level sets in the evaluator's memory (at least
+// 1/16, and whatever the other two leave). The subtree cache keeps, and
+// `upload` uploads once (recorded in subtree_blobs, tasks.proto "Geometry
+// blobs"), every subtree the evaluator computes whose root took at least
+// the job file's cache.min_subtree_seconds: faster ones cost more memory
+// than computing them again saves. Throws InputError for a job
 // that does not load (the job file or design's one-line message).
 std::shared_ptr<JobContext> LoadJobContext(const v1::JobBundle& bundle, const std::filesystem::path& dir,
                                            std::int64_t memory_mb, UploadBlob upload);

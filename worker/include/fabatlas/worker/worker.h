@@ -44,14 +44,15 @@ struct WorkerOptions {
   // and failed by kind, their durations, solid and subtree cache bytes,
   // resident memory) and /healthz (200 working, 503 stopping); empty = off.
   std::string metrics_listen;
-  // Resident memory budget of the whole worker process, MiB (>= 256): 3/8
-  // of it holds root solids for ΔG and for sharing, the latest as level sets
-  // (at least 1/16 of the budget, and whatever the compressed ones leave)
-  // and older ones compressed (zstd, at most 5/16; a solid is compressed
-  // only when it leaves the level sets), 1/8 the subtree cache (all least
-  // recently used first out; a solid dropped everywhere is evaluated
-  // again), the other half is left to the running evaluations, the
-  // allocator's slack and the process.
+  // Resident memory budget of the whole worker process, MiB (>= 256): half
+  // of it holds geometry: the subtree cache (at most 1/8; subtrees whose
+  // root took at least the job's cache.min_subtree_seconds) and root solids
+  // for ΔG and for sharing, older ones compressed (zstd, at most 5/16; a
+  // solid is compressed only when it leaves the level sets) and the latest
+  // as level sets (at least 1/16 of the budget, and whatever the subtree
+  // cache and the compressed ones leave; least recently used first out; a
+  // solid dropped everywhere is evaluated again); the other half is left to
+  // the running evaluations, the allocator's slack and the process.
   // Measured peak resident set with 2 slots: docs/benchmarks.md.
   std::int64_t memory_mb = 1024;
 };
