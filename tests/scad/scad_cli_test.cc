@@ -102,7 +102,13 @@ TEST(ScadCli, ClusterRunRecordsTheDescendantsOfCachedCsgSubtrees) {
                                          "  union() { cube([20, 20, 10]); translate([5, 5, 10]) cube([10, 10, 5]); }\n"
                                          "  translate([10, 10, -1]) cylinder(r = r, h = 20, $fn = 24);\n"
                                          "}\n";
-  CommandRun r = Fabatlas("run drilled.scad --workers 1 --slots 1 --quiet --out out", dir);
+  // A worker's cache keeps only subtrees whose root took at least the job's
+  // cache.min_subtree_seconds (default 0.1 s, more than these cubes take):
+  // the job beside the imported design keeps every subtree.
+  CommandRun import = Fabatlas("import-scad drilled.scad --out drilled.yaml", dir);
+  ASSERT_EQ(import.status, 0) << import.err;
+  std::ofstream(dir / "drilled.job.yaml", std::ios::app) << "cache: {min_subtree_seconds: 0}\n";
+  CommandRun r = Fabatlas("run drilled.job.yaml --workers 1 --slots 1 --quiet --out out", dir);
   ASSERT_EQ(r.status, 0) << r.err;
 
   fabatlas::storage::JobStore store(dir / "out/cluster-state/state.db");
