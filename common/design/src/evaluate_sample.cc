@@ -233,7 +233,8 @@ class TreeEvaluation {
       }
     }
     if (!record.from_cache) {
-      auto trace = std::make_shared<SubtreeTrace>();  // what the cache keeps beside the solid
+      // What the cache keeps beside the solid (none without a cache).
+      auto trace = options_.cache ? std::make_shared<SubtreeTrace>() : nullptr;
       std::vector<geometry::Solid> inputs;
       for (auto& c : children) inputs.push_back(std::move(c.solid));
       auto start = Clock::now();
@@ -257,8 +258,8 @@ class TreeEvaluation {
         context.path = path;
         OpenScadNodeResult scad = EvaluateOpenScadNode(node, args, design_.file.parent_path(), context);
         out.solid = std::move(scad.solid);
-        if (!scad.root_key.empty()) {
-          record.children = {scad.root_key};
+        if (!scad.root_key.empty()) record.children = {scad.root_key};
+        if (!scad.root_key.empty() && trace) {
           trace->topology = record.topology;
           trace->op = record.op;
           trace->bytes = out.solid.MemoryBytes();
