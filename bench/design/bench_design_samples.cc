@@ -3,8 +3,11 @@
 // resolution. Points are drawn uniformly from each design space with a fixed
 // seed; medians are reported beside Fab Forms Table 3's per-sample CPU time.
 //
-// Usage: bench_design_samples [samples per design (default 15)] [design.yaml ...]
-// (defaults to configs/designs/{vase,cup,pawn,tealight}.yaml)
+// Usage: bench_design_samples [--defaults] [samples per design (default 15)] [design.yaml ...]
+// (defaults to configs/designs/{vase,cup,pawn,tealight}.yaml). --defaults:
+// every sample at the design's default point (a worker's steady per-sample
+// cost for one point, after the process's first sample; docs/benchmarks.md,
+// "OpenSCAD").
 #include <time.h>
 
 #include <algorithm>
@@ -52,9 +55,11 @@ design::Point RandomPoint(const design::Design& d, std::mt19937_64& rng) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  int n = argc > 1 ? std::atoi(argv[1]) : 15;
+  const bool defaults = argc > 1 && std::string(argv[1]) == "--defaults";
+  const int first = defaults ? 2 : 1;
+  int n = argc > first ? std::atoi(argv[first]) : 15;
   std::vector<std::filesystem::path> designs;
-  for (int i = 2; i < argc; ++i) designs.emplace_back(argv[i]);
+  for (int i = first + 1; i < argc; ++i) designs.emplace_back(argv[i]);
   if (designs.empty())
     for (const char* name : {"vase", "cup", "pawn", "tealight"})
       designs.push_back(std::filesystem::path(FABATLAS_SOURCE_DIR) / "configs/designs" / (std::string(name) + ".yaml"));
@@ -69,7 +74,7 @@ int main(int argc, char** argv) {
     bool have_previous = false;
     int valid = 0;
     for (int i = 0; i < n; ++i) {
-      design::Point u = RandomPoint(d, rng);
+      design::Point u = defaults ? design::DefaultPoint(d) : RandomPoint(d, rng);
       double c0 = ProcessCpu(), w0 = Wall();
       design::SampleResult r = design::EvaluateSample(d, u);
       double cpu = ProcessCpu() - c0, wall = Wall() - w0;

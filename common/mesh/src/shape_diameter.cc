@@ -39,13 +39,22 @@ void Basis(const Vec& n, Vec* t, Vec* b) {
   *b = {c, sign + n[1] * n[1] * a, -n[1]};
 }
 
-// RAII for the Embree device and scene.
+// The process's Embree device, created on first use and kept (its first
+// creation costs about 1 ms, later ones 0.05 ms; a worker measures sample
+// after sample). Embree devices are thread-safe; each call builds its own
+// scene on it.
+RTCDevice Device() {
+  static const RTCDevice device = rtcNewDevice(nullptr);
+  if (!device) throw std::runtime_error("shape diameter: cannot create Embree device");
+  return device;
+}
+
+// RAII for the Embree scene.
 struct EmbreeScene {
   RTCDevice device = nullptr;
   RTCScene scene = nullptr;
   ~EmbreeScene() {
     if (scene) rtcReleaseScene(scene);
-    if (device) rtcReleaseDevice(device);
   }
 };
 
@@ -144,8 +153,7 @@ ShapeDiameterSummary ShapeDiameter(const TriangleMesh& mesh, const ShapeDiameter
   const float t_near = static_cast<float>(1e-6 * diagonal);
 
   EmbreeScene embree;
-  embree.device = rtcNewDevice(nullptr);
-  if (!embree.device) throw std::runtime_error("shape diameter: cannot create Embree device");
+  embree.device = Device();
   embree.scene = rtcNewScene(embree.device);
   // The triangles as Embree quads: two consecutive triangles (a, b, c),
   // (a, d, b) that share their edge a-b, as Solid::ToMesh writes each quad of
