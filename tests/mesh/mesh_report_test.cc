@@ -278,65 +278,6 @@ TEST(MeshReport, FabHacksMeshesKeepTheirRecordedVerdicts) {
 // The largest FabHacks mesh (104,824 triangles) is closed, manifold and free
 // of self-intersections. Its time is a benchmark, not a test:
 // bench/mesh/bench_mesh (docs/benchmarks.md, Mesh checks).
-// The topology-only pass counts over the mesh's vertex indices exactly what the full
-// inspection counts after merging, on meshes whose vertices are shared by
-// index: the bunny, the analytic defects above and a FabHacks part with 100k
-// triangles. Nothing is merged: a soup's triangles are each open, and the
-// teapot, whose seams repeat vertices, has 528 border edges by index (64
-// after the merge; outside meshes get the full inspection).
-TEST(MeshReport, TopologyOnlyCountsWhatTheFullInspectionCountsOnIndexedMeshes) {
-  InspectOptions topology;
-  topology.topology_only = true;
-  TriangleMesh open_cube = testing::UnitCube();
-  open_cube.triangles.pop_back();
-  TriangleMesh fan;
-  fan.vertices = {{0, 0, 0}, {1, 0, 0}, {0.5, 1, 0}, {0.5, -1, 0.2}, {0.5, 0, 1}};
-  fan.triangles = {{0, 1, 2}, {1, 0, 3}, {0, 1, 4}};
-  // Two cubes sharing the vertex (1, 1, 1) by index.
-  TriangleMesh touching = testing::UnitCube();
-  const TriangleMesh second = testing::Box(1, 1, 1, 2, 2, 2);
-  std::vector<std::int32_t> index;
-  for (const auto& v : second.vertices) {
-    std::int32_t shared = -1;
-    for (std::size_t k = 0; k < touching.vertices.size(); ++k)
-      if (touching.vertices[k] == v) shared = static_cast<std::int32_t>(k);
-    if (shared < 0) {
-      shared = static_cast<std::int32_t>(touching.vertices.size());
-      touching.vertices.push_back(v);
-    }
-    index.push_back(shared);
-  }
-  for (const auto& t : second.triangles) touching.triangles.push_back({index[t[0]], index[t[1]], index[t[2]]});
-  const TriangleMesh meshes[] = {testing::UnitCube(),
-                                 open_cube,
-                                 fan,
-                                 touching,
-                                 testing::LoadJsMesh(SourceDir() / "node_modules/bunny/index.js"),
-                                 ReadMesh(SharedDir() / "data/fabhacks/meshes/doublehookmedium.off")};
-  for (std::size_t k = 0; k < std::size(meshes); ++k) {
-    const MeshReport full = InspectMesh(meshes[k]);
-    const MeshReport lean = InspectMesh(meshes[k], topology);
-    EXPECT_EQ(lean.border_edges, full.border_edges) << "mesh " << k;
-    EXPECT_EQ(lean.non_manifold_edges, full.non_manifold_edges) << "mesh " << k;
-    EXPECT_EQ(lean.non_manifold_vertices, full.non_manifold_vertices) << "mesh " << k;
-    EXPECT_EQ(lean.inconsistent_edges, full.inconsistent_edges) << "mesh " << k;
-    EXPECT_EQ(lean.closed, full.closed) << "mesh " << k;
-    EXPECT_EQ(lean.manifold, full.manifold) << "mesh " << k;
-    EXPECT_EQ(lean.closed_reason, full.closed_reason) << "mesh " << k;
-    EXPECT_EQ(lean.manifold_reason, full.manifold_reason) << "mesh " << k;
-    EXPECT_FALSE(lean.self_intersecting);
-  }
-  EXPECT_EQ(InspectMesh(testing::LoadJsMesh(SourceDir() / "node_modules/teapot/teapot.js"), topology).border_edges, 528);
-  EXPECT_EQ(InspectMesh(meshes[3], topology).non_manifold_vertices, 1);
-  TriangleMesh soup;
-  for (const auto& t : testing::UnitCube().triangles) {
-    const auto base = static_cast<std::int32_t>(soup.vertices.size());
-    for (std::int32_t v : t) soup.vertices.push_back(testing::UnitCube().vertices[v]);
-    soup.triangles.push_back({base, base + 1, base + 2});
-  }
-  EXPECT_EQ(InspectMesh(soup, topology).border_edges, 36);
-}
-
 TEST(MeshReport, HundredThousandTriangleMeshIsClean) {
   const TriangleMesh m = ReadMesh(SharedDir() / "data/fabhacks/meshes/doublehookmedium.off");
   ASSERT_GT(m.triangles.size(), 100000u);

@@ -88,25 +88,19 @@ MeshReport InspectMesh(const TriangleMesh& mesh, const InspectOptions& options) 
   const std::size_t nv_in = mesh.vertices.size();
   const std::int64_t nv_signed = static_cast<std::int64_t>(nv_in);
 
-  const bool topology_only = options.topology_only;
-
-  // 1. Merge vertices with bit-identical coordinates (topology_only: the
-  //    mesh's own indices).
+  // 1. Merge vertices with bit-identical coordinates.
   std::vector<std::int32_t> merged(nv_in);
-  std::iota(merged.begin(), merged.end(), 0);
-  std::vector<std::array<double, 3>> merged_points;
-  const std::vector<std::array<double, 3>>& points = topology_only ? mesh.vertices : merged_points;
-  if (!topology_only) {
+  std::vector<std::array<double, 3>> points;
+  {
     std::vector<std::int32_t> order(nv_in);
     std::iota(order.begin(), order.end(), 0);
     std::sort(order.begin(), order.end(), [&](std::int32_t a, std::int32_t b) {
       return mesh.vertices[a] < mesh.vertices[b] || (mesh.vertices[a] == mesh.vertices[b] && a < b);
     });
-    merged_points.reserve(nv_in);
+    points.reserve(nv_in);
     for (std::size_t k = 0; k < nv_in; ++k) {
-      if (k == 0 || mesh.vertices[order[k]] != mesh.vertices[order[k - 1]])
-        merged_points.push_back(mesh.vertices[order[k]]);
-      merged[order[k]] = static_cast<std::int32_t>(merged_points.size() - 1);
+      if (k == 0 || mesh.vertices[order[k]] != mesh.vertices[order[k - 1]]) points.push_back(mesh.vertices[order[k]]);
+      merged[order[k]] = static_cast<std::int32_t>(points.size() - 1);
     }
   }
   report.merged_vertices = static_cast<std::int64_t>(nv_in - points.size());
@@ -127,15 +121,14 @@ MeshReport InspectMesh(const TriangleMesh& mesh, const InspectOptions& options) 
     const auto& a = points[m[0]];
     const auto& b = points[m[1]];
     const auto& c = points[m[2]];
-    const bool flat = !topology_only &&
-                      CGAL::collinear(Point(a[0], a[1], a[2]), Point(b[0], b[1], b[2]), Point(c[0], c[1], c[2]));
+    const bool flat = CGAL::collinear(Point(a[0], a[1], a[2]), Point(b[0], b[1], b[2]), Point(c[0], c[1], c[2]));
     if (flat) ++report.degenerate_triangles;
     tris.push_back(m);
     collinear.push_back(flat ? 1 : 0);
   }
 
   // 3. Measures: bbox of used vertices, area, signed volume about the bbox centre.
-  if (!tris.empty() && !topology_only) {
+  if (!tris.empty()) {
     report.bbox_min = {INFINITY, INFINITY, INFINITY};
     report.bbox_max = {-INFINITY, -INFINITY, -INFINITY};
     for (const auto& t : tris) {
@@ -149,7 +142,7 @@ MeshReport InspectMesh(const TriangleMesh& mesh, const InspectOptions& options) 
   }
   std::array<double, 3> centre;
   for (int a = 0; a < 3; ++a) centre[a] = 0.5 * (report.bbox_min[a] + report.bbox_max[a]);
-  if (!topology_only) {
+  {
     const TriangleMesh used{points, tris};
     report.volume = EnclosedVolume(used, centre);
     report.area = SurfaceArea(used, centre);
@@ -272,7 +265,7 @@ MeshReport InspectMesh(const TriangleMesh& mesh, const InspectOptions& options) 
   report.non_manifold_vertices += counts.non_manifold_vertices;
 
   // 6. Components: vertex-connected pieces.
-  if (!topology_only) {
+  {
     DisjointSets pieces(points.size());
     std::vector<char> used(points.size(), 0);
     for (const auto& t : tris) {
@@ -292,9 +285,7 @@ MeshReport InspectMesh(const TriangleMesh& mesh, const InspectOptions& options) 
     report.manifold_reason = "mesh has " + Plural(report.non_manifold_edges, "non-manifold edge") + " (3+ faces) and " +
                              Plural(report.non_manifold_vertices, "non-manifold vertex", "non-manifold vertices") + " (several fans)";
   }
-  if (topology_only) {
-    // outward not inspected: stays false, no reason
-  } else if (!report.closed) {
+  if (!report.closed) {
     report.outward = false;
     report.outward_reason = "orientation undefined: mesh is not closed";
   } else if (report.non_manifold_edges > 0) {
@@ -309,7 +300,7 @@ MeshReport InspectMesh(const TriangleMesh& mesh, const InspectOptions& options) 
   }
 
   // 7. Self-intersection (CGAL), on non-collinear triangles.
-  if (options.check_self_intersection && !topology_only && !tris.empty()) {
+  if (options.check_self_intersection && !tris.empty()) {
     std::vector<Point> soup_points;
     soup_points.reserve(points.size());
     for (const auto& p : points) soup_points.emplace_back(p[0], p[1], p[2]);

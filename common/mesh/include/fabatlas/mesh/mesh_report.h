@@ -16,17 +16,6 @@ struct InspectOptions {
   // Stop counting intersecting triangle pairs after this many; the count in the
   // report is then a lower bound (MeshReport::intersecting_pairs_capped).
   std::int64_t max_intersecting_pairs = 1000;
-  // Only the topology over the mesh's own vertex indices: border, non-manifold
-  // and inconsistently oriented edges, non-manifold vertices (so the verdicts
-  // closed and manifold). No merge of coincident vertices, no collinearity
-  // test, no measures (volume, area, bbox), no components, no orientation
-  // verdict (outward stays false, without a reason) and no self-intersection
-  // test. For meshes whose vertices are
-  // shared by index by construction (the level-set extraction,
-  // geometry::Solid::ToMesh, which is closed and manifold for any signs:
-  // the watertight check tests folds there instead, folded_triangles.h).
-  // About 4x cheaper than the default path without self-intersections.
-  bool topology_only = false;
 };
 
 struct MeshReport {
@@ -74,8 +63,7 @@ struct MeshReport {
 // intersecting: they touch). Exact predicates (Epick kernel). The per-vertex
 // edge and fan tests run over vertex ranges on TBB's threads (counts summed,
 // the same for any schedule); the rest is single-threaded: about 0.5 s for
-// 100k triangles with self-intersections, 2.7 ms CPU topology_only for the
-// tray's 83k. Never throws on any index-valid mesh; an empty
+// 100k triangles with self-intersections. Never throws on any index-valid mesh; an empty
 // mesh yields closed=false.
 MeshReport InspectMesh(const TriangleMesh& mesh, const InspectOptions& options = {});
 
