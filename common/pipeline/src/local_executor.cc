@@ -9,6 +9,7 @@
 #include "fabatlas/geometry/solid.h"
 #include "fabatlas/precompute/design_evaluator.h"
 #include "fabatlas/protocol/cache_plan.h"
+#include "fabatlas/protocol/solid_blob.h"
 #include "fabatlas/storage/blob_store.h"
 
 namespace fabatlas::pipeline {
@@ -25,7 +26,7 @@ class CollectingCache final : public design::SubtreeCache {
     std::lock_guard lock(mutex_);
     auto it = entries_.find(key);
     if (it == entries_.end()) return std::nullopt;
-    return design::CachedSubtree{geometry::Solid::Deserialize(blobs_.Read(it->second.digest)), it->second.trace,
+    return design::CachedSubtree{protocol::SolidOfBlob(blobs_.Read(it->second.digest)), it->second.trace,
                                  it->second.trace_bytes};
   }
   void Offer(const std::string& key, const design::CachedSubtree& subtree, double) override {
@@ -33,7 +34,7 @@ class CollectingCache final : public design::SubtreeCache {
       std::lock_guard lock(mutex_);
       if (entries_.count(key)) return;
     }
-    std::string digest = blobs_.Put(subtree.solid.Serialize());
+    std::string digest = blobs_.Put(protocol::SolidBlobOf(subtree.solid));
     std::lock_guard lock(mutex_);
     entries_.emplace(key, Entry{digest, subtree.trace, subtree.trace_bytes});
   }
@@ -76,7 +77,7 @@ CacheAssembly CollectSubtreesInProcess(const design::Design& design, const sampl
   }
   a.grid_of = [blobs, collecting](const std::string& key) {
     const std::string digest = collecting->DigestOf(key);
-    return digest.empty() ? std::string() : blobs->Read(digest);
+    return digest.empty() ? std::string() : protocol::GridOfBlob(blobs->Read(digest));
   };
   return a;
 }
