@@ -22,6 +22,7 @@
 #include <tbb/parallel_reduce.h>
 
 #include "fabatlas/error.h"
+#include "fabatlas/fem/nested_dissection.h"
 
 namespace fabatlas::fem {
 
@@ -514,9 +515,13 @@ StaticSolveSummary SolveStatic(const HexMesh& mesh, const Material& material,
     if (free_index[k] != 0) throw InputError("linked component: node " + std::to_string(l.node) + " is also prescribed or linked twice");
     free_index[k] = -2;  // resolved below
   }
+  // Free unknowns numbered node by node in nested-dissection order
+  // (nested_dissection.h): the factorisation keeps that order (below), so
+  // its fill, its roundings and every FEM result depend on the mesh alone.
   int num_free = 0;
-  for (auto& f : free_index)
-    if (f == 0) f = num_free++;
+  for (int n : NestedDissectionOrder(mesh))
+    for (int c = 0; c < 3; ++c)
+      if (free_index[3 * static_cast<std::size_t>(n) + c] == 0) free_index[3 * static_cast<std::size_t>(n) + c] = num_free++;
   for (const auto& l : bc.links) {
     const std::size_t k = 3 * static_cast<std::size_t>(l.node) + l.component;
     const std::size_t m = 3 * static_cast<std::size_t>(l.master) + l.component;
@@ -554,6 +559,14 @@ StaticSolveSummary SolveStatic(const HexMesh& mesh, const Material& material,
   Cholesky solver;
 #ifdef FABATLAS_FEM_HAVE_CHOLMOD
   solver.cholmod().print = 0;  // the shift below handles "not positive definite"
+  // Orderings: the unknowns' own (nested dissection, above) or AMD, the
+  // better of the two by CHOLMOD's analysis of both (fill and flops). Never
+  // METIS or NESDIS, CHOLMOD's default candidates: METIS draws from the
+  // process's one rand() generator, so its permutation changed with other
+  // threads' draws (nested_dissection.h).
+  solver.cholmod().nmethods = 2;
+  solver.cholmod().method[0].ordering = CHOLMOD_NATURAL;
+  solver.cholmod().method[1].ordering = CHOLMOD_AMD;
 #endif
   bool analysed = false;
   const bool direct = options.linear_solver == StaticSolveOptions::LinearSolver::kCholesky;
@@ -637,6 +650,13 @@ StaticSolveSummary SolveStatic(const HexMesh& mesh, const Material& material,
       if (!analysed && direct) {
         solver.analyzePattern(K);
         analysed = true;
+#ifdef FABATLAS_FEM_HAVE_CHOLMOD
+        if (options.verbose) {
+          const cholmod_common& c = solver.cholmod();
+          std::fprintf(stderr, "fem: ordering %s, factor entries %.4g, flops %.4g\n",
+                       c.method[c.selected].ordering == CHOLMOD_AMD ? "AMD" : "nested dissection", c.lnz, c.fl);
+        }
+#endif
       }
       double mean_diag = 0;
       for (int j = 0; j < num_free; ++j) mean_diag += std::abs(K.valuePtr()[problem.diagonal_slots()[j]]);
