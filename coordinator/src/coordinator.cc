@@ -18,6 +18,11 @@
 
 namespace fabatlas::coordinator {
 
+namespace {
+// gRPC threads kept polling for calls when idle (gRPC's default: 2).
+constexpr int kIdlePollers = 16;
+}  // namespace
+
 grpc::Status Invalid(const std::string& message) { return grpc::Status(grpc::StatusCode::INVALID_ARGUMENT, message); }
 
 grpc::Status FromException(const std::exception& e) {
@@ -71,6 +76,11 @@ void Coordinator::Start() {
   builder.AddChannelArgument(GRPC_ARG_KEEPALIVE_PERMIT_WITHOUT_CALLS, 1);
   builder.AddChannelArgument(GRPC_ARG_HTTP2_MIN_RECV_PING_INTERVAL_WITHOUT_DATA_MS, 5000);
   builder.AddChannelArgument(GRPC_ARG_HTTP2_MAX_PING_STRIKES, 0);
+  // Threads that finish a call go back to polling instead of exiting: each
+  // worker keeps long polls open (Sync, ShareSolids, the CLI's WatchJob), so
+  // with gRPC's default of 2 idle pollers nearly every call created and
+  // ended a thread (docs/benchmarks.md "Scale": the coordinator's CPU).
+  builder.SetSyncServerOption(grpc::ServerBuilder::SyncServerOption::MAX_POLLERS, kIdlePollers);
   m.services.push_back(MakeJobService(m));
   m.services.push_back(MakeWorkerService(m));
   m.services.push_back(MakeBlobService(m));
