@@ -33,8 +33,10 @@ struct FoldedTriangles {
 // `mesh` is s.ToMesh(). The gradient is that of the trilinear interpolant
 // of the eight voxel values around each triangle's centroid; an inward
 // facing triangle costs one more trilinear sample. Degenerate triangles and
-// centroids where the gradient vanishes are not counted. Single-threaded;
-// deterministic; about 2 ms for 63k triangles.
+// centroids where the gradient vanishes are not counted. Parallel over
+// ranges of triangles (TBB); count, area and first are summed in mesh order
+// afterwards, so the result is the same bits for any thread count. About
+// 3 ms of CPU for the tray's 83k triangles.
 FoldedTriangles FindFoldedTriangles(const Solid& s, const mesh::TriangleMesh& mesh);
 
 }  // namespace fabatlas::geometry
