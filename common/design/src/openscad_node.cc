@@ -12,6 +12,7 @@
 #include <array>
 #include <atomic>
 #include <chrono>
+#include <cstdint>
 #include <cmath>
 #include <fstream>
 #include <functional>
@@ -338,16 +339,20 @@ mesh::TriangleMesh Hull3(const std::vector<std::array<double, 3>>& points) {
   return out;
 }
 
+enum class Combine { kUnion, kDifference, kIntersection };
+
 // A subtree's signed distance bound not sampled yet: exact within `band` of
 // its surface (the band of the grid it will be sampled on), beyond it a
 // lower bound in magnitude (as geometry::FromDistance requires); `bounds` is
-// its material's bounding box.
+// its material's bounding box. A convex primitive or a prism is its distance
+// function (`leaf`); a boolean of such subtrees is `op` over its `parts`
+// (two or more, `leaf` empty), evaluated by FieldProgram.
 struct Field {
-  geometry::DistanceFunction distance;
   geometry::Box3 bounds;
+  geometry::DistanceFunction leaf;
+  Combine op = Combine::kUnion;
+  std::vector<std::shared_ptr<const Field>> parts;
 };
-
-enum class Combine { kUnion, kDifference, kIntersection };
 
 // Distance from p to box b when outside it (a lower bound of the distance to
 // anything inside b); <= 0 inside.
@@ -358,12 +363,66 @@ double BoxOutside(const geometry::Box3& b, double x, double y, double z) {
   return ox > 0 || oy > 0 || oz > 0 ? std::sqrt(ox * ox + oy * oy + oz * oz) : std::max({qx, qy, qz});
 }
 
-// The CSG of fields as OpenVDB's CSG combines level sets (min for union,
-// max(a, -b) for difference, max for intersection: the same voxel values in
-// the band). An operand whose box lies `band` or farther from p contributes
-// its box distance without being evaluated: that leaves every value within
-// the band exact and every value beyond it a bound. nullptr: no material.
-std::shared_ptr<const Field> CombineFields(Combine op, std::vector<std::shared_ptr<const Field>> in, double band) {
+// The booleans of fields as OpenVDB's CSG combines level sets (min for
+// union, max(a, -b) for difference, max for intersection: the same voxel
+// values in the band). An operand whose box lies `band` or farther from p
+// contributes its box distance without being evaluated: that leaves every
+// value within the band exact and every value beyond it a bound.
+//
+// A field's tree is laid out once per sampling as an array in pre-order (a
+// boolean followed by its operands' subtrees) and evaluated per point by one
+// recursive function over it: no std::function call per boolean and no
+// pointer chase per operand, only one per primitive. The same floating-point
+// operations in the same order as the tree they come from, so the same
+// values to the bit. Thread-safe (it only reads); `root` must outlive it.
+class FieldProgram {
+ public:
+  // root: a boolean (a field with parts).
+  FieldProgram(const Field& root, double band) : band_(band) { Append(root); }
+
+  double operator()(double x, double y, double z) const { return Evaluate(0, x, y, z); }
+
+ private:
+  struct Node {
+    geometry::Box3 bounds;
+    const geometry::DistanceFunction* leaf;  // null for a boolean
+    Combine op;
+    std::uint32_t parts;  // a boolean's operands, the subtrees after it
+    std::uint32_t end;    // one past this node's subtree
+  };
+
+  void Append(const Field& f) {
+    const std::size_t i = nodes_.size();
+    nodes_.push_back({f.bounds, f.parts.empty() ? &f.leaf : nullptr, f.op, static_cast<std::uint32_t>(f.parts.size()), 0});
+    for (const auto& p : f.parts) Append(*p);
+    nodes_[i].end = static_cast<std::uint32_t>(nodes_.size());
+  }
+
+  // Boolean node i: its operands in order, each its box distance where that
+  // is `band` or more, else its own value (a primitive's or a boolean's).
+  double Evaluate(std::size_t i, double x, double y, double z) const {
+    const Node& n = nodes_[i];
+    double d = 0;
+    std::size_t c = i + 1;
+    for (std::uint32_t k = 0; k < n.parts; ++k, c = nodes_[c].end) {
+      const Node& part = nodes_[c];
+      double e = BoxOutside(part.bounds, x, y, z);
+      if (!(e >= band_)) e = part.leaf ? (*part.leaf)(x, y, z) : Evaluate(c, x, y, z);
+      if (k == 0) d = e;
+      else if (n.op == Combine::kUnion) d = std::min(d, e);
+      else if (n.op == Combine::kDifference) d = std::max(d, -e);
+      else d = std::max(d, e);
+    }
+    return d;
+  }
+
+  std::vector<Node> nodes_;
+  double band_;
+};
+
+// The boolean `op` of fields (FieldProgram evaluates it); nullptr: no
+// material.
+std::shared_ptr<const Field> CombineFields(Combine op, std::vector<std::shared_ptr<const Field>> in) {
   std::vector<std::shared_ptr<const Field>> parts;
   for (std::size_t i = 0; i < in.size(); ++i) {
     if (!in[i]) {
@@ -389,20 +448,8 @@ std::shared_ptr<const Field> CombineFields(Combine op, std::vector<std::shared_p
     if (box.min[k] > box.max[k]) return nullptr;  // an intersection of disjoint boxes
   auto field = std::make_shared<Field>();
   field->bounds = box;
-  field->distance = [parts = std::move(parts), op, band](double x, double y, double z) {
-    auto value = [&](const Field& f) {
-      const double b = BoxOutside(f.bounds, x, y, z);
-      return b >= band ? b : f.distance(x, y, z);
-    };
-    double d = value(*parts[0]);
-    for (std::size_t i = 1; i < parts.size(); ++i) {
-      const double e = value(*parts[i]);
-      if (op == Combine::kUnion) d = std::min(d, e);
-      else if (op == Combine::kDifference) d = std::max(d, -e);
-      else d = std::max(d, e);
-    }
-    return d;
-  };
+  field->op = op;
+  field->parts = std::move(parts);
   return field;
 }
 
@@ -478,7 +525,7 @@ class CsgEvaluation {
       if (all_fields) {
         std::vector<std::shared_ptr<const Field>> fields;
         for (const auto& k : kids) fields.push_back(k.field);
-        result.field = CombineFields(op, fields, c_.grid.half_width_voxels * c_.grid.voxel_size);
+        result.field = CombineFields(op, fields);
       } else {
         std::vector<Solid> solids;
         for (const auto& k : kids) solids.push_back(k.field ? Sample(*k.field) : k.solid);
@@ -567,7 +614,7 @@ class CsgEvaluation {
     geometry::DistanceFunction d = geometry::ConvexMeshDistance(m, c_.grid.half_width_voxels * c_.grid.voxel_size);
     if (!d) return {geometry::FromMesh(c_.grid, m), nullptr, ""};
     auto field = std::make_shared<Field>();
-    field->distance = std::move(d);
+    field->leaf = std::move(d);
     field->bounds = {m.vertices[0], m.vertices[0]};
     for (const auto& v : m.vertices)
       for (int k = 0; k < 3; ++k) {
@@ -580,7 +627,10 @@ class CsgEvaluation {
   // A field sampled in its band (geometry::FromDistance).
   Solid Sample(const Field& f) {
     try {
-      return geometry::FromDistance(c_.grid, f.bounds, f.distance, "csg");
+      if (f.parts.empty()) return geometry::FromDistance(c_.grid, f.bounds, f.leaf, "csg");
+      const FieldProgram program(f, c_.grid.half_width_voxels * c_.grid.voxel_size);
+      return geometry::FromDistance(
+          c_.grid, f.bounds, [&program](double x, double y, double z) { return program(x, y, z); }, "csg");
     } catch (const InputError& e) {
       throw SampleFailure(kNoGeometry, model_.filename().string() + ": " + e.what());
     }
@@ -892,7 +942,7 @@ class CsgEvaluation {
       return scale * (std::sqrt(oa * oa + ob * ob) + std::min(std::max(a, b), 0.0));
     };
     auto field = std::make_shared<Field>();
-    field->distance = distance;
+    field->leaf = distance;
     field->bounds = box;
     return Result{Solid(), field, ""};
   }

@@ -3,9 +3,9 @@
 
 #include <openvdb/tools/Interpolation.h>
 #include <openvdb/tree/ValueAccessor.h>
-#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <cmath>
 #include <vector>
 
@@ -16,23 +16,6 @@ namespace {
 
 using Accessor = openvdb::tree::ValueAccessor<const openvdb::FloatTree, /*IsSafe=*/false>;
 using LeafT = openvdb::FloatTree::LeafNodeType;
-
-// Triangle t's (unnormalised) normal, (b - a) x (c - a), and centroid.
-void NormalAndCentroid(const mesh::TriangleMesh& mesh, const std::array<std::int32_t, 3>& t, double normal[3],
-                       double centroid[3]) {
-  const auto& a = mesh.vertices[t[0]];
-  const auto& b = mesh.vertices[t[1]];
-  const auto& c = mesh.vertices[t[2]];
-  double e1[3], e2[3];
-  for (int k = 0; k < 3; ++k) {
-    centroid[k] = (a[k] + b[k] + c[k]) / 3;
-    e1[k] = b[k] - a[k];
-    e2[k] = c[k] - a[k];
-  }
-  normal[0] = e1[1] * e2[2] - e1[2] * e2[1];
-  normal[1] = e1[2] * e2[0] - e1[0] * e2[2];
-  normal[2] = e1[0] * e2[1] - e1[1] * e2[0];
-}
 
 // The eight voxel values of the cell with minimum corner o, v[i][j][l] at
 // o + (i, j, l): read from o's leaf when the cell lies inside it (most
@@ -64,15 +47,31 @@ FoldedTriangles FindFoldedTriangles(const Solid& s, const mesh::TriangleMesh& me
   const openvdb::math::Transform& transform = grid.transform();
   const double vs = s.impl()->spec.voxel_size;
   const double iso = kMeshIso * vs;
-  // Whether each triangle is folded, over ranges of triangles in parallel
-  // (each range reads the grid through its own accessor).
-  std::vector<char> folded(mesh.triangles.size(), 0);
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, mesh.triangles.size(), 4096),
-                    [&](const tbb::blocked_range<std::size_t>& range) {
+  // The folded triangles of each chunk of kChunk triangles, chunks in
+  // parallel (each reads the grid through its own accessor).
+  struct Fold {
+    double centroid[3];
+    double area;
+  };
+  constexpr std::size_t kChunk = 4096;
+  const std::size_t chunks = (mesh.triangles.size() + kChunk - 1) / kChunk;
+  std::vector<std::vector<Fold>> folds(chunks);
+  tbb::parallel_for(std::size_t{0}, chunks, [&](std::size_t chunk) {
     Accessor acc(grid.tree());
-    for (std::size_t n = range.begin(); n != range.end(); ++n) {
-      double normal[3], centroid[3];
-      NormalAndCentroid(mesh, mesh.triangles[n], normal, centroid);
+    const std::size_t end = std::min(mesh.triangles.size(), (chunk + 1) * kChunk);
+    for (std::size_t n = chunk * kChunk; n != end; ++n) {
+      const auto& t = mesh.triangles[n];
+      const auto& a = mesh.vertices[t[0]];
+      const auto& b = mesh.vertices[t[1]];
+      const auto& c = mesh.vertices[t[2]];
+      double centroid[3], e1[3], e2[3];
+      for (int k = 0; k < 3; ++k) {
+        centroid[k] = (a[k] + b[k] + c[k]) / 3;
+        e1[k] = b[k] - a[k];
+        e2[k] = c[k] - a[k];
+      }
+      const double normal[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
+                                e1[0] * e2[1] - e1[1] * e2[0]};
       // The gradient of the trilinear interpolant of the voxel values in the
       // cell holding the centroid (the cell the surface was extracted from).
       double f[3];
@@ -102,18 +101,17 @@ FoldedTriangles FindFoldedTriangles(const Solid& s, const mesh::TriangleMesh& me
       float value = 0;
       openvdb::tools::BoxSampler::sample(acc, transform.worldToIndex(inward), value);
       if (value <= iso) continue;
-      folded[n] = 1;
+      folds[chunk].push_back({{centroid[0], centroid[1], centroid[2]},
+                              0.5 * std::sqrt(normal[0] * normal[0] + normal[1] * normal[1] + normal[2] * normal[2])});
     }
   });
-  // Count and area in mesh order: the same sum for any schedule.
-  for (std::size_t n = 0; n < mesh.triangles.size(); ++n) {
-    if (!folded[n]) continue;
-    double normal[3], centroid[3];
-    NormalAndCentroid(mesh, mesh.triangles[n], normal, centroid);
-    if (out.count == 0) out.first = {centroid[0], centroid[1], centroid[2]};
-    ++out.count;
-    out.area += 0.5 * std::sqrt(normal[0] * normal[0] + normal[1] * normal[1] + normal[2] * normal[2]);
-  }
+  // Count, area and first in mesh order: the same bits for any schedule.
+  for (const auto& chunk : folds)
+    for (const Fold& fold : chunk) {
+      if (out.count == 0) out.first = {fold.centroid[0], fold.centroid[1], fold.centroid[2]};
+      ++out.count;
+      out.area += fold.area;
+    }
   return out;
 }
 
