@@ -165,13 +165,18 @@ ShapeDiameterSummary ShapeDiameter(const TriangleMesh& mesh, const ShapeDiameter
   // whose second triangle (c, c, b) is empty.
   // first[q]: the quad's first triangle; its second is first[q] + 1 when
   // paired[q].
+  // quad_of[i]: the quad holding measured face i * stride.
   std::vector<std::uint32_t> first;
   std::vector<char> paired;
+  std::vector<std::uint32_t> quad_of(measured_faces);
   first.reserve(nf);
   paired.reserve(nf);
   for (std::size_t f = 0; f < nf;) {
     const bool pair = f + 1 < nf && mesh.triangles[f + 1][0] == mesh.triangles[f][0] &&
                       mesh.triangles[f + 1][2] == mesh.triangles[f][1];
+    const auto q = static_cast<std::uint32_t>(first.size());
+    for (std::size_t g = f; g < f + (pair ? 2 : 1); ++g)
+      if (g % stride == 0) quad_of[g / stride] = q;
     first.push_back(static_cast<std::uint32_t>(f));
     paired.push_back(pair ? 1 : 0);
     f += pair ? 2 : 1;
@@ -260,10 +265,12 @@ ShapeDiameterSummary ShapeDiameter(const TriangleMesh& mesh, const ShapeDiameter
         rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
         rtcIntersect1(embree.scene, &context, &rh);
         if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) continue;
-        // The hit triangle: a quad's second when u + v > 1 (Embree's quad
-        // parametrisation).
-        const std::size_t hit = first[rh.hit.primID] + (paired[rh.hit.primID] && rh.hit.u + rh.hit.v > 1 ? 1 : 0);
-        if (hit == f) continue;
+        // The face itself: its own quad, and in it the triangle hit (a
+        // quad's second when u + v > 1, Embree's quad parametrisation). Only
+        // a hit on its own quad reads first and paired (a cache miss per ray
+        // otherwise).
+        const unsigned q = rh.hit.primID;
+        if (q == quad_of[i] && first[q] + (paired[q] && rh.hit.u + rh.hit.v > 1 ? 1 : 0) == f) continue;
         // The hit face's unit normal from Embree's geometric normal (the
         // counter-clockwise one, as ours; rounded to float, equal to the
         // double one to 1e-9 in cosine on the tray): reading ours would be a
