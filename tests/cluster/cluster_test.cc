@@ -280,7 +280,7 @@ TEST(ClusterFaults, TwentyWorkerKillsMidTaskLoseNothing) {
   v1::JobStatus s = WaitForJob([&] { return c.port; }, id, std::chrono::seconds(300), [&](const v1::JobStatus& st) {
     // Kill a random worker while leases are out (mid-task), once per step of
     // the job's progress since the last kill — a task completed or a lease
-    // expired (a worker of short tasks reports up to 32 results per Sync,
+    // expired (a worker of short tasks reports up to eight results per Sync,
     // so completions alone come in batches): the faults follow the job, not the
     // speed of the machine.
     const std::int64_t progress = st.tasks_done() + st.lease_expiries();

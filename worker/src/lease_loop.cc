@@ -2,7 +2,6 @@
 // threads, heartbeats, the holder's side of solid sharing, and stopping.
 #include <unistd.h>
 
-#include <algorithm>
 #include <cstdlib>
 
 #include <tbb/global_control.h>
@@ -116,8 +115,8 @@ v1::SyncRequest Worker::NextSyncRequest(bool* leaving) {
   int busy = static_cast<int>(queue_.size()) + running_;
   // A 1-slot worker running short tasks asks for leases beyond the one it
   // can run, and runs them before it reports (SyncLoop): one Sync per up to
-  // ResultsPerSync() tasks.
-  const int wanted = o_.slots + (slots_.empty() && short_tasks_ ? ResultsPerSync() - 1 : 0);
+  // kResultsPerSync tasks.
+  const int wanted = o_.slots + (slots_.empty() && short_tasks_ ? kResultsPerSync - 1 : 0);
   req.set_free_slots(stop_ ? 0 : std::max(0, wanted - busy));
   for (const auto& id : in_flight_) req.add_in_flight_lease_ids(id);
   for (auto& c : done_) *req.add_completed() = std::move(c);
@@ -251,7 +250,7 @@ void Worker::SyncLoop() {
       // result goes out on the next Sync from this thread: two thread
       // hand-offs fewer per task than through a slot thread.
       // Short tasks: the leases taken in advance run before the Sync, so
-      // one Sync reports up to ResultsPerSync() results, held back no longer
+      // one Sync reports up to kResultsPerSync results, held back no longer
       // than about kShortTaskSeconds of work (a longer task reports at
       // once: its result is not held back, nor the leases behind it from
       // others).
@@ -260,9 +259,7 @@ void Worker::SyncLoop() {
         while (true) {
           {
             std::lock_guard lock(mu_);
-            if (!short_tasks_ || static_cast<int>(done_.size()) >= ResultsPerSync() ||
-                held_seconds_ >= kShortTaskSeconds)
-              break;
+            if (!short_tasks_ || done_.size() >= kResultsPerSync || held_seconds_ >= kShortTaskSeconds) break;
           }
           std::optional<v1::Lease> next = TakeLease();
           if (!next) break;
@@ -413,11 +410,6 @@ std::optional<v1::Lease> Worker::TakeLease() {
   return PopLease();
 }
 
-int Worker::ResultsPerSync() const {
-  const double fit = kShortTaskSeconds / std::max(last_task_seconds_, 1e-6);
-  return static_cast<int>(std::clamp<double>(fit, kMinResultsPerSync, kMaxResultsPerSync));
-}
-
 void Worker::RunLease(const v1::Lease& lease) {
   auto started = Clock::now();
   v1::CompletedTask done = Execute(lease);
@@ -429,7 +421,6 @@ void Worker::RunLease(const v1::Lease& lease) {
                               {"reason", done.error()}});
   std::lock_guard lock(mu_);
   short_tasks_ = seconds < kShortTaskSeconds;
-  last_task_seconds_ = seconds;
   held_seconds_ += seconds;
   ++tasks_by_kind_[kind];
   if (!done.error().empty()) ++failures_by_kind_[kind];

@@ -185,22 +185,16 @@ class Worker {
   bool syncing_ = false;           // a Sync is under way (one at a time)
   bool sync_loop_waits_ = false;   // the sync loop waits for a slot thread's Sync
   // The last task took less than kShortTaskSeconds: a 1-slot worker then
-  // takes up to ResultsPerSync() - 1 leases in advance and runs them before
+  // takes up to kResultsPerSync - 1 leases in advance and runs them before
   // it reports, until the results it holds took kShortTaskSeconds together,
   // so one Sync (a round trip and a store commit) carries up to
-  // ResultsPerSync() results of a job of short tasks and none waits behind
+  // kResultsPerSync results of a job of short tasks and none waits behind
   // more than about kShortTaskSeconds of work; a longer task ends this, so
   // no result or lease waits behind it.
   bool short_tasks_ = false;
   double held_seconds_ = 0;  // tasks of the results in done_ took this long together
-  double last_task_seconds_ = 0;
   static constexpr double kShortTaskSeconds = 0.1;
-  static constexpr int kMinResultsPerSync = 8, kMaxResultsPerSync = 32;
-  // Results per Sync for short tasks: as many as take about
-  // kShortTaskSeconds at the last task's pace, at least kMinResultsPerSync
-  // and at most kMaxResultsPerSync (so the leases one worker holds in
-  // advance stay within max(8 tasks, about 100 ms) of work, as with 8).
-  int ResultsPerSync() const;
+  static constexpr int kResultsPerSync = 8;
   std::int64_t heartbeat_ms_ = 2000;
   std::vector<std::thread> slots_;
   std::thread heartbeat_, share_;
