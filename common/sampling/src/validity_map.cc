@@ -102,7 +102,7 @@ ValidityMapLayout WriteValidityMap(const Form& form, const ValidityMapOptions& o
     for (int px = 0; px < P; ++px) {
       u[xd] = ux(px + 0.5);
       u[yd] = uy(py + 0.5);
-      const auto leaf = LocateLeaf(form, u);
+      const auto leaf = LocateLeaf(form, space, u);
       if (!leaf) continue;
       const long long id = (static_cast<long long>(leaf->tree) << 32) | leaf->node;
       leaf_id[static_cast<size_t>(py) * P + px] = id;
