@@ -290,25 +290,51 @@ mesh::TriangleMesh Solid::ToMesh(double adaptivity) const {
   if (!std::isfinite(adaptivity) || adaptivity < 0 || adaptivity > 1) {
     throw InputError("Solid::ToMesh: adaptivity must be in [0,1]");
   }
-  std::vector<openvdb::Vec3s> points;
-  std::vector<openvdb::Vec3I> tris;
-  std::vector<openvdb::Vec4I> quads;
   // Iso-value a hair above 0 (1e-4 voxel): voxels lying exactly on the surface
   // (faces of boxes at round sizes fall on voxel centres) then count as
   // inside, which avoids a chamfer of up to a voxel along such edges.
-  openvdb::tools::volumeToMesh(*impl_->grid, points, tris, quads, kMeshIso * impl_->spec.voxel_size, adaptivity);
-  out.vertices.reserve(points.size());
-  for (const auto& p : points) out.vertices.push_back({p.x(), p.y(), p.z()});
-  out.triangles.reserve(tris.size() + 2 * quads.size());
+  openvdb::tools::VolumeToMesh mesher(kMeshIso * impl_->spec.voxel_size, adaptivity);
+  mesher(*impl_->grid);
+  // The mesher's points and polygon pools straight into the TriangleMesh, in
+  // the order openvdb::tools::volumeToMesh lists them (every pool's quads,
+  // then every pool's triangles; each pool's primitives in order), without
+  // its intermediate point and polygon vectors; in parallel over points and
+  // over pools, so the result is the same for any thread count.
+  const std::size_t np = mesher.pointListSize();
+  const openvdb::tools::PointList& points = mesher.pointList();
+  out.vertices.resize(np);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, np, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t i = r.begin(); i != r.end(); ++i) out.vertices[i] = {points[i].x(), points[i].y(), points[i].z()};
+  });
+  openvdb::tools::PolygonPoolList& pools = mesher.polygonPoolList();
+  const std::size_t npools = mesher.polygonPoolListSize();
+  std::vector<std::size_t> quad_start(npools + 1, 0), triangle_start(npools + 1, 0);
+  for (std::size_t n = 0; n < npools; ++n) {
+    quad_start[n + 1] = quad_start[n] + pools[n].numQuads();
+    triangle_start[n + 1] = triangle_start[n] + pools[n].numTriangles();
+  }
+  const std::size_t nquads = quad_start[npools];
+  out.triangles.resize(2 * nquads + triangle_start[npools]);
   // volumeToMesh orients its polygons clockwise seen from outside for a level
   // set (negative inside); reverse them to the outward (counter-clockwise)
   // convention of TriangleMesh.
   auto idx = [](openvdb::Index32 i) { return static_cast<std::int32_t>(i); };
-  for (const auto& q : quads) {
-    out.triangles.push_back({idx(q[0]), idx(q[2]), idx(q[1])});
-    out.triangles.push_back({idx(q[0]), idx(q[3]), idx(q[2])});
-  }
-  for (const auto& t : tris) out.triangles.push_back({idx(t[0]), idx(t[2]), idx(t[1])});
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, npools, 64), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t n = r.begin(); n != r.end(); ++n) {
+      const openvdb::tools::PolygonPool& pool = pools[n];
+      auto* q_out = out.triangles.data() + 2 * quad_start[n];
+      for (std::size_t i = 0; i < pool.numQuads(); ++i) {
+        const openvdb::Vec4I& q = pool.quad(i);
+        q_out[2 * i] = {idx(q[0]), idx(q[2]), idx(q[1])};
+        q_out[2 * i + 1] = {idx(q[0]), idx(q[3]), idx(q[2])};
+      }
+      auto* t_out = out.triangles.data() + 2 * nquads + triangle_start[n];
+      for (std::size_t i = 0; i < pool.numTriangles(); ++i) {
+        const openvdb::Vec3I& t = pool.triangle(i);
+        t_out[i] = {idx(t[0]), idx(t[2]), idx(t[1])};
+      }
+    }
+  });
   return out;
 }
 
