@@ -85,12 +85,14 @@ Solid MakeSolid(FloatGrid::Ptr grid, const GridSpec& spec) {
 namespace {
 
 // Smooth Heaviside of the interior indicator, H(-phi), half width eps
-// (Osher & Fedkiw, "Level Set Methods", eq. 1.23 style sine ramp).
-inline double InsideWeight(double phi, double eps) {
+// (Osher & Fedkiw, "Level Set Methods", eq. 1.23 style sine ramp):
+// 0.5 (1 + x / eps + sin(pi x / eps) / pi) for x = -phi within eps of 0.
+// `sine` is sin(pi x / eps), given by the caller.
+inline double InsideWeight(double phi, double eps, double sine) {
   const double x = -phi;
   if (x <= -eps) return 0.0;
   if (x >= eps) return 1.0;
-  return 0.5 * (1.0 + x / eps + std::sin(std::numbers::pi * x / eps) / std::numbers::pi);
+  return 0.5 * (1.0 + x / eps + sine / std::numbers::pi);
 }
 
 struct Moments {
@@ -160,6 +162,7 @@ Measures ComputeMeasures(const FloatGrid& grid, double half_width_voxels) {
   const double deep = 0.99 * grid.background();
   const double e1 = 1.0, e2 = std::min(2.0, half_width_voxels);  // voxels
   const double eps1 = e1 * vs, eps2 = e2 * vs;                   // mm
+  const bool halves = e2 == 2 * e1;  // one sin and cos serve both widths
   constexpr double inf = std::numeric_limits<double>::infinity();
   struct LeafMeasures {
     std::array<Moments, 2> m;
@@ -180,8 +183,17 @@ Measures ComputeMeasures(const FloatGrid& grid, double half_width_voxels) {
             const double phi = values[n];
             if (phi >= eps2) continue;
             const openvdb::Coord c = origin.offsetBy(x, y, z);
-            m.m[0].Add(InsideWeight(phi, eps1), c);
-            m.m[1].Add(InsideWeight(phi, eps2), c);
+            // sin(pi x / eps2) and cos(pi x / eps2) once; sin(pi x / eps1)
+            // = 2 sin cos when eps1 = eps2 / 2 (sin 2a = 2 sin a cos a).
+            double sine2 = 0, sine1 = 0;
+            if (phi > -eps2) {
+              const double a = std::numbers::pi * -phi / eps2;
+              const double s = std::sin(a);
+              sine2 = s;
+              if (std::abs(phi) < eps1) sine1 = halves ? 2 * s * std::cos(a) : std::sin(std::numbers::pi * -phi / eps1);
+            }
+            m.m[0].Add(InsideWeight(phi, eps1, sine1), c);
+            m.m[1].Add(InsideWeight(phi, eps2, sine2), c);
             if (phi >= 0) continue;
             const double r = phi > -deep ? -phi : 0.0;
             const double p[3] = {c.x() * vs, c.y() * vs, c.z() * vs};
