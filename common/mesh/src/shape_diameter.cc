@@ -42,9 +42,13 @@ void Basis(const Vec& n, Vec* t, Vec* b) {
 // The process's Embree device, created on first use and kept (its first
 // creation costs about 1 ms, later ones 0.05 ms; a worker measures sample
 // after sample). Embree devices are thread-safe; each call builds its own
-// scene on it.
+// scene on it. Its kernels are at most AVX2 (`max_isa`): Embree's AVX-512
+// kernels round some hit distances differently in the last float bit, so
+// workers with and without AVX-512 gave different per-face values; and on
+// this project's AMD EPYC machine (Zen 4 runs 512-bit vectors as two 256-bit
+// halves) the AVX2 kernels trace the tray's rays 9% faster (docs/mesh.md).
 RTCDevice Device() {
-  static const RTCDevice device = rtcNewDevice(nullptr);
+  static const RTCDevice device = rtcNewDevice("max_isa=avx2");
   if (!device) throw std::runtime_error("shape diameter: cannot create Embree device");
   return device;
 }
