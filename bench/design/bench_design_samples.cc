@@ -7,12 +7,14 @@
 // (defaults to configs/designs/{vase,cup,pawn,tealight}.yaml). --defaults:
 // every sample at the design's default point (a worker's steady per-sample
 // cost for one point, after the process's first sample; docs/benchmarks.md,
-// "OpenSCAD").
+// "OpenSCAD"), and below each design's row the median wall seconds of each
+// part of a sample (SampleResult::timings and every check's seconds).
 #include <time.h>
 
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
+#include <map>
 #include <random>
 #include <string>
 #include <vector>
@@ -70,6 +72,7 @@ int main(int argc, char** argv) {
     design::Design d = design::LoadDesign(path);
     std::mt19937_64 rng(2026);
     std::vector<double> cpu_all, cpu_valid, wall_valid, cpu_dg;
+    std::map<std::string, std::vector<double>> stages;  // seconds per timing and check, valid samples
     design::SampleResult previous;
     bool have_previous = false;
     int valid = 0;
@@ -83,6 +86,8 @@ int main(int argc, char** argv) {
         ++valid;
         cpu_valid.push_back(cpu);
         wall_valid.push_back(wall);
+        for (const auto& [name, seconds] : r.timings) stages[name].push_back(seconds);
+        for (const auto& c : r.checks) stages["check " + c.name].push_back(c.seconds);
         if (have_previous) {
           double g0 = ProcessCpu();
           volatile double dg = design::DeltaG(previous, r);
@@ -95,6 +100,11 @@ int main(int argc, char** argv) {
     }
     std::printf("| %s | %.2f | %d | %d | %.3f | %.3f | %.3f | %.3f |\n", d.name.c_str(), d.voxel_size, n, valid,
                 Median(cpu_all), Median(cpu_valid), Median(wall_valid), Median(cpu_dg));
+    if (defaults) {
+      std::printf("stages (median wall s of the valid samples; the checks run side by side):");
+      for (const auto& [name, v] : stages) std::printf(" %s %.4f,", name.c_str(), Median(v));
+      std::printf("\n");
+    }
     std::fflush(stdout);
   }
   return 0;
