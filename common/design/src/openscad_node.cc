@@ -372,7 +372,8 @@ double BoxOutside(const geometry::Box3& b, double x, double y, double z) {
 // A field's tree is laid out once per sampling as an array in pre-order (a
 // boolean followed by its operands' subtrees) and evaluated per point by one
 // recursive function over it: no std::function call per boolean and no
-// pointer chase per operand, only one per primitive. The same floating-point
+// pointer chase per operand, only one per primitive other than a box (a
+// box's distance is called directly). The same floating-point
 // operations in the same order as the tree they come from, so the same
 // values to the bit. Thread-safe (it only reads); `root` must outlive it.
 class FieldProgram {
@@ -386,6 +387,7 @@ class FieldProgram {
   struct Node {
     geometry::Box3 bounds;
     const geometry::DistanceFunction* leaf;  // null for a boolean
+    const geometry::BoxDistance* box;        // a box leaf's own function, called directly
     Combine op;
     std::uint32_t parts;  // a boolean's operands, the subtrees after it
     std::uint32_t end;    // one past this node's subtree
@@ -393,7 +395,9 @@ class FieldProgram {
 
   void Append(const Field& f) {
     const std::size_t i = nodes_.size();
-    nodes_.push_back({f.bounds, f.parts.empty() ? &f.leaf : nullptr, f.op, static_cast<std::uint32_t>(f.parts.size()), 0});
+    nodes_.push_back({f.bounds, f.parts.empty() ? &f.leaf : nullptr,
+                      f.parts.empty() ? f.leaf.target<geometry::BoxDistance>() : nullptr, f.op,
+                      static_cast<std::uint32_t>(f.parts.size()), 0});
     for (const auto& p : f.parts) Append(*p);
     nodes_[i].end = static_cast<std::uint32_t>(nodes_.size());
   }
@@ -407,7 +411,7 @@ class FieldProgram {
     for (std::uint32_t k = 0; k < n.parts; ++k, c = nodes_[c].end) {
       const Node& part = nodes_[c];
       double e = BoxOutside(part.bounds, x, y, z);
-      if (!(e >= band_)) e = part.leaf ? (*part.leaf)(x, y, z) : Evaluate(c, x, y, z);
+      if (!(e >= band_)) e = part.box ? (*part.box)(x, y, z) : part.leaf ? (*part.leaf)(x, y, z) : Evaluate(c, x, y, z);
       if (k == 0) d = e;
       else if (n.op == Combine::kUnion) d = std::min(d, e);
       else if (n.op == Combine::kDifference) d = std::max(d, -e);

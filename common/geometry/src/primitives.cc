@@ -354,14 +354,7 @@ DistanceFunction ConvexMeshDistance(const mesh::TriangleMesh& m, double exact_wi
       if (f.n[k] == 1 && f.n[(k + 1) % 3] == 0 && f.n[(k + 2) % 3] == 0) hi[k] = f.d, sides += 1 << (2 * k);
       if (f.n[k] == -1 && f.n[(k + 1) % 3] == 0 && f.n[(k + 2) % 3] == 0) lo[k] = -f.d, sides += 2 << (2 * k);
     }
-  if (faces.size() == 6 && sides == 0b111111) {
-    return [lo, hi](double x, double y, double z) {
-      const double qx = std::max(lo[0] - x, x - hi[0]), qy = std::max(lo[1] - y, y - hi[1]),
-                   qz = std::max(lo[2] - z, z - hi[2]);
-      const double ox = std::max(qx, 0.0), oy = std::max(qy, 0.0), oz = std::max(qz, 0.0);
-      return std::sqrt(ox * ox + oy * oy + oz * oz) + std::min(std::max({qx, qy, qz}), 0.0);
-    };
-  }
+  if (faces.size() == 6 && sides == 0b111111) return BoxDistance{lo, hi};
   return [faces = std::move(faces), exact_within](double x, double y, double z) {
     return ConvexDistance(faces, exact_within, x, y, z);
   };
