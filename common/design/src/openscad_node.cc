@@ -395,8 +395,12 @@ class FieldProgram {
 
   void Append(const Field& f) {
     const std::size_t i = nodes_.size();
-    nodes_.push_back({f.bounds, f.parts.empty() ? &f.leaf : nullptr,
-                      f.parts.empty() ? f.leaf.target<geometry::BoxDistance>() : nullptr, f.op,
+    // A box leaf whose bounds are its box: outside it, its distance is the
+    // box distance the cut would give (the same arithmetic), so it is
+    // evaluated without the cut's test.
+    const geometry::BoxDistance* box = f.parts.empty() ? f.leaf.target<geometry::BoxDistance>() : nullptr;
+    if (box && !(box->lo == f.bounds.min && box->hi == f.bounds.max)) box = nullptr;
+    nodes_.push_back({f.bounds, f.parts.empty() ? &f.leaf : nullptr, box, f.op,
                       static_cast<std::uint32_t>(f.parts.size()), 0});
     for (const auto& p : f.parts) Append(*p);
     nodes_[i].end = static_cast<std::uint32_t>(nodes_.size());
@@ -410,8 +414,13 @@ class FieldProgram {
     std::size_t c = i + 1;
     for (std::uint32_t k = 0; k < n.parts; ++k, c = nodes_[c].end) {
       const Node& part = nodes_[c];
-      double e = BoxOutside(part.bounds, x, y, z);
-      if (!(e >= band_)) e = part.box ? (*part.box)(x, y, z) : part.leaf ? (*part.leaf)(x, y, z) : Evaluate(c, x, y, z);
+      double e;
+      if (part.box) {
+        e = (*part.box)(x, y, z);
+      } else {
+        e = BoxOutside(part.bounds, x, y, z);
+        if (!(e >= band_)) e = part.leaf ? (*part.leaf)(x, y, z) : Evaluate(c, x, y, z);
+      }
       if (k == 0) d = e;
       else if (n.op == Combine::kUnion) d = std::min(d, e);
       else if (n.op == Combine::kDifference) d = std::max(d, -e);
