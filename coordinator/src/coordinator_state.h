@@ -151,12 +151,14 @@ struct Coordinator::Impl {
 
   // Solid sharing (worker.proto FetchSolid / ShareSolids), in memory only: a
   // coordinator restart forgets it and workers evaluate a missing solid
-  // again. shares: SolidKey -> the blob a holder shared (answered with an
-  // empty digest: it does not hold the solid); share_wanted: holder -> the
+  // again. shares: SolidKey -> what a holder shared: its bytes (kept until
+  // one FetchSolid takes them) or an uploaded blob's digest (answered with
+  // neither: it does not hold the solid); share_wanted: holder -> the
   // requests to pass on; share_polled: holder -> when its ShareSolids loop
   // was last seen (a holder not polling is not asked).
   struct Share {
     std::string digest;
+    std::string blob;
     bool answered = false;
     std::int64_t asked_ms = 0;
   };
@@ -242,9 +244,9 @@ struct Coordinator::Impl {
   // Forgets the job's shared solids (its sampling is over).
   void ForgetShares(const std::string& bundle_digest);
 
-  // worker.proto FetchSolid: the blob of a solid another worker holds, or ""
-  // (evaluate again).
-  std::string FetchSolid(const v1::FetchSolidRequest& req, grpc::ServerContext* ctx);
+  // worker.proto FetchSolid: the solid another worker holds (its bytes or
+  // its blob's digest) into `resp`, or nothing (evaluate again).
+  void FetchSolid(const v1::FetchSolidRequest& req, v1::FetchSolidResponse* resp, grpc::ServerContext* ctx);
 
   // worker.proto ShareSolids: records the holder's answers, then waits for
   // requests addressed to it.

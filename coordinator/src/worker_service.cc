@@ -173,7 +173,7 @@ class WorkerServiceImpl final : public ServiceOn<v1::WorkerService::Service> {
     if (req->worker_id().empty()) return Invalid("worker_id is empty");
     if (req->solid().point_key_size() == 0) return Invalid("solid.point_key is empty");
     return Guarded([&]() -> Status {
-      resp->set_digest(impl_.FetchSolid(*req, ctx));
+      impl_.FetchSolid(*req, resp, ctx);
       return Status::OK;
     });
   }

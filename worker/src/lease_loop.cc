@@ -8,6 +8,7 @@
 
 #include "fabatlas/error.h"
 #include "fabatlas/log/log.h"
+#include "fabatlas/protocol/channel.h"
 #include "fabatlas/protocol/tasks.h"
 #include "worker_process.h"
 
@@ -375,8 +376,14 @@ void Worker::ShareLoop() {
       }
       if (job)
         if (auto blob = HeldSolidBlob(*job, sampling::PointKey(ref.point_key().begin(), ref.point_key().end()))) {
-          answer.set_digest(Upload(*blob));
-          if (!answer.digest().empty()) ++solids_shared_;
+          // Inline when it fits one chunk (worker.proto SharedSolid.blob):
+          // nothing durable names a shared solid, so it need not pass
+          // through the coordinator's blob store.
+          if (blob->size() <= static_cast<std::size_t>(protocol::kBlobChunkBytes))
+            answer.set_blob(std::move(*blob));
+          else
+            answer.set_digest(Upload(*blob));
+          if (!answer.blob().empty() || !answer.digest().empty()) ++solids_shared_;
         }
       answers.push_back(std::move(answer));
     }

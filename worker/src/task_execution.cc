@@ -174,6 +174,7 @@ geometry::Solid Worker::SolidOf(JobContext& ctx, const v1::Lease& lease, const s
     ctx.evaluator->Remember(point.key, solid);
     return solid;
   }
+  std::string bytes;  // the solid's blob, sent inline by its holder or downloaded
   if (digest.empty() && !holder.empty() && holder != o_.worker_id) {
     v1::FetchSolidRequest req;
     req.set_worker_id(o_.worker_id);
@@ -184,19 +185,22 @@ geometry::Solid Worker::SolidOf(JobContext& ctx, const v1::Lease& lease, const s
     v1::FetchSolidResponse resp;
     grpc::ClientContext call;
     protocol::Prepare(call, o_.security, std::chrono::milliseconds(20000));
-    if (stub_->FetchSolid(&call, req, &resp).ok()) digest = resp.digest();
+    if (stub_->FetchSolid(&call, req, &resp).ok()) {
+      digest = resp.digest();
+      bytes = std::move(*resp.mutable_blob());
+    }
   }
-  if (!digest.empty()) {
-    std::string bytes;
-    if (protocol::DownloadBlob(*blob_stub_, o_.security, digest, std::chrono::seconds(60), &bytes).ok()) {
-      try {
-        geometry::Solid solid = protocol::SolidOfBlob(bytes);
-        ctx.evaluator->Remember(point.key, solid);
-        ctx.shelf.Put(point.key, std::move(bytes));
-        ++solids_downloaded_;
-        return solid;
-      } catch (const InputError&) {
-      }
+  if (bytes.empty() && !digest.empty() &&
+      !protocol::DownloadBlob(*blob_stub_, o_.security, digest, std::chrono::seconds(60), &bytes).ok())
+    bytes.clear();
+  if (!bytes.empty()) {
+    try {
+      geometry::Solid solid = protocol::SolidOfBlob(bytes);
+      ctx.evaluator->Remember(point.key, solid);
+      ctx.shelf.Put(point.key, std::move(bytes));
+      ++solids_downloaded_;
+      return solid;
+    } catch (const InputError&) {
     }
   }
   ++samples_reevaluated_;

@@ -120,8 +120,9 @@ class Worker {
   void HeartbeatLoop();
 
   // Solid sharing, the holder's side (worker.proto ShareSolids): a long poll
-  // for the root solids other workers ask for; each is uploaded from this
-  // worker's memory (or reported as not held) on the next call. On a
+  // for the root solids other workers ask for; each is sent from this
+  // worker's memory (inline, or uploaded when larger than a chunk), or
+  // reported as not held, on the next call. On a
   // thread of its own, so a request is served while every slot is busy.
   void ShareLoop();
 

@@ -63,7 +63,7 @@ struct WorkerSummary {
   std::int64_t blobs_uploaded = 0;       // solids and subtrees (tasks.proto "Geometry blobs")
   std::int64_t solids_downloaded = 0;    // ΔG inputs another worker evaluated
   std::int64_t samples_reevaluated = 0;  // ΔG inputs evaluated again (no holder, or it lost them)
-  std::int64_t solids_shared = 0;        // root solids uploaded because another worker asked
+  std::int64_t solids_shared = 0;        // root solids sent because another worker asked
 };
 
 // Runs until `stop` becomes true, then finishes the running tasks, reports
