@@ -386,7 +386,7 @@ TEST(ClusterStorage, StoreWithoutAffinityColumnIsMigrated) {
   {
     sqlite3* db = nullptr;
     ASSERT_EQ(sqlite3_open((dir / "state.db").string().c_str(), &db), SQLITE_OK);
-    EXPECT_EQ(sqlite3_exec(db, "DROP INDEX tasks_neutral; ALTER TABLE tasks DROP COLUMN affine;", nullptr,
+    EXPECT_EQ(sqlite3_exec(db, "DROP INDEX tasks_queued; ALTER TABLE tasks DROP COLUMN affine;", nullptr,
                            nullptr, nullptr),
               SQLITE_OK);
     sqlite3_close(db);
@@ -394,6 +394,63 @@ TEST(ClusterStorage, StoreWithoutAffinityColumnIsMigrated) {
   JobStore store(dir / "state.db");
   auto grants = store.GrantLeases("w1", 5, 1000, 500);
   EXPECT_EQ(grants.size(), 2u);
+}
+
+// A store written before the partial indexes and the ordered lease ids
+// (tasks_job, tasks_neutral, leases_active, leases_worker; lease ids from
+// the task key) opens with the new indexes only, and its active leases,
+// ids of the old form included, complete, expire and are found as before.
+TEST(ClusterStorage, StoreWithTheEarlierIndexesAndLeaseIdsIsMigrated) {
+  fs::path dir = FreshDir("migrate_indexes");
+  std::vector<LeaseGrant> grants;
+  {
+    JobStore store(dir / "state.db");
+    AddRunningJob(store, 4);
+    grants = store.GrantLeases("w1", 2, 1000, 500);
+    ASSERT_EQ(grants.size(), 2u);
+  }
+  auto exec = [&](const std::string& sql) {
+    sqlite3* db = nullptr;
+    ASSERT_EQ(sqlite3_open((dir / "state.db").string().c_str(), &db), SQLITE_OK);
+    EXPECT_EQ(sqlite3_exec(db, sql.c_str(), nullptr, nullptr, nullptr), SQLITE_OK) << sqlite3_errmsg(db);
+    sqlite3_close(db);
+  };
+  auto indexes = [&] {
+    std::vector<std::string> names;
+    sqlite3* db = nullptr;
+    EXPECT_EQ(sqlite3_open((dir / "state.db").string().c_str(), &db), SQLITE_OK);
+    sqlite3_stmt* s = nullptr;
+    sqlite3_prepare_v2(db, "SELECT name FROM sqlite_schema WHERE type = 'index' AND name NOT LIKE 'sqlite_%' "
+                           "AND (tbl_name = 'tasks' OR tbl_name = 'leases') ORDER BY name", -1, &s, nullptr);
+    while (sqlite3_step(s) == SQLITE_ROW) names.push_back(reinterpret_cast<const char*>(sqlite3_column_text(s, 0)));
+    sqlite3_finalize(s);
+    sqlite3_close(db);
+    return names;
+  };
+  EXPECT_EQ(indexes(), (std::vector<std::string>{"leases_due", "leases_of_worker", "tasks_of_job", "tasks_queued"}));
+  // As the previous version wrote it: its indexes, and the first lease's id
+  // from its task key.
+  const std::string old_id = grants[0].task_key.substr(0, 16) + ".1";
+  exec("DROP INDEX tasks_of_job; DROP INDEX tasks_queued; DROP INDEX leases_due; DROP INDEX leases_of_worker; "
+       "CREATE INDEX tasks_job ON tasks (job_id, state); CREATE INDEX tasks_neutral ON tasks (state, affine, seq); "
+       "CREATE INDEX leases_active ON leases (state, deadline_ms); "
+       "CREATE INDEX leases_worker ON leases (worker_id, state); "
+       "UPDATE leases SET lease_id = '" + old_id + "' WHERE lease_id = '" + grants[0].lease_id + "'");
+  JobStore store(dir / "state.db");
+  EXPECT_EQ(indexes(), (std::vector<std::string>{"leases_due", "leases_of_worker", "tasks_of_job", "tasks_queued"}));
+  EXPECT_EQ(store.ActiveLeases(), 2);
+  EXPECT_TRUE(store.ExtendLeases("w1", {old_id, grants[1].lease_id}, 1400).empty());
+  auto outcomes = store.Complete({{old_id, grants[0].task_key, 1, "r0", false, 1}}, 1100, 0);
+  EXPECT_EQ(outcomes, (std::vector<CompletionOutcome>{CompletionOutcome::kAccepted}));
+  auto expired = store.ExpireLeases(2000, 10, 3, [](int) { return std::string(); });
+  ASSERT_EQ(expired.size(), 1u);
+  EXPECT_EQ(expired[0].lease_id, grants[1].lease_id);
+  auto more = store.GrantLeases("w2", 5, 1000000, 500);
+  EXPECT_EQ(more.size(), 3u);  // the expired one again and the two never leased
+  EXPECT_TRUE(store.CheckConsistency().empty());
+  const TaskCounts c = store.CountTasks("job1");
+  EXPECT_EQ(c.done, 1);
+  EXPECT_EQ(c.leased, 3);
 }
 
 // The schema version: an unversioned store (user_version 0) is stamped with
