@@ -17,40 +17,10 @@ namespace {
 using Accessor = openvdb::tree::ValueAccessor<const openvdb::FloatTree, /*IsSafe=*/false>;
 using LeafT = openvdb::FloatTree::LeafNodeType;
 
-// The leaves met lately, by origin (direct-mapped, 16 slots), for the cells
-// across leaf faces: a third to a half of an extraction's triangles (a box
-// face on a multiple of 8 voxels puts all of its cells there), whose eight
-// values come from two to eight leaves, often on both sides of a root or
-// internal node boundary, where each switch of leaf was a walk of the tree
-// through the accessor. A slot holds nullptr for a tile or background region.
-class LeafCache {
- public:
-  // The value at p: its leaf's buffer, else the accessor's (the same value).
-  float Value(Accessor& acc, const openvdb::Coord& p) {
-    constexpr int kMask = ~(static_cast<int>(LeafT::DIM) - 1);
-    const openvdb::Coord origin(p.x() & kMask, p.y() & kMask, p.z() & kMask);
-    const unsigned slot =
-        (static_cast<unsigned>(origin.x()) * 73856093u ^ static_cast<unsigned>(origin.y()) * 19349663u ^
-         static_cast<unsigned>(origin.z()) * 83492791u) >> 3 & (kSlots - 1);
-    if (!valid_[slot] || origin_[slot] != origin) {
-      origin_[slot] = origin;
-      leaf_[slot] = acc.probeConstLeaf(p);
-      valid_[slot] = true;
-    }
-    return leaf_[slot] ? leaf_[slot]->buffer().data()[LeafT::coordToOffset(p)] : acc.getValue(p);
-  }
-
- private:
-  static constexpr unsigned kSlots = 16;
-  openvdb::Coord origin_[kSlots];
-  const LeafT* leaf_[kSlots] = {};
-  bool valid_[kSlots] = {};
-};
-
 // The eight voxel values of the cell with minimum corner o, v[i][j][l] at
 // o + (i, j, l): read from o's leaf when the cell lies inside it (most
 // cells), else leaf by leaf through the cache; the same values either way.
-void CellValues(Accessor& acc, LeafCache& leaves, const openvdb::Coord& o, double v[2][2][2]) {
+void CellValues(Accessor& acc, detail::LeafCache<Accessor>& leaves, const openvdb::Coord& o, double v[2][2][2]) {
   constexpr int kLast = static_cast<int>(LeafT::DIM) - 1;
   if ((o.x() & kLast) != kLast && (o.y() & kLast) != kLast && (o.z() & kLast) != kLast) {
     if (const LeafT* leaf = acc.probeConstLeaf(o)) {
@@ -88,7 +58,7 @@ FoldedTriangles FindFoldedTriangles(const Solid& s, const mesh::TriangleMesh& me
   std::vector<std::vector<Fold>> folds(chunks);
   tbb::parallel_for(std::size_t{0}, chunks, [&](std::size_t chunk) {
     Accessor acc(grid.tree());
-    LeafCache leaves;
+    detail::LeafCache<Accessor> leaves;
     const std::size_t end = std::min(mesh.triangles.size(), (chunk + 1) * kChunk);
     for (std::size_t n = chunk * kChunk; n != end; ++n) {
       const auto& t = mesh.triangles[n];

@@ -206,6 +206,7 @@ std::size_t detail::RemoveZeroSheets(FloatGrid& grid, double voxel_size) {
   std::vector<std::vector<std::pair<openvdb::Coord, float>>> per_leaf(leaves.size());
   tbb::parallel_for(tbb::blocked_range<size_t>(0, leaves.size()), [&](const tbb::blocked_range<size_t>& r) {
     auto acc = grid.getConstAccessor();
+    detail::LeafCache<decltype(acc)> neighbours;
     for (size_t i = r.begin(); i != r.end(); ++i) {
       const float* values = leaves[i]->buffer().data();
       for (auto on = leaves[i]->getValueMask().beginOn(); on; ++on) {
@@ -215,14 +216,14 @@ std::size_t detail::RemoveZeroSheets(FloatGrid& grid, double voxel_size) {
         const openvdb::Coord c = leaves[i]->origin() + local;
         for (int axis = 0; axis < 3; ++axis) {
           // Neighbours inside the leaf from its buffer, across its faces
-          // through the tree.
+          // from theirs (LeafCache).
           const openvdb::Index step = 1u << (LeafT::LOG2DIM * (2 - axis));
           const bool inner = local[axis] > 0 && local[axis] < static_cast<int>(LeafT::DIM) - 1;
           openvdb::Coord lo = c, hi = c;
           lo[axis] -= 1;
           hi[axis] += 1;
-          const float a = inner ? values[on.pos() - step] : acc.getValue(lo);
-          const float b = inner ? values[on.pos() + step] : acc.getValue(hi);
+          const float a = inner ? values[on.pos() - step] : neighbours.Value(acc, lo);
+          const float b = inner ? values[on.pos() + step] : neighbours.Value(acc, hi);
           if (a > iso && b > iso) {
             per_leaf[i].emplace_back(c, std::min(a, b));
             break;

@@ -60,6 +60,38 @@ Solid MakeSolid(openvdb::FloatGrid::Ptr grid, const GridSpec& spec);
 // then inactive values are signed again (operations.cc). Returns the voxels
 // repaired.
 std::size_t RemoveZeroSheets(openvdb::FloatGrid& grid, double voxel_size);
+// The leaves of a float grid met lately, by origin (direct-mapped, 16
+// slots), for reading voxels on both sides of leaf faces: where a surface
+// lies on a multiple of 8 voxels (a box face at a round coordinate), each
+// switch of leaf through an accessor walks the tree, from the root's map
+// across root and internal node boundaries. A slot holds nullptr for a tile
+// or background region. Not thread-safe: one per thread, with its accessor.
+template <typename AccessorT>
+class LeafCache {
+ public:
+  using LeafT = openvdb::FloatTree::LeafNodeType;
+  // The value at p: its leaf's buffer, else the accessor's (the same value).
+  float Value(AccessorT& acc, const openvdb::Coord& p) {
+    constexpr int kMask = ~(static_cast<int>(LeafT::DIM) - 1);
+    const openvdb::Coord origin(p.x() & kMask, p.y() & kMask, p.z() & kMask);
+    const unsigned slot =
+        (static_cast<unsigned>(origin.x()) * 73856093u ^ static_cast<unsigned>(origin.y()) * 19349663u ^
+         static_cast<unsigned>(origin.z()) * 83492791u) >> 3 & (kSlots - 1);
+    if (!valid_[slot] || origin_[slot] != origin) {
+      origin_[slot] = origin;
+      leaf_[slot] = acc.probeConstLeaf(p);
+      valid_[slot] = true;
+    }
+    return leaf_[slot] ? leaf_[slot]->buffer().data()[LeafT::coordToOffset(p)] : acc.getValue(p);
+  }
+
+ private:
+  static constexpr unsigned kSlots = 16;
+  openvdb::Coord origin_[kSlots];
+  const LeafT* leaf_[kSlots] = {};
+  bool valid_[kSlots] = {};
+};
+
 // Throws InputError with `where: message` unless value is finite and > 0.
 void RequirePositive(double value, const char* where, const char* name);
 
