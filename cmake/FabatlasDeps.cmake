@@ -31,3 +31,18 @@ endif()
 if(FABATLAS_BUILD_BENCH)
   find_package(benchmark REQUIRED)
 endif()
+
+# fabatlas_load_first(<program>): OpenVDB and FCL first among the shared
+# libraries <program> names (DT_NEEDED), so that they come right after it in
+# the loader's global search scope. Neither library is linked with
+# -Bsymbolic, so each of their relocations against their own symbols
+# (~55,000 and ~12,000, OpenVDB's names ~300 characters long) is looked up
+# through that scope from its start; at their place as dependencies of
+# dependencies (65th and 67th of the 112 objects of fabatlas-worker) those
+# lookups were most of the CPU of every process start (docs/benchmarks.md,
+# Scale). --no-as-needed: on the link line they come before the objects that
+# use them.
+function(fabatlas_load_first program)
+  target_link_options(${program} PRIVATE "LINKER:--push-state,--no-as-needed"
+    "$<TARGET_FILE:OpenVDB::openvdb>" "$<TARGET_FILE:fcl>" "LINKER:--pop-state")
+endfunction()
