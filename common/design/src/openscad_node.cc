@@ -354,15 +354,6 @@ struct Field {
   std::vector<std::shared_ptr<const Field>> parts;
 };
 
-// Distance from p to box b when outside it (a lower bound of the distance to
-// anything inside b); <= 0 inside.
-double BoxOutside(const geometry::Box3& b, double x, double y, double z) {
-  const double qx = std::max(b.min[0] - x, x - b.max[0]), qy = std::max(b.min[1] - y, y - b.max[1]),
-               qz = std::max(b.min[2] - z, z - b.max[2]);
-  const double ox = std::max(qx, 0.0), oy = std::max(qy, 0.0), oz = std::max(qz, 0.0);
-  return ox > 0 || oy > 0 || oz > 0 ? std::sqrt(ox * ox + oy * oy + oz * oz) : std::max({qx, qy, qz});
-}
-
 // The booleans of fields as OpenVDB's CSG combines level sets (min for
 // union, max(a, -b) for difference, max for intersection: the same voxel
 // values in the band). An operand whose box lies `band` or farther from p
@@ -418,7 +409,8 @@ class FieldProgram {
       if (part.box) {
         e = (*part.box)(x, y, z);
       } else {
-        e = BoxOutside(part.bounds, x, y, z);
+        // The distance to its box: a lower bound of the distance to anything in it.
+        e = geometry::BoxDistance{part.bounds.min, part.bounds.max}(x, y, z);
         if (!(e >= band_)) e = part.leaf ? (*part.leaf)(x, y, z) : Evaluate(c, x, y, z);
       }
       if (k == 0) d = e;
