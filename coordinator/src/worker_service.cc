@@ -96,6 +96,7 @@ class WorkerServiceImpl final : public ServiceOn<v1::WorkerService::Service> {
       }
       const bool granting = !(impl_.draining || impl_.stopping || req->leaving());
       sync.want = granting ? std::min(req->free_slots(), o.max_leases_per_sync) : 0;
+      if (req->has_idle_slots()) sync.steal = std::max(0, req->idle_slots());
       std::uint64_t epoch;  // new work since this is not waited for below
       {
         std::lock_guard lock(impl_.work_mu);
@@ -151,7 +152,7 @@ class WorkerServiceImpl final : public ServiceOn<v1::WorkerService::Service> {
           impl_.work_cv.wait_until(lock, slice, [&] { return impl_.work_epoch != epoch || impl_.stopping.load(); });
           epoch = impl_.work_epoch;
         }
-        grants = impl_.store->GrantLeases(req->worker_id(), want, NowMs(), o.lease_ms);
+        grants = impl_.store->GrantLeases(req->worker_id(), want, NowMs(), o.lease_ms, sync.steal);
         if (std::chrono::steady_clock::now() >= until) break;
       }
       for (auto& g : grants) {

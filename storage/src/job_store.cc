@@ -626,10 +626,12 @@ std::vector<CompletionOutcome> CompleteIn(JobStore::Db& db, const std::vector<Co
 }
 
 // GrantLeases' choice of tasks, by reads only (so an empty queue costs no
-// write transaction): up to `max` grants; unprefer gets the seq of granted
-// tasks that had a preference. any_preferring: some task prefers a worker.
-std::vector<LeaseGrant> PickLeases(JobStore::Db& db, const std::string& worker_id, int max, std::int64_t now_ms,
-                                   std::int64_t lease_ms, bool any_preferring, std::vector<std::int64_t>& unprefer) {
+// write transaction): up to `max` grants, of them up to `steal` preferring
+// other workers (all when negative); unprefer gets the seq of granted tasks
+// that had a preference. any_preferring: some task prefers a worker.
+std::vector<LeaseGrant> PickLeases(JobStore::Db& db, const std::string& worker_id, int max, int steal,
+                                   std::int64_t now_ms, std::int64_t lease_ms, bool any_preferring,
+                                   std::vector<std::int64_t>& unprefer) {
   std::vector<LeaseGrant> grants;
   if (max <= 0) return grants;
   // Lease affinity
@@ -648,8 +650,8 @@ std::vector<LeaseGrant> PickLeases(JobStore::Db& db, const std::string& worker_i
                                     "tasks t JOIN jobs j ON j.id = t.job_id WHERE t.state = 0 AND t.affine = 1 AND "
                                     "j.state = 2 AND t.not_before_ms <= ? ORDER BY t.seq DESC LIMIT ?";
   std::set<std::int64_t> picked;
-  auto take = [&](Stmt& pick) {
-    while (static_cast<int>(grants.size()) < max && pick.Next()) {
+  auto take = [&](Stmt& pick, int cap) {  // until `cap` grants in all
+    while (static_cast<int>(grants.size()) < cap && pick.Next()) {
       std::int64_t seq = pick.ColumnInt(6);
       if (!picked.insert(seq).second) continue;
       if (pick.ColumnInt(7) != 0) unprefer.push_back(seq);
@@ -668,18 +670,21 @@ std::vector<LeaseGrant> PickLeases(JobStore::Db& db, const std::string& worker_i
   if (any_preferring) {  // skipped while no task prefers anyone (no-op jobs)
     Stmt pick(db, own.c_str());
     pick.BindText(1, worker_id).Bind(2, now_ms).Bind(3, std::int64_t{max});
-    take(pick);
+    take(pick, max);
   }
   if (static_cast<int>(grants.size()) < max) {
     Stmt pick(db, neutral.c_str());
     pick.Bind(1, now_ms).Bind(2, std::int64_t{max - static_cast<int>(grants.size())});
-    take(pick);
+    take(pick, max);
   }
-  if (static_cast<int>(grants.size()) < max) {  // never skipped: no preferred task can starve
-    // Own preferred tasks were all taken above and may come again here.
+  // Never skipped while the worker has an idle slot: no preferred task can
+  // starve. Own preferred tasks were all taken above and may come again here.
+  const int before = static_cast<int>(grants.size());
+  const int limit = steal < 0 ? max : std::min(max, before + steal);
+  if (before < limit) {
     Stmt pick(db, others.c_str());
-    pick.Bind(1, now_ms).Bind(2, std::int64_t{max - static_cast<int>(grants.size()) + static_cast<int>(unprefer.size())});
-    take(pick);
+    pick.Bind(1, now_ms).Bind(2, std::int64_t{limit - before + static_cast<int>(unprefer.size())});
+    take(pick, limit);
   }
   return grants;
 }
@@ -789,10 +794,10 @@ std::vector<std::string> ExtendIn(JobStore::Db& db, Transaction& t, const std::s
 }  // namespace
 
 std::vector<LeaseGrant> JobStore::GrantLeases(const std::string& worker_id, int max,
-                                              std::int64_t now_ms, std::int64_t lease_ms) {
+                                              std::int64_t now_ms, std::int64_t lease_ms, int steal) {
   std::lock_guard lock(mutex_);
   std::vector<std::int64_t> unprefer;
-  std::vector<LeaseGrant> grants = PickLeases(*db_, worker_id, max, now_ms, lease_ms, preferring_tasks_ > 0, unprefer);
+  std::vector<LeaseGrant> grants = PickLeases(*db_, worker_id, max, steal, now_ms, lease_ms, preferring_tasks_ > 0, unprefer);
   if (grants.empty()) return grants;
   Transaction t(*db_);
   CountDeltas deltas;
@@ -895,7 +900,8 @@ WorkerSyncOutcome JobStore::SyncWorker(const WorkerSync& sync) {
   out.revoked = ExtendIn(*db_, t, sync.worker_id, active, sync.in_flight, sync.now_ms + sync.lease_ms,
                          sync.lease_ms / 2);
   std::vector<std::int64_t> unprefer;
-  out.grants = PickLeases(*db_, sync.worker_id, sync.want, sync.now_ms, sync.lease_ms, preferring_tasks_ > 0, unprefer);
+  out.grants = PickLeases(*db_, sync.worker_id, sync.want, sync.steal, sync.now_ms, sync.lease_ms,
+                          preferring_tasks_ > 0, unprefer);
   if (!out.grants.empty()) {
     t.Begin();
     WriteLeasesIn(*db_, sync.worker_id, sync.now_ms, out.grants, unprefer, deltas);

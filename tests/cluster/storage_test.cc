@@ -375,6 +375,38 @@ TEST(ClusterStorage, LeaseAffinityOrderAndForgetting) {
   EXPECT_EQ(grants[0].task_key, Key(8));
 }
 
+// Leases taken in advance are never stolen (worker.proto, idle_slots): a
+// worker asking for eight with one idle slot gets the unclaimed task and at
+// most one of another worker's, the newest; with no idle slot, none of
+// them; a Sync caps its grants the same way.
+TEST(ClusterStorage, StealingIsCappedAtTheIdleSlots) {
+  fs::path dir = FreshDir("steal");
+  JobStore store(dir / "state.db");
+  ASSERT_TRUE(store.CreateJob({"job1", std::string(64, 'a'), "d", JobState::kRunning, "", 1, 0}));
+  std::vector<NewTask> batch;
+  for (int i = 0; i < 6; ++i)
+    batch.push_back({Key(i), "job1", 2, "p" + std::to_string(i), i == 0 ? std::vector<std::string>{}
+                                                                        : std::vector<std::string>{"w2"}});
+  store.AddTasks(batch);
+  auto keys = [](const std::vector<LeaseGrant>& grants) {
+    std::vector<std::string> got;
+    for (const auto& g : grants) got.push_back(g.task_key);
+    return got;
+  };
+  EXPECT_EQ(keys(store.GrantLeases("w1", 8, 1000, 500, 1)), (std::vector<std::string>{Key(0), Key(5)}));
+  EXPECT_TRUE(store.GrantLeases("w1", 8, 1000, 500, 0).empty());
+  WorkerSync sync;
+  sync.worker_id = "w3";
+  sync.now_ms = 1000;
+  sync.lease_ms = 500;
+  sync.want = 8;
+  sync.steal = 2;
+  EXPECT_EQ(keys(store.SyncWorker(sync).grants), (std::vector<std::string>{Key(4), Key(3)}));
+  // Uncapped (a worker that does not say): all that are left, newest first.
+  EXPECT_EQ(keys(store.GrantLeases("w1", 8, 1000, 500)), (std::vector<std::string>{Key(2), Key(1)}));
+  EXPECT_TRUE(store.CheckConsistency().empty());
+}
+
 // A store written before lease affinity (no tasks.affine column) opens and
 // schedules.
 TEST(ClusterStorage, StoreWithoutAffinityColumnIsMigrated) {

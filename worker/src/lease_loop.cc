@@ -119,6 +119,9 @@ v1::SyncRequest Worker::NextSyncRequest(bool* leaving) {
   // kResultsPerSync tasks.
   const int wanted = o_.slots + (slots_.empty() && short_tasks_ ? kResultsPerSync - 1 : 0);
   req.set_free_slots(stop_ ? 0 : std::max(0, wanted - busy));
+  // Leases beyond the slots are taken in advance: never another worker's
+  // preferred tasks (worker.proto, lease affinity).
+  req.set_idle_slots(stop_ ? 0 : std::max(0, o_.slots - busy));
   for (const auto& id : in_flight_) req.add_in_flight_lease_ids(id);
   for (auto& c : done_) *req.add_completed() = std::move(c);
   done_.clear();

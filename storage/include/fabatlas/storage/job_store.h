@@ -134,6 +134,7 @@ struct WorkerSync {
   std::int64_t now_ms = 0;
   std::int64_t lease_ms = 0;            // leases granted or topped up run until now_ms + lease_ms
   int want = 0;                         // leases to grant at most (0: none)
+  int steal = -1;                       // of them, tasks preferring other workers at most (< 0: want)
   // As for Complete.
   std::int64_t retry_backoff_ms = 0;
   int quarantine_after = 0;
@@ -239,10 +240,10 @@ class JobStore {
   // to `worker_id` until now_ms + lease_ms, in the order of lease affinity
   // (worker.proto): tasks preferring this worker (fewest preferred workers
   // first, then oldest), then tasks preferring nobody (oldest first), then
-  // tasks preferring other workers (newest first). A granted task's
-  // preference is dropped.
+  // tasks preferring other workers (newest first; at most `steal` of them,
+  // all `max` when negative). A granted task's preference is dropped.
   std::vector<LeaseGrant> GrantLeases(const std::string& worker_id, int max, std::int64_t now_ms,
-                                      std::int64_t lease_ms);
+                                      std::int64_t lease_ms, int steal = -1);
   // Drops every preference for the worker (it left or went silent); tasks
   // left without a preferred worker prefer nobody. Returns how many tasks
   // lost it.
@@ -263,7 +264,7 @@ class JobStore {
   // A worker's Sync in one transaction (one commit at most, none when
   // nothing changes): Complete(completions), then ReturnUnknownLeases(
   // in_flight + the completions' leases), ExtendLeases(in_flight, now_ms +
-  // lease_ms, slack lease_ms / 2), then GrantLeases(want). The same outcome
+  // lease_ms, slack lease_ms / 2), then GrantLeases(want, steal). The same outcome
   // as those calls in that order; a kill -9 keeps all of it or none (a
   // worker whose Sync got no answer reports again: its results are accepted
   // or acknowledged as duplicates, and leases it never heard of are returned
