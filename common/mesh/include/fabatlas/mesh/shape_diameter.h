@@ -55,8 +55,8 @@ struct ShapeDiameterSummary {
 // more than 180 - wall_angle_degrees apart). Hit lengths further than one standard deviation
 // from their median are dropped; the face value is the weighted median of the
 // rest with Shapira's weights 1/theta. Raw SDF, no smoothing or normalisation.
-// Rays are traced in float32 with Embree 3 over a TBB parallel loop; results
-// are deterministic. Throws fabatlas::InputError for invalid options or an
+// Rays are traced in float32 with Embree 3, a face's rays in packets of eight,
+// over a TBB parallel loop; results are deterministic. Throws fabatlas::InputError for invalid options or an
 // index out of range.
 ShapeDiameterSummary ShapeDiameter(const TriangleMesh& mesh,
                                    const ShapeDiameterOptions& options = {});
