@@ -8,7 +8,12 @@
       OpenSCAD's .csg export, + its level sets: timings.tree), the whole
       sample (a worker's cost for one point: geometry, properties and the
       imported design's checks, timings.total) and the eval process's wall
-      time (import, model measurement, sample, mesh export); then where the
+      time (import, model measurement, sample, mesh export); a worker's
+      sample (the model's default point evaluated 10 times in one process by
+      bench_design_samples, beside fabatlas: the median wall time of those
+      samples, what each sample of a job costs once the process has
+      evaluated one, against the first sample of a fresh process that
+      `fabatlas eval` times); then where the
       whole sample goes (CSG tree, level sets, properties, the surface the
       checks read, each check: they run side by side, so their times
       overlap); the CPU seconds (user + system) of the OpenSCAD and the eval
@@ -34,6 +39,8 @@ import json, os, re, resource, statistics, struct, subprocess, sys, tempfile, ti
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 FABATLAS = os.environ.get("FABATLAS_BIN", os.path.join(ROOT, "build", "bin", "fabatlas"))
 EXAMPLES = "/usr/share/openscad/examples"
+DESIGN_SAMPLES = os.environ.get("BENCH_DESIGN_SAMPLES_BIN",
+                                os.path.join(os.path.dirname(FABATLAS), "bench_design_samples"))
 
 
 def stl_triangles(path):
@@ -101,11 +108,13 @@ def speed(repeats):
               os.path.join(EXAMPLES, "Parametric/sign.scad"),
               os.path.join(EXAMPLES, "Parametric/candleStand.scad")]
     breakdown = []
-    print("| model | voxel mm | OpenSCAD STL wall s (process CPU) | fabatlas geometry s (ratio) | whole sample s (ratio) | eval process wall s (process CPU) | volume OpenSCAD / property (diff) / mesh (diff) mm^3 |")
-    print("|---|---|---|---|---|---|---|")
+    print("| model | voxel mm | OpenSCAD STL wall s (process CPU) | fabatlas geometry s (ratio) | whole sample s (ratio) | a worker's sample s (ratio) | eval process wall s (process CPU) | volume OpenSCAD / property (diff) / mesh (diff) mm^3 |")
+    print("|---|---|---|---|---|---|---|---|")
     for model in models:
         name = os.path.basename(model)
-        osc, geo, whole, walls, osc_cpu, eval_cpu = [], [], [], [], [], []
+        osc, geo, whole, steady, walls, osc_cpu, eval_cpu = [], [], [], [], [], [], []
+        design = os.path.join(tmp, name + ".yaml")
+        subprocess.run([FABATLAS, "import-scad", model, "--out", design], capture_output=True)
         parts = {}  # where the whole sample goes: seconds per part, per run
         ref = os.path.join(tmp, name + ".ref.stl")
         ours = os.path.join(tmp, name + ".ours.stl")
@@ -133,14 +142,19 @@ def speed(repeats):
                     run_parts[check] = c["seconds"]
             for k, v in run_parts.items():
                 parts.setdefault(k, []).append(v)
+            if os.path.exists(DESIGN_SAMPLES) and os.path.exists(design):
+                r = subprocess.run([DESIGN_SAMPLES, "--defaults", "10", design], capture_output=True, text=True)
+                # The median wall s of the valid samples, to 0.1 ms ("stages" line).
+                total = re.search(r"stages \(.*? total ([0-9.]+),", r.stdout)
+                if total:
+                    steady.append(float(total.group(1)))
         vo, vm, vp = volume(ref), volume(ours), j["properties"].get("volume", float("nan"))
         voxel = ""
-        design = os.path.join(tmp, name + ".yaml")
-        subprocess.run([FABATLAS, "import-scad", model, "--out", design], capture_output=True)
         if os.path.exists(design):
             voxel = re.search(r"voxel_size: (\S+)", open(design).read()).group(1)
         mo, mg, mw, mp, co, ce = (statistics.median(x) for x in (osc, geo, whole, walls, osc_cpu, eval_cpu))
-        print(f"| {name} | {voxel} | {mo:.3f} (CPU {co:.3f}) | {mg:.3f} ({mg / mo:.2f}) | {mw:.3f} ({mw / mo:.2f}) | {mp:.3f} (CPU {ce:.3f}) | "
+        ms = f"{statistics.median(steady):.4f} ({statistics.median(steady) / mo:.3f})" if steady else "n/a"
+        print(f"| {name} | {voxel} | {mo:.3f} (CPU {co:.3f}) | {mg:.3f} ({mg / mo:.2f}) | {mw:.4f} ({mw / mo:.3f}) | {ms} | {mp:.3f} (CPU {ce:.3f}) | "
               f"{vo:.1f} / {vp:.1f} ({pct(vp, vo):+.2f}%) / {vm:.1f} ({pct(vm, vo):+.2f}%) |", flush=True)
         breakdown.append(f"{name}: " + ", ".join(f"{k} {statistics.median(v):.3f}" for k, v in parts.items()))
     print("\nwhere the whole sample goes (medians, s; the checks run side by side after the surface, so their"
