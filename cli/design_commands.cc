@@ -25,11 +25,13 @@ void Validate(const DesignArgs& args) {
 
 void Eval(const DesignArgs& args) {
   design::Design d = LoadDesignOrModel(args.design);
-  design::SampleResult r = design::EvaluateSample(d, design::ParsePoint(d, args.at, "--at"));
+  design::EvaluateOptions options;
+  options.keep_surface = !args.mesh_out.empty();  // the checks' surface is the one to write
+  design::SampleResult r = design::EvaluateSample(d, design::ParsePoint(d, args.at, "--at"), options);
   if (!args.mesh_out.empty()) {
     if (r.solid.empty())
       throw InputError("--mesh " + args.mesh_out + ": the sample has no geometry to write (" + r.failure + ")");
-    mesh::WriteMesh(r.solid.ToMesh(), args.mesh_out);
+    mesh::WriteMesh(r.surface ? *r.surface : r.solid.ToMesh(), args.mesh_out);
   }
   if (args.json) std::cout << SampleJson(d, r).dump(2) << "\n";
   else std::cout << SampleText(d, r);

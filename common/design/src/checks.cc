@@ -477,8 +477,16 @@ CheckOutcome TargetReached(const CheckSpec& spec, CheckContext& c) {
 }  // namespace
 
 const mesh::TriangleMesh& CheckContext::Mesh() {
-  std::call_once(mesh_once_, [this] { mesh_ = solid_.ToMesh(); });
+  std::call_once(mesh_once_, [this] {
+    mesh_ = solid_.ToMesh();
+    mesh_made_ = true;
+  });
   return mesh_;
+}
+
+std::shared_ptr<const mesh::TriangleMesh> CheckContext::TakeMesh() {
+  if (!mesh_made_) return nullptr;
+  return std::make_shared<const mesh::TriangleMesh>(std::move(mesh_));
 }
 
 double CheckContext::Number(const CheckSpec& spec, const std::string& name, double fallback) {

@@ -22,6 +22,9 @@ class CheckContext {
   const Design& design() const { return design_; }
   const geometry::Solid& solid() const { return solid_; }
   const mesh::TriangleMesh& Mesh();
+  // The mesh Mesh() extracted, moved out (after the checks); null when no
+  // check asked for it.
+  std::shared_ptr<const mesh::TriangleMesh> TakeMesh();
   double Number(const CheckSpec& spec, const std::string& name, double fallback);
 
   // Reconfigurables: an object's solid (body frame) and the resolved
@@ -41,6 +44,7 @@ class CheckContext {
   const geometry::Solid& solid_;
   Scope& scope_;
   std::once_flag mesh_once_;
+  bool mesh_made_ = false;
   mesh::TriangleMesh mesh_;
   std::mutex number_mutex_;  // checks running side by side share the scope
 };

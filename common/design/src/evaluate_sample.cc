@@ -450,6 +450,7 @@ SampleResult EvaluateSample(const Design& design, const Point& u, const Evaluate
       }
       if (surface_seconds > 0) r.timings["surface"] = surface_seconds;
       r.timings["checks"] = Since(checks_start);
+      if (options.keep_surface) r.surface = context.TakeMesh();
     }
     // Reconfigurables: what a collision_free check did not record (no such
     // check, or checks skipped): the objects and motions, without collisions.

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <map>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -10,6 +11,7 @@
 #include "fabatlas/design/design.h"
 #include "fabatlas/design/subtree_cache.h"
 #include "fabatlas/geometry/solid.h"
+#include "fabatlas/mesh/triangle_mesh.h"
 
 namespace fabatlas::design {
 
@@ -64,6 +66,9 @@ struct EvaluateOptions {
   // skip the checks and properties (the sample is then valid iff it has
   // geometry).
   bool run_checks = true;
+  // true: keep the surface the checks extracted in SampleResult::surface
+  // (`fabatlas eval --mesh` writes it instead of extracting it again).
+  bool keep_surface = false;
   // true: look every subtree up in `cache` before evaluating its children
   // (computing its key from the resolved arguments alone), so a hit skips the
   // whole subtree below it, as a preview with cache H does (Fab Forms
@@ -85,6 +90,9 @@ struct SampleResult {
   std::map<std::string, double> properties;
   std::map<std::string, double> values;  // every parameter after solving
   geometry::Solid solid;                 // root geometry (empty when invalid before geometry)
+  // solid.ToMesh() as the checks read it, when EvaluateOptions::keep_surface
+  // and a check extracted it; else null.
+  std::shared_ptr<const mesh::TriangleMesh> surface;
   std::vector<SubtreeRecord> subtrees;   // post-order, root last
   // Wall seconds: solve, tree, checks (surface included), surface (the
   // extraction of the surface the checks read, when one does), properties,
