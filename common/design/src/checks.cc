@@ -566,8 +566,6 @@ std::vector<CheckOutcome> RunChecks(const std::vector<CheckSpec>& specs, CheckCo
   return outcomes;
 }
 
-double SurfaceArea(const geometry::Solid& solid) { return mesh::SurfaceArea(solid.ToMesh()); }
-
 double DistanceInsideConvexHull(std::vector<geometry::Vec2> pts, const geometry::Vec2& p) {
   const std::vector<geometry::Vec2> hull = ConvexHull2D(std::move(pts));  // counter-clockwise
   if (hull.size() < 3) return -std::numeric_limits<double>::infinity();

@@ -63,9 +63,6 @@ CheckOutcome RunCheck(const CheckSpec& spec, CheckContext& context);
 std::vector<CheckOutcome> RunChecks(const std::vector<CheckSpec>& specs, CheckContext& context,
                                     double* surface_seconds = nullptr);
 
-// Surface area of the solid's zero iso-surface, mm^2.
-double SurfaceArea(const geometry::Solid& solid);
-
 // Signed distance (mm) of point p from the boundary of the convex hull of
 // `points` in the plane: positive inside, negative outside. Fewer than three
 // non-collinear points give a degenerate hull: the distance is then negative

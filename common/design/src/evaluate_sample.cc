@@ -17,6 +17,7 @@
 #include "fabatlas/scad/customizer.h"
 #include "fabatlas/mesh/enclosed_volume.h"
 #include "fabatlas/mesh/raw_mesh.h"
+#include "fabatlas/mesh/surface_area.h"
 #include "fabatlas/sha256.h"
 #include "node_schema.h"
 #include "openscad_node.h"
@@ -373,6 +374,10 @@ SampleResult EvaluateSample(const Design& design, const Point& u, const Evaluate
   auto start = Clock::now();
   SampleResult r;
   r.u = u;
+  // The surface the checks extracted (null when none read it): the `area`
+  // property and EvaluateOptions::keep_surface take it instead of extracting
+  // it again.
+  std::shared_ptr<const mesh::TriangleMesh> surface;
   auto fail = [&](const std::string& type, const std::string& reason) {
     if (r.failure.empty()) {
       r.failure = type;
@@ -450,7 +455,8 @@ SampleResult EvaluateSample(const Design& design, const Point& u, const Evaluate
       }
       if (surface_seconds > 0) r.timings["surface"] = surface_seconds;
       r.timings["checks"] = Since(checks_start);
-      if (options.keep_surface) r.surface = context.TakeMesh();
+      surface = context.TakeMesh();
+      if (options.keep_surface) r.surface = surface;
     }
     // Reconfigurables: what a collision_free check did not record (no such
     // check, or checks skipped): the objects and motions, without collisions.
@@ -487,7 +493,7 @@ SampleResult EvaluateSample(const Design& design, const Point& u, const Evaluate
         r.properties["bbox_y"] = box.max[1] - box.min[1];
         r.properties["bbox_z"] = box.max[2] - box.min[2];
       } else if (name == "area") {
-        r.properties["area"] = SurfaceArea(r.solid);
+        r.properties["area"] = mesh::SurfaceArea(surface ? *surface : r.solid.ToMesh());
       }
     }
     for (const CheckOutcome& c : r.checks)
