@@ -91,16 +91,17 @@ struct JobEtaOptions {
   double first_split_dg_per_sample_factor = 2.5;
   // CPU seconds per task beyond its evaluator: the coordinator's lease,
   // result and store work and the worker's outside the evaluator (measured
-  // on the coarse tube 10k job: 107 of its 300 CPU seconds were not the
+  // on the coarse tube 10k job: 8.6 of its 69.4 CPU seconds were not the
   // evaluator's, over 37,354 tasks; docs/benchmarks.md "Scale").
-  double overhead_cpu_seconds_per_task = 0.0029;
+  double overhead_cpu_seconds_per_task = 0.00025;
   // Length of the sliding window the rate is measured over, wall seconds.
   double rate_window_seconds = 60;
   // Wall seconds of publishing per sample (form outputs and maps, artifact,
   // outputs into the blob store) on 2 cores; measured on the coarse tube
-  // jobs (docs/benchmarks.md "Scale"). Jobs with a geometry cache add the
-  // cache plan, which this does not estimate.
-  double publish_seconds_per_sample = 0.0005;
+  // jobs: 0.07 ms at 1k and 10k samples, 0.03 ms at 100k (driver start to
+  // success less the sampling wall; docs/benchmarks.md "Scale"). Jobs with
+  // a geometry cache add the cache plan, which this does not estimate.
+  double publish_seconds_per_sample = 0.00007;
 };
 
 struct JobEta {
