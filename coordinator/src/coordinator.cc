@@ -65,6 +65,7 @@ void Coordinator::Start() {
   m.store->ExtendAllLeases(NowMs() + o.lease_ms);
   m.store->ClearAffinity();  // which workers are alive is not known yet
 
+  protocol::HoldGrpcUntilExit();
   protocol::RouteGrpcLogs();
   grpc::EnableDefaultHealthCheckService(true);
   grpc::ServerBuilder builder;

@@ -1,6 +1,7 @@
 // Channels, credentials and tokens (see channel.h).
 #include "fabatlas/protocol/channel.h"
 
+#include <grpc/grpc.h>
 #include <grpc/support/log.h>
 
 #include <fstream>
@@ -42,6 +43,11 @@ bool IsLoopback(const std::string& address) {
   return host == "localhost" || host == "::1" || host.rfind("127.", 0) == 0;
 }
 
+void HoldGrpcUntilExit() {
+  static std::once_flag once;
+  std::call_once(once, [] { grpc_init(); });  // no grpc_shutdown: see channel.h
+}
+
 void RouteGrpcLogs() {
   static std::once_flag once;
   std::call_once(once, [] {
@@ -56,6 +62,7 @@ void RouteGrpcLogs() {
 }
 
 std::shared_ptr<grpc::Channel> MakeChannel(const std::string& target, const ClientSecurity& security) {
+  HoldGrpcUntilExit();
   RouteGrpcLogs();
   grpc::ChannelArguments args;
   args.SetMaxReceiveMessageSize(kMaxMessageBytes);

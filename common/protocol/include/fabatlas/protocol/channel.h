@@ -36,6 +36,14 @@ std::shared_ptr<grpc::Channel> MakeChannel(const std::string& target, const Clie
 // JSON. Idempotent; MakeChannel and the coordinator call it.
 void RouteGrpcLogs();
 
+// Holds the gRPC library until the process exits. Without it the last
+// server or channel destroyed shuts gRPC down and joins an executor thread
+// that can sit in a poll for up to 10 s (gRPC 1.51): `fabatlas run` ended
+// 10 s after its job in about half the 10k tube jobs. Nothing is left to
+// flush at exit: the store commits each change. Idempotent; MakeChannel and
+// the coordinator call it, so a process that never talks gRPC never starts it.
+void HoldGrpcUntilExit();
+
 // Sets the deadline and the bearer token on a client call.
 void Prepare(grpc::ClientContext& context, const ClientSecurity& security,
              std::chrono::milliseconds timeout);
