@@ -6,6 +6,7 @@ every fabatlas process of the run (peak VmHWM of each). Prints one JSON line:
 samples, wall s, CPU s (user+sys of the command and its workers), CPU ms per
 sample, peaks, artifact bytes.
   python3 bench/scale/scale_run.py run|sample JOB OUT [--fabatlas build/bin/fabatlas] [extra args]
+(`run` gets --workers 2 unless the extra args name --workers.)
 """
 import json, os, subprocess, sys, threading, time
 
@@ -14,7 +15,7 @@ extra = sys.argv[4:]
 fab = "build/bin/fabatlas"
 if extra[:1] == ["--fabatlas"]:
     fab, extra = extra[1], extra[2:]
-cmd = [os.path.abspath(fab), mode, job, "--out", out] + (["--workers", "2"] if mode == "run" else []) + extra
+cmd = [os.path.abspath(fab), mode, job, "--out", out] + (["--workers", "2"] if mode == "run" and "--workers" not in extra else []) + extra
 state = os.path.join(out, "cluster-state")
 peak = {"state_bytes": 0}
 rss = {}

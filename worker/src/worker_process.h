@@ -195,7 +195,7 @@ class Worker {
   bool short_tasks_ = false;
   double held_seconds_ = 0;  // tasks of the results in done_ took this long together
   static constexpr double kShortTaskSeconds = 0.1;
-  static constexpr int kResultsPerSync = 8;
+  static constexpr int kResultsPerSync = 16;
   std::int64_t heartbeat_ms_ = 2000;
   std::vector<std::thread> slots_;
   std::thread heartbeat_, share_;

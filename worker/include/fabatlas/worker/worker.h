@@ -1,7 +1,7 @@
 // fabatlas/worker/worker.h — a cluster worker: pulls leases from the
 // coordinator (WorkerService.Sync long polls), runs them on `slots` threads
 // (one slot: on the thread that sends Sync, and while its tasks take under
-// 100 ms it holds up to seven leases in advance and reports up to eight
+// 100 ms it holds up to fifteen leases in advance and reports up to sixteen
 // results per Sync, about 100 ms of work at most;
 // with more, the slot thread that finishes the last running task sends the
 // next Sync itself)
