@@ -7,7 +7,7 @@ set -euo pipefail
 APT_PACKAGES=(
   build-essential cmake ninja-build ccache pkg-config clang libclang-rt-14-dev
   libopenvdb-dev libboost-iostreams-dev libtbb-dev libblosc-dev
-  libcgal-dev libgmp-dev libmpfr-dev
+  libcgal-dev libgmp-dev libmpfr-dev libpolyclipping-dev
   libopenmesh-dev libembree-dev
   libceres-dev libeigen3-dev libsuitesparse-dev
   libgrpc++-dev protobuf-compiler-grpc libprotobuf-dev protobuf-compiler
@@ -16,6 +16,9 @@ APT_PACKAGES=(
   libcpp-httplib-dev libtinygltf-dev libstb-dev libpng-dev libzstd-dev libssl-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   openscad
+  # real OpenSCAD models nobody on the team wrote: the corpus of the mesh road's
+  # coverage tests and benchmark (docs/openscad.md)
+  openscad-testing-data openscad-mcad
   chromium
   fonts-dejavu-core
   libglpk-dev
