@@ -39,6 +39,7 @@ nlohmann::json SampleJson(const design::Design& d, const design::SampleResult& r
     subtrees.push_back({{"path", s.path}, {"op", s.op}, {"key", s.key}, {"topology", s.topology},
                         {"seconds", s.seconds}, {"from_cache", s.from_cache}, {"bytes", s.bytes}});
   j["subtrees"] = subtrees;
+  j["warnings"] = r.warnings;
   return j;
 }
 
@@ -51,6 +52,7 @@ std::string SampleText(const design::Design& d, const design::SampleResult& r) {
     out << "\n";
   }
   for (const auto& [name, value] : r.properties) out << "  " << std::left << std::setw(16) << name << value << "\n";
+  for (const auto& w : r.warnings) out << "  warning: " << w << "\n";
   out << "  " << std::left << std::setw(16) << "time" << std::fixed << std::setprecision(3) << r.timings.at("total") << " s\n";
   return out.str();
 }

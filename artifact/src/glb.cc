@@ -10,10 +10,18 @@
 #include <sstream>
 
 #include "fabatlas/error.h"
+#include "fabatlas/mesh/crease_normals.h"
 
 namespace fabatlas::artifact {
 
-std::string MeshToGlb(const mesh::TriangleMesh& m) {
+std::string SolidPreviewGlb(const mesh::TriangleMesh& surface, bool exact) {
+  if (!exact) return MeshToGlb(surface);
+  const mesh::CreasedMesh creased = mesh::CreaseNormals(surface, 30.0);
+  return MeshToGlb(creased.mesh, &creased.normals);
+}
+
+std::string MeshToGlb(const mesh::TriangleMesh& m, const std::vector<std::array<float, 3>>* normals) {
+  if (normals && normals->size() != m.vertices.size()) throw InputError("glb: one normal per vertex expected");
   tinygltf::Model model;
   model.asset.version = "2.0";
   model.asset.generator = "fabatlas";
@@ -30,7 +38,8 @@ std::string MeshToGlb(const mesh::TriangleMesh& m) {
     tinygltf::Buffer buffer;
     const std::size_t position_bytes = m.vertices.size() * 3 * sizeof(float);
     const std::size_t index_bytes = m.triangles.size() * 3 * sizeof(std::uint32_t);
-    buffer.data.resize(position_bytes + index_bytes);
+    const std::size_t normal_bytes = normals ? position_bytes : 0;
+    buffer.data.resize(position_bytes + index_bytes + normal_bytes);
     std::vector<double> lo(3, std::numeric_limits<double>::infinity()), hi(3, -std::numeric_limits<double>::infinity());
     unsigned char* out = buffer.data.data();
     for (const auto& v : m.vertices)
@@ -49,6 +58,7 @@ std::string MeshToGlb(const mesh::TriangleMesh& m) {
         std::memcpy(out, &i, sizeof i);
         out += sizeof i;
       }
+    if (normals) std::memcpy(out, normals->data(), normal_bytes);
     model.buffers.push_back(std::move(buffer));
 
     tinygltf::BufferView positions;
@@ -76,9 +86,24 @@ std::string MeshToGlb(const mesh::TriangleMesh& m) {
     index_accessor.count = m.triangles.size() * 3;
     index_accessor.type = TINYGLTF_TYPE_SCALAR;
     model.accessors = {position_accessor, index_accessor};
+    if (normals) {
+      tinygltf::BufferView normal_view;
+      normal_view.buffer = 0;
+      normal_view.byteOffset = position_bytes + index_bytes;
+      normal_view.byteLength = normal_bytes;
+      normal_view.target = TINYGLTF_TARGET_ARRAY_BUFFER;
+      model.bufferViews.push_back(normal_view);
+      tinygltf::Accessor normal_accessor;
+      normal_accessor.bufferView = 2;
+      normal_accessor.componentType = TINYGLTF_COMPONENT_TYPE_FLOAT;
+      normal_accessor.count = m.vertices.size();
+      normal_accessor.type = TINYGLTF_TYPE_VEC3;
+      model.accessors.push_back(normal_accessor);
+    }
 
     tinygltf::Primitive primitive;
     primitive.attributes["POSITION"] = 0;
+    if (normals) primitive.attributes["NORMAL"] = 2;
     primitive.indices = 1;
     primitive.mode = TINYGLTF_MODE_TRIANGLES;
     tinygltf::Mesh mesh;

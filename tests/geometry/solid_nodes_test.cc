@@ -65,8 +65,8 @@ void ExpectSameSolid(const fg::Solid& a, const fg::Solid& b) {
   EXPECT_EQ(a.Serialize(), b.Serialize());
   ASSERT_EQ(a.impl() == nullptr, b.impl() == nullptr);
   if (!a.impl()) return;
-  const FloatGrid& ga = *a.impl()->grid;
-  const FloatGrid& gb = *b.impl()->grid;
+  const FloatGrid& ga = *a.impl()->Grid();
+  const FloatGrid& gb = *b.impl()->Grid();
   EXPECT_TRUE(ga.transform() == gb.transform());
   EXPECT_EQ(ga.getGridClass(), gb.getGridClass());
   EXPECT_EQ(std::bit_cast<std::uint32_t>(ga.background()), std::bit_cast<std::uint32_t>(gb.background()));
@@ -112,7 +112,7 @@ fg::Solid RoundTrip(const fg::Solid& s) {
 
 TEST(GeometrySolidNodes, TubeAcrossTheOriginRoundTripsExactly) {
   const fg::Solid tube = Tube();
-  ASSERT_EQ(tube.impl()->grid->tree().root().childCount(), 8u);  // straddles the origin
+  ASSERT_EQ(tube.impl()->Grid()->tree().root().childCount(), 8u);  // straddles the origin
   ExpectSameSolid(tube, RoundTrip(tube));
   // Smaller than OpenVDB's stream of the same tree.
   EXPECT_LT(fg::SolidNodeBytes(tube)->size(), tube.Serialize().size());
@@ -136,7 +136,7 @@ TEST(GeometrySolidNodes, SolidsWithInsideTilesRoundTripExactly) {
   // tiles in the top-level nodes.
   const fg::Solid big = fg::Box(Spec(1.0), {264, 264, 264});
   std::vector<const Upper*> upper;
-  big.impl()->grid->tree().getNodes(upper);
+  big.impl()->Grid()->tree().getNodes(upper);
   bool upper_inside_tile = false;
   for (const Upper* node : upper)
     for (auto it = node->cbeginValueOff(); it; ++it) upper_inside_tile |= *it < 0;
@@ -149,7 +149,7 @@ TEST(GeometrySolidNodes, LeavesAndTilesOfAnyValueRoundTripExactly) {
   // tile and a non-background inactive tile in a lower node, a root tile:
   // none comes from this library's operations today, all must survive.
   const fg::Solid tube = Tube();
-  FloatGrid::Ptr grid = tube.impl()->grid->deepCopy();
+  FloatGrid::Ptr grid = tube.impl()->Grid()->deepCopy();
   std::vector<Leaf*> leaves;
   grid->tree().getNodes(leaves);
   ASSERT_FALSE(leaves.empty());
@@ -170,10 +170,10 @@ TEST(GeometrySolidNodes, LeavesAndTilesOfAnyValueRoundTripExactly) {
 
 TEST(GeometrySolidNodes, GridsItCannotEncodeExactlyAreDeclined) {
   const fg::Solid tube = Tube();
-  FloatGrid::Ptr moved = tube.impl()->grid->deepCopy();
+  FloatGrid::Ptr moved = tube.impl()->Grid()->deepCopy();
   moved->transform().postTranslate(openvdb::Vec3d(0.5, 0, 0));
   EXPECT_FALSE(fg::SolidNodeBytes(fg::detail::MakeSolid(moved, tube.impl()->spec)).has_value());
-  FloatGrid::Ptr tagged = tube.impl()->grid->deepCopy();
+  FloatGrid::Ptr tagged = tube.impl()->Grid()->deepCopy();
   tagged->insertMeta("note", openvdb::StringMetadata("x"));
   EXPECT_FALSE(fg::SolidNodeBytes(fg::detail::MakeSolid(tagged, tube.impl()->spec)).has_value());
 }

@@ -183,7 +183,7 @@ std::shared_ptr<const EncodedPreview> Customiser::PreviewGlb(std::int64_t sample
         const PreviewResult p = Preview(id);
         EncodedPreview e;
         e.sample = id;
-        e.glb = artifact::MeshToGlb(p.solid.ToMesh());
+        e.glb = artifact::SolidPreviewGlb(p.solid.ToMesh(), p.solid.boundary() != nullptr);
         e.seconds = p.seconds;
         e.subtrees = p.subtrees;
         e.cache_hits = p.cache_hits;

@@ -100,7 +100,7 @@ ExportResult ExportDesign(const Customiser& c, const std::vector<double>& u, con
     throw ResourceError(PointText(c, u) + ": the mesh at voxel size " + std::to_string(design.voxel_size) +
                         " mm is not closed (" + report.closed_reason + ")");
   ExportResult out;
-  out.bytes = f == "glb" ? artifact::MeshToGlb(m) : mesh::EncodeMesh(m, "." + f);
+  out.bytes = f == "glb" ? artifact::SolidPreviewGlb(m, r.solid.boundary() != nullptr) : mesh::EncodeMesh(m, "." + f);
   out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   out.u = u;
   out.voxel_size = design.voxel_size;

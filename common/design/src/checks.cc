@@ -41,6 +41,10 @@ double Cross(const geometry::Vec2& o, const geometry::Vec2& a, const geometry::V
 //    OpenSCAD polyhedron or render) gets the full test (CGAL, with
 //    self-intersections), its defects named; reports are remembered per
 //    mesh content for the process, so a mesh is inspected once;
+//  - a mesh solid's boundary (the mesh road of OpenSCAD models: exact
+//    booleans of the model's own faces, rounded to doubles; Nef results
+//    where two parts share only an edge) gets the full test too: it can be
+//    non-manifold, and rounding can make it touch itself;
 //  - the sample's own level-set extraction is closed and manifold by
 //    construction, so what it gets is the cheap test of what it can get
 //    wrong: no triangle folded against the level set's outward direction
@@ -75,6 +79,15 @@ CheckOutcome Watertight(CheckContext& c) {
         return o;
       }
     }
+  }
+  if (const mesh::TriangleMesh* boundary = c.solid().boundary()) {
+    const mesh::MeshReport report = mesh::InspectMesh(*boundary);
+    if (!report.closed || !report.manifold || report.self_intersecting) {
+      o.passed = false;
+      o.failure = !report.closed || !report.manifold ? kNotWatertight : kSelfIntersecting;
+      o.reason = "the model's exact surface: " + report.Reasons();
+    }
+    return o;
   }
   // Folds covering less than one voxel face (a single triangle at the tip of
   // a sharp wedge) are below what the grid resolves at all; more is a part

@@ -114,6 +114,7 @@ class TreeEvaluation {
 
   // Meshes from outside fabatlas met while evaluating (for `watertight`).
   const std::vector<OutsideMesh>& Outside() const { return outside_; }
+  const std::vector<std::string>& Warnings() const { return warnings_; }
 
   // Where subtree records go from now on.
   void RecordInto(std::vector<SubtreeRecord>* records) { records_ = records; }
@@ -256,6 +257,7 @@ class TreeEvaluation {
         context.cache = options_.cache;
         context.records = records_;
         context.outside = &outside_;
+        context.warnings = &warnings_;
         context.path = path;
         OpenScadNodeResult scad = EvaluateOpenScadNode(node, args, design_.file.parent_path(), context);
         out.solid = std::move(scad.solid);
@@ -336,6 +338,7 @@ class TreeEvaluation {
   std::map<const Node*, Identity> identities_;
   std::map<std::string, Result> objects_;
   std::vector<OutsideMesh> outside_;  // meshes from outside fabatlas met in this sample
+  std::vector<std::string> warnings_;  // OpenSCAD's warnings and the mesh road's fallbacks, in evaluation order
   std::optional<std::vector<ResolvedTransition>> transitions_;
 };
 
@@ -410,6 +413,7 @@ SampleResult EvaluateSample(const Design& design, const Point& u, const Evaluate
     TreeEvaluation tree(design, scope, options, r.subtrees);
     try {
       r.solid = tree.Evaluate(design.tree, "root").solid;
+      r.warnings = tree.Warnings();
       if (r.solid.empty()) {
         geometry_check.passed = false;
         geometry_check.reason = "the tree produced no material";

@@ -153,7 +153,8 @@ void LintArgument(const Argument& a, const ArgSpec& spec, Scope& scope, const st
       }
       break;
   }
-  if (spec.name == "render" && a.text != "native" && a.text != "openscad") fail("must be native or openscad");
+  if (spec.name == "render" && a.text != "mesh" && a.text != "native" && a.text != "levelset" && a.text != "openscad")
+    fail("must be mesh, levelset or openscad");
   if (spec.name == "file") {
     std::filesystem::path p = dir / a.text;
     if (!std::filesystem::is_regular_file(p)) fail("names a file that does not exist: " + p.string());

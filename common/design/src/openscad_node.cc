@@ -25,6 +25,8 @@
 
 #include "convex_hull_2d.h"
 #include "fabatlas/error.h"
+#include "fabatlas/mesh/enclosed_volume.h"
+#include "fabatlas/mesh/exact_boolean.h"
 #include "fabatlas/mesh/read_mesh.h"
 #include "fabatlas/geometry/convex_mesh_distance.h"
 #include "fabatlas/scad/csg_tree.h"
@@ -86,6 +88,13 @@ bool IsTwoD(const std::string& name) {
          name == "projection";
 }
 
+// Nodes that are 3D whatever their children (OpenSCAD ignores them under a
+// 2D operation).
+bool IsThreeD(const std::string& name) {
+  return name == "cube" || name == "sphere" || name == "cylinder" || name == "polyhedron" || name == "linear_extrude" ||
+         name == "rotate_extrude" || name == "surface";
+}
+
 double Num(const CsgValue& v, double fallback) { return v.type == CsgValue::Type::kNumber ? v.number : fallback; }
 
 std::vector<double> Numbers(const CsgValue& v) {
@@ -108,6 +117,15 @@ Affine MatrixOf(const CsgNode& n) {
     std::vector<double> row = Numbers(matrix->items[r]);
     if (row.size() < 4) throw NoNativeEquivalent{"multmatrix with a short row"};
     for (int k = 0; k < 4; ++k) a[4 * r + k] = row[k];
+  }
+  // A last row (0, 0, 0, w) scales by 1/w, as OpenSCAD applies the matrix
+  // to homogeneous points; any other last row is a projection.
+  if (matrix->items.size() >= 4) {
+    const std::vector<double> w = Numbers(matrix->items[3]);
+    if (w.size() >= 4 && (w[0] != 0 || w[1] != 0 || w[2] != 0 || w[3] == 0))
+      throw NoNativeEquivalent{"multmatrix with a projective last row"};
+    if (w.size() >= 4 && w[3] != 1)
+      for (double& x : a) x /= w[3];
   }
   return a;
 }
@@ -240,6 +258,8 @@ Shape2 Evaluate2(const CsgNode& n, const Affine2& t, const Render2& render2) {
     Loop h = ConvexHull2D(points);
     if (h.size() >= 3) s.loops.push_back(h);
     return s;
+  } else if (IsThreeD(name)) {
+    return s;  // a 3D object among 2D ones: no material, as OpenSCAD ignores it (with a warning)
   } else {
     for (const Loop& l : render2(n)) s.loops.push_back(Apply(t, l));
     return s;
@@ -292,6 +312,10 @@ Distance2 RegionOf(const Shape2& s) {
   };
 }
 
+// Grows [lo, hi] by the shape's bounding box: of a difference its first
+// operand's, of an intersection the overlap of its operands' (so trimming
+// with a huge square, `difference() { shape; square(4200); }`, keeps the
+// shape's box), of a union every operand's.
 void Bounds2(const Shape2& s, scad::Point2& lo, scad::Point2& hi) {
   for (const auto& l : s.loops)
     for (const auto& p : l)
@@ -299,7 +323,27 @@ void Bounds2(const Shape2& s, scad::Point2& lo, scad::Point2& hi) {
         lo[k] = std::min(lo[k], p[k]);
         hi[k] = std::max(hi[k], p[k]);
       }
-  for (const auto& p : s.parts) Bounds2(p, lo, hi);
+  if (s.op == Shape2::Op::kLoops || s.parts.empty()) return;
+  if (s.op == Shape2::Op::kUnion) {
+    for (const auto& p : s.parts) Bounds2(p, lo, hi);
+    return;
+  }
+  constexpr double kInf = std::numeric_limits<double>::infinity();
+  scad::Point2 plo{kInf, kInf}, phi{-kInf, -kInf};
+  Bounds2(s.parts[0], plo, phi);
+  for (std::size_t i = 1; i < s.parts.size() && s.op == Shape2::Op::kIntersection; ++i) {
+    scad::Point2 qlo{kInf, kInf}, qhi{-kInf, -kInf};
+    Bounds2(s.parts[i], qlo, qhi);
+    for (int k = 0; k < 2; ++k) {
+      plo[k] = std::max(plo[k], qlo[k]);
+      phi[k] = std::min(phi[k], qhi[k]);
+    }
+  }
+  if (!(plo[0] <= phi[0] && plo[1] <= phi[1])) return;  // nothing
+  for (int k = 0; k < 2; ++k) {
+    lo[k] = std::min(lo[k], plo[k]);
+    hi[k] = std::max(hi[k], phi[k]);
+  }
 }
 
 // The scale s of an affine map whose linear part is s times a rotation or
@@ -460,8 +504,14 @@ std::shared_ptr<const Field> CombineFields(Combine op, std::vector<std::shared_p
 
 class CsgEvaluation {
  public:
-  CsgEvaluation(OpenScadNodeContext& context, const fs::path& model, const fs::path& work)
-      : c_(context), model_(model), work_(work), render2_([this](const CsgNode& n) { return Outline2(n); }) {}
+  // mesh_road: every subtree an exact mesh (mesh::ExactBoolean and friends),
+  // else today's level sets (docs/openscad.md, "Two roads").
+  CsgEvaluation(OpenScadNodeContext& context, const fs::path& model, const fs::path& work, bool mesh_road)
+      : c_(context),
+        model_(model),
+        work_(work),
+        mesh_road_(mesh_road),
+        render2_([this](const CsgNode& n) { return Outline2(n); }) {}
 
   // A subtree's geometry: a level set, or (while every node below is a
   // convex primitive, a straight prism or a boolean of them) its signed
@@ -512,16 +562,37 @@ class CsgEvaluation {
     std::vector<Result> kids;
     std::vector<std::string> kid_paths;  // below path
     Affine inner;
-    const bool boolean = ChildFrame(n, m, &inner);
+    const bool boolean = ChildFrame(n, m, &inner) || (mesh_road_ && MeshChildFrame(n, m, &inner));
+    // OpenSCAD 2021.01 takes a 2D object among 3D ones as no material (with
+    // a warning): it empties an intersection, and a difference it comes first in.
+    bool two_d_child = false, two_d_first = false;
     if (boolean) {
       for (std::size_t i = 0; i < n.children.size(); ++i) {
-        if (IsTwoD(n.children[i].name)) continue;  // OpenSCAD ignores 2D objects among 3D ones
+        if (IsTwoD(n.children[i].name)) {
+          if (mesh_road_) {
+            Warn(n.children[i].name + " (CSG line " + std::to_string(n.children[i].line) +
+                 "): a 2D object among 3D ones is ignored, as OpenSCAD ignores it");
+            two_d_first = two_d_first || kids.empty();
+            two_d_child = true;
+          }
+          continue;
+        }
         kid_paths.push_back("/" + std::to_string(i));
         kids.push_back(Evaluate3(n.children[i], inner, path + kid_paths.back()));
       }
     }
     const auto start = Clock::now();
-    if (boolean) {
+    if (mesh_road_) {
+      try {
+        if (boolean && ((n.name == "intersection" && two_d_child) || (n.name == "difference" && two_d_first)))
+          result.solid = Solid();
+        else
+          result.solid = boolean ? MeshOfChildren(n, m, kids, record) : MeshLeaf(n, m);
+      } catch (const NoNativeEquivalent& e) {
+        record.op = kCsgRenderedOp + n.name;
+        result.solid = Rendered(n, m, e.what);
+      }
+    } else if (boolean) {
       const Combine op = n.name == "difference" ? Combine::kDifference
                          : n.name == "intersection" ? Combine::kIntersection
                                                     : Combine::kUnion;
@@ -580,8 +651,8 @@ class CsgEvaluation {
  private:
   // The cache key of subtree n under the composed transform m.
   std::string KeyOf(const CsgNode& n, const Affine& m) const {
-    return Sha256Hex("csg|voxel=" + scad::FormatScadNumber(c_.grid.voxel_size) + "|m=" + AffineText(m) + "|" +
-                     n.canonical);
+    return Sha256Hex(std::string(mesh_road_ ? "csg-mesh" : "csg") + "|voxel=" + scad::FormatScadNumber(c_.grid.voxel_size) +
+                     "|m=" + AffineText(m) + "|" + n.canonical);
   }
 
   // Whether n is evaluated from its 3D children (booleans and multmatrix
@@ -837,17 +908,30 @@ class CsgEvaluation {
   Solid Rendered(const CsgNode& n, const Affine& m, const std::string& why) {
     fs::path stl;
     scad::OpenScadRun run;
-    if (!ExportSubtree(n, "subtree", ".stl", stl, run))
+    const bool rendered = ExportSubtree(n, "subtree", ".stl", stl, run);
+    if (!rendered && mesh_road_) {
+      // OpenSCAD renders the whole model, so a subtree it cannot render on
+      // its own is one it leaves empty there ("Current top level object is
+      // empty"): no material, named in the log.
+      Warn(n.name + " (CSG line " + std::to_string(n.line) + "): OpenSCAD renders it to no material (" + run.log_tail + ")");
+      return Solid();
+    }
+    if (!rendered)
       throw SampleFailure(kNoGeometry, model_.string() + ": OpenSCAD could not render " + n.name + " (CSG line " +
                                            std::to_string(n.line) + ", no native " + why + "): " + run.log_tail);
     mesh::TriangleMesh mm;
     try {
       mm = mesh::ReadMesh(stl);
     } catch (const InputError& e) {
+      if (mesh_road_) {  // OpenSCAD renders this subtree to nothing: no material, as in OpenSCAD's own render
+        Warn(n.name + " (CSG line " + std::to_string(n.line) + "): OpenSCAD renders it to no material (" + e.what() + ")");
+        return Solid();
+      }
       throw SampleFailure(kNoGeometry, model_.string() + ": OpenSCAD's render of " + n.name + ": " + e.what());
     }
     Outside(model_.filename().string() + ": OpenSCAD's render of " + n.name + " (CSG line " + std::to_string(n.line) + ")",
             Sha256Hex(n.canonical), mm);
+    if (mesh_road_) return MeshOf(std::move(mm), m);
     return FromMesh(std::move(mm), m);
   }
 
@@ -965,8 +1049,251 @@ class CsgEvaluation {
     }
   }
 
+  // ---- The mesh road ---------------------------------------------------------
+
+  // Nodes evaluated from their 3D children on the mesh road beyond the
+  // booleans and multmatrix: hull (children in the world frame: a hull
+  // commutes with affine maps), minkowski and resize (children in their own
+  // frame, the result mapped by m: a Minkowski sum would count m's
+  // translation once per operand, a resize reads the child's own box).
+  static bool MeshChildFrame(const CsgNode& n, const Affine& m, Affine* inner) {
+    if (n.name == "hull") {
+      *inner = m;
+      return std::any_of(n.children.begin(), n.children.end(), [](const CsgNode& c) { return !IsTwoD(c.name); });
+    }
+    if (n.name == "minkowski" || n.name == "resize") {
+      *inner = kIdentity;
+      return true;
+    }
+    return false;
+  }
+
+  // An exact mesh under a as a mesh solid; a mesh with a reflection is
+  // turned inside out by the map, so its triangles are reversed.
+  Solid MeshOf(mesh::TriangleMesh mm, const Affine& a) {
+    Transform(mm, a);
+    const double det = a[0] * (a[5] * a[10] - a[6] * a[9]) - a[1] * (a[4] * a[10] - a[6] * a[8]) +
+                       a[2] * (a[4] * a[9] - a[5] * a[8]);
+    if (det < 0)
+      for (auto& t : mm.triangles) std::swap(t[1], t[2]);
+    try {
+      return geometry::MeshSolid(c_.grid, std::move(mm));
+    } catch (const InputError& e) {
+      Warn("CSG: " + std::string(e.what()) + "; the object is left out, as OpenSCAD leaves it out");
+      return Solid();
+    }
+  }
+
+  void Warn(const std::string& text) {
+    if (c_.warnings) c_.warnings->push_back(model_.filename().string() + ": " + text);
+  }
+
+  // A boolean, hull, minkowski or resize of evaluated children (kids: the
+  // 3D children in order) on the mesh road. Operands that are not meshes (a
+  // level-set fallback below) or that the exact booleans cannot take make it
+  // a level-set boolean, named in the record ("csg-levelset:") and the log.
+  Solid MeshOfChildren(const CsgNode& n, const Affine& m, const std::vector<Result>& kids, SubtreeRecord& record) {
+    const std::string where = n.name + " (CSG line " + std::to_string(n.line) + ")";
+    if (n.name == "hull") {
+      std::vector<std::array<double, 3>> points;
+      for (const auto& k : kids) {
+        if (k.solid.empty()) continue;
+        const mesh::TriangleMesh mm = k.solid.ToMesh();
+        points.insert(points.end(), mm.vertices.begin(), mm.vertices.end());
+      }
+      return MeshOf(mesh::ConvexHull(points), kIdentity);
+    }
+    std::vector<mesh::TriangleMesh> operands;
+    bool meshes = true;
+    for (const auto& k : kids) {
+      if (k.solid.empty()) operands.emplace_back();
+      else if (const mesh::TriangleMesh* b = k.solid.boundary()) operands.push_back(*b);
+      else meshes = false;
+    }
+    if (n.name == "resize") return MeshResized(n, m, kids);
+    if (n.name == "minkowski") {
+      if (!meshes) throw NoNativeEquivalent{"minkowski of a level set"};
+      mesh::BooleanSummary summary;
+      try {
+        return MeshOf(mesh::MinkowskiSum(operands, &summary), m);
+      } catch (const InputError& e) {
+        throw NoNativeEquivalent{"minkowski: " + std::string(e.what())};
+      }
+    }
+    const mesh::BooleanOp op = n.name == "difference"     ? mesh::BooleanOp::kDifference
+                               : n.name == "intersection" ? mesh::BooleanOp::kIntersection
+                                                          : mesh::BooleanOp::kUnion;
+    // One child (a transform, a colour, a group of one): the child itself.
+    if (op == mesh::BooleanOp::kUnion && kids.size() == 1) return kids[0].solid;
+    if (kids.empty()) return Solid();
+    if (meshes) {
+      mesh::BooleanSummary summary;
+      try {
+        Solid out = MeshOf(mesh::ExactBoolean(op, operands, &summary), kIdentity);
+        if (summary.nef) Warn(where + ": computed with Nef polyhedra (" + summary.nef_why + ")");
+        return out;
+      } catch (const InputError& e) {
+        Warn(where + ": " + e.what() + "; evaluated with level sets instead");
+      }
+    } else {
+      Warn(where + ": an operand is a level set; evaluated with level sets");
+    }
+    record.op = std::string(kCsgLevelSetOp) + n.name;
+    Solid acc;
+    bool first = true;
+    for (const auto& k : kids) {
+      if (first) acc = k.solid;
+      else if (op == mesh::BooleanOp::kUnion) acc = geometry::Union(acc, k.solid);
+      else if (op == mesh::BooleanOp::kDifference) acc = geometry::Difference(acc, k.solid);
+      else acc = geometry::Intersection(acc, k.solid);
+      first = false;
+    }
+    return acc;
+  }
+
+  // resize(newsize, auto): the child's own box scaled per axis to newsize;
+  // an axis of newsize 0 keeps its size, or with auto takes the largest
+  // scale of the axes given (OpenSCAD User Manual, "resize").
+  Solid MeshResized(const CsgNode& n, const Affine& m, const std::vector<Result>& kids) {
+    if (kids.empty() || kids[0].solid.empty()) return Solid();
+    const Solid& child = kids[0].solid;
+    const geometry::Box3 box = child.BoundingBox();
+    std::vector<double> size = {0, 0, 0};
+    std::vector<bool> automatic = {false, false, false};
+    if (auto it = n.args.find("newsize"); it != n.args.end()) {
+      const auto v = Numbers(it->second);
+      for (std::size_t i = 0; i < 3 && i < v.size(); ++i) size[i] = v[i];
+    }
+    if (auto it = n.args.find("auto"); it != n.args.end()) {
+      if (it->second.type == CsgValue::Type::kBoolean) automatic = {it->second.boolean, it->second.boolean, it->second.boolean};
+      for (std::size_t i = 0; i < 3 && i < it->second.items.size(); ++i)
+        automatic[i] = it->second.items[i].type == CsgValue::Type::kBoolean ? it->second.items[i].boolean
+                                                                            : Num(it->second.items[i], 0) != 0;
+    }
+    double scale[3] = {1, 1, 1}, largest = 0;
+    for (int i = 0; i < 3; ++i) {
+      const double extent = box.max[i] - box.min[i];
+      if (size[i] > 0 && extent > 0) {
+        scale[i] = size[i] / extent;
+        largest = std::max(largest, scale[i]);
+      }
+    }
+    for (int i = 0; i < 3; ++i)
+      if (size[i] <= 0 && automatic[i] && largest > 0) scale[i] = largest;
+    const Affine s = {scale[0], 0, 0, 0, 0, scale[1], 0, 0, 0, 0, scale[2], 0};
+    return MeshOf(child.ToMesh(), Compose(m, s));
+  }
+
+  // A mesh turned outward when it encloses a negative volume (an inverted
+  // polyhedron, as OpenSCAD flips it).
+  static mesh::TriangleMesh Outward(mesh::TriangleMesh mm) {
+    if (mesh::EnclosedVolume(mm) < 0)
+      for (auto& t : mm.triangles) std::swap(t[1], t[2]);
+    return mm;
+  }
+
+  // A leaf on the mesh road: OpenSCAD's own polygon mesh of it.
+  Solid MeshLeaf(const CsgNode& n, const Affine& m) {
+    if (n.name == "cube" || n.name == "sphere" || n.name == "cylinder") return MeshOf(PrimitiveMesh(n), m);
+    if (n.name == "polyhedron") {
+      mesh::TriangleMesh mm = PrimitiveMesh(n);
+      Outside(model_.filename().string() + ": polyhedron (CSG line " + std::to_string(n.line) + ")", Sha256Hex(n.canonical), mm);
+      return MeshOf(Outward(std::move(mm)), m);
+    }
+    if (n.name == "linear_extrude" || n.name == "rotate_extrude") {
+      Shape2 s;
+      s.op = Shape2::Op::kUnion;
+      for (const auto& c : n.children) s.parts.push_back(Evaluate2(c, {1, 0, 0, 0, 1, 0}, render2_));
+      std::vector<Loop> loops;
+      CollectLoops(s, loops);
+      if (loops.empty()) return Solid();
+      const scad::Region2 region = scad::ResolveRegion(loops, [&](const scad::Point2& p) { return Inside(s, p); });
+      if (region.triangles.empty()) return Solid();
+      if (n.name == "linear_extrude") return MeshOf(LinearExtruded(n, region), m);
+      try {
+        return MeshOf(RotateExtruded(n, s, region), m);
+      } catch (const InputError& e) {
+        throw NoNativeEquivalent{"rotate_extrude (" + std::string(e.what()) + ")"};
+      }
+    }
+    if (n.name == "import") {
+      auto f = n.args.find("file");
+      if (f == n.args.end() || f->second.type != CsgValue::Type::kString) throw NoNativeEquivalent{"import"};
+      fs::path file = f->second.text;
+      std::string ext = file.extension().string();
+      std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char ch) { return std::tolower(ch); });
+      if (ext == ".dxf" || ext == ".svg") return Solid();  // 2D: OpenSCAD ignores it among 3D objects
+      if (ext != ".stl" && ext != ".off" && ext != ".obj") throw NoNativeEquivalent{"import of " + ext};
+      if (file.is_relative()) file = model_.parent_path() / file;
+      mesh::TriangleMesh mm;
+      try {
+        mm = mesh::ReadMesh(file);
+      } catch (const InputError& e) {
+        Warn("import (CSG line " + std::to_string(n.line) + "): " + e.what() + "; left out, as OpenSCAD leaves it out");
+        return Solid();
+      }
+      Outside(file.string() + " (imported by " + model_.filename().string() + ")", Sha256Hex(n.canonical), mm);
+      return MeshOf(Outward(std::move(mm)), m);
+    }
+    if (IsTwoD(n.name)) return Solid();  // 2D among 3D objects: ignored, as OpenSCAD ignores it
+    if (n.name == "hull") return Solid();  // a hull of 2D children only
+    throw NoNativeEquivalent{n.name};
+  }
+
+  // linear_extrude of a region, with OpenSCAD's slices, twist and scale.
+  mesh::TriangleMesh LinearExtruded(const CsgNode& n, const scad::Region2& region) {
+    const double h = n.Number("height", 100), twist = n.Number("twist", 0);
+    if (!(h > 0)) return {};
+    scad::Point2 scale{1, 1};
+    if (auto it = n.args.find("scale"); it != n.args.end()) {
+      if (it->second.type == CsgValue::Type::kVector) {
+        auto v = Numbers(it->second);
+        if (v.size() >= 2) scale = {v[0], v[1]};
+      } else {
+        scale = {Num(it->second, 1), Num(it->second, 1)};
+      }
+    }
+    double r_sqr = 0, delta_sqr = 0;
+    for (const auto& loop : region.loops)
+      for (int i : loop) {
+        const scad::Point2& p = region.points[i];
+        r_sqr = std::max(r_sqr, p[0] * p[0] + p[1] * p[1]);
+        const double dx = p[0] * (1 - scale[0]), dy = p[1] * (1 - scale[1]);
+        delta_sqr = std::max(delta_sqr, dx * dx + dy * dy);
+      }
+    int slices = static_cast<int>(n.Number("slices", 0));
+    if (slices <= 0)
+      slices = scad::ExtrudeSlices(r_sqr, delta_sqr, h, twist, scale, n.Number("$fn", 0), n.Number("$fs", 2),
+                                   n.Number("$fa", 12));
+    return scad::LinearExtrudeMesh(region, h, n.Boolean("center", false), twist, slices, scale);
+  }
+
+  // rotate_extrude of a region: each boundary loop's solid of revolution,
+  // outer loops (counter-clockwise) joined, holes taken away, exactly.
+  mesh::TriangleMesh RotateExtruded(const CsgNode& n, const Shape2& s, const scad::Region2& region) {
+    const auto [min_x, max_x] = XRangeWithAxis(s);
+    if (min_x < 0) throw NoNativeEquivalent{"rotate_extrude of points with x < 0"};
+    const double angle = std::clamp(n.Number("angle", 360), -360.0, 360.0);
+    if (angle == 0) return {};  // OpenSCAD 2021.01: no material
+    const int fragments = static_cast<int>(std::max(FragmentsOf(n, max_x) * std::abs(angle) / 360, 1.0));
+    std::vector<mesh::TriangleMesh> outer, holes;
+    for (const auto& ids : region.loops) {
+      Loop loop;
+      double area2 = 0;
+      for (int i : ids) loop.push_back(region.points[i]);
+      for (std::size_t i = 0, j = loop.size() - 1; i < loop.size(); j = i++)
+        area2 += loop[j][0] * loop[i][1] - loop[i][0] * loop[j][1];
+      (area2 > 0 ? outer : holes).push_back(scad::RotateExtrudeMesh(loop, angle, fragments));
+    }
+    mesh::TriangleMesh joined = outer.size() == 1 ? outer[0] : mesh::ExactBoolean(mesh::BooleanOp::kUnion, outer);
+    if (holes.empty()) return joined;
+    holes.insert(holes.begin(), std::move(joined));
+    return mesh::ExactBoolean(mesh::BooleanOp::kDifference, holes);
+  }
+
   OpenScadNodeContext& c_;
   fs::path model_, work_;
+  bool mesh_road_ = true;
   int rendered_ = 0;
   bool linked_ = false;
   Render2 render2_;
@@ -1041,7 +1368,8 @@ OpenScadNodeResult EvaluateOpenScadNode(const Node& node, const ResolvedArgs& ar
   if (auto it = args.values.find("set"); it != args.values.end())
     for (std::size_t i = 0; i < it->second.keys.size(); ++i) overrides.emplace_back(it->second.keys[i], it->second.literals[i]);
   WorkDir work(node.place.str());
-  const bool native = args.Text("render", "native") == "native";
+  const std::string render = args.Text("render", "mesh");
+  const bool native = render != "openscad";  // mesh (native) or levelset: fabatlas evaluates the CSG tree
   const fs::path out = work.path / (native ? "model.csg" : "model.stl");
   scad::OpenScadRun run;
   // The CSG tree from fabatlas's own evaluation of the model where it
@@ -1089,7 +1417,7 @@ OpenScadNodeResult EvaluateOpenScadNode(const Node& node, const ResolvedArgs& ar
   } catch (const InputError& e) {
     throw SampleFailure(kNoGeometry, e.what());
   }
-  CsgEvaluation evaluation(context, model, work.path);
+  CsgEvaluation evaluation(context, model, work.path, /*mesh_road=*/render != "levelset");
   CsgEvaluation::Result r = evaluation.Evaluate3(root, kIdentity, context.path + "/csg", /*need_solid=*/true);
   result.solid = r.solid;
   result.root_key = r.key;

@@ -66,13 +66,18 @@ struct OpenScadNodeContext {
   SubtreeCache* cache = nullptr;               // looked up and offered per CSG subtree
   std::vector<SubtreeRecord>* records = nullptr;  // CSG subtree records are appended (post-order)
   std::vector<OutsideMesh>* outside = nullptr;    // outside meshes are appended
+  std::vector<std::string>* warnings = nullptr;   // what OpenSCAD would warn, and the mesh road's fallbacks
   std::string path;                             // the node's record path; CSG subtrees are PATH/csg/...
 };
 
-// Record ops of CSG subtrees: "csg:NAME" evaluated with level sets,
-// "csg-openscad:NAME" rendered by OpenSCAD (no native equivalent below it).
+// Record ops of CSG subtrees: "csg:NAME" evaluated by fabatlas (exact
+// meshes on the mesh road, level sets on the level-set road),
+// "csg-openscad:NAME" rendered by OpenSCAD (no native equivalent below it),
+// "csg-levelset:NAME" a boolean of the mesh road that fell back to level sets
+// (an operand is a level set, or the exact booleans could not take it).
 inline constexpr const char* kCsgNativeOp = "csg:";
 inline constexpr const char* kCsgRenderedOp = "csg-openscad:";
+inline constexpr const char* kCsgLevelSetOp = "csg-levelset:";
 
 struct OpenScadNodeResult {
   geometry::Solid solid;

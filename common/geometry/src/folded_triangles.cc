@@ -43,7 +43,7 @@ void CellValues(Accessor& acc, detail::LeafCache<Accessor>& leaves, const openvd
 FoldedTriangles FindFoldedTriangles(const Solid& s, const mesh::TriangleMesh& mesh) {
   FoldedTriangles out;
   if (!s.impl()) return out;
-  const openvdb::FloatGrid& grid = *s.impl()->grid;
+  const openvdb::FloatGrid& grid = *s.impl()->Grid();
   const openvdb::math::Transform& transform = grid.transform();
   const double vs = s.impl()->spec.voxel_size;
   const double iso = kMeshIso * vs;

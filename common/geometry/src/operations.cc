@@ -13,6 +13,8 @@
 #include <memory>
 #include <numbers>
 
+#include "fabatlas/mesh/enclosed_volume.h"
+#include "fabatlas/mesh/exact_boolean.h"
 #include "solid_impl.h"
 
 namespace fabatlas::geometry {
@@ -30,7 +32,7 @@ FloatGrid::Ptr EmptyGrid(const GridSpec& spec) {
 
 Solid EmptyLike(const Solid& s) { return detail::MakeSolid(EmptyGrid(s.impl()->spec), s.impl()->spec); }
 
-double ActiveVoxels(const Solid& s) { return static_cast<double>(s.impl()->grid->activeVoxelCount()); }
+double ActiveVoxels(const Solid& s) { return static_cast<double>(s.impl()->Grid()->activeVoxelCount()); }
 
 // Rebuild the zero level set of `src` (whose transform may be any affine map)
 // as a narrow band on the canonical transform of `spec`.
@@ -45,9 +47,9 @@ Solid Rebuild(const FloatGrid& src, const GridSpec& spec) {
 FloatGrid::ConstPtr OnSpecOf(const Solid& a, const Solid& b) {
   const GridSpec& sa = a.impl()->spec;
   const GridSpec& sb = b.impl()->spec;
-  if (sa.voxel_size == sb.voxel_size && sa.half_width_voxels == sb.half_width_voxels) return b.impl()->grid;
+  if (sa.voxel_size == sb.voxel_size && sa.half_width_voxels == sb.half_width_voxels) return b.impl()->Grid();
   GridSpec target = sa;
-  return Rebuild(*b.impl()->grid, target).impl()->grid;
+  return Rebuild(*b.impl()->Grid(), target).impl()->Grid();
 }
 
 // Builds a narrow-band level set leaf by leaf, in parallel over leaves (TBB):
@@ -90,7 +92,7 @@ Solid AssembleNarrowBand(const GridSpec& spec, double bg, const std::vector<open
 template <typename Fn>
 Solid MapAndRebuild(const Solid& s, Fn post, double scale = 1.0) {
   const GridSpec& spec = s.impl()->spec;
-  const FloatGrid& in = *s.impl()->grid;
+  const FloatGrid& in = *s.impl()->Grid();
   auto xform = in.transform().copy();
   post(*xform);
   if (scale < 1.0) {
@@ -140,14 +142,28 @@ bool IsLatticeShift(const Vec3& t, double vs, openvdb::Coord& shift) {
 
 // ---- Transforms -----------------------------------------------------------------
 
+namespace {
+// A mesh solid mapped vertex by vertex (x -> f(x)): it stays a mesh solid.
+template <typename F>
+Solid MapBoundary(const Solid& s, F&& f) {
+  mesh::TriangleMesh m = *s.boundary();
+  for (auto& v : m.vertices) v = f(v);
+  return MeshSolid(s.impl()->spec, std::move(m));
+}
+}  // namespace
+
 Solid Translate(const Solid& s, const Vec3& t) {
   for (double v : t)
     if (!std::isfinite(v)) throw InputError("translate: offset must be finite");
   if (!s.impl()) return s;
+  if (s.boundary())
+    return MapBoundary(s, [&](const std::array<double, 3>& v) {
+      return std::array<double, 3>{v[0] + t[0], v[1] + t[1], v[2] + t[2]};
+    });
   openvdb::Coord shift;
   if (IsLatticeShift(t, s.voxel_size(), shift)) {
     // Exact: move every active voxel by a whole number of voxels.
-    const FloatGrid& src = *s.impl()->grid;
+    const FloatGrid& src = *s.impl()->Grid();
     FloatGrid::Ptr out = EmptyGrid(s.impl()->spec);
     auto acc = out->getAccessor();
     for (auto it = src.tree().cbeginValueOn(); it; ++it) {
@@ -171,6 +187,16 @@ Solid Rotate(const Solid& s, const Vec3& euler_xyz_deg) {
   if (!s.impl()) return s;
   if (euler_xyz_deg[0] == 0 && euler_xyz_deg[1] == 0 && euler_xyz_deg[2] == 0) return s;
   const double k = std::numbers::pi / 180.0;
+  if (s.boundary()) {
+    const double cx = std::cos(euler_xyz_deg[0] * k), sx = std::sin(euler_xyz_deg[0] * k);
+    const double cy = std::cos(euler_xyz_deg[1] * k), sy = std::sin(euler_xyz_deg[1] * k);
+    const double cz = std::cos(euler_xyz_deg[2] * k), sz = std::sin(euler_xyz_deg[2] * k);
+    return MapBoundary(s, [&](const std::array<double, 3>& v) {
+      const double y1 = cx * v[1] - sx * v[2], z1 = sx * v[1] + cx * v[2];  // about x
+      const double x2 = cy * v[0] + sy * z1, z2 = -sy * v[0] + cy * z1;      // about y
+      return std::array<double, 3>{cz * x2 - sz * y1, sz * x2 + cz * y1, z2};  // about z
+    });
+  }
   return MapAndRebuild(s, [&](openvdb::math::Transform& x) {
     // R = Rz * Ry * Rx on column vectors: rotate about x first.
     x.postRotate(euler_xyz_deg[0] * k, openvdb::math::X_AXIS);
@@ -183,6 +209,10 @@ Solid Scale(const Solid& s, double factor) {
   detail::RequirePositive(factor, "scale", "factor");
   if (!s.impl()) return s;
   if (factor == 1.0) return s;
+  if (s.boundary())
+    return MapBoundary(s, [&](const std::array<double, 3>& v) {
+      return std::array<double, 3>{v[0] * factor, v[1] * factor, v[2] * factor};
+    });
   detail::CheckActiveVoxelEstimate(s.impl()->spec, ActiveVoxels(s) * factor * factor, "the scaled solid");
   return MapAndRebuild(s, [&](openvdb::math::Transform& x) { x.postScale(factor); }, factor);
 }
@@ -192,7 +222,7 @@ Solid Scale(const Solid& s, double factor) {
 Solid Union(const Solid& a, const Solid& b) {
   if (!a.impl()) return b;
   if (!b.impl()) return a;
-  return detail::MakeSolid(openvdb::tools::csgUnionCopy(*a.impl()->grid, *OnSpecOf(a, b)), a.impl()->spec);
+  return detail::MakeSolid(openvdb::tools::csgUnionCopy(*a.impl()->Grid(), *OnSpecOf(a, b)), a.impl()->spec);
 }
 
 // A sub-voxel sheet between flush faces (solid_impl.h): such a voxel takes the
@@ -250,7 +280,7 @@ std::size_t detail::RemoveZeroSheets(FloatGrid& grid, double voxel_size) {
 Solid Difference(const Solid& a, const Solid& b) {
   if (!a.impl()) return a;
   if (!b.impl()) return a;
-  FloatGrid::Ptr out = openvdb::tools::csgDifferenceCopy(*a.impl()->grid, *OnSpecOf(a, b));
+  FloatGrid::Ptr out = openvdb::tools::csgDifferenceCopy(*a.impl()->Grid(), *OnSpecOf(a, b));
   detail::RemoveZeroSheets(*out, a.voxel_size());
   return detail::MakeSolid(out, a.impl()->spec);
 }
@@ -258,7 +288,7 @@ Solid Difference(const Solid& a, const Solid& b) {
 Solid Intersection(const Solid& a, const Solid& b) {
   if (!a.impl()) return a;
   if (!b.impl()) return b;
-  return detail::MakeSolid(openvdb::tools::csgIntersectionCopy(*a.impl()->grid, *OnSpecOf(a, b)),
+  return detail::MakeSolid(openvdb::tools::csgIntersectionCopy(*a.impl()->Grid(), *OnSpecOf(a, b)),
                            a.impl()->spec);
 }
 
@@ -284,7 +314,7 @@ Solid Offset(const Solid& s, double distance) {
   // the side we move towards, then a standard band around the iso-value.
   const float hw = static_cast<float>(spec.half_width_voxels);
   const float widened = hw + static_cast<float>(dilation);
-  const FloatGrid& in = *s.impl()->grid;
+  const FloatGrid& in = *s.impl()->Grid();
   const float iso0 = static_cast<float>(kMeshIso * vs);
   FloatGrid::Ptr wide = openvdb::tools::levelSetRebuild(in, iso0, distance > 0 ? widened : hw,
                                                         distance < 0 ? widened : hw);
@@ -344,6 +374,17 @@ double DeltaG(const Solid& a, const Solid& b) {
   const bool ea = a.empty(), eb = b.empty();
   if (ea && eb) return 0.0;
   if (ea != eb) return 1.0;
+  if (a.boundary() && b.boundary()) {
+    try {
+      const double va = a.Volume(), vb = b.Volume();
+      const double vi = mesh::EnclosedVolume(mesh::ExactBoolean(mesh::BooleanOp::kIntersection, {*a.boundary(), *b.boundary()}));
+      const double vu = va + vb - vi;
+      if (vu <= 0) return 0.0;
+      return std::clamp((vu - vi) / vu, 0.0, 1.0);
+    } catch (const InputError&) {
+      // not exactly computable: the level sets' answer below
+    }
+  }
   const double vu = Union(a, b).Volume();
   const double vi = Intersection(a, b).Volume();
   if (vu <= 0) return 0.0;

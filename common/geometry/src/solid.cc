@@ -9,6 +9,7 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <limits>
 #include <mutex>
 #include <numbers>
@@ -240,12 +241,46 @@ Measures ComputeMeasures(const FloatGrid& grid, double half_width_voxels) {
 
 }  // namespace
 
+const FloatGrid::Ptr& Solid::Impl::Grid() const {
+  if (boundary) {
+    std::call_once(grid_once, [this] {
+      grid = boundary->triangles.empty() ? FloatGrid::create(static_cast<float>(spec.half_width_voxels * spec.voxel_size))
+                                         : FromMesh(spec, *boundary).impl()->Grid();
+      if (boundary->triangles.empty()) {
+        grid->setTransform(detail::CanonicalTransform(spec.voxel_size));
+        grid->setGridClass(openvdb::GRID_LEVEL_SET);
+        grid->setName("solid");
+      }
+    });
+  }
+  return grid;
+}
+
+Solid MeshSolid(const GridSpec& g, mesh::TriangleMesh boundary) {
+  detail::ValidateSpec(g, "MeshSolid");
+  for (const auto& v : boundary.vertices)
+    if (!std::isfinite(v[0]) || !std::isfinite(v[1]) || !std::isfinite(v[2]))
+      throw InputError("MeshSolid: a vertex coordinate is not a finite number");
+  for (const auto& t : boundary.triangles)
+    for (std::int32_t i : t)
+      if (i < 0 || static_cast<std::size_t>(i) >= boundary.vertices.size())
+        throw InputError("MeshSolid: a triangle refers to a missing vertex");
+  if (boundary.triangles.empty()) return Solid();
+  auto impl = std::make_shared<Solid::Impl>();
+  impl->spec = g;
+  impl->boundary = std::make_shared<const mesh::TriangleMesh>(std::move(boundary));
+  return Solid(std::shared_ptr<const Solid::Impl>(std::move(impl)));
+}
+
 Solid::Solid() = default;
 Solid::Solid(std::shared_ptr<const Impl> impl) : impl_(std::move(impl)) {}
 
+const mesh::TriangleMesh* Solid::boundary() const { return impl_ ? impl_->boundary.get() : nullptr; }
+
 bool Solid::empty() const {
   if (!impl_) return true;
-  const FloatTree& tree = impl_->grid->tree();
+  if (impl_->boundary) return impl_->boundary->triangles.empty();
+  const FloatTree& tree = impl_->Grid()->tree();
   // The band's leaves first: a solid with material has negative voxels there.
   std::vector<const LeafT*> leaves;
   tree.getNodes(leaves);
@@ -265,7 +300,32 @@ namespace {
 // The solid's measures, computed on first use and kept with its grid.
 const Solid::Impl& WithMeasures(const Solid::Impl& impl) {
   std::call_once(impl.measures_once, [&impl] {
-    const Measures m = ComputeMeasures(*impl.grid, impl.spec.half_width_voxels);
+    if (impl.boundary) {  // the mesh's own: divergence theorem over its triangles
+      const mesh::TriangleMesh& b = *impl.boundary;
+      double six = 0, c[3] = {0, 0, 0};
+      Box3 box{{b.vertices[0][0], b.vertices[0][1], b.vertices[0][2]}, {b.vertices[0][0], b.vertices[0][1], b.vertices[0][2]}};
+      for (const auto& v : b.vertices)
+        for (int k = 0; k < 3; ++k) {
+          box.min[k] = std::min(box.min[k], v[k]);
+          box.max[k] = std::max(box.max[k], v[k]);
+        }
+      for (const auto& t : b.triangles) {
+        const auto& p = b.vertices[t[0]];
+        const auto& q = b.vertices[t[1]];
+        const auto& r = b.vertices[t[2]];
+        const double d = p[0] * (q[1] * r[2] - q[2] * r[1]) - p[1] * (q[0] * r[2] - q[2] * r[0]) +
+                         p[2] * (q[0] * r[1] - q[1] * r[0]);
+        six += d;
+        for (int k = 0; k < 3; ++k) c[k] += d * (p[k] + q[k] + r[k]);
+      }
+      const double vs = impl.spec.voxel_size, v = six / 6;
+      // In voxel units, as the level set's: m0 = V / vs^3, m1 = V c / vs^4 (c = sum / (4 * six)).
+      impl.moments = {v / (vs * vs * vs), c[0] / 24 / (vs * vs * vs * vs), c[1] / 24 / (vs * vs * vs * vs),
+                      c[2] / 24 / (vs * vs * vs * vs)};
+      impl.box = box;
+      return;
+    }
+    const Measures m = ComputeMeasures(*impl.Grid(), impl.spec.half_width_voxels);
     impl.moments = {m.moments.m0, m.moments.m1[0], m.moments.m1[1], m.moments.m1[2]};
     impl.box = m.box;
   });
@@ -293,12 +353,19 @@ Box3 Solid::BoundingBox() const {
 }
 
 std::size_t Solid::MemoryBytes() const {
-  return impl_ ? static_cast<std::size_t>(impl_->grid->memUsage()) : 0;
+  if (!impl_) return 0;
+  // A mesh solid counts its mesh only, so the figure does not depend on
+  // whether some operation voxelised it yet.
+  if (impl_->boundary)
+    return sizeof(mesh::TriangleMesh) + impl_->boundary->vertices.size() * sizeof(impl_->boundary->vertices[0]) +
+           impl_->boundary->triangles.size() * sizeof(impl_->boundary->triangles[0]);
+  return static_cast<std::size_t>(impl_->Grid()->memUsage());
 }
 
 mesh::TriangleMesh Solid::ToMesh(double adaptivity) const {
   mesh::TriangleMesh out;
   if (!impl_) return out;
+  if (impl_->boundary) return *impl_->boundary;
   if (!std::isfinite(adaptivity) || adaptivity < 0 || adaptivity > 1) {
     throw InputError("Solid::ToMesh: adaptivity must be in [0,1]");
   }
@@ -306,7 +373,7 @@ mesh::TriangleMesh Solid::ToMesh(double adaptivity) const {
   // (faces of boxes at round sizes fall on voxel centres) then count as
   // inside, which avoids a chamfer of up to a voxel along such edges.
   openvdb::tools::VolumeToMesh mesher(kMeshIso * impl_->spec.voxel_size, adaptivity);
-  mesher(*impl_->grid);
+  mesher(*impl_->Grid());
   // The mesher's points and polygon pools straight into the TriangleMesh, in
   // the order openvdb::tools::volumeToMesh lists them (every pool's quads,
   // then every pool's triangles; each pool's primitives in order), without
@@ -375,12 +442,44 @@ void BlankArchiveUuid(std::string& bytes) {
 }
 }  // namespace
 
+namespace {
+// A mesh solid's bytes: the magic, the spec (voxel size, half width, voxel
+// budget), the counts, then vertices as doubles and triangles as int32, all
+// little-endian (the machines fabatlas runs on).
+constexpr std::string_view kMeshMagic = "fabatlas-mesh-solid-1\n";
+
+template <typename T>
+void Put(std::string& out, const T& v) {
+  out.append(reinterpret_cast<const char*>(&v), sizeof v);
+}
+template <typename T>
+T Take(std::string_view& in) {
+  if (in.size() < sizeof(T)) throw InputError("Solid::Deserialize: truncated mesh solid");
+  T v;
+  std::memcpy(&v, in.data(), sizeof v);
+  in.remove_prefix(sizeof v);
+  return v;
+}
+}  // namespace
+
 std::string Solid::Serialize() const {
+  if (impl_ && impl_->boundary) {
+    const mesh::TriangleMesh& b = *impl_->boundary;
+    std::string out(kMeshMagic);
+    Put(out, impl_->spec.voxel_size);
+    Put(out, impl_->spec.half_width_voxels);
+    Put(out, static_cast<std::uint64_t>(impl_->spec.max_active_voxels));
+    Put(out, static_cast<std::uint64_t>(b.vertices.size()));
+    Put(out, static_cast<std::uint64_t>(b.triangles.size()));
+    out.append(reinterpret_cast<const char*>(b.vertices.data()), b.vertices.size() * sizeof(b.vertices[0]));
+    out.append(reinterpret_cast<const char*>(b.triangles.data()), b.triangles.size() * sizeof(b.triangles[0]));
+    return out;
+  }
   detail::EnsureOpenVdbInitialized();
   FloatGrid::Ptr grid;
   GridSpec spec;
   if (impl_) {
-    grid = impl_->grid;
+    grid = impl_->Grid();
     spec = impl_->spec;
   } else {
     // The default-constructed Solid: an empty grid with voxel size 0 marker.
@@ -408,6 +507,22 @@ std::string Solid::Serialize() const {
 }
 
 Solid Solid::Deserialize(std::string_view bytes) {
+  if (bytes.substr(0, kMeshMagic.size()) == kMeshMagic) {
+    std::string_view in = bytes.substr(kMeshMagic.size());
+    GridSpec spec;
+    spec.voxel_size = Take<double>(in);
+    spec.half_width_voxels = Take<double>(in);
+    spec.max_active_voxels = Take<std::uint64_t>(in);
+    const auto nv = Take<std::uint64_t>(in), nt = Take<std::uint64_t>(in);
+    mesh::TriangleMesh m;
+    if (nv > in.size() / 24 || nt > in.size() / 12 || in.size() != nv * 24 + nt * 12)
+      throw InputError("Solid::Deserialize: mesh solid of the wrong length");
+    m.vertices.resize(nv);
+    m.triangles.resize(nt);
+    std::memcpy(m.vertices.data(), in.data(), nv * 24);
+    std::memcpy(m.triangles.data(), in.data() + nv * 24, nt * 12);
+    return MeshSolid(spec, std::move(m));
+  }
   detail::EnsureOpenVdbInitialized();
   try {
     std::istringstream is(std::string(bytes), std::ios_base::binary);
@@ -464,7 +579,7 @@ Occupancy SampleOccupancy(const Solid& s, double cell_size, std::size_t max_cell
   }
   const std::size_t nx = occ.dims[0], ny = occ.dims[1], nz = occ.dims[2];
   occ.inside.assign(nx * ny * nz, 0);
-  const FloatGrid& grid = *s.impl()->grid;
+  const FloatGrid& grid = *s.impl()->Grid();
   tbb::parallel_for(std::size_t{0}, nz, [&](std::size_t k) {
     FloatGrid::ConstAccessor accessor = grid.getConstAccessor();
     openvdb::tools::GridSampler<FloatGrid::ConstAccessor, openvdb::tools::BoxSampler> sampler(accessor,

@@ -15,9 +15,17 @@ namespace fabatlas::geometry {
 // A level set grid (GRID_LEVEL_SET, background = half_width_voxels *
 // voxel_size) whose transform is the canonical one of its GridSpec: a linear
 // transform with voxel centres at integer multiples of voxel_size.
+//
+// A solid bounded by an exact mesh (MeshSolid, the mesh road) keeps `boundary`
+// and builds its level set from it on first use (Grid(), once, thread-safe),
+// so that a sample whose checks read only the mesh never voxelises it.
 struct Solid::Impl {
-  openvdb::FloatGrid::Ptr grid;  // never mutated after construction
+  // The level set; never mutated after it is set.
+  const openvdb::FloatGrid::Ptr& Grid() const;
   GridSpec spec;
+  std::shared_ptr<const mesh::TriangleMesh> boundary;  // null: a level-set solid
+  mutable openvdb::FloatGrid::Ptr grid;                // set at construction, or by Grid() from `boundary`
+  mutable std::once_flag grid_once;
   // The inside's zeroth and first moments (voxel units: m0, m1 x, y, z) and
   // its bounding box (mm), computed together once for Volume, CenterOfMass
   // and BoundingBox (a sample asks for all three: the volume and bbox

@@ -221,7 +221,7 @@ std::optional<std::string> SolidNodeBytes(const Solid& solid) {
     w.Put(static_cast<std::uint64_t>(spec.max_active_voxels));
     return w.Take();
   }
-  const FloatGrid& grid = *impl->grid;
+  const FloatGrid& grid = *impl->Grid();
   if (grid.metaCount() != 2 || grid.getName() != "solid" || grid.getGridClass() != openvdb::GRID_LEVEL_SET ||
       grid.saveFloatAsHalf() || !(grid.transform() == *detail::CanonicalTransform(impl->spec.voxel_size)))
     return std::nullopt;

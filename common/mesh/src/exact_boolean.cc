@@ -1,66 +1,220 @@
-// Exact mesh booleans by CGAL corefinement (see exact_boolean.h).
+// Exact mesh booleans, convex hulls and Minkowski sums with CGAL (see
+// exact_boolean.h): corefinement on Surface_mesh<Epeck>, Nef polyhedra as the
+// fallback.
 #include "fabatlas/mesh/exact_boolean.h"
 
-#include <array>
+#include <algorithm>
 #include <cstdint>
 #include <map>
+#include <numeric>
+#include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
+#include <CGAL/Exact_predicates_exact_constructions_kernel.h>
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/Nef_polyhedron_3.h>
 #include <CGAL/Polygon_mesh_processing/corefinement.h>
 #include <CGAL/Polygon_mesh_processing/orient_polygon_soup.h>
 #include <CGAL/Polygon_mesh_processing/polygon_soup_to_polygon_mesh.h>
 #include <CGAL/Polygon_mesh_processing/self_intersections.h>
+#include <CGAL/Polyhedron_3.h>
 #include <CGAL/Surface_mesh.h>
+#include <CGAL/boost/graph/convert_nef_polyhedron_to_polygon_mesh.h>
+#include <CGAL/convex_decomposition_3.h>
+#include <CGAL/convex_hull_3.h>
 
 #include "fabatlas/error.h"
+#include "fabatlas/mesh/enclosed_volume.h"
 
 namespace fabatlas::mesh {
 namespace {
 
-using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
-using SurfaceMesh = CGAL::Surface_mesh<Kernel::Point_3>;
+using Kernel = CGAL::Exact_predicates_exact_constructions_kernel;
+using Point = Kernel::Point_3;
+using SurfaceMesh = CGAL::Surface_mesh<Point>;
+using Nef = CGAL::Nef_polyhedron_3<Kernel>;
 namespace PMP = CGAL::Polygon_mesh_processing;
 
-SurfaceMesh ToSurfaceMesh(const TriangleMesh& m, std::size_t index) {
-  std::vector<Kernel::Point_3> points;
-  for (const auto& v : m.vertices) points.emplace_back(v[0], v[1], v[2]);
+// An exact operand or intermediate result: a closed surface mesh, or a Nef
+// polyhedron where the exact result is not a 2-manifold.
+struct Exact {
+  SurfaceMesh mesh;
+  std::optional<Nef> nef;
+  CGAL::Bbox_3 box;
+  bool empty = true;
+};
+
+// The signed volume of a closed mesh in doubles (divergence theorem):
+// negative for an inward one.
+double SignedVolume(const TriangleMesh& m) {
+  double six = 0;
+  for (const auto& t : m.triangles) {
+    const auto& a = m.vertices[t[0]];
+    const auto& b = m.vertices[t[1]];
+    const auto& c = m.vertices[t[2]];
+    six += a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) + a[2] * (b[0] * c[1] - b[1] * c[0]);
+  }
+  return six / 6;
+}
+
+Exact ToExact(const TriangleMesh& m, std::size_t index) {
+  Exact out;
+  if (m.triangles.empty()) return out;
+  const std::string name = "exact boolean operand " + std::to_string(index);
+  // Vertices at bit-identical coordinates are one point (a cone's apex that
+  // OpenSCAD's faceting repeats, an STL's soup); a triangle that then
+  // repeats a point has no area and is not part of the boundary.
+  std::vector<Point> points;
+  std::vector<std::size_t> merged(m.vertices.size());
+  std::map<std::array<double, 3>, std::size_t> at;
+  for (std::size_t i = 0; i < m.vertices.size(); ++i) {
+    const auto& v = m.vertices[i];
+    if (!std::isfinite(v[0]) || !std::isfinite(v[1]) || !std::isfinite(v[2]))
+      throw InputError(name + " has a vertex that is not a finite number");
+    auto [it, added] = at.try_emplace(v, points.size());
+    if (added) points.emplace_back(v[0], v[1], v[2]);
+    merged[i] = it->second;
+  }
   std::vector<std::vector<std::size_t>> faces;
+  faces.reserve(m.triangles.size());
   for (const auto& t : m.triangles) {
     for (std::int32_t v : t)
       if (v < 0 || static_cast<std::size_t>(v) >= m.vertices.size())
-        throw InputError("exact boolean operand " + std::to_string(index) + " has a triangle with a missing vertex");
-    faces.push_back({std::size_t(t[0]), std::size_t(t[1]), std::size_t(t[2])});
+        throw InputError(name + " has a triangle with a missing vertex");
+    const std::size_t a = merged[t[0]], b = merged[t[1]], c = merged[t[2]];
+    if (a == b || b == c || a == c) continue;
+    faces.push_back({a, b, c});
   }
-  SurfaceMesh out;
-  if (!PMP::is_polygon_soup_a_polygon_mesh(faces))
-    throw InputError("exact boolean operand " + std::to_string(index) + " is not a manifold mesh");
-  PMP::polygon_soup_to_polygon_mesh(points, faces, out);
-  if (!CGAL::is_closed(out))
-    throw InputError("exact boolean operand " + std::to_string(index) + " is not closed");
-  if (PMP::does_self_intersect(out))
-    throw InputError("exact boolean operand " + std::to_string(index) + " intersects itself");
+  // A vertex or edge shared by several sheets (two cubes meeting at an
+  // edge, as Nef results and OpenSCAD's STL have them) is split per sheet.
+  if (!PMP::is_polygon_soup_a_polygon_mesh(faces)) PMP::orient_polygon_soup(points, faces);
+  if (!PMP::is_polygon_soup_a_polygon_mesh(faces)) throw InputError(name + " is not a manifold mesh");
+  PMP::polygon_soup_to_polygon_mesh(points, faces, out.mesh);
+  if (!CGAL::is_closed(out.mesh)) throw InputError(name + " is not closed");
+  if (SignedVolume(m) < 0) PMP::reverse_face_orientations(out.mesh);
+  out.box = PMP::bbox(out.mesh);
+  out.empty = out.mesh.number_of_faces() == 0;
   return out;
 }
 
-TriangleMesh FromSurfaceMesh(const SurfaceMesh& m) {
-  TriangleMesh out;
-  std::map<SurfaceMesh::Vertex_index, std::int32_t> index;
+void AppendMesh(const SurfaceMesh& m, TriangleMesh& out) {
+  std::vector<std::int32_t> index(m.number_of_vertices() + m.number_of_removed_vertices(), -1);
   for (auto v : m.vertices()) {
-    index[v] = static_cast<std::int32_t>(out.vertices.size());
-    const auto& p = m.point(v);
-    out.vertices.push_back({p.x(), p.y(), p.z()});
+    index[v.idx()] = static_cast<std::int32_t>(out.vertices.size());
+    const Point& p = m.point(v);
+    out.vertices.push_back({CGAL::to_double(p.x()), CGAL::to_double(p.y()), CGAL::to_double(p.z())});
   }
   for (auto f : m.faces()) {
     std::array<std::int32_t, 3> tri{};
     int i = 0;
     for (auto v : CGAL::vertices_around_face(m.halfedge(f), m)) {
-      if (i < 3) tri[i] = index[v];
+      if (i < 3) tri[i] = index[v.idx()];
       ++i;
     }
     if (i == 3) out.triangles.push_back(tri);
   }
+}
+
+void AppendExact(const Exact& e, TriangleMesh& out) {
+  if (e.empty) return;
+  if (!e.nef) {
+    AppendMesh(e.mesh, out);
+    return;
+  }
+  std::vector<Point> points;
+  std::vector<std::vector<std::size_t>> polygons;
+  CGAL::convert_nef_polyhedron_to_polygon_soup(*e.nef, points, polygons, /*triangulate_all_faces=*/true);
+  const auto base = static_cast<std::int32_t>(out.vertices.size());
+  for (const Point& p : points) out.vertices.push_back({CGAL::to_double(p.x()), CGAL::to_double(p.y()), CGAL::to_double(p.z())});
+  for (const auto& f : polygons)
+    if (f.size() == 3)
+      out.triangles.push_back({base + static_cast<std::int32_t>(f[0]), base + static_cast<std::int32_t>(f[1]),
+                               base + static_cast<std::int32_t>(f[2])});
+}
+
+Nef NefOf(const Exact& e) { return e.nef ? *e.nef : Nef(e.mesh); }
+
+Exact OfNef(Nef nef) {
+  Exact out;
+  out.empty = nef.is_empty();
+  if (out.empty) return out;
+  if (nef.is_simple()) {
+    CGAL::convert_nef_polyhedron_to_polygon_mesh(nef, out.mesh, /*triangulate_all_faces=*/true);
+    out.box = PMP::bbox(out.mesh);
+  } else {
+    std::vector<Point> points;
+    std::vector<std::vector<std::size_t>> polygons;
+    CGAL::convert_nef_polyhedron_to_polygon_soup(nef, points, polygons, true);
+    out.box = CGAL::bbox_3(points.begin(), points.end());
+    out.nef = std::move(nef);
+  }
+  return out;
+}
+
+bool Meet(const CGAL::Bbox_3& a, const CGAL::Bbox_3& b) { return CGAL::do_overlap(a, b); }
+
+// a op b, both non-empty: corefinement, else Nef.
+Exact Apply(BooleanOp op, const Exact& a, const Exact& b, BooleanSummary& summary) {
+  std::string why;
+  if (!a.nef && !b.nef) {
+    SurfaceMesh ma = a.mesh, mb = b.mesh, out;
+    bool ok = false;
+    try {
+      const auto np = CGAL::parameters::throw_on_self_intersection(true);
+      ok = op == BooleanOp::kUnion        ? PMP::corefine_and_compute_union(ma, mb, out, np, np)
+           : op == BooleanOp::kDifference ? PMP::corefine_and_compute_difference(ma, mb, out, np, np)
+                                          : PMP::corefine_and_compute_intersection(ma, mb, out, np, np);
+      why = "no manifold result";
+    } catch (const PMP::Corefinement::Self_intersection_exception&) {
+      why = "an operand touches itself near the intersection";
+    } catch (const std::exception& e) {
+      why = e.what();
+    }
+    ++summary.corefinements;
+    if (ok) {
+      Exact r;
+      r.empty = out.number_of_faces() == 0;
+      if (!r.empty) r.box = PMP::bbox(out);
+      r.mesh = std::move(out);
+      return r;
+    }
+  } else {
+    why = "an operand is not a 2-manifold";
+  }
+  ++summary.nef;
+  if (summary.nef_why.empty()) summary.nef_why = why;
+  // Nef polyhedra take only valid solids (CGAL does not check: a mesh that
+  // touches itself can crash the construction).
+  for (const Exact* e : {&a, &b})
+    if (!e->nef && PMP::does_self_intersect(e->mesh))
+      throw InputError(std::string("exact ") + BooleanOpName(op) + " could not be computed (" + why +
+                       "): an operand intersects itself");
+  try {
+    const Nef na = NefOf(a), nb = NefOf(b);
+    return OfNef(op == BooleanOp::kUnion ? na + nb : op == BooleanOp::kDifference ? na - nb : na * nb);
+  } catch (const std::exception& e) {
+    throw InputError(std::string("exact ") + BooleanOpName(op) + " could not be computed (" + why +
+                     "; Nef polyhedra: " + e.what() + ")");
+  }
+}
+
+// Groups of operands whose bounding boxes meet, transitively.
+std::vector<std::vector<std::size_t>> TouchingGroups(const std::vector<Exact>& in) {
+  std::vector<std::size_t> parent(in.size());
+  std::iota(parent.begin(), parent.end(), 0);
+  auto find = [&](std::size_t i) {
+    while (parent[i] != i) i = parent[i] = parent[parent[i]];
+    return i;
+  };
+  for (std::size_t i = 0; i < in.size(); ++i)
+    for (std::size_t j = i + 1; j < in.size(); ++j)
+      if (Meet(in[i].box, in[j].box)) parent[find(j)] = find(i);
+  std::map<std::size_t, std::vector<std::size_t>> groups;
+  for (std::size_t i = 0; i < in.size(); ++i) groups[find(i)].push_back(i);
+  std::vector<std::vector<std::size_t>> out;
+  for (auto& [_, g] : groups) out.push_back(std::move(g));
   return out;
 }
 
@@ -75,24 +229,130 @@ const char* BooleanOpName(BooleanOp op) {
   return "union";
 }
 
-TriangleMesh ExactBoolean(BooleanOp op, const std::vector<TriangleMesh>& operands) {
-  const std::string name = BooleanOpName(op);
-  SurfaceMesh acc = ToSurfaceMesh(operands.at(0), 0);
-  for (std::size_t i = 1; i < operands.size(); ++i) {
-    SurfaceMesh other = ToSurfaceMesh(operands[i], i);
-    SurfaceMesh result;
-    bool ok = false;
-    try {
-      ok = op == BooleanOp::kUnion        ? PMP::corefine_and_compute_union(acc, other, result)
-           : op == BooleanOp::kDifference ? PMP::corefine_and_compute_difference(acc, other, result)
-                                          : PMP::corefine_and_compute_intersection(acc, other, result);
-    } catch (const std::exception& e) {  // CGAL's own checks (degenerate or inconsistent input)
-      throw InputError("exact " + name + " with operand " + std::to_string(i) + " failed: " + e.what());
+TriangleMesh ExactBoolean(BooleanOp op, const std::vector<TriangleMesh>& operands, BooleanSummary* summary_out) {
+  BooleanSummary local;
+  BooleanSummary& summary = summary_out ? *summary_out : local;
+  std::vector<Exact> in;
+  in.reserve(operands.size());
+  for (std::size_t i = 0; i < operands.size(); ++i) in.push_back(ToExact(operands[i], i));
+  TriangleMesh out;
+  if (in.empty()) return out;
+  if (op == BooleanOp::kUnion) {
+    std::vector<Exact> present;
+    for (auto& e : in)
+      if (!e.empty) present.push_back(std::move(e));
+    // Operands apart from all others join the result as they are.
+    for (const auto& group : TouchingGroups(present)) {
+      Exact acc = present[group[0]];
+      for (std::size_t k = 1; k < group.size(); ++k) acc = Apply(op, acc, present[group[k]], summary);
+      summary.disjoint += group.size() == 1 && present.size() > 1;
+      AppendExact(acc, out);
     }
-    if (!ok) throw InputError("exact " + name + " with operand " + std::to_string(i) + " has no manifold result");
-    acc = std::move(result);
+    return out;
   }
-  return FromSurfaceMesh(acc);
+  Exact acc = std::move(in[0]);
+  for (std::size_t i = 1; i < in.size() && !acc.empty; ++i) {
+    if (in[i].empty || !Meet(acc.box, in[i].box)) {
+      ++summary.disjoint;
+      if (op == BooleanOp::kIntersection) return out;  // nothing in common
+      continue;  // nothing to take away
+    }
+    acc = Apply(op, acc, in[i], summary);
+  }
+  AppendExact(acc, out);
+  return out;
+}
+
+TriangleMesh ConvexHull(const std::vector<std::array<double, 3>>& points) {
+  using Epick = CGAL::Exact_predicates_inexact_constructions_kernel;
+  std::vector<Epick::Point_3> p;
+  p.reserve(points.size());
+  for (const auto& v : points)
+    if (std::isfinite(v[0]) && std::isfinite(v[1]) && std::isfinite(v[2])) p.emplace_back(v[0], v[1], v[2]);
+  // The points span a volume when four of them are not coplanar.
+  std::size_t second = 1, third = 0, fourth = 0;
+  while (second < p.size() && p[second] == p[0]) ++second;
+  for (std::size_t i = second + 1; i < p.size() && !third; ++i)
+    if (!CGAL::collinear(p[0], p[second], p[i])) third = i;
+  for (std::size_t i = third + 1; third && i < p.size() && !fourth; ++i)
+    if (CGAL::orientation(p[0], p[second], p[third], p[i]) != CGAL::COPLANAR) fourth = i;
+  TriangleMesh out;
+  if (!fourth) return out;
+  CGAL::Surface_mesh<Epick::Point_3> hull;
+  CGAL::convex_hull_3(p.begin(), p.end(), hull);
+  std::vector<std::int32_t> index(hull.number_of_vertices() + hull.number_of_removed_vertices(), -1);
+  for (auto v : hull.vertices()) {
+    index[v.idx()] = static_cast<std::int32_t>(out.vertices.size());
+    const auto& q = hull.point(v);
+    out.vertices.push_back({q.x(), q.y(), q.z()});
+  }
+  for (auto f : hull.faces()) {
+    std::array<std::int32_t, 3> tri{};
+    int i = 0;
+    for (auto v : CGAL::vertices_around_face(hull.halfedge(f), hull))
+      if (i < 3) tri[i++] = index[v.idx()];
+    out.triangles.push_back(tri);
+  }
+  return out;
+}
+
+namespace {
+
+using ConvexPart = std::vector<std::array<double, 3>>;
+
+// A closed mesh's convex parts, each as its vertices.
+std::vector<ConvexPart> ConvexParts(const TriangleMesh& m) {
+  const TriangleMesh hull = ConvexHull(m.vertices);
+  const double volume = std::abs(SignedVolume(m)), hull_volume = std::abs(SignedVolume(hull));
+  if (hull_volume <= volume * (1 + 1e-9)) return {hull.vertices};  // convex
+  Exact e = ToExact(m, 0);
+  Nef nef = NefOf(e);
+  CGAL::convex_decomposition_3(nef);
+  std::vector<ConvexPart> parts;
+  auto volume_it = nef.volumes_begin();
+  for (++volume_it; volume_it != nef.volumes_end(); ++volume_it) {
+    if (!volume_it->mark()) continue;
+    CGAL::Polyhedron_3<Kernel> part;
+    nef.convert_inner_shell_to_polyhedron(volume_it->shells_begin(), part);
+    ConvexPart points;
+    for (auto v = part.vertices_begin(); v != part.vertices_end(); ++v)
+      points.push_back({CGAL::to_double(v->point().x()), CGAL::to_double(v->point().y()), CGAL::to_double(v->point().z())});
+    if (!points.empty()) parts.push_back(std::move(points));
+  }
+  return parts;
+}
+
+}  // namespace
+
+TriangleMesh MinkowskiSum(const std::vector<TriangleMesh>& operands, BooleanSummary* summary) {
+  std::vector<ConvexPart> acc;
+  bool first = true;
+  for (const TriangleMesh& m : operands) {
+    if (m.triangles.empty()) continue;
+    std::vector<ConvexPart> parts = ConvexParts(m);
+    if (first) {
+      acc = std::move(parts);
+      first = false;
+      continue;
+    }
+    std::vector<ConvexPart> sums;
+    for (const ConvexPart& a : acc)
+      for (const ConvexPart& b : parts) {
+        ConvexPart s;
+        s.reserve(a.size() * b.size());
+        for (const auto& p : a)
+          for (const auto& q : b) s.push_back({p[0] + q[0], p[1] + q[1], p[2] + q[2]});
+        sums.push_back(ConvexHull(s).vertices);
+      }
+    acc = std::move(sums);
+  }
+  std::vector<TriangleMesh> hulls;
+  for (const ConvexPart& part : acc) {
+    TriangleMesh h = ConvexHull(part);
+    if (!h.triangles.empty()) hulls.push_back(std::move(h));
+  }
+  if (hulls.size() == 1) return hulls[0];
+  return ExactBoolean(BooleanOp::kUnion, hulls, summary);
 }
 
 }  // namespace fabatlas::mesh

@@ -64,7 +64,10 @@ CacheAssemblySummary AddCache(artifact::Artifact& artifact, const CacheAssembly&
       e.grid.clear();
     }
     if (e.grid.empty()) return false;
-    e.glb = artifact::MeshToGlb(geometry::Solid::Deserialize(e.grid).ToMesh());
+    {
+      const geometry::Solid solid = geometry::Solid::Deserialize(e.grid);
+      e.glb = artifact::SolidPreviewGlb(solid.ToMesh(), solid.boundary() != nullptr);
+    }
     return true;
   };
   if (a.stream_geometry) artifact.cache_geometry = fill;

@@ -344,7 +344,9 @@ async function meshFromGlb(buffer) {
   const group = new THREE.Group();
   gltf.scene.traverse((o) => {
     if (o.isMesh) {
-      o.geometry.computeVertexNormals();
+      // Exact meshes carry normals split at creases (flat faces, sharp
+      // edges); level-set surfaces get smooth ones here.
+      if (!o.geometry.attributes.normal) o.geometry.computeVertexNormals();
       o.material = material;
       group.add(o.clone());
     }

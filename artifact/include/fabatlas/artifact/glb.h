@@ -5,6 +5,8 @@
 
 #include <string>
 #include <string_view>
+#include <array>
+#include <vector>
 
 #include "fabatlas/mesh/triangle_mesh.h"
 
@@ -14,10 +16,16 @@ namespace fabatlas::artifact {
 // float32 VEC3 in the design's millimetres, z up (with min/max bounds, as
 // glTF requires) and uint32 indices; the node's scale (1/1000) and rotation
 // (-90 degrees about x) place it in glTF's metres with +Y up, so viewers
-// (Blender, three.js) show it at its true size and upright. No normals,
-// materials or extras. Deterministic: the same mesh gives the same bytes. An
-// empty mesh gives a scene without a mesh.
-std::string MeshToGlb(const mesh::TriangleMesh& mesh);
+// (Blender, three.js) show it at its true size and upright. With `normals`
+// (one unit vector per vertex, e.g. mesh::CreaseNormals for an exact mesh:
+// flat at creases) a NORMAL attribute, else none (viewers compute smooth
+// ones). No materials or extras. Deterministic: the same mesh gives the same
+// bytes. An empty mesh gives a scene without a mesh.
+std::string MeshToGlb(const mesh::TriangleMesh& mesh, const std::vector<std::array<float, 3>>* normals = nullptr);
+
+// A solid's preview mesh as GLB: an exact mesh (the mesh road) with normals
+// split at creases of 30 degrees, a level-set surface without normals.
+std::string SolidPreviewGlb(const mesh::TriangleMesh& surface, bool exact);
 
 // Reads a GLB written by MeshToGlb (or any GLB whose first mesh primitive is
 // float positions with uint8/16/32 indices): the primitive's positions as

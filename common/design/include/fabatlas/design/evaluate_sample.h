@@ -94,6 +94,11 @@ struct SampleResult {
   // and a check extracted it; else null.
   std::shared_ptr<const mesh::TriangleMesh> surface;
   std::vector<SubtreeRecord> subtrees;   // post-order, root last
+  // The sample's log: what OpenSCAD would warn of (a 2D object among 3D
+  // ones, an object left out) and each fallback of the mesh road (Nef
+  // polyhedra, level sets), "MODEL.scad: where: what". Subtrees found in the
+  // geometry cache bring none.
+  std::vector<std::string> warnings;
   // Wall seconds: solve, tree, checks (surface included), surface (the
   // extraction of the surface the checks read, when one does), properties,
   // total.

@@ -64,11 +64,16 @@ class Solid {
   std::size_t MemoryBytes() const;
 
   // Zero iso-surface via openvdb::tools::volumeToMesh, as triangles
-  // (quads split), outward orientation. adaptivity in [0,1].
+  // (quads split), outward orientation. adaptivity in [0,1]. A mesh solid
+  // (MeshSolid) returns its boundary as it is, whatever the adaptivity.
   mesh::TriangleMesh ToMesh(double adaptivity = 0.0) const;
 
+  // The exact boundary of a mesh solid (MeshSolid), else nullptr.
+  const mesh::TriangleMesh* boundary() const;
+
   // Exact, deterministic byte encoding (OpenVDB stream, uncompressed metadata
-  // stripped of timestamps) for content-addressed cache blobs, and back.
+  // stripped of timestamps; a mesh solid's boundary as raw little-endian
+  // doubles and indices) for content-addressed cache blobs, and back.
   std::string Serialize() const;
   static Solid Deserialize(std::string_view bytes);  // throws InputError
 
@@ -104,6 +109,17 @@ Solid Revolve(const GridSpec& g, const std::vector<Vec2>& profile, int sides);
 // (Winding-number signing of open meshes is not implemented yet.)
 Solid FromMesh(const GridSpec& g, const mesh::TriangleMesh& m);
 
+// A solid bounded by a closed, outward triangle mesh taken as exact: the
+// mesh road of OpenSCAD models (docs/openscad.md). Volume, CenterOfMass and
+// BoundingBox are the mesh's own (divergence theorem, exact up to rounding),
+// ToMesh returns the mesh, MemoryBytes counts the mesh, and DeltaG of two
+// mesh solids intersects the meshes exactly. Every other operation (level-set
+// CSG, offsets, occupancy, opening) reads the level set on `g`, built from the
+// mesh by FromMesh the first time one asks (once per solid, thread-safe).
+// An empty mesh is the empty solid. Throws InputError on a missing vertex or
+// a coordinate that is not finite.
+Solid MeshSolid(const GridSpec& g, mesh::TriangleMesh boundary);
+
 // Level set of a signed distance function f(x, y, z) (mm, negative inside)
 // whose interior lies within `bounds`. f must be exact within the narrow band
 // and never exceed the true distance in magnitude elsewhere (a bound, as CSG
@@ -137,7 +153,10 @@ Solid PolarArray(const Solid& s, int count, double total_angle_deg);
 
 // ---- Measures -----------------------------------------------------------------
 // Volumetric change of Fab Forms Eq. 2: |A xor B| / |A union B|, in [0,1].
-// Both empty -> 0. One empty, other not -> 1.
+// Both empty -> 0. One empty, other not -> 1. Two mesh solids: from their
+// exact volumes and the volume of their exact intersection (mesh::ExactBoolean),
+// |A xor B| = |A| + |B| - 2|A n B|; otherwise (or when the exact intersection
+// cannot be computed) from level-set CSG.
 double DeltaG(const Solid& a, const Solid& b);
 
 // Minimum-feature test by morphological opening (OpenVDB erosion then
