@@ -1,9 +1,11 @@
 // fabatlas/mesh/exact_boolean.h — exact booleans of closed triangle meshes:
-// CGAL Polygon Mesh Processing corefinement on Surface_mesh over the kernel
-// with exact predicates and exact constructions (Epeck), with CGAL's Nef
-// polyhedra (the exact booleans OpenSCAD 2021.01 computes everything with)
-// as the fallback where corefinement cannot give a manifold result (two
-// boxes sharing an edge) or an operand touches itself.
+// CGAL Polygon Mesh Processing corefinement on Surface_mesh, with exact
+// predicates always and the intersection points constructed in doubles
+// first (Epick: rounded once, as the result is rounded anyway), redone with
+// exact constructions (Epeck) when that result is not closed or touches
+// itself, and CGAL's Nef polyhedra (the exact booleans OpenSCAD 2021.01
+// computes everything with) as the fallback where corefinement cannot give
+// a manifold result (two boxes sharing an edge) or an operand touches itself.
 //
 // The one implementation of a mesh union, difference or intersection: the
 // mesh road of OpenSCAD models (docs/openscad.md), the design's `exact: true`
@@ -24,7 +26,8 @@ enum class BooleanOp { kUnion, kDifference, kIntersection };
 
 // What a boolean did (for the sample's log and benchmarks).
 struct BooleanSummary {
-  int corefinements = 0;  // pairwise corefinements run
+  int corefinements = 0;        // pairwise corefinements run
+  int exact_corefinements = 0;  // of them, those the kernel with exact constructions had to redo
   int disjoint = 0;       // operands settled by their bounding boxes alone (no intersection computed)
   int nef = 0;            // operations that fell back to Nef polyhedra
   std::string nef_why;    // why the first fallback was taken, "" when none
