@@ -123,7 +123,10 @@ fabatlas::scad::Evaluate2dOptions PeerOptions(const fs::path& model_dir, const f
     return fabatlas::mesh::ReadMesh(stl);
   };
   o.outline = [model_dir, dir, counter](const CsgNode& node) {
-    const fs::path p = Program(model_dir, ".fabatlas-outline-" + std::to_string(++*counter) + ".scad", node.canonical);
+    // In the model's directory when writable, for an import's relative path.
+    const std::string name = ".fabatlas-outline-" + std::to_string(++*counter) + ".scad";
+    const bool writable = static_cast<bool>(std::ofstream(model_dir / name));
+    const fs::path p = Program(writable ? model_dir : dir, name, node.canonical);
     const fs::path svg = dir / (p.filename().string() + ".svg");
     RunPeer(p, svg);
     fs::remove(p);
@@ -265,6 +268,13 @@ TEST(Scad2d, ImportIsResolvedBelowTheModelAndRefusedOutside) {
   CsgNode outside = fabatlas::scad::ParseCsg("import(file = \"../../etc/passwd.svg\");", "outside.csg");
   fabatlas::scad::Evaluate2dOptions o = PeerOptions(dir, dir);
   EXPECT_THROW(fabatlas::scad::Evaluate2d(outside, o, nullptr), fabatlas::InputError);
+}
+
+// text through the outline callback (OpenSCAD's own SVG of the text node,
+// here with the fonts OpenSCAD finds when it reads the .csg).
+TEST(Scad2d, CorpusTextThroughItsOutline) {
+  if (!fs::exists(kCorpus)) GTEST_SKIP() << "openscad-testing-data not installed";
+  ExpectSame2d(kCorpus / "2D/features/text-font-simple-tests.scad");
 }
 
 TEST(Scad2d, TextWithoutOutlineHasNoNativeEquivalent) {
