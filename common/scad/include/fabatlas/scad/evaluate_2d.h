@@ -74,7 +74,9 @@ Polygon2d Evaluate2d(const CsgNode& node, const Evaluate2dOptions& options, std:
 // them, caps triangulating the polygon with its holes, a top scaled to zero
 // collapsed to its point or segment. A closed, outward (counter-clockwise
 // seen from outside) triangle mesh without degenerate triangles; empty for
-// an empty polygon or height <= 0.
+// an empty polygon or height <= 0. Not a 2-manifold only where OpenSCAD's
+// solid is not one either: loops of a top scaled to zero collapsing onto the
+// same segment or point (a square with a hole under scale = [0, 1]).
 mesh::TriangleMesh LinearExtrude(const CsgNode& linear_extrude_node, const Evaluate2dOptions& options,
                                  std::vector<std::string>* warnings);
 
@@ -85,7 +87,8 @@ mesh::TriangleMesh LinearExtrude(const CsgNode& linear_extrude_node, const Evalu
 // starting on +x with caps at both ends. Vertices on the axis are shared by
 // all fragments. A polygon with points on both sides of the axis gives an
 // empty mesh and OpenSCAD's error line in *warnings, as OpenSCAD does.
-// Closed and outward as LinearExtrude.
+// Closed and outward as LinearExtrude; a polygon touching the axis at a
+// single vertex pinches there (one vertex of two sheets), as OpenSCAD's.
 mesh::TriangleMesh RotateExtrude(const CsgNode& rotate_extrude_node, const Evaluate2dOptions& options,
                                  std::vector<std::string>* warnings);
 
