@@ -256,6 +256,7 @@ class Evaluator {
     }
     std::optional<Shape> s = Combine(n, ClipperLib::ctUnion, false);
     if (!s) return s;
+    if (!std::isfinite(delta)) return Shape{};  // OpenSCAD's result is empty
     const int fragments = Fragments(n, std::abs(delta));
     const double arc_tolerance = std::abs(delta) * (1 - CosDegrees(180.0 / fragments));
     return internal::Offset(*s, delta, join, 1000000.0, arc_tolerance);
