@@ -379,6 +379,15 @@ TEST(Scad2d, CorpusRotateExtrudesMatchOpenScad) {
   ExpectSameSolids(kCorpus / "3D/features/rotate_extrude-angle.scad", 17);
 }
 
+TEST(Scad2d, DebianExampleExtrusionsMatchOpenScad) {
+  const fs::path examples = "/usr/share/openscad/examples";
+  if (!fs::exists(examples)) GTEST_SKIP() << "openscad examples not installed";
+  ExpectSameSolids(examples / "Basics/linear_extrude.scad", 4);
+  ExpectSameSolids(examples / "Advanced/offset.scad", 2);
+  ExpectSameSolids(examples / "Old/example017.scad", 5);
+  ExpectSameSolids(examples / "Old/example020.scad", 2);  // a spring twisted 1500 degrees in 80 slices
+}
+
 TEST(Scad2d, ExtrusionIdiomsMatchOpenScad) {
   const fs::path dir = fabatlas::testing::FreshTempDir("scad-extrude-idioms");
   ExpectSameSolids(Program(dir, "idioms.scad",

@@ -2,6 +2,7 @@
 #include "clipper_shape.h"
 
 #include <algorithm>
+#include <cmath>
 #include <map>
 
 namespace fabatlas::scad::internal {
@@ -138,14 +139,22 @@ std::vector<Loop> SliceLoops(const mesh::TriangleMesh& m, bool zero_above) {
   return loops;
 }
 
+// A coordinate on OpenSCAD's grid, truncated toward zero as its conversion
+// does; beyond the integers (or NaN) a value Clipper's range test refuses
+// (OpenSCAD's conversion is undefined there).
+cInt Grid(double mm) {
+  const double v = mm * kClipperScale;
+  if (!(std::abs(v) < 9.2e18)) return v < 0 ? static_cast<cInt>(-9.2e18) : static_cast<cInt>(9.2e18);
+  return static_cast<cInt>(v);
+}
+
 }  // namespace
 
 Paths ToPaths(const Shape& shape) {
   Paths paths;
   for (const Loop& loop : shape.loops) {
     Path p;
-    // The conversion truncates toward zero, as OpenSCAD's does.
-    for (const Point2& v : loop) p.push_back(IntPoint(static_cast<cInt>(v[0] * kClipperScale), static_cast<cInt>(v[1] * kClipperScale)));
+    for (const Point2& v : loop) p.push_back(IntPoint(Grid(v[0]), Grid(v[1])));
     if (!shape.sanitized && !ClipperLib::Orientation(p)) std::reverse(p.begin(), p.end());
     paths.push_back(std::move(p));
   }
@@ -214,9 +223,13 @@ Shape Minkowski(const std::vector<const Shape*>& shapes) {
   bool any = false;
   for (std::size_t i = 1; i < shapes.size(); ++i) {
     if (!shapes[i]) continue;
-    if (any) {  // the previous sum becomes the left operand
+    if (any) {  // the previous sum (not cleaned, as OpenSCAD keeps it) becomes the left operand
       ClipperLib::Clipper clipper;
-      clipper.AddPaths(terms, ClipperLib::ptSubject, true);
+      try {
+        clipper.AddPaths(terms, ClipperLib::ptSubject, true);
+      } catch (const ClipperLib::clipperException&) {
+        return {};
+      }
       clipper.Execute(ClipperLib::ctUnion, lhs, ClipperLib::pftNonZero, ClipperLib::pftNonZero);
     }
     const Paths rhs = ToPaths(*shapes[i]);
