@@ -179,7 +179,8 @@ TEST(Scad2d, CorpusBooleansMatchOpenScad) {
   if (!fs::exists(kCorpus)) GTEST_SKIP() << "openscad-testing-data not installed";
   for (const char* f : {"difference-2d-tests.scad", "intersection2-tests.scad", "polygon-tests.scad",
                         "polygons-touch.scad", "square-tests.scad", "circle-tests.scad", "scale2D-tests.scad",
-                        "render-2d-tests.scad", "nullspace-2d.scad"})
+                        "render-2d-tests.scad", "nullspace-2d.scad", "control-hull-dimension.scad",
+                        "highlight-modifier-2d.scad"})
     ExpectSame2d(kCorpus / "2D/features" / f);
 }
 
