@@ -25,6 +25,9 @@ find_package(SQLite3 REQUIRED)
 find_package(TinyGLTF CONFIG REQUIRED)
 find_package(PkgConfig REQUIRED)
 pkg_check_modules(MUPARSER REQUIRED IMPORTED_TARGET muparser)
+# Clipper 6.4.2: the 2-D booleans, offsets and minkowski OpenSCAD 2021.01 uses
+# (scad/evaluate_2d.h).
+pkg_check_modules(POLYCLIPPING REQUIRED IMPORTED_TARGET polyclipping)
 if(FABATLAS_BUILD_TESTS)
   find_package(GTest REQUIRED)
 endif()

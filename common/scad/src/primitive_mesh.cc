@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <numbers>
 
 namespace fabatlas::scad {
@@ -11,8 +12,30 @@ namespace {
 using mesh::TriangleMesh;
 using V3 = std::array<double, 3>;
 
-double SinDeg(double a) { return std::sin(a * std::numbers::pi / 180); }
-double CosDeg(double a) { return std::cos(a * std::numbers::pi / 180); }
+double SinDeg(double a) { return SinDegrees(a); }
+double CosDeg(double a) { return CosDegrees(a); }
+
+// An angle in degrees folded into [0, 90] (x -> its reference angle), with
+// the signs of its sine and cosine.
+struct Folded {
+  double x;
+  bool negative_sin, negative_cos;
+};
+
+Folded Fold(double x) {
+  x -= 360.0 * std::floor(x / 360.0);
+  Folded f{x, x >= 180.0, false};
+  if (f.negative_sin) f.x -= 180.0;
+  f.negative_cos = f.negative_sin;
+  if (f.x > 90.0) {
+    f.x = 180.0 - f.x;
+    f.negative_cos = !f.negative_cos;
+  }
+  return f;
+}
+
+constexpr double kDegree = std::numbers::pi / 180;
+constexpr double kSqrt3Over2 = 0.86602540378443864676;
 
 void AddFan(TriangleMesh& m, const std::vector<int>& face, bool flip) {
   for (std::size_t k = 1; k + 1 < face.size(); ++k) {
@@ -43,7 +66,77 @@ void AddCap(TriangleMesh& m, const std::vector<std::array<int, 3>>& tris, int ba
   }
 }
 
+// A top scaled to zero in one axis is a segment: the walls' top edges
+// overlap along it. Each triangle edge on the segment is split at the top
+// vertices inside it (a fan from the opposite vertex), so that every piece
+// of the segment is an edge of the triangles on both sides of it.
+void SplitAtTopVertices(TriangleMesh& m, const std::map<std::array<double, 3>, int>& top) {
+  std::map<int, double> along;  // top vertex -> its coordinate along the segment
+  for (const auto& [p, i] : top) along[i] = p[0] + p[1];  // one of x, y is 0
+  std::vector<std::pair<double, int>> sorted;
+  for (const auto& [i, t] : along) sorted.push_back({t, i});
+  std::sort(sorted.begin(), sorted.end());
+  std::vector<std::array<int, 3>> out;
+  for (const auto& t : m.triangles) {
+    int k = 0;
+    while (k < 3 && !(along.count(t[k]) && along.count(t[(k + 1) % 3]))) ++k;
+    if (k == 3) {
+      out.push_back(t);
+      continue;
+    }
+    const int u = t[k], v = t[(k + 1) % 3], apex = t[(k + 2) % 3];
+    const double tu = along[u], tv = along[v];
+    std::vector<int> chain{u};
+    for (const auto& [tw, w] : sorted)
+      if (std::min(tu, tv) < tw && tw < std::max(tu, tv)) chain.push_back(w);
+    if (tu > tv) std::reverse(chain.begin() + 1, chain.end());
+    chain.push_back(v);
+    for (std::size_t i = 0; i + 1 < chain.size(); ++i) out.push_back({chain[i], chain[i + 1], apex});
+  }
+  // Walls folded onto each other along the segment give a triangle and its
+  // reverse: a fin of no volume, dropped.
+  std::map<std::array<int, 3>, int> count;  // rotated to start at the least vertex
+  auto key = [](std::array<int, 3> t) {
+    std::rotate(t.begin(), std::min_element(t.begin(), t.end()), t.end());
+    return t;
+  };
+  for (const auto& t : out) ++count[key(t)];
+  m.triangles.clear();
+  for (const auto& t : out) {
+    const auto r = key({t[0], t[2], t[1]});
+    auto it = count.find(r);
+    if (it != count.end() && it->second > 0) {
+      --it->second;  // cancels one copy of the reverse
+      --count[key(t)];
+      continue;
+    }
+    if (count[key(t)] > 0) m.triangles.push_back(t);
+  }
+}
+
 }  // namespace
+
+double SinDegrees(double a) {
+  if (!std::isfinite(a) || std::abs(a) >= 360.0 * 4503599627370496.0) return std::nan("");
+  const Folded f = Fold(a);
+  double v;
+  if (f.x == 30) v = 0.5;
+  else if (f.x == 45) v = std::numbers::sqrt2 / 2;
+  else if (f.x == 60) v = kSqrt3Over2;
+  else v = f.x < 45 ? std::sin(f.x * kDegree) : std::cos((90 - f.x) * kDegree);
+  return f.negative_sin ? -v : v;
+}
+
+double CosDegrees(double a) {
+  if (!std::isfinite(a) || std::abs(a) >= 360.0 * 4503599627370496.0) return std::nan("");
+  const Folded f = Fold(a);
+  double v;
+  if (f.x == 60) v = 0.5;
+  else if (f.x == 45) v = std::numbers::sqrt2 / 2;
+  else if (f.x == 30) v = kSqrt3Over2;
+  else v = f.x > 45 ? std::sin((90 - f.x) * kDegree) : std::cos(f.x * kDegree);
+  return f.negative_cos ? -v : v;
+}
 
 int Fragments(double r, double fn, double fs, double fa) {
   if (r < 1e-6) return 3;
@@ -168,47 +261,78 @@ TriangleMesh LinearExtrudeMesh(const Region2& region, double height, bool center
   TriangleMesh m;
   const int n = static_cast<int>(region.points.size());
   slices = std::max(1, slices);
-  const double z0 = center ? -height / 2 : 0;
-  // Layer s: rotated by -twist * s / slices, then scaled (OpenSCAD's order).
+  const double z0 = center ? -height / 2 : 0, z1 = center ? height / 2 : height;
+  const bool zero_top = scale[0] == 0 || scale[1] == 0;
+  // Layer s: rotated by -twist * s / slices, then scaled (OpenSCAD's order
+  // and arithmetic). A top scaled to zero collapses to a point or a
+  // segment: its coinciding vertices are one vertex.
+  std::vector<int> id;  // layer vertex -> mesh vertex
+  std::map<std::array<double, 3>, int> top;
   for (int s = 0; s <= slices; ++s) {
-    const double t = static_cast<double>(s) / slices;
-    const double a = -twist * t;  // positive twist turns clockwise going up
-    const double sx = 1 + (scale[0] - 1) * t, sy = 1 + (scale[1] - 1) * t;
-    for (const Point2& p : region.points)
-      m.vertices.push_back({sx * (CosDeg(a) * p[0] - SinDeg(a) * p[1]), sy * (SinDeg(a) * p[0] + CosDeg(a) * p[1]),
-                            z0 + height * t});
+    const double a = -(twist * s / slices);  // positive twist turns clockwise going up
+    const double sx = 1 - (1 - scale[0]) * s / slices, sy = 1 - (1 - scale[1]) * s / slices;
+    const double c = CosDeg(a), sn = SinDeg(a);
+    const double m00 = sx * c, m01 = sx * -sn, m10 = sy * sn, m11 = sy * c;
+    const double z = z0 + (z1 - z0) * s / slices;
+    for (const Point2& p : region.points) {
+      const std::array<double, 3> v{m00 * p[0] + m01 * p[1], m10 * p[0] + m11 * p[1], z};
+      if (s == slices && zero_top) {
+        auto [it, fresh] = top.emplace(v, static_cast<int>(m.vertices.size()));
+        if (fresh) m.vertices.push_back(v);
+        id.push_back(it->second);
+      } else {
+        id.push_back(static_cast<int>(m.vertices.size()));
+        m.vertices.push_back(v);
+      }
+    }
   }
-  AddCap(m, region.triangles, 0, true);
-  AddCap(m, region.triangles, slices * n, false);
-  auto squared = [&](int i, int j) {
-    const auto& u = m.vertices[i];
-    const auto& v = m.vertices[j];
-    return (u[0] - v[0]) * (u[0] - v[0]) + (u[1] - v[1]) * (u[1] - v[1]);
+  auto add = [&](int a, int b, int c) {
+    a = id[a], b = id[b], c = id[c];
+    if (a != b && b != c && c != a) m.triangles.push_back({a, b, c});
+  };
+  for (const auto& t : region.triangles) add(t[0], t[2], t[1]);
+  if (!zero_top)
+    for (const auto& t : region.triangles) add(slices * n + t[0], slices * n + t[1], slices * n + t[2]);
+  // OpenSCAD's comparison of the diagonals' lengths: equal within 10 ppm of
+  // their mean.
+  auto shorter = [&](int i, int j, int k, int l) {  // -1: |ij| < |kl|, 0: equal, 1: longer
+    auto length = [&](int u, int v) {
+      const auto& p = m.vertices[id[u]];
+      const auto& q = m.vertices[id[v]];
+      return std::hypot(p[0] - q[0], p[1] - q[1]);
+    };
+    const double l1 = length(i, j), l2 = length(k, l);
+    return 2 * std::abs(l1 - l2) * 1e5 > l1 + l2 ? (l1 < l2 ? -1 : 1) : 0;
   };
   for (const auto& loop : region.loops) {
     const int k = static_cast<int>(loop.size());
     Loop points;
     for (int i : loop) points.push_back(region.points[i]);
     // Equal diagonals (an edge on a line through the axis): OpenSCAD splits
-    // along the one from the edge's end up to its start when the twist is
-    // negative, the other one when positive, and the other way round on holes.
-    const bool tie_end_up = (twist < 0) != (SignedArea(points) < 0);
-    for (int s = 0; s < slices; ++s)
+    // along the one from the edge's start up to its end when the twist is
+    // positive, the other one when it is zero or negative, and the other way
+    // round on holes.
+    const bool hole = SignedArea(points) < 0;
+    const bool tie_start_up = hole == (twist <= 0);
+    for (int s = 0; s < slices; ++s) {
+      // A top scaled to zero takes the other diagonal (no flat "ears").
+      const bool invert = zero_top && s + 1 == slices;
       for (int i = 0; i < k; ++i) {
         const int p1 = s * n + loop[i], c1 = s * n + loop[(i + 1) % k];  // this layer: previous, current vertex
         const int p2 = p1 + n, c2 = c1 + n;                                 // the layer above
-        const double d_c1p2 = squared(c1, p2), d_p1c2 = squared(p1, c2);
-        const double tolerance = 1e-9 * std::max(d_c1p2, d_p1c2);
-        const bool end_up = std::abs(d_c1p2 - d_p1c2) <= tolerance ? tie_end_up : d_c1p2 < d_p1c2;
-        if (end_up) {
-          m.triangles.push_back({p1, c1, p2});
-          m.triangles.push_back({c1, c2, p2});
-        } else {
-          m.triangles.push_back({p1, c1, c2});
-          m.triangles.push_back({p1, c2, p2});
+        const int d = shorter(p1, c2, c1, p2);
+        const bool start_up = (d == -1 || (d == 0 && tie_start_up)) != invert;
+        if (start_up) {  // diagonal p1-c2
+          add(p1, c1, c2);
+          add(p1, c2, p2);
+        } else {  // diagonal c1-p2
+          add(p1, c1, p2);
+          add(c1, c2, p2);
         }
       }
+    }
   }
+  if (zero_top && top.size() > 1) SplitAtTopVertices(m, top);
   return m;
 }
 
@@ -244,33 +368,74 @@ int ExtrudeSlices(double r_sqr, double delta_sqr, double height, double twist, c
     const int by_fa = static_cast<int>(std::ceil(twist / fa)), by_fs = static_cast<int>(std::ceil(length / fs));
     return std::max(std::min(by_fa, by_fs), min_slices);
   };
-  return uniform ? twisted() : std::max(twisted(), diagonal());
+  return twisted();
 }
 
-TriangleMesh RotateExtrudeMesh(const Loop& loop, double angle, int fragments) {
+TriangleMesh RotateExtrudeMesh(const Region2& region, double angle, int fragments) {
   TriangleMesh m;
-  const int n = static_cast<int>(loop.size());
+  const int n = static_cast<int>(region.points.size());
   const bool closed = std::abs(angle) >= 360;
   fragments = std::max(1, fragments);
   const int rings = closed ? fragments : fragments + 1;
+  // Ring r at OpenSCAD's angle a: (x sin a, x cos a, y), a = -90 + 360 r / f
+  // for a full turn (starting on -x), 90 - r angle / f otherwise (on +x). A
+  // point on the axis is one vertex in every ring.
+  std::vector<int> id(static_cast<std::size_t>(rings) * n);
   for (int r = 0; r < rings; ++r) {
-    const double a = closed ? 180 + 360.0 * r / fragments : angle * r / fragments;
-    for (const Point2& p : loop) m.vertices.push_back({p[0] * CosDeg(a), p[0] * SinDeg(a), p[1]});
-  }
-  for (int r = 0; r < fragments; ++r) {
-    const int r2 = closed ? (r + 1) % fragments : r + 1;
+    const double a = closed ? -90 + r * 360.0 / fragments : 90 - r * angle / fragments;
     for (int i = 0; i < n; ++i) {
-      const int j = (i + 1) % n;
-      m.triangles.push_back({r * n + i, r * n + j, r2 * n + j});
-      m.triangles.push_back({r * n + i, r2 * n + j, r2 * n + i});
+      const Point2& p = region.points[i];
+      if (p[0] == 0 && r > 0) {
+        id[r * n + i] = id[i];
+        continue;
+      }
+      id[r * n + i] = static_cast<int>(m.vertices.size());
+      m.vertices.push_back({p[0] * SinDeg(a), p[0] * CosDeg(a), p[1]});
     }
   }
-  if (!closed) {
-    const auto tris = TriangulateLoop(loop);
-    AddCap(m, tris, 0, true);
-    AddCap(m, tris, fragments * n, false);
+  auto add = [&](int a, int b, int c) {
+    a = id[a], b = id[b], c = id[c];
+    if (a != b && b != c && c != a) m.triangles.push_back({a, b, c});
+  };
+  for (const auto& loop : region.loops) {
+    const int k = static_cast<int>(loop.size());
+    for (int r = 0; r < fragments; ++r) {
+      const int r2 = closed ? (r + 1) % fragments : r + 1;
+      for (int i = 0; i < k; ++i) {
+        const int a = loop[i], b = loop[(i + 1) % k];
+        add(r * n + a, r2 * n + b, r * n + b);
+        add(r * n + a, r2 * n + a, r2 * n + b);
+      }
+    }
   }
+  if (!closed)
+    for (const auto& t : region.triangles) {
+      add(t[0], t[1], t[2]);
+      add(fragments * n + t[0], fragments * n + t[2], fragments * n + t[1]);
+    }
+  // The walls' orientation depends on the side of the axis and the sense of
+  // the turn: make the solid's volume positive (outward triangles).
+  double volume = 0;
+  for (const auto& t : m.triangles) {
+    const auto& p = m.vertices[t[0]];
+    const auto& q = m.vertices[t[1]];
+    const auto& w = m.vertices[t[2]];
+    volume += p[0] * (q[1] * w[2] - q[2] * w[1]) - p[1] * (q[0] * w[2] - q[2] * w[0]) + p[2] * (q[0] * w[1] - q[1] * w[0]);
+  }
+  if (volume < 0)
+    for (auto& t : m.triangles) std::swap(t[1], t[2]);
   return m;
+}
+
+TriangleMesh RotateExtrudeMesh(const Loop& loop, double angle, int fragments) {
+  Region2 region;
+  region.points = loop;
+  region.triangles = TriangulateLoop(loop);
+  std::vector<int> indices(loop.size());
+  for (std::size_t i = 0; i < loop.size(); ++i) indices[i] = static_cast<int>(i);
+  if (SignedArea(loop) < 0) std::reverse(indices.begin(), indices.end());
+  region.loops.push_back(std::move(indices));
+  return RotateExtrudeMesh(region, angle, fragments);
 }
 
 }  // namespace fabatlas::scad

@@ -15,6 +15,12 @@ namespace fabatlas::scad {
 using Point2 = std::array<double, 2>;
 using Loop = std::vector<Point2>;  // a closed polygon, last point != first
 
+// Sine and cosine of an angle in degrees as OpenSCAD 2021.01 computes them:
+// exact at multiples of 30 and 45 degrees (sin 30 = 0.5, sin 180 = 0), so
+// its circles have exact axis points. NaN for a non-finite angle.
+double SinDegrees(double degrees);
+double CosDegrees(double degrees);
+
 // OpenSCAD's number of fragments of a circle of radius r: $fn when > 0 (at
 // least 3), else ceil(max(min(360 / $fa, 2 pi r / $fs), 5)); 3 below r ~ 1e-6.
 int Fragments(double r, double fn, double fs, double fa);
@@ -47,12 +53,15 @@ struct Region2 {
 
 // linear_extrude of a region (region_outline.h builds one from OpenSCAD's
 // 2D children): z from 0 (or -h/2 with center) to h, rotated by -twist
-// degrees and scaled by `scale` (x, y) at the top, with `slices` layers
-// between. Each side quad is split along its shorter diagonal (ties, edges
-// on a line through the axis, by the twist's sign and whether the loop is a
-// hole), as OpenSCAD 2021.01 splits them: the diagonal decides the volume of
-// a twisted wall (a 300 mm^2 cross twisted 57.5 degrees in 5 slices: 5525 or
-// 6194 mm^3).
+// degrees and scaled by `scale` (x, y, each >= 0) at the top, with `slices`
+// layers between. Each side quad is split along its shorter diagonal
+// (lengths within 10 ppm are equal; then by the twist's sign, zero counting
+// as negative, and whether the loop is a hole), as OpenSCAD 2021.01 splits
+// them: the diagonal decides the volume of a twisted wall (a 300 mm^2 cross
+// twisted 57.5 degrees in 5 slices: 5525 or 6194 mm^3). A top scaled to
+// zero in x or y has no cap, its coinciding vertices merged and its quads
+// split along the other diagonal, as OpenSCAD's. Closed and outward, no
+// degenerate triangles.
 mesh::TriangleMesh LinearExtrudeMesh(const Region2& region, double height, bool center, double twist, int slices,
                                      const Point2& scale);
 
@@ -66,10 +75,14 @@ mesh::TriangleMesh LinearExtrudeMesh(const Region2& region, double height, bool 
 // non-uniform scale, $fn or the diagonal path's length / $fs.
 int ExtrudeSlices(double r_sqr, double delta_sqr, double height, double twist, const Point2& scale, double fn,
                   double fs, double fa);
-// rotate_extrude of one simple loop in the (x >= 0, y) half-plane about z,
-// through `angle` degrees in `fragments` steps, starting on +x; a closed
-// one (|angle| >= 360) starts on -x, as OpenSCAD 2021.01's (so an odd number
-// of fragments puts a vertex on -x, not +x).
+// rotate_extrude of a region in one half-plane (x >= 0 or x <= 0, its y
+// becoming z) about z, through `angle` degrees in `fragments` steps, each
+// ring at OpenSCAD 2021.01's angles: a closed one (|angle| >= 360) starts on
+// -x (so an odd number of fragments puts a vertex on -x, not +x), a partial
+// one starts on +x and has the region's triangles as its end caps. A point
+// on the axis is one vertex shared by every ring. Closed and outward.
+mesh::TriangleMesh RotateExtrudeMesh(const Region2& region, double angle, int fragments);
+// The same of one simple loop.
 mesh::TriangleMesh RotateExtrudeMesh(const Loop& loop, double angle, int fragments);
 
 }  // namespace fabatlas::scad
