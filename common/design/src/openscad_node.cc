@@ -31,6 +31,7 @@
 #include "fabatlas/geometry/convex_mesh_distance.h"
 #include "fabatlas/scad/csg_tree.h"
 #include "fabatlas/scad/customizer.h"
+#include "fabatlas/scad/evaluate_2d.h"
 #include "fabatlas/scad/evaluate_model.h"
 #include "fabatlas/scad/model_files.h"
 #include "fabatlas/scad/primitive_mesh.h"
@@ -568,7 +569,7 @@ class CsgEvaluation {
     bool two_d_child = false, two_d_first = false;
     if (boolean) {
       for (std::size_t i = 0; i < n.children.size(); ++i) {
-        if (IsTwoD(n.children[i].name)) {
+        if (mesh_road_ ? scad::Dimension(n.children[i]) == 2 : IsTwoD(n.children[i].name)) {
           if (mesh_road_) {
             Warn(n.children[i].name + " (CSG line " + std::to_string(n.children[i].line) +
                  "): a 2D object among 3D ones is ignored, as OpenSCAD ignores it");
@@ -586,8 +587,12 @@ class CsgEvaluation {
       try {
         if (boolean && ((n.name == "intersection" && two_d_child) || (n.name == "difference" && two_d_first)))
           result.solid = Solid();
-        else
-          result.solid = boolean ? MeshOfChildren(n, m, kids, record) : MeshLeaf(n, m);
+        else if (boolean)
+          result.solid = MeshOfChildren(n, m, kids, record);
+        else {
+          leaf_path_ = path;
+          result.solid = MeshLeaf(n, m);
+        }
       } catch (const NoNativeEquivalent& e) {
         record.op = kCsgRenderedOp + n.name;
         result.solid = Rendered(n, m, e.what);
@@ -1059,7 +1064,7 @@ class CsgEvaluation {
   static bool MeshChildFrame(const CsgNode& n, const Affine& m, Affine* inner) {
     if (n.name == "hull") {
       *inner = m;
-      return std::any_of(n.children.begin(), n.children.end(), [](const CsgNode& c) { return !IsTwoD(c.name); });
+      return std::any_of(n.children.begin(), n.children.end(), [](const CsgNode& c) { return scad::Dimension(c) == 3; });
     }
     if (n.name == "minkowski" || n.name == "resize") {
       *inner = kIdentity;
@@ -1201,20 +1206,27 @@ class CsgEvaluation {
       return MeshOf(Outward(std::move(mm)), m);
     }
     if (n.name == "linear_extrude" || n.name == "rotate_extrude") {
-      Shape2 s;
-      s.op = Shape2::Op::kUnion;
-      for (const auto& c : n.children) s.parts.push_back(Evaluate2(c, {1, 0, 0, 0, 1, 0}, render2_));
-      std::vector<Loop> loops;
-      CollectLoops(s, loops);
-      if (loops.empty()) return Solid();
-      const scad::Region2 region = scad::ResolveRegion(loops, [&](const scad::Point2& p) { return Inside(s, p); });
-      if (region.triangles.empty()) return Solid();
-      if (n.name == "linear_extrude") return MeshOf(LinearExtruded(n, region), m);
+      // The 2D child as OpenSCAD computes it (Clipper), extruded to
+      // OpenSCAD's mesh (evaluate_2d.h); projections below evaluate their
+      // 3D children on this road, texts and 2D imports are OpenSCAD's outlines.
+      scad::Evaluate2dOptions options;
+      options.model_dir = model_.parent_path();
+      options.outline = [this](const CsgNode& c) { return Outline2(c); };
+      options.mesh3d = [this](const CsgNode& c) {
+        return Evaluate3(c, kIdentity, leaf_path_ + "/" + std::to_string(++projections_)).solid.ToMesh();
+      };
+      std::vector<std::string> warnings;
+      mesh::TriangleMesh mm;
       try {
-        return MeshOf(RotateExtruded(n, s, region), m);
-      } catch (const InputError& e) {
-        throw NoNativeEquivalent{"rotate_extrude (" + std::string(e.what()) + ")"};
+        mm = n.name == "linear_extrude" ? scad::LinearExtrude(n, options, &warnings)
+                                        : scad::RotateExtrude(n, options, &warnings);
+      } catch (const scad::NoNativeEquivalentError& e) {
+        throw NoNativeEquivalent{e.what()};
+      } catch (const InputError& e) {  // an import outside the model's directory
+        throw SampleFailure(kNoGeometry, model_.filename().string() + ": " + e.what());
       }
+      for (const std::string& w : warnings) Warn(n.name + " (CSG line " + std::to_string(n.line) + "): " + w);
+      return MeshOf(std::move(mm), m);
     }
     if (n.name == "import") {
       auto f = n.args.find("file");
@@ -1240,60 +1252,11 @@ class CsgEvaluation {
     throw NoNativeEquivalent{n.name};
   }
 
-  // linear_extrude of a region, with OpenSCAD's slices, twist and scale.
-  mesh::TriangleMesh LinearExtruded(const CsgNode& n, const scad::Region2& region) {
-    const double h = n.Number("height", 100), twist = n.Number("twist", 0);
-    if (!(h > 0)) return {};
-    scad::Point2 scale{1, 1};
-    if (auto it = n.args.find("scale"); it != n.args.end()) {
-      if (it->second.type == CsgValue::Type::kVector) {
-        auto v = Numbers(it->second);
-        if (v.size() >= 2) scale = {v[0], v[1]};
-      } else {
-        scale = {Num(it->second, 1), Num(it->second, 1)};
-      }
-    }
-    double r_sqr = 0, delta_sqr = 0;
-    for (const auto& loop : region.loops)
-      for (int i : loop) {
-        const scad::Point2& p = region.points[i];
-        r_sqr = std::max(r_sqr, p[0] * p[0] + p[1] * p[1]);
-        const double dx = p[0] * (1 - scale[0]), dy = p[1] * (1 - scale[1]);
-        delta_sqr = std::max(delta_sqr, dx * dx + dy * dy);
-      }
-    int slices = static_cast<int>(n.Number("slices", 0));
-    if (slices <= 0)
-      slices = scad::ExtrudeSlices(r_sqr, delta_sqr, h, twist, scale, n.Number("$fn", 0), n.Number("$fs", 2),
-                                   n.Number("$fa", 12));
-    return scad::LinearExtrudeMesh(region, h, n.Boolean("center", false), twist, slices, scale);
-  }
-
-  // rotate_extrude of a region: each boundary loop's solid of revolution,
-  // outer loops (counter-clockwise) joined, holes taken away, exactly.
-  mesh::TriangleMesh RotateExtruded(const CsgNode& n, const Shape2& s, const scad::Region2& region) {
-    const auto [min_x, max_x] = XRangeWithAxis(s);
-    if (min_x < 0) throw NoNativeEquivalent{"rotate_extrude of points with x < 0"};
-    const double angle = std::clamp(n.Number("angle", 360), -360.0, 360.0);
-    if (angle == 0) return {};  // OpenSCAD 2021.01: no material
-    const int fragments = static_cast<int>(std::max(FragmentsOf(n, max_x) * std::abs(angle) / 360, 1.0));
-    std::vector<mesh::TriangleMesh> outer, holes;
-    for (const auto& ids : region.loops) {
-      Loop loop;
-      double area2 = 0;
-      for (int i : ids) loop.push_back(region.points[i]);
-      for (std::size_t i = 0, j = loop.size() - 1; i < loop.size(); j = i++)
-        area2 += loop[j][0] * loop[i][1] - loop[i][0] * loop[j][1];
-      (area2 > 0 ? outer : holes).push_back(scad::RotateExtrudeMesh(loop, angle, fragments));
-    }
-    mesh::TriangleMesh joined = outer.size() == 1 ? outer[0] : mesh::ExactBoolean(mesh::BooleanOp::kUnion, outer);
-    if (holes.empty()) return joined;
-    holes.insert(holes.begin(), std::move(joined));
-    return mesh::ExactBoolean(mesh::BooleanOp::kDifference, holes);
-  }
-
   OpenScadNodeContext& c_;
   fs::path model_, work_;
   bool mesh_road_ = true;
+  std::string leaf_path_;  // the record path of the leaf MeshLeaf evaluates (its projections' children go below it)
+  int projections_ = 0;
   int rendered_ = 0;
   bool linked_ = false;
   Render2 render2_;
