@@ -13,8 +13,9 @@ volume) is cached on disk under --cache, keyed by SHA-256 of the model's bytes
 and OpenSCAD's version (files the model includes are not in the key), so a
 rerun renders nothing it has rendered. Status: `ok` (an STL enclosing a
 positive volume), `empty` (no STL, no triangles or no volume: library files
-with nothing at top level, 2-D results, echo tests), `error` (OpenSCAD failed
-with another message), `timeout`. The `ok` models are the denominator.
+with nothing at top level, 2-D results, echo tests), `inverted` (an STL whose
+triangles enclose a negative volume: OpenSCAD kept a polyhedron's inward
+faces), `error` (OpenSCAD failed with another message), `timeout`. The `ok` models are the denominator.
 
 fabatlas: each denominator model evaluated at its own values by a one-node
 design beside nothing else,
@@ -40,6 +41,12 @@ bench_mesh_compare (bench/scad/mesh_compare.cc: 20,000 area-weighted random
 points on each mesh, exact distance to the other's triangles, seeded; p50,
 p95, max), fabatlas's and OpenSCAD's wall times. A model passes when it has
 geometry, its volume is within 0.1% and p95 <= 0.01 mm both ways.
+
+With --manifold, each denominator model is also evaluated by Manifold
+(bench/scad/manifold_csg.mjs: npm manifold-3d, WASM, one thread, the same
+.csg tree with OpenSCAD's faceting; median ms in process of 5 after a
+warm-up) and measured the same way: what an exact mesh kernel gives on this
+corpus, and which nodes the script does not evaluate.
 
   nice -n 10 python3 bench/scad/corpus.py --jobs 2 --markdown
   nice -n 10 python3 bench/scad/corpus.py --peer-only --jobs 2   # fill the cache only
@@ -143,20 +150,23 @@ def peer(model, cache, version, timeout, compare):
         with open(meta_path + ".tmp", "w") as f:
             json.dump(meta, f, indent=1)
         os.replace(meta_path + ".tmp", meta_path)
-    if meta["status"] == "rendered" and compare.available():
+    if meta["status"] == "rendered" and "volume" not in meta and compare.available():
         # The STL's volume by the same code as fabatlas's (enclosed_volume.h).
         try:
             v = compare(stl)["meshes"][0]
             meta.update(triangles=v["triangles"], volume=v["volume"], size=v["size"])
-            meta["status"] = "ok" if v["volume"] > 0 else "empty"
-            if meta["status"] == "empty":
-                meta["message"] = f"the STL encloses no volume ({v['volume']:g} mm^3)"
         except RuntimeError as e:
-            meta.update(status="empty", triangles=0, volume=0.0, message=str(e))
+            meta.update(triangles=0, volume=0.0, size=[0, 0, 0], volume_message=str(e))
         with open(meta_path + ".tmp", "w") as f:
             json.dump(meta, f, indent=1)
         os.replace(meta_path + ".tmp", meta_path)
-    return dict(meta, stl=stl)
+    meta = dict(meta, stl=stl)
+    if meta["status"] == "rendered" and "volume" in meta:
+        v = meta["volume"]
+        meta["status"] = "ok" if v > 0 else "inverted" if v < 0 else "empty"
+        if meta["status"] != "ok":
+            meta["message"] = meta.get("volume_message") or f"the STL encloses {v:g} mm^3"
+    return meta
 
 
 # ---- fabatlas ----
@@ -197,6 +207,35 @@ def fabatlas(name, model, fab, work, timeout, voxel, size):
     return dict(out, geometry=True)
 
 
+def manifold(name, model, work, timeout, compare, peer_stl, peer_volume):
+    d = os.path.join(work, re.sub(r"[^A-Za-z0-9_.-]", "_", name))
+    os.makedirs(d, exist_ok=True)
+    stl = os.path.join(d, "manifold.stl")
+    if os.path.exists(stl):
+        os.remove(stl)
+    # --single-threaded: V8 without its worker threads (compilation, GC): the
+    # one thread the comparison is about.
+    wall, r = run(["node", "--single-threaded", os.path.join(ROOT, "bench", "scad", "manifold_csg.mjs"), model, "--json", "--stl", stl],
+                  timeout, cwd=os.path.dirname(model))
+    if r is None:
+        return {"geometry": False, "message": f"took over {timeout} s"}
+    try:
+        j = json.loads(r.stdout.strip().splitlines()[-1])
+    except (json.JSONDecodeError, IndexError):
+        return {"geometry": False, "message": last_line(r.stderr, f"exit {r.returncode}")}
+    out = {"outlined_by_openscad": j.get("outlined_by_openscad", [])}
+    if "ms_median" not in j:
+        msg = ("not evaluated: " + ", ".join(j["unsupported"])) if j.get("unsupported") else j.get("error", "?")
+        return dict(out, geometry=False, message=msg)
+    out.update(ms=j["ms_median"], triangles=j["triangles"], volume=j["volume"])
+    if j["triangles"] == 0:
+        return dict(out, geometry=False, message="no triangles")
+    c = compare(peer_stl, stl)
+    out.update(geometry=True, volume_error=(c["meshes"][1]["volume"] - peer_volume) / peer_volume,
+               distance={"openscad_to_manifold": c["distance"]["a_to_b"], "manifold_to_openscad": c["distance"]["b_to_a"]})
+    return out
+
+
 def evaluate(name, model, a, cache, version, compare, lock, done, total):
     p = peer(model, cache, version, a.timeout, compare)
     row = {"model": name, "path": model,
@@ -218,6 +257,12 @@ def evaluate(name, model, a, cache, version, compare, lock, done, total):
             except RuntimeError as e:
                 row["fabatlas"].update(geometry=False, message=f"its mesh could not be measured: {e}")
         row["passes"] = passes(row)
+        if a.manifold:
+            try:
+                row["manifold"] = manifold(name, model, os.path.join(a.out, "models"), a.timeout, compare, p["stl"],
+                                           p["volume"])
+            except RuntimeError as e:
+                row["manifold"] = {"geometry": False, "message": str(e)}
     with lock:
         done[0] += 1
         f = row.get("fabatlas")
@@ -261,7 +306,16 @@ def summarise(rows):
     p95s = sorted(max(r["distance"][k]["p95"] for k in r["distance"]) for r in geo)
     fw = [r["fabatlas"]["wall"] for r in den]
     ow = [r["openscad"]["wall"] for r in den]
+    mf = [r["manifold"] for r in den if "manifold" in r]
+    mf_geo = [m for m in mf if m.get("geometry")]
+    manifold = {
+        "evaluated": len(mf), "geometry": len(mf_geo),
+        "volume_within_0.1pct": sum(abs(m["volume_error"]) <= VOLUME_TOLERANCE for m in mf_geo),
+        "p95_within_0.01mm": sum(max(m["distance"][k]["p95"] for k in m["distance"]) <= P95_TOLERANCE for m in mf_geo),
+        "ms_median": statistics.median(m["ms"] for m in mf_geo) if mf_geo else None,
+    } if mf else None
     return {
+        "manifold": manifold,
         "models": len(rows), "openscad": peer_counts, "denominator": len(den),
         "geometry": len(geo), "geometry_pct": pct(len(geo)),
         "volume_within_0.1pct": len(vol), "volume_pct": pct(len(vol)),
@@ -300,6 +354,24 @@ def markdown(summary, rows, command):
             dist = "–"
         why = reason(r).replace("|", "\\|")
         lines.append(f"| {r['model']} | {why} | {vol} | {dist} | {f['wall']:.2f} / {o['wall']:.2f} |")
+    if s.get("manifold"):
+        m = s["manifold"]
+        lines += ["", f"Manifold (bench/scad/manifold_csg.mjs) on the same {m['evaluated']} models: geometry {m['geometry']}, "
+                  f"volume within 0.1% {m['volume_within_0.1pct']}, p95 <= 0.01 mm both ways {m['p95_within_0.01mm']}; "
+                  f"in-process evaluation median {fmt(m['ms_median'])} ms.", "",
+                  "| model | Manifold: why not |", "|---|---|"]
+        for r in rows:
+            mm = r.get("manifold")
+            if not mm:
+                continue
+            if not mm.get("geometry"):
+                why = mm.get("message", "")
+            else:
+                p1, p2 = (mm["distance"][k]["p95"] for k in ("openscad_to_manifold", "manifold_to_openscad"))
+                why = ", ".join(x for x in (f"volume {100 * mm['volume_error']:+.3f}%" if abs(mm["volume_error"]) > VOLUME_TOLERANCE else "",
+                                            f"p95 {p1:.3g} / {p2:.3g} mm" if max(p1, p2) > P95_TOLERANCE else "") if x)
+            if why:
+                lines.append(f"| {r['model']} | {why.replace('|', '/')} |")
     lines += ["", "Not in the denominator (OpenSCAD gives no STL with volume):", ""]
     for r in rows:
         if r["openscad"]["status"] not in ("ok",):
@@ -327,6 +399,8 @@ def main():
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--peer-only", action="store_true", help="only render (and cache) OpenSCAD's STLs")
     ap.add_argument("--markdown", action="store_true", help="write OUT/corpus.md and print it")
+    ap.add_argument("--manifold", action="store_true",
+                    help="also evaluate each model with Manifold (bench/scad/manifold_csg.mjs, npm manifold-3d)")
     a = ap.parse_args()
     a.fabatlas = os.path.abspath(a.fabatlas)
     a.out = os.path.abspath(a.out)

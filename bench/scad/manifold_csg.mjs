@@ -3,8 +3,12 @@
 // tree: the peer for fabatlas's exact mesh road (docs/openscad.md, "Manifold
 // as a peer"; docs/benchmarks.md).
 //
-//   node bench/scad/manifold_csg.mjs MODEL.csg|MODEL.scad [--repeats 5] [--stl OUT.stl] [--json]
-//                                    [-D name=value ...]
+//   node --single-threaded bench/scad/manifold_csg.mjs MODEL.csg|MODEL.scad [--repeats 5]
+//        [--stl OUT.stl] [--json] [-D name=value ...]
+//
+// (--single-threaded: V8 without worker threads, so WASM compilation and GC
+// run on the one thread too; Manifold's WASM build has no threads of its own.
+// Without it, node 20 hung at exit now and then, every thread in a futex wait.)
 //
 // A .scad model is first exported by OpenSCAD (`openscad -o MODEL.csg`, with
 // the -D values), as fabatlas reads it. The tree is the text that export
@@ -150,12 +154,15 @@ function parseCsg(text, file) {
 
 const sinDeg = (a) => Math.sin(a * Math.PI / 180);
 const cosDeg = (a) => Math.cos(a * Math.PI / 180);
-const num = (v, d) => (typeof v === 'number' && Number.isFinite(v) ? v : d);
+const num = (v, d) => (typeof v === 'number' && !Number.isNaN(v) ? v : d);
+// OpenSCAD drops a primitive with a non-finite size, radius or point.
+const finite = (...xs) => xs.flat(2).every((x) => typeof x !== 'number' || Number.isFinite(x));
 
 // $fn when > 0 (at least 3), else ceil(max(min(360 / $fa, 2 pi r / $fs), 5)); 3 below r ~ 1e-6.
+// An infinite $fn gives 3, as OpenSCAD 2021.01's integer conversion does.
 function fragments(r, fn, fs, fa) {
   if (r < 1e-6) return 3;
-  if (fn > 0) return fn >= 3 ? Math.trunc(fn) : 3;
+  if (fn > 0) return fn >= 3 && Number.isFinite(fn) ? Math.trunc(fn) : 3;
   return Math.ceil(Math.max(Math.min(360 / fa, r * 2 * Math.PI / fs), 5));
 }
 const fragmentsOf = (n, r) => fragments(r, num(n.args.$fn, 0), num(n.args.$fs, 2), num(n.args.$fa, 12));
@@ -241,7 +248,7 @@ function extrudeSlices(rSqr, deltaSqr, height, twist, scale, fn, fs, fa) {
   return uniform ? twisted() : Math.max(twisted(), diagonal());
 }
 
-// Ear clipping of one polygon face given as 3-D points, in its best-fit plane.
+// Triangles of one polygon face given as 3-D points (indices into pts).
 function triangulateFace(pts, ids) {
   if (ids.length === 3) return [ids];
   const nrm = [0, 0, 0];
@@ -255,6 +262,12 @@ function triangulateFace(pts, ids) {
   const u = (ax + 1) % 3, v = (ax + 2) % 3, s = nrm[ax] >= 0 ? 1 : -1;
   const p2 = ids.map((id) => [pts[id][u], s * pts[id][v]]);
   const cross = (o, a, b) => (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0]);
+  // A convex face (in its plane's projection) is a fan from its first
+  // corner, as fabatlas's PolyhedronMesh: the split of a non-planar quad
+  // decides its volume (issue1867: the fan gives OpenSCAD's); others are
+  // ear-clipped.
+  const fan = () => ids.slice(1, -1).map((_, k) => [ids[0], ids[k + 1], ids[k + 2]]);
+  if (p2.every((_, k) => cross(p2[k], p2[(k + 1) % p2.length], p2[(k + 2) % p2.length]) >= 0)) return fan();
   let idx = [...ids.keys()];
   const tris = [];
   let guard = 0;
@@ -275,6 +288,109 @@ function triangulateFace(pts, ids) {
   }
   for (let k = 1; k + 1 < idx.length; ++k) tris.push([ids[idx[0]], ids[idx[k]], ids[idx[k + 1]]]);
   return tris;
+}
+
+// linear_extrude of a region as OpenSCAD 2021.01 meshes it
+// (LinearExtrudeMesh in primitive_mesh.cc): layer s rotated by
+// -twist * s / slices, then scaled; caps triangulated; each side quad split
+// along its shorter diagonal (equal ones by the twist's sign, the other way
+// on holes).
+function linearExtrudeMesh(w, loops, height, center, twist, slices, scale) {
+  const points = loops.flat(), n = points.length;
+  const caps = w.triangulate(loops);
+  const verts = [], tris = [];
+  const z0 = center ? -height / 2 : 0;
+  for (let s = 0; s <= slices; ++s) {
+    const t = s / slices, ang = -twist * t, c = cosDeg(ang), si = sinDeg(ang);
+    const sx = 1 + (scale[0] - 1) * t, sy = 1 + (scale[1] - 1) * t;
+    for (const [x, y] of points) verts.push([sx * (c * x - si * y), sy * (si * x + c * y), z0 + height * t]);
+  }
+  for (const [i, j, k] of caps) {
+    tris.push([i, k, j]);
+    tris.push([slices * n + i, slices * n + j, slices * n + k]);
+  }
+  const sq = (i, j) => (verts[i][0] - verts[j][0]) ** 2 + (verts[i][1] - verts[j][1]) ** 2;
+  let base = 0;
+  for (const loop of loops) {
+    const k = loop.length;
+    let area = 0;
+    for (let i = 0; i < k; ++i) area += loop[i][0] * loop[(i + 1) % k][1] - loop[(i + 1) % k][0] * loop[i][1];
+    const tieEndUp = (twist < 0) !== (area < 0);
+    for (let s = 0; s < slices; ++s)
+      for (let i = 0; i < k; ++i) {
+        const p1 = s * n + base + i, c1 = s * n + base + (i + 1) % k, p2 = p1 + n, c2 = c1 + n;
+        const d1 = sq(c1, p2), d2 = sq(p1, c2), tol = 1e-9 * Math.max(d1, d2);
+        const endUp = Math.abs(d1 - d2) <= tol ? tieEndUp : d1 < d2;
+        if (endUp) tris.push([p1, c1, p2], [c1, c2, p2]);
+        else tris.push([p1, c1, c2], [p1, c2, p2]);
+      }
+    base += k;
+  }
+  return {verts, tris};
+}
+
+// rotate_extrude of a region as OpenSCAD 2021.01 meshes it
+// (RotateExtrudeMesh in primitive_mesh.cc): `sectors` steps through `angle`
+// degrees from +x, a full turn from -x (an outline on x < 0 sweeps with its
+// negative radii, as OpenSCAD's); open ends capped. Manifold's own revolve
+// starts a full turn on +x and gives nothing for one or two sectors.
+function rotateExtrudeMesh(w, loops, angle, sectors) {
+  const points = loops.flat(), n = points.length, full = Math.abs(angle) >= 360;
+  const rings = full ? sectors : sectors + 1, verts = [], tris = [];
+  for (let r = 0; r < rings; ++r) {
+    const t = full ? 180 + 360 * r / sectors : angle * r / sectors;
+    for (const [x, y] of points) verts.push([x * cosDeg(t), x * sinDeg(t), y]);
+  }
+  let base = 0;
+  for (const loop of loops) {
+    const k = loop.length;
+    for (let r = 0; r < sectors; ++r) {
+      const r2 = full ? (r + 1) % sectors : r + 1;
+      for (let i = 0; i < k; ++i) {
+        const a = r * n + base + i, b = r * n + base + (i + 1) % k, c = r2 * n + base + (i + 1) % k, d = r2 * n + base + i;
+        tris.push([a, b, c], [a, c, d]);
+      }
+    }
+    base += k;
+  }
+  if (!full)
+    for (const [i, j, k] of w.triangulate(loops)) tris.push([i, k, j], [sectors * n + i, sectors * n + j, sectors * n + k]);
+  return {verts, tris};
+}
+
+// resize(newsize, auto): the scale per axis OpenSCAD 2021.01 applies about
+// the origin: newsize / size where newsize > 0; an axis with auto set takes
+// the largest of those; the rest 1.
+function resizeScale(a, box, dims) {
+  const size = [...Array(dims).keys()].map((k) => box.max[k] - box.min[k]);
+  const want = Array.isArray(a.newsize) ? a.newsize : [];
+  const auto = Array.isArray(a.auto) ? a.auto : [...Array(dims)].map(() => a.auto);
+  const scale = size.map((sz, k) => (num(want[k], 0) > 0 && sz > 0 ? want[k] / sz : 1));
+  const given = scale.filter((_, k) => num(want[k], 0) > 0);
+  const autoscale = given.length ? Math.max(...given) : 1;
+  return scale.map((x, k) => (!(num(want[k], 0) > 0) && (auto[k] === true || auto[k] === 1) ? autoscale : x));
+}
+
+// An STL file (binary, or ASCII) as a mesh, corners with equal coordinates merged.
+function readStl(file) {
+  const buf = fs.readFileSync(file), verts = [], tris = [], at = new Map();
+  const vertex = (x, y, z) => {
+    const key = `${x},${y},${z}`;
+    if (!at.has(key)) { at.set(key, verts.length); verts.push([x, y, z]); }
+    return at.get(key);
+  };
+  const count = buf.length >= 84 ? buf.readUInt32LE(80) : -1;
+  if (count >= 0 && buf.length === 84 + 50 * count) {
+    for (let t = 0; t < count; ++t) {
+      const o = 84 + 50 * t + 12, c = [0, 1, 2].map((k) => vertex(buf.readFloatLE(o + 12 * k), buf.readFloatLE(o + 12 * k + 4),
+                                                                    buf.readFloatLE(o + 12 * k + 8)));
+      tris.push(c);
+    }
+  } else {
+    const v = [...buf.toString('latin1').matchAll(/vertex\s+(\S+)\s+(\S+)\s+(\S+)/g)].map((m) => vertex(+m[1], +m[2], +m[3]));
+    for (let k = 0; k + 2 < v.length; k += 3) tris.push([v[k], v[k + 1], v[k + 2]]);
+  }
+  return {verts, tris: tris.filter(([a, b, c]) => a !== b && b !== c && a !== c)};
 }
 
 // ---- evaluation with Manifold ----
@@ -298,7 +414,7 @@ function dimension(n) {
 
 // 2-D nodes evaluated natively (the rest are outlined by OpenSCAD).
 const NATIVE2 = new Set(['circle', 'square', 'polygon', 'group', 'union', 'render', 'color', 'difference',
-                         'intersection', 'hull', 'multmatrix']);
+                         'intersection', 'hull', 'multmatrix', 'resize']);
 
 // OpenSCAD's SVG export of a 2-D subtree, read back as loops (y flipped back).
 function outlineByOpenScad(n, dir, cache) {
@@ -346,18 +462,20 @@ function prepare(n, dim2, dir, outlines, report) {
     for (const c of n.children) if (dimension(c) === 2) prepare(c, true, dir, outlines, report);
     return;
   }
-  if (GROUPS.has(n.name) && n.name !== 'resize') {
+  if (GROUPS.has(n.name)) {
     const d = dimension(n);
     for (const c of n.children) if (dimension(c) === d) prepare(c, d === 2, dir, outlines, report);
     return;
   }
   if (['cube', 'sphere', 'cylinder', 'polyhedron'].includes(n.name)) return;
+  if (n.name === 'import' && /\.stl$/i.test(String(n.args.file ?? ''))) return;
   report.unsupported.add(`${n.name} (CSG line ${n.line})`);
 }
 
 class Evaluator {
-  constructor(wasm, outlines) {
+  constructor(wasm, outlines, dir) {
     this.w = wasm;
+    this.dir = dir;
     this.outlines = outlines;
     this.live = [];
   }
@@ -384,7 +502,7 @@ class Evaluator {
 
   empty3() { return this.keep(new this.w.Manifold(new this.w.Mesh({numProp: 3, vertProperties: new Float32Array(0), triVerts: new Uint32Array(0)}))); }
 
-  empty2() { return this.keep(new this.w.CrossSection([], 'Positive')); }
+  empty2() { return this.keep(new this.w.CrossSection([[[0, 0], [0, 0], [0, 0]]], 'Positive')); }
 
   // 3-D node -> Manifold.
   eval3(n) {
@@ -394,19 +512,20 @@ class Evaluator {
       case 'cube': {
         let s = a.size ?? 1;
         s = Array.isArray(s) ? s.map((x) => num(x, 1)) : [num(s, 1), num(s, 1), num(s, 1)];
-        if (s.length < 3 || s.some((x) => !(x > 0))) return this.empty3();
+        if (s.length < 3 || s.some((x) => !(x > 0) || !Number.isFinite(x))) return this.empty3();
         return this.mesh3(cubeMesh(s, a.center === true));
       }
       case 'sphere': {
         const r = num(a.r, 1);
-        return r > 0 ? this.mesh3(sphereMesh(r, fragmentsOf(n, r))) : this.empty3();
+        return r > 0 && Number.isFinite(r) ? this.mesh3(sphereMesh(r, fragmentsOf(n, r))) : this.empty3();
       }
       case 'cylinder': {
         const h = num(a.h, 1), r1 = num(a.r1, 1), r2 = num(a.r2, 1);
-        if (!(h > 0) || r1 < 0 || r2 < 0 || (r1 === 0 && r2 === 0)) return this.empty3();
+        if (!(h > 0) || r1 < 0 || r2 < 0 || (r1 === 0 && r2 === 0) || !finite(h, r1, r2)) return this.empty3();
         return this.mesh3(cylinderMesh(h, r1, r2, a.center === true, fragmentsOf(n, Math.max(r1, r2))));
       }
       case 'polyhedron': {
+        if (!finite(a.points ?? [])) return this.empty3();
         const pts = (a.points ?? []).map((p) => [num(p[0], 0), num(p[1], 0), num(p[2], 0)]);
         const faces = a.faces ?? a.triangles ?? [];
         const tris = [];
@@ -415,6 +534,7 @@ class Evaluator {
       }
       case 'multmatrix': {
         const m = a.m ?? n.positional[0];
+        if (!finite(m)) return this.empty3();  // OpenSCAD drops an object under a non-finite transform
         const inner = this.union3(n.children);
         return this.keep(inner.transform([m[0][0], m[1][0], m[2][0], 0, m[0][1], m[1][1], m[2][1], 0,
                                           m[0][2], m[1][2], m[2][2], 0, m[0][3], m[1][3], m[2][3], 1]));
@@ -422,6 +542,9 @@ class Evaluator {
       case 'group': case 'union': case 'render': case 'color':
         return this.union3(n.children);
       case 'difference': case 'intersection': {
+        // An intersection with an operand that is not 3-D (2-D, or no
+        // geometry: `render();`) is empty in OpenSCAD 2021.01.
+        if (n.name === 'intersection' && n.children.some((c) => dimension(c) !== 3)) return this.empty3();
         const parts = n.children.filter((c) => dimension(c) === 3).map((c) => this.eval3(c));
         if (!parts.length) return this.empty3();
         if (n.name === 'intersection') return this.keep(Manifold.intersection(parts));
@@ -440,8 +563,9 @@ class Evaluator {
       case 'linear_extrude': {
         const cs = this.union2(n.children);
         const h = num(a.height, 100), twist = num(a.twist, 0);
-        if (!(h > 0)) return this.empty3();
-        const sc = Array.isArray(a.scale) ? [num(a.scale[0], 1), num(a.scale[1], 1)] : [num(a.scale, 1), num(a.scale, 1)];
+        if (!(h > 0) || cs.isEmpty()) return this.empty3();  // Manifold: an empty extrusion is an invalid construction
+        const sc = (Array.isArray(a.scale) ? [num(a.scale[0], 1), num(a.scale[1], 1)] : [num(a.scale, 1), num(a.scale, 1)])
+          .map((x) => Math.max(x, 0));  // OpenSCAD 2021.01 takes a negative scale as 0
         let slices = Math.trunc(num(a.slices, 0));
         if (slices <= 0) {
           let rSqr = 0, deltaSqr = 0;
@@ -453,22 +577,33 @@ class Evaluator {
             }
           slices = extrudeSlices(rSqr, deltaSqr, h, twist, sc, num(a.$fn, 0), num(a.$fs, 2), num(a.$fa, 12));
         }
-        // Manifold twists counter-clockwise going up; OpenSCAD clockwise.
-        return this.keep(cs.extrude(h, slices - 1, -twist, sc, a.center === true));
+        if (twist === 0 && sc[0] === 1 && sc[1] === 1) return this.keep(cs.extrude(h, 0, 0, [1, 1], a.center === true));
+        // Twisted or scaled: the walls decide the volume, so OpenSCAD's mesh.
+        return this.mesh3(linearExtrudeMesh(this.w, cs.toPolygons(), h, a.center === true, twist, slices, sc));
       }
       case 'rotate_extrude': {
-        const cs = this.union2(n.children);
-        const b = cs.bounds();
+        let cs = this.union2(n.children);
         if (cs.isEmpty()) return this.empty3();
-        if (b.min[0] < 0) throw new Error(`rotate_extrude (CSG line ${n.line}): points with x < 0, which OpenSCAD rejects`);
-        const angle = Math.max(-360, Math.min(360, num(a.angle, 360)));
-        const full = Math.abs(angle) >= 360;
-        // OpenSCAD 2021.01: fragments from the largest x, truncated to the angle's share.
-        const sectors = Math.trunc(Math.max(fragmentsOf(n, b.max[0]) * Math.abs(angle) / 360, 1));
-        let m = this.keep(cs.revolve(full ? Math.max(sectors, 3) : sectors, full ? 360 : Math.abs(angle)));
-        if (full) m = this.keep(m.rotate([0, 0, 180]));  // OpenSCAD's full turn starts on -x
-        else if (angle < 0) m = this.keep(m.mirror([0, 1, 0]));
-        return m;
+        let b = cs.bounds();
+        // OpenSCAD 2021.01 rejects an outline on both sides of the axis (an
+        // error; the node is empty).
+        if (b.min[0] < 0 && b.max[0] > 0) return this.empty3();
+        const angle = Number.isFinite(a.angle) ? Math.max(-360, Math.min(360, a.angle)) : 360;
+        if (angle === 0) return this.empty3();
+        // OpenSCAD 2021.01: fragments from the largest |x|, truncated to the angle's share.
+        const r = Math.max(-b.min[0], b.max[0]);
+        const sectors = Math.trunc(Math.max(fragmentsOf(n, r) * Math.abs(angle) / 360, 1));
+        return this.mesh3(rotateExtrudeMesh(this.w, cs.toPolygons(), angle, sectors));
+      }
+      case 'resize': {
+        const inner = this.union3(n.children);
+        return inner.isEmpty() ? inner : this.keep(inner.scale(resizeScale(a, inner.boundingBox(), 3)));
+      }
+      case 'import': {
+        const file = path.resolve(this.dir, String(a.file));
+        if (!fs.existsSync(file)) return this.empty3();  // OpenSCAD warns and imports nothing
+        const m = readStl(file);
+        return m.tris.length ? this.mesh3(m) : this.empty3();
       }
       default:
         throw new Error(`${n.name} (CSG line ${n.line}): not evaluated by this script`);
@@ -509,6 +644,7 @@ class Evaluator {
       }
       case 'multmatrix': {
         const m = a.m ?? n.positional[0];
+        if (!finite(m)) return this.empty2();
         return this.keep(this.union2(n.children).transform([m[0][0], m[1][0], 0, m[0][1], m[1][1], 0, m[0][3], m[1][3], 1]));
       }
       case 'group': case 'union': case 'render': case 'color':
@@ -523,6 +659,10 @@ class Evaluator {
       case 'hull': {
         const parts = n.children.filter((c) => dimension(c) === 2).map((c) => this.eval2(c));
         return parts.length ? this.keep(CrossSection.hull(parts)) : this.empty2();
+      }
+      case 'resize': {
+        const inner = this.union2(n.children);
+        return inner.isEmpty() ? inner : this.keep(inner.scale(resizeScale(a, inner.bounds(), 2)));
       }
     }
     throw new Error(`${n.name} (CSG line ${n.line}): not evaluated by this script`);
@@ -600,7 +740,7 @@ async function main() {
 
   const wasm = await Module();
   wasm.setup();
-  const ev = new Evaluator(wasm, outlines);
+  const ev = new Evaluator(wasm, outlines, dir);
   const run = () => {
     const t = process.hrtime.bigint();
     const m = ev.union3(parseCsg(text, csgFile).children);
@@ -618,13 +758,20 @@ async function main() {
     }
   } catch (e) {
     out.error = String(e.message ?? e);
+    if (process.env.MANIFOLD_CSG_DEBUG) console.error(e.stack);
     console.log(json ? JSON.stringify(out) : `${model}: Manifold failed: ${out.error}`);
     process.exit(3);
   }
+  if (process.env.MANIFOLD_CSG_DEBUG) console.error(times.map((x) => x.toFixed(1)).join(" "));
   times.sort((x, y) => x - y);
   const median = times.length % 2 ? times[(times.length - 1) / 2] : (times[times.length / 2 - 1] + times[times.length / 2]) / 2;
+  if (last.m.status() !== 'NoError') {
+    out.error = `Manifold's result: ${last.m.status()}`;
+    console.log(json ? JSON.stringify(out) : `${model}: Manifold failed: ${out.error}`);
+    process.exit(3);
+  }
   Object.assign(out, {volume: last.m.volume(), triangles: last.m.numTri(), ms_median: median, ms: times,
-                      status: last.m.status()});
+});
   if (stl) writeStl(last.mesh, stl);
   ev.release();
   if (json) console.log(JSON.stringify(out));
