@@ -202,8 +202,17 @@ def fabatlas(name, model, fab, work, timeout, voxel, size):
         out["rendered_by_openscad"] = sorted({o[len("csg-openscad:"):] for o in ops if o.startswith("csg-openscad:")})
     ok = r.returncode == 0 and os.path.exists(ours) and os.path.getsize(ours) > 84
     if not ok:
-        msg = last_line(r.stderr) or str(j.get("failure_reason") or j.get("failure") or f"exit {r.returncode}")
-        return dict(out, geometry=False, message=msg)
+        msg = last_line(r.stderr) or f"exit {r.returncode}"
+        if not j and "has no geometry to write" in msg:
+            # --mesh refuses an empty sample before printing it: the sample's
+            # own failure, from the same evaluation without --mesh.
+            _, r2 = run([fab, "eval", design, "--json"], timeout, cwd=d)
+            try:
+                j2 = json.loads(r2.stdout) if r2 is not None and r2.stdout.strip() else {}
+            except json.JSONDecodeError:
+                j2 = {}
+            msg = str(j2.get("failure_reason") or j2.get("failure") or msg)
+        return dict(out, geometry=False, message=msg.replace(model + ": ", ""))
     return dict(out, geometry=True)
 
 
