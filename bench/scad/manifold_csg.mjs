@@ -8,7 +8,8 @@
 //
 // (--single-threaded: V8 without worker threads, so WASM compilation and GC
 // run on the one thread too; Manifold's WASM build has no threads of its own.
-// Without it, node 20 hung at exit now and then, every thread in a futex wait.)
+// Without it, node 20 hung now and then in a corpus run, every thread in a
+// futex wait.)
 //
 // A .scad model is first exported by OpenSCAD (`openscad -o MODEL.csg`, with
 // the -D values), as fabatlas reads it. The tree is the text that export
@@ -17,26 +18,32 @@
 //
 // Primitives are faceted as OpenSCAD 2021.01 facets them (the rules of
 // common/scad/src/primitive_mesh.cc, ported: Fragments from $fn/$fa/$fs,
-// sphere rings at (i + 0.5) / rings, cylinder rings, circles), so both
-// evaluate the same triangles; Manifold takes them as meshes in float32.
-// Natively: cube, sphere, cylinder, polyhedron (faces ear-clipped, all
-// flipped when they enclose a negative volume, as OpenSCAD's clockwise
-// faces do), multmatrix, group/union/render/color, difference,
-// intersection, hull, minkowski (Manifold's minkowskiSum), linear_extrude
-// (height, center, twist, slices, scale; slices by OpenSCAD's rule) and
-// rotate_extrude (angle; OpenSCAD's sectors, a full turn starting on -x)
-// through Manifold's CrossSection, and the 2-D circle, square, polygon
-// (paths, even-odd), 2-D booleans, multmatrix and hull. Where OpenSCAD's
-// behaviour and Manifold's differ: a twisted or scaled linear_extrude splits
-// its side quads by Manifold's rule, not OpenSCAD's shorter diagonal (the
-// volume of a twisted wall depends on it); minkowski of non-convex parts is
-// Manifold's decomposition. Any other 2-D node (text, offset, projection,
-// import of DXF/SVG) is outlined by OpenSCAD before the timing (`openscad
-// -o outline.svg` of that subtree alone, read back as even-odd loops), as
-// fabatlas does. Any other 3-D node (surface, resize, import of meshes,
-// ...) is not evaluated: the script names it and exits 3. A child of the
-// other dimension (3-D under a 2-D operation, 2-D beside 3-D) is dropped, as
-// OpenSCAD drops it with a warning.
+// sphere rings at (i + 0.5) / rings, cylinder rings, a cone's single tip,
+// circles), so both evaluate the same triangles; Manifold takes them as
+// meshes in float32. Natively: cube, sphere, cylinder, polyhedron (convex
+// faces fanned from their first corner, others ear-clipped; all flipped when
+// they enclose a negative volume, as OpenSCAD's clockwise faces do),
+// multmatrix, group/union/render/color, difference, intersection, hull,
+// minkowski (Manifold's minkowskiSum), resize, import of STL; linear_extrude
+// (height, center, twist, slices by OpenSCAD's rule, scale): a straight one
+// by Manifold's extrusion, a twisted or scaled one as OpenSCAD's own mesh
+// (its side quads split along the shorter diagonal decide the volume);
+// rotate_extrude as OpenSCAD's own mesh (its sectors, a full turn starting on
+// -x; Manifold's revolve starts on +x and gives nothing for one or two
+// sectors); and the 2-D circle, square, polygon (paths, even-odd), 2-D
+// booleans, multmatrix, hull and resize. Any other 2-D node (text, offset,
+// projection, import of DXF/SVG) is outlined by OpenSCAD before the timing
+// (`openscad -o outline.svg` of that subtree alone, read back as even-odd
+// loops), as fabatlas does. Any other 3-D node (surface, import of 3MF, OFF,
+// AMF, OBJ, ...) is not evaluated: the script names it and exits 3.
+// OpenSCAD's behaviour where input is odd: a child of the other dimension
+// (3-D under a 2-D operation, 2-D beside 3-D) is dropped, an intersection
+// with a 2-D or empty operand is empty, a primitive or transform with a
+// non-finite number is dropped, a rotate_extrude across the axis is empty, a
+// missing import is empty. Known differences: a linear_extrude scaled to 0
+// on an axis (OpenSCAD collapses its top differently), polyhedra that are
+// not manifold (Manifold rejects them), minkowski of non-convex parts
+// (Manifold's decomposition).
 //
 // Timing: the evaluation from the CSG text to the final mesh (parse,
 // primitives, booleans, getMesh), in process, WASM start-up and OpenSCAD's
