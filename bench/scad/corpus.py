@@ -54,7 +54,7 @@ corpus, and which nodes the script does not evaluate.
 Writes OUT/corpus.json (every model) and, with --markdown, OUT/corpus.md
 (summary and the table of models that do not pass, also printed).
 """
-import argparse, concurrent.futures, hashlib, json, os, re, shutil, statistics, subprocess, sys, threading, time
+import argparse, concurrent.futures, hashlib, json, os, re, signal, statistics, subprocess, sys, threading, time
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 TESTDATA = "/usr/share/openscad/testdata/scad/3D"
@@ -83,13 +83,19 @@ def last_line(text, default=""):
 
 
 def run(args, timeout, cwd=None):
-    """(wall seconds, CompletedProcess or None on timeout)."""
+    """(wall seconds, CompletedProcess or None on timeout). The program runs in
+    a session of its own, so a timeout ends what it started too (fabatlas's
+    OpenSCAD subtree renders)."""
     t = time.monotonic()
+    p = subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=cwd, errors="replace",
+                         start_new_session=True)
     try:
-        r = subprocess.run(args, capture_output=True, text=True, timeout=timeout, cwd=cwd, errors="replace")
+        out, err = p.communicate(timeout=timeout)
     except subprocess.TimeoutExpired:
+        os.killpg(p.pid, signal.SIGKILL)
+        p.communicate()
         return time.monotonic() - t, None
-    return time.monotonic() - t, r
+    return time.monotonic() - t, subprocess.CompletedProcess(args, p.returncode, out, err)
 
 
 class MeshCompare:
