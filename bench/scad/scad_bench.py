@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """OpenSCAD models through fabatlas against OpenSCAD itself (docs/openscad.md).
 
-  bench/scad/scad_bench.py speed [--repeats 3]   tray, sign.scad, candleStand.scad:
+  bench/scad/scad_bench.py speed [--repeats 3] [--manifold]   tray, sign.scad, candleStand.scad:
       OpenSCAD's own STL render wall time vs one fabatlas sample of
       `fabatlas eval MODEL.scad` (imported on the fly, automatic voxel):
       geometry (the model's CSG tree, by fabatlas's own evaluation or
@@ -19,7 +19,11 @@
       overlap); the CPU seconds (user + system) of the OpenSCAD and the eval
       processes;
       medians of --repeats, interleaved; volumes of OpenSCAD's STL, of the
-      sample's `volume` property and of the mesh fabatlas exports.
+      sample's `volume` property and of the mesh fabatlas exports. With
+      --manifold, a last column: Manifold (npm manifold-3d, WASM, one thread)
+      evaluating the same .csg tree in process (bench/scad/manifold_csg.mjs:
+      median of max(5, --repeats) after a warm-up, WASM start-up excluded),
+      its volume, and its time over fabatlas's whole sample.
   bench/scad/scad_bench.py coverage [--timeout 120]   every example Debian's
       openscad ships: does `import-scad` take it (and why not), is it
       evaluated fully natively or with subtrees OpenSCAD rendered, the volume
@@ -102,14 +106,26 @@ def pct(a, b):
     return 100 * (a - b) / b
 
 
-def speed(repeats):
+def manifold_csg(model, repeats):
+    """(median ms, volume) of bench/scad/manifold_csg.mjs evaluating the model's .csg tree."""
+    r = subprocess.run(["node", "--single-threaded", os.path.join(ROOT, "bench", "scad", "manifold_csg.mjs"), model, "--json",
+                        "--repeats", str(max(5, repeats))], capture_output=True, text=True)
+    j = json.loads(r.stdout.strip().splitlines()[-1]) if r.stdout.strip() else {}
+    if "ms_median" not in j:
+        raise RuntimeError(model + ": manifold_csg: " + (j.get("error") or ", ".join(j.get("unsupported", []))
+                                                         or r.stderr.strip()[-200:]))
+    return j["ms_median"], j["volume"]
+
+
+def speed(repeats, manifold=False):
     tmp = tempfile.mkdtemp(prefix="scad-bench-")
     models = [os.path.join(ROOT, "configs/scad/tray.scad"),
               os.path.join(EXAMPLES, "Parametric/sign.scad"),
               os.path.join(EXAMPLES, "Parametric/candleStand.scad")]
     breakdown = []
-    print("| model | voxel mm | OpenSCAD STL wall s (process CPU) | fabatlas geometry s (ratio) | whole sample s (ratio) | a worker's sample s (ratio) | eval process wall s (process CPU) | volume OpenSCAD / property (diff) / mesh (diff) mm^3 |")
-    print("|---|---|---|---|---|---|---|---|")
+    print("| model | voxel mm | OpenSCAD STL wall s (process CPU) | fabatlas geometry s (ratio) | whole sample s (ratio) | a worker's sample s (ratio) | eval process wall s (process CPU) | volume OpenSCAD / property (diff) / mesh (diff) mm^3 |"
+          + (" Manifold in process ms, volume (diff); whole sample / Manifold |" if manifold else ""))
+    print("|---|---|---|---|---|---|---|---|" + ("---|" if manifold else ""))
     for model in models:
         name = os.path.basename(model)
         osc, geo, whole, steady, walls, osc_cpu, eval_cpu = [], [], [], [], [], [], []
@@ -154,8 +170,12 @@ def speed(repeats):
             voxel = re.search(r"voxel_size: (\S+)", open(design).read()).group(1)
         mo, mg, mw, mp, co, ce = (statistics.median(x) for x in (osc, geo, whole, walls, osc_cpu, eval_cpu))
         ms = f"{statistics.median(steady):.4f} ({statistics.median(steady) / mo:.3f})" if steady else "n/a"
+        mf = ""
+        if manifold:
+            m_ms, m_vol = manifold_csg(model, repeats)
+            mf = f" {m_ms:.1f}, {m_vol:.1f} ({pct(m_vol, vo):+.4f}%); {1000 * mw / m_ms:.2f}x |"
         print(f"| {name} | {voxel} | {mo:.3f} (CPU {co:.3f}) | {mg:.3f} ({mg / mo:.2f}) | {mw:.4f} ({mw / mo:.3f}) | {ms} | {mp:.3f} (CPU {ce:.3f}) | "
-              f"{vo:.1f} / {vp:.1f} ({pct(vp, vo):+.2f}%) / {vm:.1f} ({pct(vm, vo):+.2f}%) |", flush=True)
+              f"{vo:.1f} / {vp:.1f} ({pct(vp, vo):+.2f}%) / {vm:.1f} ({pct(vm, vo):+.2f}%) |" + mf, flush=True)
         breakdown.append(f"{name}: " + ", ".join(f"{k} {statistics.median(v):.3f}" for k, v in parts.items()))
     print("\nwhere the whole sample goes (medians, s; the checks run side by side after the surface, so their"
           " times overlap):")
@@ -248,4 +268,4 @@ if __name__ == "__main__":
         coverage(int(sys.argv[sys.argv.index("--timeout") + 1]) if "--timeout" in sys.argv else 120)
     else:
         repeats = int(sys.argv[sys.argv.index("--repeats") + 1]) if "--repeats" in sys.argv else 3
-        speed(repeats)
+        speed(repeats, manifold="--manifold" in sys.argv)
