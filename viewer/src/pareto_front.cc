@@ -53,26 +53,20 @@ ParetoFront ParetoFrontOf(const sampling::Form& form, const std::vector<sampling
   front.candidates = static_cast<std::int64_t>(all.size());
   // Best on a first, then best on b, then lowest id; a sweep keeps each
   // point strictly better on b than every point before it.
-  std::vector<std::size_t> order(all.size());
-  for (std::size_t k = 0; k < order.size(); ++k) order[k] = k;
-  std::sort(order.begin(), order.end(), [&](std::size_t i, std::size_t j) {
-    const ParetoPoint &p = all[i], &q = all[j];
+  std::sort(all.begin(), all.end(), [&](const ParetoPoint& p, const ParetoPoint& q) {
     if (sa * p.a != sa * q.a) return sa * p.a < sa * q.a;
     if (sb * p.b != sb * q.b) return sb * p.b < sb * q.b;
     return p.sample < q.sample;
   });
-  std::vector<bool> on_front(all.size(), false);
   double best_b = 0;
-  for (std::size_t k = 0; k < order.size(); ++k) {
-    const ParetoPoint& p = all[order[k]];
-    if (!front.points.empty() && !(sb * p.b < best_b)) continue;
+  for (const ParetoPoint& p : all) {
+    if (!front.points.empty() && !(sb * p.b < best_b)) {
+      if (options.keep_dominated) front.dominated.push_back(p);
+      continue;
+    }
     front.points.push_back(p);
-    on_front[order[k]] = true;
     best_b = sb * p.b;
   }
-  if (options.keep_dominated)
-    for (std::size_t k = 0; k < all.size(); ++k)
-      if (!on_front[k]) front.dominated.push_back(all[k]);
   return front;
 }
 

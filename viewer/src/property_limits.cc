@@ -104,22 +104,40 @@ std::string ResolvePropertyName(const std::string& name, const sampling::Form& f
 
 Quantity ResolveQuantity(const std::string& name, const sampling::Form& form,
                          const std::vector<sampling::Material>& materials) {
+  std::string parameters;
+  for (std::size_t d = 0; d < form.dimensions.size(); ++d) {
+    if (form.dimensions[d].name == name) return {name, static_cast<int>(d)};
+    parameters += (parameters.empty() ? "" : ", ") + form.dimensions[d].name;
+  }
   try {
-    return {ResolvePropertyName(name, form, materials), -1};
-  } catch (const InputError& e) {
-    std::string parameters;
-    for (std::size_t d = 0; d < form.dimensions.size(); ++d) {
-      if (form.dimensions[d].name == name) return {name, static_cast<int>(d)};
-      parameters += (parameters.empty() ? "" : ", ") + form.dimensions[d].name;
+    Quantity q{ResolvePropertyName(name, form, materials)};
+    for (const char* prefix : {"weight:", "cost:"}) {
+      const std::string p = prefix;
+      if (q.name.rfind(p, 0) == 0) {
+        q.material = {*FindMaterial(materials, q.name.substr(p.size()))};
+        q.cost = p == "cost:";
+      }
     }
+    return q;
+  } catch (const InputError& e) {
     throw InputError(std::string(e.what()) + "; nor a parameter (" + parameters + ")");
   }
 }
 
 std::optional<double> QuantityValue(const Quantity& q, const sampling::FormSample& sample,
                                     const std::vector<sampling::Material>& materials) {
+  (void)materials;  // resolved into q by ResolveQuantity
   if (q.dimension >= 0) return sample.u.at(static_cast<std::size_t>(q.dimension));
-  return LimitedValue(PropertyLimit{q.name}, sample.outcome.properties, materials);
+  const auto& properties = sample.outcome.properties;
+  if (q.material.empty()) {
+    const auto it = properties.find(q.name);
+    if (it == properties.end()) return std::nullopt;
+    return it->second;
+  }
+  const auto volume = properties.find("volume");
+  if (volume == properties.end()) return std::nullopt;
+  const MaterialReadout r = MaterialReadouts(volume->second, q.material).front();
+  return q.cost ? r.cost : r.weight_g;
 }
 
 sampling::Form ApplyLimits(const sampling::Form& form, const std::vector<PropertyLimit>& limits,

@@ -46,7 +46,7 @@ struct ParetoFront {
   std::string a, b;                 // canonical property names of the axes
   std::vector<ParetoPoint> points;  // best on axis a first (so worst on b first)
   std::int64_t candidates = 0;      // valid samples recording both properties
-  std::vector<ParetoPoint> dominated;  // with keep_dominated: the other candidates, in id order
+  std::vector<ParetoPoint> dominated;  // with keep_dominated: the other candidates, best on a first
 };
 
 // Throws InputError for an unknown property (ResolveQuantity) or the

@@ -54,18 +54,23 @@ std::vector<std::string> PropertyNames(const sampling::Form& form, const std::ve
 std::string ResolvePropertyName(const std::string& name, const sampling::Form& form,
                                 const std::vector<sampling::Material>& materials);
 
-// What objectives and trade-offs compare (optimise.h, pareto_front.h): a
-// property (ResolvePropertyName) or, when no sample records the name, one of
-// the form's parameters, whose value at a sample is its coordinate.
+// What objectives and trade-offs compare (optimise.h, pareto_front.h): one
+// of the form's parameters, whose value at a sample is its coordinate, or
+// else a property (ResolvePropertyName). A parameter's name comes first, so
+// it is found without scanning the samples.
 struct Quantity {
   std::string name;    // canonical: weight:PLA, volume, radius, ...
   int dimension = -1;  // >= 0: a parameter
+  // weight:M / cost:M: the material, looked up once (else empty).
+  std::vector<sampling::Material> material;
+  bool cost = false;   // with a material: cost, else weight (g)
 };
 // Throws InputError naming the quantity and listing the properties and
 // parameters when it is neither.
 Quantity ResolveQuantity(const std::string& name, const sampling::Form& form,
                          const std::vector<sampling::Material>& materials);
 // The quantity at a sample; nullopt when the sample does not record it.
+// A recorded property or a parameter costs one look-up, no allocation.
 std::optional<double> QuantityValue(const Quantity& q, const sampling::FormSample& sample,
                                     const std::vector<sampling::Material>& materials);
 
