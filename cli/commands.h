@@ -27,6 +27,15 @@ void AddJobCommands(CLI::App& app, int& exit_code);
 // (cli/inspect_commands.cc).
 void AddInspectCommands(CLI::App& app, int& exit_code);
 
+// optimise: the best valid design for an objective (cli/optimise_commands.cc).
+void AddOptimiseCommands(CLI::App& app, int& exit_code);
+
+// inspect --pareto: the Pareto front of two properties over the artifact's
+// valid samples (under `limits`), written as CSV and PNG (defaults: the
+// artifact's path with .pareto.csv / .pareto.png); one line on stdout.
+void WritePareto(const std::filesystem::path& artifact, const std::string& axes, const std::string& csv,
+                 const std::string& png, const std::string& limits);
+
 // prototype: solve a works-like prototype, export STL (cli/prototype_commands.cc).
 void AddPrototypeCommands(CLI::App& app, int& exit_code);
 

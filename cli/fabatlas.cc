@@ -21,6 +21,7 @@ int main(int argc, char** argv) {
   fabatlas::cli::AddInspectCommands(app, exit_code);
   fabatlas::cli::AddPrototypeCommands(app, exit_code);
   fabatlas::cli::AddViewerCommands(app, exit_code);
+  fabatlas::cli::AddOptimiseCommands(app, exit_code);
   fabatlas::cli::AddAssemblyCommands(app, exit_code);
   fabatlas::cli::AddScadCommands(app, exit_code);
   try {

@@ -1,4 +1,4 @@
-// fabatlas inspect ART [--json] [--png PATH] [--points N] — what a published
+// fabatlas inspect ART [--json] [--png PATH] [--points N] [--pareto A,B] — what a published
 // artifact (docs/artifact.md) holds, as the rows of Fab Forms' evaluation:
 //   Table 3: samples, CPU time, valid volume %, failure shares;
 //   Fig. 14: H_TOP, H_opt and H_rfree sizes, and mean / worst preview time
@@ -42,7 +42,7 @@ namespace fs = std::filesystem;
 using nlohmann::json;
 
 struct InspectArgs {
-  std::string artifact, png, fig14_png;
+  std::string artifact, png, fig14_png, pareto, pareto_csv, pareto_png, limits;
   bool json = false;
   int points = 200;
   std::uint64_t seed = 1;
@@ -87,6 +87,11 @@ std::string TimesText(const std::optional<precompute::PreviewTimes>& t) {
 void Inspect(const InspectArgs& a, int& exit_code) {
   const fs::path path = ArtifactPath(a.artifact);  // the file, or the run directory holding it (as serve)
   if (a.points < 0) throw InputError("inspect: --points must be >= 0");
+  if (!a.pareto.empty()) {  // the trade-off only (optimise_commands.cc)
+    WritePareto(path, a.pareto, a.pareto_csv, a.pareto_png, a.limits);
+    exit_code = 0;
+    return;
+  }
   // Metadata only: the cache's geometry is read set by set below, so the
   // memory holds the form and one preview cache, not the whole file.
   const artifact::Artifact art = artifact::ReadArtifact(path, {.load_geometry = false});
@@ -231,6 +236,12 @@ void AddInspectCommands(CLI::App& app, int& exit_code) {
                       "where to write the Fig. 14 preview-time box plots (default: ART with .fig14.png)");
   inspect->add_option("--points", a->points, "random valid points for the preview times (default 200)");
   inspect->add_option("--seed", a->seed, "seed of the random points (default 1)");
+  inspect->add_option("--pareto", a->pareto,
+                      "instead: the Pareto front of two properties over the valid samples, A,B (each optionally "
+                      "min: or max:, default min), written as CSV and PNG");
+  inspect->add_option("--pareto-csv", a->pareto_csv, "where --pareto writes the CSV (default: ART with .pareto.csv)");
+  inspect->add_option("--pareto-png", a->pareto_png, "where --pareto writes the plot (default: ART with .pareto.png)");
+  inspect->add_option("--limits", a->limits, "with --pareto: runtime limits as the page's (volume<=9000,...)");
   inspect->callback([a, &exit_code] { Inspect(*a, exit_code); });
 }
 

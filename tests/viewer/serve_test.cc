@@ -245,6 +245,23 @@ TEST_F(Server, ExportSendsTheSameBytesAsTheCommandAndRefusesWithItsText) {
   EXPECT_EQ(format->status, 400);
 }
 
+// The two queries that also take a JSON body answer POST over HTTP as GET.
+TEST_F(Server, OptimiseAndParetoAnswerPostAsGet) {
+  auto get = Get("/api/optimise?min=volume&hold=radius%3D15");
+  auto post = client_->Post("/api/optimise", R"({"min": "volume", "hold": {"radius": 15}})", "application/json");
+  ASSERT_TRUE(get && post);
+  EXPECT_EQ(get->status, 200) << get->body;
+  EXPECT_EQ(post->status, 200) << post->body;
+  EXPECT_EQ(get->body, post->body);
+  auto pareto = client_->Post("/api/pareto", R"({"axes": ["volume", "max:radius"]})", "application/json");
+  ASSERT_TRUE(pareto);
+  EXPECT_EQ(pareto->status, 200) << pareto->body;
+  EXPECT_EQ(pareto->body, Get("/api/pareto?axes=volume,max:radius")->body);
+  auto bad = client_->Post("/api/optimise", "not json", "application/json");
+  ASSERT_TRUE(bad);
+  EXPECT_EQ(bad->status, 400);
+}
+
 TEST_F(Server, OtherMethodsGet405AndTheServerStaysUp) {
   for (const std::string path : {"/api/form", "/", "/api/export"}) {
     auto post = client_->Post(path.c_str(), "x", "text/plain");

@@ -2,6 +2,7 @@
 
 #include <charconv>
 #include <cmath>
+#include <optional>
 #include <set>
 #include <sstream>
 
@@ -13,6 +14,8 @@
 #include "fabatlas/artifact/glb.h"
 #include "fabatlas/viewer/export_design.h"
 #include "fabatlas/viewer/failure_reason.h"
+#include "fabatlas/viewer/optimise.h"
+#include "fabatlas/viewer/pareto_front.h"
 #include "fabatlas/viewer/property_limits.h"
 
 namespace fabatlas::viewer {
@@ -339,6 +342,59 @@ ApiResponse Route(const Customiser& c, const std::string& path, const std::map<s
     return Json({{"a", a}, {"b", b}, {"n", n}, {"a_range", {alo, ahi}}, {"b_range", {blo, bhi}},
                  {"failures", failure_names}, {"cells", cells}});
   }
+  if (path == "/api/optimise") {
+    // The objective: min=P or max=P (P a property, or weights a=1,b=2), or
+    // weights=a=1,b=2 (minimised).
+    const auto min = query.find("min"), max = query.find("max"), weights = query.find("weights");
+    const int given = (min != query.end()) + (max != query.end()) + (weights != query.end());
+    if (given != 1) throw BadRequest{"name exactly one objective: min=PROPERTY, max=PROPERTY or weights=a=1,b=2"};
+    OptimiseOptions options;
+    options.maximise = max != query.end();
+    options.terms = ParseObjective((min != query.end() ? min : max != query.end() ? max : weights)->second);
+    const auto hold = query.find("hold");
+    if (hold != query.end()) options.hold = ParseHolds(hold->second, c.space());
+    const OptimiseResult r = Optimise(form, c.corners(), c.source().materials, options);
+    if (!r.found)
+      return Json({{"found", false},
+                   {"reason", limits.empty() ? "no valid point on the held values"
+                                             : "no valid point meets your limits on the held values"}});
+    json values = json::object();
+    for (std::size_t k = 0; k < r.values.size(); ++k) values[r.properties[k]] = r.values[k];
+    return Json({{"found", true},
+                 {"u", r.u},
+                 {"objective", r.objective},
+                 {"maximise", options.maximise},
+                 {"values", values},
+                 {"sample", r.sample},
+                 {"interpolated", r.sample < 0},
+                 {"corners", r.corners},
+                 {"candidates", r.candidates},
+                 {"valid", IsValidPoint(form, c.space(), c.corners(), r.u)}});
+  }
+  if (path == "/api/pareto") {
+    const auto axes = query.find("axes");
+    if (axes == query.end()) throw BadRequest{"missing query parameter 'axes' (A,B; each optionally min: or max:)"};
+    ParetoOptions options = ParseParetoAxes(axes->second);
+    const int dominated = ParseIndex(query, "dominated", 0, 100000, 0);  // at most this many, evenly spread
+    options.keep_dominated = dominated > 0;
+    const ParetoFront front = ParetoFrontOf(form, c.source().materials, options);
+    const auto point_json = [&](const ParetoPoint& p) {
+      return json{{"sample", p.sample}, {"u", form.samples[static_cast<std::size_t>(p.sample)].u}, {"a", p.a}, {"b", p.b}};
+    };
+    json points = json::array(), others = json::array();
+    for (const auto& p : front.points) points.push_back(point_json(p));
+    const std::size_t stride = dominated > 0 ? (front.dominated.size() + dominated - 1) / dominated : 1;
+    for (std::size_t k = 0; k < front.dominated.size(); k += std::max<std::size_t>(stride, 1))
+      others.push_back({{"sample", front.dominated[k].sample}, {"a", front.dominated[k].a}, {"b", front.dominated[k].b}});
+    return Json({{"a", front.a},
+                 {"b", front.b},
+                 {"a_maximise", options.a.maximise},
+                 {"b_maximise", options.b.maximise},
+                 {"points", points},
+                 {"dominated", others},
+                 {"dominated_total", front.dominated.size()},
+                 {"candidates", front.candidates}});
+  }
   ApiResponse r;
   r.status = 404;
   r.content_type = "text/plain";
@@ -371,6 +427,47 @@ ApiResponse HandleApiRequest(const Customiser& c, const std::string& path, const
     r.body = std::string("internal error: ") + e.what() + "\n";
     return r;
   }
+}
+
+bool AcceptsPost(const std::string& path) { return path == "/api/optimise" || path == "/api/pareto"; }
+
+ApiResponse HandleApiPost(const Customiser& c, const std::string& path, const std::string& body) {
+  std::map<std::string, std::string> query;
+  const auto bad = [](const std::string& reason, int status = 400) {
+    ApiResponse r;
+    r.status = status;
+    r.content_type = "text/plain";
+    r.body = reason + "\n";
+    return r;
+  };
+  const auto text = [](const json& v) -> std::optional<std::string> {
+    if (v.is_string()) return v.get<std::string>();
+    if (v.is_number()) return v.dump();
+    return std::nullopt;
+  };
+  if (!AcceptsPost(path)) {
+    ApiResponse r = bad("POST is not allowed here; only /api/optimise and /api/pareto take POST", 405);
+    r.headers["Allow"] = "GET";
+    return r;
+  }
+  const json j = json::parse(body, nullptr, /*allow_exceptions=*/false);
+  if (!j.is_object()) return bad("the request body is not a JSON object");
+  for (const auto& [key, value] : j.items()) {
+    std::string joined;
+    if (value.is_object() || value.is_array()) {
+      for (const auto& [name, item] : value.items()) {
+        const auto t = text(item);
+        if (!t) return bad("'" + key + "': items must be strings or numbers");
+        joined += (joined.empty() ? "" : ",") + (value.is_object() ? name + "=" : std::string()) + *t;
+      }
+    } else if (const auto t = text(value)) {
+      joined = *t;
+    } else {
+      return bad("'" + key + "': expected a string, a number, an object or an array");
+    }
+    query[key] = joined;
+  }
+  return HandleApiRequest(c, path, query);
 }
 
 }  // namespace fabatlas::viewer

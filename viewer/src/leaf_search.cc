@@ -27,7 +27,7 @@ std::optional<std::vector<double>> KeyCoordinates(const DesignSpace& space, cons
 namespace {
 
 void Descend(const sampling::FormTree& tree, int tree_index, int node, const std::vector<double>& x,
-             int free_dimension, std::vector<LeafHit>& out) {
+             const std::vector<bool>& free, std::vector<LeafHit>& out) {
   const FormNode& nd = tree.nodes[node];
   if (nd.split_dimension < 0) {
     out.push_back({&nd, tree_index, node});
@@ -35,20 +35,27 @@ void Descend(const sampling::FormTree& tree, int tree_index, int node, const std
   }
   const int e = nd.split_dimension;
   const double split = static_cast<double>(nd.split_key);
-  if (e == free_dimension || x[e] <= split) Descend(tree, tree_index, nd.children[0], x, free_dimension, out);
-  if (e == free_dimension || x[e] >= split) Descend(tree, tree_index, nd.children[1], x, free_dimension, out);
+  if (free[e] || x[e] <= split) Descend(tree, tree_index, nd.children[0], x, free, out);
+  if (free[e] || x[e] >= split) Descend(tree, tree_index, nd.children[1], x, free, out);
 }
 
 }  // namespace
 
 std::vector<LeafHit> LeavesTouching(const Form& form, const DesignSpace& space, const std::vector<double>& x,
                                     int free_dimension) {
+  std::vector<bool> free(space.dimension_count(), false);
+  if (free_dimension >= 0) free[free_dimension] = true;
+  return LeavesMeeting(form, space, x, free);
+}
+
+std::vector<LeafHit> LeavesMeeting(const Form& form, const DesignSpace& space, const std::vector<double>& x,
+                                   const std::vector<bool>& free) {
   const int n = space.dimension_count();
   // Candidate bootstrap cells per dimension (two where x is on a grid line).
   std::vector<std::vector<int>> cells(n);
   for (int d = 0; d < n; ++d) {
     for (int j = 0; j < space.cell_count(d); ++j) {
-      if (d == free_dimension || (x[d] >= static_cast<double>(space.grid_key(d, j)) &&
+      if (free[d] || (x[d] >= static_cast<double>(space.grid_key(d, j)) &&
                                   x[d] <= static_cast<double>(space.grid_key(d, j + 1))))
         cells[d].push_back(j);
     }
@@ -58,7 +65,7 @@ std::vector<LeafHit> LeavesTouching(const Form& form, const DesignSpace& space, 
   for (;;) {
     int tree = 0;
     for (int d = 0; d < n; ++d) tree = tree * space.cell_count(d) + cells[d][pick[d]];
-    Descend(form.trees[tree], tree, 0, x, free_dimension, out);
+    Descend(form.trees[tree], tree, 0, x, free, out);
     int d = n - 1;
     while (d >= 0 && ++pick[d] == cells[d].size()) pick[d--] = 0;
     if (d < 0) break;

@@ -29,6 +29,12 @@ struct LeafHit {
 std::vector<LeafHit> LeavesTouching(const sampling::Form& form, const sampling::DesignSpace& space,
                                     const std::vector<double>& x, int free_dimension = -1);
 
+// Every leaf whose closed box meets the affine subspace through x that is
+// free along each dimension d with free[d] (free.size() == dimensions): the
+// leaves a slice at held parameter values crosses.
+std::vector<LeafHit> LeavesMeeting(const sampling::Form& form, const sampling::DesignSpace& space,
+                                   const std::vector<double>& x, const std::vector<bool>& free);
+
 // True if the corners of `leaf` on the smallest face containing x are all
 // valid; the face is free along free_dimension (if >= 0) and along every
 // dimension where x is strictly inside the leaf. corners: the leaf's 2^n

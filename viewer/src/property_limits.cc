@@ -2,6 +2,7 @@
 
 #include <charconv>
 #include <cmath>
+#include <set>
 #include <sstream>
 
 #include "fabatlas/error.h"
@@ -68,6 +69,75 @@ std::optional<double> LimitedValue(const PropertyLimit& limit, const std::map<st
   const auto it = properties.find(limit.property);
   if (it == properties.end()) return std::nullopt;
   return it->second;
+}
+
+std::vector<std::string> PropertyNames(const sampling::Form& form, const std::vector<sampling::Material>& materials) {
+  std::set<std::string> recorded;
+  for (const auto& s : form.samples)
+    for (const auto& [name, value] : s.outcome.properties) recorded.insert(name);
+  std::vector<std::string> names(recorded.begin(), recorded.end());
+  if (recorded.count("volume"))
+    for (const char* prefix : {"weight:", "cost:"})
+      for (const auto& m : materials) names.push_back(prefix + m.name);
+  return names;
+}
+
+std::string ResolvePropertyName(const std::string& name, const sampling::Form& form,
+                                const std::vector<sampling::Material>& materials) {
+  const auto recorded = [&](const std::string& property) {
+    for (const auto& s : form.samples)
+      if (s.outcome.properties.count(property)) return true;
+    return false;
+  };
+  if (!name.empty() && recorded(name)) return name;
+  for (const std::string prefix : {"weight", "cost"}) {
+    if (name.size() <= prefix.size() + 1 || name.compare(0, prefix.size(), prefix) != 0) continue;
+    const char sep = name[prefix.size()];
+    if (sep != ':' && sep != '_') continue;
+    const std::string material = name.substr(prefix.size() + 1);
+    if (FindMaterial(materials, material) && recorded("volume")) return prefix + ":" + material;
+  }
+  std::string known;
+  for (const auto& n : PropertyNames(form, materials)) known += (known.empty() ? "" : ", ") + n;
+  throw InputError("unknown property '" + name + "' (known: " + (known.empty() ? "none" : known) + ")");
+}
+
+Quantity ResolveQuantity(const std::string& name, const sampling::Form& form,
+                         const std::vector<sampling::Material>& materials) {
+  std::string parameters;
+  for (std::size_t d = 0; d < form.dimensions.size(); ++d) {
+    if (form.dimensions[d].name == name) return {name, static_cast<int>(d)};
+    parameters += (parameters.empty() ? "" : ", ") + form.dimensions[d].name;
+  }
+  try {
+    Quantity q{ResolvePropertyName(name, form, materials)};
+    for (const char* prefix : {"weight:", "cost:"}) {
+      const std::string p = prefix;
+      if (q.name.rfind(p, 0) == 0) {
+        q.material = {*FindMaterial(materials, q.name.substr(p.size()))};
+        q.cost = p == "cost:";
+      }
+    }
+    return q;
+  } catch (const InputError& e) {
+    throw InputError(std::string(e.what()) + "; nor a parameter (" + parameters + ")");
+  }
+}
+
+std::optional<double> QuantityValue(const Quantity& q, const sampling::FormSample& sample,
+                                    const std::vector<sampling::Material>& materials) {
+  (void)materials;  // resolved into q by ResolveQuantity
+  if (q.dimension >= 0) return sample.u.at(static_cast<std::size_t>(q.dimension));
+  const auto& properties = sample.outcome.properties;
+  if (q.material.empty()) {
+    const auto it = properties.find(q.name);
+    if (it == properties.end()) return std::nullopt;
+    return it->second;
+  }
+  const auto volume = properties.find("volume");
+  if (volume == properties.end()) return std::nullopt;
+  const MaterialReadout r = MaterialReadouts(volume->second, q.material).front();
+  return q.cost ? r.cost : r.weight_g;
 }
 
 sampling::Form ApplyLimits(const sampling::Form& form, const std::vector<PropertyLimit>& limits,

@@ -63,6 +63,14 @@ void Serve(const Customiser& customiser, const ServeOptions& options, const std:
       res.set_content(r.body, r.content_type);
     }
   });
+  // The queries that also take a JSON body (http_api.h, HandleApiPost).
+  server.Post(R"(/api/(optimise|pareto))", [&](const httplib::Request& req, httplib::Response& res) {
+    const ApiResponse r = HandleApiPost(customiser, req.path, req.body);
+    res.status = r.status;
+    for (const auto& [k, v] : r.headers) res.set_header(k, v);
+    res.set_header("Cache-Control", "no-store");
+    res.set_content(r.body, r.content_type);
+  });
   // Everything else: only the page's own files, looked up by exact path.
   server.Get(R"(.*)", [&](const httplib::Request& req, httplib::Response& res) {
     const auto it = files.find(req.path);
@@ -73,7 +81,7 @@ void Serve(const Customiser& customiser, const ServeOptions& options, const std:
     }
     res.set_content(it->second, ContentType(it->first == "/" ? "/index.html" : it->first).c_str());
   });
-  // Only GET: anything else is 405 with one line.
+  // Only GET (and POST to the two routes above): anything else is 405 with one line.
   const auto not_allowed = [](const httplib::Request& req, httplib::Response& res) {
     res.status = 405;
     res.set_header("Allow", "GET");

@@ -9,6 +9,7 @@
 
 #include "fabatlas/error.h"
 #include "fabatlas/precompute/form_outputs.h"
+#include "fabatlas/picture/axis_ticks.h"
 #include "fabatlas/picture/canvas.h"
 
 namespace fabatlas::precompute {
@@ -16,28 +17,14 @@ namespace fabatlas::precompute {
 namespace {
 
 using picture::Canvas;
+using picture::NiceStep;
+using picture::TickLabel;
 
 unsigned StrategyColour(const std::string& s, bool mean) {
   if (s == "naive" || s == "NAIVE") return mean ? 0xF4A6A6 : 0xC0392B;
   if (s == "opt_ave" || s == "OPT-AVE") return mean ? 0xC9A7E0 : 0x7D3C98;
   if (s == "opt_max" || s == "OPT-MAX") return mean ? 0x9CC9F0 : 0x1F5FA8;
   return mean ? 0xBBBBBB : 0x444444;
-}
-
-std::string Tick(double v) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.3g", v);
-  return buf;
-}
-
-// A "nice" step (1, 2 or 5 times a power of ten) giving about `ticks` ticks.
-double NiceStep(double range, int ticks) {
-  if (!(range > 0)) return 1.0;
-  const double raw = range / ticks;
-  const double p = std::pow(10.0, std::floor(std::log10(raw)));
-  for (double m : {1.0, 2.0, 5.0, 10.0})
-    if (m * p >= raw) return m * p;
-  return 10 * p;
 }
 
 }  // namespace
@@ -67,11 +54,11 @@ void WriteCacheCurvesPng(const std::vector<artifact::CacheCurvePoint>& points, c
   auto Y = [&](double s) { return bottom - (bottom - top) * s / max_s; };
   for (double v = 0; v <= max_mib + 1e-9; v += x_step) {
     img.Line(X(v), top, X(v), bottom, 0xEEEEEE, 1);
-    img.Text(static_cast<int>(X(v)) - Canvas::TextWidth(Tick(v)) / 2, bottom + 10, Tick(v), 0x333333);
+    img.Text(static_cast<int>(X(v)) - Canvas::TextWidth(TickLabel(v)) / 2, bottom + 10, TickLabel(v), 0x333333);
   }
   for (double v = 0; v <= max_s + 1e-9; v += y_step) {
     img.Line(left, Y(v), right, Y(v), 0xEEEEEE, 1);
-    img.Text(left - 10 - Canvas::TextWidth(Tick(v)), static_cast<int>(Y(v)) - 6, Tick(v), 0x333333);
+    img.Text(left - 10 - Canvas::TextWidth(TickLabel(v)), static_cast<int>(Y(v)) - 6, TickLabel(v), 0x333333);
   }
   img.Line(left, top, left, bottom, 0x000000, 2);
   img.Line(left, bottom, right, bottom, 0x000000, 2);

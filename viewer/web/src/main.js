@@ -12,6 +12,7 @@
 import * as THREE from 'three';
 import { OrbitControls } from 'three/examples/jsm/controls/OrbitControls.js';
 import { GLTFLoader } from 'three/examples/jsm/loaders/GLTFLoader.js';
+import { installOptimise } from './optimise.js';
 
 // State shared with tests (tests/viewer/browser_test.mjs reads it).
 const state = {
@@ -287,7 +288,7 @@ async function update() {
   state.properties = properties;
   drawTracks();
   drawReadout(properties);
-  await Promise.all([loadPreview(u, properties.sample), drawMap()]);
+  await Promise.all([loadPreview(u, properties.sample), drawMap(), trade.afterUpdate()]);
 }
 
 function drawReadout(p) {
@@ -854,6 +855,15 @@ async function setLimit(property, bound, text) {
   } catch (e) { showError(e); }
 }
 
+// ------------------------------------------------- objectives, trade-offs
+// "Best for…" and the Pareto plot live in optimise.js.
+const trade = installOptimise({
+  state, $, apiJson, limitsText, formatValue, showError, setStatus, clearError,
+  moveTo: (u) => { clearError(); state.u = u.slice(); requestUpdate(); },
+  preview: (u, sample) => loadPreview(u, sample),
+  restorePreview: () => { if (state.properties) loadPreview(state.u, state.properties.sample).catch(showError); },
+});
+
 // ------------------------------------------------------------------ start
 async function main() {
   state.form = await apiJson('/api/form');
@@ -866,6 +876,7 @@ async function main() {
   buildDownloads();
   buildPresets();
   buildLimits();
+  trade.build();
   initView();
   buildTransitions();
   await update();

@@ -8,6 +8,8 @@
 //   GET /api/preview.glb?u=..      the snapped sample's geometry as glTF binary
 //   GET /api/map?a=i&b=j&n=N&u=..  N x N validity map over parameters i and j through u
 //   GET /api/export?u=..&format=F  the design at exactly u as a file (export_design.h)
+//   GET /api/optimise?min=P&hold=..   the best valid point for an objective (optimise.h)
+//   GET /api/pareto?axes=A,B        the Pareto front of two properties (pareto_front.h)
 //
 // u lists one value per parameter in the form's order (enumerated: the value
 // index). Bad requests (unparsable or non-finite numbers, wrong arity, a value
@@ -39,5 +41,15 @@ struct ApiResponse {
 // path: the request path ("/api/..."); query: decoded query parameters.
 ApiResponse HandleApiRequest(const Customiser& customiser, const std::string& path,
                              const std::map<std::string, std::string>& query);
+
+// The routes that also take POST (/api/optimise, /api/pareto): true for them.
+bool AcceptsPost(const std::string& path);
+
+// A POST to /api/optimise or /api/pareto: `body` is a JSON object whose keys
+// are the GET route's query parameters; a value is a string or number as in
+// the query, an object {"name": value, ...} standing for "name=value,..."
+// (hold, weights), or an array standing for its items joined by commas. A
+// body that is not such an object is a 400 with one line. Never throws.
+ApiResponse HandleApiPost(const Customiser& customiser, const std::string& path, const std::string& body);
 
 }  // namespace fabatlas::viewer
