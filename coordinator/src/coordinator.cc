@@ -11,6 +11,7 @@
 #include <thread>
 
 #include "coordinator_state.h"
+#include "fabatlas/directory_lock.h"
 #include "fabatlas/error.h"
 #include "fabatlas/log/log.h"
 #include "fabatlas/protocol/channel.h"
@@ -57,6 +58,8 @@ void Coordinator::Start() {
                        " (give --tls-cert/--tls-key, see ops/tls/make-certs.sh)");
     credentials = grpc::InsecureServerCredentials();
   }
+  // One coordinator per state directory: a second one exits naming the first.
+  m.state_lock = std::make_unique<DirectoryLock>(o.state_dir, "state directory");
   storage::JobStoreOptions store_options;
   store_options.fsync_every_commit = o.fsync_commits;
   store_options.background_checkpoints = true;  // Sweep() checkpoints, off the request path

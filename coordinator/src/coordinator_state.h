@@ -30,6 +30,7 @@
 
 #include "fabatlas/coordinator/coordinator.h"
 #include "fabatlas/coordinator/job_eta.h"
+#include "fabatlas/directory_lock.h"
 #include "fabatlas/log/metrics_text.h"
 #include "fabatlas/protocol/tasks.h"
 #include "fabatlas/storage/blob_store.h"
@@ -78,6 +79,8 @@ struct Coordinator::Impl {
   explicit Impl(CoordinatorOptions o) : options(std::move(o)) {}
 
   CoordinatorOptions options;
+  // Held from Start() until destruction, released after the store closes.
+  std::unique_ptr<DirectoryLock> state_lock;
   std::unique_ptr<storage::JobStore> store;
   std::unique_ptr<storage::BlobStore> blobs;
   std::unique_ptr<grpc::Server> server;

@@ -920,6 +920,111 @@ TEST(ClusterCli, CancelStopsTheJobOverGrpc) {
   EXPECT_EQ(WaitExit(c.pid, std::chrono::seconds(30)), 0);
 }
 
+// BlobService refusals (issue 31, paths no test reached), on an in-process
+// coordinator over loopback gRPC: bytes that do not hash to their digest are
+// DATA_LOSS and discarded (nothing held, nothing served); a chunk over 1 MiB
+// is INVALID_ARGUMENT; a chunk at an offset other than the bytes held is
+// FAILED_PRECONDITION naming the offset to resume at, after which the upload
+// resumes there and completes; a Read of a blob the store does not hold is
+// NOT_FOUND naming it, and the coordinator records blob_missing.
+TEST(ClusterBlobs, WriteRefusesWhatItCannotKeepAndReadOfAMissingBlobIsNotFound) {
+  fs::path dir = FreshDir("blob_refusals");
+  coordinator::CoordinatorOptions options;
+  options.listen = "127.0.0.1:0";
+  options.state_dir = dir / "state";
+  coordinator::Coordinator c(options);
+  c.Start();
+  auto stub = v1::BlobService::NewStub(protocol::MakeChannel("127.0.0.1:" + std::to_string(c.port()), {}));
+  auto chunk = [](const std::string& digest, std::int64_t size, std::int64_t offset, const std::string& data,
+                  bool finish) {
+    v1::WriteChunk ch;
+    ch.set_digest(digest);
+    ch.set_size(size);
+    ch.set_offset(offset);
+    ch.set_data(data);
+    ch.set_finish(finish);
+    return ch;
+  };
+  auto write = [&](const std::vector<v1::WriteChunk>& chunks, v1::WriteResponse* resp) {
+    grpc::ClientContext ctx;
+    protocol::Prepare(ctx, {}, std::chrono::seconds(30));
+    auto writer = stub->Write(&ctx, resp);
+    for (const auto& ch : chunks)
+      if (!writer->Write(ch)) break;
+    writer->WritesDone();
+    return writer->Finish();
+  };
+  auto status_of = [&](const std::string& digest) {
+    grpc::ClientContext ctx;
+    protocol::Prepare(ctx, {}, std::chrono::seconds(5));
+    v1::QueryWriteStatusRequest req;
+    req.set_digest(digest);
+    v1::QueryWriteStatusResponse resp;
+    EXPECT_TRUE(stub->QueryWriteStatus(&ctx, req, &resp).ok());
+    return resp;
+  };
+  auto read = [&](const std::string& digest, std::string* bytes) {
+    grpc::ClientContext ctx;
+    protocol::Prepare(ctx, {}, std::chrono::seconds(5));
+    v1::ReadRequest req;
+    req.set_digest(digest);
+    auto reader = stub->Read(&ctx, req);
+    v1::ReadChunk ch;
+    while (reader->Read(&ch)) *bytes += ch.data();
+    return reader->Finish();
+  };
+
+  // 1. Bytes that are not the digest's: DATA_LOSS, the upload discarded.
+  const std::string data = "the bytes of a blob";
+  const std::string claimed = Sha256Hex("other bytes");
+  v1::WriteResponse resp;
+  grpc::Status s = write({chunk(claimed, static_cast<std::int64_t>(data.size()), 0, data, true)}, &resp);
+  EXPECT_EQ(s.error_code(), grpc::StatusCode::DATA_LOSS) << s.error_message();
+  EXPECT_NE(s.error_message().find("hash to " + Sha256Hex(data)), std::string::npos) << s.error_message();
+  EXPECT_FALSE(status_of(claimed).complete());
+  EXPECT_EQ(status_of(claimed).committed_size(), 0);
+  std::string bytes;
+  EXPECT_EQ(read(claimed, &bytes).error_code(), grpc::StatusCode::NOT_FOUND);
+  EXPECT_TRUE(bytes.empty());
+
+  // 2. A chunk one byte over 1 MiB: INVALID_ARGUMENT, nothing held.
+  const std::string big((1 << 20) + 1, 'x');
+  s = write({chunk(Sha256Hex(big), static_cast<std::int64_t>(big.size()), 0, big, true)}, &resp);
+  EXPECT_EQ(s.error_code(), grpc::StatusCode::INVALID_ARGUMENT) << s.error_message();
+  EXPECT_NE(s.error_message().find("chunk larger than 1 MiB"), std::string::npos) << s.error_message();
+  EXPECT_EQ(status_of(Sha256Hex(big)).committed_size(), 0);
+
+  // 3. The first chunk at offset 10 with nothing held: FAILED_PRECONDITION
+  // naming offset 0; then a first half, and the second half sent at a wrong
+  // offset (refused, the first half kept), then at the right one: complete.
+  const std::string digest = Sha256Hex(data);
+  const auto n = static_cast<std::int64_t>(data.size());
+  s = write({chunk(digest, n, 10, data.substr(10), true)}, &resp);
+  EXPECT_EQ(s.error_code(), grpc::StatusCode::FAILED_PRECONDITION) << s.error_message();
+  EXPECT_NE(s.error_message().find("chunk at offset 10 but 0 bytes are held"), std::string::npos) << s.error_message();
+  EXPECT_EQ(status_of(digest).committed_size(), 0);
+  ASSERT_TRUE(write({chunk(digest, n, 0, data.substr(0, 8), false)}, &resp).ok());
+  EXPECT_EQ(resp.committed_size(), 8);
+  s = write({chunk(digest, n, 12, data.substr(12), true)}, &resp);
+  EXPECT_EQ(s.error_code(), grpc::StatusCode::FAILED_PRECONDITION) << s.error_message();
+  EXPECT_NE(s.error_message().find("chunk at offset 12 but 8 bytes are held"), std::string::npos) << s.error_message();
+  EXPECT_EQ(status_of(digest).committed_size(), 8);
+  ASSERT_TRUE(write({chunk(digest, n, 8, data.substr(8), true)}, &resp).ok());
+  EXPECT_TRUE(resp.complete());
+  bytes.clear();
+  ASSERT_TRUE(read(digest, &bytes).ok());
+  EXPECT_EQ(bytes, data);
+
+  // 4. Read of a blob never uploaded: NOT_FOUND naming it.
+  const std::string missing = Sha256Hex("never uploaded");
+  bytes.clear();
+  s = read(missing, &bytes);
+  EXPECT_EQ(s.error_code(), grpc::StatusCode::NOT_FOUND);
+  EXPECT_EQ(s.error_message(), "no blob " + missing);
+  c.Shutdown();
+  fs::remove_all(dir);
+}
+
 // A blob upload cut off by a kill -9 of the coordinator resumes where the
 // server's partial file ends, and the published blob is the uploaded bytes.
 TEST(ClusterBlobs, UploadInterruptedByACoordinatorKillResumes) {

@@ -2,6 +2,7 @@
 // sees the bundle evaluates the same design (protocol/job_bundle.h).
 #include <gtest/gtest.h>
 #include <stdlib.h>
+#include <sys/stat.h>
 
 #include <fstream>
 #include <sstream>
@@ -9,6 +10,7 @@
 #include "fabatlas/assembly/part_library.h"
 #include "fabatlas/design/design.h"
 #include "fabatlas/design/evaluate_sample.h"
+#include "fabatlas/error.h"
 #include "fabatlas/protocol/job_bundle.h"
 #include "fabatlas/testing/paths.h"
 
@@ -85,4 +87,67 @@ TEST(JobBundle, AssemblyPartMeshesTravelInTheBundle) {
   EXPECT_EQ(got.failure_reason, expected.failure_reason);
   ASSERT_EQ(got.checks.size(), expected.checks.size());
   for (std::size_t i = 0; i < got.checks.size(); ++i) EXPECT_EQ(got.checks[i].passed, expected.checks[i].passed) << i;
+}
+
+// Bundle confinement (issue 31): a model naming a file outside its
+// directory, by an absolute path, by '..' out of it, or through a link that
+// points out, is refused when the bundle is made (at submit and run), with
+// one line naming the model file, the line and the statement; nothing of the
+// outside file is read (it is a FIFO here: opening it to read would block).
+namespace {
+
+// A job of one OpenSCAD model in ROOT/job, whose line 3 is `statement`;
+// ROOT/outside holds the files the model must not reach.
+fs::path HostileModelJob(const fs::path& root, const std::string& statement) {
+  fs::create_directories(root / "job");
+  std::ofstream(root / "job/model.scad") << "size = 10;\ncube(size);\n" << statement << "\n";
+  std::ofstream(root / "job/design.yaml") << "name: hostile_model\nparameters:\n"
+                                             "  size: {type: real, min: 5, max: 15, default: 10}\n"
+                                             "tree: {op: openscad, file: model.scad, set: {size: size}}\n";
+  std::ofstream(root / "job/job.yaml") << "design: design.yaml\nsampling: {subdivisions: 2, max_depth: 0}\n";
+  return root / "job/job.yaml";
+}
+
+}  // namespace
+
+TEST(JobBundle, ModelFilesOutsideTheModelsDirectoryAreRefusedWithTheirLine) {
+  const fs::path root = FreshTempDir("confine");
+  fs::create_directories(root / "outside");
+  std::ofstream(root / "outside/secret.scad") << "cube(1);\n";
+  ASSERT_EQ(::mkfifo((root / "outside/secret.stl").c_str(), 0600), 0);
+  const std::string abs_scad = (root / "outside/secret.scad").string();
+  const std::string abs_stl = (root / "outside/secret.stl").string();
+  struct Case {
+    std::string statement, shown, why;
+  };
+  const std::vector<Case> cases = {
+      {"include <" + abs_scad + ">", "include <" + abs_scad + ">", "names an absolute path"},
+      {"use <../outside/secret.scad>", "use <../outside/secret.scad>", "leaves the model's directory"},
+      {"import(\"" + abs_stl + "\");", "import(\"" + abs_stl + "\")", "names an absolute path"},
+      {"import(file = \"../outside/secret.stl\");", "import(\"../outside/secret.stl\")", "leaves the model's directory"},
+      {"surface(file = \"sub/../../outside/secret.dat\");", "surface(\"sub/../../outside/secret.dat\")",
+       "leaves the model's directory"},
+      {"include <link.scad>", "include <link.scad>", "is a link to " + abs_scad},
+  };
+  int k = 0;
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.statement);
+    const fs::path dir = root / ("case" + std::to_string(k++));
+    const fs::path job = HostileModelJob(dir, c.statement);
+    fs::create_symlink(abs_scad, dir / "job/link.scad");
+    const std::string want = (dir / "job/model.scad").string() + ":3: " + c.shown + " " + c.why;
+    try {
+      protocol::MakeJobBundle(job);
+      ADD_FAILURE() << "bundled";
+    } catch (const InputError& e) {
+      const std::string what = e.what();
+      EXPECT_EQ(what.rfind(want, 0), 0u) << what << "\nwanted: " << want;
+      EXPECT_EQ(what.find('\n'), std::string::npos) << what;
+    }
+  }
+  // The same model with the statement commented out bundles (block comments
+  // keep the line count: the refusal's line is the statement's own).
+  const fs::path fine = HostileModelJob(root / "fine", "/* use <../outside/secret.scad>\n*/ cube(2);");
+  EXPECT_NO_THROW(protocol::MakeJobBundle(fine));
+  fs::remove_all(root);
 }

@@ -3,11 +3,16 @@
 // as a worker loads it.
 #include <gtest/gtest.h>
 
+#include <fcntl.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
+#include <fstream>
+#include <future>
 #include <map>
 #include <string>
 
+#include "fabatlas/error.h"
 #include "fabatlas/protocol/job_bundle.h"
 #include "fabatlas/sampling/sample_evaluator.h"
 #include "fabatlas/sha256.h"
@@ -82,6 +87,50 @@ TEST(LoadJobContext, EvaluatesAndUploadsEverySubtreeOnce) {
   for (const auto& s : r.subtrees) EXPECT_EQ(ctx->subtree_blobs.count(s.key), 1u) << s.key;
   ctx->evaluator->Evaluate(point);
   EXPECT_EQ(uploaded.size(), r.subtrees.size());
+  fs::remove_all(dir);
+}
+
+// Bundle confinement on the worker (issue 31): a bundle that did not come
+// through `fabatlas submit` (a client of its own) whose model imports a file
+// outside the bundle by absolute path: the evaluation is refused with the
+// model's file, line and statement before anything opens that file (a FIFO:
+// opening it to read would block until the guard below writes to it).
+TEST(LoadJobContext, AModelNamingAFileOutsideItsBundleIsRefusedBeforeItIsRead) {
+  const fs::path dir = testing::FreshTempDir("confine_worker");
+  fs::create_directories(dir / "job");
+  std::ofstream(dir / "job/model.scad") << "size = 10;\ncube(size);\n";
+  std::ofstream(dir / "job/design.yaml") << "name: hostile_model\nparameters:\n"
+                                            "  size: {type: real, min: 5, max: 15, default: 10}\n"
+                                            "tree: {op: openscad, file: model.scad, set: {size: size}}\n";
+  std::ofstream(dir / "job/job.yaml") << "design: design.yaml\nsampling: {subdivisions: 2, max_depth: 0}\n";
+  v1::JobBundle bundle = protocol::MakeJobBundle(dir / "job/job.yaml");
+  const fs::path fifo = dir / "secret.stl";
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  const std::string statement = "import(\"" + fifo.string() + "\")";
+  ASSERT_EQ(bundle.files().count("model.scad"), 1u);
+  (*bundle.mutable_files())["model.scad"] = "size = 10;\ncube(size);\n" + statement + ";\n";
+
+  auto ctx = worker::LoadJobContext(bundle, dir / "cache", 256, [](const std::string& bytes) { return Sha256Hex(bytes); });
+  ASSERT_TRUE(ctx->evaluator);
+  sampling::SamplePoint point;
+  point.key = {0};
+  point.u = {10.0};
+  auto evaluation = std::async(std::launch::async, [&]() -> std::string {
+    try {
+      ctx->evaluator->Evaluate(point);
+      return "evaluated";
+    } catch (const InputError& e) {
+      return e.what();
+    }
+  });
+  if (evaluation.wait_for(std::chrono::seconds(120)) != std::future_status::ready) {
+    const int fd = ::open(fifo.c_str(), O_WRONLY | O_NONBLOCK);  // lets a blocked reader go on
+    if (fd >= 0) ::close(fd);
+    ADD_FAILURE() << "the evaluation opened " << fifo;
+  }
+  const std::string what = evaluation.get();
+  EXPECT_NE(what.find("model.scad:3: " + statement + " names an absolute path"), std::string::npos) << what;
+  EXPECT_EQ(what.find('\n'), std::string::npos) << what;
   fs::remove_all(dir);
 }
 

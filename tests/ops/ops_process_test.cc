@@ -13,6 +13,7 @@
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
+#include <fstream>
 #include <map>
 #include <set>
 #include <sstream>
@@ -228,6 +229,125 @@ TEST(OpsWorker, SigtermExitsWithinSecondsWhenTheCoordinatorHasGone) {
   fs::remove_all(dir);
 }
 
+// This machine's host name, as the LOCK line names it.
+std::string HostName() {
+  char host[256] = {};
+  ::gethostname(host, sizeof(host) - 1);
+  return host;
+}
+
+// The one line a process refused by a lock wrote, checked: it names the
+// directory and the holder's pid and host, and the process exited 2.
+void ExpectRefusedByHolder(pid_t refused, const fs::path& log, const std::string& program, const fs::path& dir,
+                           const std::string& what, pid_t holder) {
+  EXPECT_EQ(WaitExit(refused, std::chrono::seconds(30)), 2) << ReadText(log);
+  const std::string text = ReadText(log);
+  const std::string want = program + ": " + dir.string() + ": " + what + " in use by pid " + std::to_string(holder) +
+                           " host " + HostName() + " since ";
+  EXPECT_EQ(text.rfind(want, 0), 0u) << text;
+  EXPECT_NE(text.find("(" + (dir / "LOCK").string() + ")"), std::string::npos) << text;
+  EXPECT_EQ(std::count(text.begin(), text.end(), '\n'), 1) << text;
+}
+
+// Two coordinators on one state directory (split brain: both would resume,
+// lease and publish the same jobs): the second exits 2 with one line naming
+// the first (pid, host, since when). Once the first is killed with SIGKILL
+// (no cleanup), the kernel has released its flock and a new coordinator
+// starts on the same directory, resumes the job and finishes it.
+TEST(OpsLock, ASecondCoordinatorOnOneStateDirectoryExits2AndAKilledOnesLockIsTakenOver) {
+  fs::path dir = FreshDir("ops_lock_coordinator");
+  CoordinatorProcess first = StartCoordinator(dir / "state", 0, {"--retry-backoff-ms", "50"});
+  ASSERT_GT(first.port, 0) << ReadText(dir / "state/coordinator.log");
+  const std::string id = Client(first.port).Submit(JobPath());
+  pid_t second = Spawn({(BinDir() / "fabatlas-coordinator").string(), "--listen", "127.0.0.1:0", "--state-dir",
+                        (dir / "state").string(), "--port-file", (dir / "second.port").string()},
+                       dir / "second.log");
+  ExpectRefusedByHolder(second, dir / "second.log", "fabatlas-coordinator", dir / "state", "state directory", first.pid);
+  EXPECT_FALSE(fs::exists(dir / "second.port"));
+  // The holder's line stays the first's while it runs.
+  EXPECT_EQ(ReadText(dir / "state/LOCK").rfind("pid " + std::to_string(first.pid) + " host ", 0), 0u);
+
+  KillAndReap(first.pid);
+  CoordinatorProcess third = StartCoordinator(dir / "state", 0, {"--retry-backoff-ms", "50"});
+  ASSERT_GT(third.port, 0) << ReadText(dir / "state/coordinator.log");
+  EXPECT_EQ(ReadText(dir / "state/LOCK").rfind("pid " + std::to_string(third.pid) + " host ", 0), 0u)
+      << ReadText(dir / "state/LOCK");
+  pid_t w = StartWorker(third.port, dir / "w");
+  const v1::JobStatus s = WaitForJob(third.port, id, std::chrono::seconds(240));
+  EXPECT_EQ(s.state(), v1::JOB_STATE_SUCCEEDED) << s.error();
+  ::kill(w, SIGTERM);
+  EXPECT_EQ(WaitExit(w, std::chrono::seconds(30)), 0);
+  ::kill(third.pid, SIGTERM);
+  EXPECT_EQ(WaitExit(third.pid, std::chrono::seconds(30)), 0);
+  fs::remove_all(dir);
+}
+
+// Two workers on one cache directory: the second exits 2 with one line
+// naming the first; after SIGKILL of the first a new worker takes the
+// directory over and runs a job to its end.
+TEST(OpsLock, ASecondWorkerOnOneCacheDirectoryExits2AndAKilledOnesLockIsTakenOver) {
+  fs::path dir = FreshDir("ops_lock_worker");
+  CoordinatorProcess c = StartCoordinator(dir / "state", 0, {"--retry-backoff-ms", "50", "--lease-ms", "3000"});
+  ASSERT_GT(c.port, 0) << ReadText(dir / "state/coordinator.log");
+  pid_t first = StartWorker(c.port, dir / "w1", {"--log-format", "json"});
+  ASSERT_TRUE(WaitForText(dir / "w1/worker.log", "worker_connected", first)) << ReadText(dir / "w1/worker.log");
+  pid_t second = Spawn({(BinDir() / "fabatlas-worker").string(), "--coordinator", "127.0.0.1:" + std::to_string(c.port),
+                        "--cache-dir", (dir / "w1/cache").string()},
+                       dir / "second.log");
+  ExpectRefusedByHolder(second, dir / "second.log", "fabatlas-worker", dir / "w1/cache", "worker cache directory",
+                        first);
+
+  KillAndReap(first);
+  pid_t third = Spawn({(BinDir() / "fabatlas-worker").string(), "--coordinator", "127.0.0.1:" + std::to_string(c.port),
+                       "--cache-dir", (dir / "w1/cache").string(), "--log-format", "json"},
+                      dir / "third.log");
+  ASSERT_TRUE(WaitForText(dir / "third.log", "worker_connected", third)) << ReadText(dir / "third.log");
+  EXPECT_EQ(ReadText(dir / "w1/cache/LOCK").rfind("pid " + std::to_string(third) + " host ", 0), 0u)
+      << ReadText(dir / "w1/cache/LOCK");
+  const std::string id = Client(c.port).Submit(JobPath());
+  const v1::JobStatus s = WaitForJob(c.port, id, std::chrono::seconds(240));
+  EXPECT_EQ(s.state(), v1::JOB_STATE_SUCCEEDED) << s.error();
+  ::kill(third, SIGTERM);
+  EXPECT_EQ(WaitExit(third, std::chrono::seconds(30)), 0);
+  ::kill(c.pid, SIGTERM);
+  EXPECT_EQ(WaitExit(c.pid, std::chrono::seconds(30)), 0);
+  fs::remove_all(dir);
+}
+
+// `fabatlas run` (an embedded coordinator) on an --out whose cluster-state
+// a coordinator holds: exit 2, one line naming the holder.
+TEST(OpsLock, RunOnAStateDirectoryInUseExits2) {
+  fs::path dir = FreshDir("ops_lock_run");
+  CoordinatorProcess c = StartCoordinator(dir / "out/cluster-state", 0);
+  ASSERT_GT(c.port, 0) << ReadText(dir / "out/cluster-state/coordinator.log");
+  pid_t run = Spawn({(BinDir() / "fabatlas").string(), "run", JobPath().string(), "--workers", "1", "--out",
+                     (dir / "out").string()},
+                    dir / "run.log");
+  ExpectRefusedByHolder(run, dir / "run.log", "fabatlas", dir / "out/cluster-state", "state directory", c.pid);
+  ::kill(c.pid, SIGTERM);
+  EXPECT_EQ(WaitExit(c.pid, std::chrono::seconds(30)), 0);
+  fs::remove_all(dir);
+}
+
+// A state.db that is not SQLite (a text file, or the first 4 KiB of a
+// database overwritten): the coordinator exits 2 with one line naming the
+// file and SQLite's reason, and leaves the file as it was.
+TEST(OpsStore, AStateDbThatIsNotSqliteIsOneLineAndExit2) {
+  fs::path dir = FreshDir("ops_not_sqlite");
+  fs::create_directories(dir / "state");
+  std::string text;
+  for (int i = 0; i < 200; ++i) text += "this is not a database, line " + std::to_string(i) + "\n";
+  std::ofstream(dir / "state/state.db", std::ios::binary) << text;
+  pid_t c = Spawn({(BinDir() / "fabatlas-coordinator").string(), "--listen", "127.0.0.1:0", "--state-dir",
+                   (dir / "state").string()},
+                  dir / "coordinator.log");
+  EXPECT_EQ(WaitExit(c, std::chrono::seconds(30)), 2) << ReadText(dir / "coordinator.log");
+  const std::string log = ReadText(dir / "coordinator.log");
+  EXPECT_EQ(log, "fabatlas-coordinator: " + (dir / "state/state.db").string() + ": file is not a database\n");
+  EXPECT_EQ(ReadText(dir / "state/state.db"), text);
+  fs::remove_all(dir);
+}
+
 // `fabatlas sample` and `fabatlas run` with a job file and --out named
 // without a directory part (as typed in the job's own directory) write the
 // same form as with full paths.
@@ -358,13 +478,15 @@ TEST(OpsDiskFull, WorkerCacheDirOnAFullFileSystemFailsTasksCleanlyAndRecovers) {
   EXPECT_EQ(s.state(), v1::JOB_STATE_RUNNING);
   EXPECT_EQ(s.tasks_quarantined(), 0);
   EXPECT_EQ(s.tasks_done(), 0);
-  // Nothing half-written: only directories (and the filler) on the disk. The
+  // Nothing half-written: only directories (and the filler, and the worker's
+  // lock, empty as the disk is full) on the disk. The
   // worker keeps leasing and failing meanwhile, so a write it has under way
   // may show its temporary file (never read by a lease); that none is left
   // behind is checked once the worker has exited, below.
   auto under_way = [](const fs::path& p) { return p.filename().string().find(".tmp-") != std::string::npos; };
   for (const auto& entry : fs::recursive_directory_iterator(disk.dir()))
-    EXPECT_TRUE(entry.is_directory() || entry.path().filename() == ".filler" || under_way(entry.path()))
+    EXPECT_TRUE(entry.is_directory() || entry.path().filename() == ".filler" || entry.path() == disk.dir() / "cache/LOCK" ||
+                under_way(entry.path()))
         << "left behind: " << entry.path();
 
   disk.Free();

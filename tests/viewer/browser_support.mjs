@@ -53,11 +53,22 @@ export function launchBrowser() {
   });
 }
 
-// Opens the page and waits for its first preview.
+// Opens the page and waits for its first preview. `errors` collects what
+// fails a test whatever it checks: page errors, any 4xx/5xx answer of the API
+// (/api/*), console errors reporting a Content-Security-Policy violation, and
+// dialogs (alert, confirm, prompt: the page opens none).
 export async function openPage(browser, url, viewport = { width: 1200, height: 900 }) {
   const page = await browser.newPage({ viewport, acceptDownloads: true });
   const errors = [];
   page.on('pageerror', (e) => errors.push(String(e)));
+  page.on('response', (r) => {
+    const u = new URL(r.url());
+    if (u.pathname.startsWith('/api/') && r.status() >= 400) errors.push(`${r.status()} from ${u.pathname}${decodeURIComponent(u.search)}`);
+  });
+  page.on('console', (m) => {
+    if (m.type() === 'error' && /Content.Security.Policy|Refused to/i.test(m.text())) errors.push('CSP violation: ' + m.text());
+  });
+  page.on('dialog', (d) => { errors.push(`dialog (${d.type()}): ${d.message()}`); d.dismiss().catch(() => {}); });
   await page.goto(url, { timeout: 120000 });
   await page.waitForFunction(() => window.fabatlas.ready && window.fabatlas.previewCount >= 1, null, { timeout: 60000 });
   await settle(page);

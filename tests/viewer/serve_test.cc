@@ -203,6 +203,41 @@ TEST_F(Server, OnlyThePageAndTheApiAreReachable) {
   }
 }
 
+// Every response, the page's files, API answers and errors alike, carries a
+// Content-Security-Policy without inline script, and nosniff; an error that
+// echoes hostile input is plain text, never HTML.
+TEST_F(Server, EveryResponseCarriesTheContentSecurityPolicyAndErrorsArePlainText) {
+  httplib::Client raw("127.0.0.1", port_);
+  const std::string hostile = "<script>document.title='XSS'</script>";
+  const std::string encoded = "%3Cscript%3Edocument.title%3D%27XSS%27%3C%2Fscript%3E";  // hostile, URL-encoded
+  const std::vector<std::pair<std::string, int>> gets = {
+      {"/", 200}, {"/assets/app.js", 200}, {"/api/form", 200}, {"/api/intervals?u=15,6", 200},
+      {"/api/snap?u=" + encoded + ",1", 400},
+      {"/api/" + encoded, 404}, {"/nothing.html", 404}};
+  for (const auto& [path, status] : gets) {
+    auto r = raw.Get(path.c_str());
+    ASSERT_TRUE(r) << path;
+    EXPECT_EQ(r->status, status) << path;
+    const std::string csp = r->get_header_value("Content-Security-Policy");
+    EXPECT_NE(csp.find("script-src 'self'"), std::string::npos) << path << ": " << csp;
+    EXPECT_EQ(csp.find("unsafe-inline"), std::string::npos) << path << ": " << csp;
+    EXPECT_EQ(csp.find("unsafe-eval"), std::string::npos) << path << ": " << csp;
+    EXPECT_EQ(r->get_header_value("X-Content-Type-Options"), "nosniff") << path;
+    if (status >= 400) {
+      EXPECT_EQ(r->get_header_value("Content-Type").rfind("text/plain", 0), 0u) << path;
+      EXPECT_EQ(r->body.find('\n'), r->body.size() - 1) << path << ": " << r->body;
+    }
+  }
+  // The 400's one line names the hostile value as typed, as text.
+  auto bad = raw.Get(("/api/snap?u=" + encoded + ",1").c_str());
+  ASSERT_TRUE(bad);
+  EXPECT_NE(bad->body.find(hostile), std::string::npos) << bad->body;
+  auto post = raw.Post("/api/form", "x", "text/plain");
+  ASSERT_TRUE(post);
+  EXPECT_EQ(post->status, 405);
+  EXPECT_NE(post->get_header_value("Content-Security-Policy").find("script-src 'self'"), std::string::npos);
+}
+
 TEST_F(Server, MapMarksTheCurrentPointsCellValid) {
   const json m = GetJson("/api/map?a=0&b=1&n=25&u=15,6");
   ASSERT_EQ(m["cells"].size(), 625u);

@@ -397,7 +397,7 @@ ApiResponse Route(const Customiser& c, const std::string& path, const std::map<s
   }
   ApiResponse r;
   r.status = 404;
-  r.content_type = "text/plain";
+  r.content_type = "text/plain; charset=utf-8";
   r.body = "no such API route: " + path + "\n";
   return r;
 }
@@ -410,20 +410,20 @@ ApiResponse HandleApiRequest(const Customiser& c, const std::string& path, const
   } catch (const BadRequest& e) {
     ApiResponse r;
     r.status = 400;
-    r.content_type = "text/plain";
+    r.content_type = "text/plain; charset=utf-8";
     r.body = e.reason + "\n";
     return r;
   } catch (const InputError& e) {
     ApiResponse r;
     r.status = 400;
-    r.content_type = "text/plain";
+    r.content_type = "text/plain; charset=utf-8";
     r.body = std::string(e.what()) + "\n";
     return r;
   } catch (const std::exception& e) {
     // A fault of ours, not of the request: answered, never a dropped connection.
     ApiResponse r;
     r.status = 500;
-    r.content_type = "text/plain";
+    r.content_type = "text/plain; charset=utf-8";
     r.body = std::string("internal error: ") + e.what() + "\n";
     return r;
   }

@@ -76,7 +76,7 @@ void Serve(const Customiser& customiser, const ServeOptions& options, const std:
     const auto it = files.find(req.path);
     if (it == files.end()) {
       res.status = 404;
-      res.set_content("not found\n", "text/plain");
+      res.set_content("not found\n", "text/plain; charset=utf-8");
       return;
     }
     res.set_content(it->second, ContentType(it->first == "/" ? "/index.html" : it->first).c_str());
@@ -85,14 +85,21 @@ void Serve(const Customiser& customiser, const ServeOptions& options, const std:
   const auto not_allowed = [](const httplib::Request& req, httplib::Response& res) {
     res.status = 405;
     res.set_header("Allow", "GET");
-    res.set_content(req.method + " is not allowed here; the customiser's API answers GET only\n", "text/plain");
+    res.set_content(req.method + " is not allowed here; the customiser's API answers GET only\n",
+                    "text/plain; charset=utf-8");
   };
   server.Post(R"(.*)", not_allowed);
   server.Put(R"(.*)", not_allowed);
   server.Delete(R"(.*)", not_allowed);
   server.Patch(R"(.*)", not_allowed);
+  // On every response, the page's files, the API's answers and errors alike.
+  server.set_post_routing_handler([](const httplib::Request&, httplib::Response& res) {
+    res.set_header("Content-Security-Policy", kContentSecurityPolicy);
+    res.set_header("X-Content-Type-Options", "nosniff");
+    res.set_header("Referrer-Policy", "no-referrer");
+  });
   server.set_error_handler([](const httplib::Request&, httplib::Response& res) {
-    if (res.body.empty()) res.set_content("error " + std::to_string(res.status) + "\n", "text/plain");
+    if (res.body.empty()) res.set_content("error " + std::to_string(res.status) + "\n", "text/plain; charset=utf-8");
   });
   // SO_REUSEADDR only: httplib's default also sets SO_REUSEPORT, with which
   // a second server on a taken port would bind and share its connections.

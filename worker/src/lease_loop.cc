@@ -36,6 +36,7 @@ Worker::Worker(WorkerOptions options, const std::atomic<bool>& stop) : o_(std::m
   if (o_.memory_mb < 256) throw InputError("worker: --memory-mb must be at least 256");
   if (o_.worker_id.empty()) o_.worker_id = DefaultWorkerId();
   if (o_.cache_dir.empty()) o_.cache_dir = fs::temp_directory_path() / ("fabatlas-worker-" + std::to_string(::getpid()));
+  cache_lock_ = std::make_unique<DirectoryLock>(o_.cache_dir, "worker cache directory");
   channel_ = protocol::MakeChannel(o_.coordinator, o_.security);
   stub_ = v1::WorkerService::NewStub(channel_);
   blob_stub_ = v1::BlobService::NewStub(channel_);

@@ -23,6 +23,7 @@
 
 #include <httplib.h>
 
+#include "fabatlas/directory_lock.h"
 #include "fabatlas/geometry/solid.h"
 #include "fabatlas/log/metrics_text.h"
 #include "fabatlas/protocol/channel.h"
@@ -164,6 +165,8 @@ class Worker {
                           std::string digest, const std::string& holder);
 
   WorkerOptions o_;
+  // The cache directory is this worker's alone while it runs (directory_lock.h).
+  std::unique_ptr<DirectoryLock> cache_lock_;
   const std::atomic<bool>& stop_;
   std::shared_ptr<grpc::Channel> channel_;
   std::unique_ptr<v1::WorkerService::Stub> stub_;

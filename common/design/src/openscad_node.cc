@@ -1327,6 +1327,14 @@ void AppendDescendantRecords(const SubtreeTrace& trace, const std::string& path,
 OpenScadNodeResult EvaluateOpenScadNode(const Node& node, const ResolvedArgs& args, const fs::path& dir,
                                         OpenScadNodeContext& context) {
   const fs::path model = dir / args.Text("file");
+  // A job bundle is all an evaluation reads: a model naming a file outside
+  // its directory (absolute, '..' out of it, a link pointing out) is refused
+  // before anything reads that file, here as at submit (model_files.h).
+  try {
+    scad::ModelFiles(model);
+  } catch (const InputError& e) {
+    throw DesignFault(e.what());
+  }
   std::vector<std::pair<std::string, std::string>> overrides;
   if (auto it = args.values.find("set"); it != args.values.end())
     for (std::size_t i = 0; i < it->second.keys.size(); ++i) overrides.emplace_back(it->second.keys[i], it->second.literals[i]);

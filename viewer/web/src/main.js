@@ -40,6 +40,18 @@ window.fabatlas = state;
 state.motionObjects = () => motionMeshes;
 
 const $ = (id) => document.getElementById(id);
+// An element built from properties and children (strings become text
+// nodes): every string that comes from a design, job or artifact reaches
+// the page as text, never as markup (docs/viewer.md, Hostile artifacts).
+function node(tag, props = {}, ...children) {
+  const el = document.createElement(tag);
+  for (const [k, v] of Object.entries(props)) {
+    if (k === 'dataset') Object.assign(el.dataset, v);
+    else el[k] = v;
+  }
+  el.append(...children);
+  return el;
+}
 // The limits as the API reads them: "volume<=9000,weight:PLA>=3".
 function limitsText() {
   const items = [];
@@ -101,9 +113,11 @@ function buildSliders() {
     const root = hostOf(dim.group ?? '');
     const box = document.createElement('div');
     box.className = 'slider';
-    box.innerHTML = `<div class="label"><span class="name"></span><span class="value"></span></div>
-      <div class="row"><div class="track"><div class="segments"></div><input type="range"></div></div>
-      <div class="why" hidden></div>`;
+    box.append(
+      node('div', { className: 'label' }, node('span', { className: 'name' }), node('span', { className: 'value' })),
+      node('div', { className: 'row' }, node('div', { className: 'track' }, node('div', { className: 'segments' }),
+        node('input', { type: 'range' }))),
+      node('div', { className: 'why', hidden: true }));
     box.querySelector('.name').textContent = dim.name;
     if (dim.description) {
       box.querySelector('.name').title = dim.description;
@@ -296,12 +310,15 @@ function drawReadout(p) {
   const volume = p.properties.volume;
   if (volume !== undefined) rows.push(['volume', `${(volume / 1000).toFixed(2)} cm³`]);
   for (const [k, v] of Object.entries(p.properties)) if (k !== 'volume') rows.push([k, v.toFixed(2)]);
-  let html = rows.map(([k, v]) => `<tr><th>${k}</th><td>${v}</td></tr>`).join('');
+  const table = $('readout');
+  table.textContent = '';
+  for (const [k, v] of rows) table.append(node('tr', {}, node('th', {}, k), node('td', {}, v)));
   if (p.materials.length) {
-    html += '<tr><th>material</th><th>weight</th><th>cost</th></tr>';
-    html += p.materials.map((m) => `<tr class="material"><td>${m.name}</td><td>${m.weight_g.toFixed(1)} g</td><td>${m.cost.toFixed(2)}</td></tr>`).join('');
+    table.append(node('tr', {}, node('th', {}, 'material'), node('th', {}, 'weight'), node('th', {}, 'cost')));
+    for (const m of p.materials)
+      table.append(node('tr', { className: 'material' }, node('td', {}, m.name), node('td', {}, `${m.weight_g.toFixed(1)} g`),
+        node('td', {}, m.cost.toFixed(2))));
   }
-  $('readout').innerHTML = html;
 }
 
 // ------------------------------------------------------------- preview
@@ -474,8 +491,14 @@ async function drawMap() {
   ctx.strokeStyle = '#fff';
   ctx.lineWidth = 2;
   ctx.strokeRect(x - 4, y - 4, 8, 8);
-  $('map-legend').innerHTML = '<span class="swatch valid"></span> valid ' +
-    m.failures.map((f, k) => `<span class="swatch" style="background:${palette[k % palette.length]}"></span> ${f}`).join(' ');
+  const legend = $('map-legend');
+  legend.textContent = '';
+  legend.append(node('span', { className: 'swatch valid' }), ' valid');
+  m.failures.forEach((f, k) => {
+    const swatch = node('span', { className: 'swatch' });
+    swatch.style.background = palette[k % palette.length];
+    legend.append(' ', swatch, ' ', f);
+  });
 }
 
 function onMapClick(e) {
@@ -822,8 +845,9 @@ function buildLimits() {
   for (const p of names) {
     const row = document.createElement('div');
     row.className = 'limit';
-    row.innerHTML = `<span class="name"></span><input type="number" step="any" placeholder="min" data-bound="min">
-      <input type="number" step="any" placeholder="max" data-bound="max">`;
+    row.append(node('span', { className: 'name' }),
+      node('input', { type: 'number', step: 'any', placeholder: 'min', dataset: { bound: 'min' } }), ' ',
+      node('input', { type: 'number', step: 'any', placeholder: 'max', dataset: { bound: 'max' } }));
     row.querySelector('.name').textContent = p.replace(/^(weight|cost):(.*)$/, '$1 in $2') +
       (p === 'volume' ? ' (mm³)' : p.startsWith('weight:') ? ' (g)' : p.startsWith('bbox') ? ' (mm)' : '');
     for (const input of row.querySelectorAll('input')) {

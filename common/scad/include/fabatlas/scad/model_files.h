@@ -22,10 +22,19 @@ struct ModelFile {
 };
 
 // The files `model` needs, each once, in the order first named. Names that
-// are not found (OpenSCAD's own library directory, a computed file name) and
-// names that would leave the model's directory (`../lib.scad`) are left out:
-// OpenSCAD reports a missing file itself when it evaluates the model.
+// are not found (OpenSCAD's own library directory) are left out: OpenSCAD
+// reports a missing file itself when it evaluates the model.
 // `openscadpath` is the OPENSCADPATH value (directories separated by ':').
+//
+// Confinement: a job bundle carries only the files inside the model's
+// directory, and those are all an evaluation may read. A literal name that
+// is absolute (`import("/etc/x.stl")`), that leaves the model's directory
+// (`use <../lib.scad>`), or a found file that is a link resolving outside
+// the directory it was found in (the model's, or the OPENSCADPATH directory
+// of a library) throws fabatlas::InputError, one line:
+//   "<file>:<line>: use <../lib.scad> leaves the model's directory; ..."
+// before anything reads that file. Computed names (`import(str(a, b))`) are
+// not seen here (docs/operations.md, Bundle confinement).
 // Throws fabatlas::InputError naming the file when a .scad file cannot be read.
 std::vector<ModelFile> ModelFiles(const std::filesystem::path& model, const std::string& openscadpath);
 
