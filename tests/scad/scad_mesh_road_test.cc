@@ -104,7 +104,8 @@ INSTANTIATE_TEST_SUITE_P(Features, CorpusModel,
                                            "features/linear_extrude-tests.scad", "features/rotate_extrude-tests.scad",
                                            "features/rotate_extrude-angle.scad", "features/polyhedron-concave-test.scad",
                                            "features/import_stl-tests.scad", "features/2d-3d.scad",
-                                           "features/for-tests.scad", "features/child-tests.scad"));
+                                           "features/for-tests.scad", "features/child-tests.scad",
+                                           "features/minkowski3-erosion.scad", "issues/issue911.scad"));
 
 TEST(MeshRoad, SurfaceIsOpenScadsOwnTriangles) {
   // A box with a cylindrical hole: OpenSCAD's STL has a few dozen triangles

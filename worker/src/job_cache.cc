@@ -21,6 +21,7 @@ std::shared_ptr<JobContext> LoadJobContext(const v1::JobBundle& bundle, const st
   const std::size_t geometry = budget / 2, level_sets_at_least = budget / 16;
   options.subtree_memory_bytes = budget / 8;
   options.min_subtree_seconds = ctx->min_subtree_seconds;
+  options.confine_model_files = true;  // the bundle is all an evaluation reads
   ctx->shelf.SetBudget(budget / 16 * 5);
   JobContext* job = ctx.get();
   options.solid_memory_budget = [job, geometry, level_sets_at_least] {

@@ -258,6 +258,7 @@ class TreeEvaluation {
         context.records = records_;
         context.outside = &outside_;
         context.warnings = &warnings_;
+        context.confine_model_files = options_.confine_model_files;
         context.path = path;
         OpenScadNodeResult scad = EvaluateOpenScadNode(node, args, design_.file.parent_path(), context);
         out.solid = std::move(scad.solid);

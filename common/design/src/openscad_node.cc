@@ -1048,7 +1048,15 @@ class CsgEvaluation {
     if (linked_) return;
     linked_ = true;
     std::error_code ec;
-    for (const scad::ModelFile& f : scad::ModelFiles(model_)) {
+    // A model evaluated where it lies may name files outside its directory
+    // (OpenSCAD reads them; a job bundle refuses such a model at submit and
+    // a worker before it reads anything, model_files.h): those are not linked.
+    std::vector<scad::ModelFile> files;
+    try {
+      files = scad::ModelFiles(model_);
+    } catch (const InputError&) {
+    }
+    for (const scad::ModelFile& f : files) {
       fs::create_directories((work_ / f.relative).parent_path(), ec);
       fs::create_symlink(fs::absolute(f.source), work_ / f.relative, ec);
     }
@@ -1327,13 +1335,15 @@ void AppendDescendantRecords(const SubtreeTrace& trace, const std::string& path,
 OpenScadNodeResult EvaluateOpenScadNode(const Node& node, const ResolvedArgs& args, const fs::path& dir,
                                         OpenScadNodeContext& context) {
   const fs::path model = dir / args.Text("file");
-  // A job bundle is all an evaluation reads: a model naming a file outside
-  // its directory (absolute, '..' out of it, a link pointing out) is refused
-  // before anything reads that file, here as at submit (model_files.h).
-  try {
-    scad::ModelFiles(model);
-  } catch (const InputError& e) {
-    throw DesignFault(e.what());
+  // A job bundle is all a worker's evaluation reads: a model naming a file
+  // outside its directory is refused before anything reads that file, here
+  // as at submit (model_files.h).
+  if (context.confine_model_files) {
+    try {
+      scad::ModelFiles(model);
+    } catch (const InputError& e) {
+      throw DesignFault(e.what());
+    }
   }
   std::vector<std::pair<std::string, std::string>> overrides;
   if (auto it = args.values.find("set"); it != args.values.end())

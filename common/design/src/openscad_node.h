@@ -67,6 +67,7 @@ struct OpenScadNodeContext {
   std::vector<SubtreeRecord>* records = nullptr;  // CSG subtree records are appended (post-order)
   std::vector<OutsideMesh>* outside = nullptr;    // outside meshes are appended
   std::vector<std::string>* warnings = nullptr;   // what OpenSCAD would warn, and the mesh road's fallbacks
+  bool confine_model_files = false;               // EvaluateOptions::confine_model_files
   std::string path;                             // the node's record path; CSG subtrees are PATH/csg/...
 };
 

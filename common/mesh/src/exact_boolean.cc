@@ -15,6 +15,7 @@
 #include <CGAL/Exact_predicates_exact_constructions_kernel.h>
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Nef_polyhedron_3.h>
+#include <CGAL/Polygon_mesh_processing/connected_components.h>
 #include <CGAL/Polygon_mesh_processing/corefinement.h>
 #include <CGAL/Polygon_mesh_processing/orient_polygon_soup.h>
 #include <CGAL/Polygon_mesh_processing/polygon_soup_to_polygon_mesh.h>
@@ -134,7 +135,34 @@ void AppendExact(const Exact& e, TriangleMesh& out) {
                                base + static_cast<std::int32_t>(f[2])});
 }
 
-Nef NefOf(const Exact& e) { return e.nef ? *e.nef : Nef(e.mesh); }
+// The Nef polyhedron of a closed mesh. CGAL builds each closed shell as a
+// solid whatever its orientation, so a cavity (an inward shell inside an
+// outward one) would come out filled: the outward shells are joined and the
+// inward ones, turned outward, taken away.
+Nef NefOf(const Exact& e) {
+  if (e.nef) return *e.nef;
+  std::vector<SurfaceMesh> shells;
+  PMP::split_connected_components(e.mesh, shells);
+  if (shells.size() <= 1) return Nef(e.mesh);
+  Nef solid, cavities;
+  for (SurfaceMesh& shell : shells) {
+    double six = 0;
+    for (auto f : shell.faces()) {
+      std::array<Point, 3> p;
+      int i = 0;
+      for (auto v : CGAL::vertices_around_face(shell.halfedge(f), shell))
+        if (i < 3) p[i++] = shell.point(v);
+      six += CGAL::to_double(CGAL::determinant(p[0] - CGAL::ORIGIN, p[1] - CGAL::ORIGIN, p[2] - CGAL::ORIGIN));
+    }
+    if (six < 0) {
+      PMP::reverse_face_orientations(shell);
+      cavities += Nef(shell);
+    } else {
+      solid += Nef(shell);
+    }
+  }
+  return solid - cavities;
+}
 
 Exact OfNef(Nef nef) {
   Exact out;

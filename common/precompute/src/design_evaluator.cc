@@ -62,6 +62,7 @@ DesignSampleEvaluator::DesignSampleEvaluator(design::Design design, DesignEvalua
 design::SampleResult DesignSampleEvaluator::Evaluate(const sampling::SamplePoint& point) {
   design::EvaluateOptions eval;
   eval.cache = observed_ ? observed_.get() : static_cast<design::SubtreeCache*>(&subtrees_);
+  eval.confine_model_files = options_.confine_model_files;
   design::SampleResult r = design::EvaluateSample(design_, DesignPointOf(design_, point.u), eval);
   if (r.valid) Remember(point.key, r.solid);
   return r;

@@ -79,6 +79,11 @@ struct EvaluateOptions {
   // objects' meshes, the transitions' motions and the collision_free check's
   // intervals (state_graph.h, EvaluateStateGraph).
   StateGraph* state_graph = nullptr;
+  // true (a worker's job bundle): an OpenSCAD model naming a file outside
+  // its directory (absolute, '..' out of it, a link pointing out) is refused
+  // with InputError before anything reads that file (model_files.h). false
+  // (a model evaluated where it lies): OpenSCAD's own lookup.
+  bool confine_model_files = false;
 };
 
 struct SampleResult {

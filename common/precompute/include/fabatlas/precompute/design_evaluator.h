@@ -53,6 +53,9 @@ struct DesignEvaluatorOptions {
   // root took from its children. Cluster workers upload slow subtrees from
   // here (tasks.proto "Geometry blobs"). Must be thread-safe.
   std::function<void(const std::string& key, const geometry::Solid& solid, double seconds)> on_subtree_computed;
+  // design::EvaluateOptions::confine_model_files (the cluster worker: a job
+  // bundle is all an evaluation reads).
+  bool confine_model_files = false;
 };
 
 // Thread-safe: the executor calls it from several threads at once.
