@@ -12,6 +12,7 @@
 #include <string>
 
 #include "fabatlas/design/evaluate_sample.h"
+#include "fabatlas/error.h"
 #include "fabatlas/geometry/solid.h"
 #include "fabatlas/mesh/enclosed_volume.h"
 #include "fabatlas/mesh/exact_boolean.h"
@@ -178,6 +179,54 @@ TEST(MeshSolid, DeltaGIsExactAndTheBytesRoundTrip) {
   const geometry::Solid voxels = geometry::Intersection(sa, sa);
   EXPECT_EQ(voxels.boundary(), nullptr);
   EXPECT_NEAR(voxels.Volume(), 1.0, 0.05);
+}
+
+}  // namespace
+
+namespace {
+
+TEST(MeshRoad, AModelOpenScadRejectsIsBadInputNamingItsLine) {
+  // OpenSCAD's parser refuses the model whatever its values: one line with
+  // the model, OpenSCAD's line and its message (the CLI exits 2 on it).
+  const fs::path dir = fabatlas::testing::FreshTempDir("scad-mesh-road-bad");
+  std::ofstream(dir / "bad.scad") << "size = 10;\ncube(size)\nsphere(2;\n";
+  try {
+    Evaluate(dir / "bad.scad", dir);
+    FAIL() << "a model OpenSCAD cannot parse evaluated";
+  } catch (const fabatlas::InputError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find((dir / "bad.scad").string() + ":3: OpenSCAD rejects the model: Parser error"), std::string::npos) << what;
+    EXPECT_EQ(what.find('\n'), std::string::npos) << what;
+  }
+}
+
+TEST(MeshRoad, ConcavePolyhedronFacesKeepTheirShape) {
+  // polyhedron-concave-test.scad's hexagons are concave: OpenSCAD's STL and
+  // ours must be the same surface, not only the same volume (a fan of a
+  // concave face covers area outside it and cancels it in the volume).
+  const fs::path model = kCorpus / "features/polyhedron-concave-test.scad";
+  if (!fs::exists(model)) GTEST_SKIP() << "openscad-testing-data is not installed";
+  const fs::path dir = fabatlas::testing::FreshTempDir("scad-mesh-road-concave");
+  const Measured peer = Peer(model, dir);
+  const design::SampleResult r = Evaluate(model, dir);
+  ASSERT_TRUE(r.valid) << r.failure_reason;
+  double area = 0, peer_area = 0;
+  auto area_of = [](const mesh::TriangleMesh& m) {
+    double a = 0;
+    for (const auto& t : m.triangles) {
+      const auto& p = m.vertices[t[0]];
+      const auto& q = m.vertices[t[1]];
+      const auto& s = m.vertices[t[2]];
+      const double u[3] = {q[0] - p[0], q[1] - p[1], q[2] - p[2]}, v[3] = {s[0] - p[0], s[1] - p[1], s[2] - p[2]};
+      const double c[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
+      a += 0.5 * std::sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
+    }
+    return a;
+  };
+  area = area_of(r.solid.ToMesh());
+  peer_area = area_of(mesh::ReadMesh(dir / "polyhedron-concave-test.peer.stl"));
+  EXPECT_NEAR(area, peer_area, 1e-4 * peer_area);
+  EXPECT_NEAR(r.solid.Volume(), peer.volume, 1e-5 * peer.volume);
 }
 
 }  // namespace

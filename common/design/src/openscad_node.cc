@@ -1362,8 +1362,22 @@ OpenScadNodeResult EvaluateOpenScadNode(const Node& node, const ResolvedArgs& ar
   } else {
     try {
       if (!scad::RunOpenScad(model, out, overrides, &run))
+      {
+        // A parser error is the model's, whatever the values: bad input
+        // (one line naming the model and OpenSCAD's line, exit 2), where a
+        // failure at these values only (an assert) fails the sample.
+        const std::size_t parser = run.log_tail.find("Parser error");
+        if (parser != std::string::npos) {
+          std::string line;
+          if (const std::size_t at = run.log_tail.rfind("line "); at != std::string::npos)
+            line = ":" + run.log_tail.substr(at + 5, run.log_tail.find_first_not_of("0123456789", at + 5) - (at + 5));
+          throw DesignFault(model.string() + line + ": OpenSCAD rejects the model: " + run.log_tail.substr(parser));
+        }
         throw SampleFailure(kNoGeometry, node.place.str() + ": openscad failed: " + run.log_tail);
+      }
     } catch (const SampleFailure&) {
+      throw;
+    } catch (const DesignFault&) {
       throw;
     } catch (const InputError& e) {
       throw DesignFault(node.place.str() + ": " + e.what());

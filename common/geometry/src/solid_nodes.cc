@@ -211,6 +211,7 @@ bool IsSolidNodeBytes(std::string_view bytes) {
 }
 
 std::optional<std::string> SolidNodeBytes(const Solid& solid) {
+  if (solid.boundary()) return std::nullopt;  // a mesh solid: Solid::Serialize keeps its exact mesh
   Writer w;
   w.PutBytes(kMagic, sizeof kMagic);
   const Solid::Impl* impl = solid.impl();

@@ -231,7 +231,7 @@ std::optional<SurfaceMesh> FloatCorefinement(BooleanOp op, const SurfaceMesh& a,
 }
 
 // a op b, both non-empty: corefinement (in doubles, then exact), else Nef.
-Exact Apply(BooleanOp op, const Exact& a, const Exact& b, BooleanSummary& summary) {
+Exact Apply(BooleanOp op, const Exact& a, const Exact& b, std::size_t b_index, BooleanSummary& summary) {
   std::string why;
   if (!a.nef && !b.nef) {
     if (std::optional<SurfaceMesh> fast = FloatCorefinement(op, a.mesh, b.mesh)) {
@@ -271,10 +271,11 @@ Exact Apply(BooleanOp op, const Exact& a, const Exact& b, BooleanSummary& summar
   if (summary.nef_why.empty()) summary.nef_why = why;
   // Nef polyhedra take only valid solids (CGAL does not check: a mesh that
   // touches itself can crash the construction).
-  for (const Exact* e : {&a, &b})
+  for (const Exact* e : {&b, &a})
     if (!e->nef && PMP::does_self_intersect(e->mesh))
-      throw InputError(std::string("exact ") + BooleanOpName(op) + " could not be computed (" + why +
-                       "): an operand intersects itself");
+      throw InputError("exact boolean operand " + (e == &b ? std::to_string(b_index) : std::string("0")) +
+                       (e == &a && b_index > 1 ? " (with the operands before " + std::to_string(b_index) + ")" : "") +
+                       " intersects itself (" + BooleanOpName(op) + ": " + why + ")");
   try {
     const Nef na = NefOf(a), nb = NefOf(b);
     return OfNef(op == BooleanOp::kUnion ? na + nb : op == BooleanOp::kDifference ? na - nb : na * nb);
@@ -323,12 +324,16 @@ TriangleMesh ExactBoolean(BooleanOp op, const std::vector<TriangleMesh>& operand
   if (in.empty()) return out;
   if (op == BooleanOp::kUnion) {
     std::vector<Exact> present;
-    for (auto& e : in)
-      if (!e.empty) present.push_back(std::move(e));
+    std::vector<std::size_t> present_index;  // each one's index among the operands
+    for (std::size_t i = 0; i < in.size(); ++i)
+      if (!in[i].empty) {
+        present.push_back(std::move(in[i]));
+        present_index.push_back(i);
+      }
     // Operands apart from all others join the result as they are.
     for (const auto& group : TouchingGroups(present)) {
       Exact acc = present[group[0]];
-      for (std::size_t k = 1; k < group.size(); ++k) acc = Apply(op, acc, present[group[k]], summary);
+      for (std::size_t k = 1; k < group.size(); ++k) acc = Apply(op, acc, present[group[k]], present_index[group[k]], summary);
       summary.disjoint += group.size() == 1 && present.size() > 1;
       AppendExact(acc, out);
     }
@@ -341,7 +346,7 @@ TriangleMesh ExactBoolean(BooleanOp op, const std::vector<TriangleMesh>& operand
       if (op == BooleanOp::kIntersection) return out;  // nothing in common
       continue;  // nothing to take away
     }
-    acc = Apply(op, acc, in[i], summary);
+    acc = Apply(op, acc, in[i], i, summary);
   }
   AppendExact(acc, out);
   return out;

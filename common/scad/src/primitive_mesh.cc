@@ -231,8 +231,29 @@ TriangleMesh CylinderMesh(double h, double r1, double r2, bool center, int fragm
 TriangleMesh PolyhedronMesh(const std::vector<std::array<double, 3>>& points, const std::vector<std::vector<int>>& faces) {
   TriangleMesh m;
   m.vertices = points;
-  for (const auto& f : faces)
-    if (f.size() >= 3) AddFan(m, f, false);
+  for (const auto& f : faces) {
+    if (f.size() == 3) AddFan(m, f, false);
+    if (f.size() <= 3) continue;
+    // A polygon face may be concave (polyhedron-concave-test.scad's
+    // hexagons): ear-clipped in its plane, seen along its normal's largest
+    // axis (Newell's normal), so its triangles keep the face's winding.
+    std::array<double, 3> normal{0, 0, 0};
+    for (std::size_t i = 0; i < f.size(); ++i) {
+      const auto& a = points[f[i]];
+      const auto& b = points[f[(i + 1) % f.size()]];
+      normal[0] += (a[1] - b[1]) * (a[2] + b[2]);
+      normal[1] += (a[2] - b[2]) * (a[0] + b[0]);
+      normal[2] += (a[0] - b[0]) * (a[1] + b[1]);
+    }
+    int k = 0;
+    for (int j = 1; j < 3; ++j)
+      if (std::abs(normal[j]) > std::abs(normal[k])) k = j;
+    int u = (k + 1) % 3, v = (k + 2) % 3;
+    if (normal[k] < 0) std::swap(u, v);
+    Loop loop;
+    for (int i : f) loop.push_back({points[i][u], points[i][v]});
+    for (const auto& t : TriangulateLoop(loop)) m.triangles.push_back({f[t[0]], f[t[1]], f[t[2]]});
+  }
   return m;
 }
 

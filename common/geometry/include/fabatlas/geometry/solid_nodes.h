@@ -37,7 +37,8 @@ class Solid;
 // The node bytes of `solid`; std::nullopt when it cannot be encoded exactly
 // this way (a grid with a transform other than its spec's canonical one or
 // with metadata beyond its name and class; no solid built by this library
-// has either): callers then use Solid::Serialize().
+// has either), and for a mesh solid (MeshSolid: its exact mesh is the solid,
+// its level set only a view of it): callers then use Solid::Serialize().
 std::optional<std::string> SolidNodeBytes(const Solid& solid);
 
 // True when `bytes` start with the node encoding's magic number.
