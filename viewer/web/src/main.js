@@ -397,10 +397,11 @@ async function loadPreview(u, sample, exact = false) {
   const buffer = await res.arrayBuffer();
   if (seq !== previewSeq) return;
   const kind = res.headers.get('X-Preview');
-  const same = kind === 'snapped' && state.previewKind === 'snapped' && Number(res.headers.get('X-Sample')) === state.previewSample;
-  state.previewQuery = kind === 'exact' ? query(u) : null;
-  showPreviewKind(kind, res.headers.get('X-Preview-U'), res.headers.get('X-Preview-Fallback'));
-  if (same) return;  // the snapped sample on screen already
+  const label = () => showPreviewKind(kind, res.headers.get('X-Preview-U'), res.headers.get('X-Preview-Fallback'));
+  if (kind === 'snapped' && state.previewKind === 'snapped' && Number(res.headers.get('X-Sample')) === state.previewSample) {
+    label();  // the snapped sample on screen already
+    return;
+  }
   const group = await meshFromGlb(buffer);
   if (seq !== previewSeq) return;
   modelGroup.clear();
@@ -415,7 +416,9 @@ async function loadPreview(u, sample, exact = false) {
   render();
   state.previewSample = Number(res.headers.get('X-Sample'));
   state.previewKind = kind;
+  state.previewQuery = kind === 'exact' ? query(u) : null;
   state.previewCount += 1;
+  label();
   setStatus(`${kind === 'exact' ? 'exact point' : `sample #${state.previewSample}`} · preview ${(Number(res.headers.get('X-Preview-Seconds')) * 1000).toFixed(0)} ms` +
     ` · cached subtrees ${res.headers.get('X-Cache-Hits')} (${state.form.cache})`);
 }
@@ -430,7 +433,6 @@ function showPreviewKind(kind, shown, fallback) {
     : fallback === 'budget' ? 'an exact preview would take longer than the server\'s budget'
     : fallback === 'failed' ? 'the design could not be evaluated at exactly these values'
     : 'previews snap to the closest valid sample';
-  state.previewKindText = label.textContent;
 }
 
 // ------------------------------------------------------ starting points
