@@ -44,6 +44,7 @@ struct ServeArgs {
   std::string art, job, host = "127.0.0.1", web = DefaultWebDir(), cache = "opt";
   int port = 8080;
   int preview_cache_mb = 192;
+  double exact_budget_ms = 150;
 };
 
 // ART: an artifact file, a run directory holding exactly one artifact, or
@@ -63,7 +64,9 @@ viewer::CustomiserSource Load(const std::string& arg, const std::string& job, co
 void Serve(const ServeArgs& a) {
   viewer::PreviewCacheOptions previews;
   previews.max_bytes = static_cast<std::size_t>(a.preview_cache_mb) << 20;
-  viewer::Customiser customiser(Load(a.art, a.job, a.cache), previews);
+  viewer::ExactPreviewOptions exact;
+  exact.budget_seconds = a.exact_budget_ms / 1000;
+  viewer::Customiser customiser(Load(a.art, a.job, a.cache), previews, exact);
   viewer::ServeOptions options;
   options.host = a.host;
   options.port = a.port;
@@ -187,6 +190,10 @@ void AddViewerCommands(CLI::App& app, int& exit_code) {
   serve->add_option("--preview-cache-mb", a->preview_cache_mb,
                     "memory for encoded previews, filled in the background at start (default 192; 0: none)")
       ->check(CLI::Range(0, 1 << 20));
+  serve->add_option("--exact-budget-ms", a->exact_budget_ms,
+                    "previews at the sliders' exact point when one is expected to take at most this long "
+                    "(default 150; 0: always the snapped sample)")
+      ->check(CLI::Range(0.0, 600000.0));
   serve->callback([a] { Serve(*a); });
 }
 

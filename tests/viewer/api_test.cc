@@ -7,10 +7,13 @@
 
 #include <cmath>
 #include <numbers>
+#include <sstream>
 
 #include <nlohmann/json.hpp>
 
 #include "corner_table_check.h"
+#include "fabatlas/artifact/glb.h"
+#include "fabatlas/mesh/mesh_report.h"
 #include "fabatlas/testing/paths.h"
 #include "fabatlas/viewer/customiser.h"
 #include "fabatlas/viewer/http_api.h"
@@ -153,6 +156,93 @@ TEST(ApiExport, ChecksRunAtExactlyThePointBeforeWriting) {
   const ApiResponse ok = HandleApiRequest(c, "/api/export", {{"u", "16,1,0"}, {"format", "stl"}});
   EXPECT_EQ(ok.status, 200) << ok.body;
   EXPECT_EQ(ok.headers.at("X-Checks"), "constraints,geometry,max_volume");
+}
+
+// Exact previews (issue 35): between samples, with a budget nothing on this
+// host can exceed, the preview is the design at exactly u — the tube's
+// analytic volume there, not the snapped sample's — and says so; a budget
+// of 0 always snaps.
+double GlbVolume(const std::string& glb) {
+  mesh::InspectOptions inspect;
+  inspect.check_self_intersection = false;
+  return mesh::InspectMesh(artifact::GlbToMesh(glb), inspect).volume;
+}
+
+std::vector<double> PointOf(const std::string& text) {
+  std::vector<double> u;
+  std::istringstream in(text);
+  for (std::string item; std::getline(in, item, ',');) u.push_back(std::stod(item));
+  return u;
+}
+
+TEST(ApiExactPreview, BetweenSamplesShowsTheDesignAtExactlyThePoint) {
+  ASSERT_FALSE(Artifact().empty()) << "run the viewer_tube_run fixture first";
+  const Customiser c(LoadArtifact(Artifact()), {}, ExactPreviewOptions{.budget_seconds = 600});
+  // The run has no sample with a wall between 7.4 and 9.7 mm.
+  const std::map<std::string, std::string> at = {{"u", "20.6,8.55"}};
+  auto with_exact = at;
+  with_exact["exact"] = "1";
+  const ApiResponse snapped = HandleApiRequest(c, "/api/preview.glb", at);
+  const ApiResponse exact = HandleApiRequest(c, "/api/preview.glb", with_exact);
+  ASSERT_EQ(snapped.status, 200) << snapped.body;
+  ASSERT_EQ(exact.status, 200) << exact.body;
+  EXPECT_EQ(snapped.headers.at("X-Preview"), "snapped");
+  EXPECT_EQ(snapped.headers.count("X-Preview-Fallback"), 0u);
+  EXPECT_EQ(exact.headers.at("X-Preview"), "exact");
+  EXPECT_EQ(exact.headers.at("X-Sample"), snapped.headers.at("X-Sample"));
+  EXPECT_EQ(PointOf(exact.headers.at("X-Preview-U")), (std::vector<double>{20.6, 8.55}));
+  const std::vector<double> s = PointOf(snapped.headers.at("X-Preview-U"));
+  ASSERT_EQ(s.size(), 2u);
+  EXPECT_NE(s, (std::vector<double>{20.6, 8.55})) << "the point must lie between samples";
+  EXPECT_GT(std::stod(exact.headers.at("X-Preview-Seconds")), 0.0);
+
+  const double want = TubeVolume(20.6, 8.55);
+  const double other = TubeVolume(s[0], s[1]);
+  ASSERT_GT(std::abs(other - want), 0.05 * want) << "the snapped sample must be told apart at 2%";
+  EXPECT_NE(exact.bytes(), snapped.bytes());
+  EXPECT_NEAR(GlbVolume(exact.bytes()), want, 0.02 * want);
+  EXPECT_NEAR(GlbVolume(snapped.bytes()), other, 0.02 * other);
+}
+
+TEST(ApiExactPreview, ABudgetOfZeroAlwaysSnaps) {
+  ASSERT_FALSE(Artifact().empty()) << "run the viewer_tube_run fixture first";
+  const Customiser c(LoadArtifact(Artifact()), {}, ExactPreviewOptions{.budget_seconds = 0});
+  for (const char* u : {"20.6,8.55", "12.2,5.1", "25,11"}) {
+    const ApiResponse r = HandleApiRequest(c, "/api/preview.glb", {{"u", u}, {"exact", "1"}});
+    ASSERT_EQ(r.status, 200) << r.body;
+    EXPECT_EQ(r.headers.at("X-Preview"), "snapped") << u;
+    EXPECT_EQ(r.headers.at("X-Preview-Fallback"), "budget") << u;
+    const ApiResponse plain = HandleApiRequest(c, "/api/preview.glb", {{"u", u}});
+    EXPECT_EQ(r.bytes(), plain.bytes()) << u;
+  }
+}
+
+TEST(ApiExactPreview, OutsideTheValidRegionSnapsAndBadFlagsAre400) {
+  ASSERT_FALSE(Artifact().empty()) << "run the viewer_tube_run fixture first";
+  const Customiser c(LoadArtifact(Artifact()), {}, ExactPreviewOptions{.budget_seconds = 600});
+  // wall 2 < 1 + 0.01 * 25^2: outside the closed-form region.
+  const ApiResponse r = HandleApiRequest(c, "/api/preview.glb", {{"u", "25,2"}, {"exact", "1"}});
+  ASSERT_EQ(r.status, 200) << r.body;
+  EXPECT_EQ(r.headers.at("X-Preview"), "snapped");
+  EXPECT_EQ(r.headers.at("X-Preview-Fallback"), "outside");
+  const ApiResponse bad = HandleApiRequest(c, "/api/preview.glb", {{"u", "20.6,8.55"}, {"exact", "yes"}});
+  EXPECT_EQ(bad.status, 400);
+  EXPECT_EQ(bad.body, "exact must be 0 or 1, got 'yes'\n");
+}
+
+// The estimate: the snapped preview's time times the median ratio of the
+// last ExactPreviewCost::kWindow exact previews (1 before any).
+TEST(ExactPreviewCost, IsTheSnappedTimeTimesTheMedianRecentRatio) {
+  ExactPreviewCost cost;
+  EXPECT_EQ(cost.Estimate(0.04), 0.04);
+  cost.Record(0.01, 0.02);  // 2
+  cost.Record(0.01, 0.50);  // 50
+  cost.Record(0.02, 0.06);  // 3
+  EXPECT_DOUBLE_EQ(cost.Estimate(0.1), 0.3);
+  for (int i = 0; i < ExactPreviewCost::kWindow; ++i) cost.Record(0.1, 0.1);  // the old ratios leave the window
+  EXPECT_DOUBLE_EQ(cost.Estimate(0.1), 0.1);
+  cost.Record(0, 1);  // ignored
+  EXPECT_DOUBLE_EQ(cost.Estimate(0.1), 0.1);
 }
 
 }  // namespace

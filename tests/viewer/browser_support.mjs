@@ -10,9 +10,9 @@ export const env = process.env;
 export const failures = [];
 export const check = (ok, what) => { console.log(`${ok ? 'ok  ' : 'FAIL'} ${what}`); if (!ok) failures.push(what); };
 
-// `fabatlas serve RUN --port 0`; resolves with {child, url} once it prints its URL.
-export function startServer(run) {
-  const child = spawn(path.join(env.FABATLAS_BIN_DIR, 'fabatlas'), ['serve', run, '--port', '0'], { stdio: ['ignore', 'pipe', 'pipe'] });
+// `fabatlas serve RUN --port 0 ARGS...`; resolves with {child, url} once it prints its URL.
+export function startServer(run, args = []) {
+  const child = spawn(path.join(env.FABATLAS_BIN_DIR, 'fabatlas'), ['serve', run, '--port', '0', ...args], { stdio: ['ignore', 'pipe', 'pipe'] });
   return new Promise((resolve, reject) => {
     let text = '';
     const timer = setTimeout(() => reject(new Error('fabatlas serve did not start: ' + text)), 30000);
@@ -27,13 +27,13 @@ export function startServer(run) {
   });
 }
 
-// Runs one browser test: `fabatlas serve RUN` and Chromium, then
+// Runs one browser test: `fabatlas serve RUN ARGS...` and Chromium, then
 // `body({ server, browser })`; a throw is a failure. Closes both and exits the
 // process with status 1 if any check failed, else 0.
-export async function runBrowserTest(run, body) {
+export async function runBrowserTest(run, body, args = []) {
   let server, browser;
   try {
-    server = await startServer(run);
+    server = await startServer(run, args);
     browser = await launchBrowser();
     await body({ server, browser });
   } catch (e) {

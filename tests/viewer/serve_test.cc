@@ -321,6 +321,41 @@ TEST_F(Server, PreviewsComeFromTheCacheOnceEvaluated) {
   EXPECT_EQ(first->body, again->body);
 }
 
+// `fabatlas serve --exact-budget-ms`: 0 always snaps; a budget nothing on
+// this host can exceed shows the design at exactly u between samples (the
+// run has no sample with a wall between 7.4 and 9.7 mm).
+TEST(ServeExactPreview, TheBudgetOptionDecidesExactOrSnapped) {
+  const fs::path dir = testing::FreshTempDir("viewer-serve-exact");
+  for (const std::string budget : {"0", "600000"}) {
+    const pid_t pid = Spawn({(testing::BinDir() / "fabatlas").string(), "serve", RunDir().string(), "--port", "0",
+                             "--preview-cache-mb", "0", "--exact-budget-ms", budget},
+                            dir / (budget + ".log"));
+    int port = 0;
+    const std::regex listening(R"(at http://127\.0\.0\.1:(\d+)/)");
+    for (int i = 0; i < 3000 && port == 0; ++i) {
+      std::smatch m;
+      const std::string text = ReadText(dir / (budget + ".log"));
+      if (std::regex_search(text, m, listening)) port = std::stoi(m[1]);
+      else if (WaitExit(pid, std::chrono::milliseconds(20)) != -1) break;
+    }
+    ASSERT_GT(port, 0) << ReadText(dir / (budget + ".log"));
+    httplib::Client client("127.0.0.1", port);
+    client.set_read_timeout(std::chrono::seconds(120));
+    auto r = client.Get("/api/preview.glb?u=20.6,8.55&exact=1");
+    ASSERT_TRUE(r);
+    EXPECT_EQ(r->status, 200) << r->body;
+    if (budget == "0") {
+      EXPECT_EQ(r->get_header_value("X-Preview"), "snapped");
+      EXPECT_EQ(r->get_header_value("X-Preview-Fallback"), "budget");
+      EXPECT_NE(r->get_header_value("X-Preview-U"), "20.6,8.55");
+    } else {
+      EXPECT_EQ(r->get_header_value("X-Preview"), "exact");
+      EXPECT_EQ(r->get_header_value("X-Preview-U"), "20.6,8.55");
+    }
+    KillAndReap(pid);
+  }
+}
+
 // `fabatlas serve` refuses what it cannot serve with one line and exit 2.
 TEST(ServeErrors, MissingOrDamagedArtifactAndABusyPortAreOneLine) {
   const fs::path dir = testing::FreshTempDir("viewer-serve-errors");

@@ -132,9 +132,10 @@ std::vector<MaterialReadout> MaterialReadouts(double volume_mm3, const std::vect
   return out;
 }
 
-Customiser::Customiser(CustomiserSource source, PreviewCacheOptions preview_cache)
+Customiser::Customiser(CustomiserSource source, PreviewCacheOptions preview_cache, ExactPreviewOptions exact_preview)
     : source_(std::move(source)), space_(source_.form.space()), corners_(source_.form),
-      preview_options_(preview_cache), previews_(std::make_unique<PreviewCache>(preview_cache)) {
+      preview_options_(preview_cache), previews_(std::make_unique<PreviewCache>(preview_cache)),
+      exact_options_(exact_preview) {
   starting_points_ = source_.starting_points;
   if (starting_points_.empty())  // a run directory: the artifact's rule (cache/starting_points.h)
     for (const auto& p : cache::ChooseStartingPoints(source_.form)) starting_points_.push_back(p.sample_id);
@@ -156,18 +157,22 @@ std::vector<MaterialReadout> Customiser::Materials(std::int64_t sample) const {
 }
 
 PreviewResult Customiser::Preview(std::int64_t sample, bool with_cache) const {
+  PreviewResult out = PreviewAt(source_.form.samples.at(sample).u, with_cache);
+  out.sample = sample;
+  return out;
+}
+
+PreviewResult Customiser::PreviewAt(const std::vector<double>& u, bool with_cache) const {
   if (!source_.design) throw InputError("this form has no design to preview");
-  const auto& s = source_.form.samples.at(sample);
   design::EvaluateOptions options;
   options.cache = with_cache ? cache_.get() : nullptr;
   options.run_checks = false;  // the sample was checked during sampling
   options.lookup_before_children = true;  // a cached subtree skips everything below it
   const auto start = std::chrono::steady_clock::now();
   design::SampleResult r =
-      design::EvaluateSample(*source_.design, precompute::DesignPointOf(*source_.design, s.u), options);
+      design::EvaluateSample(*source_.design, precompute::DesignPointOf(*source_.design, u), options);
   PreviewResult out;
   out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  out.sample = sample;
   out.valid = r.valid;
   out.failure = r.failure;
   out.solid = std::move(r.solid);
@@ -190,6 +195,43 @@ std::shared_ptr<const EncodedPreview> Customiser::PreviewGlb(std::int64_t sample
         return e;
       },
       hit);
+}
+
+PointPreview Customiser::PreviewGlbAt(const std::vector<double>& u, std::int64_t snapped, bool exact) const {
+  PointPreview out;
+  out.sample = snapped;
+  out.preview = PreviewGlb(snapped, &out.cache_hit);
+  out.u = source_.form.samples.at(snapped).u;
+  out.seconds = out.preview->seconds;
+  out.estimate_seconds = exact_cost_.Estimate(out.preview->seconds);
+  if (!exact) return out;
+  if (!(exact_options_.budget_seconds > 0) || out.estimate_seconds > exact_options_.budget_seconds) {
+    out.fallback = "budget";
+    return out;
+  }
+  const auto start = std::chrono::steady_clock::now();
+  try {
+    const PreviewResult p = PreviewAt(u);
+    const mesh::TriangleMesh surface = p.valid ? p.solid.ToMesh() : mesh::TriangleMesh{};
+    if (surface.triangles.empty()) {
+      out.fallback = "failed";
+      return out;
+    }
+    auto e = std::make_shared<EncodedPreview>();
+    e->glb = artifact::SolidPreviewGlb(surface, p.solid.boundary() != nullptr);
+    e->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    e->subtrees = p.subtrees;
+    e->cache_hits = p.cache_hits;
+    exact_cost_.Record(out.preview->seconds, e->seconds);
+    out.seconds = e->seconds;
+    out.preview = std::move(e);
+    out.exact = true;
+    out.u = u;
+    out.cache_hit = false;
+  } catch (const std::exception&) {
+    out.fallback = "failed";  // the snapped sample's preview stands
+  }
+  return out;
 }
 
 int Customiser::WarmPreviews(const std::atomic<bool>& stop) const {

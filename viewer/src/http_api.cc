@@ -276,15 +276,31 @@ ApiResponse Route(const Customiser& c, const std::string& path, const std::map<s
   if (path == "/api/preview.glb") {
     const auto u = ParsePoint(c, query);
     if (!c.source().design) throw BadRequest{"this form has no design to preview"};
-    bool hit = false;
-    const auto p = c.PreviewGlb(snap_or_fail(u), &hit);
+    const auto e = query.find("exact");
+    if (e != query.end() && e->second != "0" && e->second != "1")
+      throw BadRequest{"exact must be 0 or 1, got '" + e->second + "'"};
+    const bool asked = e != query.end() && e->second == "1";
+    // Only a point the (limited) form calls valid is shown exactly; the
+    // page's validity stays the form's (docs/viewer.md, Exact previews).
+    const bool inside = asked && IsValidPoint(form, c.space(), c.corners(), u);
+    PointPreview p = c.PreviewGlbAt(u, snap_or_fail(u), inside);
+    if (asked && !inside) p.fallback = "outside";
     ApiResponse r;
     r.content_type = "model/gltf-binary";
-    r.shared_body = std::shared_ptr<const std::string>(p, &p->glb);
-    r.headers["X-Sample"] = std::to_string(p->sample);
-    r.headers["X-Preview-Seconds"] = std::to_string(p->seconds);
-    r.headers["X-Cache-Hits"] = std::to_string(p->cache_hits) + "/" + std::to_string(p->subtrees);
-    r.headers["X-Preview-Cache"] = hit ? "hit" : "miss";
+    r.shared_body = std::shared_ptr<const std::string>(p.preview, &p.preview->glb);
+    r.headers["X-Sample"] = std::to_string(p.sample);
+    r.headers["X-Preview"] = p.exact ? "exact" : "snapped";
+    std::string shown;  // shortest text that reads back as the same doubles
+    for (std::size_t d = 0; d < p.u.size(); ++d) {
+      char text[32];
+      shown += std::string(d ? "," : "") + std::string(text, std::to_chars(text, text + sizeof text, p.u[d]).ptr);
+    }
+    r.headers["X-Preview-U"] = shown;
+    r.headers["X-Preview-Seconds"] = std::to_string(p.seconds);
+    r.headers["X-Preview-Estimate"] = std::to_string(p.estimate_seconds);
+    if (!p.fallback.empty()) r.headers["X-Preview-Fallback"] = p.fallback;
+    r.headers["X-Cache-Hits"] = std::to_string(p.preview->cache_hits) + "/" + std::to_string(p.preview->subtrees);
+    r.headers["X-Preview-Cache"] = p.exact ? "none" : p.cache_hit ? "hit" : "miss";
     return r;
   }
   if (path == "/api/export") {

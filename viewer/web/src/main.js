@@ -21,7 +21,9 @@ const state = {
   u: [],
   stretches: [],       // per dimension: [{lo, hi, valid, failures}]
   previewCount: 0,     // previews shown so far
-  previewSample: -1,   // sample id of the preview on screen
+  previewSample: -1,   // the snapped sample of the preview on screen
+  previewKind: null,   // 'exact' (the design at exactly u) or 'snapped' (the sample's)
+  previewQuery: null,  // the u of the exact preview on screen
   properties: null,
   error: null,
   limits: {},          // property -> {min, max} (numbers or undefined)
@@ -302,7 +304,7 @@ async function update() {
   state.properties = properties;
   drawTracks();
   drawReadout(properties);
-  await Promise.all([loadPreview(u, properties.sample), drawMap(), trade.afterUpdate()]);
+  await Promise.all([loadPreview(u, properties.sample, true), drawMap(), trade.afterUpdate()]);
 }
 
 function drawReadout(p) {
@@ -384,13 +386,22 @@ function fitCamera(object, cam, ctl) {
 }
 
 let previewSeq = 0;
-async function loadPreview(u, sample) {
+// exact: ask for the design at exactly u; the server answers it when it is
+// expected to fit its budget, else the snapped sample's (docs/viewer.md,
+// Exact previews). The label under the view says which is shown.
+async function loadPreview(u, sample, exact = false) {
   if (!state.form.preview) return;
-  if (sample === state.previewSample) return;
+  if (exact ? query(u) === state.previewQuery : sample === state.previewSample && state.previewKind === 'snapped') return;
   const seq = ++previewSeq;
-  const res = await api('/api/preview.glb?' + query(u));
+  const res = await api('/api/preview.glb?' + query(u) + (exact ? '&exact=1' : ''));
   const buffer = await res.arrayBuffer();
   if (seq !== previewSeq) return;
+  const kind = res.headers.get('X-Preview');
+  const label = () => showPreviewKind(kind, res.headers.get('X-Preview-U'), res.headers.get('X-Preview-Fallback'));
+  if (kind === 'snapped' && state.previewKind === 'snapped' && Number(res.headers.get('X-Sample')) === state.previewSample) {
+    label();  // the snapped sample on screen already
+    return;
+  }
   const group = await meshFromGlb(buffer);
   if (seq !== previewSeq) return;
   modelGroup.clear();
@@ -404,9 +415,24 @@ async function loadPreview(u, sample) {
   }
   render();
   state.previewSample = Number(res.headers.get('X-Sample'));
+  state.previewKind = kind;
+  state.previewQuery = kind === 'exact' ? query(u) : null;
   state.previewCount += 1;
-  setStatus(`sample #${state.previewSample} · preview ${(Number(res.headers.get('X-Preview-Seconds')) * 1000).toFixed(0)} ms` +
+  label();
+  setStatus(`${kind === 'exact' ? 'exact point' : `sample #${state.previewSample}`} · preview ${(Number(res.headers.get('X-Preview-Seconds')) * 1000).toFixed(0)} ms` +
     ` · cached subtrees ${res.headers.get('X-Cache-Hits')} (${state.form.cache})`);
+}
+
+// "exact point" or "nearest sample (values)", from the preview's headers.
+function showPreviewKind(kind, shown, fallback) {
+  const u = (shown ?? '').split(',').map(Number);
+  const values = u.map((v, d) => `${state.form.dimensions[d]?.name} ${formatValue(d, v)}`).join(', ');
+  const label = $('preview-kind');
+  label.textContent = kind === 'exact' ? 'exact point' : `nearest sample (${values})`;
+  label.title = kind === 'exact' ? 'the design evaluated at exactly these values; validity is the form\'s'
+    : fallback === 'budget' ? 'an exact preview would take longer than the server\'s budget'
+    : fallback === 'failed' ? 'the design could not be evaluated at exactly these values'
+    : 'previews snap to the closest valid sample';
 }
 
 // ------------------------------------------------------ starting points
@@ -885,7 +911,7 @@ const trade = installOptimise({
   state, $, apiJson, limitsText, formatValue, showError, setStatus, clearError,
   moveTo: (u) => { clearError(); state.u = u.slice(); requestUpdate(); },
   preview: (u, sample) => loadPreview(u, sample),
-  restorePreview: () => { if (state.properties) loadPreview(state.u, state.properties.sample).catch(showError); },
+  restorePreview: () => { if (state.properties) loadPreview(state.u, state.properties.sample, true).catch(showError); },
 });
 
 // ------------------------------------------------------------------ start

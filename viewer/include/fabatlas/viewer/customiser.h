@@ -23,6 +23,7 @@
 #include "fabatlas/geometry/solid.h"
 #include "fabatlas/sampling/form.h"
 #include "fabatlas/sampling/job_file.h"
+#include "fabatlas/viewer/exact_preview_cost.h"
 #include "fabatlas/viewer/leaf_corners.h"
 #include "fabatlas/viewer/preview_cache.h"
 #include "fabatlas/viewer/property_limits.h"
@@ -75,17 +76,32 @@ struct MaterialReadout {
 std::vector<MaterialReadout> MaterialReadouts(double volume_mm3, const std::vector<sampling::Material>& materials);
 
 struct PreviewResult {
-  std::int64_t sample = -1;
-  bool valid = false;           // the evaluation's verdict at the snapped sample
+  std::int64_t sample = -1;     // -1: evaluated at a point (PreviewAt)
+  bool valid = false;           // the evaluation's verdict (constraints and geometry; checks skipped)
   std::string failure;
   geometry::Solid solid;
   double seconds = 0;           // wall time of EvaluateSample (constraints and tree; checks skipped)
   int subtrees = 0, cache_hits = 0;
 };
 
+// A preview for a point u (Customiser::PreviewGlbAt): the design at exactly u
+// or u's snapped sample, and which.
+struct PointPreview {
+  std::shared_ptr<const EncodedPreview> preview;  // the glTF sent
+  bool exact = false;           // true: evaluated at exactly u; false: the snapped sample's
+  std::int64_t sample = -1;     // u's snapped sample (the preview's when !exact)
+  std::vector<double> u;        // the point shown: u itself, or the snapped sample's
+  double seconds = 0;           // exact: this preview's wall time (evaluate, mesh, encode);
+                                // snapped: the sample's recorded evaluation time
+  double estimate_seconds = 0;  // what an exact preview was expected to take (ExactPreviewCost)
+  std::string fallback;         // why snapped though exact was asked: "budget" or "failed"; else empty
+  bool cache_hit = false;       // snapped: served from the preview cache
+};
+
 class Customiser {
  public:
-  explicit Customiser(CustomiserSource source, PreviewCacheOptions preview_cache = {});
+  explicit Customiser(CustomiserSource source, PreviewCacheOptions preview_cache = {},
+                      ExactPreviewOptions exact_preview = {});
   const PreviewCacheOptions& preview_cache_options() const { return preview_options_; }
   ~Customiser();
   Customiser(const Customiser&) = delete;  // the cache refers into source_
@@ -114,12 +130,29 @@ class Customiser {
   // source's subtree cache. Throws InputError when the source has no design.
   // with_cache = false ignores the cache (the "no cache" baseline).
   PreviewResult Preview(std::int64_t sample, bool with_cache = true) const;
+  // The same at any point u of the space (one value per parameter, the
+  // form's order), with sample = -1. Says nothing of u's validity: the
+  // form's checks are not run (valid is the constraints' and geometry's
+  // verdict only).
+  PreviewResult PreviewAt(const std::vector<double>& u, bool with_cache = true) const;
 
   // The sample's preview as glTF binary (artifact::MeshToGlb), from the
   // bounded cache of encoded previews (preview_cache.h) or evaluated with
   // Preview() and stored; `hit` says which.
   std::shared_ptr<const EncodedPreview> PreviewGlb(std::int64_t sample, bool* hit = nullptr) const;
   PreviewCache::Stats preview_cache_stats() const { return previews_->stats(); }
+
+  // The preview for a point u whose snapped sample is `snapped`. With
+  // exact = true and the expected time of an exact preview
+  // (ExactPreviewCost::Estimate of the snapped preview's recorded time)
+  // within the budget, the design is evaluated at exactly u through the
+  // cache (PreviewAt, not stored in the preview cache) and its time
+  // recorded; else, or when that evaluation fails (constraints at exactly
+  // u, empty geometry, an error), the snapped sample's PreviewGlb. The
+  // caller decides whether u may be shown exactly (the page asks only
+  // inside the valid region); validity is never claimed here.
+  PointPreview PreviewGlbAt(const std::vector<double>& u, std::int64_t snapped, bool exact) const;
+  const ExactPreviewOptions& exact_preview_options() const { return exact_options_; }
 
   // Fills the preview cache ahead of requests: the starting points, then
   // every valid sample in id order, each evaluated once on the calling
@@ -145,6 +178,8 @@ class Customiser {
   mutable std::mutex limited_mu_;
   mutable std::list<std::pair<std::string, std::shared_ptr<const sampling::Form>>> limited_;  // most recent first
   std::unique_ptr<PreviewCache> previews_;
+  ExactPreviewOptions exact_options_;
+  mutable ExactPreviewCost exact_cost_;
 };
 
 }  // namespace fabatlas::viewer

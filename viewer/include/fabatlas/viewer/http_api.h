@@ -5,7 +5,9 @@
 //   GET /api/intervals?u=a,b,..    validity of u and every dimension's stretches through u
 //   GET /api/snap?u=..             the snapped sample and its ΔG-weighted distance
 //   GET /api/properties?u=..       the snapped sample's properties and material cost/weight
-//   GET /api/preview.glb?u=..      the snapped sample's geometry as glTF binary
+//   GET /api/preview.glb?u=..      the snapped sample's geometry as glTF binary;
+//                                  &exact=1: the design at exactly u when cheap
+//                                  enough (Customiser::PreviewGlbAt)
 //   GET /api/map?a=i&b=j&n=N&u=..  N x N validity map over parameters i and j through u
 //   GET /api/export?u=..&format=F  the design at exactly u as a file (export_design.h)
 //   GET /api/optimise?min=P&hold=..   the best valid point for an objective (optimise.h)
