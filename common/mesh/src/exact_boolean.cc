@@ -303,6 +303,33 @@ std::vector<std::vector<std::size_t>> TouchingGroups(const std::vector<Exact>& i
   return out;
 }
 
+// The same mesh with its vertices sorted by coordinates and its triangles
+// by their vertices (each starting at its least, orientation kept): CGAL
+// lists a result's vertices and faces in an order that depends on the
+// addresses of its internal boxes (Box_intersection_d's ids), so equal
+// results came out in different orders between runs, and sums over them
+// (volumes, ΔG, the level set built from them) differed in the last bits.
+TriangleMesh Canonical(TriangleMesh m) {
+  std::vector<std::int32_t> order(m.vertices.size());
+  std::iota(order.begin(), order.end(), 0);
+  std::sort(order.begin(), order.end(), [&](std::int32_t a, std::int32_t b) { return m.vertices[a] < m.vertices[b]; });
+  std::vector<std::int32_t> rank(m.vertices.size());
+  TriangleMesh out;
+  out.vertices.reserve(m.vertices.size());
+  for (std::size_t i = 0; i < order.size(); ++i) {
+    rank[order[i]] = static_cast<std::int32_t>(i);
+    out.vertices.push_back(m.vertices[order[i]]);
+  }
+  out.triangles.reserve(m.triangles.size());
+  for (const auto& t : m.triangles) {
+    std::array<std::int32_t, 3> r{rank[t[0]], rank[t[1]], rank[t[2]]};
+    const int k = r[0] <= r[1] && r[0] <= r[2] ? 0 : r[1] <= r[2] ? 1 : 2;
+    out.triangles.push_back({r[k], r[(k + 1) % 3], r[(k + 2) % 3]});
+  }
+  std::sort(out.triangles.begin(), out.triangles.end());
+  return out;
+}
+
 }  // namespace
 
 const char* BooleanOpName(BooleanOp op) {
@@ -314,7 +341,16 @@ const char* BooleanOpName(BooleanOp op) {
   return "union";
 }
 
+namespace {
+TriangleMesh UnorderedBoolean(BooleanOp op, const std::vector<TriangleMesh>& operands, BooleanSummary* summary_out);
+}  // namespace
+
 TriangleMesh ExactBoolean(BooleanOp op, const std::vector<TriangleMesh>& operands, BooleanSummary* summary_out) {
+  return Canonical(UnorderedBoolean(op, operands, summary_out));
+}
+
+namespace {
+TriangleMesh UnorderedBoolean(BooleanOp op, const std::vector<TriangleMesh>& operands, BooleanSummary* summary_out) {
   BooleanSummary local;
   BooleanSummary& summary = summary_out ? *summary_out : local;
   std::vector<Exact> in;
@@ -351,6 +387,8 @@ TriangleMesh ExactBoolean(BooleanOp op, const std::vector<TriangleMesh>& operand
   AppendExact(acc, out);
   return out;
 }
+
+}  // namespace
 
 TriangleMesh ConvexHull(const std::vector<std::array<double, 3>>& points) {
   using Epick = CGAL::Exact_predicates_inexact_constructions_kernel;
