@@ -31,7 +31,7 @@ fs::path Artifact() {
   return {};
 }
 
-double TubeVolume(double r, double w) { return std::numbers::pi * (r * r - (r - w) * (r - w)) * 20.0; }
+using viewer_test::TubeVolume;
 
 class Api : public ::testing::Test {
  protected:

@@ -34,8 +34,8 @@ using cluster_test::Spawn;
 using cluster_test::WaitExit;
 using nlohmann::json;
 
-bool TrulyValid(double radius, double wall) { return wall >= 1 + 0.01 * radius * radius && radius - wall >= 2; }
-double TubeVolume(double r, double w) { return std::numbers::pi * (r * r - (r - w) * (r - w)) * 20.0; }
+using viewer_test::TrulyValid;
+using viewer_test::TubeVolume;
 double WallMin(double r) { return 1 + 0.01 * r * r; }
 
 fs::path ArtifactIn(const fs::path& dir) {

@@ -4,6 +4,8 @@
 // test-fixtures/.
 #pragma once
 
+#include <numbers>
+
 #include <cstdlib>
 #include <filesystem>
 
@@ -22,5 +24,12 @@ inline std::filesystem::path PegRunDir() {
   const char* dir = std::getenv("FABATLAS_VIEWER_PEG_RUN");
   return dir ? std::filesystem::path(dir) : testing::BinDir().parent_path() / "test-fixtures" / "viewer-peg";
 }
+
+// The tube run's design (tests/viewer/data): a tube of height 20 mm, valid
+// where the wall is at least 1 + 0.01 r^2 and leaves a bore of 2 mm; its
+// closed-form validity and volume (mm^3), the numbers the viewer tests
+// check the runtime against.
+inline bool TrulyValid(double radius, double wall) { return wall >= 1 + 0.01 * radius * radius && radius - wall >= 2; }
+inline double TubeVolume(double r, double w) { return std::numbers::pi * (r * r - (r - w) * (r - w)) * 20.0; }
 
 }  // namespace fabatlas::viewer_test
