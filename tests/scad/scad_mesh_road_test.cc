@@ -170,6 +170,7 @@ TEST(MeshSolid, DeltaGIsExactAndTheBytesRoundTrip) {
   for (auto& v : b.vertices) v[0] += 0.5;
   const geometry::Solid sa = geometry::MeshSolid(grid, a), sb = geometry::MeshSolid(grid, b);
   EXPECT_NEAR(geometry::DeltaG(sa, sb), 2.0 / 3.0, 1e-12);
+  EXPECT_EQ(geometry::DeltaG(sa, geometry::MeshSolid(grid, a)), 0.0);  // equal meshes: no change
   EXPECT_NEAR(sa.Volume(), 1.0, 1e-12);
   EXPECT_NEAR(sa.CenterOfMass()[0], 0.5, 1e-12);
   const geometry::Solid back = geometry::Solid::Deserialize(sa.Serialize());

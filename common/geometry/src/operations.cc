@@ -375,6 +375,10 @@ double DeltaG(const Solid& a, const Solid& b) {
   if (ea && eb) return 0.0;
   if (ea != eb) return 1.0;
   if (a.boundary() && b.boundary()) {
+    // Equal meshes (samples whose parameters do not change the geometry):
+    // no change, without intersecting a mesh with its own coplanar twin.
+    if (a.boundary()->vertices == b.boundary()->vertices && a.boundary()->triangles == b.boundary()->triangles)
+      return 0.0;
     try {
       const double va = a.Volume(), vb = b.Volume();
       const double vi = mesh::EnclosedVolume(mesh::ExactBoolean(mesh::BooleanOp::kIntersection, {*a.boundary(), *b.boundary()}));
