@@ -4,9 +4,6 @@
 
 #include <unistd.h>
 
-#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
-#include <CGAL/Surface_mesh.h>
-#include <CGAL/convex_hull_3.h>
 
 #include <algorithm>
 #include <array>
@@ -362,27 +359,6 @@ double SimilarityScale(const Affine& a) {
   return std::sqrt(s2);
 }
 
-// Hull of 3D points (CGAL) as a closed triangle mesh.
-mesh::TriangleMesh Hull3(const std::vector<std::array<double, 3>>& points) {
-  using K = CGAL::Exact_predicates_inexact_constructions_kernel;
-  std::vector<K::Point_3> p;
-  for (const auto& v : points) p.emplace_back(v[0], v[1], v[2]);
-  CGAL::Surface_mesh<K::Point_3> sm;
-  CGAL::convex_hull_3(p.begin(), p.end(), sm);
-  mesh::TriangleMesh out;
-  std::map<std::size_t, std::int32_t> index;
-  for (auto v : sm.vertices()) {
-    const auto& q = sm.point(v);
-    index[v] = static_cast<std::int32_t>(out.vertices.size());
-    out.vertices.push_back({q.x(), q.y(), q.z()});
-  }
-  for (auto f : sm.faces()) {
-    std::vector<std::int32_t> ids;
-    for (auto v : vertices_around_face(sm.halfedge(f), sm)) ids.push_back(index[v]);
-    for (std::size_t k = 1; k + 1 < ids.size(); ++k) out.triangles.push_back({ids[0], ids[k], ids[k + 1]});
-  }
-  return out;
-}
 
 enum class Combine { kUnion, kDifference, kIntersection };
 
@@ -873,7 +849,7 @@ class CsgEvaluation {
       std::vector<std::array<double, 3>> points;
       for (const auto& c : n.children) HullPoints(c, kIdentity, points);
       if (points.size() < 4) return {};
-      return Convex(Hull3(points), m);
+      return Convex(mesh::ConvexHull(points), m);
     }
     if (n.name == "import") {
       auto f = n.args.find("file");

@@ -47,19 +47,6 @@ struct Exact {
   bool empty = true;
 };
 
-// The signed volume of a closed mesh in doubles (divergence theorem):
-// negative for an inward one.
-double SignedVolume(const TriangleMesh& m) {
-  double six = 0;
-  for (const auto& t : m.triangles) {
-    const auto& a = m.vertices[t[0]];
-    const auto& b = m.vertices[t[1]];
-    const auto& c = m.vertices[t[2]];
-    six += a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) + a[2] * (b[0] * c[1] - b[1] * c[0]);
-  }
-  return six / 6;
-}
-
 Exact ToExact(const TriangleMesh& m, std::size_t index) {
   Exact out;
   if (m.triangles.empty()) return out;
@@ -94,7 +81,7 @@ Exact ToExact(const TriangleMesh& m, std::size_t index) {
   if (!PMP::is_polygon_soup_a_polygon_mesh(faces)) throw InputError(name + " is not a manifold mesh");
   PMP::polygon_soup_to_polygon_mesh(points, faces, out.mesh);
   if (!CGAL::is_closed(out.mesh)) throw InputError(name + " is not closed");
-  if (SignedVolume(m) < 0) PMP::reverse_face_orientations(out.mesh);
+  if (EnclosedVolume(m) < 0) PMP::reverse_face_orientations(out.mesh);
   out.box = PMP::bbox(out.mesh);
   out.empty = out.mesh.number_of_faces() == 0;
   return out;
@@ -430,7 +417,7 @@ using ConvexPart = std::vector<std::array<double, 3>>;
 // A closed mesh's convex parts, each as its vertices.
 std::vector<ConvexPart> ConvexParts(const TriangleMesh& m) {
   const TriangleMesh hull = ConvexHull(m.vertices);
-  const double volume = std::abs(SignedVolume(m)), hull_volume = std::abs(SignedVolume(hull));
+  const double volume = std::abs(EnclosedVolume(m)), hull_volume = std::abs(EnclosedVolume(hull));
   if (hull_volume <= volume * (1 + 1e-9)) return {hull.vertices};  // convex
   Exact e = ToExact(m, 0);
   Nef nef = NefOf(e);
