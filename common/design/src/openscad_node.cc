@@ -32,6 +32,7 @@
 #include "fabatlas/scad/evaluate_model.h"
 #include "fabatlas/scad/model_files.h"
 #include "fabatlas/scad/primitive_mesh.h"
+#include "fabatlas/scad/surface_mesh.h"
 #include "fabatlas/scad/region_distance.h"
 #include "fabatlas/scad/region_outline.h"
 #include "fabatlas/scad/svg_outline.h"
@@ -1230,6 +1231,15 @@ class CsgEvaluation {
       }
       Outside(file.string() + " (imported by " + model_.filename().string() + ")", Sha256Hex(n.canonical), mm);
       return MeshOf(Outward(std::move(mm)), m);
+    }
+    if (n.name == "surface") {
+      auto f = n.args.find("file");
+      fs::path file = f != n.args.end() && f->second.type == CsgValue::Type::kString ? f->second.text : "";
+      if (file.is_relative()) file = model_.parent_path() / file;
+      std::vector<std::string> warnings;
+      const scad::HeightMap map = scad::ReadHeightMap(file, n.Boolean("invert", false), &warnings);
+      for (const std::string& w : warnings) Warn("surface (CSG line " + std::to_string(n.line) + "): " + w);
+      return MeshOf(scad::SurfaceMesh(map, n.Boolean("center", false)), m);
     }
     if (IsTwoD(n.name)) return Solid();  // 2D among 3D objects: ignored, as OpenSCAD ignores it
     if (n.name == "hull") return Solid();  // a hull of 2D children only
