@@ -13,7 +13,7 @@ APT_PACKAGES=(
   libgrpc++-dev protobuf-compiler-grpc libprotobuf-dev protobuf-compiler
   libsqlite3-dev sqlite3
   libyaml-cpp-dev libmuparser-dev nlohmann-json3-dev libcli11-dev libspdlog-dev
-  libcpp-httplib-dev libtinygltf-dev libstb-dev libpng-dev libzstd-dev libssl-dev
+  libcpp-httplib-dev libtinygltf-dev libstb-dev libpng-dev libzstd-dev libssl-dev libexpat1-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   openscad
   # real OpenSCAD models nobody on the team wrote: the corpus of the mesh road's

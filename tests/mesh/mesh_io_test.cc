@@ -14,6 +14,8 @@
 #include <string>
 
 #include "fabatlas/error.h"
+#include "fabatlas/mesh/encode_3mf.h"
+#include "fabatlas/mesh/enclosed_volume.h"
 #include "fabatlas/mesh/mesh_report.h"
 #include "fabatlas/mesh/read_mesh.h"
 #include "fabatlas/mesh/write_mesh.h"
@@ -251,6 +253,35 @@ TEST_F(MeshIo, WriteFailureWhenTheFileSizeLimitIsHitIsAnInputError) {
   std::size_t files = 0;
   for ([[maybe_unused]] const auto& e : fs::directory_iterator(dir_)) ++files;
   EXPECT_EQ(files, 0u);
+}
+
+TEST_F(MeshIo, Reads3mfPackagesAsWrittenAndRefusesDamagedOnes) {
+  const TriangleMesh cube = testing::UnitCube();
+  const std::string package = Encode3mf(cube);
+  const TriangleMesh back = ReadMesh(Write("cube.3mf", package));
+  EXPECT_EQ(back.triangles.size(), cube.triangles.size());
+  EXPECT_NEAR(EnclosedVolume(back), EnclosedVolume(cube), 1e-9);
+  ExpectRejected(Write("text.3mf", "solid not a package\n"), "not a 3MF package");
+  ExpectRejected(Write("cut.3mf", package.substr(0, package.size() / 2)), "not a readable ZIP archive");
+}
+
+TEST_F(MeshIo, ReadsAmfAndRefusesBrokenXml) {
+  Write("two.amf",
+        "<?xml version=\"1.0\"?><amf unit=\"millimeter\"><object id=\"0\"><mesh><vertices>"
+        "<vertex><coordinates><x>0</x><y>0</y><z>0</z></coordinates></vertex>"
+        "<vertex><coordinates><x>1</x><y>0</y><z>0</z></coordinates></vertex>"
+        "<vertex><coordinates><x>0</x><y>1</y><z>0</z></coordinates></vertex>"
+        "<vertex><coordinates><x>0</x><y>0</y><z>1</z></coordinates></vertex></vertices>"
+        "<volume><triangle><v1>0</v1><v2>2</v2><v3>1</v3></triangle><triangle><v1>0</v1><v2>1</v2><v3>3</v3></triangle>"
+        "<triangle><v1>0</v1><v2>3</v2><v3>2</v3></triangle><triangle><v1>1</v1><v2>2</v2><v3>3</v3></triangle>"
+        "</volume></mesh></object></amf>");
+  EXPECT_NEAR(EnclosedVolume(ReadMesh(dir_ / "two.amf")), 1.0 / 6, 1e-12);  // the unit tetrahedron
+  ExpectRejected(Write("open.amf", "<amf><object id=\"0\"><mesh>"), "AMF line 1");
+  ExpectRejected(Write("index.amf", "<amf><object id=\"0\"><mesh><vertices></vertices><volume><triangle><v1>0</v1>"
+                                    "<v2>1</v2><v3>2</v3></triangle></volume></mesh></object></amf>"),
+                 "out of range");
+  const fs::path broken = "/usr/share/openscad/testdata/amf/amf_broken.amf";  // OpenSCAD's own broken file
+  if (fs::exists(broken)) EXPECT_THROW(ReadMesh(broken), InputError);
 }
 
 TEST_F(MeshIo, RejectsMissingFileAndUnknownExtension) {

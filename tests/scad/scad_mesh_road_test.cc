@@ -93,8 +93,9 @@ TEST_P(CorpusModel, MeshRoadMatchesOpenScadsStl) {
 
 // Each exercises nodes of the road: primitives and their faceting, booleans
 // (coincident faces included), transforms with mirrors, hulls, Minkowski
-// sums, resize, extrusions, polyhedra, STL imports, 2D objects among 3D
-// ones (ignored).
+// sums, resize, extrusions, polyhedra, STL and 3MF imports, surfaces from
+// PNG and DAT height maps (a short DAT row, a missing file), 2D objects
+// among 3D ones (ignored).
 INSTANTIATE_TEST_SUITE_P(Features, CorpusModel,
                          ::testing::Values("features/cube-tests.scad", "features/sphere-tests.scad",
                                            "features/cylinder-tests.scad", "features/union-tests.scad",
@@ -106,7 +107,25 @@ INSTANTIATE_TEST_SUITE_P(Features, CorpusModel,
                                            "features/rotate_extrude-angle.scad", "features/polyhedron-concave-test.scad",
                                            "features/import_stl-tests.scad", "features/2d-3d.scad",
                                            "features/for-tests.scad", "features/child-tests.scad",
-                                           "features/minkowski3-erosion.scad", "issues/issue911.scad"));
+                                           "features/minkowski3-erosion.scad", "issues/issue911.scad",
+                                           "features/surface-png-image3-tests.scad", "features/surface-tests.scad",
+                                           "issues/issue1223.scad", "features/import_3mf-tests.scad"));
+
+// OpenSCAD's own AMF test files (single objects, several volumes, a zipped
+// one, one in inches whose unit OpenSCAD ignores) imported by a one-line model.
+TEST(MeshRoad, AmfImportsMatchOpenScadsStl) {
+  const fs::path amf = "/usr/share/openscad/testdata/amf";
+  if (!fs::exists(amf)) GTEST_SKIP() << "openscad-testing-data is not installed";
+  const fs::path dir = fabatlas::testing::FreshTempDir("scad-mesh-road-amf");
+  for (const char* name : {"cube-with-hole", "multi-volume-binary", "sphere20face", "split_pyramid", "tetra_multicolor"}) {
+    const fs::path model = dir / (std::string(name) + ".scad");
+    std::ofstream(model) << "import(\"" << (amf / (std::string(name) + ".amf")).string() << "\");\n";
+    const Measured peer = Peer(model, dir);
+    const design::SampleResult r = Evaluate(model, dir);
+    ASSERT_TRUE(r.valid) << name << ": " << r.failure_reason;
+    EXPECT_NEAR(r.solid.Volume(), peer.volume, 1e-6 * peer.volume) << name;
+  }
+}
 
 TEST(MeshRoad, SurfaceIsOpenScadsOwnTriangles) {
   // A box with a cylindrical hole: OpenSCAD's STL has a few dozen triangles

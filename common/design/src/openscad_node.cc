@@ -856,8 +856,10 @@ class CsgEvaluation {
       auto f = n.args.find("file");
       if (f == n.args.end() || f->second.type != CsgValue::Type::kString) throw NoNativeEquivalent{"import"};
       fs::path file = f->second.text;
-      const std::string ext = file.extension().string();
-      if (ext != ".stl" && ext != ".STL" && ext != ".off" && ext != ".obj") throw NoNativeEquivalent{"import of " + ext};
+      std::string ext = file.extension().string();
+      std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char ch) { return std::tolower(ch); });
+      if (ext != ".stl" && ext != ".off" && ext != ".obj" && ext != ".3mf" && ext != ".amf")
+        throw NoNativeEquivalent{"import of " + ext};
       if (file.is_relative()) file = model_.parent_path() / file;
       mesh::TriangleMesh mm;
       try {
@@ -1220,7 +1222,8 @@ class CsgEvaluation {
       std::string ext = file.extension().string();
       std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char ch) { return std::tolower(ch); });
       if (ext == ".dxf" || ext == ".svg") return Solid();  // 2D: OpenSCAD ignores it among 3D objects
-      if (ext != ".stl" && ext != ".off" && ext != ".obj") throw NoNativeEquivalent{"import of " + ext};
+      if (ext != ".stl" && ext != ".off" && ext != ".obj" && ext != ".3mf" && ext != ".amf")
+        throw NoNativeEquivalent{"import of " + ext};
       if (file.is_relative()) file = model_.parent_path() / file;
       mesh::TriangleMesh mm;
       try {

@@ -2,6 +2,7 @@
 // about structure (every failure is an InputError naming the file and the
 // problem) and never index outside the buffer they parse.
 #include "fabatlas/mesh/read_mesh.h"
+#include "mesh_formats.h"
 
 #include <algorithm>
 #include <array>
@@ -517,8 +518,8 @@ TriangleMesh ReadPly(const std::filesystem::path& path, std::string_view data) {
 
 TriangleMesh ReadMesh(const std::filesystem::path& path) {
   const std::string ext = Lower(path.extension().string());
-  if (ext != ".stl" && ext != ".obj" && ext != ".off" && ext != ".ply") {
-    Fail(path, "unknown mesh extension '" + path.extension().string() + "' (expected .stl, .obj, .off or .ply)");
+  if (ext != ".stl" && ext != ".obj" && ext != ".off" && ext != ".ply" && ext != ".3mf" && ext != ".amf") {
+    Fail(path, "unknown mesh extension '" + path.extension().string() + "' (expected .stl, .obj, .off, .ply, .3mf or .amf)");
   }
   std::error_code ec;
   if (!std::filesystem::exists(path, ec)) Fail(path, "file does not exist");
@@ -535,6 +536,8 @@ TriangleMesh ReadMesh(const std::filesystem::path& path) {
   if (ext == ".stl") mesh = ReadStl(path, data);
   else if (ext == ".obj") mesh = ReadObj(path, data);
   else if (ext == ".off") mesh = ReadOff(path, data);
+  else if (ext == ".3mf") mesh = detail::Read3mf(path, data);
+  else if (ext == ".amf") mesh = detail::ReadAmf(path, data);
   else mesh = ReadPly(path, data);
 
   for (std::size_t i = 0; i < mesh.vertices.size(); ++i) {

@@ -1,4 +1,4 @@
-// fabatlas/mesh/read_mesh.h — import a triangle mesh from STL, OBJ, OFF or PLY.
+// fabatlas/mesh/read_mesh.h — import a triangle mesh from STL, OBJ, OFF, PLY, 3MF or AMF.
 #pragma once
 
 #include <filesystem>
@@ -16,7 +16,13 @@ namespace fabatlas::mesh {
 //         relative indices); other records are ignored;
 //   .off  OFF / COFF / NOFF (first three numbers of each vertex line);
 //   .ply  ASCII, binary_little_endian or binary_big_endian PLY with a vertex
-//         element (x, y, z) and a face element (vertex_indices list).
+//         element (x, y, z) and a face element (vertex_indices list);
+//   .3mf  3MF core: every build item's object (meshes and components under
+//         their transforms);
+//   .amf  AMF (plain or zipped XML): every object's volumes' triangles, in
+//         no curved triangles, materials or constellations). 3MF and AMF
+//         coordinates are taken as stored, whatever their unit attribute
+//         (OpenSCAD 2021.01 ignores it too).
 // Polygons with more than three corners are split into triangle fans around
 // their first corner. Coordinates are taken as millimetres as stored.
 //

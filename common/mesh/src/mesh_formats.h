@@ -1,0 +1,31 @@
+// Internal to fabatlas_mesh: the readers of the archive and XML formats
+// ReadMesh dispatches to (read_mesh.h documents what each accepts).
+#pragma once
+
+#include <filesystem>
+#include <string>
+#include <string_view>
+
+#include "fabatlas/mesh/triangle_mesh.h"
+
+namespace fabatlas::mesh::detail {
+
+// True when `data` starts with a ZIP local file header ("PK\3\4").
+bool IsZip(std::string_view data);
+
+// The uncompressed bytes of the entry `name` of the ZIP archive `data`
+// (stored or deflated; no ZIP64, no encryption), or of its first entry when
+// `name` is empty. Entries larger than 1 GiB uncompressed are refused.
+// Throws InputError "PATH: ..." for a damaged archive or a missing entry.
+std::string ZipEntry(const std::filesystem::path& path, std::string_view data, const std::string& name);
+
+// 3MF core: every build item's object (its mesh, or its components',
+// recursively) under the item's and components' transforms; coordinates as
+// stored (the unit attribute is ignored, as OpenSCAD 2021.01 ignores it). `data` is the whole .3mf archive.
+TriangleMesh Read3mf(const std::filesystem::path& path, std::string_view data);
+
+// AMF: every object's vertices and every volume's triangles; coordinates
+// as stored (the unit attribute is ignored, as OpenSCAD 2021.01 ignores it). `data` is the XML text or a ZIP holding it.
+TriangleMesh ReadAmf(const std::filesystem::path& path, std::string_view data);
+
+}  // namespace fabatlas::mesh::detail
