@@ -1190,7 +1190,10 @@ class CsgEvaluation {
     if (n.name == "polyhedron") {
       mesh::TriangleMesh mm = PrimitiveMesh(n);
       Outside(model_.filename().string() + ": polyhedron (CSG line " + std::to_string(n.line) + ")", Sha256Hex(n.canonical), mm);
-      return MeshOf(Outward(std::move(mm)), m);
+      mm = Outward(std::move(mm));
+      // OpenSCAD renders an approximately convex polyhedron as its hull.
+      if (scad::ApproximatelyConvex(mm)) mm = mesh::ConvexHull(mm.vertices);
+      return MeshOf(std::move(mm), m);
     }
     if (n.name == "linear_extrude" || n.name == "rotate_extrude") {
       // The 2D child as OpenSCAD computes it (Clipper), extruded to

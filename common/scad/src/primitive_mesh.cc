@@ -5,6 +5,7 @@
 #include <cmath>
 #include <map>
 #include <numbers>
+#include <set>
 
 namespace fabatlas::scad {
 namespace {
@@ -228,6 +229,41 @@ TriangleMesh CylinderMesh(double h, double r1, double r2, bool center, int fragm
   return m;
 }
 
+// The diagonal OpenSCAD 2021.01 splits a quad face along (true: corners 0
+// and 2, false: 1 and 3). It tessellates faces with libtess2's constrained
+// Delaunay triangulation: the face projected along its normal's largest axis
+// (in single precision), a monotone triangulation in sweep order (s, then t),
+// then a diagonal flipped when its two opposite angles sum to pi + 0.01 or
+// more. For a convex quad the monotone triangulation joins the two middle
+// vertices in sweep order when the first and last are opposite, else the
+// last to the first's other neighbour; a concave quad has one diagonal. The
+// choice decides the solid only when the quad is not planar (issue1867.scad).
+bool QuadDiagonalIsZeroTwo(const std::vector<V3>& points, const std::vector<int>& f, const V3& normal) {
+  int k = 0;
+  for (int j = 1; j < 3; ++j)
+    if (std::abs(normal[j]) > std::abs(normal[k])) k = j;
+  Loop q;
+  for (int i : f) q.push_back({static_cast<float>(points[i][(k + 1) % 3]), static_cast<float>(points[i][(k + 2) % 3])});
+  if (SignedArea(q) < 0)
+    for (auto& p : q) p[1] = -p[1];  // counter-clockwise in (s, t), as libtess2 orients it
+  for (int i = 0; i < 4; ++i)
+    if (Cross(q[(i + 3) % 4], q[i], q[(i + 1) % 4]) <= 0) return i % 2 == 0;  // reflex corner i: its diagonal
+  std::array<int, 4> order = {0, 1, 2, 3};
+  std::sort(order.begin(), order.end(), [&](int a, int b) { return q[a] < q[b]; });
+  const int first = order[0], last = order[3];
+  // First and last opposite: the middles' diagonal; adjacent: last joined
+  // to first's other neighbour, which lies opposite last.
+  bool zero_two = (first + 2) % 4 == last ? first % 2 == 1 : last % 2 == 0;
+  auto angle = [&](int at, int a, int b) {
+    const double ux = q[a][0] - q[at][0], uy = q[a][1] - q[at][1], vx = q[b][0] - q[at][0], vy = q[b][1] - q[at][1];
+    double c = (ux * vx + uy * vy) / (std::hypot(ux, uy) * std::hypot(vx, vy));
+    return std::acos(std::clamp(c, -1.0, 1.0));
+  };
+  const int a = zero_two ? 0 : 1, b = a + 1, c = (a + 2) % 4, d = (a + 3) % 4;
+  if (angle(b, c, a) + angle(d, a, c) >= std::numbers::pi + 0.01) zero_two = !zero_two;
+  return zero_two;
+}
+
 TriangleMesh PolyhedronMesh(const std::vector<std::array<double, 3>>& points, const std::vector<std::vector<int>>& faces) {
   TriangleMesh m;
   m.vertices = points;
@@ -245,6 +281,11 @@ TriangleMesh PolyhedronMesh(const std::vector<std::array<double, 3>>& points, co
       normal[1] += (a[2] - b[2]) * (a[0] + b[0]);
       normal[2] += (a[0] - b[0]) * (a[1] + b[1]);
     }
+    if (f.size() == 4 && std::set<int>(f.begin(), f.end()).size() == 4) {
+      if (QuadDiagonalIsZeroTwo(points, f, normal)) AddFan(m, f, false);
+      else AddFan(m, {f[1], f[2], f[3], f[0]}, false);
+      continue;
+    }
     int k = 0;
     for (int j = 1; j < 3; ++j)
       if (std::abs(normal[j]) > std::abs(normal[k])) k = j;
@@ -255,6 +296,48 @@ TriangleMesh PolyhedronMesh(const std::vector<std::array<double, 3>>& points, co
     for (const auto& t : TriangulateLoop(loop)) m.triangles.push_back({f[t[0]], f[t[1]], f[t[2]]});
   }
   return m;
+}
+
+bool ApproximatelyConvex(const TriangleMesh& m) {
+  if (m.triangles.empty()) return false;
+  std::map<std::pair<int, int>, std::size_t> edge_of;  // directed edge -> triangle
+  for (std::size_t t = 0; t < m.triangles.size(); ++t)
+    for (int j = 0; j < 3; ++j)
+      if (!edge_of.emplace(std::make_pair(m.triangles[t][j], m.triangles[t][(j + 1) % 3]), t).second) return false;
+  std::vector<V3> normal(m.triangles.size());
+  for (std::size_t t = 0; t < m.triangles.size(); ++t) {
+    const V3 &a = m.vertices[m.triangles[t][0]], &b = m.vertices[m.triangles[t][1]], &c = m.vertices[m.triangles[t][2]];
+    const V3 u = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, v = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+    normal[t] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
+  }
+  const double threshold = std::cos(0.1 * std::numbers::pi / 180);
+  std::vector<bool> reached(m.triangles.size(), false);
+  std::vector<std::size_t> queue = {0};
+  reached[0] = true;
+  for (std::size_t t = 0; t < m.triangles.size(); ++t)
+    for (int j = 0; j < 3; ++j) {
+      auto it = edge_of.find({m.triangles[t][(j + 1) % 3], m.triangles[t][j]});
+      if (it == edge_of.end()) return false;  // not closed
+      const std::size_t o = it->second;
+      const V3& p = m.vertices[m.triangles[t][(j + 2) % 3]];
+      const V3& q = m.vertices[m.triangles[o][0]];
+      const V3& n = normal[o];
+      if (n[0] * (p[0] - q[0]) + n[1] * (p[1] - q[1]) + n[2] * (p[2] - q[2]) > 0) {  // folds inward
+        const V3& w = normal[t];
+        const double cosine = (n[0] * w[0] + n[1] * w[1] + n[2] * w[2]) /
+                              std::sqrt((n[0] * n[0] + n[1] * n[1] + n[2] * n[2]) * (w[0] * w[0] + w[1] * w[1] + w[2] * w[2]));
+        if (!(cosine >= threshold)) return false;
+      }
+    }
+  while (!queue.empty()) {
+    const std::size_t t = queue.back();
+    queue.pop_back();
+    for (int j = 0; j < 3; ++j) {
+      const std::size_t o = edge_of.at({m.triangles[t][(j + 1) % 3], m.triangles[t][j]});
+      if (!reached[o]) reached[o] = true, queue.push_back(o);
+    }
+  }
+  return std::all_of(reached.begin(), reached.end(), [](bool r) { return r; });
 }
 
 Loop CircleLoop(double r, int fragments) {

@@ -32,6 +32,14 @@ mesh::TriangleMesh CylinderMesh(double h, double r1, double r2, bool center, int
 mesh::TriangleMesh PolyhedronMesh(const std::vector<std::array<double, 3>>& points,
                                   const std::vector<std::vector<int>>& faces);
 
+// OpenSCAD 2021.01's test before it turns a polyhedron into a Nef
+// polyhedron: true when `m` (outward, triangles) is closed, each directed
+// edge used once, connected, and no edge folds inward by 0.1 degrees or
+// more. OpenSCAD then takes the convex hull of its points instead, so a
+// polyhedron whose non-planar faces fold slightly inward renders as its
+// hull (issue1867.scad).
+bool ApproximatelyConvex(const mesh::TriangleMesh& m);
+
 // 2D: a circle as OpenSCAD's regular polygon; a square.
 Loop CircleLoop(double r, int fragments);
 Loop SquareLoop(double x, double y, bool center);
