@@ -95,7 +95,8 @@ TEST_P(CorpusModel, MeshRoadMatchesOpenScadsStl) {
 // (coincident faces included), transforms with mirrors, hulls, Minkowski
 // sums, resize, extrusions, polyhedra, STL and 3MF imports, surfaces from
 // PNG and DAT height maps (a short DAT row, a missing file), 2D objects
-// among 3D ones (ignored).
+// among 3D ones (ignored), boxes meeting along an edge as an operand of a
+// further union, a polyhedron OpenSCAD takes as approximately convex.
 INSTANTIATE_TEST_SUITE_P(Features, CorpusModel,
                          ::testing::Values("features/cube-tests.scad", "features/sphere-tests.scad",
                                            "features/cylinder-tests.scad", "features/union-tests.scad",
@@ -109,7 +110,8 @@ INSTANTIATE_TEST_SUITE_P(Features, CorpusModel,
                                            "features/for-tests.scad", "features/child-tests.scad",
                                            "features/minkowski3-erosion.scad", "issues/issue911.scad",
                                            "features/surface-png-image3-tests.scad", "features/surface-tests.scad",
-                                           "issues/issue1223.scad", "features/import_3mf-tests.scad"));
+                                           "issues/issue1223.scad", "features/import_3mf-tests.scad",
+                                           "features/highlight-modifier2.scad", "issues/issue1867.scad"));
 
 // OpenSCAD's own AMF test files (single objects, several volumes, a zipped
 // one, one in inches whose unit OpenSCAD ignores) imported by a one-line model.

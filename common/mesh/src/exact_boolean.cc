@@ -4,6 +4,9 @@
 #include "fabatlas/mesh/exact_boolean.h"
 
 #include <algorithm>
+#include <array>
+#include <cmath>
+#include <numbers>
 #include <cstdint>
 #include <map>
 #include <numeric>
@@ -47,6 +50,107 @@ struct Exact {
   bool empty = true;
 };
 
+Nef NefOf(const Exact& e);
+
+// Solids meeting along an edge (two cubes sharing only an edge, as Nef
+// results and OpenSCAD's STL have them) leave that edge with four or more
+// triangles. Each such edge's triangles are sorted around it and each is
+// paired with its neighbour across the material between them; triangles
+// joined by ordinary edges and by these pairs form closed shells, and each
+// shell gets its own copies of its vertices, so the soup becomes closed
+// 2-manifold shells that touch along the shared edges. False when no edge
+// has more than two triangles, or the triangles around one cannot be paired.
+bool SplitShellsAtSharedEdges(std::vector<Point>& points, std::vector<std::vector<std::size_t>>& faces) {
+  std::map<std::pair<std::size_t, std::size_t>, std::vector<std::size_t>> around;  // undirected edge -> faces
+  for (std::size_t f = 0; f < faces.size(); ++f)
+    for (int j = 0; j < 3; ++j) {
+      const std::size_t a = faces[f][j], b = faces[f][(j + 1) % 3];
+      around[{std::min(a, b), std::max(a, b)}].push_back(f);
+    }
+  // Corners (face * 3 + position) joined when two faces meet at that
+  // vertex across an edge; each group of joined corners keeps one copy.
+  std::vector<std::size_t> parent(faces.size() * 3);
+  std::iota(parent.begin(), parent.end(), 0);
+  auto find = [&](std::size_t i) {
+    while (parent[i] != i) i = parent[i] = parent[parent[i]];
+    return i;
+  };
+  auto corner = [&](std::size_t f, std::size_t v) {
+    return f * 3 + static_cast<std::size_t>(std::find(faces[f].begin(), faces[f].end(), v) - faces[f].begin());
+  };
+  auto join = [&](const std::pair<std::size_t, std::size_t>& edge, std::size_t f, std::size_t g) {
+    parent[find(corner(g, edge.first))] = find(corner(f, edge.first));
+    parent[find(corner(g, edge.second))] = find(corner(f, edge.second));
+  };
+  auto vec = [&](std::size_t from, std::size_t to) {
+    const Point &p = points[from], &q = points[to];
+    return std::array<double, 3>{CGAL::to_double(q.x() - p.x()), CGAL::to_double(q.y() - p.y()), CGAL::to_double(q.z() - p.z())};
+  };
+  auto cross = [](const std::array<double, 3>& u, const std::array<double, 3>& v) {
+    return std::array<double, 3>{u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
+  };
+  auto dot = [](const std::array<double, 3>& u, const std::array<double, 3>& v) { return u[0] * v[0] + u[1] * v[1] + u[2] * v[2]; };
+  bool shared = false;
+  for (const auto& [edge, list] : around) {
+    if (list.size() <= 2) {
+      if (list.size() == 2) join(edge, list[0], list[1]);
+      continue;
+    }
+    if (list.size() % 2) return false;
+    shared = true;
+    const auto d = vec(edge.first, edge.second);
+    const double len = std::sqrt(dot(d, d));
+    // A frame around the edge: e1 any unit vector across it, e2 = d x e1.
+    std::array<double, 3> e1 = std::abs(d[0]) < 0.9 * len ? std::array<double, 3>{1, 0, 0} : std::array<double, 3>{0, 1, 0};
+    const double along = dot(e1, d) / (len * len);
+    for (int k = 0; k < 3; ++k) e1[k] -= along * d[k];
+    auto e2 = cross(d, e1);
+    for (double& c : e2) c /= len;
+    struct Sheet {
+      double angle;
+      std::size_t face;
+      std::array<double, 3> normal;
+    };
+    std::vector<Sheet> sheets;
+    for (std::size_t f : list) {
+      std::size_t w = faces[f][0];
+      for (std::size_t v : faces[f])
+        if (v != edge.first && v != edge.second) w = v;
+      const auto r = vec(edge.first, w);
+      sheets.push_back({std::atan2(dot(r, e2), dot(r, e1)), f,
+                        cross(vec(faces[f][0], faces[f][1]), vec(faces[f][0], faces[f][2]))});
+    }
+    std::sort(sheets.begin(), sheets.end(), [](const Sheet& a, const Sheet& b) { return a.angle < b.angle; });
+    std::vector<int> partners(sheets.size(), 0);
+    for (std::size_t k = 0; k < sheets.size(); ++k) {
+      const std::size_t next = (k + 1) % sheets.size();
+      double mid = 0.5 * (sheets[k].angle + sheets[next].angle);
+      if (next == 0) mid += std::numbers::pi;  // the wedge across the angle's cut
+      std::array<double, 3> m{};
+      for (int c = 0; c < 3; ++c) m[c] = std::cos(mid) * e1[c] + std::sin(mid) * e2[c];
+      if (dot(sheets[k].normal, m) < 0) {  // material between sheet k and the next
+        join(edge, sheets[k].face, sheets[next].face);
+        ++partners[k];
+        ++partners[next];
+      }
+    }
+    if (std::any_of(partners.begin(), partners.end(), [](int n) { return n != 1; })) return false;
+  }
+  if (!shared) return false;
+  std::map<std::size_t, std::size_t> copy;  // corner group -> new point
+  std::vector<Point> copies;
+  std::vector<std::vector<std::size_t>> split = faces;
+  for (std::size_t f = 0; f < faces.size(); ++f)
+    for (int j = 0; j < 3; ++j) {
+      auto [it, added] = copy.try_emplace(find(f * 3 + j), copies.size());
+      if (added) copies.push_back(points[faces[f][j]]);
+      split[f][j] = it->second;
+    }
+  faces = std::move(split);
+  points = std::move(copies);
+  return true;
+}
+
 Exact ToExact(const TriangleMesh& m, std::size_t index) {
   Exact out;
   if (m.triangles.empty()) return out;
@@ -77,6 +181,7 @@ Exact ToExact(const TriangleMesh& m, std::size_t index) {
   }
   // A vertex or edge shared by several sheets (two cubes meeting at an
   // edge, as Nef results and OpenSCAD's STL have them) is split per sheet.
+  const bool touching = !PMP::is_polygon_soup_a_polygon_mesh(faces) && SplitShellsAtSharedEdges(points, faces);
   if (!PMP::is_polygon_soup_a_polygon_mesh(faces)) PMP::orient_polygon_soup(points, faces);
   if (!PMP::is_polygon_soup_a_polygon_mesh(faces)) throw InputError(name + " is not a manifold mesh");
   PMP::polygon_soup_to_polygon_mesh(points, faces, out.mesh);
@@ -84,6 +189,8 @@ Exact ToExact(const TriangleMesh& m, std::size_t index) {
   if (EnclosedVolume(m) < 0) PMP::reverse_face_orientations(out.mesh);
   out.box = PMP::bbox(out.mesh);
   out.empty = out.mesh.number_of_faces() == 0;
+  // Shells touching along edges are one solid only as a Nef polyhedron.
+  if (touching && !out.empty) out.nef = NefOf(out);
   return out;
 }
 
