@@ -111,7 +111,23 @@ INSTANTIATE_TEST_SUITE_P(Features, CorpusModel,
                                            "features/minkowski3-erosion.scad", "issues/issue911.scad",
                                            "features/surface-png-image3-tests.scad", "features/surface-tests.scad",
                                            "issues/issue1223.scad", "features/import_3mf-tests.scad",
-                                           "features/highlight-modifier2.scad", "issues/issue1867.scad"));
+                                           "features/highlight-modifier2.scad", "issues/issue1867.scad",
+                                           "features/primitive-inf-tests.scad"));
+
+// A primitive alone is the sample's solid: its volume is OpenSCAD's, with
+// its sign (a sphere's rings run north to south; $fn = inf gives a triangle).
+TEST(MeshRoad, LonePrimitivesEncloseOpenScadsVolume) {
+  const fs::path dir = fabatlas::testing::FreshTempDir("scad-mesh-road-lone");
+  int k = 0;
+  for (const char* text : {"sphere(1);", "sphere(2, $fn = 1/0);", "cylinder(r1 = 1, r2 = 0, h = 2);", "cube(2);"}) {
+    const fs::path model = dir / ("lone" + std::to_string(++k) + ".scad");
+    std::ofstream(model) << text << "\n";
+    const Measured peer = Peer(model, dir);
+    const design::SampleResult r = Evaluate(model, dir);
+    ASSERT_TRUE(r.valid) << text << ": " << r.failure_reason;
+    EXPECT_NEAR(r.solid.Volume(), peer.volume, 1e-4 * peer.volume) << text;  // OpenSCAD writes floats
+  }
+}
 
 // OpenSCAD's own AMF test files (single objects, several volumes, a zipped
 // one, one in inches whose unit OpenSCAD ignores) imported by a one-line model.

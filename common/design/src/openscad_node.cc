@@ -1189,6 +1189,12 @@ class CsgEvaluation {
     if (n.name == "cube" || n.name == "sphere" || n.name == "cylinder") return MeshOf(PrimitiveMesh(n), m);
     if (n.name == "polyhedron") {
       mesh::TriangleMesh mm = PrimitiveMesh(n);
+      for (const auto& v : mm.vertices)
+        if (!std::isfinite(v[0]) || !std::isfinite(v[1]) || !std::isfinite(v[2])) {
+          Warn("polyhedron (CSG line " + std::to_string(n.line) +
+               "): a point is not finite; left out, as OpenSCAD's render of it encloses nothing");
+          return Solid();
+        }
       Outside(model_.filename().string() + ": polyhedron (CSG line " + std::to_string(n.line) + ")", Sha256Hex(n.canonical), mm);
       mm = Outward(std::move(mm));
       // OpenSCAD renders an approximately convex polyhedron as its hull.

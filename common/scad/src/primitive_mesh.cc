@@ -168,7 +168,7 @@ double CosDegrees(double a) {
 }
 
 int Fragments(double r, double fn, double fs, double fa) {
-  if (r < 1e-6) return 3;
+  if (r < 1e-6 || !std::isfinite(fn)) return 3;  // $fn = inf gives a triangle, as in OpenSCAD 2021.01
   if (fn > 0) return fn >= 3 ? static_cast<int>(fn) : 3;
   return static_cast<int>(std::ceil(std::max(std::min(360.0 / fa, r * 2 * std::numbers::pi / fs), 5.0)));
 }
@@ -204,6 +204,7 @@ TriangleMesh SphereMesh(double r, int fragments) {
   AddStripCap(m, bottom, false);
   for (int i = 0; i + 1 < rings; ++i)
     for (int j = 0; j < fragments; ++j) AddFan(m, {at(i, j), at(i, j + 1), at(i + 1, j + 1), at(i + 1, j)}, false);
+  for (auto& t : m.triangles) std::swap(t[1], t[2]);  // outward: the rings run north to south
   return m;
 }
 

@@ -1,8 +1,9 @@
 // fabatlas/scad/primitive_mesh.h — OpenSCAD's primitives as the polygon
 // meshes OpenSCAD itself builds (faceting by $fn, $fa, $fs), so a level set
 // of them encloses the volume of OpenSCAD's own STL. Millimetres, degrees.
-// Each function returns a closed triangle mesh (orientation unspecified:
-// level sets are signed by their own flood fill).
+// Each function returns a closed triangle mesh; cube, sphere and cylinder
+// face outward (the mesh road's volume is their signed volume), a
+// polyhedron keeps its faces' winding.
 #pragma once
 
 #include <array>
@@ -22,7 +23,8 @@ double SinDegrees(double degrees);
 double CosDegrees(double degrees);
 
 // OpenSCAD's number of fragments of a circle of radius r: $fn when > 0 (at
-// least 3), else ceil(max(min(360 / $fa, 2 pi r / $fs), 5)); 3 below r ~ 1e-6.
+// least 3), else ceil(max(min(360 / $fa, 2 pi r / $fs), 5)); 3 below r ~ 1e-6
+// and for a non-finite $fn.
 int Fragments(double r, double fn, double fs, double fa);
 
 mesh::TriangleMesh CubeMesh(const std::array<double, 3>& size, bool center);
