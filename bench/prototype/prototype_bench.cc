@@ -33,7 +33,8 @@ int main(int argc, char** argv) {
   std::printf("| example | variables | constraints | deviation (mm) | median solve wall (ms) | median solve CPU (ms) |"
               " geometry (s) | voxel (mm) | triangles | closed | manifold | self-int. | pieces |\n");
   std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
-  for (const char* name : {"cabinet", "crate_bed", "sofa_bunk"}) {
+  for (const char* name : {"cabinet", "crate_bar", "crate_bed", "sofa_bunk", "printer", "cellphone", "tablet", "toolbox",
+                           "jewellery_box"}) {
     prototype::Prototype p = prototype::LoadPrototype(root + "/configs/prototypes/" + name + ".yaml");
     std::vector<double> wall, cpu;
     prototype::SolveSummary s;
