@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 
 #include "fabatlas/error.h"
 #include "fabatlas/swept/swept_volume.h"
@@ -48,10 +49,12 @@ mesh::TriangleMesh BoxMesh(const std::array<double, 6>& b) {
 // Mated rails of a slide (Koo et al. Sec. 7: "we add mated rails that allow
 // the parts to move along the sliding vector"): a T-shaped tongue on the
 // child's rail face runs in a T-slot cut into the parent, over the travel of
-// every configuration. Sizes follow the parent's thickness t across the
-// rail plane: unit u = clamp(t / 8, 2 voxels, 3 mm); stem 2u wide, flange 4u
-// wide and u high, the parent's wall over the flange u thick, clearance
-// `gap` all round. Throws InputError when the parts are too thin or narrow.
+// every configuration. Sizes follow the depth t of parent material under
+// the rail face: unit u = clamp(t / 8, 2 voxels, 3 mm); stem 2u wide, flange
+// u high and overhanging the stem's slot by u on each side (2(2u + gap)
+// wide), the parent's lip over the flange u thick, clearance `gap` all
+// round. Throws InputError naming the joint when the parent is too thin or
+// the faces overlap too little across the rail.
 void SlideRails(const Prototype& p, const internal::Model& model, const SolveSummary& sol, const Eigen::VectorXd& x,
                 const Joint& j, const geometry::GridSpec& g, Solid& child, Solid& parent) {
   const double gap = p.fabrication.gap, h = g.voxel_size;
@@ -74,14 +77,19 @@ void SlideRails(const Prototype& p, const internal::Model& model, const SolveSum
     if (over && depth >= 0) t = std::min(t, depth);
   }
   double u = std::clamp(t / 8, 2 * h, 3.0);
-  double a = u, bw = 2 * u, ds = gap + u, hf = u;
-  if (ds + hf + gap > t - 2 * h)
-    throw InputError(j.where + ": slide " + j.name + ": " + j.parent + " is " + std::to_string(t) +
-                     " mm thick under its rail face, too thin for rails (needs " + std::to_string(ds + hf + gap + 2 * h) + ")");
+  double a = u, bw = a + gap + u, ds = gap + u, hf = u;  // the flange overhangs the stem's slot by u
+  char msg[200];
+  if (ds + hf + gap > t - 2 * h) {
+    std::snprintf(msg, sizeof msg, "%s is %.2f mm deep under its rail face; rails need %.2f", j.parent.c_str(), t,
+                  ds + hf + gap + 2 * h);
+    throw InputError(j.where + ": slide " + j.name + ": " + msg);
+  }
   double w0 = std::max(cb[2 * w], ob[2 * w]), w1 = std::min(cb[2 * w + 1], ob[2 * w + 1]);
-  if (w1 - w0 < 2 * (bw + gap) + 4 * h)
-    throw InputError(j.where + ": slide " + j.name + ": " + j.child + " and " + j.parent + " overlap by " +
-                     std::to_string(w1 - w0) + " mm across the rail, too narrow for rails");
+  if (w1 - w0 < 2 * (bw + gap) + 4 * h) {
+    std::snprintf(msg, sizeof msg, "%s and %s overlap by %.2f mm across the rail; rails need %.2f", j.child.c_str(),
+                  j.parent.c_str(), w1 - w0, 2 * (bw + gap) + 4 * h);
+    throw InputError(j.where + ": slide " + j.name + ": " + msg);
+  }
   double wc = (w0 + w1) / 2;
   double dmin = 0, dmax = 0;
   for (const Configuration& c : p.configurations) {
@@ -111,7 +119,8 @@ void SlideRails(const Prototype& p, const internal::Model& model, const SolveSum
 
 }  // namespace
 
-Solid Fabricate(const Prototype& p, const SolveSummary& sol, const geometry::GridSpec& g, FabricateSummary* summary) {
+std::vector<FabricatedPiece> FabricatePieces(const Prototype& p, const SolveSummary& sol, const geometry::GridSpec& g,
+                                             FabricateSummary* summary) {
   auto start = std::chrono::steady_clock::now();
   if (!sol.satisfiable) throw InputError(p.file + ": cannot fabricate: " + sol.Explain());
   internal::Model model(p);
@@ -210,7 +219,7 @@ Solid Fabricate(const Prototype& p, const SolveSummary& sol, const geometry::Gri
   }
 
   // Joint geometry.
-  std::vector<Solid> extra;  // free pieces (links)
+  std::vector<std::pair<std::string, Solid>> extra;  // free pieces (links), by joint
   for (const Joint& j : p.joints) {
     int ci = p.PartIndex(j.child), pi = p.PartIndex(j.parent);
     auto cb = box_of(j.child), pb = box_of(j.parent);
@@ -297,7 +306,7 @@ Solid Fabricate(const Prototype& p, const SolveSummary& sol, const geometry::Gri
       bh[n] = l1;
       Solid link = geometry::Intersection(geometry::Capsule(g, a, b, R), BoxAt(g, bl, bh));
       for (const Vec3& u : {ua, ub}) link = Cut(link, CylinderAlong(g, n, rp + gap, l0 - h, l1 + h, u));
-      extra.push_back(link);
+      extra.push_back({j.name, link});
       fs.joint_pieces += 1;
     }
     if (j.type == JointType::kSlide && !j.on.empty()) {
@@ -308,12 +317,22 @@ Solid Fabricate(const Prototype& p, const SolveSummary& sol, const geometry::Gri
     // no extra geometry (Koo et al. Sec. 7).
   }
 
-  Solid all;
+  std::vector<FabricatedPiece> out;
   for (std::size_t i = 0; i < np; ++i) {
     fs.part_volumes[p.parts[i].name] = solids[i].empty() ? 0 : solids[i].Volume();
-    all = Add(all, solids[i]);
+    out.push_back({p.parts[i].name, solids[i]});
   }
-  for (const Solid& s : extra) all = Add(all, s);
+  for (auto& [name, s] : extra) out.push_back({"link:" + name, s});
+  fs.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  if (summary) *summary = fs;
+  return out;
+}
+
+Solid Fabricate(const Prototype& p, const SolveSummary& sol, const geometry::GridSpec& g, FabricateSummary* summary) {
+  auto start = std::chrono::steady_clock::now();
+  FabricateSummary fs;
+  Solid all;
+  for (const FabricatedPiece& piece : FabricatePieces(p, sol, g, &fs)) all = Add(all, piece.solid);
   fs.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   if (summary) *summary = fs;
   return all;
