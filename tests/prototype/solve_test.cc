@@ -319,6 +319,17 @@ TEST(PrototypeSolve, BadInputNamesThePlace) {
   }
   EXPECT_THROW(LoadPrototype(Example("cabinet"), {{"no_such", 1}}), InputError);
   EXPECT_THROW(ParsePrototype("parts:\n  a: {box: [0, 1, 0, 1, 1, 0]}\n", "x.yaml"), InputError);
+  // A piece named like a coordinate would make "a.x0" ambiguous; a piece
+  // apart from its cuboid is not part of it.
+  for (const char* bad : {"parts:\n  a: {box: [0, 1, 0, 1, 0, 1], pieces: {x0: {box: [1, 2, 0, 1, 0, 1]}}}\n",
+                          "parts:\n  a: {box: [0, 1, 0, 1, 0, 1], pieces: {p: {box: [3, 4, 0, 1, 0, 1]}}}\n"}) {
+    try {
+      SolvePrototype(ParsePrototype(bad, "pieces.yaml"));
+      FAIL() << bad;
+    } catch (const InputError& e) {
+      EXPECT_EQ(std::string(e.what()).rfind("pieces.yaml:2:", 0), 0u) << e.what();
+    }
+  }
 }
 
 }  // namespace

@@ -113,13 +113,15 @@ class Reader {
       if (kv.second["min_size"]) part.min_size = Number(kv.second["min_size"], "min_size");
       if (const auto h = kv.second["hold"])
         for (const std::string& s : StrList(h, "hold")) part.held.push_back(CoordIndex(h, s));
-      std::set<std::string> inner_names;
+      // Piece and cavity names share the namespace of coordinates and measures.
+      std::set<std::string> inner_names{"x0", "x1", "y0", "y1", "z0", "z1", "w", "d", "h", "cx", "cy", "cz"};
       if (const auto ps = kv.second["pieces"]) {
         if (!ps.IsMap()) Fail(ps, "pieces must be a map name: {box, on, align}");
         for (const auto& c : ps) {
           Keys(c.second, {"box", "on", "align", "hold"}, "piece");
           std::string n = c.first.as<std::string>();
-          if (!inner_names.insert(n).second) Fail(c.first, "duplicate piece '" + n + "' in part " + part.name);
+          if (!inner_names.insert(n).second)
+            Fail(c.first, "piece '" + n + "' of " + part.name + " repeats a name or is a coordinate name");
           Cuboid piece = ReadCuboid(c.second["box"], part.name + "." + n);
           piece.on = part.name;
           if (c.second["on"]) {
@@ -141,7 +143,7 @@ class Reader {
         for (const auto& c : cs) {
           Keys(c.second, {"box", "open", "hold"}, "cavity");
           if (!inner_names.insert(c.first.as<std::string>()).second)
-            Fail(c.first, "cavity '" + c.first.as<std::string>() + "' has the name of a piece or cavity of " + part.name);
+            Fail(c.first, "cavity '" + c.first.as<std::string>() + "' of " + part.name + " repeats a name or is a coordinate name");
           Cuboid cav = ReadCuboid(c.second["box"], part.name + "." + c.first.as<std::string>());
           if (const auto h = c.second["hold"])
             for (const std::string& s : StrList(h, "hold")) cav.held.push_back(CoordIndex(h, s));
