@@ -1,4 +1,4 @@
-// fabatlas prototype FILE.yaml [--set name=value,...] [--stl OUT.stl] [--json]
+// fabatlas prototype FILE.yaml [--set name=value,...] [--remove part,...] [--stl OUT.stl] [--json]
 // — solve a works-like prototype (Koo et al.) and export its printable geometry.
 #include <iostream>
 #include <memory>
@@ -17,7 +17,7 @@ namespace fabatlas::cli {
 namespace {
 
 struct PrototypeArgs {
-  std::string file, set, stl;
+  std::string file, set, remove, stl;
   double voxel = 0;
   bool json = false;
 };
@@ -43,6 +43,8 @@ std::map<std::string, double> ParseSet(const std::string& text) {
 
 int Run(const PrototypeArgs& args) {
   prototype::Prototype p = prototype::LoadPrototype(args.file, ParseSet(args.set));
+  std::stringstream removed(args.remove);
+  for (std::string part; std::getline(removed, part, ',');) p = prototype::RemovePart(p, part);
   prototype::SolveSummary s = prototype::SolvePrototype(p);
   nlohmann::json j;
   j["name"] = p.name;
@@ -100,6 +102,7 @@ void AddPrototypeCommands(CLI::App& app, int& exit_code) {
   auto* c = app.add_subcommand("prototype", "solve a works-like prototype and export printable geometry");
   c->add_option("file", args->file, "prototype YAML (docs/prototype.md)")->required();
   c->add_option("--set", args->set, "parameter overrides name=value,...");
+  c->add_option("--remove", args->remove, "remove these parts first (a discrete edit), part,...");
   c->add_option("--stl", args->stl, "write the printable geometry (base configuration) here");
   c->add_option("--voxel", args->voxel, "level-set voxel, mm (default: the file's)");
   c->add_flag("--json", args->json, "print JSON");

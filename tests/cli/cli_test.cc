@@ -127,7 +127,7 @@ std::array<double, 6> StlBounds(const std::filesystem::path& path) {
 // `fabatlas prototype` as a user runs it: the solved flap height against
 // the analytic one, also after --set; the printable geometry as a closed
 // mesh spanning the solved parts; a conflict named with exit status 3; bad
-// overrides as one line with exit status 2.
+// overrides as one line with exit status 2; a part removed (--remove).
 TEST(Cli, PrototypeSolvesFabricatesAndNamesConflicts) {
   // The flap of tests/prototype/data/flap.yaml: solved height gap + 5,
   // deviation |gap + 5 - 30|.
@@ -187,4 +187,20 @@ relationships:
   EXPECT_EQ(r.status, 2);
   EXPECT_EQ(Lines(r.err), 1) << r.err;
   EXPECT_NE(r.err.find("gap=wide"), std::string::npos) << r.err;
+
+  // A discrete edit (Koo et al. Sec. 8): the jewellery box without its
+  // middle drawer; the two remaining fronts meet at 29, halfway between the
+  // freed edges 20 and 38 (docs/prototype.md). An unknown part: one line,
+  // exit status 2.
+  const auto box = fabatlas::testing::SourceDir() / "configs/prototypes/jewellery_box.yaml";
+  r = Fabatlas("prototype " + box.string() + " --remove drawer_2 --json");
+  ASSERT_EQ(r.status, 0) << r.err;
+  j = nlohmann::json::parse(r.out);
+  EXPECT_FALSE(j["cuboids"].contains("drawer_2"));
+  EXPECT_NEAR(j["cuboids"]["drawer_1"][5].get<double>(), 29.0, 1e-3);
+  EXPECT_NEAR(j["cuboids"]["drawer_3"][4].get<double>(), 29.0, 1e-3);
+  r = Fabatlas("prototype " + box.string() + " --remove drawer_9");
+  EXPECT_EQ(r.status, 2);
+  EXPECT_EQ(Lines(r.err), 1) << r.err;
+  EXPECT_NE(r.err.find("drawer_9"), std::string::npos) << r.err;
 }

@@ -153,6 +153,154 @@ TEST(PrototypeSolve, SofaBunkHeadrestHeightBound) {
   }
 }
 
+// Koo et al. Table 1, "Statistics for fabricated prototypes": joints by type
+// and constraints (functional relationships, geometric constraints) of the
+// eight examples. The seed's text gives the two constraint columns row by
+// row: 7 1 / 2 1 / 3 1 / 5 1 / 2 0 / 2 1 / 2 1 / 2 0.
+struct Table1Row {
+  const char* file;
+  int hinge, slide, sliding_hinge, double_pivot, functional, geometric;
+};
+constexpr Table1Row kTable1[] = {
+    {"cabinet", 1, 1, 3, 0, 7, 1},   {"crate_bar", 2, 5, 0, 0, 2, 1}, {"crate_bed", 0, 0, 0, 4, 3, 1},
+    {"sofa_bunk", 2, 0, 0, 2, 5, 1}, {"printer", 2, 3, 0, 0, 2, 0},   {"cellphone", 1, 1, 0, 0, 2, 1},
+    {"tablet", 1, 1, 0, 0, 2, 1},    {"toolbox", 1, 1, 0, 0, 2, 0},
+};
+
+TEST(PrototypeSolve, TheEightExamplesSolveWithTable1sCounts) {
+  for (const Table1Row& row : kTable1) {
+    Prototype p = LoadPrototype(Example(row.file));
+    int joints[4] = {0, 0, 0, 0}, functional = 0, geometric = 0;
+    for (const Joint& j : p.joints) ++joints[static_cast<int>(j.type)];
+    for (const Relationship& r : p.relationships) ++(r.type == RelationType::kGeometric ? geometric : functional);
+    EXPECT_EQ(joints[static_cast<int>(JointType::kHinge)], row.hinge) << row.file;
+    EXPECT_EQ(joints[static_cast<int>(JointType::kSlide)], row.slide) << row.file;
+    EXPECT_EQ(joints[static_cast<int>(JointType::kSlidingHinge)], row.sliding_hinge) << row.file;
+    EXPECT_EQ(joints[static_cast<int>(JointType::kDoublePivot)], row.double_pivot) << row.file;
+    EXPECT_EQ(functional, row.functional) << row.file;
+    EXPECT_EQ(geometric, row.geometric) << row.file;
+    SolveSummary s = SolvePrototype(p);
+    EXPECT_TRUE(s.satisfiable) << row.file << ": " << s.Explain();
+    EXPECT_LE(s.max_violation, 1e-4) << row.file;
+  }
+}
+
+// A part of two cuboids (Koo et al. Sec. 3): a 10 mm block with a 5 mm cap
+// on it, x0 aligned. Made 20 mm tall (bottom held), the block carries the
+// cap's bottom to 20; the cap's top (15 in the input) is then pushed to
+// 20 + min_size = 21 and no further (Eq. 4 moves coordinates as little as
+// possible). Moving the cap's x0 to 3 moves the block's with it.
+TEST(PrototypeSolve, PiecesStayOnTheirCuboid) {
+  SolveSummary s = SolvePrototype(ParsePrototype(R"(
+parts:
+  block:
+    box: [0, 10, 0, 10, 0, 10]
+    hold: [x1, y0, y1, z0]
+    pieces: {cap: {box: [0, 8, 2, 8, 10, 15], align: [x0]}}
+relationships:
+  - {type: geometric, name: tall block, expression: "block.h == 20"}
+  - {type: geometric, name: cap moved, expression: "block.cap.x0 == 3"}
+)", "pieces.yaml"));
+  ASSERT_TRUE(s.satisfiable) << s.Explain();
+  auto cap = s.cuboids.at("block.cap");
+  EXPECT_NEAR(cap[4], 20, 1e-4);
+  EXPECT_NEAR(cap[5], 21, 1e-4);
+  EXPECT_NEAR(cap[1], 8, 1e-4);
+  EXPECT_NEAR(s.cuboids.at("block")[0], 3, 1e-4);
+}
+
+// A whole part of two cuboids fits inside a room z 1..12 (Sec. 4.2 with
+// Box(P) the union's box): the block's bottom rises to 1, the cap's top drops
+// to 12, the contact between them stays at 10.
+TEST(PrototypeSolve, AllCuboidsOfAPartFitInside) {
+  SolveSummary s = SolvePrototype(ParsePrototype(R"(
+parts:
+  case:
+    box: [-5, 15, -5, 15, 0, 13]
+    hold: [x0, x1, y0, y1, z0, z1]
+    cavities: {room: {box: [-4, 14, -4, 14, 1, 12], hold: [z0, z1]}}
+  block:
+    box: [0, 10, 0, 10, 0, 10]
+    pieces: {cap: {box: [2, 8, 2, 8, 10, 15]}}
+relationships:
+  - {type: fit, name: block in the room, inner: [block], outer: case.room}
+)", "fit_pieces.yaml"));
+  ASSERT_TRUE(s.satisfiable) << s.Explain();
+  EXPECT_NEAR(s.cuboids.at("block")[4], 1, 1e-4);
+  EXPECT_NEAR(s.cuboids.at("block")[5], 10, 1e-4);
+  EXPECT_NEAR(s.cuboids.at("block.cap")[4], 10, 1e-4);
+  EXPECT_NEAR(s.cuboids.at("block.cap")[5], 12, 1e-4);
+}
+
+// A slide on rails (Koo et al. Sec. 7) keeps the child on the parent: a
+// 30 mm carriage on a 100 mm bed, asked to travel as far as it can (a free
+// slide pulled towards 1000 mm), stops when it overlaps the bed by its
+// min_size (1 mm): at 100 - 1 - 0 = 99 mm from x0 = 0.
+TEST(PrototypeSolve, SlideOnRailsStaysOnItsParent) {
+  Prototype p = ParsePrototype(R"(
+parts:
+  bed:      {box: [0, 100, 0, 40, 0, 10], hold: [x0, x1, y0, y1, z0, z1]}
+  carriage: {box: [0, 30, 10, 30, 10, 20], hold: [x0, x1, y0, y1, z1]}
+joints:
+  s: {type: slide, child: carriage, parent: bed, axis: x, on: [carriage.z0, bed.z1]}
+configurations:
+  far: {s: {free: true, guess: 1000}}
+)", "rails.yaml");
+  SolveSummary s = SolvePrototype(p);
+  ASSERT_TRUE(s.satisfiable) << s.Explain();
+  EXPECT_NEAR(s.free_values.at("s@far.s"), 99.0, 1e-3);
+  EXPECT_NEAR(s.cuboids.at("carriage")[4], 10.0, 1e-4);  // rail faces coplanar
+}
+
+// The jewellery box's discrete edits (Koo et al. Sec. 8): the three fronts
+// just cover the chest (z 5..55, held), packed. Removing the middle drawer leaves
+// two fronts that must meet; least squares moves both free edges (20 and 38)
+// equally, to 29. Removing the bottom drawer instead stretches the middle
+// front down to the chest's floor (5) and leaves the top front alone.
+TEST(PrototypeSolve, JewelleryBoxRemovingACompartmentResolves) {
+  Prototype p = LoadPrototype(Example("jewellery_box"));
+  SolveSummary s = SolvePrototype(p);
+  ASSERT_TRUE(s.satisfiable) << s.Explain();
+  EXPECT_NEAR(s.cuboids.at("drawer_2")[4], 20, 1e-4);
+
+  Prototype without_2 = RemovePart(p, "drawer_2");
+  EXPECT_EQ(without_2.parts.size(), 3u);
+  EXPECT_EQ(without_2.joints.size(), 2u);
+  ASSERT_EQ(without_2.relationships.size(), 2u);
+  EXPECT_EQ(without_2.relationships[0].a.size(), 2u);
+  SolveSummary a = SolvePrototype(without_2);
+  ASSERT_TRUE(a.satisfiable) << a.Explain();
+  EXPECT_NEAR(a.cuboids.at("drawer_1")[4], 5, 1e-4);
+  EXPECT_NEAR(a.cuboids.at("drawer_1")[5], 29, 1e-3);
+  EXPECT_NEAR(a.cuboids.at("drawer_3")[4], 29, 1e-3);
+  EXPECT_NEAR(a.cuboids.at("drawer_3")[5], 55, 1e-4);
+  EXPECT_EQ(a.cuboids.count("drawer_2.tray"), 0u);
+
+  SolveSummary b = SolvePrototype(RemovePart(p, "drawer_1"));
+  ASSERT_TRUE(b.satisfiable) << b.Explain();
+  EXPECT_NEAR(b.cuboids.at("drawer_2")[4], 5, 1e-4);
+  EXPECT_NEAR(b.cuboids.at("drawer_2")[5], 38, 1e-3);
+  EXPECT_NEAR(b.cuboids.at("drawer_3")[4], 38, 1e-3);
+
+  EXPECT_THROW(RemovePart(p, "drawer_4"), InputError);
+}
+
+// Removing a part takes what hangs from it: the printer's flap carries the
+// extension; the flap's flush relationship goes with them.
+TEST(PrototypeSolve, RemovingAPartRemovesWhatHangsFromIt) {
+  Prototype p = RemovePart(LoadPrototype(Example("printer")), "flap");
+  EXPECT_EQ(p.PartIndex("flap"), -1);
+  EXPECT_EQ(p.PartIndex("extension"), -1);
+  EXPECT_EQ(p.joints.size(), 3u);
+  ASSERT_EQ(p.relationships.size(), 1u);
+  EXPECT_EQ(p.relationships[0].type, RelationType::kFit);
+  for (const Configuration& c : p.configurations) {
+    EXPECT_EQ(c.values.count("flap_hinge"), 0u);
+    EXPECT_EQ(c.values.count("extension_slide"), 0u);
+  }
+  EXPECT_TRUE(SolvePrototype(p).satisfiable);
+}
+
 TEST(PrototypeSolve, BadInputNamesThePlace) {
   try {
     ParsePrototype("parts:\n  a: {box: [0, 1, 0, 1, 0, 1]}\njoints:\n  j: {type: hinge, child: a, parent: b, axis: x, at: [a.y0, a.z0]}\n",
@@ -171,6 +319,17 @@ TEST(PrototypeSolve, BadInputNamesThePlace) {
   }
   EXPECT_THROW(LoadPrototype(Example("cabinet"), {{"no_such", 1}}), InputError);
   EXPECT_THROW(ParsePrototype("parts:\n  a: {box: [0, 1, 0, 1, 1, 0]}\n", "x.yaml"), InputError);
+  // A piece named like a coordinate would make "a.x0" ambiguous; a piece
+  // apart from its cuboid is not part of it.
+  for (const char* bad : {"parts:\n  a: {box: [0, 1, 0, 1, 0, 1], pieces: {x0: {box: [1, 2, 0, 1, 0, 1]}}}\n",
+                          "parts:\n  a: {box: [0, 1, 0, 1, 0, 1], pieces: {p: {box: [3, 4, 0, 1, 0, 1]}}}\n"}) {
+    try {
+      SolvePrototype(ParsePrototype(bad, "pieces.yaml"));
+      FAIL() << bad;
+    } catch (const InputError& e) {
+      EXPECT_EQ(std::string(e.what()).rfind("pieces.yaml:2:", 0), 0u) << e.what();
+    }
+  }
 }
 
 }  // namespace

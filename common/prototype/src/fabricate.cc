@@ -2,8 +2,10 @@
 // (common/geometry) with swept volumes from common/swept.
 #include "fabatlas/prototype/fabricate.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 
 #include "fabatlas/error.h"
 #include "fabatlas/swept/swept_volume.h"
@@ -44,9 +46,81 @@ mesh::TriangleMesh BoxMesh(const std::array<double, 6>& b) {
   return m;
 }
 
+// Mated rails of a slide (Koo et al. Sec. 7: "we add mated rails that allow
+// the parts to move along the sliding vector"): a T-shaped tongue on the
+// child's rail face runs in a T-slot cut into the parent, over the travel of
+// every configuration. Sizes follow the depth t of parent material under
+// the rail face: unit u = clamp(t / 8, 2 voxels, 3 mm); stem 2u wide, flange
+// u high and overhanging the stem's slot by u on each side (2(2u + gap)
+// wide), the parent's lip over the flange u thick, clearance `gap` all
+// round. Throws InputError naming the joint when the parent is too thin or
+// the faces overlap too little across the rail.
+void SlideRails(const Prototype& p, const internal::Model& model, const SolveSummary& sol, const Eigen::VectorXd& x,
+                const Joint& j, const geometry::GridSpec& g, Solid& child, Solid& parent) {
+  const double gap = p.fabrication.gap, h = g.voxel_size;
+  const int s = j.axis, n = j.on[0][j.on[0].size() - 2] - 'x', w = 3 - s - n;
+  const double sigma = j.on[0].back() == '0' ? 1 : -1;  // the child lies on the +n side of the plane
+  const double P = model.Resolve(j.on[0], j.where).Eval(x);
+  auto cb = sol.cuboids.at(j.child), pb = sol.cuboids.at(j.parent);
+  // The parent's material under the plane: the parent's cuboid, or the
+  // cavity whose floor the child rides on.
+  std::string owner = j.on[1].substr(0, j.on[1].rfind('.'));
+  auto ob = sol.cuboids.at(owner);
+  // Depth of material under the rail face: down to the parent's far face or
+  // to the nearest other cavity over the rail's footprint.
+  double t = sigma > 0 ? P - pb[2 * n] : pb[2 * n + 1] - P;
+  for (const Cuboid& cav : p.parts[p.PartIndex(j.parent)].cavities) {
+    if (cav.name == owner) continue;
+    auto c = sol.cuboids.at(cav.name);
+    bool over = c[2 * w + 1] > cb[2 * w] && c[2 * w] < cb[2 * w + 1];
+    double depth = sigma > 0 ? P - c[2 * n + 1] : c[2 * n] - P;
+    if (over && depth >= 0) t = std::min(t, depth);
+  }
+  double u = std::clamp(t / 8, 2 * h, 3.0);
+  double a = u, bw = a + gap + u, ds = gap + u, hf = u;  // the flange overhangs the stem's slot by u
+  char msg[200];
+  if (ds + hf + gap > t - 2 * h) {
+    std::snprintf(msg, sizeof msg, "%s is %.2f mm deep under its rail face; rails need %.2f", j.parent.c_str(), t,
+                  ds + hf + gap + 2 * h);
+    throw InputError(j.where + ": slide " + j.name + ": " + msg);
+  }
+  double w0 = std::max(cb[2 * w], ob[2 * w]), w1 = std::min(cb[2 * w + 1], ob[2 * w + 1]);
+  if (w1 - w0 < 2 * (bw + gap) + 4 * h) {
+    std::snprintf(msg, sizeof msg, "%s and %s overlap by %.2f mm across the rail; rails need %.2f", j.child.c_str(),
+                  j.parent.c_str(), w1 - w0, 2 * (bw + gap) + 4 * h);
+    throw InputError(j.where + ": slide " + j.name + ": " + msg);
+  }
+  double wc = (w0 + w1) / 2;
+  double dmin = 0, dmax = 0;
+  for (const Configuration& c : p.configurations) {
+    double d = model.SlideValue(j, c).Eval(x);
+    dmin = std::min(dmin, d);
+    dmax = std::max(dmax, d);
+  }
+  // A box from s/w/n ranges; n as signed depths below the parent's printed
+  // face (positive into the parent).
+  const double face = P - sigma * gap / 2;
+  auto rail_box = [&](double s0, double s1, double wlo, double whi, double d0, double d1) {
+    Vec3 lo, hi;
+    lo[s] = s0, hi[s] = s1, lo[w] = wlo, hi[w] = whi;
+    lo[n] = std::min(face - sigma * d0, face - sigma * d1);
+    hi[n] = std::max(face - sigma * d0, face - sigma * d1);
+    return BoxAt(g, lo, hi);
+  };
+  double t0 = cb[2 * s] + gap, t1 = cb[2 * s + 1] - gap;
+  // Tongue: stem from a voxel into the child's printed face, flange at its foot.
+  child = Add(child, rail_box(t0, t1, wc - a, wc + a, -gap - h, ds + hf / 2));
+  child = Add(child, rail_box(t0, t1, wc - bw, wc + bw, ds, ds + hf));
+  // Slot over the travel.
+  double s0 = t0 + dmin - gap, s1 = t1 + dmax + gap;
+  parent = Cut(parent, rail_box(s0, s1, wc - a - gap, wc + a + gap, -gap - h, ds));
+  parent = Cut(parent, rail_box(s0, s1, wc - bw - gap, wc + bw + gap, ds - gap, ds + hf + gap));
+}
+
 }  // namespace
 
-Solid Fabricate(const Prototype& p, const SolveSummary& sol, const geometry::GridSpec& g, FabricateSummary* summary) {
+std::vector<FabricatedPiece> FabricatePieces(const Prototype& p, const SolveSummary& sol, const geometry::GridSpec& g,
+                                             FabricateSummary* summary) {
   auto start = std::chrono::steady_clock::now();
   if (!sol.satisfiable) throw InputError(p.file + ": cannot fabricate: " + sol.Explain());
   internal::Model model(p);
@@ -62,10 +136,30 @@ Solid Fabricate(const Prototype& p, const SolveSummary& sol, const geometry::Gri
   auto box_of = [&](const std::string& name) { return sol.cuboids.at(name); };
 
   // Parts shrunk by gap/2 on every face, so touching faces end up a gap apart;
-  // cavities grown by gap/2 and pushed through their open face.
+  // a piece joins the cuboid it is on through a bridge over their contact
+  // (the shrunk boxes of a face contact are a gap apart too); cavities grown
+  // by gap/2 and pushed through their open face.
+  for (std::size_t c = 0; c < model.cuboids.size(); ++c) {
+    if (!model.cuboid_solid[c]) continue;
+    const int i = model.cuboid_part[c];
+    auto b = box_of(model.cuboid_names[c]);
+    solids[i] = Add(solids[i], BoxAt(g, {b[0] + gap / 2, b[2] + gap / 2, b[4] + gap / 2},
+                                     {b[1] - gap / 2, b[3] - gap / 2, b[5] - gap / 2}));
+    if (static_cast<int>(c) == i) continue;
+    auto n = box_of(model.cuboids[c]->on);
+    Vec3 lo, hi;
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = std::max(b[2 * a], n[2 * a]) + gap / 2;
+      hi[a] = std::min(b[2 * a + 1], n[2 * a + 1]) - gap / 2;
+      if (hi[a] - lo[a] < h) {  // the contact axis: span the two gaps and a voxel into each
+        double plane = std::abs(b[2 * a] - n[2 * a + 1]) < std::abs(b[2 * a + 1] - n[2 * a]) ? b[2 * a] : b[2 * a + 1];
+        lo[a] = plane - gap / 2 - h;
+        hi[a] = plane + gap / 2 + h;
+      }
+    }
+    solids[i] = Add(solids[i], BoxAt(g, lo, hi));
+  }
   for (std::size_t i = 0; i < np; ++i) {
-    auto b = box_of(p.parts[i].name);
-    solids[i] = BoxAt(g, {b[0] + gap / 2, b[2] + gap / 2, b[4] + gap / 2}, {b[1] - gap / 2, b[3] - gap / 2, b[5] - gap / 2});
     for (const Cuboid& cav : p.parts[i].cavities) {
       auto c = box_of(cav.name);
       Vec3 lo{c[0] - gap / 2, c[2] - gap / 2, c[4] - gap / 2}, hi{c[1] + gap / 2, c[3] + gap / 2, c[5] + gap / 2};
@@ -83,12 +177,16 @@ Solid Fabricate(const Prototype& p, const SolveSummary& sol, const geometry::Gri
   // gap/2, is subtracted from the outer part.
   for (const Relationship& r : p.relationships) {
     if (r.type != RelationType::kFit) continue;
-    int outer = p.PartIndex(r.b[0]);
-    if (outer < 0) continue;  // into a user cavity: already hollow
+    int oc = model.CuboidIndex(r.b[0], r.where);
+    if (!model.cuboid_solid[oc]) continue;  // into a user cavity: already hollow
+    int outer = model.cuboid_part[oc];
     const Configuration& c = model.Config(r.configuration);
-    for (const std::string& in : r.a) {
-      int ip = p.PartIndex(in);
-      if (ip < 0) continue;
+    std::vector<int> inner;
+    for (const std::string& in : r.a)
+      for (int ci : model.SolidsOf(in, r.where)) inner.push_back(ci);
+    for (int ci : inner) {
+      int ip = model.cuboid_part[ci];
+      if (!model.cuboid_solid[ci]) continue;
       auto pose = [&](double t) {
         internal::Pose pa = model.PoseOf(ip, c, t), pb = model.PoseOf(outer, c, t);
         swept::Transform tr;
@@ -105,7 +203,7 @@ Solid Fabricate(const Prototype& p, const SolveSummary& sol, const geometry::Gri
         }
         return tr;
       };
-      mesh::TriangleMesh body = BoxMesh(box_of(in));
+      mesh::TriangleMesh body = BoxMesh(box_of(model.cuboid_names[ci]));
       swept::SweptVolumeOptions so;
       so.voxel_size = h;
       so.offset = gap / 2;
@@ -121,7 +219,7 @@ Solid Fabricate(const Prototype& p, const SolveSummary& sol, const geometry::Gri
   }
 
   // Joint geometry.
-  std::vector<Solid> extra;  // free pieces (links)
+  std::vector<std::pair<std::string, Solid>> extra;  // free pieces (links), by joint
   for (const Joint& j : p.joints) {
     int ci = p.PartIndex(j.child), pi = p.PartIndex(j.parent);
     auto cb = box_of(j.child), pb = box_of(j.parent);
@@ -208,19 +306,33 @@ Solid Fabricate(const Prototype& p, const SolveSummary& sol, const geometry::Gri
       bh[n] = l1;
       Solid link = geometry::Intersection(geometry::Capsule(g, a, b, R), BoxAt(g, bl, bh));
       for (const Vec3& u : {ua, ub}) link = Cut(link, CylinderAlong(g, n, rp + gap, l0 - h, l1 + h, u));
-      extra.push_back(link);
+      extra.push_back({j.name, link});
       fs.joint_pieces += 1;
     }
-    // Slide joints: the parts slide in a cavity (fit inside) or against
-    // each other; no rails are generated (docs/prototype.md).
+    if (j.type == JointType::kSlide && !j.on.empty()) {
+      SlideRails(p, model, sol, x, j, g, solids[ci], solids[pi]);
+      fs.joint_pieces += 1;
+    }
+    // A slide without rail faces runs tightly in a cavity (a fit inside):
+    // no extra geometry (Koo et al. Sec. 7).
   }
 
-  Solid all;
+  std::vector<FabricatedPiece> out;
   for (std::size_t i = 0; i < np; ++i) {
     fs.part_volumes[p.parts[i].name] = solids[i].empty() ? 0 : solids[i].Volume();
-    all = Add(all, solids[i]);
+    out.push_back({p.parts[i].name, solids[i]});
   }
-  for (const Solid& s : extra) all = Add(all, s);
+  for (auto& [name, s] : extra) out.push_back({"link:" + name, s});
+  fs.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  if (summary) *summary = fs;
+  return out;
+}
+
+Solid Fabricate(const Prototype& p, const SolveSummary& sol, const geometry::GridSpec& g, FabricateSummary* summary) {
+  auto start = std::chrono::steady_clock::now();
+  FabricateSummary fs;
+  Solid all;
+  for (const FabricatedPiece& piece : FabricatePieces(p, sol, g, &fs)) all = Add(all, piece.solid);
   fs.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   if (summary) *summary = fs;
   return all;

@@ -108,16 +108,45 @@ class Reader {
       part.where = Where(kv.first);
       if (proto_.PartIndex(part.name) >= 0) Fail(kv.first, "duplicate part '" + part.name + "'");
       if (part.name.find('.') != std::string::npos) Fail(kv.first, "part names cannot contain '.'");
-      Keys(kv.second, {"box", "cavities", "hold", "min_size"}, "part " + part.name);
+      Keys(kv.second, {"box", "pieces", "cavities", "hold", "min_size"}, "part " + part.name);
       part.cuboid = ReadCuboid(kv.second["box"], part.name);
       if (kv.second["min_size"]) part.min_size = Number(kv.second["min_size"], "min_size");
       if (const auto h = kv.second["hold"])
         for (const std::string& s : StrList(h, "hold")) part.held.push_back(CoordIndex(h, s));
+      // Piece and cavity names share the namespace of coordinates and measures.
+      std::set<std::string> inner_names{"x0", "x1", "y0", "y1", "z0", "z1", "w", "d", "h", "cx", "cy", "cz"};
+      if (const auto ps = kv.second["pieces"]) {
+        if (!ps.IsMap()) Fail(ps, "pieces must be a map name: {box, on, align}");
+        for (const auto& c : ps) {
+          Keys(c.second, {"box", "on", "align", "hold"}, "piece");
+          std::string n = c.first.as<std::string>();
+          if (!inner_names.insert(n).second)
+            Fail(c.first, "piece '" + n + "' of " + part.name + " repeats a name or is a coordinate name");
+          Cuboid piece = ReadCuboid(c.second["box"], part.name + "." + n);
+          piece.on = part.name;
+          if (c.second["on"]) {
+            std::string on = Str(c.second["on"], "on");
+            bool known = on == part.name;
+            for (const Cuboid& q : part.pieces) known |= q.name == part.name + "." + on;
+            if (!known) Fail(c.second["on"], "piece " + piece.name + ": 'on' must be the part or an earlier piece of it");
+            piece.on = on == part.name ? on : part.name + "." + on;
+          }
+          if (const auto h = c.second["hold"])
+            for (const std::string& s : StrList(h, "hold")) piece.held.push_back(CoordIndex(h, s));
+          if (const auto a = c.second["align"])
+            for (const std::string& s : StrList(a, "align")) piece.align.push_back(CoordIndex(a, s));
+          part.pieces.push_back(piece);
+        }
+      }
       if (const auto cs = kv.second["cavities"]) {
         if (!cs.IsMap()) Fail(cs, "cavities must be a map name: {box, open}");
         for (const auto& c : cs) {
-          Keys(c.second, {"box", "open"}, "cavity");
+          Keys(c.second, {"box", "open", "hold"}, "cavity");
+          if (!inner_names.insert(c.first.as<std::string>()).second)
+            Fail(c.first, "cavity '" + c.first.as<std::string>() + "' of " + part.name + " repeats a name or is a coordinate name");
           Cuboid cav = ReadCuboid(c.second["box"], part.name + "." + c.first.as<std::string>());
+          if (const auto h = c.second["hold"])
+            for (const std::string& s : StrList(h, "hold")) cav.held.push_back(CoordIndex(h, s));
           if (c.second["open"]) {
             cav.open = Str(c.second["open"], "open");
             CoordIndex(c.second["open"], cav.open);
@@ -149,7 +178,7 @@ class Reader {
       j.name = kv.first.as<std::string>();
       j.where = Where(kv.first);
       const auto n = kv.second;
-      Keys(n, {"type", "child", "parent", "axis", "at", "slide_axis", "face", "pivot_child", "pivot_parent"},
+      Keys(n, {"type", "child", "parent", "axis", "at", "slide_axis", "face", "pivot_child", "pivot_parent", "on"},
            "joint " + j.name);
       std::string type = Str(n["type"], "joint type");
       if (type == "hinge") j.type = JointType::kHinge;
@@ -184,6 +213,28 @@ class Reader {
         const auto at = n["at"];
         if (!at || !at.IsSequence() || at.size() != 2) Fail(at ? at : n, "'at' must list the edge's two coordinates");
         for (const auto& e : at) j.at.push_back(StrList(e, "at"));
+      }
+      if (n["on"]) {
+        if (j.type != JointType::kSlide) Fail(n["on"], "'on' (rail faces) is for slide joints");
+        j.on = StrList(n["on"], "on");
+        if (j.on.size() != 2) Fail(n["on"], "'on' must be [child face, parent face]");
+        std::string f[2];
+        for (int k = 0; k < 2; ++k) {
+          auto dot = j.on[k].rfind('.');
+          std::string owner = dot == std::string::npos ? "" : j.on[k].substr(0, dot);
+          f[k] = dot == std::string::npos ? "" : j.on[k].substr(dot + 1);
+          std::string part = owner.substr(0, owner.find('.'));
+          if (part != (k ? j.parent : j.child))
+            Fail(n["on"], "rail face '" + j.on[k] + "' must be a face of " + (k ? j.parent : j.child));
+          CoordIndex(n["on"], f[k]);
+        }
+        // A part's face looks away from the part, a cavity's into the cavity.
+        std::string owner = j.on[1].substr(0, j.on[1].rfind('.'));
+        bool cavity = false;
+        for (const Cuboid& c : proto_.parts[proto_.PartIndex(j.parent)].cavities) cavity |= c.name == owner;
+        if (f[0][0] != f[1][0] || (f[0] == f[1]) != cavity)
+          Fail(n["on"], "rail faces " + j.on[0] + " and " + j.on[1] + " must face each other on one axis");
+        if (f[0][0] - 'x' == j.axis) Fail(n["on"], "rail faces must be parallel to the slide axis");
       }
       if (j.type == JointType::kSlidingHinge) {
         j.slide_axis = Axis(n["slide_axis"], "slide_axis");

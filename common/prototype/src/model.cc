@@ -32,14 +32,17 @@ Model::Model(const Prototype& p) : proto(p) {
   for (std::size_t i = 0; i < p.parts.size(); ++i) {
     cuboid_names.push_back(p.parts[i].name);
     cuboid_part.push_back(static_cast<int>(i));
+    cuboid_solid.push_back(true);
     cuboids.push_back(&p.parts[i].cuboid);
   }
-  for (std::size_t i = 0; i < p.parts.size(); ++i)
-    for (const Cuboid& c : p.parts[i].cavities) {
-      cuboid_names.push_back(c.name);
-      cuboid_part.push_back(static_cast<int>(i));
-      cuboids.push_back(&c);
-    }
+  for (bool solid : {false, true})
+    for (std::size_t i = 0; i < p.parts.size(); ++i)
+      for (const Cuboid& c : solid ? p.parts[i].pieces : p.parts[i].cavities) {
+        cuboid_names.push_back(c.name);
+        cuboid_part.push_back(static_cast<int>(i));
+        cuboid_solid.push_back(solid);
+        cuboids.push_back(&c);
+      }
   std::vector<double> guesses;
   for (const Configuration& c : p.configurations)
     for (const auto& [jn, v] : c.values) {
@@ -85,6 +88,22 @@ int Model::CuboidIndex(const std::string& name, const std::string& where) const 
   throw InputError(where + ": unknown part or cavity '" + name + "'");
 }
 
+std::vector<int> Model::SolidsOf(const std::string& name, const std::string& where) const {
+  int c = CuboidIndex(name, where);
+  if (c != cuboid_part[c]) return {c};
+  std::vector<int> out;
+  for (std::size_t i = 0; i < cuboids.size(); ++i)
+    if (cuboid_part[i] == c && cuboid_solid[i]) out.push_back(static_cast<int>(i));
+  return out;
+}
+
+Affine Model::SlideValue(const Joint& j, const Configuration& c) const {
+  auto it = c.values.find(j.name);
+  if (it == c.values.end()) return Affine::Const(0);
+  if (it->second.slide == "free") return Affine::Var(FreeIndex(j.name + "@" + c.name + ".s"));
+  return ParseExpression(it->second.slide, j.where);
+}
+
 Affine Model::Resolve(const std::string& name, const std::string& where) const {
   if (auto it = proto.parameters.find(name); it != proto.parameters.end()) return Affine::Const(it->second);
   auto dot = name.rfind('.');
@@ -119,11 +138,7 @@ Pose Model::JointMotion(int ji, const Configuration& c, double s) const {
   bool set = it != c.values.end();
   if (set) v = it->second;
   Pose m;
-  auto slide_value = [&]() -> Affine {
-    if (!set) return Affine::Const(0);
-    if (v.slide == "free") return s * Affine::Var(FreeIndex(j.name + "@" + c.name + ".s"));
-    return s * ParseExpression(v.slide, j.where);
-  };
+  auto slide_value = [&]() -> Affine { return s * SlideValue(j, c); };
   auto rotate_about = [&](const Affine3& p) {
     m.t = Sub(p, Mul(m.R, p));
   };
@@ -338,11 +353,18 @@ struct Builder {
     int outer = m.CuboidIndex(r.b[0], r.where);
     int frame = m.cuboid_part[outer];
     Box ob = m.BoxIn(outer, c, frame);
+    // A part fits with all its solid cuboids; naming a piece ("lid.tab")
+    // makes the fit partial (Koo et al. Sec. 4.2, Fig. 4b).
     std::vector<Box> boxes;
-    for (const auto& s : r.a) {
-      int ci = m.CuboidIndex(s, r.where);
-      if (m.cuboid_part[ci] == frame) throw InputError(r.where + ": '" + s + "' cannot fit inside its own part");
-      boxes.push_back(m.BoxIn(ci, c, frame));
+    std::vector<std::string> names;
+    std::vector<int> entry;
+    for (std::size_t e = 0; e < r.a.size(); ++e) {
+      for (int ci : m.SolidsOf(r.a[e], r.where)) {
+        if (m.cuboid_part[ci] == frame) throw InputError(r.where + ": '" + r.a[e] + "' cannot fit inside its own part");
+        boxes.push_back(m.BoxIn(ci, c, frame));
+        names.push_back(m.cuboid_names[ci]);
+        entry.push_back(static_cast<int>(e));
+      }
     }
     for (int u : r.axes) {
       std::string ax(1, "xyz"[u]);
@@ -352,13 +374,13 @@ struct Builder {
         std::size_t extreme = 0;
         for (std::size_t i = 0; i < boxes.size(); ++i) {
           Affine g = side ? ob.hi[u] - boxes[i].hi[u] : boxes[i].lo[u] - ob.lo[u];
-          Ge(g, r.name + ": " + r.a[i] + " " + sname + " inside " + r.b[0]);
+          Ge(g, r.name + ": " + names[i] + " " + sname + " inside " + r.b[0]);
           double vi = V(side ? boxes[i].hi[u] : boxes[i].lo[u]), ve = V(side ? boxes[extreme].hi[u] : boxes[extreme].lo[u]);
           if (side ? vi > ve : vi < ve) extreme = i;
         }
         if (just) {
           Affine g = side ? ob.hi[u] - boxes[extreme].hi[u] : boxes[extreme].lo[u] - ob.lo[u];
-          Eq(g, r.name + ": " + r.a[extreme] + " just fits " + r.b[0] + " at " + sname);
+          Eq(g, r.name + ": " + names[extreme] + " just fits " + r.b[0] + " at " + sname);
         }
       }
     }
@@ -366,6 +388,7 @@ struct Builder {
     // where the user's arrangement separates them most (Koo et al. Sec. 5.2).
     for (std::size_t i = 0; i < boxes.size(); ++i)
       for (std::size_t j = i + 1; j < boxes.size(); ++j) {
+        if (entry[i] == entry[j]) continue;  // cuboids of one part
         int best_u = 0;
         bool j_after = true;
         double best = -1e18;
@@ -376,7 +399,7 @@ struct Builder {
         }
         const Box& first = j_after ? boxes[i] : boxes[j];
         const Box& second = j_after ? boxes[j] : boxes[i];
-        Ge(second.lo[best_u] - first.hi[best_u], r.name + ": " + r.a[i] + " and " + r.a[j] + " apart along " + "xyz"[best_u]);
+        Ge(second.lo[best_u] - first.hi[best_u], r.name + ": " + names[i] + " and " + names[j] + " apart along " + "xyz"[best_u]);
       }
   }
 
@@ -439,7 +462,7 @@ void Model::Build(std::vector<LinearConstraint>& out, std::vector<std::string>& 
     for (int ax = 0; ax < 3; ++ax)
       b.Ge(Affine::Var(6 * c + 2 * ax + 1) - Affine::Var(6 * c + 2 * ax) - Affine::Const(part.min_size),
            cuboid_names[c] + " " + "xyz"[ax] + " extent >= " + std::to_string(part.min_size));
-    if (static_cast<int>(c) != cuboid_part[c]) {  // a cavity: inside its part, open face on the part's face
+    if (!cuboid_solid[c]) {  // a cavity: inside its part, open face on the part's face
       int p = cuboid_part[c];
       for (int k = 0; k < 6; ++k) {
         Affine g = Affine::Var(6 * c + k) - Affine::Var(6 * p + k);
@@ -449,13 +472,48 @@ void Model::Build(std::vector<LinearConstraint>& out, std::vector<std::string>& 
       }
     }
   }
-  for (const Part& part : proto.parts) {
-    if (part.held.empty()) continue;
-    int c = proto.PartIndex(part.name);
-    b.Group("held coordinates of " + part.name + " (" + part.where + ")");
-    for (int k : part.held)
-      b.Eq(Affine::Var(6 * c + k) - Affine::Const(part.cuboid.box[k]),
-           part.name + "." + kCoord[k] + " held at " + std::to_string(part.cuboid.box[k]));
+  // Pieces stay connected to the cuboid they are on: a face contact of the
+  // user's arrangement (within 0.5 mm) stays a contact and the two overlap
+  // by >= min_size across it; cuboids that overlap keep overlapping by
+  // >= min_size on every axis. `align` coordinates stay equal.
+  for (std::size_t c = 0; c < cuboids.size(); ++c) {
+    if (!cuboid_solid[c] || static_cast<int>(c) == cuboid_part[c]) continue;
+    const Part& part = proto.parts[cuboid_part[c]];
+    int nb = CuboidIndex(cuboids[c]->on, part.where);
+    b.Group("connection of " + cuboid_names[c] + " to " + cuboid_names[nb] + " (" + part.where + ")");
+    auto var = [&](int cu, int k) { return Affine::Var(6 * cu + k); };
+    int contact = -1, side = 0;
+    bool overlaps = true;
+    for (int ax = 0; ax < 3; ++ax) {
+      double q0 = base[6 * c + 2 * ax], q1 = base[6 * c + 2 * ax + 1];
+      double n0 = base[6 * nb + 2 * ax], n1 = base[6 * nb + 2 * ax + 1];
+      if (std::abs(q0 - n1) <= 0.5) { contact = ax; side = 0; }
+      else if (std::abs(q1 - n0) <= 0.5) { contact = ax; side = 1; }
+      else overlaps &= std::min(q1, n1) - std::max(q0, n0) > 0;
+    }
+    if (contact < 0 && !overlaps)
+      throw InputError(part.where + ": piece " + cuboid_names[c] + " neither touches nor overlaps " + cuboid_names[nb]);
+    for (int ax = 0; ax < 3; ++ax) {
+      std::string a(1, "xyz"[ax]);
+      if (ax == contact) {
+        if (side == 0) b.Eq(var(c, 2 * ax) - var(nb, 2 * ax + 1), cuboid_names[c] + "." + a + "0 on " + cuboid_names[nb] + "." + a + "1");
+        else b.Eq(var(nb, 2 * ax) - var(c, 2 * ax + 1), cuboid_names[c] + "." + a + "1 on " + cuboid_names[nb] + "." + a + "0");
+        continue;
+      }
+      b.Ge(var(c, 2 * ax + 1) - var(nb, 2 * ax) - Affine::Const(part.min_size), cuboid_names[c] + " overlaps " + cuboid_names[nb] + " in " + a);
+      b.Ge(var(nb, 2 * ax + 1) - var(c, 2 * ax) - Affine::Const(part.min_size), cuboid_names[c] + " overlaps " + cuboid_names[nb] + " in " + a);
+    }
+    for (int k : cuboids[c]->align)
+      b.Eq(var(c, k) - var(nb, k), cuboid_names[c] + "." + kCoord[k] + " aligned with " + cuboid_names[nb]);
+  }
+  for (std::size_t c = 0; c < cuboids.size(); ++c) {
+    const Part& part = proto.parts[cuboid_part[c]];
+    const std::vector<int>& held = static_cast<int>(c) == cuboid_part[c] ? part.held : cuboids[c]->held;
+    if (held.empty()) continue;
+    b.Group("held coordinates of " + cuboid_names[c] + " (" + part.where + ")");
+    for (int k : held)
+      b.Eq(Affine::Var(6 * c + k) - Affine::Const(cuboids[c]->box[k]),
+           cuboid_names[c] + "." + kCoord[k] + " held at " + std::to_string(cuboids[c]->box[k]));
   }
   for (const Joint& j : proto.joints) {
     if (j.type == JointType::kDoublePivot) {
@@ -466,6 +524,24 @@ void Model::Build(std::vector<LinearConstraint>& out, std::vector<std::string>& 
       b.Group("attachment of joint " + j.name + " (" + j.where + ")");
       b.Eq(Affine::Var(6 * c + k) - Affine::Var(6 * pa + k),
            j.name + ": " + j.child + "." + j.face + " coplanar with " + j.parent + "." + j.face);
+      continue;
+    }
+    if (j.type == JointType::kSlide && !j.on.empty()) {
+      // Rails (Koo et al. Sec. 7): the two faces coplanar, and in every
+      // configuration the child still overlaps the parent along the slide
+      // by >= its min_size, so the rail stays in its groove.
+      b.Group("attachment of joint " + j.name + " (" + j.where + ")");
+      b.Eq(Resolve(j.on[0], j.where) - Resolve(j.on[1], j.where), j.name + ": " + j.on[0] + " on " + j.on[1]);
+      int c = proto.PartIndex(j.child), pa = proto.PartIndex(j.parent);
+      double m = proto.parts[c].min_size;
+      for (const Configuration& conf : proto.configurations) {
+        Affine d = SlideValue(j, conf);
+        int s = j.axis;
+        b.Ge(Affine::Var(6 * c + 2 * s + 1) + d - Affine::Var(6 * pa + 2 * s) - Affine::Const(m),
+             j.name + ": " + j.child + " on " + j.parent + " in '" + conf.name + "' (" + "xyz"[s] + "0)");
+        b.Ge(Affine::Var(6 * pa + 2 * s + 1) - Affine::Var(6 * c + 2 * s) - d - Affine::Const(m),
+             j.name + ": " + j.child + " on " + j.parent + " in '" + conf.name + "' (" + "xyz"[s] + "1)");
+      }
       continue;
     }
     bool any = false;

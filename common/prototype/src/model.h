@@ -49,14 +49,20 @@ class Model {
   explicit Model(const Prototype& p);
 
   const Prototype& proto;
-  std::vector<std::string> cuboid_names;  // "part" or "part.cavity"
+  // Parts first (cuboid i = part i), then cavities, then pieces.
+  std::vector<std::string> cuboid_names;  // "part", "part.cavity" or "part.piece"
   std::vector<int> cuboid_part;
+  std::vector<bool> cuboid_solid;         // part or piece (not a cavity)
   std::vector<const Cuboid*> cuboids;
   int variables = 0;
   Eigen::VectorXd base, weight;           // target and weight of the deviation energy
   std::vector<std::string> free_names;    // "joint@config.k", variable = 6*cuboids + i
 
   int CuboidIndex(const std::string& name, const std::string& where) const;
+  // `name` is a part: its solid cuboids; a piece or cavity: itself.
+  std::vector<int> SolidsOf(const std::string& name, const std::string& where) const;
+  // A slide's travel along its axis in configuration c (0 when not set).
+  Affine SlideValue(const Joint& j, const Configuration& c) const;
   // Base coordinate refs for expressions: part.x0 .. part.z1, part.w/.d/.h
   // (extents), part.cx/.cy/.cz (centres), the same for part.cavity.*, and
   // parameters as constants.

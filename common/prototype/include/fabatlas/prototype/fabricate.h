@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <map>
 #include <string>
+#include <vector>
 
 #include "fabatlas/geometry/solid.h"
 #include "fabatlas/prototype/prototype.h"
@@ -22,7 +23,19 @@ struct FabricateSummary {
   double seconds = 0;
 };
 
+struct FabricatedPiece {
+  std::string name;        // a part's name (with its joint pieces), or "link:<joint>" for a double-pivot link
+  geometry::Solid solid;   // base configuration, world mm
+};
+
+// The printable pieces one by one, parts in file order, then the links; for
+// checking the parts against each other (e.g. along a joint's motion).
 // Throws InputError if `solution` is not satisfiable.
+std::vector<FabricatedPiece> FabricatePieces(const Prototype& p, const SolveSummary& solution,
+                                             const geometry::GridSpec& grid, FabricateSummary* summary = nullptr);
+
+// Their union, the printable model. Throws InputError if `solution` is not
+// satisfiable.
 geometry::Solid Fabricate(const Prototype& p, const SolveSummary& solution, const geometry::GridSpec& grid,
                           FabricateSummary* summary = nullptr);
 

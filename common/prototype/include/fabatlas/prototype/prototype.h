@@ -17,14 +17,22 @@
 namespace fabatlas::prototype {
 
 struct Cuboid {
-  std::string name;              // part name, or "part.cavity" for a cavity
+  std::string name;              // part name, "part.cavity" for a cavity, "part.piece" for a piece
   std::array<double, 6> box{};   // x0 x1 y0 y1 z0 z1, base configuration
   std::string open;              // cavity only: face ("y0", ...) that lies on the part's face
+  std::vector<int> held;         // piece or cavity: coordinates (0..5) held at their base value
+  // Piece only (a further solid cuboid of the part, Koo et al. Sec. 3: "each
+  // part consists of one or more axis-aligned connected cuboids"): the cuboid
+  // it is connected to ("part" or "part.piece", default the part's first
+  // cuboid) and coordinates kept equal to that cuboid's (e.g. "x0").
+  std::string on;
+  std::vector<int> align;
 };
 
 struct Part {
   std::string name;
-  Cuboid cuboid;
+  Cuboid cuboid;                     // the part's first cuboid (joints attach to it)
+  std::vector<Cuboid> pieces;        // further solid cuboids, connected to it, move with the part
   std::vector<Cuboid> cavities;      // user cavities, move with the part
   std::vector<int> held;             // coordinates (0..5) held at their base value (a user edit)
   double min_size = 1.0;             // every extent >= this, mm
@@ -40,6 +48,11 @@ struct Joint {
   std::string child, parent;
   int axis = 2;                                // hinge / sliding hinge rotation axis; slide direction
   int slide_axis = 0;                          // sliding hinge: translation direction
+  // Slide: the child's and the parent's faces the rails run between
+  // ("drawer.z0", "body.z1"); held coplanar, and the child stays on the parent
+  // along the slide in every configuration. Empty: the child slides tightly
+  // in the parent (a fit inside), no rails (Koo et al. Sec. 7).
+  std::vector<std::string> on;
   // Hinge edge: for the two axes other than `axis` (in increasing order), the
   // coordinate refs ("door.x0"); the first of each list places the edge, the
   // others are held equal to it (the joint stays attached).
@@ -100,6 +113,14 @@ struct Prototype {
 
   int PartIndex(const std::string& name) const;  // -1 if absent
 };
+
+// A discrete edit (Koo et al. Sec. 6, the jewellery box of Sec. 8): the
+// prototype without `part`, the parts hanging from it by joints, their joints
+// and configuration values; relationships lose the faces and parts of the
+// removed parts and are dropped when nothing of one side is left (a flush or
+// geometric constraint naming a removed part is dropped). Solve the result
+// to update the remaining parts. Throws InputError for an unknown part.
+Prototype RemovePart(const Prototype& p, const std::string& part);
 
 // Reads a prototype file; `overrides` replace parameter values (unknown names
 // are an error). Throws fabatlas::InputError "file:line:col: message".

@@ -37,7 +37,7 @@ struct SolveSummary {
   std::string Explain() const;  // one line
   double max_violation = 0;     // mm, at the returned solution
 
-  std::map<std::string, std::array<double, 6>> cuboids;  // solved boxes: parts and "part.cavity"
+  std::map<std::string, std::array<double, 6>> cuboids;  // solved boxes: parts, "part.piece" and "part.cavity"
   std::map<std::string, double> free_values;             // solved free joint values "joint@config.k"
   std::vector<PivotSolution> pivots;
   double deviation = 0;          // sqrt(sum (B - B_base)^2), mm
