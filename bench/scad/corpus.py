@@ -27,7 +27,7 @@ design beside nothing else,
     tree: {op: openscad, file: /abs/MODEL.scad}
     properties: [volume]
 
-and `fabatlas eval DESIGN.yaml --json --mesh OURS.stl` (limited to
+and `fabatlas eval DESIGN.yaml --json --mesh OURS.off` (OFF keeps doubles; a float32 STL would round a 5e-6 mm^3 sliver by 0.7%) (limited to
 --timeout seconds). `fabatlas eval MODEL.scad` itself imports the model's
 Customizer parameters and declines a model that has none ("no Customizer
 parameter has a slider or dropdown annotation"), which is most of the corpus;
@@ -187,7 +187,7 @@ def voxel_for(size, fixed):
 def fabatlas(name, model, fab, work, timeout, voxel, size):
     d = os.path.join(work, re.sub(r"[^A-Za-z0-9_.-]", "_", name))
     os.makedirs(d, exist_ok=True)
-    design, ours = os.path.join(d, "design.yaml"), os.path.join(d, "ours.stl")
+    design, ours = os.path.join(d, "design.yaml"), os.path.join(d, "ours.off")  # doubles: a float STL rounds slivers
     if os.path.exists(ours):
         os.remove(ours)
     v = voxel_for(size, voxel)
