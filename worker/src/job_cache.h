@@ -10,6 +10,7 @@
 #include <memory>
 #include <mutex>
 #include <optional>
+#include <set>
 #include <string>
 
 #include "fabatlas/precompute/design_evaluator.h"
@@ -28,6 +29,10 @@ struct JobContext {
   std::map<std::string, double> last_seconds;
   // Subtree key -> blob digest, for the subtrees this worker uploaded.
   std::map<std::string, std::string> subtree_blobs;
+  // Warnings of the model's evaluation (OpenSCAD's rules where input is
+  // odd) already written to this worker's log: each once per job, not per
+  // sample.
+  std::set<std::string> logged_warnings;
   SolidShelf shelf;
 };
 

@@ -6,6 +6,7 @@
 #include "fabatlas/design/design.h"
 #include "fabatlas/design/evaluate_sample.h"
 #include "fabatlas/error.h"
+#include "fabatlas/log/log.h"
 #include "fabatlas/precompute/design_evaluator.h"
 #include "fabatlas/protocol/blob_transfer.h"
 #include "fabatlas/protocol/cache_plan.h"
@@ -147,6 +148,9 @@ v1::TaskResult Worker::EvaluateSample(JobContext& ctx, const sampling::SamplePoi
   v1::TaskResult result = protocol::SampleResultOf(outcome);
   v1::SampleResult* sample = result.mutable_sample();
   std::lock_guard lock(ctx.mu);
+  for (const std::string& w : r.warnings)
+    if (ctx.logged_warnings.size() < 1000 && ctx.logged_warnings.insert(w).second)
+      log::Warn("sample_warning", {{"warning", w}});
   for (const design::SubtreeRecord& rec : r.subtrees) {
     v1::SubtreeRecord* out = sample->add_subtrees();
     out->set_key(rec.key);
