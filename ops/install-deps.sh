@@ -29,6 +29,8 @@ APT_PACKAGES=(
   python3-distributed
   # tests: certificates made by the TLS test, the journal syncs --fsync-commits makes
   openssl strace
+  # a peer's mesh volumes: ADMesh, for the FabHacks volumes of tests/mesh (fabhacks_admesh_volumes.sh)
+  admesh
 )
 # Node.js and npm: the machine's own if present, else Debian's.
 command -v npm >/dev/null 2>&1 || APT_PACKAGES+=(nodejs npm)

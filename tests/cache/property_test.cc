@@ -169,6 +169,10 @@ TEST(ExactCache, ExactOptimumNeverLosesToOptMaxOnSmallGraphs) {
                     ex.cost.worst_seconds, ex.objective, (unsigned long long)ex.cost.bytes, max.cost.worst_seconds,
                     (unsigned long long)max.cost.bytes, (unsigned long long)o.budget_bytes);
       ++cases;
+      // Both caches hold something and shorten the worst preview, so the
+      // comparison below is not one an empty answer passes.
+      EXPECT_FALSE(max.chosen.empty());
+      EXPECT_LT(ex.cost.worst_seconds, r.none.worst_seconds - 1e-9) << "seed " << seed << " f " << f;
       EXPECT_LE(ex.cost.bytes, o.budget_bytes);
       EXPECT_NEAR(ex.cost.worst_seconds, ex.objective, 1e-6);
       EXPECT_LE(ex.cost.worst_seconds, max.cost.worst_seconds + 1e-9);
@@ -181,6 +185,51 @@ TEST(ExactCache, ExactOptimumNeverLosesToOptMaxOnSmallGraphs) {
   EXPECT_EQ(cases, 16);
   std::printf("OPT-MAX worst case vs the optimum over %d programs: optimal in %d, mean gap %.1f %%, max gap %.1f %%\n",
               cases, optimal_hits, 100 * gap_sum / cases, 100 * gap_max);
+}
+
+// The exact optimum against exhaustive search: on the random graphs of two
+// samples with at most 20 candidate nodes (seeds 1-30) every cache within
+// the budget is evaluated (EvaluateCache, not GLPK) and the least worst case
+// must be the solver's objective. Where a cache helps at all (the optimum
+// below the empty cache's worst case, at least 10 cases required) the
+// solver's cache is non-empty.
+TEST(ExactCache, ExactOptimumIsTheExhaustiveSearchOptimumOnTinyGraphs) {
+  int cases = 0, helped = 0;
+  for (std::uint64_t seed = 1; seed <= 30; ++seed) {
+    const DependencyGraph g = RandomGraph(seed, 2);
+    const CacheReport r = PlanCache(g);
+    std::vector<std::int32_t> candidates;
+    for (std::int32_t i = 0; i < g.node_count(); ++i)
+      if (g.stored[static_cast<std::size_t>(i)]) candidates.push_back(i);
+    if (candidates.size() > 20) continue;  // 2^20 caches at most
+    for (double f : {0.2, 0.5, 0.8}) {
+      ExactCacheOptions e;
+      e.min_seconds = 0;
+      e.budget_bytes = static_cast<std::uint64_t>(f * static_cast<double>(r.rfree.bytes));
+      const ExactCacheSummary ex = SolveExactCache(g, e);
+      ASSERT_TRUE(ex.optimal) << ex.message;
+      double best = r.none.worst_seconds;
+      CacheSet cache(static_cast<std::size_t>(g.node_count()), 0);
+      for (std::uint32_t subset = 0; subset < (1u << candidates.size()); ++subset) {
+        std::uint64_t bytes = 0;
+        for (std::size_t k = 0; k < candidates.size(); ++k) {
+          const bool in = (subset >> k) & 1u;
+          cache[static_cast<std::size_t>(candidates[k])] = in;
+          if (in) bytes += g.bytes[static_cast<std::size_t>(candidates[k])];
+        }
+        if (bytes <= e.budget_bytes) best = std::min(best, EvaluateCache(g, cache).worst_seconds);
+      }
+      EXPECT_NEAR(ex.cost.worst_seconds, best, 1e-9) << "seed " << seed << " f " << f;
+      EXPECT_LE(ex.cost.bytes, e.budget_bytes);
+      ++cases;
+      if (best < r.none.worst_seconds - 1e-9) {
+        ++helped;
+        EXPECT_GT(std::count(ex.cache.begin(), ex.cache.end(), 1), 0) << "seed " << seed << " f " << f;
+      }
+    }
+  }
+  std::printf("exhaustive search: %d programs, a cache helps in %d\n", cases, helped);
+  EXPECT_GE(helped, 10);
 }
 
 }  // namespace

@@ -17,6 +17,7 @@
 #include <random>
 #include <set>
 #include <sstream>
+#include <thread>
 
 #include "cluster_job.h"
 #include "cluster_process.h"
@@ -568,6 +569,163 @@ TEST(ClusterFaults, LateResultOfAnExpiredReissuedLeaseIsFencedNotStored) {
   for (pid_t p : workers) ::kill(p, SIGTERM);
   for (pid_t p : workers) EXPECT_EQ(WaitExit(p, std::chrono::seconds(30)), 0);
   StopAndCheckStore(c, dir / "state", id);
+}
+
+// Heartbeat (worker.proto "Leases"): a task that runs three times longer
+// than its lease (1.5 s) keeps it while its worker sends heartbeats: no
+// expiry, no second attempt, and the result is accepted as the lease's.
+// A worker that stops its heartbeats loses the lease at its deadline, and
+// its next heartbeat is answered with the lease revoked.
+TEST(ClusterFaults, HeartbeatsKeepALeaseTheTaskOutlivesAndALapsedOneIsRevoked) {
+  fs::path dir = FreshDir("heartbeat");
+  CoordinatorProcess c = StartCoordinator(dir / "state", 0, kFastLeases);
+  ASSERT_GT(c.port, 0) << ReadText(dir / "state/coordinator.log");
+  const fs::path db = dir / "state/state.db";
+  const std::string id = Client(c.port).Submit(JobPath());
+  auto stub = v1::WorkerService::NewStub(protocol::MakeChannel("127.0.0.1:" + std::to_string(c.port), {}));
+  const auto heartbeat = [&](const std::string& worker, const std::string& lease_id) {
+    grpc::ClientContext ctx;
+    protocol::Prepare(ctx, {}, std::chrono::seconds(5));
+    v1::HeartbeatRequest req;
+    req.set_worker_id(worker);
+    req.add_lease_ids(lease_id);
+    v1::HeartbeatResponse resp;
+    grpc::Status s = stub->Heartbeat(&ctx, req, &resp);
+    EXPECT_TRUE(s.ok()) << s.error_message();
+    return std::vector<std::string>(resp.revoked_lease_ids().begin(), resp.revoked_lease_ids().end());
+  };
+  const auto lease_for = [&](const std::string& worker) {
+    v1::Lease lease;
+    for (int i = 0; i < 20 && lease.lease_id().empty(); ++i) {
+      v1::SyncResponse r = SyncAs(c.port, worker, 1, {}, 2000);
+      if (r.leases_size() > 0) lease = r.leases(0);
+    }
+    return lease;
+  };
+
+  const v1::Lease slow = lease_for("slow");
+  ASSERT_FALSE(slow.lease_id().empty());
+  ASSERT_EQ(slow.attempt(), 1);
+  const auto start = std::chrono::steady_clock::now();
+  while (std::chrono::steady_clock::now() - start < std::chrono::milliseconds(4500)) {
+    EXPECT_EQ(heartbeat("slow", slow.lease_id()), std::vector<std::string>{});
+    std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  }
+  EXPECT_EQ(Client(c.port).Status(id).lease_expiries(), 0);
+  TaskRow row = ReadTaskRow(db, slow.task_key());
+  EXPECT_EQ(row.state, 1);  // still leased, to the same attempt
+  EXPECT_EQ(row.attempt, 1);
+  v1::CompletedTask done;
+  done.set_lease_id(slow.lease_id());
+  done.set_task_key(slow.task_key());
+  done.set_attempt(slow.attempt());
+  done.mutable_result()->mutable_sample()->set_valid(false);
+  done.mutable_result()->mutable_sample()->set_failure_type("heartbeat_probe");
+  v1::SyncResponse ack = SyncAs(c.port, "slow", 0, {done});
+  ASSERT_EQ(ack.acknowledged_lease_ids_size(), 1);
+  row = ReadTaskRow(db, slow.task_key());
+  EXPECT_EQ(row.state, 2);  // done, by the first attempt
+  EXPECT_EQ(row.completions, 1);
+  EXPECT_EQ(row.fenced, 0);
+  ASSERT_EQ(row.leases.size(), 1u);
+  EXPECT_EQ(row.leases[0], std::make_tuple(std::string("slow"), std::int64_t{1}, std::string("completed")));
+
+  // A worker that goes silent: its lease expires, its late heartbeat is
+  // told so, and the task is queued for a second attempt.
+  const v1::Lease lapsed = lease_for("lapsed");
+  ASSERT_FALSE(lapsed.lease_id().empty());
+  v1::JobStatus s;
+  for (int i = 0; i < 600 && s.lease_expiries() == 0; ++i) {
+    s = Client(c.port).Status(id);
+    if (s.lease_expiries() == 0) std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  ASSERT_EQ(s.lease_expiries(), 1);
+  EXPECT_EQ(heartbeat("lapsed", lapsed.lease_id()), std::vector<std::string>{lapsed.lease_id()});
+  row = ReadTaskRow(db, lapsed.task_key());
+  EXPECT_NE(row.state, 2);
+  EXPECT_EQ(row.completions, 0);
+  ASSERT_EQ(row.leases.size(), 1u);
+  EXPECT_EQ(std::get<2>(row.leases[0]), "expired");
+  KillAndReap(c.pid);
+}
+
+// FetchSolid (worker.proto) when the holder is gone: a holder the
+// coordinator never heard of is answered "not available" at once; a holder
+// that went silent after asking for work is answered so once it is
+// declared lost (one lease period, 1.5 s), not after the caller's 10 s wait.
+// The same request to a holder that answers gets its bytes (the control).
+TEST(ClusterFaults, FetchSolidFromAHolderThatIsGoneAnswersNotAvailable) {
+  fs::path dir = FreshDir("fetch_solid");
+  CoordinatorProcess c = StartCoordinator(dir / "state", 0, kFastLeases);
+  ASSERT_GT(c.port, 0) << ReadText(dir / "state/coordinator.log");
+  auto stub = v1::WorkerService::NewStub(protocol::MakeChannel("127.0.0.1:" + std::to_string(c.port), {}));
+  v1::SolidRef ref;
+  ref.set_job_bundle_digest(Sha256Hex("a bundle"));
+  ref.add_point_key(3);
+  ref.add_point_key(7);
+  const auto fetch = [&](const std::string& holder, double* seconds) {
+    grpc::ClientContext ctx;
+    protocol::Prepare(ctx, {}, std::chrono::seconds(30));
+    v1::FetchSolidRequest req;
+    req.set_worker_id("asker");
+    *req.mutable_solid() = ref;
+    req.set_holder_worker_id(holder);
+    req.set_max_wait_ms(10000);
+    v1::FetchSolidResponse resp;
+    const auto t0 = std::chrono::steady_clock::now();
+    grpc::Status s = stub->FetchSolid(&ctx, req, &resp);
+    *seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    EXPECT_TRUE(s.ok()) << s.error_message();
+    return resp;
+  };
+  const auto share = [&](const std::string& holder, const std::vector<v1::SharedSolid>& shared, int wait_ms) {
+    auto own = v1::WorkerService::NewStub(protocol::MakeChannel("127.0.0.1:" + std::to_string(c.port), {}));
+    grpc::ClientContext ctx;
+    protocol::Prepare(ctx, {}, std::chrono::milliseconds(wait_ms + 10000));
+    v1::ShareSolidsRequest req;
+    req.set_worker_id(holder);
+    for (const auto& x : shared) *req.add_shared() = x;
+    req.set_max_wait_ms(wait_ms);
+    v1::ShareSolidsResponse resp;
+    EXPECT_TRUE(own->ShareSolids(&ctx, req, &resp).ok());
+    return resp;
+  };
+
+  // 1. Never heard of: at once, neither bytes nor digest.
+  double seconds = 0;
+  v1::FetchSolidResponse r = fetch("nobody", &seconds);
+  EXPECT_TRUE(r.digest().empty());
+  EXPECT_TRUE(r.blob().empty());
+  EXPECT_LT(seconds, 1.0);
+
+  // 2. The control: a holder whose sharing loop answers sends the bytes.
+  SyncAs(c.port, "holder", 0);
+  share("holder", {}, 0);
+  std::thread loop([&] {
+    v1::ShareSolidsResponse wanted = share("holder", {}, 10000);
+    ASSERT_EQ(wanted.wanted_size(), 1);
+    v1::SharedSolid answer;
+    *answer.mutable_solid() = wanted.wanted(0);
+    answer.set_blob("the solid's bytes");
+    share("holder", {answer}, 0);
+  });
+  r = fetch("holder", &seconds);
+  loop.join();
+  EXPECT_EQ(r.blob(), "the solid's bytes");
+
+  // 3. The holder asked for work and polled once, then went silent (killed
+  // or partitioned): the request waits until the holder is lost, then
+  // "not available".
+  SyncAs(c.port, "silent", 0);
+  share("silent", {}, 0);
+  r = fetch("silent", &seconds);
+  EXPECT_TRUE(r.digest().empty());
+  EXPECT_TRUE(r.blob().empty());
+  std::printf("FetchSolid from a silent holder: not available after %.2f s of a 10 s wait\n", seconds);
+  EXPECT_GE(seconds, 1.0);
+  EXPECT_LT(seconds, 5.0) << "the caller waited for a holder already lost";
+  EXPECT_NE(ReadText(dir / "state/coordinator.log").find("worker_lost"), std::string::npos);
+  KillAndReap(c.pid);
 }
 
 TEST(ClusterFaults, CoordinatorKilledThreeTimesResumesByReplay) {

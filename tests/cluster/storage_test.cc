@@ -1,7 +1,9 @@
 // The durable job store and the blob store: leases, fencing, quarantine,
 // durability across reopen, content addresses and resumable uploads.
 #include <gtest/gtest.h>
+#include <fcntl.h>
 #include <sqlite3.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -689,6 +691,59 @@ TEST(ClusterStorage, ReferencedBlobsAndCollection) {
   // Touch makes an old blob new again.
   EXPECT_TRUE(blobs.Touch(bundle));
   EXPECT_FALSE(blobs.Touch(stray));
+}
+
+// The partial-upload grace of Collect (blob_store.h): a partial upload is
+// kept while it was touched within a day of the cutoff, whatever `keep`
+// says, so an upload paused by a worker's restart or a partition can resume;
+// past the day it goes, and so does an unreferenced finished blob as old.
+// Ages are set on the files (utimensat) one hour either side of the day.
+TEST(ClusterStorage, CollectKeepsAPartialUploadForADayThenRemovesIt) {
+  fs::path dir = FreshDir("collect_grace");
+  BlobStore blobs(dir / "blobs");
+  const std::string data = "bytes of an upload that paused half way";
+  const std::string digest = fabatlas::Sha256Hex(data);
+  ASSERT_EQ(blobs.Append(digest, 0, data.substr(0, 10)), 10);
+  const std::string finished = blobs.Put("an unreferenced finished blob");
+  const fs::path partial = dir / "blobs/partial" / digest;
+  ASSERT_TRUE(fs::exists(partial));
+  const std::int64_t now_ms = std::chrono::duration_cast<std::chrono::milliseconds>(
+                                  std::chrono::system_clock::now().time_since_epoch()).count();
+  const std::int64_t day_ms = 86400000, hour_ms = 3600000;
+  const auto set_age = [&](const fs::path& file, std::int64_t modified_ms) {
+    timespec times[2];
+    times[0].tv_sec = times[1].tv_sec = modified_ms / 1000;
+    times[0].tv_nsec = times[1].tv_nsec = (modified_ms % 1000) * 1000000;
+    ASSERT_EQ(::utimensat(AT_FDCWD, file.c_str(), times, 0), 0) << file;
+  };
+  // 23 hours before the cutoff: the partial upload stays, the finished
+  // blob (older than the cutoff, referenced by nothing) goes.
+  const std::int64_t cutoff = now_ms;
+  set_age(partial, cutoff - day_ms + hour_ms);
+  set_age(blobs.PathOf(finished), cutoff - day_ms + hour_ms);
+  BlobStore::Collection c = blobs.Collect({}, cutoff);
+  EXPECT_EQ(c.blobs_removed, 1);
+  EXPECT_EQ(c.blobs_kept, 1);
+  EXPECT_FALSE(blobs.Contains(finished));
+  EXPECT_TRUE(fs::exists(partial));
+  EXPECT_EQ(blobs.CommittedSize(digest), 10);
+  // It resumes where it stopped and is published whole.
+  EXPECT_EQ(blobs.Append(digest, 10, data.substr(10)), static_cast<std::int64_t>(data.size()));
+  // A second upload paused 25 hours before the cutoff: removed, and its
+  // upload starts again from 0.
+  const std::string other = "another upload, abandoned";
+  const std::string other_digest = fabatlas::Sha256Hex(other);
+  ASSERT_EQ(blobs.Append(other_digest, 0, other.substr(0, 7)), 7);
+  set_age(dir / "blobs/partial" / other_digest, cutoff - day_ms - hour_ms);
+  c = blobs.Collect({}, cutoff);
+  EXPECT_EQ(c.blobs_removed, 1);
+  EXPECT_EQ(c.bytes_removed, 7);
+  EXPECT_FALSE(fs::exists(dir / "blobs/partial" / other_digest));
+  EXPECT_EQ(blobs.CommittedSize(other_digest), 0);
+  // The first one, touched just now by its last chunk, is still there.
+  EXPECT_EQ(blobs.CommittedSize(digest), static_cast<std::int64_t>(data.size()));
+  blobs.Finish(digest);
+  EXPECT_TRUE(blobs.Verify(digest));
 }
 
 // A full disk under the blob store (a 2 MiB tmpfs, filled): a Put fails with

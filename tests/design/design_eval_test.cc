@@ -113,7 +113,8 @@ TEST(EvaluateSample, InvalidSamplesFollowTheDeltaGConventions) {
 TEST(EvaluateSample, StandsCheckUsesCentreOfMassOverSupport) {
   // A post on a foot plate with an arm carrying a heavy block. Short arm:
   // stands. Long arm: the block's weight pulls the centre of mass past the
-  // foot plate's edge (foot half-width 10).
+  // foot plate's edge (foot half-width 10): checked on both sides of the
+  // analytic tipping point.
   design::Design d = Load(R"(name: lever
 voxel_size: 0.5
 parameters: {arm: {type: real, min: 0, max: 40, default: 5}}
@@ -131,12 +132,23 @@ tree:
       children: [{op: box, size: [12, 12, 8]}]
 checks: [stands]
 )");
-  design::SampleResult near = Eval(d, "arm=0");
+  // The analytic tipping point: plate 800 mm^3 and post 320 mm^3 overlap in
+  // 16 mm^3, centred on x = 0; the block, 1152 mm^3 at x = arm, no longer
+  // meets the post beyond arm = 8. The centre of mass x = 1152 arm / 2256
+  // reaches the plate's edge x = 10 at arm* = 10 * 2256 / 1152 = 19.583 mm.
+  // One millimetre of arm moves it 0.511 mm.
+  const double tip = 10.0 * 2256 / 1152;
+  design::SampleResult near = Eval(d, "arm=" + std::to_string(tip - 1));
   EXPECT_TRUE(near.valid) << near.failure_reason;
-  design::SampleResult far = Eval(d, "arm=40");
+  design::SampleResult far = Eval(d, "arm=" + std::to_string(tip + 1));
   EXPECT_FALSE(far.valid);
   EXPECT_EQ(far.failure, design::kUnstable);
   EXPECT_NE(far.failure_reason.find("outside the support polygon"), std::string::npos) << far.failure_reason;
+  // How far outside: 1152 / 2256 mm, within a quarter voxel (the level
+  // set's centre of mass and bottom face).
+  const std::string lies = "centre of mass lies ";
+  ASSERT_EQ(far.failure_reason.find(lies), 0u) << far.failure_reason;
+  EXPECT_NEAR(std::stod(far.failure_reason.substr(lies.size())), 1152.0 / 2256, 0.125) << far.failure_reason;
 }
 
 TEST(EvaluateSample, WatertightCheckPassesOnLevelSetGeometry) {

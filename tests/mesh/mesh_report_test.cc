@@ -5,8 +5,10 @@
 #include <gtest/gtest.h>
 
 
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
+#include <limits>
 #include <stdexcept>
 #include <string>
 
@@ -184,67 +186,75 @@ TEST(MeshReport, NpmTeapotIsOpenAndSelfIntersecting) {
   EXPECT_FALSE(r.outward);
 }
 
-// Verdicts recorded in docs/mesh.md ("FabHacks meshes"). `mass` is the part
-// mass of data/fabhacks/EXAMPLES.md (mesh volume, mm^3, density 1), 0 when the
-// file lists none.
+// Verdicts recorded in docs/mesh.md ("FabHacks meshes"). `volume` is the
+// enclosed volume a peer program computes for the same file: ADMesh 0.98
+// (Debian's admesh, `admesh -c`, no repairs), reproduced by
+// tests/mesh/fabhacks_admesh_volumes.sh, which rewrites OBJ and OFF as STL
+// without fabatlas's reader; ADMesh sums in single precision, so it agrees
+// with the double-precision sum within 1e-4. readingroom.stl is open (a room's
+// walls and floor): its "volume" depends on the origin (ADMesh and the
+// divergence sum differ threefold), so none is compared. `mass` is the part
+// mass of data/fabhacks/EXAMPLES.md (mesh volume, mm^3, density 1), 0 when
+// the file lists none.
+constexpr double kOpen = std::numeric_limits<double>::quiet_NaN();
 struct Recorded {
   const char* file;
   bool closed, manifold, self_intersecting;
-  double volume;  // measured here, mm^3
+  double volume;  // ADMesh 0.98, mm^3; kOpen: not defined
   double mass;    // published, mm^3
 };
 
 constexpr Recorded kFabHacks[] = {
     {"backseats.obj", true, true, false, 6.47691e+07, 0},
     {"basket.obj", true, true, false, 1.52782e+06, 1.528e6},
-    {"basketbase.obj", true, true, false, 446573, 0},
+    {"basketbase.obj", true, true, false, 446572, 0},
     {"baskethandle.obj", true, true, false, 8572.15, 0},
-    {"binderclip.obj", true, true, false, 322.797, 323},
+    {"binderclip.obj", true, true, false, 322.798, 323},
     {"birdfeeder.obj", true, true, false, 3.48463e+06, 3.485e6},
-    {"birdfeederenv.obj", true, true, true, 21187.3, 0},
+    {"birdfeederenv.obj", true, true, true, 21186.9, 0},
     {"board.obj", true, false, true, 647136, 0},
     {"broomrod.obj", true, false, true, 17589.7, 17590},
     {"cable.obj", true, true, false, 1874.88, 1875},
     {"carseat.obj", true, true, false, 3.23846e+07, 0},
-    {"ceilinghook.obj", true, true, false, 8272.52, 0},
-    {"cliplight.obj", true, true, false, 65453.4, 65453},
-    {"curtainring.stl", true, true, false, 3460.90, 0},
-    {"closetrods.obj", true, true, false, 42742.6, 0},
+    {"ceilinghook.obj", true, true, false, 8272.5, 0},
+    {"cliplight.obj", true, true, false, 65453.3, 65453},
+    {"curtainring.stl", true, true, false, 3460.9, 0},
+    {"closetrods.obj", true, true, false, 42742.7, 0},
     {"clothesclip.off", true, true, false, 7504.1, 0},
     {"diapercaddy.obj", true, true, false, 2.79878e+06, 2.799e6},
-    {"doublehook.off", true, true, false, 1382.11, 1382},
-    {"doublehookmedium.off", true, true, false, 3979.13, 0},
+    {"doublehook.off", true, true, false, 1382.1, 1382},
+    {"doublehookmedium.off", true, true, false, 3979.1, 0},
     {"fabrichanger.obj", true, true, false, 137987, 1.380e5},
     {"flagrod.obj", true, true, false, 37410.3, 0},
-    {"handlebasket.obj", true, true, false, 455144, 0},
+    {"handlebasket.obj", true, true, false, 455148, 0},
     {"hanger.off", true, true, true, 33347.5, 33348},
     {"hookeyeleft.obj", true, true, false, 17221.8, 17222},
     {"hookeyelefts.obj", true, true, false, 17221.8, 17222},
     {"hookeyeright.obj", true, true, false, 17221.8, 17222},
-    {"hulahoop.stl", true, true, false, 904256, 0},
+    {"hulahoop.stl", true, true, false, 904257, 0},
     {"longtensionrod.obj", true, true, false, 1.57646e+06, 0},
     {"mug.obj", true, false, true, 151538, 1.515e5},
-    {"obstacleringl.stl", true, true, false, 83606.2, 0},
-    {"openhandlebasket.obj", true, true, false, 349067, 0},
+    {"obstacleringl.stl", true, true, false, 83606.3, 0},
+    {"openhandlebasket.obj", true, true, false, 349065, 0},
     {"papertowelroll.obj", true, true, false, 1.817e+06, 1.817e6},
     {"papertowelrollthick.obj", true, true, false, 3.8922e+06, 0},
     {"plasticclip.obj", true, true, true, 7255.58, 7256},
-    {"readingroom.stl", false, true, true, -9.2528e+08, 0},
+    {"readingroom.stl", false, true, true, kOpen, 0},
     {"ringL.off", true, true, false, 13409.2, 13409},
-    {"ringlink.stl", true, true, false, 7991.89, 0},
+    {"ringlink.stl", true, true, false, 7991.88, 0},
     {"ringM.off", true, true, false, 11290.8, 11291},
-    {"ringS.off", true, true, false, 9172.46, 9173},
-    {"ringXS.off", true, true, false, 7054.12, 7054},
-    {"roundhandlebasket.obj", true, true, false, 502458, 5.025e5},
+    {"ringS.off", true, true, false, 9172.47, 9173},
+    {"ringXS.off", true, true, false, 7054.14, 7054},
+    {"roundhandlebasket.obj", true, true, false, 502457, 5.025e5},
     {"showercurtainrod.obj", true, true, false, 58434, 0},
     {"small_plasticclip.obj", true, true, false, 4608.06, 0},
-    {"smallbirdfeederenv.obj", true, true, true, 21187.3, 0},
-    {"soapbottle.obj", true, true, false, 688663, 6.887e5},
+    {"smallbirdfeederenv.obj", true, true, true, 21187.4, 0},
+    {"soapbottle.obj", true, true, false, 688664, 6.887e5},
     {"toothbrush.obj", true, true, false, 24397.8, 24398},
-    {"towelhangingenv.obj", true, true, true, 56287.3, 0},
-    {"turnbuckle.stl", true, true, true, 2005.21, 0},
-    {"twoholebasket.obj", true, true, false, 1.10264e+06, 0},
-    {"wallhook.obj", true, true, true, 10593.7, 0},
+    {"towelhangingenv.obj", true, true, true, 56287.4, 0},
+    {"turnbuckle.stl", true, true, true, 2005.22, 0},
+    {"twoholebasket.obj", true, true, false, 1.10265e+06, 0},
+    {"wallhook.obj", true, true, true, 10593.6, 0},
 };
 
 TEST(MeshReport, FabHacksMeshesKeepTheirRecordedVerdicts) {
@@ -264,7 +274,7 @@ TEST(MeshReport, FabHacksMeshesKeepTheirRecordedVerdicts) {
     EXPECT_EQ(r.closed, rec.closed) << r.Reasons();
     EXPECT_EQ(r.manifold, rec.manifold) << r.Reasons();
     EXPECT_EQ(r.self_intersecting, rec.self_intersecting) << r.Reasons();
-    EXPECT_NEAR(r.volume, rec.volume, 1e-4 * std::abs(rec.volume));
+    if (!std::isnan(rec.volume)) EXPECT_NEAR(r.volume, rec.volume, 1e-4 * std::abs(rec.volume));
     if (rec.mass > 0) {
       ++with_mass;
       EXPECT_TRUE(r.closed);

@@ -2,8 +2,12 @@
 // the result does not depend on thread count, and the estimated valid region
 // of a closed-form design matches the algebra.
 #include <gtest/gtest.h>
+#include <png.h>
 
+#include <fstream>
 #include <random>
+
+#include <nlohmann/json.hpp>
 
 #include "../design/design_files.h"
 #include "fabatlas/design/constraint_solve.h"
@@ -14,6 +18,7 @@
 #include "fabatlas/sampling/adaptive_sampler.h"
 #include "fabatlas/sampling/executor.h"
 #include "fabatlas/sampling/form_json.h"
+#include "fabatlas/sampling/validity_map.h"
 
 using namespace fabatlas;
 
@@ -100,8 +105,46 @@ TEST(Precompute, OutputsAreWrittenAndReadable) {
   sampling::SamplingSummary s = Sample(d, 2, options);
   auto out = fabatlas::testing::TempDesign("", "placeholder").parent_path() / "out";
   precompute::WriteFormOutputs(d, s, out, true);
-  EXPECT_TRUE(std::filesystem::exists(out / "statistics.json"));
-  EXPECT_GT(std::filesystem::file_size(out / "map_radius_wall.png"), 1000u);
+  // statistics.json holds the run's figures.
+  {
+    std::ifstream in(out / "statistics.json");
+    const nlohmann::json stats = nlohmann::json::parse(in);
+    EXPECT_EQ(stats["design"], "tube_wall_2d");
+    EXPECT_EQ(stats["exposed_parameters"], 2);
+    EXPECT_EQ(stats["samples"].get<std::int64_t>(), static_cast<std::int64_t>(s.form.samples.size()));
+    EXPECT_EQ(stats["valid_samples"].get<std::int64_t>(), s.statistics.valid_samples);
+    EXPECT_EQ(stats["valid_volume_percent"].get<double>(), s.statistics.valid_volume_percent);
+    EXPECT_EQ(stats["failure_shares"]["unsat_constraints"].get<double>(), 1.0);
+  }
+  // The validity map, decoded: its pixels show the closed-form region. With
+  // 4 subdivisions the bootstrap cells of radius x wall are 6.25 x 2.875;
+  // the cell [11.25, 17.5] x [6.25, 9.125] has every corner valid (wall >=
+  // 1 + 0.01 r^2 and r - wall >= 2 hold at all four), the cell [23.75, 30]
+  // x [0.5, 3.375] none (1 + 0.01 * 23.75^2 = 6.64 > 3.375), so whatever was
+  // split inside them, (13, 7) is green and (27.5, 1.2) the dark colour of
+  // unsat_constraints. Both points lie >= 12 pixels from any leaf border.
+  {
+    const auto scratch = out.parent_path() / "layout.png";
+    sampling::ValidityMapOptions options;
+    options.fixed = {15, 6};
+    const sampling::ValidityMapLayout layout = sampling::WriteValidityMap(s.form, options, scratch.string());
+    png_image im{};
+    im.version = PNG_IMAGE_VERSION;
+    ASSERT_TRUE(png_image_begin_read_from_file(&im, (out / "map_radius_wall.png").c_str()));
+    im.format = PNG_FORMAT_RGB;
+    std::vector<unsigned char> rgb(PNG_IMAGE_SIZE(im));
+    ASSERT_TRUE(png_image_finish_read(&im, nullptr, rgb.data(), 0, nullptr));
+    ASSERT_EQ(static_cast<int>(im.width), layout.width);
+    ASSERT_EQ(static_cast<int>(im.height), layout.height);
+    const auto colour_at = [&](double radius, double wall) {
+      const int px = layout.plot_left + static_cast<int>((radius - 5.0) / 25.0 * layout.plot_size);
+      const int py = layout.plot_top + static_cast<int>((12.0 - wall) / 11.5 * layout.plot_size);
+      const unsigned char* p = &rgb[(static_cast<std::size_t>(py) * im.width + static_cast<std::size_t>(px)) * 3];
+      return (unsigned{p[0]} << 16) | (unsigned{p[1]} << 8) | p[2];
+    };
+    EXPECT_EQ(colour_at(13, 7), sampling::ValidColour());
+    EXPECT_EQ(colour_at(27.5, 1.2), sampling::FailureColour(s.form, "unsat_constraints"));
+  }
   std::ifstream in(out / "form.json");
   std::string text((std::istreambuf_iterator<char>(in)), {});
   EXPECT_EQ(sampling::FormToJson(sampling::FormFromJson(text)), text);

@@ -227,18 +227,35 @@ print(sum(1 for (p, q), k in edges.items() if k != 1 or edges.get((q, p)) != 1),
     }
 
     // 9. A volume limit shrinks the wall slider's valid stretch at radius 15
-    // to walls whose volume meets it: V(15, 5) caps the wall near 5.
+    // to walls whose volume meets it: V(15, 8.5) caps the wall at 8.5, between
+    // the run's samples at walls 7.4 (within) and 9.7 (beyond), far above the
+    // smallest valid wall (3.25), so the stretch must end in [7.4, 8.5 + 0.3].
+    // The point starts at wall 11, beyond the limit, so it has to move into
+    // it (to the closest sample that meets it, on another radius); then the
+    // stretch is read back at radius 15.
     {
       const validHi = () => page.evaluate(() => Math.max(...window.fabatlas.stretches[1].filter((s) => s.valid).map((s) => s.hi)));
+      const type = async (dimension, value) => {
+        await page.fill(`input[type=number][data-dimension="${dimension}"]`, String(value));
+        await page.press(`input[type=number][data-dimension="${dimension}"]`, 'Enter');
+        await page.waitForFunction(([d, v]) => window.fabatlas.u[d] === v, [dimension, value], { timeout: 30000 });
+        await settle(page);
+      };
+      await type(1, 11);
       const before = await validHi();
-      await page.fill('input[data-property="volume"][data-bound="max"]', String(tubeVolume(15, 5)));
+      await page.fill('input[data-property="volume"][data-bound="max"]', String(tubeVolume(15, 8.5)));
       await page.press('input[data-property="volume"][data-bound="max"]', 'Enter');
-      await page.waitForFunction((b) => Math.max(...window.fabatlas.stretches[1].filter((s) => s.valid).map((s) => s.hi)) < b, before, { timeout: 30000 });
+      await page.waitForFunction(() => window.fabatlas.u[1] !== 11, null, { timeout: 30000 });
       await settle(page);
-      const after = await validHi();
       const u = await page.evaluate(() => window.fabatlas.u.slice());
-      check(before > 11 && after <= 5 + 0.3 && after >= 5 - 12 / 5, `a volume limit shrinks the wall's valid stretch (${before.toFixed(2)} -> ${after.toFixed(2)})`);
-      check(u[1] <= after + 1e-9 && tubeVolume(u[0], u[1]) <= tubeVolume(15, 5) * 1.02, `the point moved into the limit (${u.map((v) => v.toFixed(2)).join(', ')})`);
+      const movedHi = await validHi();
+      check(u[1] <= movedHi + 1e-9 && tubeVolume(u[0], u[1]) <= tubeVolume(15, 8.5) * 1.02, `the point moved into the limit (${u.map((v) => v.toFixed(2)).join(', ')})`);
+      // Back to radius 15 through points within the limit (a typed point
+      // outside it would snap to a sample).
+      await type(1, 7);
+      await type(0, 15);
+      const after = await validHi();
+      check(before > 11 && after <= 8.5 + 0.3 && after >= 0.5 + 3 * 2.3 - 1e-9, `a volume limit shrinks the wall's valid stretch at radius 15 (${before.toFixed(2)} -> ${after.toFixed(2)})`);
       check(page.url().includes('limits='), 'the URL carries the limit');
       const hatched = await page.locator('.slider').nth(1).locator('.segment.invalid').count();
       check(hatched >= 2, `the wall track hatches the stretch beyond the limit (${hatched} invalid segments)`);
