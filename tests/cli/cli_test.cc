@@ -188,3 +188,16 @@ relationships:
   EXPECT_EQ(Lines(r.err), 1) << r.err;
   EXPECT_NE(r.err.find("gap=wide"), std::string::npos) << r.err;
 }
+
+// resolve: bad input is one line with exit status 2 (an unknown point, a
+// design without transitions, an unknown degree of freedom); the Fig. 15
+// hooks are covered in tests/design/design_resolve_test.cc.
+TEST(Cli, ResolveRejectsBadInputWithOneLine) {
+  const std::string bench = Examples() + "/bench_table.yaml";
+  for (const std::string& args : {bench + " --at armrest_height=9000", Examples() + "/vase.yaml",
+                                  bench + " --parameters nope", std::string("/nonexistent.yaml")}) {
+    CommandRun r = Fabatlas("resolve " + args);
+    EXPECT_EQ(r.status, 2) << args << ": " << r.out;
+    EXPECT_EQ(Lines(r.err), 1) << args << ": " << r.err;
+  }
+}

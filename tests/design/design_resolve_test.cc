@@ -136,6 +136,33 @@ TEST(DesignResolve, FoldingBenchResolvedWithinItsParameters) {
   EXPECT_EQ(design::DefaultPoint(written), r.after);
 }
 
+// Precompute's verdict (EvaluateSample): a collision that resolution within
+// the check's `repair_with` parameters resolves is `repairable`; one it
+// cannot resolve (dx only shifts when the hooks meet) stays `collision`, as
+// does every collision of a design that declares no such parameters.
+TEST(DesignResolve, RepairableOnlyWithinTheDeclaredParameters) {
+  auto with = [](const std::string& names) {
+    std::string text = kHooks;
+    const std::string check = "time_steps: 121}";
+    text.replace(text.find(check), check.size(), "time_steps: 121, repair_with: \"" + names + "\"}");
+    return design::LoadDesign(TempDesign(text));
+  };
+  const design::SampleResult lift = design::EvaluateSample(with("lift"), design::DefaultPoint(with("lift")));
+  EXPECT_EQ(lift.failure, design::kRepairable) << lift.failure_reason;
+  EXPECT_NE(lift.failure_reason.find("repairable: lift +"), std::string::npos) << lift.failure_reason;
+  const design::SampleResult dx = design::EvaluateSample(with("dx"), design::DefaultPoint(with("dx")));
+  EXPECT_EQ(dx.failure, design::kCollision) << dx.failure_reason;
+  const design::Design plain = design::LoadDesign(TempDesign(kHooks));
+  EXPECT_EQ(design::EvaluateSample(plain, design::DefaultPoint(plain)).failure, design::kCollision);
+  // A name that is not an exposed real parameter is refused at load.
+  try {
+    with("lift, nope");
+    ADD_FAILURE() << "loaded";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("repair_with: 'nope' is not an exposed real parameter"), std::string::npos) << e.what();
+  }
+}
+
 TEST(DesignResolve, RejectsUnknownParametersAndDesignsWithoutTransitions) {
   const design::Design d = design::LoadDesign(TempDesign(kHooks));
   design::ResolutionOptions o;

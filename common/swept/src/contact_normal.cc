@@ -6,7 +6,6 @@
 #include <CGAL/AABB_tree.h>
 #include <CGAL/AABB_triangle_primitive.h>
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
-#include <CGAL/intersections.h>
 
 #include <algorithm>
 #include <cmath>
@@ -21,7 +20,6 @@ namespace {
 using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
 using Point = Kernel::Point_3;
 using Triangle = Kernel::Triangle_3;
-using Segment = Kernel::Segment_3;
 using Primitive = CGAL::AABB_triangle_primitive<Kernel, std::vector<Triangle>::const_iterator>;
 using Tree = CGAL::AABB_tree<CGAL::AABB_traits<Kernel, Primitive>>;
 
@@ -41,6 +39,55 @@ Vec3 UnitNormal(const Vec3& p0, const Vec3& p1, const Vec3& p2) {
   const Vec3 n{e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
   const double l = Norm(n);
   return l > 0 ? Scale(n, 1 / l) : Vec3{0, 0, 0};
+}
+
+Vec3 Add(const Vec3& p, const Vec3& q) { return {p[0] + q[0], p[1] + q[1], p[2] + q[2]}; }
+double Dot(const Vec3& p, const Vec3& q) { return p[0] * q[0] + p[1] * q[1] + p[2] * q[2]; }
+Vec3 Cross(const Vec3& p, const Vec3& q) {
+  return {p[1] * q[2] - p[2] * q[1], p[2] * q[0] - p[0] * q[2], p[0] * q[1] - p[1] * q[0]};
+}
+
+// Where triangle t crosses the plane through `origin` with unit normal n:
+// the two extreme points of the crossing (false if t lies on one side or
+// in the plane).
+bool PlaneCrossing(const std::array<Vec3, 3>& t, const Vec3& origin, const Vec3& n, Vec3& p, Vec3& q) {
+  double d[3];
+  for (int i = 0; i < 3; ++i) d[i] = Dot(n, Sub(t[i], origin));
+  if ((d[0] > 0 && d[1] > 0 && d[2] > 0) || (d[0] < 0 && d[1] < 0 && d[2] < 0)) return false;
+  if (d[0] == 0 && d[1] == 0 && d[2] == 0) return false;  // coplanar: no contour direction
+  std::vector<Vec3> points;
+  for (int i = 0; i < 3; ++i) {
+    const int j = (i + 1) % 3;
+    if (d[i] == 0) points.push_back(t[i]);
+    if ((d[i] < 0 && d[j] > 0) || (d[i] > 0 && d[j] < 0))
+      points.push_back(Add(t[i], Scale(Sub(t[j], t[i]), d[i] / (d[i] - d[j]))));
+  }
+  if (points.size() < 2) return false;  // touching at a vertex
+  p = points[0], q = points[1];
+  for (std::size_t k = 2; k < points.size(); ++k)
+    if (Norm(Sub(points[k], p)) > Norm(Sub(q, p))) q = points[k];
+  return true;
+}
+
+// The segment where two triangles cross (plain doubles, no constructed
+// point reaches an exact predicate): each triangle's crossing of the
+// other's plane lies on the planes' common line; the segment is where the
+// two overlap along it. False when they do not cross along a segment.
+bool CrossingSegment(const std::array<Vec3, 3>& a, const Vec3& na, const std::array<Vec3, 3>& b, const Vec3& nb,
+                     Vec3& p, Vec3& q) {
+  Vec3 line = Cross(na, nb);
+  const double l = Norm(line);
+  if (!(l > 1e-12)) return false;  // parallel planes
+  line = Scale(line, 1 / l);
+  Vec3 a0, a1, b0, b1;
+  if (!PlaneCrossing(b, a[0], na, b0, b1) || !PlaneCrossing(a, b[0], nb, a0, a1)) return false;
+  double sa0 = Dot(line, a0), sa1 = Dot(line, a1), sb0 = Dot(line, b0), sb1 = Dot(line, b1);
+  if (sa0 > sa1) std::swap(sa0, sa1), std::swap(a0, a1);
+  if (sb0 > sb1) std::swap(sb0, sb1), std::swap(b0, b1);
+  if (std::max(sa0, sb0) >= std::min(sa1, sb1)) return false;
+  p = sa0 > sb0 ? a0 : b0;
+  q = sa1 < sb1 ? a1 : b1;
+  return true;
 }
 
 void CheckPart(const std::vector<MovingPart>& parts, int p) {
@@ -108,16 +155,18 @@ ContactNormalSummary SpacetimeContactNormal(const std::vector<MovingPart>& parts
       if (hits.empty()) continue;
       const Vec3 nb = UnitNormal({tb[0].x(), tb[0].y(), tb[0].z()}, {tb[1].x(), tb[1].y(), tb[1].z()},
                                  {tb[2].x(), tb[2].y(), tb[2].z()});
+      const std::array<Vec3, 3> vb{Vec3{tb[0].x(), tb[0].y(), tb[0].z()}, Vec3{tb[1].x(), tb[1].y(), tb[1].z()},
+                                   Vec3{tb[2].x(), tb[2].y(), tb[2].z()}};
       for (const auto& id : hits) {
         const Triangle& tri_a = *id;
-        const auto result = CGAL::intersection(tri_a, tb);
-        if (!result) continue;
-        const Segment* seg = boost::get<Segment>(&*result);
-        if (!seg) continue;  // a point (no length) or a coplanar overlap (no contour direction)
-        const double l = std::sqrt(CGAL::to_double(seg->squared_length()));
-        const Vec3 na = UnitNormal({tri_a[0].x(), tri_a[0].y(), tri_a[0].z()},
-                                   {tri_a[1].x(), tri_a[1].y(), tri_a[1].z()},
-                                   {tri_a[2].x(), tri_a[2].y(), tri_a[2].z()});
+        const std::array<Vec3, 3> va{Vec3{tri_a[0].x(), tri_a[0].y(), tri_a[0].z()},
+                                     Vec3{tri_a[1].x(), tri_a[1].y(), tri_a[1].z()},
+                                     Vec3{tri_a[2].x(), tri_a[2].y(), tri_a[2].z()}};
+        const Vec3 na = UnitNormal(va[0], va[1], va[2]);
+        if (Norm(na) == 0 || Norm(nb) == 0) continue;
+        Vec3 p, q;
+        if (!CrossingSegment(va, na, vb, nb, p, q)) continue;
+        const double l = Norm(Sub(q, p));
         const Vec3 bisector = Sub(na, nb);
         const double bl = Norm(bisector);
         if (!(l > 0) || !(bl > 1e-12)) continue;  // equal normals: tangent, no side to leave by
@@ -126,8 +175,7 @@ ContactNormalSummary SpacetimeContactNormal(const std::vector<MovingPart>& parts
         // stand for the sample steps they lie in.
         ContourForce f;
         f.t = t;
-        const Point m = CGAL::midpoint(seg->source(), seg->target());
-        f.point = fa.Apply({m.x(), m.y(), m.z()});
+        f.point = fa.Apply(Scale(Add(p, q), 0.5));
         f.force = Rotate(fa, Scale(bisector, l * dt / bl));
         f.normal_a = Rotate(fa, na);
         f.normal_b = Rotate(fa, nb);
