@@ -35,6 +35,7 @@ HintSummary ResolutionHints(const Design& design, const Point& u, const Resoluti
       n.object_b = r.graph.object_names[c.part_b];
       n.t_begin = c.t_begin;
       n.t_end = c.t_end;
+      n.where = c.where;
       swept::ContactNormalOptions co;
       co.time_steps = steps;
       n.normal = swept::SpacetimeContactNormal(parts, c.part_a, c.part_b, c.t_begin, c.t_end, co);

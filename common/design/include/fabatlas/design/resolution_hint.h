@@ -62,6 +62,7 @@ struct ResolutionOptions {
 struct IntervalNormal {
   std::string transition, object_a, object_b;  // object_b is the selected object; a's normal is the opposite
   double t_begin = 0, t_end = 0;
+  swept::SpatialBox where;                      // the check's box of the interval (world, mm)
   swept::ContactNormalSummary normal;           // forces dropped (normal.forces empty)
 };
 
