@@ -6,6 +6,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <fstream>
+#include <sstream>
 #include <string>
 
 #include "design_files.h"
@@ -20,44 +22,15 @@ using fabatlas::testing::TempDesign;
 
 namespace {
 
-// Fig. 15 in 3D (extruded 20 mm along y): a grey hook, its 10 mm prong
-// hanging down to z = 15 + lift, slides along x from -60 to +60 over a
-// green hook whose prong stands up to z = 20. With lift < 5 the prongs
-// overlap by 5 - lift mm while their x ranges meet, t in (5/12, 7/12); the
-// first contact is the grey prong's vertical face x = X + 10 meeting the
-// green prong's vertical face x = 0. Lifting by more than 5 mm clears it;
-// shifting the path along x (dx) only shifts when they meet.
-const char* kHooks = R"(name: hooks
-voxel_size: 1
-parameters:
-  lift: {type: real, min: -5, max: 20, default: 0}
-  dx:   {type: real, min: -20, max: 20, default: 0}
-objects:
-  green:
-    op: union
-    children:
-      - {op: translate, by: [-10, 0, -3], children: [{op: box, size: [40, 20, 6]}]}
-      - {op: translate, by: [5, 0, 10], children: [{op: box, size: [10, 20, 20]}]}
-  grey:
-    op: union
-    children:
-      - {op: translate, by: [5, 0, 22.5], children: [{op: box, size: [10, 20, 15]}]}
-      - {op: translate, by: [20, 0, 33], children: [{op: box, size: [40, 20, 6]}]}
-states: [left, right]
-transitions:
-  - name: pass
-    from: left
-    to: right
-    motions:
-      grey: {translation: [[-60 + dx, 0, lift], [60 + dx, 0, lift]]}
-tree:
-  op: union
-  children:
-    - {op: object, object: green}
-    - {op: object, object: grey}
-checks:
-  - {type: collision_free, time_steps: 121}
-)";
+// Fig. 15 in 3D: tests/design/data/hooks_fig15.yaml (a grey hook sliding
+// over a green one; lifting it by more than 5 mm clears them).
+std::string Hooks() {
+  std::ifstream in(fabatlas::testing::SourceDir() / "tests/design/data/hooks_fig15.yaml");
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+const std::string kHooks = Hooks();
 
 TEST(DesignResolve, Fig15SpacetimeNormalPointsUpWhereTheFirstContactNormalDoesNot) {
   const design::Design d = design::LoadDesign(TempDesign(kHooks));
