@@ -157,7 +157,7 @@ ContactState ContactsOf(const Point& u, StateGraph graph, int time_steps) {
 }
 
 std::vector<Perturbation> Perturb(const Design& design, const ContactState& at, const std::vector<Freedom>& free,
-                                  const ResolutionOptions& options, int time_steps, SubtreeCache* cache) {
+                                  const ResolutionOptions& options, SubtreeCache* cache) {
   std::vector<Perturbation> out;
   for (const Freedom& f : free) {
     double h = options.difference_step * (f.max - f.min);
@@ -175,7 +175,6 @@ std::vector<Perturbation> Perturb(const Design& design, const ContactState& at, 
     o.state_graph = &p.state.graph;
     const SampleResult r = EvaluateSample(design, u, o);
     p.state.has_geometry = r.failure.empty() && p.state.graph.objects.size() == design.objects.size();
-    (void)time_steps;
     out.push_back(std::move(p));
   }
   return out;

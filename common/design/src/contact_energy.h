@@ -60,7 +60,7 @@ struct Perturbation {
   ContactState state;
 };
 std::vector<Perturbation> Perturb(const Design& design, const ContactState& at, const std::vector<Freedom>& free,
-                                  const ResolutionOptions& options, int time_steps, SubtreeCache* cache);
+                                  const ResolutionOptions& options, SubtreeCache* cache);
 
 // Eq. 3: -dE/du_k for the forces of pair (a, b) at `at`, per parameter.
 std::map<std::string, double> PairDescent(const ContactState& at, const std::vector<Perturbation>& perturbations,

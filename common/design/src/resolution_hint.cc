@@ -49,7 +49,7 @@ HintSummary ResolutionHints(const Design& design, const Point& u, const Resoluti
   std::set<std::pair<int, int>> pairs;
   for (const auto& p : state.pairs) pairs.emplace(p.a, p.b);
   if (pairs.empty() || free.empty()) return out;
-  const std::vector<Perturbation> perturbations = Perturb(design, state, free, options, steps, &cache);
+  const std::vector<Perturbation> perturbations = Perturb(design, state, free, options, &cache);
   out.evaluations += static_cast<int>(perturbations.size());
   for (const auto& [a, b] : pairs) {
     PairHint h;

@@ -46,7 +46,7 @@ ResolveSummary ResolveCollisions(const Design& design, const Point& u, const Res
     for (const auto& p : state.pairs)
       if (seen.emplace(p.a, p.b).second) pairs.push_back({state.PairEnergy(p.a, p.b), {p.a, p.b}});
     std::sort(pairs.begin(), pairs.end(), [](const auto& x, const auto& y) { return x.first > y.first; });
-    const std::vector<Perturbation> perturbations = Perturb(design, state, free, options, steps, &cache);
+    const std::vector<Perturbation> perturbations = Perturb(design, state, free, options, &cache);
     out.evaluations += static_cast<int>(perturbations.size());
     bool moved = false;
     for (const auto& [energy, pair] : pairs) {
