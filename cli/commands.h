@@ -54,6 +54,9 @@ void AddAssemblyCommands(CLI::App& app, int& exit_code);
 // import-scad: an OpenSCAD Customizer model as a design (cli/scad_commands.cc).
 void AddScadCommands(CLI::App& app, int& exit_code);
 
+// resolve: a reconfigurable's collisions resolved (cli/resolve_commands.cc).
+void AddResolveCommands(CLI::App& app, int& exit_code);
+
 // True for an OpenSCAD model path (.scad).
 bool IsScadModel(const std::string& path);
 // A design file, or an OpenSCAD model imported on the fly (warnings on stderr).

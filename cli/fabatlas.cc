@@ -24,6 +24,7 @@ int main(int argc, char** argv) {
   fabatlas::cli::AddOptimiseCommands(app, exit_code);
   fabatlas::cli::AddAssemblyCommands(app, exit_code);
   fabatlas::cli::AddScadCommands(app, exit_code);
+  fabatlas::cli::AddResolveCommands(app, exit_code);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -309,3 +309,39 @@ relationships:
   EXPECT_EQ(Lines(r.err), 1) << r.err;
   EXPECT_NE(r.err.find("drawer_9"), std::string::npos) << r.err;
 }
+
+// resolve: bad input is one line with exit status 2 (an unknown point, a
+// design without transitions, an unknown degree of freedom); the Fig. 15
+// hooks are covered in tests/design/design_resolve_test.cc.
+TEST(Cli, ResolveRejectsBadInputWithOneLine) {
+  const std::string bench = Examples() + "/bench_table.yaml";
+  for (const std::string& args : {bench + " --at armrest_height=9000", Examples() + "/vase.yaml",
+                                  bench + " --parameters nope", std::string("/nonexistent.yaml")}) {
+    CommandRun r = Fabatlas("resolve " + args);
+    EXPECT_EQ(r.status, 2) << args << ": " << r.out;
+    EXPECT_EQ(Lines(r.err), 1) << args << ": " << r.err;
+  }
+}
+
+// Precompute's `repairable` class reaches the artifact: the Fig. 15 hooks
+// with `repair_with: "lift"`, sampled at the corners of (lift, dx). The
+// corners at lift = -5 collide (the prongs overlap by 10 mm) and lifting
+// clears them; those at lift = 20 are valid. statistics.json counts the
+// failures as repairable, none as collision.
+TEST(Cli, SampleRecordsRepairableCollisions) {
+  std::ifstream in(fabatlas::testing::SourceDir() / "tests/design/data/hooks_fig15.yaml");
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string check = "time_steps: 121}";
+  ASSERT_NE(text.find(check), std::string::npos);
+  text.replace(text.find(check), check.size(), "time_steps: 121, repair_with: \"lift\"}");
+  const auto design = fabatlas::testing::TempDesign(text, "hooks.yaml");
+  const auto dir = design.parent_path();
+  std::ofstream(dir / "job.yaml") << "design: hooks.yaml\nsampling:\n  subdivisions: 1\n  max_depth: 0\n"
+                                     "  dg_threshold: 0.2\n  max_samples: 4\nthreads: 2\n";
+  CommandRun r = Fabatlas("sample " + (dir / "job.yaml").string() + " --out " + (dir / "out").string());
+  ASSERT_EQ(r.status, 0) << r.err;
+  std::ifstream stats(dir / "out" / "statistics.json");
+  const auto j = nlohmann::json::parse(stats);
+  EXPECT_EQ(j["failure_shares"], (nlohmann::json{{"repairable", 1.0}})) << j.dump();
+  EXPECT_NE(r.out.find("repairable"), std::string::npos) << r.out;
+}

@@ -6,7 +6,10 @@
 // plays the invalid sample next to it and rests at its first colliding time,
 // which equals `fabatlas eval`'s collision_t_begin for that sample, with
 // exactly the two objects the CLI names drawn red (and red pixels on
-// screen). Keeps a screenshot in $FABATLAS_TEST_OUTPUT/viewer_transition.png.
+// screen); "How to resolve it" draws the spacetime contact normal `fabatlas
+// resolve` prints as an arrow on the selected object and offers the
+// resolved design, which `fabatlas eval` finds valid. Keeps screenshots in
+// $FABATLAS_TEST_OUTPUT/viewer_transition.png and viewer_resolve.png.
 import { execFileSync } from 'node:child_process';
 import fs from 'node:fs';
 import path from 'node:path';
@@ -114,7 +117,48 @@ await runBrowserTest(env.FABATLAS_TRANSITION_RUN, async ({ server, browser }) =>
     check(asked === 0 && again.t === bad.firstCollision.t && JSON.stringify(again.u) === JSON.stringify(bad.u),
       `"Play invalid sample" replays it from the page's copy (${asked} requests), resting at t = ${again.t}`);
 
-    // 5. Back to the preview.
+    // 5. How to resolve it (Reconfigurables Sec. 6): an arrow on the selected
+    // object along the spacetime contact normal `fabatlas resolve` prints,
+    // and the resolved design, valid by `fabatlas eval` with every check;
+    // "Use the resolved design" moves the customiser there.
+    check(await page.locator('#resolve-hint').isVisible(), 'a played collision offers "How to resolve it"');
+    await page.click('#resolve-hint');
+    await page.waitForFunction(() => window.fabatlas.resolvePlays === 1, null, { timeout: play });
+    const res = await page.evaluate(() => ({ r: window.fabatlas.resolution, arrows: window.fabatlas.hintArrows,
+      drawn: window.fabatlas.motionObjects()[0].parent.children.filter((c) => c.name.startsWith('hint:')).map((c) => c.name),
+      info: document.querySelector('#resolve-info').textContent }));
+    const at = `armrest_height=${bad.u[0]},hinge_offset=${bad.u[1]}`;
+    const printed = execFileSync(path.join(env.FABATLAS_BIN_DIR, 'fabatlas'), ['resolve', design, '--at', at]).toString();
+    const normal = printed.match(/spacetime normal of '(\w+)': \[([-\d.]+), ([-\d.]+), ([-\d.]+)\]/);
+    check(normal !== null && res.arrows.length === 1 && res.arrows[0].object === normal[1] &&
+      res.arrows[0].normal.every((x, k) => Math.abs(x - Number(normal[k + 2])) <= 0.0005) &&
+      JSON.stringify(res.drawn) === JSON.stringify([`hint:${normal[1]}`]),
+      `the arrow on '${res.arrows[0]?.object}' points along (${res.arrows[0]?.normal.map((x) => x.toFixed(3))}), as fabatlas resolve prints: ${normal?.[0]}`);
+    check(res.r.resolution?.resolved === true && cliEval(res.r.resolution.u).valid === true,
+      `the resolved design (${res.r.resolution?.u.join(', ')}) is valid by fabatlas eval`);
+    check(res.info.includes('resolved: ') && res.info.includes(`move '${normal?.[1]}' along`), `the page says so: "${res.info}"`);
+    const yellow = await page.evaluate(() => {
+      const src = document.querySelector('#preview canvas');
+      const c = document.createElement('canvas');
+      c.width = src.width; c.height = src.height;
+      const ctx = c.getContext('2d');
+      ctx.drawImage(src, 0, 0);
+      const p = ctx.getImageData(0, 0, c.width, c.height).data;
+      let n = 0;
+      for (let i = 0; i < p.length; i += 4) n += p[i] > 200 && p[i + 1] > 150 && p[i + 1] < 230 && p[i + 2] < 80;
+      return n;
+    });
+    check(yellow > 50, `the arrow is on screen: ${yellow} yellow pixels`);
+    await page.screenshot({ path: path.join(out, 'viewer_resolve.png'), fullPage: true });
+    await page.click('#resolve-apply');
+    await page.waitForFunction((u) => JSON.stringify(window.fabatlas.u) === JSON.stringify(u), res.r.resolution.u, { timeout: 30000 });
+    check(await page.evaluate(() => window.fabatlas.motion === null && window.fabatlas.resolution === null),
+      '"Use the resolved design" leaves the transition for the resolved design');
+    await statusOk(page, 'at the resolved design');
+
+    // 6. Back to the preview (after playing the invalid sample once more).
+    await page.click('#motion-why');
+    await page.waitForFunction(() => window.fabatlas.motionPlays === 4, null, { timeout: play });
     await page.click('#motion-back');
     check(await page.evaluate(() => window.fabatlas.motion === null), 'back to the preview');
     await statusOk(page, 'at the end');

@@ -8,6 +8,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "fabatlas/design/resolution_hint.h"
+#include "fabatlas/design/resolve_collisions.h"
 #include "fabatlas/design/state_graph.h"
 #include "fabatlas/error.h"
 #include "fabatlas/precompute/design_evaluator.h"
@@ -215,6 +217,47 @@ json StateGraphJson(const Customiser& c, const std::vector<double>& u, int frame
   return j;
 }
 
+// A reconfigurable's collisions at exactly u resolved (Reconfigurables Secs.
+// 6.4–6.6; docs/swept.md "Collision resolution"): per collision interval the
+// spacetime contact normal of the selected object (the second of the pair)
+// and where to draw it (the centre of the interval's box), per pair the
+// hint in the parameters and its step, and the design resolved
+// automatically, `u` in the form's dimension order, proved by the design's
+// checks (`resolved`).
+json ResolveJson(const Customiser& c, const std::vector<double>& u) {
+  if (!c.source().design) throw BadRequest{"this form has no design"};
+  const design::Design& d = *c.source().design;
+  if (d.objects.empty() || d.transitions.empty()) throw BadRequest{"this design has no state graph (objects and transitions)"};
+  const design::Point at = precompute::DesignPointOf(d, u);
+  const design::HintSummary h = design::ResolutionHints(d, at);
+  json j = {{"u", u}, {"valid", h.sample.valid}, {"failure", h.sample.failure}, {"energy", h.energy}};
+  json intervals = json::array();
+  for (const auto& i : h.intervals) {
+    const auto& n = i.normal;
+    swept::Vec3 centre;
+    for (int k = 0; k < 3; ++k) centre[k] = 0.5 * (i.where.min[k] + i.where.max[k]);
+    intervals.push_back({{"transition", i.transition}, {"objects", {i.object_a, i.object_b}}, {"object", i.object_b},
+                         {"t_begin", i.t_begin}, {"t_end", i.t_end}, {"at", centre}, {"normal", n.spacetime_normal},
+                         {"energy", n.energy},
+                         {"first_contact_normal", n.has_first_contact ? json(n.first_contact_normal) : json(nullptr)}});
+  }
+  j["intervals"] = intervals;
+  json pairs = json::array();
+  for (const auto& p : h.pairs)
+    pairs.push_back({{"objects", {p.object_a, p.object_b}}, {"energy", p.energy}, {"descent", p.descent}, {"step", p.step}});
+  j["pairs"] = pairs;
+  json resolution = nullptr;
+  if (!h.sample.valid && !h.intervals.empty()) {
+    const design::ResolveSummary r = design::ResolveCollisions(d, at);
+    std::vector<double> after;
+    for (const auto& e : d.exposed) after.push_back(r.after.at(e.name));
+    resolution = {{"resolved", r.resolved}, {"u", after}, {"edit", r.edit}, {"edit_size", r.edit_size},
+                  {"failure", r.failure_after}, {"steps", r.steps.size()}, {"evaluations", r.evaluations}};
+  }
+  j["resolution"] = resolution;
+  return j;
+}
+
 ApiResponse Json(const json& j) {
   ApiResponse r;
   r.body = j.dump();
@@ -327,6 +370,7 @@ ApiResponse Route(const Customiser& c, const std::string& path, const std::map<s
     const int frames = ParseIndex(query, "frames", 2, 1000, 61);
     return Json(StateGraphJson(c, ParsePoint(c, query), frames));
   }
+  if (path == "/api/resolve") return Json(ResolveJson(c, ParsePoint(c, query)));
   if (path == "/api/map") {
     const int n_dims = c.dimension_count();
     const int a = ParseIndex(query, "a", 0, n_dims - 1, -1), b = ParseIndex(query, "b", 0, n_dims - 1, -1);

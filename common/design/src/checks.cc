@@ -599,4 +599,23 @@ double DistanceInsideConvexHull(std::vector<geometry::Vec2> pts, const geometry:
   return inside ? nearest_line : -nearest_segment;
 }
 
+std::vector<std::string> RepairParameters(const Design& design) {
+  std::vector<std::string> out;
+  for (const CheckSpec& spec : design.checks) {
+    if (spec.type != "collision_free") continue;
+    const auto it = spec.args.find("repair_with");
+    if (it == spec.args.end()) continue;
+    std::string name;
+    for (const char c : it->second.text + ",") {
+      if (c == ',' || c == ' ') {
+        if (!name.empty()) out.push_back(name);
+        name.clear();
+      } else {
+        name += c;
+      }
+    }
+  }
+  return out;
+}
+
 }  // namespace fabatlas::design

@@ -60,6 +60,10 @@ CheckOutcome RunCheck(const CheckSpec& spec, CheckContext& context);
 // design's order. Each outcome's seconds are its own wall time: those of
 // checks side by side overlap. An exception of a check is rethrown after the
 // side-by-side checks have finished, the first in the design's order.
+// The parameters the collision_free check lets automatic resolution change
+// (`repair_with: "a, b"`), empty when it names none.
+std::vector<std::string> RepairParameters(const Design& design);
+
 std::vector<CheckOutcome> RunChecks(const std::vector<CheckSpec>& specs, CheckContext& context,
                                     double* surface_seconds = nullptr);
 

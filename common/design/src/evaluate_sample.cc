@@ -1,6 +1,7 @@
 // EvaluateSample (Fab Forms Alg. 2) and ΔG (Eq. 2).
 #include "fabatlas/exact_decimal.h"
 #include "fabatlas/design/evaluate_sample.h"
+#include "fabatlas/design/resolve_collisions.h"
 #include "fabatlas/design/state_graph.h"
 
 #include <chrono>
@@ -481,6 +482,26 @@ SampleResult EvaluateSample(const Design& design, const Point& u, const Evaluate
       } catch (const SampleFailure& e) {
         fail(e.type(), e.what());
         g = StateGraph{};
+      }
+    }
+  }
+  // Reconfigurables, Sec. 6.6: a collision the design declares repairable
+  // (collision_free's `repair_with`) and automatic resolution within those
+  // parameters resolves, proved by every check at the resolved point.
+  if (r.failure == kCollision && options.run_checks && options.repair_collisions) {
+    const std::vector<std::string> with = RepairParameters(design);
+    if (!with.empty()) {
+      ResolutionOptions ro;
+      ro.parameters = with;
+      const ResolveSummary s = ResolveCollisions(design, u, ro);
+      if (s.resolved) {
+        std::ostringstream reason;
+        reason.precision(4);
+        reason << r.failure_reason << "; repairable:";
+        for (const auto& [name, d] : s.edit) reason << " " << name << (d >= 0 ? " +" : " ") << d;
+        reason << " resolves it";
+        r.failure = kRepairable;
+        r.failure_reason = reason.str();
       }
     }
   }

@@ -549,6 +549,21 @@ Design ParseDesign(const std::string& text, const std::filesystem::path& path) {
         };
         if (!has(d.tree)) r.Fail(c, "check '" + check.type + "' needs an 'assembly' node in the tree");
       }
+      if (check.args.count("repair_with")) {
+        // Automatic resolution's degrees of freedom: exposed real parameters.
+        std::string names = check.args.at("repair_with").text + ",", name;
+        for (const char ch : names) {
+          if (ch != ',' && ch != ' ') {
+            name += ch;
+            continue;
+          }
+          if (name.empty()) continue;
+          const ExposedParameter* p = d.FindExposed(name);
+          if (!p || p->kind != ParameterKind::kReal)
+            r.Fail(c["repair_with"], "repair_with: '" + name + "' is not an exposed real parameter");
+          name.clear();
+        }
+      }
       d.checks.push_back(check);
     }
   }

@@ -93,7 +93,8 @@ const std::map<std::string, OpSchema>& CheckSchemas() {
          {"element", S::kString, false}},
         0,
         0}},
-      {"collision_free", {{{"time_steps", S::kNumber, false}, {"clearance", S::kNumber, false}}, 0, 0}},
+      {"collision_free",
+       {{{"time_steps", S::kNumber, false}, {"clearance", S::kNumber, false}, {"repair_with", S::kString, false}}, 0, 0}},
       // Assemblies (FabHacks): the design's `assembly` node solved at the sample.
       {"assembly_feasible", {{}, 0, 0}},
       {"assembly_stable", {{}, 0, 0}},

@@ -72,6 +72,19 @@ double ContinuousContact::Distance(int a, int b, double t) const {
   return result.min_distance;
 }
 
+ContinuousContact::Closest ContinuousContact::Nearest(int a, int b, double t) const {
+  fcl::CollisionObjectd oa(impl_->models.at(a), ToFcl(impl_->motions[a].At(t)));
+  fcl::CollisionObjectd ob(impl_->models.at(b), ToFcl(impl_->motions[b].At(t)));
+  fcl::DistanceRequestd request;
+  request.enable_nearest_points = true;
+  fcl::DistanceResultd result;
+  fcl::distance(&oa, &ob, request, result);
+  Closest c;
+  c.distance = result.min_distance;
+  for (int k = 0; k < 3; ++k) c.point_a[k] = result.nearest_points[0][k], c.point_b[k] = result.nearest_points[1][k];
+  return c;
+}
+
 ContactSearch ContinuousContact::Advance(int a, int b, double from, double to,
                                          const ContactSearchOptions& options) const {
   ContactSearch s;

@@ -36,6 +36,8 @@ const state = {
   // (objects in collision at t), highlighted (objects drawn red)}.
   motion: null,
   motionPlays: 0,      // transitions played to their end so far
+  resolution: null,    // the last /api/resolve answer shown (a played collision)
+  resolvePlays: 0,     // resolutions shown so far
 };
 window.fabatlas = state;
 // The moving objects on screen (three.js meshes), for the browser test.
@@ -585,6 +587,15 @@ function buildTransitions() {
     showFrame(k);
   });
   $('motion-back').addEventListener('click', leaveMotion);
+  $('resolve-hint').addEventListener('click', () => showResolution().catch(showError));
+  $('resolve-apply').addEventListener('click', () => {
+    const r = state.resolution?.resolution;
+    if (!r?.resolved) return;
+    leaveMotion();
+    clearError();
+    state.u = r.u.slice();
+    requestUpdate();
+  });
   $('motion-why').addEventListener('click', () => {
     const r = state.reason;
     if (r && r.sample >= 0) playTransition(null, r.sample_u, `invalid sample #${r.sample}`);
@@ -598,6 +609,7 @@ function leaveMotion() {
   if (motionGroup) motionGroup.visible = false;
   modelGroup.visible = true;
   $('motion-back').hidden = true;
+  hideResolution();
   state.motion = null;
   render();
 }
@@ -686,6 +698,7 @@ function stateGraphAt(u) {
 async function playTransition(name, u, label) {
   clearError();
   stopPlaying();
+  hideResolution();
   setStatus(`evaluating the state graph at ${label}…`);
   const data = await stateGraphAt(u).catch((e) => { showError(e); return null; });
   if (!data) return;
@@ -730,10 +743,68 @@ async function playTransition(name, u, label) {
     state.motion.playing = false;
     // Rest at the first colliding time: the collision in view, parts red.
     if (first) showFrame(tr.times.indexOf(first.t));
+    $('resolve-hint').hidden = first === null;
     state.motionPlays += 1;
     setStatus(info.textContent);
   };
   motionTimer = requestAnimationFrame(step);
+}
+
+// ------------------------------------------------ collision resolution
+// Reconfigurables Secs. 6.4–6.6 (/api/resolve at the point played): an
+// arrow on the selected object (the second of the colliding pair) along the
+// spacetime contact normal, drawn at the centre of the interval's box, the
+// hint in the parameters, and the design resolved automatically, which
+// "Use the resolved design" moves to.
+let hintArrows = [];
+function hideResolution() {
+  for (const a of hintArrows) a.removeFromParent();
+  hintArrows = [];
+  $('resolve-hint').hidden = true;
+  $('resolve-apply').hidden = true;
+  $('resolve-info').hidden = true;
+  state.resolution = null;
+  state.hintArrows = [];
+}
+
+async function showResolution() {
+  if (!state.motion) return;
+  const u = state.motion.u;
+  setStatus('resolving the collisions (contact normals, hints, automatic resolution)…');
+  $('resolve-hint').disabled = true;
+  const r = await apiJson('/api/resolve?u=' + u.map((v) => String(v)).join(',')).finally(() => { $('resolve-hint').disabled = false; });
+  if (!state.motion || state.motion.u !== u) return;  // left or moved on meanwhile
+  state.resolution = r;
+  for (const a of hintArrows) a.removeFromParent();
+  const size = new THREE.Box3();
+  for (const m of motionMeshes) size.expandByObject(m);
+  const length = 0.25 * size.getSize(new THREE.Vector3()).length() * 1000;  // mm (the group's units)
+  hintArrows = r.intervals.map((i) => {
+    const arrow = new THREE.ArrowHelper(new THREE.Vector3(...i.normal).normalize(), new THREE.Vector3(...i.at),
+      length, 0xffc300, 0.25 * length, 0.12 * length);
+    arrow.name = 'hint:' + i.object;
+    motionGroup.add(arrow);
+    return arrow;
+  });
+  state.hintArrows = r.intervals.map((i) => ({ object: i.object, at: i.at, normal: i.normal }));
+  const f = (v) => (v >= 0 ? '+' : '') + v.toPrecision(4);
+  const lines = r.intervals.map((i) => `move '${i.object}' along (${i.normal.map((x) => x.toFixed(2)).join(', ')})` +
+    ` away from '${i.objects[0]}' (t in [${i.t_begin.toFixed(4)}, ${i.t_end.toFixed(4)}])`);
+  for (const p of r.pairs)
+    lines.push(`'${p.objects[0]}' and '${p.objects[1]}': ` +
+      (Object.keys(p.step).length ? Object.entries(p.step).map(([n, v]) => `${n} ${f(v)}`).join(', ') : 'no step lowers the collision'));
+  const res = r.resolution;
+  if (res) lines.push(res.resolved
+    ? `resolved: ${Object.entries(res.edit).map(([n, v]) => `${n} ${f(v)}`).join(', ')} (the checks pass there)`
+    : `not resolved within the parameters (${res.failure})`);
+  const info = $('resolve-info');
+  info.textContent = '';
+  lines.forEach((line, k) => info.append(...(k ? [node('br'), line] : [line])));
+  info.hidden = false;
+  $('resolve-apply').hidden = !res?.resolved;
+  state.resolvePlays = (state.resolvePlays ?? 0) + 1;
+  setStatus(lines[lines.length - 1]);
+  render();
 }
 
 // ------------------------------------------------- the point in the URL

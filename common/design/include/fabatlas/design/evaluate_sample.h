@@ -32,6 +32,10 @@ inline constexpr const char* kTooMuchDeformation = "too_much_deformation";  // f
 inline constexpr const char* kLoadCaseMissesSolid = "load_case_misses_solid";
 inline constexpr const char* kCollision = "collision";                         // collision_free check
 inline constexpr const char* kTooLittleClearance = "too_little_clearance";     // collision_free check
+// collision_free check with `repair_with`: it collides, and automatic
+// resolution within those parameters (resolve_collisions.h) makes the design
+// valid.
+inline constexpr const char* kRepairable = "repairable";
 inline constexpr const char* kInfeasible = "infeasible";                       // assembly_feasible check
 inline constexpr const char* kFallsApart = "falls_apart";                      // assembly_stable check
 inline constexpr const char* kTargetMissed = "target_missed";                  // target_reached check
@@ -84,6 +88,11 @@ struct EvaluateOptions {
   // with InputError before anything reads that file (model_files.h). false
   // (a model evaluated where it lies): OpenSCAD's own lookup.
   bool confine_model_files = false;
+  // Reconfigurables: a sample failing with `collision` whose collision_free
+  // check names `repair_with` parameters is resolved within them
+  // (resolve_collisions.h) and fails with `repairable` when that makes it
+  // valid. false: no resolution (the resolution's own evaluations).
+  bool repair_collisions = true;
 };
 
 struct SampleResult {

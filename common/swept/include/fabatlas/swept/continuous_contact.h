@@ -47,6 +47,14 @@ class ContinuousContact {
   // Distance between the surfaces of parts a and b posed at time t (mm);
   // <= 0 when they touch or cross.
   double Distance(int a, int b, double t) const;
+  // The same with the closest points of the two surfaces (world frame at
+  // t): point_b - point_a is the direction that parts b from a fastest (the
+  // gradient of the distance with respect to a translation of b).
+  struct Closest {
+    double distance = 0;
+    Vec3 point_a{0, 0, 0}, point_b{0, 0, 0};
+  };
+  Closest Nearest(int a, int b, double t) const;
   // Searches from `from` towards `to` (backwards if to < from) for the first
   // time parts a and b are within options.tolerance.
   ContactSearch Advance(int a, int b, double from, double to, const ContactSearchOptions& options) const;
