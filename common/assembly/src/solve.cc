@@ -13,13 +13,13 @@
 // resting_contacts.*. This file drives them.
 #include "fabatlas/assembly/solve.h"
 
-#include <chrono>
 #include <cmath>
 #include <limits>
 #include <string>
 #include <vector>
 
 #include "fabatlas/assembly/precheck.h"
+#include "fabatlas/stopwatch.h"
 #include "solve/resting_contacts.h"
 #include "solve/solver.h"
 #include "solve/target_form.h"
@@ -35,10 +35,6 @@ using internal::TargetForm;
 
 void TargetErrors(const Program& prog, const Eigen::Isometry3d& pose, double& mm, double& deg) {
   TargetForm::Of(prog).Errors(pose.matrix(), mm, deg);
-}
-
-double Since(std::chrono::steady_clock::time_point t) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
 }
 
 // Relaxation runs after which the active set is no longer updated (each
@@ -58,19 +54,19 @@ bool Step1(const Program& prog, const SolveOptions& opt, Solver& solver, SolveSu
   double closest_c = std::numeric_limits<double>::infinity();
   for (int k = 0; k < opt.restarts; ++k) {
     ++out.starts_tried;
-    const auto tf = std::chrono::steady_clock::now();
+    const Stopwatch feasibility_time;
     if (k == opt.chain_start && solver.ClosesCycles()) solver.SetChainStart();
     else solver.SetStart(k);
     if (solver.ConstraintResidual() >= opt.feasibility_tolerance) solver.Run(Phase::kFeasibility, 1.0);
     const double c = solver.ConstraintResidual();
-    out.feasibility_seconds += Since(tf);
+    out.feasibility_seconds += feasibility_time.Seconds();
     if (c >= opt.feasibility_tolerance) {
       if (c < closest_c) closest_c = c, closest = solver.blocks();
       continue;
     }
     if (!out.feasible) out.feasibility_starts = k + 1;
     out.feasible = true;
-    const auto to = std::chrono::steady_clock::now();
+    const Stopwatch objective_time;
     // Step 1: user objective with penalty σ doubling (FabHacks, 4.3.3).
     double sigma = opt.penalty_start;
     for (int d = 0; d <= (solver.HasCycles() ? opt.penalty_doublings : 0); ++d, sigma *= 2) {
@@ -80,7 +76,7 @@ bool Step1(const Program& prog, const SolveOptions& opt, Solver& solver, SolveSu
     double mm, deg;
     TargetErrors(prog, solver.Poses()[prog.target], mm, deg);
     if (!prog.target_match_rotation) deg = 0;
-    out.objective_seconds += Since(to);
+    out.objective_seconds += objective_time.Seconds();
     const double obj = mm * mm + std::pow(opt.target_mm_per_rad * deg * M_PI / 180, 2);
     if (obj < best_obj) {
       best_obj = obj;
@@ -134,7 +130,7 @@ void RelaxToRest(const SolveOptions& opt, Solver& solver, SolveSummary& out) {
 void Relax(const SolveOptions& opt, double perturbation, Solver& solver, SolveSummary& out) {
   if (perturbation != 0) solver.Perturb(perturbation);
   solver.SetRelaxationAnchor();
-  const auto tr = std::chrono::steady_clock::now();
+  const Stopwatch relaxation_time;
   // Static friction along rods: relax with every slide held, let go of
   // those whose load leaves the friction cone and relax again from there,
   // until every slide still held is inside it (at most one more relaxation
@@ -152,7 +148,7 @@ void Relax(const SolveOptions& opt, double perturbation, Solver& solver, SolveSu
   }
   solver.SetRelaxationTargetWeight(0);
   RelaxToRest(opt, solver, out);
-  out.relaxation_seconds = Since(tr);
+  out.relaxation_seconds = relaxation_time.Seconds();
   out.falls_apart = solver.FallsApart();
   out.slides = solver.SlideReport();
 }
@@ -191,14 +187,14 @@ void Report(const Program& prog, const SolveOptions& opt, Solver& solver, SolveS
 }
 
 SolveSummary Solve(const Program& prog, const SolveOptions& opt, double perturbation) {
-  const auto t0 = std::chrono::steady_clock::now();
+  const Stopwatch total_time;
   SolveSummary out;
   const PrecheckSummary pre = Precheck(prog);
-  out.precheck_seconds = Since(t0);
+  out.precheck_seconds = total_time.Seconds();
   for (const auto& i : pre.issues) out.messages.push_back(i.message);
   out.prechecks_passed = pre.ok;
   auto finish = [&]() {
-    out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    out.seconds = total_time.Seconds();
     return out;
   };
   if (!pre.ok) return finish();

@@ -8,13 +8,13 @@
 #include "fabatlas/fem/static_solve.h"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <string>
 #include <utility>
 #include <vector>
 
 #include "fabatlas/error.h"
+#include "fabatlas/stopwatch.h"
 #include "static_solve/dof_map.h"
 #include "static_solve/gauss_points.h"
 #include "static_solve/newton.h"
@@ -34,10 +34,6 @@ void BoundaryConditions::FixComponentEverywhere(const HexMesh& mesh, int compone
 }
 
 namespace {
-
-using Clock = std::chrono::steady_clock;
-
-double Seconds(Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double>(b - a).count(); }
 
 // Throws InputError for an empty mesh, a material or load-step count out of
 // range, or an element naming a node that does not exist.
@@ -102,7 +98,7 @@ void StepTheLoad(const internal::Equilibrium& eq, Eigen::VectorXd& u, Eigen::Vec
 
 StaticSolveSummary SolveStatic(const HexMesh& mesh, const Material& material,
                                const BoundaryConditions& bc, const StaticSolveOptions& options) {
-  const auto t_start = Clock::now();
+  const Stopwatch total_time;
   StaticSolveSummary summary;
   CheckInput(mesh, material, options);
   const int nn = static_cast<int>(mesh.nodes.size());
@@ -134,7 +130,7 @@ StaticSolveSummary SolveStatic(const HexMesh& mesh, const Material& material,
     summary.max_displacement = std::max(summary.max_displacement, std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]));
   }
   summary.max_principal_strain = problem.MaxPrincipalStrain(u, alpha);
-  summary.total_seconds = Seconds(t_start, Clock::now());
+  summary.total_seconds = total_time.Seconds();
   return summary;
 }
 

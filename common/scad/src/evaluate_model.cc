@@ -4,7 +4,6 @@
 // (evaluate_model/csg_node.h); any NotNative on the way declines, naming the line.
 #include "fabatlas/scad/evaluate_model.h"
 
-#include <chrono>
 #include <fstream>
 #include <memory>
 #include <numbers>
@@ -13,6 +12,7 @@
 #include <utility>
 #include <vector>
 
+#include "fabatlas/stopwatch.h"
 #include "evaluate_model/csg_node.h"
 #include "evaluate_model/evaluator.h"
 #include "evaluate_model/parser.h"
@@ -75,7 +75,7 @@ Scope BuiltinScope() {
 
 ModelEvaluation EvaluateModelText(const std::string& text, const std::string& file,
                                   const std::vector<std::pair<std::string, std::string>>& overrides) {
-  const auto start = std::chrono::steady_clock::now();
+  const Stopwatch watch;
   ModelEvaluation result;
   Value::values_built = 0;
   try {
@@ -94,13 +94,13 @@ ModelEvaluation EvaluateModelText(const std::string& text, const std::string& fi
     result.csg.clear();
     result.declined = file + (e.line > 0 ? ":" + std::to_string(e.line) : std::string()) + ": " + e.what;
   }
-  result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  result.seconds = watch.Seconds();
   return result;
 }
 
 ModelEvaluation EvaluateModel(const std::filesystem::path& model,
                               const std::vector<std::pair<std::string, std::string>>& overrides) {
-  const auto start = std::chrono::steady_clock::now();
+  const Stopwatch watch;
   std::ifstream in(model, std::ios::binary);
   if (!in) {
     ModelEvaluation result;
@@ -110,7 +110,7 @@ ModelEvaluation EvaluateModel(const std::filesystem::path& model,
   std::stringstream text;
   text << in.rdbuf();
   ModelEvaluation result = EvaluateModelText(text.str(), model.string(), overrides);
-  result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  result.seconds = watch.Seconds();
   return result;
 }
 

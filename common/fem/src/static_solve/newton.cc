@@ -2,19 +2,12 @@
 #include "newton.h"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 
+#include "fabatlas/stopwatch.h"
+
 namespace fabatlas::fem::internal {
-
-namespace {
-
-using Clock = std::chrono::steady_clock;
-
-double Seconds(Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double>(b - a).count(); }
-
-}  // namespace
 
 double Potential(const Equilibrium& eq, const Eigen::VectorXd& u, const Eigen::VectorXd& alpha, double lambda) {
   return eq.problem.StrainEnergy(u, alpha) - lambda * eq.f_total.dot(u);
@@ -46,9 +39,9 @@ bool NewtonIterations(const Equilibrium& eq, double target, bool line_search, Ei
   Problem& problem = eq.problem;
   Eigen::VectorXd f_int, f_cond, dalpha, d_full(u.size());
   for (int it = 0; it < options.max_newton_iterations; ++it) {
-    const auto ta = Clock::now();
+    const Stopwatch assembly_time;
     const double ra2 = problem.Assemble(u, alpha, &f_int, &f_cond, true);
-    summary.assembly_seconds += Seconds(ta, Clock::now());
+    summary.assembly_seconds += assembly_time.Seconds();
     // The gradient of Pi: r_u (free DOFs) and r_alpha; the Newton system
     // uses the condensed r (static condensation, Problem).
     const Eigen::VectorXd r_u = eq.dofs.Restrict(f_int) - target * eq.f_total_free;

@@ -2,19 +2,12 @@
 #include "tangent_solve.h"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 
+#include "fabatlas/stopwatch.h"
+
 namespace fabatlas::fem::internal {
-
-namespace {
-
-using Clock = std::chrono::steady_clock;
-
-double Seconds(Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double>(b - a).count(); }
-
-}  // namespace
 
 TangentSolve::TangentSolve(const StaticSolveOptions& options)
     : options_(options), direct_(options.linear_solver == StaticSolveOptions::LinearSolver::kCholesky) {
@@ -74,7 +67,7 @@ bool TangentSolve::TrySolve(const SpMat& K, const Eigen::VectorXd& r, Eigen::Vec
 
 bool TangentSolve::Solve(SpMat& K, const std::vector<int>& diagonal, int num_free, const Eigen::VectorXd& r,
                          Eigen::VectorXd& d, double& shift, StaticSolveSummary& summary) {
-  const auto ts = Clock::now();
+  const Stopwatch solve_time;
   if (!analysed_ && direct_) Analyse(K);
   double mean_diag = 0;
   for (int j = 0; j < num_free; ++j) mean_diag += std::abs(K.valuePtr()[diagonal[j]]);
@@ -98,7 +91,7 @@ bool TangentSolve::Solve(SpMat& K, const std::vector<int>& diagonal, int num_fre
     solved = TrySolve(K, r, d, summary);
   }
   last_shift_ratio_ = shift / mean_diag;
-  summary.linear_solve_seconds += Seconds(ts, Clock::now());
+  summary.linear_solve_seconds += solve_time.Seconds();
   return solved;
 }
 
