@@ -157,40 +157,43 @@ StmtPtr Parser::IfStatement(std::shared_ptr<Stmt> s) {
   return s;
 }
 
-// `(a, b = 1, ...)` of a definition.
-std::vector<Binding> Parser::Parameters() {
+// `( item, item, ... )`, each item read by `item`.
+template <typename Item>
+std::vector<Binding> Parser::List(Item item) {
   std::vector<Binding> out;
   Expect("(");
   while (!Is(")")) {
-    Binding b;
-    b.name = Ident();
-    if (Is("=")) {
-      ++i_;
-      b.expr = Expression();
-    }
-    out.push_back(std::move(b));
+    out.push_back(item());
     if (!Is(")")) Expect(",");
   }
   ++i_;
   return out;
 }
 
+// `(a, b = 1, ...)` of a definition.
+std::vector<Binding> Parser::Parameters() {
+  return List([this] {
+    Binding b;
+    b.name = Ident();
+    if (Is("=")) {
+      ++i_;
+      b.expr = Expression();
+    }
+    return b;
+  });
+}
+
 // `(expr, name = expr, ...)` of a call, let or for.
 std::vector<Binding> Parser::Arguments() {
-  std::vector<Binding> out;
-  Expect("(");
-  while (!Is(")")) {
+  return List([this] {
     Binding b;
     if (Peek().kind == Tok::kIdent && Is("=", 1)) {
       b.name = Ident();
       ++i_;
     }
     b.expr = Expression();
-    out.push_back(std::move(b));
-    if (!Is(")")) Expect(",");
-  }
-  ++i_;
-  return out;
+    return b;
+  });
 }
 
 // ---------------------------------------------------------------- expressions

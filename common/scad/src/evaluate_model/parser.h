@@ -45,6 +45,8 @@ class Parser {
   StmtPtr Keyword(std::shared_ptr<Stmt> s);
   StmtPtr Definition(std::shared_ptr<Stmt> s);
   StmtPtr IfStatement(std::shared_ptr<Stmt> s);
+  template <typename Item>
+  std::vector<Binding> List(Item item);
   std::vector<Binding> Parameters();
   std::vector<Binding> Arguments();
 
