@@ -501,15 +501,17 @@ CacheEntry CacheEntryMetadata(Stmt& s) {
   return e;
 }
 
-Artifact Read(Db& db, int version, const ArtifactReadOptions& options) {
-  Artifact a;
+// The manifest: format and schema version (against the file header's
+// `version`), every field, failure shares and table checksums; with
+// options.verify_checksums every table checked against its checksum.
+Manifest ReadManifest(Db& db, int version, const ArtifactReadOptions& options) {
   const auto rows = ReadManifestRows(db);
   ManifestReader m{rows};
   if (m.Text("format") != "fabatlas.artifact") throw Corrupt("manifest format is '" + m.Text("format") + "'");
   if (m.Int("schema_version") != version)
     throw Corrupt("manifest schema_version " + m.Text("schema_version") + " disagrees with the file header (" +
                   std::to_string(version) + ")");
-  Manifest& man = a.manifest;
+  Manifest man;
   man.schema_version = version;
   ForEachManifestField(man, [&m](const char* key, auto& field) {
     using T = std::decay_t<decltype(field)>;
@@ -531,123 +533,137 @@ Artifact Read(Db& db, int version, const ArtifactReadOptions& options) {
         throw Corrupt(std::string("table ") + t.table + " does not match its checksum (the file was altered or damaged)");
     }
   }
+  return man;
+}
 
-  sampling::Form& form = a.form;
-  form.subdivisions = man.subdivisions;
-  {
-    Stmt s(db, "SELECT idx, name, kind, lo, hi, enum_values FROM dimensions ORDER BY idx");
-    while (s.Next()) {
-      if (s.ColumnInt(0) != static_cast<std::int64_t>(form.dimensions.size())) throw Corrupt("dimension indices are not 0..n-1");
-      sampling::Dimension d;
-      d.name = s.ColumnText(1);
-      std::string kind = s.ColumnText(2);
-      if (!sampling::DimensionKindFromName(kind, &d.kind)) throw Corrupt("dimension '" + d.name + "' has unknown kind '" + kind + "'");
-      d.lo = s.ColumnReal(3);
-      d.hi = s.ColumnReal(4);
-      if (d.kind == sampling::DimensionKind::kEnumerated) {
+// The form's dimensions, in index order.
+void ReadDimensions(Db& db, sampling::Form& form) {
+  Stmt s(db, "SELECT idx, name, kind, lo, hi, enum_values FROM dimensions ORDER BY idx");
+  while (s.Next()) {
+    if (s.ColumnInt(0) != static_cast<std::int64_t>(form.dimensions.size())) throw Corrupt("dimension indices are not 0..n-1");
+    sampling::Dimension d;
+    d.name = s.ColumnText(1);
+    std::string kind = s.ColumnText(2);
+    if (!sampling::DimensionKindFromName(kind, &d.kind)) throw Corrupt("dimension '" + d.name + "' has unknown kind '" + kind + "'");
+    d.lo = s.ColumnReal(3);
+    d.hi = s.ColumnReal(4);
+    if (d.kind == sampling::DimensionKind::kEnumerated) {
+      try {
+        d.values = nlohmann::json::parse(s.ColumnText(5)).get<std::vector<std::string>>();
+      } catch (const std::exception&) {
+        throw Corrupt("dimension '" + d.name + "' has malformed enum_values");
+      }
+    }
+    form.dimensions.push_back(std::move(d));
+  }
+}
+
+// The samples of a form of n dimensions, in id order.
+void ReadSamples(Db& db, int n, sampling::Form& form) {
+  // Both versions have u0..u<n-1>; version 1 has NULL columns beyond them.
+  std::string select = "SELECT id, key";
+  for (int d = 0; d < n; ++d) select += ", u" + std::to_string(d);
+  Stmt s(db, select + ", valid, failure FROM samples ORDER BY id");
+  while (s.Next()) {
+    const auto id = static_cast<std::int64_t>(form.samples.size());
+    if (s.ColumnInt(0) != id) throw Corrupt("sample ids are not 0..n-1");
+    sampling::FormSample sample;
+    sample.key = SplitInts(s.ColumnText(1), "sample key");
+    if (static_cast<int>(sample.key.size()) != n) throw Corrupt("sample " + std::to_string(id) + " has a key of the wrong dimension");
+    for (int d = 0; d < n; ++d) {
+      if (s.ColumnType(2 + d) != SQLITE_FLOAT && s.ColumnType(2 + d) != SQLITE_INTEGER)
+        throw Corrupt("sample " + std::to_string(id) + " has no u" + std::to_string(d));
+      sample.u.push_back(s.ColumnReal(2 + d));
+    }
+    sample.outcome.valid = s.ColumnInt(2 + n) != 0;
+    sample.outcome.failure_type = s.ColumnText(3 + n);
+    if (!form.sample_ids.emplace(sample.key, id).second) throw Corrupt("two samples share key " + s.ColumnText(1));
+    form.samples.push_back(std::move(sample));
+  }
+}
+
+// Every sample's properties.
+void ReadSampleProperties(Db& db, sampling::Form& form) {
+  Stmt s(db, "SELECT sample_id, name, value FROM sample_properties ORDER BY sample_id, name");
+  while (s.Next()) {
+    auto id = s.ColumnInt(0);
+    if (id < 0 || id >= static_cast<std::int64_t>(form.samples.size()))
+      throw Corrupt("a property names sample " + std::to_string(id) + ", which does not exist");
+    form.samples[id].outcome.properties[s.ColumnText(1)] = s.ColumnReal(2);
+  }
+}
+
+// Every tree has nodes, a split node's children exist and a leaf's corners
+// are samples.
+void CheckTrees(const sampling::Form& form) {
+  for (std::size_t ti = 0; ti < form.trees.size(); ++ti) {
+    const auto& tree = form.trees[ti];
+    if (tree.nodes.empty()) throw Corrupt("tree " + std::to_string(ti) + " has no nodes");
+    for (const auto& node : tree.nodes) {
+      if (node.split_dimension >= 0) {
+        for (int c : node.children)
+          if (c <= 0 || c >= static_cast<int>(tree.nodes.size()))
+            throw Corrupt("a node of tree " + std::to_string(ti) + " has a child index out of range");
+      } else {
         try {
-          d.values = nlohmann::json::parse(s.ColumnText(5)).get<std::vector<std::string>>();
-        } catch (const std::exception&) {
-          throw Corrupt("dimension '" + d.name + "' has malformed enum_values");
-        }
-      }
-      form.dimensions.push_back(std::move(d));
-    }
-  }
-  const int n = static_cast<int>(form.dimensions.size());
-  const int max_dimensions = version == 1 ? 6 : sampling::kMaxDimensions;
-  if (n < 1 || n > max_dimensions)
-    throw Corrupt("the form has " + std::to_string(n) + " dimensions (1 to " + std::to_string(max_dimensions) +
-                  " expected)");
-  {
-    // Both versions have u0..u<n-1>; version 1 has NULL columns beyond them.
-    std::string select = "SELECT id, key";
-    for (int d = 0; d < n; ++d) select += ", u" + std::to_string(d);
-    Stmt s(db, select + ", valid, failure FROM samples ORDER BY id");
-    while (s.Next()) {
-      const auto id = static_cast<std::int64_t>(form.samples.size());
-      if (s.ColumnInt(0) != id) throw Corrupt("sample ids are not 0..n-1");
-      sampling::FormSample sample;
-      sample.key = SplitInts(s.ColumnText(1), "sample key");
-      if (static_cast<int>(sample.key.size()) != n) throw Corrupt("sample " + std::to_string(id) + " has a key of the wrong dimension");
-      for (int d = 0; d < n; ++d) {
-        if (s.ColumnType(2 + d) != SQLITE_FLOAT && s.ColumnType(2 + d) != SQLITE_INTEGER)
-          throw Corrupt("sample " + std::to_string(id) + " has no u" + std::to_string(d));
-        sample.u.push_back(s.ColumnReal(2 + d));
-      }
-      sample.outcome.valid = s.ColumnInt(2 + n) != 0;
-      sample.outcome.failure_type = s.ColumnText(3 + n);
-      if (!form.sample_ids.emplace(sample.key, id).second) throw Corrupt("two samples share key " + s.ColumnText(1));
-      form.samples.push_back(std::move(sample));
-    }
-  }
-  {
-    Stmt s(db, "SELECT sample_id, name, value FROM sample_properties ORDER BY sample_id, name");
-    while (s.Next()) {
-      auto id = s.ColumnInt(0);
-      if (id < 0 || id >= static_cast<std::int64_t>(form.samples.size()))
-        throw Corrupt("a property names sample " + std::to_string(id) + ", which does not exist");
-      form.samples[id].outcome.properties[s.ColumnText(1)] = s.ColumnReal(2);
-    }
-  }
-  {
-    Stmt t(db, "SELECT tree, cell FROM trees ORDER BY tree");
-    while (t.Next()) {
-      if (t.ColumnInt(0) != static_cast<std::int64_t>(form.trees.size())) throw Corrupt("tree indices are not 0..n-1");
-      sampling::FormTree tree;
-      for (auto c : SplitInts(t.ColumnText(1), "tree cell")) tree.cell.push_back(static_cast<int>(c));
-      form.trees.push_back(std::move(tree));
-    }
-    Stmt s(db,
-           "SELECT tree, node, depth, lo, hi, split_dimension, split_key, child_lo, child_hi, stop FROM nodes "
-           "ORDER BY tree, node");
-    while (s.Next()) {
-      auto ti = s.ColumnInt(0);
-      if (ti < 0 || ti >= static_cast<std::int64_t>(form.trees.size())) throw Corrupt("a node names a tree that does not exist");
-      auto& tree = form.trees[ti];
-      if (s.ColumnInt(1) != static_cast<std::int64_t>(tree.nodes.size()))
-        throw Corrupt("node indices of tree " + std::to_string(ti) + " are not 0..n-1");
-      sampling::FormNode node;
-      node.depth = static_cast<int>(s.ColumnInt(2));
-      node.lo = SplitInts(s.ColumnText(3), "node box");
-      node.hi = SplitInts(s.ColumnText(4), "node box");
-      node.split_dimension = static_cast<int>(s.ColumnInt(5));
-      node.split_key = s.ColumnInt(6);
-      node.children[0] = static_cast<int>(s.ColumnInt(7));
-      node.children[1] = static_cast<int>(s.ColumnInt(8));
-      node.stop = StopOf(s.ColumnText(9));
-      if (static_cast<int>(node.lo.size()) != n || static_cast<int>(node.hi.size()) != n)
-        throw Corrupt("a node of tree " + std::to_string(ti) + " has a box of the wrong dimension");
-      if (node.split_dimension >= n) throw Corrupt("a node splits a dimension that does not exist");
-      tree.nodes.push_back(std::move(node));
-    }
-    for (std::size_t ti = 0; ti < form.trees.size(); ++ti) {
-      const auto& tree = form.trees[ti];
-      if (tree.nodes.empty()) throw Corrupt("tree " + std::to_string(ti) + " has no nodes");
-      for (const auto& node : tree.nodes) {
-        if (node.split_dimension >= 0) {
-          for (int c : node.children)
-            if (c <= 0 || c >= static_cast<int>(tree.nodes.size()))
-              throw Corrupt("a node of tree " + std::to_string(ti) + " has a child index out of range");
-        } else {
-          try {
-            sampling::CornerSampleIds(form, node);
-          } catch (const std::out_of_range&) {
-            throw Corrupt("a leaf of tree " + std::to_string(ti) + " has a corner without a sample");
-          }
+          sampling::CornerSampleIds(form, node);
+        } catch (const std::out_of_range&) {
+          throw Corrupt("a leaf of tree " + std::to_string(ti) + " has a corner without a sample");
         }
       }
     }
   }
-  {
-    Stmt s(db, "SELECT a, b, dg FROM geometry_changes ORDER BY a, b");
-    const auto count = static_cast<std::int64_t>(form.samples.size());
-    while (s.Next()) {
-      auto x = s.ColumnInt(0), y = s.ColumnInt(1);
-      if (x < 0 || y < 0 || x >= count || y >= count) throw Corrupt("a ΔG value names a sample that does not exist");
-      form.geometry_changes[{x, y}] = s.ColumnReal(2);
-    }
+}
+
+// The k-d trees and their nodes (boxes of n dimensions), then CheckTrees.
+void ReadTrees(Db& db, int n, sampling::Form& form) {
+  Stmt t(db, "SELECT tree, cell FROM trees ORDER BY tree");
+  while (t.Next()) {
+    if (t.ColumnInt(0) != static_cast<std::int64_t>(form.trees.size())) throw Corrupt("tree indices are not 0..n-1");
+    sampling::FormTree tree;
+    for (auto c : SplitInts(t.ColumnText(1), "tree cell")) tree.cell.push_back(static_cast<int>(c));
+    form.trees.push_back(std::move(tree));
   }
+  Stmt s(db,
+         "SELECT tree, node, depth, lo, hi, split_dimension, split_key, child_lo, child_hi, stop FROM nodes "
+         "ORDER BY tree, node");
+  while (s.Next()) {
+    auto ti = s.ColumnInt(0);
+    if (ti < 0 || ti >= static_cast<std::int64_t>(form.trees.size())) throw Corrupt("a node names a tree that does not exist");
+    auto& tree = form.trees[ti];
+    if (s.ColumnInt(1) != static_cast<std::int64_t>(tree.nodes.size()))
+      throw Corrupt("node indices of tree " + std::to_string(ti) + " are not 0..n-1");
+    sampling::FormNode node;
+    node.depth = static_cast<int>(s.ColumnInt(2));
+    node.lo = SplitInts(s.ColumnText(3), "node box");
+    node.hi = SplitInts(s.ColumnText(4), "node box");
+    node.split_dimension = static_cast<int>(s.ColumnInt(5));
+    node.split_key = s.ColumnInt(6);
+    node.children[0] = static_cast<int>(s.ColumnInt(7));
+    node.children[1] = static_cast<int>(s.ColumnInt(8));
+    node.stop = StopOf(s.ColumnText(9));
+    if (static_cast<int>(node.lo.size()) != n || static_cast<int>(node.hi.size()) != n)
+      throw Corrupt("a node of tree " + std::to_string(ti) + " has a box of the wrong dimension");
+    if (node.split_dimension >= n) throw Corrupt("a node splits a dimension that does not exist");
+    tree.nodes.push_back(std::move(node));
+  }
+  CheckTrees(form);
+}
+
+// ΔG between pairs of samples.
+void ReadGeometryChanges(Db& db, sampling::Form& form) {
+  Stmt s(db, "SELECT a, b, dg FROM geometry_changes ORDER BY a, b");
+  const auto count = static_cast<std::int64_t>(form.samples.size());
+  while (s.Next()) {
+    auto x = s.ColumnInt(0), y = s.ColumnInt(1);
+    if (x < 0 || y < 0 || x >= count || y >= count) throw Corrupt("a ΔG value names a sample that does not exist");
+    form.geometry_changes[{x, y}] = s.ColumnReal(2);
+  }
+}
+
+// The geometry cache's entries (their grids and meshes with
+// options.load_geometry, each grid checked against its SHA-256) and curves.
+void ReadCache(Db& db, const ArtifactReadOptions& options, Artifact& a) {
   {
     Stmt s(db, "SELECT " + kCacheEntryMetadataColumns + (options.load_geometry ? ", grid, glb" : "") +
                    " FROM cache_entries ORDER BY key");
@@ -661,44 +677,68 @@ Artifact Read(Db& db, int version, const ArtifactReadOptions& options) {
       a.cache.push_back(std::move(e));
     }
   }
-  {
-    Stmt s(db, "SELECT strategy, step, entries, bytes, mean_seconds, worst_seconds FROM cache_curves ORDER BY strategy, step");
-    while (s.Next())
-      a.cache_curves.push_back({s.ColumnText(0), s.ColumnInt(1), s.ColumnInt(2), s.ColumnInt(3), s.ColumnReal(4), s.ColumnReal(5)});
+  Stmt s(db, "SELECT strategy, step, entries, bytes, mean_seconds, worst_seconds FROM cache_curves ORDER BY strategy, step");
+  while (s.Next())
+    a.cache_curves.push_back({s.ColumnText(0), s.ColumnInt(1), s.ColumnInt(2), s.ColumnInt(3), s.ColumnReal(4), s.ColumnReal(5)});
+}
+
+// The starting points, with their samples' parameter values.
+void ReadStartingPoints(Db& db, Artifact& a) {
+  const sampling::Form& form = a.form;
+  Stmt s(db, "SELECT idx, sample_id, component FROM starting_points ORDER BY idx");
+  while (s.Next()) {
+    StartingPoint p;
+    p.sample_id = s.ColumnInt(1);
+    p.component = static_cast<int>(s.ColumnInt(2));
+    if (p.sample_id < 0 || p.sample_id >= static_cast<std::int64_t>(form.samples.size()))
+      throw Corrupt("a starting point names sample " + std::to_string(p.sample_id) + ", which does not exist");
+    p.u = form.samples[p.sample_id].u;
+    a.starting_points.push_back(std::move(p));
   }
-  {
-    Stmt s(db, "SELECT idx, sample_id, component FROM starting_points ORDER BY idx");
-    while (s.Next()) {
-      StartingPoint p;
-      p.sample_id = s.ColumnInt(1);
-      p.component = static_cast<int>(s.ColumnInt(2));
-      if (p.sample_id < 0 || p.sample_id >= static_cast<std::int64_t>(form.samples.size()))
-        throw Corrupt("a starting point names sample " + std::to_string(p.sample_id) + ", which does not exist");
-      p.u = form.samples[p.sample_id].u;
-      a.starting_points.push_back(std::move(p));
+}
+
+// The bundle: exactly one job file and one design file, and the files they
+// name.
+void ReadBundle(Db& db, JobBundle& bundle) {
+  Stmt s(db, "SELECT role, name, bytes FROM bundle_files ORDER BY role, name");
+  int jobs = 0, designs = 0;
+  while (s.Next()) {
+    std::string role = s.ColumnText(0);
+    if (role == "job") {
+      bundle.job_file_name = s.ColumnText(1);
+      bundle.job_file = s.ColumnText(2);
+      ++jobs;
+    } else if (role == "design") {
+      bundle.design_file_name = s.ColumnText(1);
+      bundle.design_file = s.ColumnText(2);
+      ++designs;
+    } else if (role == "file") {
+      bundle.files[s.ColumnText(1)] = s.ColumnText(2);
+    } else {
+      throw Corrupt("bundle file of unknown role '" + role + "'");
     }
   }
-  {
-    Stmt s(db, "SELECT role, name, bytes FROM bundle_files ORDER BY role, name");
-    int jobs = 0, designs = 0;
-    while (s.Next()) {
-      std::string role = s.ColumnText(0);
-      if (role == "job") {
-        a.bundle.job_file_name = s.ColumnText(1);
-        a.bundle.job_file = s.ColumnText(2);
-        ++jobs;
-      } else if (role == "design") {
-        a.bundle.design_file_name = s.ColumnText(1);
-        a.bundle.design_file = s.ColumnText(2);
-        ++designs;
-      } else if (role == "file") {
-        a.bundle.files[s.ColumnText(1)] = s.ColumnText(2);
-      } else {
-        throw Corrupt("bundle file of unknown role '" + role + "'");
-      }
-    }
-    if (jobs != 1 || designs != 1) throw Corrupt("the bundle needs exactly one job file and one design file");
-  }
+  if (jobs != 1 || designs != 1) throw Corrupt("the bundle needs exactly one job file and one design file");
+}
+
+Artifact Read(Db& db, int version, const ArtifactReadOptions& options) {
+  Artifact a;
+  a.manifest = ReadManifest(db, version, options);
+  sampling::Form& form = a.form;
+  form.subdivisions = a.manifest.subdivisions;
+  ReadDimensions(db, form);
+  const int n = static_cast<int>(form.dimensions.size());
+  const int max_dimensions = version == 1 ? 6 : sampling::kMaxDimensions;
+  if (n < 1 || n > max_dimensions)
+    throw Corrupt("the form has " + std::to_string(n) + " dimensions (1 to " + std::to_string(max_dimensions) +
+                  " expected)");
+  ReadSamples(db, n, form);
+  ReadSampleProperties(db, form);
+  ReadTrees(db, n, form);
+  ReadGeometryChanges(db, form);
+  ReadCache(db, options, a);
+  ReadStartingPoints(db, a);
+  ReadBundle(db, a.bundle);
   try {
     form.space();
   } catch (const std::exception& e) {

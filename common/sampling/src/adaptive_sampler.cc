@@ -2,19 +2,15 @@
 #include "fabatlas/sampling/adaptive_sampler.h"
 
 #include <algorithm>
-#include <chrono>
 #include <functional>
 #include <set>
 
 #include "fabatlas/error.h"
+#include "fabatlas/stopwatch.h"
 
 namespace fabatlas::sampling {
 
 namespace {
-
-double Now() {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
-}
 
 using Edge = std::pair<std::int64_t, std::int64_t>;
 
@@ -36,14 +32,14 @@ class Sampler {
   }
 
   SamplingSummary Run() {
-    const double t0 = Now();
+    const Stopwatch wall_time;
     std::vector<LeafRef> frontier = Bootstrap();
     bool budget_exhausted = false;
     while (!frontier.empty()) {
       ComputeGeometryChanges(frontier);
       frontier = Refine(frontier, &budget_exhausted);
     }
-    stats_.wall_seconds = Now() - t0;
+    stats_.wall_seconds = wall_time.Seconds();
     stats_.sampling_logic_seconds = stats_.wall_seconds - executor_seconds_;
     FinishStatistics();
     return SamplingSummary{std::move(form_), std::move(stats_)};
@@ -92,9 +88,9 @@ class Sampler {
       if (!form_.sample_ids.count(k)) tasks.push_back({SamplePoint{k, space_.point(k)}});
     if (tasks.empty()) return;
     std::vector<TaskTiming> timings;
-    const double t0 = Now();
+    const Stopwatch executor_time;
     std::vector<SampleOutcome> outcomes = executor_.RunSampleTasks(tasks, evaluator_, &timings);
-    executor_seconds_ += Now() - t0;
+    executor_seconds_ += executor_time.Seconds();
     if (outcomes.size() != tasks.size())
       throw std::runtime_error("executor returned a wrong number of sample results");
     for (size_t i = 0; i < tasks.size(); ++i) {
@@ -133,9 +129,9 @@ class Sampler {
       tasks.push_back({e.first, e.second, SamplePoint{a.key, a.u}, SamplePoint{b.key, b.u}});
     }
     std::vector<TaskTiming> timings;
-    const double t0 = Now();
+    const Stopwatch executor_time;
     auto results = executor_.RunGeometryChangeTasks(tasks, evaluator_, &timings);
-    executor_seconds_ += Now() - t0;
+    executor_seconds_ += executor_time.Seconds();
     if (results.size() != tasks.size())
       throw std::runtime_error("executor returned a wrong number of ΔG results");
     for (size_t i = 0; i < tasks.size(); ++i) {

@@ -2,12 +2,13 @@
 
 #include <time.h>
 
-#include <chrono>
 #include <stdexcept>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
+
+#include "fabatlas/stopwatch.h"
 
 namespace fabatlas::sampling {
 
@@ -16,9 +17,6 @@ double ThreadCpuSeconds() {
   timespec ts{};
   clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
   return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
-}
-double WallSeconds() {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
 }
 }  // namespace
 
@@ -45,10 +43,11 @@ std::vector<Result> RunTimed(tbb::task_arena& arena, size_t n, Run run, std::vec
   arena.execute([&] {
     tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1), [&](const tbb::blocked_range<size_t>& r) {
       for (size_t i = r.begin(); i != r.end(); ++i) {
-        const double c0 = ThreadCpuSeconds(), w0 = WallSeconds();
+        const double c0 = ThreadCpuSeconds();
+        const Stopwatch wall_time;
         run(i, results[i]);
         results[i].cpu_seconds = ThreadCpuSeconds() - c0;
-        local[i].wall_seconds = WallSeconds() - w0;
+        local[i].wall_seconds = wall_time.Seconds();
       }
     });
   });

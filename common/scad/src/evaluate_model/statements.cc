@@ -1,0 +1,219 @@
+// Statements of evaluate_model.h's evaluator (evaluator.h): scopes'
+// definitions and assignments, blocks, if, for, intersection_for, let,
+// modifiers, user modules and children() (built-in modules:
+// builtin_modules.h).
+#include <cmath>
+
+#include "builtin_modules.h"
+#include "evaluator.h"
+
+namespace fabatlas::scad::internal {
+
+void Evaluator::Run(const std::vector<StmtPtr>& body, Scope& scope, std::vector<CsgOut>& out) {
+  Define(body, scope);
+  for (const StmtPtr& s : body) Instantiate(*s, scope, out);
+}
+
+void Evaluator::Define(const std::vector<StmtPtr>& body, Scope& scope) {
+  for (const StmtPtr& s : body) {
+    if (s->kind == Stmt::Kind::kModuleDef) scope.modules[s->name] = s->module;
+    else if (s->kind == Stmt::Kind::kFunctionDef) scope.functions[s->name] = s->function;
+  }
+  for (const StmtPtr& s : body) {
+    if (s->kind != Stmt::Kind::kAssign) continue;
+    if (scope.vars.count(s->name)) throw NotNative{s->line, "'" + s->name + "' assigned twice in one scope"};
+    scope.vars[s->name] = Eval(*s->expr, scope);
+  }
+}
+
+std::vector<CsgOut> Evaluator::Children(const Stmt& s, const Scope& call) {
+  std::vector<CsgOut> out;
+  Scope inner;
+  inner.lexical = inner.dynamic = &call;
+  Run(s.children, inner, out);
+  return out;
+}
+
+// The nodes of one statement appended to out.
+void Evaluator::Instantiate(const Stmt& s, Scope& scope, std::vector<CsgOut>& out) {
+  Guard(s.line);
+  if (!s.modifier.empty()) {
+    Modified(s, scope, out);
+    return;
+  }
+  switch (s.kind) {
+    case Stmt::Kind::kAssign:
+    case Stmt::Kind::kModuleDef:
+    case Stmt::Kind::kFunctionDef:
+    case Stmt::Kind::kDisabled: return;
+    case Stmt::Kind::kBlock: Block(s, scope, out); return;
+    case Stmt::Kind::kIf: If(s, scope, out); return;
+    case Stmt::Kind::kFor: For(s, scope, out); return;
+    case Stmt::Kind::kIntersectionFor: IntersectionFor(s, scope, out); return;
+    case Stmt::Kind::kLet: Let(s, scope, out); return;
+    case Stmt::Kind::kCall: CallModule(s, scope, out); return;
+  }
+}
+
+// `#` or `%` before a statement that makes at most one node.
+void Evaluator::Modified(const Stmt& s, Scope& scope, std::vector<CsgOut>& out) {
+  Stmt plain = s;
+  plain.modifier.clear();
+  const std::size_t before = out.size();
+  Instantiate(plain, scope, out);
+  if (out.size() > before + 1) throw NotNative{s.line, "modifier '" + s.modifier + "' on several nodes"};
+  if (out.size() == before + 1) out.back().modifier = s.modifier;
+}
+
+// A bare `{ }` block: its statements in the enclosing scope.
+void Evaluator::Block(const Stmt& s, Scope& scope, std::vector<CsgOut>& out) {
+  for (const StmtPtr& c : s.children) {
+    if (c->kind == Stmt::Kind::kAssign || c->kind == Stmt::Kind::kModuleDef || c->kind == Stmt::Kind::kFunctionDef)
+      throw NotNative{c->line, "a definition inside a bare { } block"};
+    Instantiate(*c, scope, out);
+  }
+}
+
+void Evaluator::If(const Stmt& s, Scope& scope, std::vector<CsgOut>& out) {
+  const bool then = Eval(*s.expr, scope).Truthy();
+  if (!then && s.otherwise.empty()) return;
+  CsgOut group{"group()", {}};
+  Scope inner;
+  inner.lexical = inner.dynamic = &scope;
+  Run(then ? s.children : s.otherwise, inner, group.children);
+  out.push_back(std::move(group));
+}
+
+void Evaluator::For(const Stmt& s, Scope& scope, std::vector<CsgOut>& out) {
+  CsgOut group{"group()", {}};
+  Loop(s.bindings, 0, scope, [&](const Scope& bound) {
+    Scope inner;
+    inner.lexical = inner.dynamic = &bound;
+    Run(s.children, inner, group.children);
+  });
+  out.push_back(std::move(group));
+}
+
+// OpenSCAD exports intersection() of every iteration's nodes side by side,
+// which is the intersection only when each iteration makes one node (its
+// render intersects each iteration's union): declined otherwise.
+void Evaluator::IntersectionFor(const Stmt& s, Scope& scope, std::vector<CsgOut>& out) {
+  CsgOut both{"intersection()", {}};
+  Loop(s.bindings, 0, scope, [&](const Scope& bound) {
+    Scope inner;
+    inner.lexical = inner.dynamic = &bound;
+    const std::size_t before = both.children.size();
+    Run(s.children, inner, both.children);
+    if (both.children.size() != before + 1)
+      throw NotNative{s.line, "intersection_for with an iteration making other than one node"};
+  });
+  out.push_back(std::move(both));
+}
+
+void Evaluator::Let(const Stmt& s, Scope& scope, std::vector<CsgOut>& out) {
+  CsgOut group{"group()", {}};
+  Scope bound;
+  bound.lexical = bound.dynamic = &scope;
+  Bind(s.bindings, bound);
+  Scope inner;
+  inner.lexical = inner.dynamic = &bound;
+  Run(s.children, inner, group.children);
+  out.push_back(std::move(group));
+}
+
+namespace {
+
+// Whether a child statement counts for $children and children(i) (OpenSCAD
+// counts module instantiations, not assignments or definitions).
+std::size_t Instantiates(const Stmt& s) {
+  return s.kind == Stmt::Kind::kCall || s.kind == Stmt::Kind::kIf || s.kind == Stmt::Kind::kFor ||
+                 s.kind == Stmt::Kind::kIntersectionFor || s.kind == Stmt::Kind::kLet || s.kind == Stmt::Kind::kBlock
+             ? 1
+             : 0;
+}
+
+}  // namespace
+
+// A module instantiation: echo, children, a user module, assert, or a
+// built-in module.
+void Evaluator::CallModule(const Stmt& s, Scope& scope, std::vector<CsgOut>& out) {
+  if (s.name == "echo") {
+    if (!s.children.empty()) {
+      Scope call;
+      call.lexical = call.dynamic = &scope;
+      out.push_back({"group()", Children(s, call)});
+    }
+    return;
+  }
+  if (s.name == "children") {
+    ChildrenCall(s, scope, out);
+    return;
+  }
+  if (auto m = scope.Module(s.name)) {
+    UserModule(s, *m, scope, out);
+    return;
+  }
+  Scope call;
+  call.lexical = call.dynamic = &scope;
+  if (s.name == "assert") {
+    std::map<std::string, Value> specials;
+    auto args = Match(s.bindings, {"condition", "message"}, scope, s.line, &specials);
+    if (!args["condition"].Truthy()) throw NotNative{s.line, "a failed assert"};
+    if (!s.children.empty()) out.push_back({"group()", Children(s, call)});
+    return;
+  }
+  CallBuiltinModule(*this, s, scope, call, out);
+}
+
+// A user module's body as a group(), its parameters bound and its children
+// kept for children().
+void Evaluator::UserModule(const Stmt& s, const ModuleDef& m, Scope& scope, std::vector<CsgOut>& out) {
+  if (++depth_ > 10000) throw NotNative{s.line, "recursion deeper than 10,000 calls"};
+  Scope body;
+  body.lexical = DefinitionScope(s.name, scope, /*module=*/true);
+  body.dynamic = &scope;
+  body.module_body = true;
+  body.children = &s.children;
+  body.children_scope = &scope;
+  BindParameters(m.params, s.bindings, scope, body, s.line);
+  std::size_t count = 0;
+  for (const StmtPtr& c : s.children) count += Instantiates(*c);
+  body.vars["$children"] = Value::Number(static_cast<double>(count));
+  CsgOut group{"group()", {}};
+  Run(m.body, body, group.children);
+  out.push_back(std::move(group));
+  --depth_;
+}
+
+// children() (all, as a group()) or children(i) of the module body the
+// call is in; nothing at top level.
+void Evaluator::ChildrenCall(const Stmt& s, Scope& scope, std::vector<CsgOut>& out) {
+  const Scope* body = scope.Body();
+  if (!body) return;  // top level: no children
+  if (!s.children.empty()) throw NotNative{s.line, "children() with children"};
+  std::vector<const Stmt*> instantiations;
+  for (const StmtPtr& c : *body->children) {
+    if (c->kind == Stmt::Kind::kBlock) throw NotNative{c->line, "a { } block among a module's children"};
+    if (Instantiates(*c)) instantiations.push_back(c.get());
+  }
+  // The children run where they were written, with the $-variables of the
+  // place children() is called.
+  Scope written;
+  written.lexical = body->children_scope;
+  written.dynamic = &scope;
+  Define(*body->children, written);
+  if (s.bindings.empty()) {
+    CsgOut group{"group()", {}};
+    for (const Stmt* c : instantiations) Instantiate(*c, written, group.children);
+    out.push_back(std::move(group));
+    return;
+  }
+  if (s.bindings.size() != 1 || !s.bindings[0].name.empty()) throw NotNative{s.line, "children() with these arguments"};
+  const Value i = Eval(*s.bindings[0].expr, scope);
+  if (!i.IsNumber()) throw NotNative{s.line, "children() of a vector or range"};
+  const double k = std::floor(i.number);
+  if (!(k >= 0 && k < static_cast<double>(instantiations.size()))) return;
+  Instantiate(*instantiations[static_cast<std::size_t>(k)], written, out);
+}
+
+}  // namespace fabatlas::scad::internal
