@@ -10,7 +10,7 @@
 # FABATLAS_SERVE=1 / 0 forces either; FABATLAS_PORT picks the port (8080).
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
-bash "$root/ops/build.sh"
+bash "$root/ops/build.sh" fabatlas fabatlas-coordinator fabatlas-worker fabatlas_web
 "$root/build/bin/fabatlas" run "$root/configs/jobs/pawn.yaml" --workers 2 --out "$root/out/pawn"
 echo "validity map: $root/out/pawn/map_head_height.png"
 port="${FABATLAS_PORT:-8080}"
