@@ -169,7 +169,10 @@ void BlobStore::Finish(const std::string& digest) {
   }
   fs::path final_path = PathOf(digest);
   std::error_code ec;
-  fs::create_directories(final_path.parent_path(), ec);
+  // A new ab/ directory's name is durable once ROOT is synced: without it a
+  // power loss could take the directory, and the blob with it, away after
+  // the blob was reported stored.
+  if (fs::create_directories(final_path.parent_path(), ec)) FsyncDirectory(root_);
   if (ec) throw ResourceError(final_path.parent_path().string() + ": " + ec.message());
   if (::rename(partial.c_str(), final_path.c_str()) != 0) IoFail(final_path, "rename", errno);
   FsyncDirectory(final_path.parent_path());

@@ -348,6 +348,19 @@ JobStore::~JobStore() {
   if (db_) db_->Close();
 }
 
+void JobStore::Sync() {
+  std::lock_guard lock(mutex_);
+  // The WAL's file (SQLITE_FCNTL_JOURNAL_POINTER): with synchronous=NORMAL
+  // SQLite syncs it only at checkpoints, and a commit is durable once its
+  // frames are (SQLite, "Write-Ahead Logging", docs/references.md).
+  sqlite3_file* wal = nullptr;
+  if (sqlite3_file_control(db_->handle, "main", SQLITE_FCNTL_JOURNAL_POINTER, &wal) != SQLITE_OK)
+    db_->Fail("find the write-ahead log");
+  if (!wal || !wal->pMethods) return;  // no WAL open: every commit is in the database file, synced
+  if (wal->pMethods->xSync(wal, SQLITE_SYNC_NORMAL) != SQLITE_OK)
+    throw ResourceError(db_->path + "-wal: cannot sync the write-ahead log");
+}
+
 int JobStore::Checkpoint() {
   std::lock_guard lock(checkpoint_mutex_);
   if (!checkpoint_db_) {

@@ -339,6 +339,14 @@ class JobStore {
   // line per violation (empty = consistent).
   std::vector<std::string> CheckConsistency();
 
+  // Makes every transaction committed so far survive a power loss (one
+  // fsync of the WAL), whatever fsync_every_commit says. For the few
+  // commits a client or a deletion depends on: a submitted job (the client
+  // was told its id) and the references blob collection reads (a blob swept
+  // because a job ended must never be needed again by a store rolled back to
+  // before that end). Throws ResourceError when the sync fails.
+  void Sync();
+
   // Copies committed WAL pages into the database file (a PASSIVE checkpoint
   // on a second connection, so commits go on meanwhile). Returns the pages
   // checkpointed. For background_checkpoints.
