@@ -202,10 +202,19 @@ std::int64_t EventsOfRun(bool fsync_commits) {
   return events[fsync_commits];
 }
 
+// Failures recorded so far in the running test (a point failed when it grew).
+int FailuresSoFar() {
+  const ::testing::TestResult* r = ::testing::UnitTest::GetInstance()->current_test_info()->result();
+  int n = 0;
+  for (int i = 0; i < r->total_part_count(); ++i) n += r->GetTestPartResult(i).failed();
+  return n;
+}
+
 struct PointOutcome {
   bool cut = false;        // the coordinator died at its crash point
   std::int64_t acknowledged = 0, lost = 0;
   double cut_seconds = 0, total_seconds = 0;  // from the point's start
+  bool failed = false;
 };
 
 // One seeded crash point: the job under the shim until the cut, the checks
@@ -219,6 +228,7 @@ PointOutcome RunPoint(std::uint64_t seed, bool fsync_commits) {
                            " (crash at event " + std::to_string(crash_at) + " of " + std::to_string(events) +
                            (torn ? ", torn" : "") + "; rerun: FABATLAS_POWER_SEED=" + std::to_string(seed) + ")";
   SCOPED_TRACE(what);
+  const int failures_before = FailuresSoFar();
   const auto started = std::chrono::steady_clock::now();
   const auto since = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count(); };
   const fs::path dir = FreshDir("power_" + std::to_string(seed) + (fsync_commits ? "_fsync" : ""));
@@ -260,6 +270,8 @@ PointOutcome RunPoint(std::uint64_t seed, bool fsync_commits) {
     EXPECT_EQ(s.state(), v1::JOB_STATE_SUCCEEDED) << what << ReadText(state / "coordinator.log");
     ::kill(worker, SIGTERM);
     WaitExit(worker, std::chrono::seconds(30));
+    out.failed = FailuresSoFar() > failures_before;
+    if (!out.failed && !std::getenv("FABATLAS_POWER_KEEP")) fs::remove_all(dir);
     return out;
   }
   out.cut_seconds = since();
@@ -280,6 +292,7 @@ PointOutcome RunPoint(std::uint64_t seed, bool fsync_commits) {
   EXPECT_EQ(c.port, port) << what << ReadText(state / "coordinator.log");
   if (c.port != port) {
     KillAndReap(worker);
+    out.failed = true;
     return out;
   }
   id = Client(port).Submit(JobPath());  // what a client told nothing does; a no-op for a stored job
@@ -291,7 +304,8 @@ PointOutcome RunPoint(std::uint64_t seed, bool fsync_commits) {
   WaitExit(worker, std::chrono::seconds(30));
   StopAndCheck(c, state, id, what);
   out.total_seconds = since();
-  if (!::testing::Test::HasFailure() && !std::getenv("FABATLAS_POWER_KEEP")) fs::remove_all(dir);
+  out.failed = FailuresSoFar() > failures_before;
+  if (!out.failed && !std::getenv("FABATLAS_POWER_KEEP")) fs::remove_all(dir);
   return out;
 }
 
@@ -317,7 +331,7 @@ void RunPoints(bool fsync_commits, std::int64_t default_points) {
     std::cerr << "power point seed " << seed << (fsync_commits ? " fsync" : " nofsync") << ": "
               << (o.cut ? "cut" : "no cut (job finished first)") << ", acknowledged " << o.acknowledged << ", lost "
               << o.lost << ", " << o.cut_seconds << " s to the cut, " << o.total_seconds << " s in all"
-              << (::testing::Test::HasFailure() ? "  FAILED" : "") << "\n";
+              << (o.failed ? "  FAILED" : "") << "\n";
   }
   std::cerr << "power loss " << (fsync_commits ? "with" : "without") << " --fsync-commits: " << points
             << " points, " << cuts << " cuts, " << acknowledged << " acknowledged results before the cuts, " << lost
