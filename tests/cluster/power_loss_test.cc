@@ -323,7 +323,13 @@ void RunPoints(bool fsync_commits, std::int64_t default_points) {
   std::int64_t points = 0, cuts = 0, acknowledged = 0, lost = 0;
   const auto started = std::chrono::steady_clock::now();
   for (std::uint64_t seed : seeds) {
-    const PointOutcome o = RunPoint(seed, fsync_commits);
+    PointOutcome o;
+    try {
+      o = RunPoint(seed, fsync_commits);
+    } catch (const std::exception& e) {  // one point's error must not end the run
+      ADD_FAILURE() << "seed " << seed << (fsync_commits ? " --fsync-commits" : "") << ": " << e.what();
+      o.failed = true;
+    }
     ++points;
     cuts += o.cut;
     acknowledged += o.acknowledged;
