@@ -346,9 +346,9 @@ void RunPoints(bool fsync_commits, std::int64_t default_points) {
   EXPECT_GT(cuts, 0);
 }
 
-TEST(PowerLoss, WithFsyncCommitsEveryAcknowledgedResultSurvivesAndTheArtifactIsTheSame) { RunPoints(true, 6); }
+TEST(PowerLoss, WithFsyncCommitsEveryAcknowledgedResultSurvivesAndTheArtifactIsTheSame) { RunPoints(true, 5); }
 
-TEST(PowerLoss, WithoutFsyncCommitsLostWorkIsRedoneAndTheArtifactIsTheSame) { RunPoints(false, 6); }
+TEST(PowerLoss, WithoutFsyncCommitsLostWorkIsRedoneAndTheArtifactIsTheSame) { RunPoints(false, 5); }
 
 // One fault loop: faults of `error` on every `stride`-th write of the files
 // matching `match`, from write `first`, each for 300 ms.

@@ -364,6 +364,7 @@ class JobStore {
   // CountTasks of each job asked for so far, moved by every committed change
   // (job_store.cc CountDeltas); under mutex_.
   std::map<std::string, TaskCounts> counts_;
+  std::int64_t synced_changes_ = -1;  // sqlite3_total_changes64 at the last Sync; under mutex_
   std::mutex checkpoint_mutex_;
   std::unique_ptr<Db> checkpoint_db_;
 };
