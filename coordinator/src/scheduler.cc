@@ -78,9 +78,8 @@ void Coordinator::Impl::CollectBlobs(const std::string& reason) {
   // The store a power loss could roll back to must not name a blob swept
   // now (a job's end drops its geometry references; rolled back, the job
   // replays and needs them): what `keep` was read from is made durable
-  // first.
-  store->Sync();
-  const storage::BlobStore::Collection c = blobs->Collect(keep, cutoff);
+  // before the first blob goes.
+  const storage::BlobStore::Collection c = blobs->Collect(keep, cutoff, [this] { store->Sync(); });
   blobs_collected_total += c.blobs_removed;
   blob_bytes_collected_total += c.bytes_removed;
   if (c.blobs_removed > 0)

@@ -268,7 +268,9 @@ std::int64_t ModifiedUnixMs(const struct stat& st) {
 
 }  // namespace
 
-BlobStore::Collection BlobStore::Collect(const std::vector<std::string>& keep, std::int64_t cutoff_unix_ms) {
+BlobStore::Collection BlobStore::Collect(const std::vector<std::string>& keep, std::int64_t cutoff_unix_ms,
+                                         const std::function<void()>& before_removing) {
+  bool removing = false;
   std::vector<std::string> sorted = keep;
   std::sort(sorted.begin(), sorted.end());
   Collection c;
@@ -289,6 +291,8 @@ BlobStore::Collection BlobStore::Collect(const std::vector<std::string>& keep, s
         c.bytes_kept += st.st_size;
         continue;
       }
+      if (!removing && before_removing) before_removing();
+      removing = true;
       std::lock_guard lock(mutex_);  // not while an upload of this digest publishes
       if (::unlink(f.path().c_str()) == 0) {
         ++c.blobs_removed;

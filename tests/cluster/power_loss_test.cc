@@ -120,6 +120,10 @@ struct AfterCut {
 
 AfterCut ReadAfterCut(const fs::path& state, const std::string& job_id, const std::vector<std::string>& acked) {
   AfterCut a;
+  if (!fs::exists(state / "state.db")) {  // the cut came before the store was created: a fresh start
+    a.integrity = "ok";
+    return a;
+  }
   sqlite3* db = nullptr;
   if (sqlite3_open_v2((state / "state.db").c_str(), &db, SQLITE_OPEN_READWRITE, nullptr) != SQLITE_OK) {
     a.integrity = std::string("cannot open: ") + sqlite3_errmsg(db);
