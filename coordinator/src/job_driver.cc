@@ -86,8 +86,13 @@ void Coordinator::Impl::Drive(const std::string& job_id) {
                {"publish_seconds",
                 std::chrono::duration<double>(std::chrono::steady_clock::now() - executor.publish_started()).count()}});
     // The published artifact holds what the cache plan kept: the job's
-    // geometry blobs go now.
-    CollectBlobs("job " + job_id + " published");
+    // geometry blobs go now. A collection that cannot write (an I/O error)
+    // is the sweeper's to retry, not a reason to run the published job again.
+    try {
+      CollectBlobs("job " + job_id + " published");
+    } catch (const ResourceError& e) {
+      StateWriteFailed("blob collection", e.what());
+    }
   } catch (const Stopping&) {
   } catch (const JobCancelled&) {
   } catch (const ResourceError& e) {

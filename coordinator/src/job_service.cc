@@ -45,6 +45,9 @@ class JobServiceImpl final : public ServiceOn<v1::JobService::Service> {
           impl_.cancelled_jobs.erase(id);
         }
       }
+      // The client is told the job exists: that survives a power loss even
+      // without --fsync-commits (JobStore::Sync).
+      impl_.store->Sync();
       impl_.Event(id, created ? "submitted" : "resubmitted", "design " + design.name);
       log::Info("job_submitted", {{"job", id}, {"design", design.name}, {"created", created}});
       auto job = impl_.store->FindJob(id);
@@ -91,6 +94,7 @@ class JobServiceImpl final : public ServiceOn<v1::JobService::Service> {
     if (!job) return Status(StatusCode::NOT_FOUND, "no job " + req->job_id());
     if (!Terminal(job->state)) {
       impl_.store->SetJobState(job->id, storage::JobState::kCancelled, "", NowMs());
+      impl_.store->Sync();  // an acknowledged cancel survives a power loss
       {
         std::lock_guard lock(impl_.results_mu);
         impl_.cancelled_jobs.insert(job->id);

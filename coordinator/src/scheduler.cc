@@ -75,7 +75,11 @@ void Coordinator::Impl::CollectBlobs(const std::string& reason) {
   const std::int64_t oldest_lease = store->OldestActiveLeaseMs();
   if (oldest_lease >= 0) cutoff = std::min(cutoff, oldest_lease - 1000);
   const std::vector<std::string> keep = store->ReferencedBlobs();
-  const storage::BlobStore::Collection c = blobs->Collect(keep, cutoff);
+  // The store a power loss could roll back to must not name a blob swept
+  // now (a job's end drops its geometry references; rolled back, the job
+  // replays and needs them): what `keep` was read from is made durable
+  // before the first blob goes.
+  const storage::BlobStore::Collection c = blobs->Collect(keep, cutoff, [this] { store->Sync(); });
   blobs_collected_total += c.blobs_removed;
   blob_bytes_collected_total += c.bytes_removed;
   if (c.blobs_removed > 0)

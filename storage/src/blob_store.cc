@@ -169,7 +169,10 @@ void BlobStore::Finish(const std::string& digest) {
   }
   fs::path final_path = PathOf(digest);
   std::error_code ec;
-  fs::create_directories(final_path.parent_path(), ec);
+  // A new ab/ directory's name is durable once ROOT is synced: without it a
+  // power loss could take the directory, and the blob with it, away after
+  // the blob was reported stored.
+  if (fs::create_directories(final_path.parent_path(), ec)) FsyncDirectory(root_);
   if (ec) throw ResourceError(final_path.parent_path().string() + ": " + ec.message());
   if (::rename(partial.c_str(), final_path.c_str()) != 0) IoFail(final_path, "rename", errno);
   FsyncDirectory(final_path.parent_path());
@@ -265,7 +268,9 @@ std::int64_t ModifiedUnixMs(const struct stat& st) {
 
 }  // namespace
 
-BlobStore::Collection BlobStore::Collect(const std::vector<std::string>& keep, std::int64_t cutoff_unix_ms) {
+BlobStore::Collection BlobStore::Collect(const std::vector<std::string>& keep, std::int64_t cutoff_unix_ms,
+                                         const std::function<void()>& before_removing) {
+  bool removing = false;
   std::vector<std::string> sorted = keep;
   std::sort(sorted.begin(), sorted.end());
   Collection c;
@@ -286,6 +291,8 @@ BlobStore::Collection BlobStore::Collect(const std::vector<std::string>& keep, s
         c.bytes_kept += st.st_size;
         continue;
       }
+      if (!removing && before_removing) before_removing();
+      removing = true;
       std::lock_guard lock(mutex_);  // not while an upload of this digest publishes
       if (::unlink(f.path().c_str()) == 0) {
         ++c.blobs_removed;

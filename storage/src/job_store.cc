@@ -348,6 +348,27 @@ JobStore::~JobStore() {
   if (db_) db_->Close();
 }
 
+void JobStore::Sync() {
+  std::lock_guard lock(mutex_);
+  // Nothing committed since the last Sync: nothing to make durable (an idle
+  // coordinator's periodic blob collection costs no fsync).
+  const std::int64_t changes = sqlite3_total_changes64(db_->handle);
+  if (changes == synced_changes_) return;
+  // The WAL's file (SQLITE_FCNTL_JOURNAL_POINTER): with synchronous=NORMAL
+  // SQLite syncs it only at checkpoints, and a commit is durable once its
+  // frames are (SQLite, "Write-Ahead Logging", docs/references.md).
+  sqlite3_file* wal = nullptr;
+  if (sqlite3_file_control(db_->handle, "main", SQLITE_FCNTL_JOURNAL_POINTER, &wal) != SQLITE_OK)
+    db_->Fail("find the write-ahead log");
+  if (!wal || !wal->pMethods) {  // no WAL open: every commit is in the database file, synced
+    synced_changes_ = changes;
+    return;
+  }
+  if (wal->pMethods->xSync(wal, SQLITE_SYNC_NORMAL) != SQLITE_OK)
+    throw ResourceError(db_->path + "-wal: cannot sync the write-ahead log");
+  synced_changes_ = changes;
+}
+
 int JobStore::Checkpoint() {
   std::lock_guard lock(checkpoint_mutex_);
   if (!checkpoint_db_) {

@@ -135,6 +135,13 @@ v1::SyncRequest Worker::NextSyncRequest(bool* leaving) {
 
 void Worker::TakeSyncResponse(v1::SyncResponse& resp) {
   summary_.results_acknowledged += resp.acknowledged_lease_ids_size();
+  // Which results the coordinator stored (the power-loss test's witness of
+  // what was acknowledged before a cut, docs/testing.md).
+  if (resp.acknowledged_lease_ids_size() > 0 && log::Enabled(log::Level::kDebug)) {
+    std::string ids;
+    for (const auto& id : resp.acknowledged_lease_ids()) ids += (ids.empty() ? "" : ",") + id;
+    log::Debug("results_acknowledged", {{"worker", o_.worker_id}, {"leases", ids}});
+  }
   if (resp.heartbeat_interval_ms() > 0) heartbeat_ms_ = resp.heartbeat_interval_ms();
   Revoke(resp.revoked_lease_ids());
   for (auto& lease : *resp.mutable_leases()) {

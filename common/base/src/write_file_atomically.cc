@@ -3,7 +3,9 @@
 #include <fcntl.h>
 #include <unistd.h>
 
+#include <atomic>
 #include <cerrno>
+#include <cstdint>
 #include <cstring>
 
 #include "fabatlas/error.h"
@@ -20,8 +22,13 @@ namespace {
 }  // namespace
 
 void WriteFileAtomically(const std::filesystem::path& path, const std::string& bytes) {
+  // One temporary name per call: two threads writing one path (a Submit
+  // materialising a job's files while its resumed driver does) each rename
+  // a whole file; with one name per process one renamed the other's file
+  // and the other's rename failed (ENOENT), found by power_loss_test.
+  static std::atomic<std::uint64_t> calls{0};
   std::filesystem::path tmp = path;
-  tmp += ".tmp-" + std::to_string(::getpid());
+  tmp += ".tmp-" + std::to_string(::getpid()) + "-" + std::to_string(calls++);
   int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
   if (fd < 0) Fail(path, "cannot create file", errno);
   std::size_t done = 0;

@@ -7,12 +7,13 @@
 namespace fabatlas {
 
 // Writes `bytes` to `path` through a temporary file beside it
-// ("<path>.tmp-<pid>"), fsync and rename, so neither a crash nor a failed
-// write leaves a partial file under the final name; a failed write removes
-// the temporary file. Errors are one line naming `path`: ResourceError
-// "<path>: disk full while writing" on ENOSPC (or EDQUOT, EFBIG), otherwise
-// InputError with the system's reason. Not thread-safe for one path from
-// several threads of a process (they share the temporary name).
+// ("<path>.tmp-<pid>-<n>", n counting the calls of the process), fsync and
+// rename, so neither a crash nor a failed write leaves a partial file under
+// the final name; a failed write removes the temporary file. Errors are one
+// line naming `path`: ResourceError "<path>: disk full while writing" on
+// ENOSPC (or EDQUOT, EFBIG), otherwise InputError with the system's reason.
+// Thread-safe: threads writing one path each put a whole file there, the
+// last rename wins.
 void WriteFileAtomically(const std::filesystem::path& path, const std::string& bytes);
 
 }  // namespace fabatlas

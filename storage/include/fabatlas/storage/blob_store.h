@@ -16,6 +16,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <mutex>
 #include <string>
 #include <vector>
@@ -77,8 +78,11 @@ class BlobStore {
   // untouched for a day. Idempotent, so a crash part-way leaves only blobs
   // the next call removes. The caller derives `keep` from durable references
   // and the cutoff from the oldest live lease, so a blob uploaded for a
-  // result not yet reported survives.
-  Collection Collect(const std::vector<std::string>& keep, std::int64_t cutoff_unix_ms);
+  // result not yet reported survives. before_removing, when given, is
+  // called once before the first removal (the caller makes the references
+  // `keep` came from durable there; a pass that removes nothing costs none).
+  Collection Collect(const std::vector<std::string>& keep, std::int64_t cutoff_unix_ms,
+                     const std::function<void()>& before_removing = {});
 
  private:
   std::filesystem::path PartialPath(const std::string& digest) const;

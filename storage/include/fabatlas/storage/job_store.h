@@ -339,6 +339,14 @@ class JobStore {
   // line per violation (empty = consistent).
   std::vector<std::string> CheckConsistency();
 
+  // Makes every transaction committed so far survive a power loss (one
+  // fsync of the WAL), whatever fsync_every_commit says. For the few
+  // commits a client or a deletion depends on: a submitted job (the client
+  // was told its id) and the references blob collection reads (a blob swept
+  // because a job ended must never be needed again by a store rolled back to
+  // before that end). Throws ResourceError when the sync fails.
+  void Sync();
+
   // Copies committed WAL pages into the database file (a PASSIVE checkpoint
   // on a second connection, so commits go on meanwhile). Returns the pages
   // checkpointed. For background_checkpoints.
@@ -356,6 +364,7 @@ class JobStore {
   // CountTasks of each job asked for so far, moved by every committed change
   // (job_store.cc CountDeltas); under mutex_.
   std::map<std::string, TaskCounts> counts_;
+  std::int64_t synced_changes_ = -1;  // sqlite3_total_changes64 at the last Sync; under mutex_
   std::mutex checkpoint_mutex_;
   std::unique_ptr<Db> checkpoint_db_;
 };
