@@ -4,7 +4,6 @@
 #include "fabatlas/design/resolve_collisions.h"
 #include "fabatlas/design/state_graph.h"
 
-#include <chrono>
 #include <cmath>
 #include <fstream>
 #include <mutex>
@@ -15,6 +14,7 @@
 #include "checks.h"
 #include "expression.h"
 #include "fabatlas/error.h"
+#include "fabatlas/stopwatch.h"
 #include "fabatlas/scad/customizer.h"
 #include "fabatlas/mesh/enclosed_volume.h"
 #include "fabatlas/mesh/raw_mesh.h"
@@ -29,8 +29,6 @@
 namespace fabatlas::design {
 namespace {
 
-using Clock = std::chrono::steady_clock;
-double Since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
 // A plain value OpenSCAD reads as a number or boolean (else it is a string).
 bool IsScadNumberOrBoolean(const std::string& s) {
@@ -240,7 +238,7 @@ class TreeEvaluation {
       auto trace = options_.cache ? std::make_shared<SubtreeTrace>() : nullptr;
       std::vector<geometry::Solid> inputs;
       for (auto& c : children) inputs.push_back(std::move(c.solid));
-      auto start = Clock::now();
+      const Stopwatch start;
       double openscad_seconds = -1;
       if (node.op == "carve_swept") {
         geometry::Solid target = inputs.size() == 1 ? inputs[0] : inputs[0];
@@ -276,7 +274,7 @@ class TreeEvaluation {
       } else {
         out.solid = ApplyOperation(node, args, inputs, grid_, design_.file.parent_path(), &outside_);
       }
-      record.seconds = openscad_seconds >= 0 ? openscad_seconds : Since(start);
+      record.seconds = openscad_seconds >= 0 ? openscad_seconds : start.Seconds();
       if (options_.cache) {
         trace->outside.assign(outside_.begin() + outside_before, outside_.end());
         options_.cache->Offer(record.key, EntryOf(out.solid, std::move(trace)), record.seconds);
@@ -376,7 +374,7 @@ std::string ResolvedArgs::Text(const std::string& name, const std::string& fallb
 }
 
 SampleResult EvaluateSample(const Design& design, const Point& u, const EvaluateOptions& options) {
-  auto start = Clock::now();
+  const Stopwatch start;
   SampleResult r;
   r.u = u;
   // The surface the checks extracted (null when none read it): the `area`
@@ -408,7 +406,7 @@ SampleResult EvaluateSample(const Design& design, const Point& u, const Evaluate
     // Lines 7–9: set parameters, evaluate the tree (with cached subtrees).
     Scope scope(ParameterNames(design));
     for (const auto& [name, value] : solve.values) scope.Set(name, value);
-    auto tree_start = Clock::now();
+    const Stopwatch tree_start;
     CheckOutcome geometry_check{"geometry", true, "", "", 0};
     std::string geometry_failure = kNoGeometry;
     // Kept for the checks: collision_free evaluates the objects (cached).
@@ -433,7 +431,7 @@ SampleResult EvaluateSample(const Design& design, const Point& u, const Evaluate
       geometry_check.passed = false;
       geometry_check.reason = e.what();
     }
-    geometry_check.seconds = r.timings["tree"] = Since(tree_start);
+    geometry_check.seconds = r.timings["tree"] = tree_start.Seconds();
     if (!geometry_check.passed) {
       geometry_check.failure = geometry_failure;
       fail(geometry_failure, geometry_check.reason);
@@ -443,7 +441,7 @@ SampleResult EvaluateSample(const Design& design, const Point& u, const Evaluate
 
     // Lines 10–15: every test w_i.
     if (geometry_check.passed && options.run_checks) {
-      auto checks_start = Clock::now();
+      const Stopwatch checks_start;
       CheckContext context(design, r.solid, scope);
       // Objects first evaluated by a check are recorded apart: the subtree
       // records stay the tree's, root last.
@@ -460,7 +458,7 @@ SampleResult EvaluateSample(const Design& design, const Point& u, const Evaluate
         r.checks.push_back(std::move(outcome));
       }
       if (surface_seconds > 0) r.timings["surface"] = surface_seconds;
-      r.timings["checks"] = Since(checks_start);
+      r.timings["checks"] = checks_start.Seconds();
       surface = context.TakeMesh();
       if (options.keep_surface) r.surface = surface;
     }
@@ -509,7 +507,7 @@ SampleResult EvaluateSample(const Design& design, const Point& u, const Evaluate
 
   // Lines 16–19: properties of valid samples.
   if (r.valid && options.run_checks) {
-    auto props_start = Clock::now();
+    const Stopwatch props_start;
     for (const std::string& name : design.properties) {
       if (name == "volume") {
         r.properties["volume"] = r.solid.Volume();
@@ -524,10 +522,10 @@ SampleResult EvaluateSample(const Design& design, const Point& u, const Evaluate
     }
     for (const CheckOutcome& c : r.checks)
       for (const auto& [name, value] : c.measures) r.properties[name] = value;
-    r.timings["properties"] = Since(props_start);
+    r.timings["properties"] = props_start.Seconds();
   }
   if (!options.keep_solid) r.solid = geometry::Solid();
-  r.timings["total"] = Since(start);
+  r.timings["total"] = start.Seconds();
   return r;
 }
 

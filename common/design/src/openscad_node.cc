@@ -8,7 +8,6 @@
 #include <algorithm>
 #include <array>
 #include <atomic>
-#include <chrono>
 #include <cstdint>
 #include <cmath>
 #include <fstream>
@@ -22,6 +21,7 @@
 
 #include "convex_hull_2d.h"
 #include "fabatlas/error.h"
+#include "fabatlas/stopwatch.h"
 #include "fabatlas/mesh/enclosed_volume.h"
 #include "fabatlas/mesh/exact_boolean.h"
 #include "fabatlas/mesh/read_mesh.h"
@@ -42,13 +42,11 @@ namespace fabatlas::design {
 namespace {
 
 namespace fs = std::filesystem;
-using Clock = std::chrono::steady_clock;
 using geometry::Solid;
 using scad::CsgNode;
 using scad::CsgValue;
 using scad::Loop;
 
-double Since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
 // An affine map x -> A x + t, row-major 3x4.
 using Affine = std::array<double, 12>;
@@ -559,7 +557,7 @@ class CsgEvaluation {
         kids.push_back(Evaluate3(n.children[i], inner, path + kid_paths.back()));
       }
     }
-    const auto start = Clock::now();
+    const Stopwatch start;
     if (mesh_road_) {
       try {
         if (boolean && ((n.name == "intersection" && two_d_child) || (n.name == "difference" && two_d_first)))
@@ -611,7 +609,7 @@ class CsgEvaluation {
       result.solid = Sample(*result.field);
       result.field = nullptr;
     }
-    record.seconds = Since(start);
+    record.seconds = start.Seconds();
     record.bytes = result.solid.MemoryBytes();
     for (const auto& k : kids) record.children.push_back(k.key);
     if (c_.cache && !result.field) {

@@ -1,6 +1,5 @@
 #include "reconfigurable.h"
 
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <map>
@@ -8,6 +7,7 @@
 #include "fabatlas/exact_decimal.h"
 #include "fabatlas/design/evaluate_sample.h"
 #include "fabatlas/error.h"
+#include "fabatlas/stopwatch.h"
 #include "fabatlas/swept/swept_volume.h"
 #include "exact_boolean.h"
 #include "operations.h"
@@ -149,15 +149,13 @@ geometry::Solid CarveSwept(const geometry::Solid& target, const geometry::Solid&
                            const swept::RigidMotion& f_moving, const swept::RigidMotion& f_frame, double offset,
                            int time_steps, const geometry::GridSpec& g, const SourcePlace& place, bool exact,
                            CarveSweptSummary* summary) {
-  using Clock = std::chrono::steady_clock;
-  auto since = [](Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); };
   CarveSweptSummary s;
-  auto t0 = Clock::now();
+  Stopwatch watch;
   const mesh::TriangleMesh cutter = SweptCutter(moving, f_moving, f_frame, offset, time_steps, g, place, nullptr);
-  s.sweep_seconds = since(t0);
+  s.sweep_seconds = watch.Seconds();
   s.cutter_triangles = cutter.triangles.size();
   geometry::Solid out = target;
-  t0 = Clock::now();
+  watch.Restart();
   if (!target.empty() && !cutter.triangles.empty()) {
     if (exact) {
       // Reconfigurables, Eq. 4 with an exact subtraction: the target's level-set
@@ -176,7 +174,7 @@ geometry::Solid CarveSwept(const geometry::Solid& target, const geometry::Solid&
       out = geometry::Difference(target, geometry::FromMesh(g, cutter));
     }
   }
-  s.subtract_seconds = since(t0);
+  s.subtract_seconds = watch.Seconds();
   if (summary) *summary = s;
   return out;
 }
