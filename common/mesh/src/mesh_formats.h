@@ -2,6 +2,8 @@
 // ReadMesh dispatches to (read_mesh.h documents what each accepts).
 #pragma once
 
+#include <expat.h>
+
 #include <filesystem>
 #include <string>
 #include <string_view>
@@ -18,6 +20,16 @@ bool IsZip(std::string_view data);
 // `name` is empty. Entries larger than 1 GiB uncompressed are refused.
 // Throws InputError "PATH: ..." for a damaged archive or a missing entry.
 std::string ZipEntry(const std::filesystem::path& path, std::string_view data, const std::string& name);
+
+// An XML element's or attribute's name without its namespace prefix
+// ("m:color" -> "color").
+std::string_view LocalName(const char* name);
+
+// Runs expat over `xml`, calling the handlers (`characters` may be null)
+// with `data`. Throws InputError "PATH: FORMAT line N: <expat's message>"
+// for text that is not well-formed XML.
+void ParseXml(const std::filesystem::path& path, const std::string& format, const std::string& xml, void* data,
+              XML_StartElementHandler start, XML_EndElementHandler end, XML_CharacterDataHandler characters);
 
 // 3MF core: every build item's object (its mesh, or its components',
 // recursively) under the item's and components' transforms; coordinates as

@@ -3,8 +3,6 @@
 // items, with their affine transforms ("m00 m01 m02 m10 ... m32", applied to
 // row vectors). Coordinates are taken as stored, whatever the model's unit,
 // as OpenSCAD 2021.01 takes them.
-#include <expat.h>
-
 #include <array>
 #include <cmath>
 #include <cstdlib>
@@ -39,12 +37,6 @@ struct Model {
   std::string problem;
   int current = -1;
 };
-
-std::string_view LocalName(const char* name) {
-  std::string_view n(name);
-  const auto colon = n.rfind(':');
-  return colon == std::string_view::npos ? n : n.substr(colon + 1);
-}
 
 const char* Attribute(const char** attributes, std::string_view key) {
   for (int i = 0; attributes[i]; i += 2)
@@ -119,14 +111,7 @@ void End(void* data, const char* element) {
 
 Model ParseModel(const std::filesystem::path& path, const std::string& xml) {
   Model m;
-  XML_Parser parser = XML_ParserCreate(nullptr);
-  XML_SetUserData(parser, &m);
-  XML_SetElementHandler(parser, Start, End);
-  const bool ok = XML_Parse(parser, xml.data(), static_cast<int>(xml.size()), 1) == XML_STATUS_OK;
-  const std::string error = ok ? "" : XML_ErrorString(XML_GetErrorCode(parser));
-  const auto line = XML_GetCurrentLineNumber(parser);
-  XML_ParserFree(parser);
-  if (!ok) throw InputError(path.string() + ": 3MF model line " + std::to_string(line) + ": " + error);
+  ParseXml(path, "3MF model", xml, &m, Start, End, nullptr);
   if (!m.problem.empty()) throw InputError(path.string() + ": 3MF model: " + m.problem);
   return m;
 }

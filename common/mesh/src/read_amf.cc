@@ -4,8 +4,6 @@
 // Coordinates are taken as stored, whatever the unit attribute says, as
 // OpenSCAD 2021.01 takes them. Materials, colours, curved triangles and
 // constellations are not read.
-#include <expat.h>
-
 #include <array>
 #include <cmath>
 #include <cstdlib>
@@ -25,12 +23,6 @@ struct Amf {
   std::string text;  // character data of the innermost element
   std::string problem;
 };
-
-std::string_view LocalName(const char* name) {
-  std::string_view n(name);
-  const auto colon = n.rfind(':');
-  return colon == std::string_view::npos ? n : n.substr(colon + 1);
-}
 
 void Start(void* data, const char* element, const char** attributes) {
   Amf& a = *static_cast<Amf*>(data);
@@ -84,15 +76,7 @@ void End(void* data, const char* element) {
 TriangleMesh ReadAmf(const std::filesystem::path& path, std::string_view data) {
   const std::string xml = IsZip(data) ? ZipEntry(path, data, "") : std::string(data);
   Amf a;
-  XML_Parser parser = XML_ParserCreate(nullptr);
-  XML_SetUserData(parser, &a);
-  XML_SetElementHandler(parser, Start, End);
-  XML_SetCharacterDataHandler(parser, Characters);
-  const bool ok = XML_Parse(parser, xml.data(), static_cast<int>(xml.size()), 1) == XML_STATUS_OK;
-  const std::string error = ok ? "" : XML_ErrorString(XML_GetErrorCode(parser));
-  const auto line = XML_GetCurrentLineNumber(parser);
-  XML_ParserFree(parser);
-  if (!ok) throw InputError(path.string() + ": AMF line " + std::to_string(line) + ": " + error);
+  ParseXml(path, "AMF", xml, &a, Start, End, Characters);
   if (!a.problem.empty()) throw InputError(path.string() + ": AMF: " + a.problem);
   return std::move(a.mesh);
 }
