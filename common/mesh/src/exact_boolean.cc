@@ -151,7 +151,7 @@ bool SplitShellsAtSharedEdges(std::vector<Point>& points, std::vector<std::vecto
   return true;
 }
 
-Exact ToExact(const TriangleMesh& m, std::size_t index) {
+Exact ToExact(const TriangleMesh& m, std::size_t index, const BooleanOptions& options) {
   Exact out;
   if (m.triangles.empty()) return out;
   const std::string name = "exact boolean operand " + std::to_string(index);
@@ -190,7 +190,10 @@ Exact ToExact(const TriangleMesh& m, std::size_t index) {
   out.box = PMP::bbox(out.mesh);
   out.empty = out.mesh.number_of_faces() == 0;
   // Shells touching along edges are one solid only as a Nef polyhedron.
-  if (touching && !out.empty) out.nef = NefOf(out);
+  if (touching && !out.empty) {
+    if (!options.exact_fallbacks) throw InputError(name + " has shells touching along an edge (Nef polyhedra needed)");
+    out.nef = NefOf(out);
+  }
   return out;
 }
 
@@ -325,7 +328,8 @@ std::optional<SurfaceMesh> FloatCorefinement(BooleanOp op, const SurfaceMesh& a,
 }
 
 // a op b, both non-empty: corefinement (in doubles, then exact), else Nef.
-Exact Apply(BooleanOp op, const Exact& a, const Exact& b, std::size_t b_index, BooleanSummary& summary) {
+Exact Apply(BooleanOp op, const Exact& a, const Exact& b, std::size_t b_index, const BooleanOptions& options,
+            BooleanSummary& summary) {
   std::string why;
   if (!a.nef && !b.nef) {
     if (std::optional<SurfaceMesh> fast = FloatCorefinement(op, a.mesh, b.mesh)) {
@@ -336,6 +340,8 @@ Exact Apply(BooleanOp op, const Exact& a, const Exact& b, std::size_t b_index, B
       r.mesh = std::move(*fast);
       return r;
     }
+    if (!options.exact_fallbacks)
+      throw InputError(std::string("exact ") + BooleanOpName(op) + " needs exact constructions");
     ++summary.exact_corefinements;
     SurfaceMesh ma = a.mesh, mb = b.mesh, out;
     bool ok = false;
@@ -361,6 +367,8 @@ Exact Apply(BooleanOp op, const Exact& a, const Exact& b, std::size_t b_index, B
   } else {
     why = "an operand is not a 2-manifold";
   }
+  if (!options.exact_fallbacks)
+    throw InputError(std::string("exact ") + BooleanOpName(op) + " needs Nef polyhedra (" + why + ")");
   ++summary.nef;
   if (summary.nef_why.empty()) summary.nef_why = why;
   // Nef polyhedra take only valid solids (CGAL does not check: a mesh that
@@ -436,20 +444,23 @@ const char* BooleanOpName(BooleanOp op) {
 }
 
 namespace {
-TriangleMesh UnorderedBoolean(BooleanOp op, const std::vector<TriangleMesh>& operands, BooleanSummary* summary_out);
+TriangleMesh UnorderedBoolean(BooleanOp op, const std::vector<TriangleMesh>& operands, BooleanSummary* summary_out,
+                              const BooleanOptions& options);
 }  // namespace
 
-TriangleMesh ExactBoolean(BooleanOp op, const std::vector<TriangleMesh>& operands, BooleanSummary* summary_out) {
-  return Canonical(UnorderedBoolean(op, operands, summary_out));
+TriangleMesh ExactBoolean(BooleanOp op, const std::vector<TriangleMesh>& operands, BooleanSummary* summary_out,
+                          const BooleanOptions& options) {
+  return Canonical(UnorderedBoolean(op, operands, summary_out, options));
 }
 
 namespace {
-TriangleMesh UnorderedBoolean(BooleanOp op, const std::vector<TriangleMesh>& operands, BooleanSummary* summary_out) {
+TriangleMesh UnorderedBoolean(BooleanOp op, const std::vector<TriangleMesh>& operands, BooleanSummary* summary_out,
+                              const BooleanOptions& options) {
   BooleanSummary local;
   BooleanSummary& summary = summary_out ? *summary_out : local;
   std::vector<Exact> in;
   in.reserve(operands.size());
-  for (std::size_t i = 0; i < operands.size(); ++i) in.push_back(ToExact(operands[i], i));
+  for (std::size_t i = 0; i < operands.size(); ++i) in.push_back(ToExact(operands[i], i, options));
   TriangleMesh out;
   if (in.empty()) return out;
   if (op == BooleanOp::kUnion) {
@@ -463,7 +474,7 @@ TriangleMesh UnorderedBoolean(BooleanOp op, const std::vector<TriangleMesh>& ope
     // Operands apart from all others join the result as they are.
     for (const auto& group : TouchingGroups(present)) {
       Exact acc = present[group[0]];
-      for (std::size_t k = 1; k < group.size(); ++k) acc = Apply(op, acc, present[group[k]], present_index[group[k]], summary);
+      for (std::size_t k = 1; k < group.size(); ++k) acc = Apply(op, acc, present[group[k]], present_index[group[k]], options, summary);
       summary.disjoint += group.size() == 1 && present.size() > 1;
       AppendExact(acc, out);
     }
@@ -476,7 +487,7 @@ TriangleMesh UnorderedBoolean(BooleanOp op, const std::vector<TriangleMesh>& ope
       if (op == BooleanOp::kIntersection) return out;  // nothing in common
       continue;  // nothing to take away
     }
-    acc = Apply(op, acc, in[i], i, summary);
+    acc = Apply(op, acc, in[i], i, options, summary);
   }
   AppendExact(acc, out);
   return out;
@@ -526,7 +537,7 @@ std::vector<ConvexPart> ConvexParts(const TriangleMesh& m) {
   const TriangleMesh hull = ConvexHull(m.vertices);
   const double volume = std::abs(EnclosedVolume(m)), hull_volume = std::abs(EnclosedVolume(hull));
   if (hull_volume <= volume * (1 + 1e-9)) return {hull.vertices};  // convex
-  Exact e = ToExact(m, 0);
+  Exact e = ToExact(m, 0, BooleanOptions{});
   Nef nef = NefOf(e);
   CGAL::convex_decomposition_3(nef);
   std::vector<ConvexPart> parts;

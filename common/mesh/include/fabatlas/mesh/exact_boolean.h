@@ -33,6 +33,16 @@ struct BooleanSummary {
   std::string nef_why;    // why the first fallback was taken, "" when none
 };
 
+// How a boolean may compute its result.
+struct BooleanOptions {
+  // Where corefinement in doubles gives no closed result, redo it with
+  // exact constructions, then with CGAL's Nef polyhedra (both exact, and
+  // orders of magnitude slower on many coplanar faces: minutes on a few
+  // thousand triangles). false: throw InputError instead, for callers with
+  // a cheaper answer of their own (ΔG's level sets).
+  bool exact_fallbacks = true;
+};
+
 // operands[0] op operands[1] op ... (difference: the first minus the rest).
 // Each operand must be a closed triangle mesh (either orientation: an
 // inward one is flipped, as OpenSCAD flips inverted polyhedra); an empty
@@ -41,10 +51,12 @@ struct BooleanSummary {
 // the result is empty (intersection). Throws InputError naming the operand
 // by index ("exact boolean operand 1 is not closed") when an operand is not
 // closed or has a triangle with a missing vertex, or when neither
-// corefinement nor Nef polyhedra can compute the result. The result is
+// corefinement nor Nef polyhedra can compute the result (or corefinement in
+// doubles cannot and options.exact_fallbacks is false). The result is
 // closed; it is manifold except where the exact result is not (Nef's
 // output, e.g. two boxes sharing an edge: the edge is kept once per side).
-TriangleMesh ExactBoolean(BooleanOp op, const std::vector<TriangleMesh>& operands, BooleanSummary* summary = nullptr);
+TriangleMesh ExactBoolean(BooleanOp op, const std::vector<TriangleMesh>& operands, BooleanSummary* summary = nullptr,
+                          const BooleanOptions& options = {});
 
 // "union", "difference", "intersection".
 const char* BooleanOpName(BooleanOp op);
