@@ -112,7 +112,7 @@ INSTANTIATE_TEST_SUITE_P(Features, CorpusModel,
                                            "features/surface-png-image3-tests.scad", "features/surface-tests.scad",
                                            "issues/issue1223.scad", "features/import_3mf-tests.scad",
                                            "features/highlight-modifier2.scad", "issues/issue1867.scad",
-                                           "features/primitive-inf-tests.scad"));
+                                           "features/primitive-inf-tests.scad", "misc/camera-tests.scad"));
 
 // A primitive alone is the sample's solid: its volume is OpenSCAD's, with
 // its sign (a sphere's rings run north to south; $fn = inf gives a triangle).
@@ -186,6 +186,24 @@ TEST(ExactBoolean, BoxesSharingOnlyAnEdgeGoThroughNefPolyhedra) {
   const mesh::TriangleMesh u = mesh::ExactBoolean(mesh::BooleanOp::kUnion, {a, b}, &summary);
   EXPECT_DOUBLE_EQ(std::abs(mesh::EnclosedVolume(u)), 2.0);
   EXPECT_EQ(summary.nef, 1);
+}
+
+TEST(ExactBoolean, ADifferenceTakesItsOperandsAwayAtOnce) {
+  // A 10 x 10 x 1 plate minus three unit holes apart from each other: the
+  // holes are joined without an intersection and taken away by one
+  // corefinement of the plate (not three); 100 - 3 mm^3.
+  const mesh::TriangleMesh plate = fabatlas::scad::CubeMesh({10, 10, 1}, false);
+  std::vector<mesh::TriangleMesh> operands{plate};
+  for (int i = 0; i < 3; ++i) {
+    mesh::TriangleMesh hole = fabatlas::scad::CubeMesh({1, 1, 3}, false);
+    for (auto& v : hole.vertices) v = {v[0] + 1 + 3 * i, v[1] + 1, v[2] - 1};
+    operands.push_back(hole);
+  }
+  mesh::BooleanSummary summary;
+  const mesh::TriangleMesh d = mesh::ExactBoolean(mesh::BooleanOp::kDifference, operands, &summary);
+  EXPECT_NEAR(std::abs(mesh::EnclosedVolume(d)), 97.0, 1e-12);
+  EXPECT_EQ(summary.corefinements, 1);
+  EXPECT_EQ(summary.nef, 0);
 }
 
 TEST(ExactBoolean, DisjointOperandsAreSettledByTheirBoxes) {

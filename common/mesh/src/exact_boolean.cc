@@ -405,6 +405,51 @@ std::vector<std::vector<std::size_t>> TouchingGroups(const std::vector<Exact>& i
   return out;
 }
 
+std::size_t FaceCount(const Exact& e) {
+  if (e.empty) return 0;
+  return e.nef ? e.nef->number_of_facets() : e.mesh.number_of_faces();
+}
+
+// The union of operands whose bounding boxes meet transitively (index: each
+// one's index among the boolean's operands, for messages), as pieces whose
+// boxes are apart. The two smallest operands (by faces) whose boxes meet are
+// joined first, and the result goes back among the operands, as Manifold
+// orders a union's operands by size: a corefinement costs about the faces
+// of both operands, so small operands meet each other before they meet a
+// large one, which is not rebuilt once per operand of the node (issue1069
+// of OpenSCAD's corpus, a Minkowski sum's union of 24 hulls: 2.3x less
+// time). An operand whose box meets no other piece's is a piece of the
+// result as it is.
+std::vector<Exact> UnionOfTouching(std::vector<Exact> pieces, std::vector<std::size_t> index, const BooleanOptions& options,
+                                   BooleanSummary& summary) {
+  std::vector<Exact> done;
+  while (!pieces.empty()) {
+    std::size_t smallest = 0;
+    for (std::size_t k = 1; k < pieces.size(); ++k)
+      if (FaceCount(pieces[k]) < FaceCount(pieces[smallest])) smallest = k;
+    std::optional<std::size_t> partner;
+    for (std::size_t k = 0; k < pieces.size(); ++k)
+      if (k != smallest && Meet(pieces[smallest].box, pieces[k].box) &&
+          (!partner || FaceCount(pieces[k]) < FaceCount(pieces[*partner])))
+        partner = k;
+    if (!partner) {  // apart from every other piece, and from all they will join into
+      done.push_back(std::move(pieces[smallest]));
+      pieces.erase(pieces.begin() + static_cast<std::ptrdiff_t>(smallest));
+      index.erase(index.begin() + static_cast<std::ptrdiff_t>(smallest));
+      continue;
+    }
+    // The earlier operand first, as the operands were given.
+    const std::size_t first = index[smallest] < index[*partner] ? smallest : *partner;
+    const std::size_t second = first == smallest ? *partner : smallest;
+    Exact joined = Apply(BooleanOp::kUnion, pieces[first], pieces[second], index[second], options, summary);
+    index[first] = std::min(index[first], index[second]);
+    pieces[first] = std::move(joined);
+    pieces.erase(pieces.begin() + static_cast<std::ptrdiff_t>(second));
+    index.erase(index.begin() + static_cast<std::ptrdiff_t>(second));
+  }
+  return done;
+}
+
 // The same mesh with its vertices sorted by coordinates and its triangles
 // by their vertices (each starting at its least, orientation kept): CGAL
 // lists a result's vertices and faces in an order that depends on the
@@ -473,14 +518,61 @@ TriangleMesh UnorderedBoolean(BooleanOp op, const std::vector<TriangleMesh>& ope
       }
     // Operands apart from all others join the result as they are.
     for (const auto& group : TouchingGroups(present)) {
-      Exact acc = present[group[0]];
-      for (std::size_t k = 1; k < group.size(); ++k) acc = Apply(op, acc, present[group[k]], present_index[group[k]], options, summary);
       summary.disjoint += group.size() == 1 && present.size() > 1;
-      AppendExact(acc, out);
+      std::vector<Exact> pieces;
+      std::vector<std::size_t> pieces_index;
+      for (std::size_t k : group) {
+        pieces.push_back(std::move(present[k]));
+        pieces_index.push_back(present_index[k]);
+      }
+      for (const Exact& piece : UnionOfTouching(std::move(pieces), pieces_index, options, summary)) AppendExact(piece, out);
     }
     return out;
   }
   Exact acc = std::move(in[0]);
+  if (op == BooleanOp::kDifference && !acc.empty) {
+    // a - b1 - b2 - ... = a - (b1 | b2 | ...): the operands taken away are
+    // joined first (apart ones cost nothing) and taken away at once, so the
+    // first operand is corefined once, not once per operand (camera-tests of
+    // OpenSCAD's corpus, a sphere minus three crossing cylinders: 8-10x
+    // less time). Where a piece of their union is a Nef polyhedron, one
+    // operand at a time.
+    std::vector<Exact> away;
+    std::vector<std::size_t> away_index;
+    for (std::size_t i = 1; i < in.size(); ++i) {
+      if (in[i].empty || !Meet(acc.box, in[i].box)) {
+        ++summary.disjoint;
+        continue;  // nothing to take away
+      }
+      away.push_back(std::move(in[i]));
+      away_index.push_back(i);
+    }
+    if (away.size() > 1) {
+      std::vector<Exact> pieces;
+      for (const auto& group : TouchingGroups(away)) {
+        std::vector<Exact> members;
+        std::vector<std::size_t> members_index;
+        for (std::size_t k : group) {
+          members.push_back(away[k]);
+          members_index.push_back(away_index[k]);
+        }
+        for (Exact& piece : UnionOfTouching(std::move(members), members_index, options, summary)) pieces.push_back(std::move(piece));
+      }
+      if (std::none_of(pieces.begin(), pieces.end(), [](const Exact& e) { return e.nef.has_value(); })) {
+        Exact joined = std::move(pieces[0]);
+        for (std::size_t k = 1; k < pieces.size(); ++k) {
+          joined.mesh += pieces[k].mesh;
+          joined.box += pieces[k].box;
+        }
+        away.clear();
+        away.push_back(std::move(joined));
+        away_index.resize(1);
+      }
+    }
+    for (std::size_t k = 0; k < away.size() && !acc.empty; ++k) acc = Apply(op, acc, away[k], away_index[k], options, summary);
+    AppendExact(acc, out);
+    return out;
+  }
   for (std::size_t i = 1; i < in.size() && !acc.empty; ++i) {
     if (in[i].empty || !Meet(acc.box, in[i].box)) {
       ++summary.disjoint;
