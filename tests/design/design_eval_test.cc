@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <random>
 
 #include "design_files.h"
 #include "fabatlas/design/evaluate_sample.h"
@@ -77,6 +78,69 @@ tree: {op: sphere, radius: r}
   EXPECT_EQ(r.failure, design::kUnsatConstraints);
   EXPECT_NE(r.failure_reason.find("d == 2 * r"), std::string::npos);
   EXPECT_TRUE(r.solid.empty());
+}
+
+// The definitions (constraint_solve.h) against Ceres alone, at random points
+// of every example design with constraints: they never call a point
+// unsatisfiable that Ceres satisfies, and where both satisfy it they agree.
+// The holey vase defines all its variables, so every point is decided
+// without Ceres, and some of them are unsatisfiable (its bridge >= 0).
+TEST(ConstraintSolve, DefinitionsNeverCallASatisfiablePointUnsatisfiable) {
+  design::ConstraintSolveOptions ceres_only;
+  ceres_only.use_definitions = false;
+  for (const char* name : {"holey_vase", "vase", "cup", "toy_car", "yinyang_cup2", "pawn", "tealight", "chess_pair",
+                           "box_8d", "tube_wall_2d", "tube_wall_3d", "sandal"}) {
+    SCOPED_TRACE(name);
+    const design::Design d = design::LoadDesign(fabatlas::testing::SourceDir() / "configs/designs" / (std::string(name) + ".yaml"));
+    std::mt19937_64 rng(33);
+    const int points = std::string(name) == "holey_vase" ? 1500 : 150;
+    int decided = 0, unsat = 0;
+    for (int i = 0; i < points; ++i) {
+      design::Point u;
+      for (const auto& p : d.exposed) {
+        // Uniform over the range, and a tenth of the points on its ends.
+        double v = std::uniform_real_distribution<double>(p.min, p.max)(rng);
+        if (rng() % 10 == 0) v = rng() % 2 ? p.min : p.max;
+        u[p.name] = p.kind == design::ParameterKind::kReal ? v : std::round(v);
+      }
+      const design::ConstraintSolveSummary fast = design::SolveConstraints(d, u);
+      const design::ConstraintSolveSummary full = design::SolveConstraints(d, u, ceres_only);
+      if (!fast.by_definitions) continue;
+      ++decided;
+      if (!fast.satisfiable) {
+        ++unsat;
+        ASSERT_FALSE(full.satisfiable) << "point " << i << ": Ceres satisfies what the definitions reject";
+      } else if (full.satisfiable) {
+        for (const auto& [var, value] : fast.values)
+          EXPECT_NEAR(value, full.values.at(var), 1e-5 * std::max(1.0, std::abs(value))) << var;
+      }
+    }
+    if (std::string(name) == "holey_vase") {
+      EXPECT_EQ(decided, points);
+      EXPECT_GT(unsat, points / 10);
+    }
+  }
+}
+
+// A chain that multiplies the tolerance: b == 1e6 * a lets b move by 1 when a
+// moves by 1e-6, so b* half a unit past its bound is still satisfiable (a
+// 5e-7 below r), and the definitions must leave it to Ceres.
+TEST(ConstraintSolve, DefinitionsLeaveAnAmplifiedMissToCeres) {
+  design::Design d = Load(R"(name: c
+parameters: {r: {type: real, min: 0, max: 5}}
+variables: {a: {min: 0, max: 10, default: 1}, b: {min: 0, max: 1000000.5, default: 1}}
+constraints: ["a == r", "b == 1e6 * a"]
+tree: {op: sphere, radius: r}
+)");
+  const design::ConstraintSolveSummary s = design::SolveConstraints(d, {{"r", 1.000001}});
+  EXPECT_FALSE(s.by_definitions);
+  EXPECT_TRUE(s.satisfiable) << s.worst_constraint << " " << s.max_violation;
+  // Far past the bound they decide alone.
+  const design::ConstraintSolveSummary far = design::SolveConstraints(d, {{"r", 1.1}});
+  EXPECT_TRUE(far.by_definitions);
+  EXPECT_FALSE(far.satisfiable);
+  EXPECT_EQ(far.worst_constraint, "b == 1e6 * a");
+  EXPECT_NEAR(far.max_violation, 1.1e6 - 1000000.5, 1e-3);
 }
 
 TEST(EvaluateSample, VolumeOfABallMatchesAnalytic) {

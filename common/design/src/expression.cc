@@ -66,6 +66,12 @@ double Expression::Evaluate() const {
   }
 }
 
+std::vector<std::string> Expression::Names() const {
+  std::vector<std::string> names;
+  for (const auto& [name, _] : parser_->GetUsedVar()) names.push_back(name);
+  return names;
+}
+
 std::vector<std::string> ParameterNames(const Design& design) {
   std::vector<std::string> names;
   for (const auto& p : design.exposed) names.push_back(p.name);

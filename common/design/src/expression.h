@@ -41,6 +41,8 @@ class Expression {
   // evaluation errors (e.g. division by zero yields inf: reported by callers).
   double Evaluate() const;
   const std::string& text() const { return text_; }
+  // The scope's names the expression reads (muparser's used variables).
+  std::vector<std::string> Names() const;
 
  private:
   std::string text_;

@@ -1,5 +1,6 @@
-// Fig. 13 curves as a PNG (see cache_curves_plot.h), drawn with
-// picture::Canvas (stb_easy_font text), written as PNG.
+// Fig. 13 curves as a PNG (see cache_curves_plot.h): a picture::Canvas with
+// picture::TrueTypeFont text (the font and layout of Fig. 14's box plots,
+// preview_times_plot.cc), written as PNG.
 #include "fabatlas/precompute/cache_curves_plot.h"
 
 #include <algorithm>
@@ -11,6 +12,7 @@
 #include "fabatlas/precompute/form_outputs.h"
 #include "fabatlas/picture/axis_ticks.h"
 #include "fabatlas/picture/canvas.h"
+#include "fabatlas/picture/true_type_font.h"
 
 namespace fabatlas::precompute {
 
@@ -48,25 +50,28 @@ void WriteCacheCurvesPng(const std::vector<artifact::CacheCurvePoint>& points, c
   max_mib = std::ceil(max_mib / x_step) * x_step;
   max_s = std::ceil(max_s / y_step) * y_step;
 
+  const picture::TrueTypeFont font(options.font_file);
   Canvas img(options.width, options.height);
-  const int left = 90, right = options.width - 220, top = 50, bottom = options.height - 70;
+  // Title on its own line above the plot, the y label upright left of the
+  // tick labels, the x label under them (as Fig. 14's layout).
+  const int left = 100, right = options.width - 200, top = 60, bottom = options.height - 70;
   auto X = [&](double mib) { return left + (right - left) * mib / max_mib; };
   auto Y = [&](double s) { return bottom - (bottom - top) * s / max_s; };
   for (double v = 0; v <= max_mib + 1e-9; v += x_step) {
     img.Line(X(v), top, X(v), bottom, 0xEEEEEE, 1);
-    img.Text(static_cast<int>(X(v)) - Canvas::TextWidth(TickLabel(v)) / 2, bottom + 10, TickLabel(v), 0x333333);
+    font.DrawCentred(img, static_cast<int>(X(v)), bottom + 20, TickLabel(v), 0x333333, 14);
   }
   for (double v = 0; v <= max_s + 1e-9; v += y_step) {
     img.Line(left, Y(v), right, Y(v), 0xEEEEEE, 1);
-    img.Text(left - 10 - Canvas::TextWidth(TickLabel(v)), static_cast<int>(Y(v)) - 6, TickLabel(v), 0x333333);
+    font.Draw(img, left - 8 - font.Width(TickLabel(v), 14), static_cast<int>(Y(v)) + 5, TickLabel(v), 0x333333, 14);
   }
   img.Line(left, top, left, bottom, 0x000000, 2);
   img.Line(left, bottom, right, bottom, 0x000000, 2);
-  img.Text(left + (right - left) / 2 - 100, bottom + 40, "cache size (MiB)", 0x000000);
-  img.Text(10, top - 30, "preview time (s)", 0x000000);
+  font.DrawCentred(img, (left + right) / 2, bottom + 48, "cache size (MiB)", 0x000000, 15);
+  font.DrawUpward(img, 24, (top + bottom) / 2 + font.Width("preview time (s)", 15) / 2, "preview time (s)", 0x000000, 15);
   const std::string title = (options.title.empty() ? std::string() : options.title + ": ") +
                             "mean and worst preview time vs cache size (Fab Forms Fig. 13)";
-  img.Text(left, 12, title, 0x000000);
+  font.Draw(img, left, 32, title, 0x000000, 18);
 
   int legend_y = top + 10;
   for (const auto& [name, c] : curves) {
@@ -84,7 +89,7 @@ void WriteCacheCurvesPng(const std::vector<artifact::CacheCurvePoint>& points, c
                  static_cast<int>(Y(v)) + 4, colour);
       }
       img.Line(right + 20, legend_y + 6, right + 50, legend_y + 6, colour, 3, mean ? 6 : 0);
-      img.Text(right + 58, legend_y, name + (mean ? " mean" : " worst"), 0x000000);
+      font.Draw(img, right + 58, legend_y + 11, name + (mean ? " mean" : " worst"), 0x000000, 14);
       legend_y += 24;
     }
   }

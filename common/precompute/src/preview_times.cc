@@ -6,6 +6,7 @@
 #include <cmath>
 #include <random>
 
+#include "fabatlas/cache/cost_model.h"
 #include "fabatlas/design/evaluate_sample.h"
 #include "fabatlas/precompute/design_evaluator.h"
 
@@ -63,8 +64,29 @@ PreviewTimes MeasurePreviewTimes(const design::Design& design, const std::vector
     t.seconds.push_back(s);
     t.worst_seconds = std::max(t.worst_seconds, s);
     t.mean_seconds += s;
+    // The plan's cost of each subtree this preview computed (hits cost 0).
+    std::map<std::string, std::size_t> bytes;
+    for (const auto& record : r.subtrees) bytes[record.key] = std::max(bytes[record.key], record.bytes);
+    double predicted = 0;
+    for (const auto& record : r.subtrees) {
+      if (record.from_cache) continue;
+      std::uint64_t in = 0;
+      for (const auto& c : record.children) in += bytes.count(c) ? bytes[c] : 0;
+      const double model = cache::ModelSubtreeSeconds(record.op, record.bytes, in);
+      predicted += model;
+      OperationCost& op = t.operations[record.op];
+      ++op.subtrees;
+      op.measured_seconds += record.seconds;
+      op.model_seconds += model;
+    }
+    t.predicted_seconds.push_back(predicted);
+    t.predicted_worst_seconds = std::max(t.predicted_worst_seconds, predicted);
+    t.predicted_mean_seconds += predicted;
   }
-  if (!t.seconds.empty()) t.mean_seconds /= static_cast<double>(t.seconds.size());
+  if (!t.seconds.empty()) {
+    t.mean_seconds /= static_cast<double>(t.seconds.size());
+    t.predicted_mean_seconds /= static_cast<double>(t.seconds.size());
+  }
   return t;
 }
 

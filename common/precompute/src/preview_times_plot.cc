@@ -1,67 +1,19 @@
-// Fig. 14 box plots as a PNG (see preview_times_plot.h): text rasterised with
-// stb_truetype from a TrueType font onto a picture::Canvas, written as PNG.
+// Fig. 14 box plots as a PNG (see preview_times_plot.h): a picture::Canvas
+// with picture::TrueTypeFont text, written as PNG.
 #include "fabatlas/precompute/preview_times_plot.h"
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <fstream>
-#include <sstream>
-
-#define STBTT_STATIC
-#define STB_TRUETYPE_IMPLEMENTATION
-#include <stb/stb_truetype.h>
 
 #include "fabatlas/error.h"
 #include "fabatlas/precompute/form_outputs.h"
 #include "fabatlas/picture/canvas.h"
+#include "fabatlas/picture/true_type_font.h"
 
 namespace fabatlas::precompute {
 
 namespace {
-
-// The TrueType face of the plot's text, drawn anti-aliased onto the canvas.
-struct Font {
-  std::string bytes;
-  stbtt_fontinfo info{};
-
-  explicit Font(const std::filesystem::path& file) {
-    std::ifstream in(file, std::ios::binary);
-    std::ostringstream read;
-    read << in.rdbuf();
-    bytes = read.str();
-    const auto* data = reinterpret_cast<const unsigned char*>(bytes.data());
-    if (!in || bytes.empty() || !stbtt_InitFont(&info, data, stbtt_GetFontOffsetForIndex(data, 0)))
-      throw InputError(file.string() + ": cannot read the TrueType font (install fonts-dejavu-core)");
-  }
-  // Width in pixels of `text` at pixel height `px`.
-  int Width(const std::string& text, double px) {
-    const float scale = stbtt_ScaleForPixelHeight(&info, static_cast<float>(px));
-    int width = 0;
-    for (unsigned char ch : text) {
-      int advance = 0, lsb = 0;
-      stbtt_GetCodepointHMetrics(&info, ch, &advance, &lsb);
-      width += static_cast<int>(std::lround(advance * scale));
-    }
-    return width;
-  }
-  // Text with its baseline at y, starting at x (ASCII).
-  void Draw(picture::Canvas& canvas, int x, int y, const std::string& text, unsigned c, double px = 16) {
-    const float scale = stbtt_ScaleForPixelHeight(&info, static_cast<float>(px));
-    for (unsigned char ch : text) {
-      int advance = 0, lsb = 0, bw = 0, bh = 0, ox = 0, oy = 0;
-      stbtt_GetCodepointHMetrics(&info, ch, &advance, &lsb);
-      unsigned char* bitmap = stbtt_GetCodepointBitmap(&info, 0, scale, ch, &bw, &bh, &ox, &oy);
-      for (int j = 0; j < bh; ++j)
-        for (int i = 0; i < bw; ++i) canvas.Blend(x + ox + i, y + oy + j, c, bitmap[j * bw + i] / 255.0);
-      stbtt_FreeBitmap(bitmap, nullptr);
-      x += static_cast<int>(std::lround(advance * scale));
-    }
-  }
-  void DrawCentred(picture::Canvas& canvas, int cx, int y, const std::string& text, unsigned c, double px = 16) {
-    Draw(canvas, cx - Width(text, px) / 2, y, text, c, px);
-  }
-};
 
 // Quantile q of sorted v by linear interpolation between order statistics.
 double Quantile(const std::vector<double>& v, double q) {
@@ -86,7 +38,7 @@ void WritePreviewTimesPng(const std::vector<PreviewTimesSeries>& series, const s
     for (double t : s.seconds)
       if (t > 0) lo = std::min(lo, t), hi = std::max(hi, t);
   if (!(hi > 0)) throw InputError(path.string() + ": no preview time to plot");
-  Font font(options.font_file);
+  const picture::TrueTypeFont font(options.font_file);
   picture::Canvas img(options.width, options.height);
   const int left = 90, right = options.width - 30, top = 80, bottom = options.height - 110;
   // Log axis over whole decades (ms) around the data.

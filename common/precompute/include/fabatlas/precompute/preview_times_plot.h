@@ -7,6 +7,8 @@
 #include <string>
 #include <vector>
 
+#include "fabatlas/picture/true_type_font.h"
+
 namespace fabatlas::precompute {
 
 struct PreviewTimesSeries {
@@ -18,7 +20,7 @@ struct PreviewTimesPlotOptions {
   int width = 900, height = 560;  // pixels
   std::string title;              // e.g. "pawn: preview time over 200 valid points"
   // The TrueType font of every label (Debian: fonts-dejavu-core).
-  std::filesystem::path font_file = "/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf";
+  std::filesystem::path font_file = picture::kDefaultFontFile;
 };
 
 // One box per series on a log10 time axis (milliseconds): the box spans the
