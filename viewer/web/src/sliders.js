@@ -5,6 +5,7 @@ import { state, $, node } from './state.js';
 import { limitsText, query, apiJson, clearError, showError } from './api.js';
 import { requestUpdate } from './update.js';
 import { offerWhy } from './motion.js';
+import { fixedRow } from './fixed.js';
 
 const sliders = [];  // {input, number, select, segments, valueLabel, track}
 
@@ -87,6 +88,8 @@ export function buildSliders() {
     sliders.push({ input, number, select, segments: box.querySelector('.segments'), valueLabel: box.querySelector('.value'), track,
       why: box.querySelector('.why') });
   });
+  // The parameters the form does not sample, read-only, in their groups.
+  for (const f of state.form.fixed ?? []) hostOf(f.group ?? '').appendChild(fixedRow(f));
 }
 
 function stretchAt(d, v) {
