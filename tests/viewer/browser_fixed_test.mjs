@@ -1,5 +1,6 @@
 // Fixed parameters in the customiser (issue 32): a real `fabatlas serve` of
-// the 18-parameter organiser (tests/scad/data/organiser.scad) imported by
+// the 18 Customizer parameters of tests/scad/data/organiser.scad on a box
+// (tests/viewer/data/fixed_box.scad) imported by
 // `fabatlas import-scad --expose columns,rows` and sampled on its bootstrap
 // grid (fixture viewer_organiser_run). Every Customizer parameter the import
 // kept fixed (but [Hidden] ones) is on the page, read-only (no input in its row), with the
@@ -27,18 +28,21 @@ await runBrowserTest(env.FABATLAS_ORGANISER_RUN, async ({ server, browser }) => 
   const params = await (await page.request.get(server.url + 'api/params')).json();
   const fixed = params.parameters.filter((p) => !p.exposed);
   check(rows.length === 13 && rows.length === fixed.length, `every fixed parameter shown: ${rows.length} rows, ${fixed.length} in /api/params`);
-  check(rows.every((r, i) => r.name === fixed[i].name && r.value === fixed[i].value), 'rows in /api/params order with its values');
+  // The page groups rows under their Customizer groups; /api/params lists them in file order.
+  const pageList = rows.map((r) => `${r.name}=${r.value}`).sort(), apiList = fixed.map((f) => `${f.name}=${f.value}`).sort();
+  check(JSON.stringify(pageList) === JSON.stringify(apiList), `the page's fixed values are /api/params's: ${pageList}`);
   check(rows.every((r) => r.inputs === 0), 'fixed rows are read-only (no input)');
   for (const [name, [value, group, description]] of Object.entries(want)) {
     const r = rows.find((x) => x.name === name);
     check(r && r.value === value && r.group === group && r.description === description,
       `${name}: ${value} in '${group}' described '${description}': ${JSON.stringify(r)}`);
   }
-  check(rows.find((x) => x.name === 'lip')?.why.includes('--expose lip=lo:hi'), 'a spin box says how to give it a range');
+  check(rows.find((x) => x.name === 'lip')?.why === "fixed at the model's value: not named by --expose (a number in group 'Finish')",
+    'the row says why it is fixed (its tooltip)');
   const exposed = params.parameters.filter((p) => p.exposed).map((p) => `${p.name}:${p.kind}:${p.min}:${p.max}:${p.step}`);
   check(JSON.stringify(exposed) === JSON.stringify(['columns:integer:1:6:1', 'rows:integer:1:6:1']), `exposed in /api/params: ${exposed}`);
   check(params.groups.join('|') === 'Compartments|Size|Walls|Finish', `groups in order of first appearance: ${params.groups}`);
-  const sliders = await page.evaluate(() => [...document.querySelectorAll('input[type=range]')].map((i) => i.getAttribute('aria-label')));
+  const sliders = await page.evaluate(() => [...document.querySelectorAll('input[type=range][data-dimension]')].map((i) => i.getAttribute('aria-label')));
   check(JSON.stringify(sliders) === JSON.stringify(['columns', 'rows']), `sliders: ${sliders}`);
   await statusOk(page, 'organiser');
   await page.screenshot({ path: `${out}/viewer_fixed.png`, fullPage: true });
