@@ -1,4 +1,4 @@
-// fabatlas inspect ART [--json] [--png PATH] [--points N] [--pareto A,B] — what a published
+// fabatlas inspect ART [--json] [--png PATH] [--points N] [--pareto A,B] [--params] — what a published
 // artifact (docs/artifact.md) holds, as the rows of Fab Forms' evaluation:
 //   Table 3: samples, CPU time, valid volume %, failure shares;
 //   Fig. 14: H_TOP, H_opt and H_rfree sizes, and mean / worst preview time
@@ -34,6 +34,8 @@
 #include "fabatlas/precompute/preview_times_plot.h"
 #include "fabatlas/protocol/job_bundle.h"
 #include "fabatlas/artifact/artifact.h"
+#include "fabatlas/viewer/customiser.h"
+#include "fabatlas/viewer/http_api.h"
 #include "fabatlas/viewer/snap.h"
 
 namespace fabatlas::cli {
@@ -45,7 +47,7 @@ using nlohmann::json;
 
 struct InspectArgs {
   std::string artifact, png, fig14_png, pareto, pareto_csv, pareto_png, limits;
-  bool json = false;
+  bool json = false, params = false;
   int points = 200;
   std::uint64_t seed = 1;
 };
@@ -98,6 +100,14 @@ std::string TimesText(const std::optional<precompute::PreviewTimes>& t) {
 void Inspect(const InspectArgs& a, int& exit_code) {
   const fs::path path = ArtifactPath(a.artifact);  // the file, or the run directory holding it (as serve)
   if (a.points < 0) throw InputError("inspect: --points must be >= 0");
+  if (a.params) {  // the parameter schema only: /api/params's answer, one implementation
+    const viewer::Customiser c(viewer::LoadArtifact(path, viewer::CacheChoice::kNone));
+    const viewer::ApiResponse r = viewer::HandleApiRequest(c, "/api/params", {});
+    if (r.status != 200) throw InputError(path.string() + ": " + r.body);
+    std::cout << json::parse(r.body).dump(2) << "\n";
+    exit_code = 0;
+    return;
+  }
   if (!a.pareto.empty()) {  // the trade-off only (optimise_commands.cc)
     WritePareto(path, a.pareto, a.pareto_csv, a.pareto_png, a.limits);
     exit_code = 0;
@@ -242,6 +252,8 @@ void AddInspectCommands(CLI::App& app, int& exit_code) {
   auto* inspect = app.add_subcommand("inspect", "show an artifact's statistics (samples, CPU time, valid volume, failure shares, cache sizes: Fab Forms Table 3) and preview times (Fig. 14), and plot preview time against cache size (Fig. 13)");
   inspect->add_option("artifact", a->artifact, "an artifact (<design>.fabatlas) or the run directory holding it")->required();
   inspect->add_flag("--json", a->json, "print JSON");
+  inspect->add_flag("--params", a->params,
+                    "instead: the parameter schema as JSON (exposed and fixed parameters, groups, ranges; /api/params)");
   inspect->add_option("--png", a->png, "where to write the Fig. 13 curves (default: ART with .fig13.png)");
   inspect->add_option("--fig14-png", a->fig14_png,
                       "where to write the Fig. 14 preview-time box plots (default: ART with .fig14.png)");

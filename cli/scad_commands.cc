@@ -20,18 +20,11 @@ namespace {
 namespace fs = std::filesystem;
 
 struct ImportArgs {
-  std::string model, out, expose;
+  std::string model, out;
+  std::vector<std::string> expose;  // NAME or NAME=lo:hi[:step]
+  int max_dims = 6;
   double voxel = 0;
 };
-
-std::vector<std::string> SplitNames(const std::string& list) {
-  std::vector<std::string> names;
-  std::stringstream ss(list);
-  std::string item;
-  while (std::getline(ss, item, ','))
-    if (!item.empty()) names.push_back(item);
-  return names;
-}
 
 void PrintWarnings(const scad::ImportSummary& s) {
   for (const auto& w : s.warnings) std::cerr << "fabatlas: warning: " << w << "\n";
@@ -41,11 +34,10 @@ void PrintWarnings(const scad::ImportSummary& s) {
 // coarse native evaluation (geometry only, voxel 1 mm, then 0.25 mm for
 // models smaller than a few voxels); 0 when neither gives geometry. The
 // import picks its voxel size from it (docs/openscad.md, "Voxel size").
-double MeasureModelSize(const std::string& model, const std::vector<std::string>& expose) {
+double MeasureModelSize(const std::string& model, const scad::ImportOptions& options) {
   fs::path path = model;
   for (double voxel : {1.0, 0.25}) {
-    scad::ImportOptions probe;
-    probe.expose = expose;
+    scad::ImportOptions probe = options;
     probe.voxel_size = voxel;
     scad::ImportSummary s = scad::ImportScad(model, probe);
     design::Design d = design::ParseDesign(s.design_yaml, path.parent_path() / (path.stem().string() + ".yaml"));
@@ -59,11 +51,10 @@ double MeasureModelSize(const std::string& model, const std::vector<std::string>
   return 0;
 }
 
-scad::ImportOptions OptionsFor(const std::string& model, const std::vector<std::string>& expose, double voxel) {
-  scad::ImportOptions options;
-  options.expose = expose;
+// `options` with the voxel size: `voxel`, else from the model's size.
+scad::ImportOptions OptionsFor(const std::string& model, scad::ImportOptions options, double voxel) {
   options.voxel_size = voxel;
-  if (voxel <= 0) options.model_size = MeasureModelSize(model, expose);
+  if (voxel <= 0) options.model_size = MeasureModelSize(model, options);
   return options;
 }
 
@@ -73,12 +64,16 @@ void ImportScadCommand(const ImportArgs& a) {
   const fs::path out = a.out;
   fs::path job = out;
   job.replace_extension(".job.yaml");
-  scad::ImportOptions options = OptionsFor(a.model, SplitNames(a.expose), a.voxel);
+  scad::ImportOptions given;
+  for (const auto& item : a.expose) scad::AddExposeItem(item, given);
+  given.max_dims = a.max_dims;
+  scad::ImportOptions options = OptionsFor(a.model, given, a.voxel);
   const fs::path out_dir = out.parent_path().empty() ? fs::path(".") : out.parent_path();
   options.model_reference = fs::relative(fs::absolute(a.model), fs::absolute(out_dir)).generic_string();
   options.design_file_name = out.filename().string();
   scad::ImportSummary s = scad::ImportScad(a.model, options);
   PrintWarnings(s);
+  for (const auto& line : s.decisions) std::cout << line << "\n";
   auto write = [](const fs::path& p, const std::string& text) {
     std::ofstream f(p, std::ios::binary);
     f << text;
@@ -119,7 +114,11 @@ void AddScadCommands(CLI::App& app, int& exit_code) {
   auto* cmd = app.add_subcommand("import-scad", "make a design (and a job beside it) from an OpenSCAD Customizer model");
   cmd->add_option("model", a->model, "OpenSCAD model (.scad); MODEL.json beside it gives presets")->required();
   cmd->add_option("--out", a->out, "design YAML to write; the job goes to the same name with .job.yaml")->required();
-  cmd->add_option("--expose", a->expose, "parameters to expose, a,b,... (default: every slider and dropdown outside [Hidden])");
+  cmd->add_option("--expose", a->expose,
+                  "parameters to expose, exactly these: NAME or NAME=lo:hi[:step] (a range for a number), comma-separated or "
+                  "repeated (default: the sliders and dropdowns outside [Hidden], by Customizer group then file order, up to --max-dims)")
+      ->delimiter(',');
+  cmd->add_option("--max-dims", a->max_dims, "at most this many exposed parameters, 1..16 (default 6); the rest stay fixed");
   cmd->add_option("--voxel", a->voxel, "level-set voxel size in mm (default: from the model's size)");
   cmd->callback([a] { ImportScadCommand(*a); });
 }

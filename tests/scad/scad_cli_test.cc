@@ -2,11 +2,15 @@
 // runs them: files written, warnings naming lines, exit status 2 with one line.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cstdlib>
 #include <fstream>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <set>
 
+#include "fabatlas/mesh/enclosed_volume.h"
+#include "fabatlas/mesh/read_mesh.h"
 #include "fabatlas/storage/job_store.h"
 
 #include "fabatlas/testing/command_run.h"
@@ -110,7 +114,14 @@ TEST(ScadCli, ClusterRunRecordsTheDescendantsOfCachedCsgSubtrees) {
   // the job beside the imported design keeps every subtree.
   CommandRun import = Fabatlas("import-scad drilled.scad --out drilled.yaml", dir);
   ASSERT_EQ(import.status, 0) << import.err;
-  std::ofstream(dir / "drilled.job.yaml", std::ios::app) << "cache: {min_subtree_seconds: 0}\n";
+  {
+    std::ifstream in(dir / "drilled.job.yaml");
+    std::string job(std::istreambuf_iterator<char>(in), {});
+    const std::string plan = "cache: {strategy: opt_max}";
+    ASSERT_NE(job.find(plan), std::string::npos) << job;
+    job.replace(job.find(plan), plan.size(), "cache: {strategy: opt_max, min_subtree_seconds: 0}");
+    std::ofstream(dir / "drilled.job.yaml") << job;
+  }
   CommandRun r = Fabatlas("run drilled.job.yaml --workers 1 --slots 1 --quiet --out out", dir);
   ASSERT_EQ(r.status, 0) << r.err;
 
@@ -132,6 +143,49 @@ TEST(ScadCli, ClusterRunRecordsTheDescendantsOfCachedCsgSubtrees) {
       for (const auto& child : children[key])
         EXPECT_TRUE(listed.count(child)) << "sample " << s.point_key << " lists " << key.substr(0, 8)
                                          << " without its child " << child.substr(0, 8);
+  }
+}
+
+// The 18-parameter organiser (tests/scad/data/organiser.scad) as a user
+// imports it: one line per parameter on stdout, --expose with a range for a
+// spin box, the design evaluated against OpenSCAD 2021.01's own render at a
+// point away from the model's values, and bad input as one line, exit 2.
+TEST(ScadCli, ImportAnyModelWithRangesAndABudget) {
+  auto dir = fabatlas::testing::FreshTempDir("scad-cli-organiser");
+  std::filesystem::copy_file(fabatlas::testing::SourceDir() / "tests/scad/data/organiser.scad", dir / "organiser.scad");
+  CommandRun r = Fabatlas("import-scad organiser.scad --out organiser.yaml --voxel 0.5", dir);
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_EQ(std::count(r.out.begin(), r.out.end(), '\n'), 19) << r.out;  // 18 decisions and "wrote ..."
+  EXPECT_NE(r.out.find("exposed divider: slider [0.8:0.2:4] in group 'Compartments', within --max-dims 6\n"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("fixed wall = 2: beyond --max-dims 6"), std::string::npos) << r.out;
+  CommandRun budget = Fabatlas("import-scad organiser.scad --out b.yaml --voxel 0.5 --max-dims 2", dir);
+  ASSERT_EQ(budget.status, 0) << budget.err;
+  EXPECT_NE(budget.out.find("(2 exposed: width depth; 16 fixed"), std::string::npos) << budget.out;
+
+  CommandRun ranged = Fabatlas("import-scad organiser.scad --out lip.yaml --voxel 0.5 --expose width,lip=0:3", dir);
+  ASSERT_EQ(ranged.status, 0) << ranged.err;
+  EXPECT_NE(ranged.out.find("exposed lip: range 0:3 from --expose\n"), std::string::npos) << ranged.out;
+  CommandRun e = Fabatlas("eval lip.yaml --at width=100,lip=3 --json", dir);
+  ASSERT_EQ(e.status, 0) << e.err;
+  const double ours = nlohmann::json::parse(e.out)["properties"]["volume"].get<double>();
+  if (std::system("command -v openscad >/dev/null 2>&1") != 0) GTEST_SKIP() << "openscad not installed";
+  const std::string stl = (dir / "peer.stl").string();
+  const std::string cmd = "cd '" + dir.string() + "' && openscad --quiet -o " + stl + " -D width=100 -D lip=3 organiser.scad 2>/dev/null";
+  ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+  const double peer = std::abs(fabatlas::mesh::EnclosedVolume(fabatlas::mesh::ReadMesh(stl)));
+  EXPECT_NEAR(ours, peer, 0.01 * peer) << "fabatlas " << ours << " mm^3, OpenSCAD " << peer << " mm^3";
+
+  for (const auto& [args, what] : std::vector<std::pair<std::string, std::string>>{
+           {"--expose lip=0:x", "--expose lip=0:x: malformed range '0:x'"},
+           {"--expose lip=3:1", "--expose lip=3:1: lo 3 is not below hi 1"},
+           {"--expose lip=2:3", "organiser.scad:39: --expose lip: the model's value 1.5 lies outside 2:3"},
+           {"--expose nope=0:1", "organiser.scad: --expose nope: the model has no Customizer parameter 'nope'"},
+           {"--expose label_text=0:1", "organiser.scad:43: --expose label_text: the parameter is a string"},
+           {"--max-dims 0", "organiser.scad: --max-dims 0 is outside 1..16"}}) {
+    CommandRun bad = Fabatlas("import-scad organiser.scad --out bad.yaml --voxel 0.5 " + args, dir);
+    EXPECT_EQ(bad.status, 2) << args;
+    EXPECT_EQ(std::count(bad.err.begin(), bad.err.end(), '\n'), 1) << bad.err;
+    EXPECT_NE(bad.err.find(what), std::string::npos) << bad.err;
   }
 }
 

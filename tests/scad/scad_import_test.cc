@@ -4,6 +4,7 @@
 // examples, parameter sets as presets.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <numbers>
@@ -247,6 +248,112 @@ TEST(Import, ExposeAndItsErrors) {
   EXPECT_THROW(fabatlas::scad::ImportScad(dir / "m.scad", o), fabatlas::InputError);
   std::ofstream(dir / "none.scad") << "a = 1;\ncube(a);\n";
   EXPECT_THROW(fabatlas::scad::ImportScad(dir / "none.scad", {}), fabatlas::InputError);
+}
+
+// A model of 18 Customizer parameters written to the manual's rules
+// (tests/scad/data/organiser.scad): the automatic choice under the dimension
+// budget, what stays fixed and why, ranges from the command line.
+TEST(Import, ManyParametersUnderADimensionBudget) {
+  const std::filesystem::path model = fabatlas::testing::SourceDir() / "tests/scad/data/organiser.scad";
+  std::ifstream in(model);
+  const CustomizerModel m = fabatlas::scad::ReadCustomizer(std::string(std::istreambuf_iterator<char>(in), {}), "organiser.scad");
+  EXPECT_TRUE(m.warnings.empty());
+  ASSERT_EQ(m.parameters.size(), 18u);  // width .. label_text, $fn, eps, tag
+  EXPECT_EQ(Find(m, "lip").widget, W::kNone);  // `// .5`: a spin box's step, not a range
+
+  // Default: sliders and dropdowns by group (tab) then file order, up to 6.
+  fabatlas::scad::ImportSummary s = fabatlas::scad::ImportScad(model, {});
+  EXPECT_EQ(s.exposed, (std::vector<std::string>{"width", "depth", "height", "columns", "rows", "divider"}));
+  ASSERT_EQ(s.decisions.size(), 18u);
+  auto decision = [&](const std::string& head) {
+    for (const auto& line : s.decisions)
+      if (line.rfind(head, 0) == 0) return line;
+    return std::string("none for ") + head;
+  };
+  EXPECT_EQ(decision("exposed width"), "exposed width: slider [40:5:160] in group 'Size', within --max-dims 6");
+  EXPECT_EQ(decision("fixed divider_ratio"),
+            "fixed divider_ratio = 0.8: beyond --max-dims 6 (slider [0.4:0.05:1] in group 'Compartments')");
+  EXPECT_NE(decision("fixed lip = 1.5: no range").find("--expose lip=lo:hi"), std::string::npos);
+  EXPECT_EQ(decision("fixed tag"), "fixed tag = 7: in [Hidden]");
+  EXPECT_EQ(decision("fixed label_text"), "fixed label_text = \"tools\": a string (text box): not sampled");
+  fabatlas::design::Design d = fabatlas::design::ParseDesign(s.design_yaml, model.parent_path() / "organiser.yaml");
+  ASSERT_EQ(d.exposed.size(), 6u);
+  ASSERT_EQ(d.fixed.size(), 9u);  // every other parameter but $fn and [Hidden]
+  EXPECT_EQ(d.fixed[0].name, "divider_ratio");
+  const auto lip = std::find_if(d.fixed.begin(), d.fixed.end(), [](const auto& f) { return f.name == "lip"; });
+  ASSERT_NE(lip, d.fixed.end());
+  EXPECT_EQ(lip->value, "1.5");
+  EXPECT_EQ(lip->group, "Finish");
+  EXPECT_EQ(lip->description, "Stacking lip height (mm)");
+  EXPECT_NE(s.job_yaml.find("cache: {strategy: opt_max}"), std::string::npos) << s.job_yaml;
+  EXPECT_NE(s.job_yaml.find("{name: PLA, density: 1.24"), std::string::npos) << s.job_yaml;
+
+  // A larger budget takes the next sliders in order.
+  fabatlas::scad::ImportOptions o;
+  o.max_dims = 8;
+  EXPECT_EQ(fabatlas::scad::ImportScad(model, o).exposed,
+            (std::vector<std::string>{"width", "depth", "height", "columns", "rows", "divider", "divider_ratio", "wall"}));
+
+  // Ranges: a spin box gets one (real: the model's 1.5 is not whole), a
+  // slider's is replaced (integer: whole ends, step and value).
+  o = {};
+  fabatlas::scad::AddExposeItem("lip=0:3", o);
+  fabatlas::scad::AddExposeItem("columns=2:5:1", o);
+  fabatlas::scad::AddExposeItem("notches", o);
+  s = fabatlas::scad::ImportScad(model, o);
+  EXPECT_EQ(s.exposed, (std::vector<std::string>{"columns", "notches", "lip"}));
+  d = fabatlas::design::ParseDesign(s.design_yaml, model.parent_path() / "organiser.yaml");
+  EXPECT_EQ(d.exposed[0].kind, fabatlas::design::ParameterKind::kInteger);
+  EXPECT_EQ(d.exposed[0].min, 2);
+  EXPECT_EQ(d.exposed[0].max, 5);
+  EXPECT_EQ(d.exposed[2].kind, fabatlas::design::ParameterKind::kReal);
+  EXPECT_EQ(d.exposed[2].max, 3);
+  EXPECT_EQ(d.exposed[2].default_value, 1.5);
+  bool said = false;
+  for (const auto& line : s.decisions) said = said || line == "exposed lip: range 0:3 from --expose";
+  EXPECT_TRUE(said);
+}
+
+// Customizer groups (tabs) are one group however often they reopen: the
+// choice takes a group's sliders together, in file order within it.
+TEST(Import, GroupsBeforeFileOrder) {
+  auto dir = fabatlas::testing::FreshTempDir("scad-import-groups");
+  std::ofstream(dir / "g.scad") << "/* [A] */\na1 = 1; // [0:2]\n/* [B] */\nb1 = 1; // [0:2]\n/* [A] */\na2 = 1; // [0:2]\ncube(a1 + b1 + a2);\n";
+  fabatlas::scad::ImportOptions o;
+  o.max_dims = 2;
+  fabatlas::scad::ImportSummary s = fabatlas::scad::ImportScad(dir / "g.scad", o);
+  EXPECT_EQ(s.exposed, (std::vector<std::string>{"a1", "a2"}));
+  EXPECT_EQ(s.fixed, (std::vector<std::string>{"b1"}));
+}
+
+// Bad --expose items and budgets: one line naming the model, the line and what is wrong.
+TEST(Import, BadRangesAreOneLine) {
+  const std::filesystem::path model = fabatlas::testing::SourceDir() / "tests/scad/data/organiser.scad";
+  auto message = [&](std::vector<std::string> items, int max_dims = 6) {
+    try {
+      fabatlas::scad::ImportOptions o;
+      o.max_dims = max_dims;
+      for (const auto& item : items) fabatlas::scad::AddExposeItem(item, o);
+      fabatlas::scad::ImportScad(model, o);
+    } catch (const fabatlas::InputError& e) {
+      EXPECT_EQ(std::string(e.what()).find('\n'), std::string::npos) << e.what();
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  EXPECT_EQ(message({"lip=0:x"}), "--expose lip=0:x: malformed range '0:x' (expected NAME=lo:hi or NAME=lo:hi:step, numbers)");
+  EXPECT_NE(message({"lip=0:3:"}).find("malformed range '0:3:'"), std::string::npos);
+  EXPECT_EQ(message({"lip=3:1"}), "--expose lip=3:1: lo 3 is not below hi 1");
+  EXPECT_EQ(message({"lip=0:3:0"}), "--expose lip=0:3:0: step 0 must be positive");
+  EXPECT_NE(message({"lip=2:3"}).find("organiser.scad:39: --expose lip: the model's value 1.5 lies outside 2:3"), std::string::npos);
+  EXPECT_NE(message({"label_text=0:1"}).find("organiser.scad:43: --expose label_text: the parameter is a string (text box) (\"tools\"), a range needs a number"),
+            std::string::npos);
+  EXPECT_NE(message({"label=0:2"}).find("--expose label: the parameter is a dropdown"), std::string::npos);
+  EXPECT_NE(message({"nope=0:2"}).find("--expose nope: the model has no Customizer parameter 'nope'"), std::string::npos);
+  EXPECT_NE(message({"lip_inset"}).find("organiser.scad:41: --expose lip_inset: the parameter has no slider or dropdown annotation"),
+            std::string::npos);
+  EXPECT_NE(message({"width", "depth", "height"}, 2).find("--expose names 3 parameters, more than --max-dims 2"), std::string::npos);
+  EXPECT_NE(message({}, 17).find("--max-dims 17 is outside 1..16"), std::string::npos);
 }
 
 }  // namespace

@@ -86,6 +86,67 @@ json SampleJson(const Customiser& c, std::int64_t id) {
   return {{"sample", id}, {"u", s.u}, {"valid", s.outcome.valid}, {"properties", properties}, {"materials", materials}};
 }
 
+// The design's fixed parameters (design.h FixedParameter), in file order.
+json FixedJson(const Customiser& c) {
+  json fixed = json::array();
+  if (!c.source().design) return fixed;
+  for (const auto& f : c.source().design->fixed) {
+    json j = {{"name", f.name}, {"value", f.value}};
+    if (!f.group.empty()) j["group"] = f.group;
+    if (!f.description.empty()) j["description"] = f.description;
+    if (!f.why.empty()) j["why"] = f.why;
+    fixed.push_back(j);
+  }
+  return fixed;
+}
+
+// The parameter schema for other front ends (docs/viewer.md, "Parameter
+// schema"): every parameter of the form, exposed ones with their ranges and
+// fixed ones with their values, the groups, and where valid stretches come from.
+json ParamsJson(const Customiser& c) {
+  json params = json::array();
+  json groups = json::array();
+  auto add_group = [&](const std::string& g) {
+    if (std::find(groups.begin(), groups.end(), json(g)) == groups.end()) groups.push_back(g);
+  };
+  for (int d = 0; d < c.dimension_count(); ++d) {
+    const auto& dim = c.space().dimension(d);
+    json j = {{"name", dim.name},
+              {"exposed", true},
+              {"dimension", d},
+              {"kind", sampling::DimensionKindName(dim.kind)},
+              {"min", c.space().value(d, c.space().key_lo(d))},
+              {"max", c.space().value(d, c.space().key_hi(d))},
+              // Continuous for real parameters; whole steps otherwise.
+              {"step", dim.kind == sampling::DimensionKind::kReal ? json(nullptr) : json(1)}};
+    if (dim.kind == sampling::DimensionKind::kEnumerated) j["values"] = dim.values;
+    std::string group;
+    if (c.source().design) {
+      const auto& e = c.source().design->exposed.at(d);
+      j["default"] = e.default_value;
+      if (!e.description.empty()) j["description"] = e.description;
+      group = e.group;
+    }
+    j["group"] = group;
+    add_group(group);
+    params.push_back(j);
+  }
+  for (json f : FixedJson(c)) {
+    f["exposed"] = false;
+    if (!f.contains("group")) f["group"] = "";
+    add_group(f["group"].get<std::string>());
+    params.push_back(f);
+  }
+  return {{"name", c.source().name},
+          {"parameters", params},
+          {"groups", groups},
+          {"valid_stretches",
+           {{"route", "/api/intervals"},
+            {"query", "u=<one value per exposed parameter, in dimension order; enumerated by index>[&limits=...]"},
+            {"answer", "per exposed parameter, the valid and invalid stretches [{lo, hi, valid, failures}] along it through u"},
+            {"source", "the form's k-d cells and their sampled corners (Fab Forms Sec. 7.2)"}}}};
+}
+
 json FormJson(const Customiser& c) {
   json dims = json::array();
   for (int d = 0; d < c.dimension_count(); ++d) {
@@ -128,6 +189,7 @@ json FormJson(const Customiser& c) {
           {"states", states},
           {"transitions", transitions},
           {"dimensions", dims},
+          {"fixed", FixedJson(c)},
           {"materials", materials},
           {"starting_points", starts},
           {"samples", c.form().samples.size()},
@@ -276,6 +338,7 @@ std::vector<PropertyLimit> LimitsOf(const Customiser& c, const std::map<std::str
 
 ApiResponse Route(const Customiser& c, const std::string& path, const std::map<std::string, std::string>& query) {
   if (path == "/api/form") return Json(FormJson(c));
+  if (path == "/api/params") return Json(ParamsJson(c));
   // Every lookup below sees the form under the user's limits, if any.
   const std::vector<PropertyLimit> limits = LimitsOf(c, query);
   const std::shared_ptr<const sampling::Form> shown = c.LimitedForm(limits);

@@ -407,7 +407,7 @@ Design ParseDesign(const std::string& text, const std::filesystem::path& path) {
   }
   if (!root.IsMap()) throw InputError(file + ": a design file must be a YAML map (name, parameters, tree, ...)");
   r.OnlyKeys(root, {"name", "voxel_size", "parameters", "variables", "constraints", "tree", "checks", "properties", "description",
-                   "objects", "states", "transitions", "presets"},
+                   "objects", "states", "transitions", "presets", "fixed"},
              "design");
 
   d.name = root["name"] ? r.String(root["name"], "name") : path.stem().string();
@@ -610,6 +610,25 @@ Design ParseDesign(const std::string& text, const std::filesystem::path& path) {
         preset.values[name] = x;
       }
       d.presets.push_back(std::move(preset));
+    }
+  }
+  // fixed: {name: {value, description, group, why}}: shown, never sampled.
+  if (root["fixed"]) {
+    if (!root["fixed"].IsMap()) r.Fail(root["fixed"], "'fixed' must be a map of name: {value, description, group, why}");
+    for (auto it = root["fixed"].begin(); it != root["fixed"].end(); ++it) {
+      FixedParameter f;
+      f.name = it->first.Scalar();
+      f.place = r.At(it->first);
+      // The model's names (OpenSCAD's rules, not the expressions'): unique.
+      if (f.name.empty() || !names.insert(f.name).second) r.Fail(it->first, "parameter '" + f.name + "' is declared twice");
+      const YAML::Node spec = it->second;  // a copy: the iterator yields temporaries
+      if (!spec.IsMap() || !spec["value"]) r.Fail(spec, "fixed parameter '" + f.name + "' must be a map with a value");
+      r.OnlyKeys(spec, {"value", "description", "group", "why"}, "fixed parameter '" + f.name + "'");
+      f.value = r.String(spec["value"], "value");
+      if (spec["description"]) f.description = r.String(spec["description"], "description");
+      if (spec["group"]) f.group = r.String(spec["group"], "group");
+      if (spec["why"]) f.why = r.String(spec["why"], "why");
+      d.fixed.push_back(std::move(f));
     }
   }
   return d;

@@ -34,17 +34,24 @@ bool Whole(double v) { return v == std::floor(v) && std::abs(v) < 1e15; }
 struct Exposure {
   const CustomizerParameter* p = nullptr;
   std::string type;                   // real, integer, enum
-  double min = 0, max = 0;
+  double min = 0, max = 0, step = 0;  // step 0: none (noted only; the range is sampled whole)
   std::vector<std::string> labels;    // enum: what users see
   std::vector<std::string> literals;  // enum: what OpenSCAD gets
   std::vector<bool> quoted;           // enum: literal is a string
   std::size_t default_index = 0;
 };
 
-Exposure ExposureOf(const CustomizerParameter& p) {
+Exposure ExposureOf(const CustomizerParameter& p, const ExposeRange* range) {
   Exposure e;
   e.p = &p;
-  if (p.value.type == ScadValue::Type::kBoolean) {
+  if (range) {
+    // A range from the command line: integer as a slider would be.
+    const double step = range->step > 0 ? range->step : 1;
+    e.type = Whole(range->lo) && Whole(step) && Whole(p.value.number) && Whole(range->hi) ? "integer" : "real";
+    e.min = range->lo;
+    e.max = range->hi;
+    e.step = range->step;
+  } else if (p.value.type == ScadValue::Type::kBoolean) {
     e.type = "enum";
     e.labels = e.literals = {"false", "true"};
     e.quoted = {false, false};
@@ -55,6 +62,7 @@ Exposure ExposureOf(const CustomizerParameter& p) {
     e.type = Whole(p.min) && Whole(step) && Whole(p.value.number) && Whole(p.max) ? "integer" : "real";
     e.min = p.min;
     e.max = p.max;
+    e.step = p.step;
   } else {
     e.type = "enum";
     std::set<std::string> seen;
@@ -93,7 +101,139 @@ double VoxelFor(const ImportOptions& o) {
   return std::round(v * 20) / 20;
 }
 
+std::string TypeWords(const ScadValue& v) {
+  switch (v.type) {
+    case ScadValue::Type::kString: return "a string (text box)";
+    case ScadValue::Type::kVector: return "a vector";
+    case ScadValue::Type::kBoolean: return "a checkbox";
+    default: return "a number";
+  }
+}
+
+std::string WidgetWords(const CustomizerParameter& p) {
+  std::string w = p.widget == CustomizerParameter::Widget::kSlider
+                      ? "slider [" + FormatScadNumber(p.min) + ":" + (p.step > 0 ? FormatScadNumber(p.step) + ":" : "") + FormatScadNumber(p.max) + "]"
+                      : p.widget == CustomizerParameter::Widget::kDropdown ? "dropdown of " + std::to_string(p.options.size())
+                                                                            : TypeWords(p.value);
+  return w + (p.group.empty() ? "" : " in group '" + p.group + "'");
+}
+
+// One parameter's fate: exposed or fixed, and the line saying why.
+struct Choice {
+  const CustomizerParameter* p = nullptr;
+  bool exposed = false;
+  std::string why;   // fixed: why, in words
+  std::string line;  // "exposed NAME: ..." / "fixed NAME = VALUE: WHY"
+};
+
+// Which parameters are exposed (import_design.h, ImportScad): in file order.
+std::vector<Choice> ChooseExposed(const CustomizerModel& m, const std::string& file, const ImportOptions& o) {
+  if (o.max_dims < 1 || o.max_dims > 16)
+    throw InputError(file + ": --max-dims " + std::to_string(o.max_dims) + " is outside 1..16 (the dimensions an artifact holds)");
+  std::map<std::string, const CustomizerParameter*> by_name;
+  for (const auto& p : m.parameters) by_name[p.name] = &p;
+  std::set<const CustomizerParameter*> chosen;
+  std::map<const CustomizerParameter*, std::string> how;  // exposed: how, in words
+  if (!o.expose.empty()) {
+    for (const auto& name : o.expose) {
+      auto it = by_name.find(name);
+      if (it == by_name.end())
+        throw InputError(file + ": --expose " + name + ": the model has no Customizer parameter '" + name +
+                         "' (a top-level literal assignment before the first '{')");
+      const CustomizerParameter* p = it->second;
+      const std::string at = file + ":" + std::to_string(p->line) + ": --expose " + name;
+      if (name[0] == '$') throw InputError(at + ": $-variables stay fixed");
+      auto range = o.ranges.find(name);
+      if (range != o.ranges.end()) {
+        const ExposeRange& r = range->second;
+        if (p->value.type != ScadValue::Type::kNumber)
+          throw InputError(at + ": the parameter is " + TypeWords(p->value) + " (" + p->value.Literal() + "), a range needs a number");
+        if (p->widget == CustomizerParameter::Widget::kDropdown)
+          throw InputError(at + ": the parameter is a dropdown; name it without a range");
+        if (p->value.number < r.lo || p->value.number > r.hi)
+          throw InputError(at + ": the model's value " + FormatScadNumber(p->value.number) + " lies outside " +
+                           FormatScadNumber(r.lo) + ":" + FormatScadNumber(r.hi));
+        how[p] = "range " + FormatScadNumber(r.lo) + ":" + (r.step > 0 ? FormatScadNumber(r.step) + ":" : "") +
+                 FormatScadNumber(r.hi) + " from --expose" +
+                 (p->widget == CustomizerParameter::Widget::kSlider ? " (replaces the model's " + WidgetWords(*p) + ")" : "");
+      } else {
+        if (p->widget == CustomizerParameter::Widget::kNone && p->value.type != ScadValue::Type::kBoolean)
+          throw InputError(at + ": the parameter has no slider or dropdown annotation, so it has no range (give one: --expose " +
+                           name + "=lo:hi)");
+        how[p] = WidgetWords(*p) + ", named by --expose";
+      }
+      chosen.insert(p);
+    }
+    if (static_cast<int>(chosen.size()) > o.max_dims)
+      throw InputError(file + ": --expose names " + std::to_string(chosen.size()) + " parameters, more than --max-dims " +
+                       std::to_string(o.max_dims));
+  } else {
+    // Customizer groups (tabs) by first appearance, then file order.
+    std::map<std::string, int> group_rank;
+    for (const auto& p : m.parameters) group_rank.emplace(p.group, static_cast<int>(group_rank.size()));
+    std::vector<const CustomizerParameter*> eligible;
+    for (const auto& p : m.parameters)
+      if (!p.hidden && p.widget != CustomizerParameter::Widget::kNone && p.name[0] != '$') eligible.push_back(&p);
+    std::stable_sort(eligible.begin(), eligible.end(),
+                     [&](auto* a, auto* b) { return group_rank.at(a->group) < group_rank.at(b->group); });
+    for (std::size_t i = 0; i < eligible.size() && static_cast<int>(i) < o.max_dims; ++i) {
+      chosen.insert(eligible[i]);
+      how[eligible[i]] = WidgetWords(*eligible[i]) + ", within --max-dims " + std::to_string(o.max_dims);
+    }
+  }
+  if (chosen.empty())
+    throw InputError(file + ": no Customizer parameter has a slider or dropdown annotation outside [Hidden]; "
+                     "name parameters with --expose NAME or give one a range with --expose NAME=lo:hi");
+  std::vector<Choice> out;
+  for (const auto& p : m.parameters) {
+    Choice c;
+    c.p = &p;
+    c.exposed = chosen.count(&p) > 0;
+    if (c.exposed) {
+      c.line = "exposed " + p.name + ": " + how[&p];
+    } else {
+      if (p.name[0] == '$') c.why = "a $-variable (OpenSCAD's special variables stay fixed)";
+      else if (p.hidden) c.why = "in [Hidden]";
+      else if (!o.expose.empty()) c.why = "not named by --expose (" + WidgetWords(p) + ")";
+      else if (p.widget != CustomizerParameter::Widget::kNone) c.why = "beyond --max-dims " + std::to_string(o.max_dims) + " (" + WidgetWords(p) + ")";
+      else if (p.value.type == ScadValue::Type::kNumber)
+        c.why = "no range: a number without a slider annotation" + std::string(p.group.empty() ? "" : " in group '" + p.group + "'") +
+                " (give one: --expose " + p.name + "=lo:hi)";
+      else if (p.value.type == ScadValue::Type::kBoolean) c.why = "a checkbox" + std::string(p.group.empty() ? "" : " in group '" + p.group + "'") + " (expose it: --expose " + p.name + ")";
+      else c.why = TypeWords(p.value) + ": not sampled";
+      c.line = "fixed " + p.name + " = " + p.value.Literal() + ": " + c.why;
+    }
+    out.push_back(std::move(c));
+  }
+  return out;
+}
+
 }  // namespace
+
+void AddExposeItem(const std::string& item, ImportOptions& options) {
+  const std::size_t eq = item.find('=');
+  const std::string name = item.substr(0, eq);
+  if (name.empty()) throw InputError("--expose '" + item + "': no parameter name (expected NAME or NAME=lo:hi[:step])");
+  if (std::find(options.expose.begin(), options.expose.end(), name) == options.expose.end()) options.expose.push_back(name);
+  if (eq == std::string::npos) return;
+  std::vector<double> v;
+  std::stringstream ss(item.substr(eq + 1));
+  std::string part;
+  bool ok = true;
+  while (std::getline(ss, part, ':')) {
+    char* end = nullptr;
+    const double x = std::strtod(part.c_str(), &end);
+    ok = ok && !part.empty() && *end == 0 && std::isfinite(x);
+    v.push_back(x);
+  }
+  const std::string text = item.substr(eq + 1);
+  if (!ok || v.size() < 2 || v.size() > 3 || text.back() == ':')
+    throw InputError("--expose " + item + ": malformed range '" + text + "' (expected NAME=lo:hi or NAME=lo:hi:step, numbers)");
+  ExposeRange r{v[0], v[1], v.size() == 3 ? v[2] : 0};
+  if (!(r.lo < r.hi)) throw InputError("--expose " + item + ": lo " + FormatScadNumber(r.lo) + " is not below hi " + FormatScadNumber(r.hi));
+  if (v.size() == 3 && !(r.step > 0)) throw InputError("--expose " + item + ": step " + FormatScadNumber(r.step) + " must be positive");
+  options.ranges[name] = r;
+}
 
 ImportSummary ImportScad(const std::filesystem::path& model, const ImportOptions& options) {
   const std::string text = ReadText(model);
@@ -103,48 +243,25 @@ ImportSummary ImportScad(const std::filesystem::path& model, const ImportOptions
 
   std::map<std::string, const CustomizerParameter*> by_name;
   for (const auto& p : m.parameters) by_name[p.name] = &p;
+  const std::vector<Choice> choices = ChooseExposed(m, model.string(), options);
   std::vector<const CustomizerParameter*> chosen;
-  if (options.expose.empty()) {
-    for (const auto& p : m.parameters)
-      if (!p.hidden && p.widget != CustomizerParameter::Widget::kNone && p.name[0] != '$') chosen.push_back(&p);
-  } else {
-    for (const auto& name : options.expose) {
-      auto it = by_name.find(name);
-      if (it == by_name.end())
-        throw InputError(model.string() + ": --expose " + name + ": the model has no Customizer parameter '" + name +
-                         "' (a top-level literal assignment before the first '{')");
-      const CustomizerParameter* p = it->second;
-      if (name[0] == '$') throw InputError(model.string() + ": --expose " + name + ": $-variables stay fixed");
-      if (p->widget == CustomizerParameter::Widget::kNone && p->value.type != ScadValue::Type::kBoolean)
-        throw InputError(model.string() + ":" + std::to_string(p->line) + ": --expose " + name +
-                         ": the parameter has no slider or dropdown annotation, so it has no range");
-      if (std::find(chosen.begin(), chosen.end(), p) == chosen.end()) chosen.push_back(p);
-    }
-    std::sort(chosen.begin(), chosen.end(), [](auto* a, auto* b) { return a->line < b->line; });
-  }
-  if (chosen.empty())
-    throw InputError(model.string() + ": no Customizer parameter has a slider or dropdown annotation outside [Hidden]; "
-                     "name parameters with --expose");
-  if (chosen.size() > 6)
-    throw InputError(model.string() + ": " + std::to_string(chosen.size()) +
-                     " Customizer parameters have ranges; fabatlas samples at most 6 dimensions, choose them with --expose a,b,...");
-
   std::vector<Exposure> exposures;
-  for (const auto* p : chosen) exposures.push_back(ExposureOf(*p));
-  for (const auto& p : m.parameters)
-    if (std::find(chosen.begin(), chosen.end(), &p) == chosen.end()) s.fixed.push_back(p.name);
+  for (const Choice& c : choices) {
+    s.decisions.push_back(c.line);
+    if (!c.exposed) {
+      s.fixed.push_back(c.p->name);
+      continue;
+    }
+    chosen.push_back(c.p);
+    auto range = options.ranges.find(c.p->name);
+    exposures.push_back(ExposureOf(*c.p, range == options.ranges.end() ? nullptr : &range->second));
+  }
 
   const std::string stem = model.stem().string();
   const std::string reference = options.model_reference.empty() ? model.filename().string() : options.model_reference;
   std::ostringstream y;
   y << "# Imported from the OpenSCAD Customizer model " << model.filename().string()
     << " by `fabatlas import-scad` (docs/openscad.md).\n";
-  if (!s.fixed.empty()) {
-    y << "# Fixed at the model's values:";
-    for (const auto& p : m.parameters)
-      if (std::find(chosen.begin(), chosen.end(), &p) == chosen.end()) y << " " << p.name << "=" << p.value.Literal();
-    y << "\n";
-  }
   y << "name: " << Yaml(stem) << "\n";
   y << "voxel_size: " << FormatScadNumber(VoxelFor(options));
   if (options.voxel_size <= 0 && options.model_size > 0)
@@ -167,8 +284,20 @@ ImportSummary ImportScad(const std::filesystem::path& model, const ImportOptions
     if (!p.description.empty()) y << ", description: " << Yaml(p.description);
     y << "}";
     // fabatlas samples the whole range; OpenSCAD's slider step is noted only.
-    if (p.step > 0 && e.type != "enum") y << "  # OpenSCAD slider step " << FormatScadNumber(p.step);
+    if (e.step > 0 && e.type != "enum")
+      y << (options.ranges.count(p.name) ? "  # --expose step " : "  # OpenSCAD slider step ") << FormatScadNumber(e.step);
     y << "\n";
+  }
+  // The rest stays at the model's values: shown read-only, never passed.
+  bool any_fixed = false;
+  for (const Choice& c : choices) {
+    if (c.exposed || c.p->name[0] == '$' || c.p->hidden) continue;  // [Hidden]: the model's author hid them
+    if (!any_fixed) y << "fixed:\n";
+    any_fixed = true;
+    y << "  " << c.p->name << ": {value: " << Yaml(c.p->value.Literal());
+    if (!c.p->group.empty()) y << ", group: " << Yaml(c.p->group);
+    if (!c.p->description.empty()) y << ", description: " << Yaml(c.p->description);
+    y << ", why: " << Yaml(c.why) << "}\n";
   }
   y << "tree:\n  op: openscad\n  file: " << Yaml(reference) << "\n  set: {";
   for (std::size_t i = 0; i < exposures.size(); ++i)
@@ -262,6 +391,13 @@ ImportSummary ImportScad(const std::filesystem::path& model, const ImportOptions
   job << "design: " << Yaml(options.design_file_name) << "\n";
   job << "sampling: {subdivisions: 3, max_depth: 3, dg_threshold: 0.1, max_samples: 400}\n";
   job << "threads: 2\n";
+  // Fab Forms Sec. 6: plan the geometry cache (OPT-MAX, default budget), and
+  // the example jobs' materials for the weight and cost readout.
+  job << "cache: {strategy: opt_max}\n";
+  job << "materials:\n";
+  job << "  - {name: PLA, density: 1.24, price_per_kg: 20}\n";
+  job << "  - {name: PETG, density: 1.27, price_per_kg: 25}\n";
+  job << "  - {name: resin, density: 1.12, price_per_kg: 60}\n";
   s.job_yaml = job.str();
   return s;
 }

@@ -2,6 +2,8 @@
 // the HTTP library so tests call it directly (docs/viewer.md lists the routes).
 //
 //   GET /api/form                  parameters, materials, starting points, statistics
+//   GET /api/params                the parameter schema: exposed and fixed parameters,
+//                                  groups, ranges, where valid stretches come from
 //   GET /api/intervals?u=a,b,..    validity of u and every dimension's stretches through u
 //   GET /api/snap?u=..             the snapped sample and its ΔG-weighted distance
 //   GET /api/properties?u=..       the snapped sample's properties and material cost/weight

@@ -35,6 +35,18 @@ struct ExposedParameter {
   SourcePlace place;
 };
 
+// A parameter of the design's model that stays at one value (e.g. an
+// OpenSCAD Customizer parameter `import-scad` did not expose): shown to users
+// read-only so they see the whole model; never passed to the tree.
+struct FixedParameter {
+  std::string name;
+  std::string value;        // as the model writes it (an OpenSCAD literal)
+  std::string description;  // optional, as for exposed parameters
+  std::string group;        // optional
+  std::string why;          // optional: why it is not exposed, in words
+  SourcePlace place;
+};
+
 // A named point of the exposed space the designer offers (e.g. an OpenSCAD
 // parameter set); parameters it does not name take their defaults.
 struct Preset {
@@ -137,6 +149,7 @@ struct Design {
   std::vector<CheckSpec> checks;
   std::vector<std::string> properties;      // volume, area, bbox
   std::vector<Preset> presets;              // optional, in file order
+  std::vector<FixedParameter> fixed;        // optional, in file order (shown, not sampled)
   // Reconfigurables (optional; see ObjectMotion). Transitions are listed so
   // that each one's `from` state is the first state or the `to` of an earlier
   // transition (the state poses are propagated in that order).
