@@ -39,6 +39,10 @@
 #include <string>
 #include <vector>
 
+namespace fabatlas::sqlite {
+class Connection;
+}  // namespace fabatlas::sqlite
+
 namespace fabatlas::storage {
 
 // Values match fabatlas.v1.JobState.
@@ -352,21 +356,19 @@ class JobStore {
   // checkpointed. For background_checkpoints.
   int Checkpoint();
 
-  struct Db;  // the SQLite connection (src/job_store.cc)
-
  private:
   std::filesystem::path path_;
   JobStoreOptions options_;
-  std::unique_ptr<Db> db_;
+  std::unique_ptr<sqlite::Connection> db_;
   std::mutex mutex_;
   std::map<std::string, std::pair<int, std::int64_t>> touched_;  // worker -> (slots, last write ms)
   std::int64_t preferring_tasks_ = 0;  // tasks with tasks.affine = 1 (lease affinity)
   // CountTasks of each job asked for so far, moved by every committed change
-  // (job_store.cc CountDeltas); under mutex_.
+  // (task_counts.h CountDeltas); under mutex_.
   std::map<std::string, TaskCounts> counts_;
   std::int64_t synced_changes_ = -1;  // sqlite3_total_changes64 at the last Sync; under mutex_
   std::mutex checkpoint_mutex_;
-  std::unique_ptr<Db> checkpoint_db_;
+  std::unique_ptr<sqlite::Connection> checkpoint_db_;  // Checkpoint()'s own
 };
 
 }  // namespace fabatlas::storage
