@@ -106,15 +106,14 @@ int JobStore::Checkpoint() {
   int rc = sqlite3_wal_checkpoint_v2(checkpoint_db_->get(), nullptr, SQLITE_CHECKPOINT_PASSIVE, &log, &done);
   if (rc != SQLITE_OK && rc != SQLITE_BUSY) checkpoint_db_->Fail("checkpoint");
   // Under a steady stream of commits a passive checkpoint never catches up
-  // with the last frame, so the WAL never restarts and grows with the job
-  // (61 MB on a 2k-sample job). Past kWalRestartFrames (8 MiB of 4 KiB
+  // with the last frame, so the WAL never restarts and grows with the job.
+  // Past kWalRestartFrames (8 MiB of 4 KiB
   // pages), a RESTART checkpoint waits (busy timeout) for the writer, copies
   // the rest, and the next commit writes from the WAL's start again: the WAL
   // stays bounded whatever the job's size. RESTART rather than TRUNCATE: the
   // file keeps its pages, so commits overwrite pages the kernel has cached
   // instead of extending an emptied file (a new page cache page and a block
-  // reservation per frame: about half the cost of the WAL writes on the 1k
-  // tube job).
+  // reservation per frame; measured in docs/benchmarks-history.md, "Scale").
   constexpr int kWalRestartFrames = 2048;
   if (log > kWalRestartFrames) {
     rc = sqlite3_wal_checkpoint_v2(checkpoint_db_->get(), nullptr, SQLITE_CHECKPOINT_RESTART, &log, &done);

@@ -16,8 +16,8 @@ namespace {
 // A lease's id: the task's seq as 16 hex digits, then the attempt. Ids in
 // the order leases are granted put each new row of the leases primary key
 // index beside the last one (an id from the task key's first digits, as
-// before, landed on a random page of it: 2,064 of the 10,620 pages a 1k tube
-// job wrote to the WAL). Unique per store, as the seq is; opaque to
+// before, landed on a random page of it, one more WAL page per grant).
+// Unique per store, as the seq is; opaque to
 // workers, so ids of the earlier form in a store still work.
 std::string LeaseIdOf(std::int64_t task_seq, std::int64_t attempt) {
   char seq[17];
@@ -118,8 +118,7 @@ void WriteLeasesIn(sqlite::Connection& db, const std::string& worker_id, std::in
   }
   // The worker's last_seen_ms is not written here: TouchWorker keeps it (to
   // 1 s) on every Sync and Heartbeat, and a write per grant put the workers
-  // page into nearly every commit's WAL frames (356 of 9,256 on the 1k tube
-  // job).
+  // page into nearly every commit's WAL frames.
 }
 
 std::vector<ActiveLease> ActiveLeasesOf(sqlite::Connection& db, const std::string& worker_id) {
