@@ -53,70 +53,70 @@ enum class JobState { kQueued = 1, kRunning = 2, kSucceeded = 3, kFailed = 4, kC
 enum class TaskState { kQueued = 0, kLeased = 1, kDone = 2, kQuarantined = 3 };
 
 struct JobRecord {
-  std::string id;
-  std::string bundle_digest;
-  std::string design_name;
+  std::string id{};
+  std::string bundle_digest{};
+  std::string design_name{};
   JobState state = JobState::kQueued;
-  std::string error;
+  std::string error{};
   std::int64_t created_ms = 0;
   std::int64_t finished_ms = 0;
 };
 
 struct NewTask {
-  std::string key;
-  std::string job_id;
+  std::string key{};
+  std::string job_id{};
   int kind = 0;          // fabatlas.v1.TaskKind
-  std::string payload;   // serialized fabatlas.v1.TaskPayload
+  std::string payload{};   // serialized fabatlas.v1.TaskPayload
   // Workers this task prefers (lease affinity, worker.proto): GrantLeases
   // hands it to one of them before anyone else. Empty = no preference.
   // Ignored when the task already exists.
-  std::vector<std::string> preferred_workers;
+  std::vector<std::string> preferred_workers{};
 };
 
 struct TaskRecord {
-  std::string key, job_id;
+  std::string key{}, job_id{};
   int kind = 0;
-  std::string payload;
+  std::string payload{};
   TaskState state = TaskState::kQueued;
   std::int64_t attempt = 0;      // attempts granted so far
   std::int64_t expiries = 0;     // leases that expired
   std::int64_t completions = 0;  // accepted results (0 or 1)
-  std::string result;            // serialized fabatlas.v1.TaskResult
+  std::string result{};            // serialized fabatlas.v1.TaskResult
 };
 
 struct LeaseGrant {
-  std::string lease_id, task_key, job_id, bundle_digest;
+  std::string lease_id{}, task_key{}, job_id{}, bundle_digest{};
   std::int64_t attempt = 0;
   int kind = 0;
-  std::string payload;
+  std::string payload{};
   std::int64_t deadline_ms = 0;
 };
 
 // One subtree root of a sample (fabatlas.v1.SubtreeRecord).
 struct SubtreeUse {
-  std::string key;          // cache key: hex SHA-256 of (τ, ρ, voxel size)
-  std::string topology;     // hex SHA-256 of τ
-  std::string op;
+  std::string key{};          // cache key: hex SHA-256 of (τ, ρ, voxel size)
+  std::string topology{};     // hex SHA-256 of τ
+  std::string op{};
   double seconds = 0;       // root compute time on the worker (for a cache hit:
                             // the worker's last measurement of the key)
   bool measured = true;     // false for a cache hit
   std::int64_t bytes = 0;   // memory of the level set
-  std::vector<std::string> children;  // child keys, in tree order
-  std::string blob_digest;  // serialized Solid in the blob store, or ""
+  std::vector<std::string> children{};  // child keys, in tree order
+  std::string blob_digest{};  // serialized Solid in the blob store, or ""
 };
 
 struct Completion {
-  std::string lease_id, task_key;
+  std::string lease_id{}, task_key{};
   std::int64_t attempt = 0;
-  std::string result;      // serialized TaskResult; ignored when failed
+  std::string result{};      // serialized TaskResult; ignored when failed
   bool failed = false;     // the worker could not run the task: requeue
   int sample_valid = -1;   // sample tasks: 1 valid, 0 invalid; -1 otherwise
   // Sample tasks: the point key ("k0,k1,..." as in the task key) and the
   // sample's subtrees, post-order (root last); stored only when the result
   // is accepted, in the same transaction.
-  std::string point_key;
-  std::vector<SubtreeUse> subtrees;
-  std::string error;       // when failed: the worker's one-line reason (events)
+  std::string point_key{};
+  std::vector<SubtreeUse> subtrees{};
+  std::string error{};       // when failed: the worker's one-line reason (events)
 };
 
 enum class CompletionOutcome {
@@ -132,9 +132,9 @@ enum class CompletionOutcome {
 // One worker's Sync (worker.proto) against the store: what it reports and
 // asks for (JobStore::SyncWorker).
 struct WorkerSync {
-  std::string worker_id;
-  std::vector<Completion> completions;  // results it reports
-  std::vector<std::string> in_flight;   // leases it still holds (running or queued)
+  std::string worker_id{};
+  std::vector<Completion> completions{};  // results it reports
+  std::vector<std::string> in_flight{};   // leases it still holds (running or queued)
   std::int64_t now_ms = 0;
   std::int64_t lease_ms = 0;            // leases granted or topped up run until now_ms + lease_ms
   int want = 0;                         // leases to grant at most (0: none)
@@ -142,18 +142,18 @@ struct WorkerSync {
   // As for Complete.
   std::int64_t retry_backoff_ms = 0;
   int quarantine_after = 0;
-  std::function<std::string(int kind)> quarantine_result;
+  std::function<std::string(int kind)> quarantine_result{};
 };
 
 struct WorkerSyncOutcome {
-  std::vector<CompletionOutcome> outcomes;  // one per completion, in order
+  std::vector<CompletionOutcome> outcomes{};  // one per completion, in order
   int returned = 0;                 // its active leases it no longer knows, queued again
-  std::vector<std::string> revoked; // in_flight ids that are not active leases of the worker
-  std::vector<LeaseGrant> grants;   // new leases
+  std::vector<std::string> revoked{}; // in_flight ids that are not active leases of the worker
+  std::vector<LeaseGrant> grants{};   // new leases
 };
 
 struct ExpiredLease {
-  std::string lease_id, task_key, job_id, worker_id;
+  std::string lease_id{}, task_key{}, job_id{}, worker_id{};
   std::int64_t attempt = 0;   // the lease's attempt number (fencing)
   std::int64_t expiries = 0;  // the task's expiries, this one included
   bool quarantined = false;
@@ -168,10 +168,10 @@ struct TaskCounts {
 // A subtree of a job, over all its accepted sample results (the geometry
 // cache's dependency graph, Fab Forms Sec. 6).
 struct SubtreeRow {
-  std::string key, topology, op;
-  std::string blob_digest;  // first non-empty digest reported, or ""
+  std::string key{}, topology{}, op{};
+  std::string blob_digest{};  // first non-empty digest reported, or ""
   std::int64_t bytes = 0;
-  std::vector<std::string> children;
+  std::vector<std::string> children{};
   double seconds_sum = 0;          // over measured (not cached) evaluations
   std::int64_t seconds_count = 0;  // how many measured evaluations
   double last_seconds = 0;         // latest reported seconds (measured or carried)
@@ -182,14 +182,14 @@ struct SubtreeRow {
 
 // The subtrees of one accepted sample, post-order (root last).
 struct SampleSubtrees {
-  std::string task_key;
-  std::string point_key;  // "k0,k1,..." (sampling::PointKey in decimal)
-  std::vector<std::string> subtree_keys;
+  std::string task_key{};
+  std::string point_key{};  // "k0,k1,..." (sampling::PointKey in decimal)
+  std::vector<std::string> subtree_keys{};
 };
 
 struct Event {
   std::int64_t time_ms = 0;
-  std::string job_id, kind, message;
+  std::string job_id{}, kind{}, message{};
 };
 
 // Durability. The store runs in WAL mode. With synchronous=NORMAL (the
