@@ -46,6 +46,23 @@ JobRecord ReadJob(const sqlite::Statement& s) {
   return j;
 }
 
+// A task row: the columns of kTaskColumns, in their order.
+constexpr const char* kTaskColumns =
+    "SELECT key, job_id, kind, payload, state, attempt, expiries, completions, result FROM tasks ";
+TaskRecord ReadTask(const sqlite::Statement& s) {
+  TaskRecord r;
+  r.key = s.ColumnText(0);
+  r.job_id = s.ColumnText(1);
+  r.kind = static_cast<int>(s.ColumnInt(2));
+  r.payload = s.ColumnText(3);
+  r.state = static_cast<TaskState>(s.ColumnInt(4));
+  r.attempt = s.ColumnInt(5);
+  r.expiries = s.ColumnInt(6);
+  r.completions = s.ColumnInt(7);
+  r.result = s.ColumnText(8);
+  return r;
+}
+
 }  // namespace
 
 JobStore::JobStore(const std::filesystem::path& path, JobStoreOptions options) : path_(path), options_(options) {
@@ -206,24 +223,6 @@ std::map<std::string, std::string> JobStore::AddTasks(const std::vector<NewTask>
   deltas.ApplyTo(counts_);
   return finished;
 }
-
-namespace {
-constexpr const char* kTaskColumns =
-    "SELECT key, job_id, kind, payload, state, attempt, expiries, completions, result FROM tasks ";
-TaskRecord ReadTask(const sqlite::Statement& s) {
-  TaskRecord r;
-  r.key = s.ColumnText(0);
-  r.job_id = s.ColumnText(1);
-  r.kind = static_cast<int>(s.ColumnInt(2));
-  r.payload = s.ColumnText(3);
-  r.state = static_cast<TaskState>(s.ColumnInt(4));
-  r.attempt = s.ColumnInt(5);
-  r.expiries = s.ColumnInt(6);
-  r.completions = s.ColumnInt(7);
-  r.result = s.ColumnText(8);
-  return r;
-}
-}  // namespace
 
 std::optional<TaskRecord> JobStore::FindTask(const std::string& key) {
   std::lock_guard lock(mutex_);

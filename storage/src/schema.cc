@@ -62,10 +62,8 @@ void CreateTables(sqlite::Connection& db) { db.Exec(kTables); }
 // Migration 2: tasks.affine, 1 while the task has task_affinity rows (lease
 // affinity); stores made before lease affinity lack it.
 void AddTaskAffinity(sqlite::Connection& db) {
-  auto columns = db.Prepare("PRAGMA table_info(tasks)");
-  while (columns.Next())
-    if (columns.ColumnText(1) == "affine") return;
-  db.Exec("ALTER TABLE tasks ADD COLUMN affine INTEGER NOT NULL DEFAULT 0");
+  if (db.ExecInt("SELECT COUNT(*) FROM pragma_table_info('tasks') WHERE name = 'affine'") == 0)
+    db.Exec("ALTER TABLE tasks ADD COLUMN affine INTEGER NOT NULL DEFAULT 0");
 }
 
 // Migration 3: indexes that a task's or a lease's change of state does not

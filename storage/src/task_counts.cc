@@ -7,48 +7,6 @@
 namespace fabatlas::storage {
 namespace internal {
 
-TaskCounts ScanCounts(sqlite::Connection& db, const std::string& job_id) {
-  const std::string where = job_id.empty() ? "" : " WHERE job_id = ?";
-  auto s = db.Cached(
-      "SELECT state, COUNT(*), SUM(sample_valid = 1), SUM(sample_valid >= 0), "
-      "SUM(expiries), SUM(fenced) FROM tasks" +
-      where + " GROUP BY state");
-  if (!job_id.empty()) s.BindText(1, job_id);
-  TaskCounts c;
-  while (s.Next()) {
-    std::int64_t n = s.ColumnInt(1);
-    c.total += n;
-    switch (static_cast<TaskState>(s.ColumnInt(0))) {
-      case TaskState::kQueued:
-        c.queued += n;
-        break;
-      case TaskState::kLeased:
-        c.leased += n;
-        break;
-      case TaskState::kDone:
-        c.done += n;
-        break;
-      case TaskState::kQuarantined:
-        c.quarantined += n;
-        break;
-    }
-    if (s.ColumnInt(0) >= 2) {
-      c.samples_valid += s.ColumnInt(2);
-      c.samples_done += s.ColumnInt(3);
-    }
-    c.lease_expiries += s.ColumnInt(4);
-    c.fenced_results += s.ColumnInt(5);
-  }
-  return c;
-}
-
-std::string CountsText(const TaskCounts& c) {
-  return std::to_string(c.total) + " tasks (" + std::to_string(c.queued) + " queued, " + std::to_string(c.leased) +
-         " leased, " + std::to_string(c.done) + " done, " + std::to_string(c.quarantined) + " quarantined), " +
-         std::to_string(c.samples_done) + " samples (" + std::to_string(c.samples_valid) + " valid), " +
-         std::to_string(c.lease_expiries) + " expiries, " + std::to_string(c.fenced_results) + " fenced";
-}
-
 namespace {
 
 std::int64_t& CountOf(TaskCounts& c, TaskState state) {
@@ -66,6 +24,35 @@ std::int64_t& CountOf(TaskCounts& c, TaskState state) {
 }
 
 }  // namespace
+
+TaskCounts ScanCounts(sqlite::Connection& db, const std::string& job_id) {
+  const std::string where = job_id.empty() ? "" : " WHERE job_id = ?";
+  auto s = db.Cached(
+      "SELECT state, COUNT(*), SUM(sample_valid = 1), SUM(sample_valid >= 0), "
+      "SUM(expiries), SUM(fenced) FROM tasks" +
+      where + " GROUP BY state");
+  if (!job_id.empty()) s.BindText(1, job_id);
+  TaskCounts c;
+  while (s.Next()) {
+    std::int64_t n = s.ColumnInt(1);
+    c.total += n;
+    CountOf(c, static_cast<TaskState>(s.ColumnInt(0))) += n;
+    if (s.ColumnInt(0) >= 2) {
+      c.samples_valid += s.ColumnInt(2);
+      c.samples_done += s.ColumnInt(3);
+    }
+    c.lease_expiries += s.ColumnInt(4);
+    c.fenced_results += s.ColumnInt(5);
+  }
+  return c;
+}
+
+std::string CountsText(const TaskCounts& c) {
+  return std::to_string(c.total) + " tasks (" + std::to_string(c.queued) + " queued, " + std::to_string(c.leased) +
+         " leased, " + std::to_string(c.done) + " done, " + std::to_string(c.quarantined) + " quarantined), " +
+         std::to_string(c.samples_done) + " samples (" + std::to_string(c.samples_valid) + " valid), " +
+         std::to_string(c.lease_expiries) + " expiries, " + std::to_string(c.fenced_results) + " fenced";
+}
 
 void CountDeltas::Added(const std::string& job_id) {
   ++deltas_[job_id].total;
