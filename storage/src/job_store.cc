@@ -35,32 +35,23 @@ std::unique_ptr<sqlite::Connection> OpenConnection(const std::filesystem::path& 
 constexpr const char* kJobColumns =
     "SELECT id, bundle_digest, design_name, state, error, created_ms, finished_ms FROM jobs ";
 JobRecord ReadJob(const sqlite::Statement& s) {
-  JobRecord j;
-  j.id = s.ColumnText(0);
-  j.bundle_digest = s.ColumnText(1);
-  j.design_name = s.ColumnText(2);
-  j.state = static_cast<JobState>(s.ColumnInt(3));
-  j.error = s.ColumnText(4);
-  j.created_ms = s.ColumnInt(5);
-  j.finished_ms = s.ColumnInt(6);
-  return j;
+  return {s.ColumnText(0), s.ColumnText(1), s.ColumnText(2), static_cast<JobState>(s.ColumnInt(3)),
+          s.ColumnText(4), s.ColumnInt(5),  s.ColumnInt(6)};
 }
 
 // A task row: the columns of kTaskColumns, in their order.
 constexpr const char* kTaskColumns =
     "SELECT key, job_id, kind, payload, state, attempt, expiries, completions, result FROM tasks ";
 TaskRecord ReadTask(const sqlite::Statement& s) {
-  TaskRecord r;
-  r.key = s.ColumnText(0);
-  r.job_id = s.ColumnText(1);
-  r.kind = static_cast<int>(s.ColumnInt(2));
-  r.payload = s.ColumnText(3);
-  r.state = static_cast<TaskState>(s.ColumnInt(4));
-  r.attempt = s.ColumnInt(5);
-  r.expiries = s.ColumnInt(6);
-  r.completions = s.ColumnInt(7);
-  r.result = s.ColumnText(8);
-  return r;
+  return {s.ColumnText(0),
+          s.ColumnText(1),
+          static_cast<int>(s.ColumnInt(2)),
+          s.ColumnText(3),
+          static_cast<TaskState>(s.ColumnInt(4)),
+          s.ColumnInt(5),
+          s.ColumnInt(6),
+          s.ColumnInt(7),
+          s.ColumnText(8)};
 }
 
 }  // namespace
