@@ -65,8 +65,8 @@ struct JobRecord {
 struct NewTask {
   std::string key{};
   std::string job_id{};
-  int kind = 0;          // fabatlas.v1.TaskKind
-  std::string payload{};   // serialized fabatlas.v1.TaskPayload
+  int kind = 0;           // fabatlas.v1.TaskKind
+  std::string payload{};  // serialized fabatlas.v1.TaskPayload
   // Workers this task prefers (lease affinity, worker.proto): GrantLeases
   // hands it to one of them before anyone else. Empty = no preference.
   // Ignored when the task already exists.
@@ -81,7 +81,7 @@ struct TaskRecord {
   std::int64_t attempt = 0;      // attempts granted so far
   std::int64_t expiries = 0;     // leases that expired
   std::int64_t completions = 0;  // accepted results (0 or 1)
-  std::string result{};            // serialized fabatlas.v1.TaskResult
+  std::string result{};          // serialized fabatlas.v1.TaskResult
 };
 
 struct LeaseGrant {
@@ -94,37 +94,37 @@ struct LeaseGrant {
 
 // One subtree root of a sample (fabatlas.v1.SubtreeRecord).
 struct SubtreeUse {
-  std::string key{};          // cache key: hex SHA-256 of (τ, ρ, voxel size)
-  std::string topology{};     // hex SHA-256 of τ
+  std::string key{};       // cache key: hex SHA-256 of (τ, ρ, voxel size)
+  std::string topology{};  // hex SHA-256 of τ
   std::string op{};
-  double seconds = 0;       // root compute time on the worker (for a cache hit:
-                            // the worker's last measurement of the key)
-  bool measured = true;     // false for a cache hit
-  std::int64_t bytes = 0;   // memory of the level set
+  double seconds = 0;                   // root compute time on the worker (for a cache hit:
+                                        // the worker's last measurement of the key)
+  bool measured = true;                 // false for a cache hit
+  std::int64_t bytes = 0;               // memory of the level set
   std::vector<std::string> children{};  // child keys, in tree order
-  std::string blob_digest{};  // serialized Solid in the blob store, or ""
+  std::string blob_digest{};            // serialized Solid in the blob store, or ""
 };
 
 struct Completion {
   std::string lease_id{}, task_key{};
   std::int64_t attempt = 0;
-  std::string result{};      // serialized TaskResult; ignored when failed
-  bool failed = false;     // the worker could not run the task: requeue
-  int sample_valid = -1;   // sample tasks: 1 valid, 0 invalid; -1 otherwise
+  std::string result{};   // serialized TaskResult; ignored when failed
+  bool failed = false;    // the worker could not run the task: requeue
+  int sample_valid = -1;  // sample tasks: 1 valid, 0 invalid; -1 otherwise
   // Sample tasks: the point key ("k0,k1,..." as in the task key) and the
   // sample's subtrees, post-order (root last); stored only when the result
   // is accepted, in the same transaction.
   std::string point_key{};
   std::vector<SubtreeUse> subtrees{};
-  std::string error{};       // when failed: the worker's one-line reason (events)
+  std::string error{};  // when failed: the worker's one-line reason (events)
 };
 
 enum class CompletionOutcome {
-  kAccepted,   // stored; the first completion of the key
-  kDuplicate,  // the key was already finished: acknowledged, ignored
-  kFenced,     // the lease is no longer current (expired, returned): ignored
-  kUnknown,    // no such task
-  kRequeued,   // failed: the task goes back to the queue
+  kAccepted,     // stored; the first completion of the key
+  kDuplicate,    // the key was already finished: acknowledged, ignored
+  kFenced,       // the lease is no longer current (expired, returned): ignored
+  kUnknown,      // no such task
+  kRequeued,     // failed: the task goes back to the queue
   kQuarantined,  // failed on quarantine_after different workers: finished
                  // with the quarantine result, like an expiry quarantine
 };
@@ -136,9 +136,9 @@ struct WorkerSync {
   std::vector<Completion> completions{};  // results it reports
   std::vector<std::string> in_flight{};   // leases it still holds (running or queued)
   std::int64_t now_ms = 0;
-  std::int64_t lease_ms = 0;            // leases granted or topped up run until now_ms + lease_ms
-  int want = 0;                         // leases to grant at most (0: none)
-  int steal = -1;                       // of them, tasks preferring other workers at most (< 0: want)
+  std::int64_t lease_ms = 0;  // leases granted or topped up run until now_ms + lease_ms
+  int want = 0;               // leases to grant at most (0: none)
+  int steal = -1;             // of them, tasks preferring other workers at most (< 0: want)
   // As for Complete.
   std::int64_t retry_backoff_ms = 0;
   int quarantine_after = 0;
@@ -147,9 +147,9 @@ struct WorkerSync {
 
 struct WorkerSyncOutcome {
   std::vector<CompletionOutcome> outcomes{};  // one per completion, in order
-  int returned = 0;                 // its active leases it no longer knows, queued again
-  std::vector<std::string> revoked{}; // in_flight ids that are not active leases of the worker
-  std::vector<LeaseGrant> grants{};   // new leases
+  int returned = 0;                           // its active leases it no longer knows, queued again
+  std::vector<std::string> revoked{};         // in_flight ids that are not active leases of the worker
+  std::vector<LeaseGrant> grants{};           // new leases
 };
 
 struct ExpiredLease {
@@ -227,8 +227,7 @@ class JobStore {
   bool CreateJob(const JobRecord& job);
   std::optional<JobRecord> FindJob(const std::string& id);
   std::vector<JobRecord> Jobs();
-  void SetJobState(const std::string& id, JobState state, const std::string& error,
-                   std::int64_t finished_ms);
+  void SetJobState(const std::string& id, JobState state, const std::string& error, std::int64_t finished_ms);
   void PutJobOutput(const std::string& job_id, const std::string& name, const std::string& digest);
   std::map<std::string, std::string> JobOutputs(const std::string& job_id);
 
@@ -246,8 +245,8 @@ class JobStore {
   // first, then oldest), then tasks preferring nobody (oldest first), then
   // tasks preferring other workers (newest first; at most `steal` of them,
   // all `max` when negative). A granted task's preference is dropped.
-  std::vector<LeaseGrant> GrantLeases(const std::string& worker_id, int max, std::int64_t now_ms,
-                                      std::int64_t lease_ms, int steal = -1);
+  std::vector<LeaseGrant> GrantLeases(const std::string& worker_id, int max, std::int64_t now_ms, std::int64_t lease_ms,
+                                      int steal = -1);
   // Drops every preference for the worker (it left or went silent); tasks
   // left without a preferred worker prefer nobody. Returns how many tasks
   // lost it.
@@ -261,9 +260,8 @@ class JobStore {
   // is finished with quarantine_result(kind) instead, so a task no worker
   // can run ends the job's wait rather than cycling forever, while one
   // misconfigured worker failing everything quarantines nothing.
-  std::vector<CompletionOutcome> Complete(const std::vector<Completion>& completions,
-                                          std::int64_t now_ms, std::int64_t retry_backoff_ms,
-                                          int quarantine_after = 0,
+  std::vector<CompletionOutcome> Complete(const std::vector<Completion>& completions, std::int64_t now_ms,
+                                          std::int64_t retry_backoff_ms, int quarantine_after = 0,
                                           const std::function<std::string(int kind)>& quarantine_result = {});
   // A worker's Sync in one transaction (one commit at most, none when
   // nothing changes): Complete(completions), then ReturnUnknownLeases(
@@ -277,8 +275,7 @@ class JobStore {
   // Moves the deadline of the worker's listed active leases to deadline_ms,
   // leaving (not writing) those already due at deadline_ms - slack_ms or
   // later. Returns the listed ids that are not active leases of this worker.
-  std::vector<std::string> ExtendLeases(const std::string& worker_id,
-                                        const std::vector<std::string>& lease_ids,
+  std::vector<std::string> ExtendLeases(const std::string& worker_id, const std::vector<std::string>& lease_ids,
                                         std::int64_t deadline_ms, std::int64_t slack_ms = 0);
   // Active leases of the worker that are not in `known` (lost in transit or
   // forgotten by a restarted worker) go back to the queue at once, without
@@ -288,8 +285,7 @@ class JobStore {
   // queued again, eligible after backoff_ms * 2^(expiries-1) (capped at 30 s),
   // or, on its quarantine_after-th expiry, finished with
   // quarantine_result(kind) and marked quarantined.
-  std::vector<ExpiredLease> ExpireLeases(std::int64_t now_ms, std::int64_t backoff_ms,
-                                         int quarantine_after,
+  std::vector<ExpiredLease> ExpireLeases(std::int64_t now_ms, std::int64_t backoff_ms, int quarantine_after,
                                          const std::function<std::string(int kind)>& quarantine_result);
   // Gives every active lease until now_ms + grace_ms (used at start-up, so
   // workers that kept running while the coordinator was down can report).
@@ -362,7 +358,7 @@ class JobStore {
   std::unique_ptr<sqlite::Connection> db_;
   std::mutex mutex_;
   std::map<std::string, std::pair<int, std::int64_t>> touched_;  // worker -> (slots, last write ms)
-  std::int64_t preferring_tasks_ = 0;  // tasks with tasks.affine = 1 (lease affinity)
+  std::int64_t preferring_tasks_ = 0;                            // tasks with tasks.affine = 1 (lease affinity)
   // CountTasks of each job asked for so far, moved by every committed change
   // (task_counts.h CountDeltas); under mutex_.
   std::map<std::string, TaskCounts> counts_;
