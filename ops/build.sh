@@ -2,9 +2,13 @@
 # Installs what fabatlas needs and builds it (Release, Ninja, ccache) into
 # build/. Binaries land in build/bin/. With target names as arguments only
 # those are built (ops/demo.sh builds the programs and the page it runs);
-# without, everything (ops/test.sh: the tests and benchmarks too).
+# without, everything (ops/test.sh: the tests and benchmarks too). Every
+# target builds with -Wall -Wextra; with CI=true warnings are errors.
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 bash "$root/ops/install-deps.sh"
-cmake -S "$root" -B "$root/build" -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
+# CI (CI=true, as CI services set it): a warning fails the build.
+werror=OFF
+if [ "${CI:-}" = true ]; then werror=ON; fi
+cmake -S "$root" -B "$root/build" -G Ninja -DCMAKE_BUILD_TYPE=Release -DFABATLAS_WERROR="$werror" >/dev/null
 ninja -C "$root/build" -j"$(nproc)" "$@"

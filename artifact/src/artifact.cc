@@ -26,7 +26,7 @@
 #include "fabatlas/sampling/design_space.h"
 #include "fabatlas/sampling/adaptive_sampler.h"
 #include "fabatlas/sampling/point_key_text.h"
-#include "fabatlas/sqlite/statement.h"
+#include "fabatlas/sqlite/connection.h"
 
 namespace fabatlas::artifact {
 
@@ -93,41 +93,20 @@ struct Corrupt : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-class Db {
+// The artifact file's SQLite connection; its errors are Corrupt.
+class Db : public sqlite::Connection {
  public:
-  Db(const std::string& uri, int flags) {
-    if (sqlite3_open_v2(uri.c_str(), &handle_, flags, nullptr) != SQLITE_OK) {
-      std::string message = handle_ ? sqlite3_errmsg(handle_) : "out of memory";
-      sqlite3_close(handle_);
-      throw Corrupt("cannot open: " + message);
-    }
-    sqlite3_extended_result_codes(handle_, 1);
+  Db(const std::string& uri, int flags)
+      : Connection(uri, flags, [](const std::string& message) { throw Corrupt(message); }) {
+    sqlite3_extended_result_codes(get(), 1);
   }
-  ~Db() { sqlite3_close(handle_); }
-  Db(const Db&) = delete;
-  Db& operator=(const Db&) = delete;
-  sqlite3* get() const { return handle_; }
-  void Exec(const std::string& sql) {
-    char* message = nullptr;
-    if (sqlite3_exec(handle_, sql.c_str(), nullptr, nullptr, &message) != SQLITE_OK) {
-      std::string text = message ? message : sqlite3_errmsg(handle_);
-      sqlite3_free(message);
-      throw Corrupt(text);
-    }
-  }
-
- private:
-  sqlite3* handle_ = nullptr;
 };
 
 // A prepared statement of the artifact file; SQLite errors are Corrupt.
 class Stmt : public sqlite::Statement {
  public:
   Stmt(Db& db, const std::string& sql)
-      : Statement(db.get(), sql, [&db](const std::string& what) {
-          (void)what;
-          throw Corrupt(std::string("SQLite: ") + sqlite3_errmsg(db.get()));
-        }) {}
+      : Statement(db.get(), sql, [&db](const std::string& what) { db.Fail(what); }) {}
 };
 
 // SHA-256 fed in pieces (the canonical content of a table with cache

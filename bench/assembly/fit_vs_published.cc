@@ -9,7 +9,7 @@
 //   rod: distance of the published centre from the fitted axis, offset along
 //     it, angle between the axes, radius.
 // Usage: assembly_fit_vs_published [--library configs/assemblies/parts.yaml]
-// Prints a Markdown table (docs/assembly.md, "Fitted against published frames").
+// Prints a Markdown table (docs/assembly-notes.md, "Fitted against published frames").
 #include <cmath>
 #include <cstdio>
 #include <string>

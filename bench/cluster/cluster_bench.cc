@@ -54,6 +54,7 @@
 
 #include "fabatlas/coordinator/coordinator.h"
 #include "fabatlas/coordinator/job_client.h"
+#include "fabatlas/coordinator/run_tasks.h"
 #include "fabatlas/log/log.h"
 #include "fabatlas/protocol/channel.h"
 #include "fabatlas/sha256.h"
@@ -170,7 +171,7 @@ double NoopThroughput(coordinator::Coordinator& c, int tasks, int salt) {
   std::vector<std::string> keys;
   auto payloads = NoopPayloads(tasks, salt, &keys);
   auto t0 = Clock::now();
-  auto results = c.RunTasks("noop-bench", payloads, keys);
+  auto results = RunTasks(c, "noop-bench", payloads, keys);
   return static_cast<double>(results.size()) / Seconds(t0, Clock::now());
 }
 
@@ -241,7 +242,7 @@ int main(int argc, char** argv) {
     {
       std::vector<std::string> keys;
       auto payloads = NoopPayloads(20, 99999, &keys);
-      oc.RunTasks("noop-overhead", payloads, keys);  // warm-up: the worker is connected
+      RunTasks(oc, "noop-overhead", payloads, keys);  // warm-up: the worker is connected
     }
     const int n = 1000;
     std::vector<double> latencies;
@@ -250,7 +251,7 @@ int main(int argc, char** argv) {
       std::vector<std::string> keys;
       auto payloads = NoopPayloads(1, 100000 + i, &keys);
       auto t0 = Clock::now();
-      oc.RunTasks("noop-overhead", payloads, keys);
+      RunTasks(oc, "noop-overhead", payloads, keys);
       latencies.push_back(1000.0 * Seconds(t0, Clock::now()));
     }
     double cpu_us = 1e6 * (ProcessCpuSeconds() - cpu0) / n;
@@ -351,6 +352,8 @@ int main(int argc, char** argv) {
         o.state_dir = dir / ("speedup" + name);
         coordinator::Coordinator sc(o);
         sc.Start();
+        // The coordinator's store, read through a connection of its own.
+        storage::JobStore state(o.state_dir / "state.db");
         std::vector<pid_t> pids;
         std::vector<fs::path> caches;
         std::int64_t spawned_ms = std::chrono::duration_cast<std::chrono::milliseconds>(
@@ -360,7 +363,7 @@ int main(int argc, char** argv) {
           pids.push_back(SpawnWorker(sc.port(), 1, caches.back()));
         }
         // Connected (one Sync each) before the job starts.
-        while (sc.store().CountWorkers(spawned_ms - 1000) < n)
+        while (state.CountWorkers(spawned_ms - 1000) < n)
           std::this_thread::sleep_for(std::chrono::milliseconds(20));
         coordinator::JobClient client("127.0.0.1:" + std::to_string(sc.port()), {});
         std::vector<double> cpu_start;
@@ -381,10 +384,10 @@ int main(int argc, char** argv) {
         busiest_cpu[n].push_back(busiest);
         process_cpu[n].push_back(StopWorkers(pids));
         task_count = s.tasks_total();
-        auto [sample_cpu, change_cpu] = TaskCpuSeconds(sc.store(), id);
+        auto [sample_cpu, change_cpu] = TaskCpuSeconds(state, id);
         double subtree_seconds = 0;
         std::int64_t subtree_computations = 0;
-        for (const auto& row : sc.store().Subtrees(id)) {
+        for (const auto& row : state.Subtrees(id)) {
           subtree_seconds += row.seconds_sum;
           subtree_computations += row.seconds_count;
         }

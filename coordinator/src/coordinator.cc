@@ -2,6 +2,7 @@
 // /metrics, resumed jobs), drain and shutdown (coordinator_state.h says
 // where the rest lives).
 #include "fabatlas/coordinator/coordinator.h"
+#include "fabatlas/coordinator/run_tasks.h"
 
 #include <grpcpp/grpcpp.h>
 #include <grpcpp/health_check_service_interface.h>
@@ -178,13 +179,9 @@ void Coordinator::Wait() {
   m.shutdown_cv.wait(lock, [&] { return m.shut_down; });
 }
 
-storage::JobStore& Coordinator::store() { return *impl_->store; }
-storage::BlobStore& Coordinator::blobs() { return *impl_->blobs; }
-
-std::vector<std::string> Coordinator::RunTasks(const std::string& job_id,
-                                               const std::vector<std::string>& payloads,
-                                               const std::vector<std::string>& keys) {
-  Impl& m = *impl_;
+std::vector<std::string> RunTasks(Coordinator& coordinator, const std::string& job_id,
+                                  const std::vector<std::string>& payloads, const std::vector<std::string>& keys) {
+  Coordinator::Impl& m = *coordinator.impl_;
   if (!m.store->FindJob(job_id))
     m.store->CreateJob({job_id, std::string(64, '0'), "tasks", storage::JobState::kRunning, "", NowMs(), 0});
   std::vector<int> kinds;

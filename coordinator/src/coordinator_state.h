@@ -160,8 +160,8 @@ struct Coordinator::Impl {
   // requests to pass on; share_polled: holder -> when its ShareSolids loop
   // was last seen (a holder not polling is not asked).
   struct Share {
-    std::string digest;
-    std::string blob;
+    std::string digest{};
+    std::string blob{};
     bool answered = false;
     std::int64_t asked_ms = 0;
   };

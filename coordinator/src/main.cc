@@ -1,5 +1,5 @@
 // fabatlas-coordinator — the cluster's coordinator process (coordinator.h).
-//   fabatlas-coordinator --listen 0.0.0.0:7450 --state-dir /var/lib/fabatlas \
+//   fabatlas-coordinator --listen 0.0.0.0:7450 --state-dir /var/lib/fabatlas
 //       --tls-cert server.pem --tls-key server.key [--token-file F] [--metrics 0.0.0.0:9450]
 // SIGTERM / SIGINT: drain (no new leases, wait up to --drain-seconds for
 // running leases), then stop; running jobs resume on the next start.

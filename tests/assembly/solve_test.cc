@@ -198,7 +198,7 @@ TEST(AssemblySolve, ReadingNookHookIsPulledAgainstTheBodyAtThePegsEnd) {
   // there, the relaxed structure pulls it 35–36° past the peg's normal plane
   // towards t = 0, beyond the 20° friction angle; let go, it stays at t = 0,
   // pressed against the scanned body the peg runs into there. Were that end
-  // open (the published default), it would fall off (docs/assembly.md "The
+  // open (the published default), it would fall off (docs/assembly-notes.md "The
   // reading nook against the published method").
   const Program p = Nook(false);
   const SolveSummary s = SolveAssembly(p);
@@ -225,7 +225,7 @@ TEST(AssemblySolve, ReadingNookUnderThePapersRelaxation) {
   // 186° away), turns about that diameter, > 60° from the published frame.
   // The turnbuckle's hook stays at the peg's t = 0 end with the energy
   // falling past it: held there by the body the peg runs into (were that end
-  // open it would fall off, as in the test above; docs/assembly.md "The
+  // open it would fall off, as in the test above; docs/assembly-notes.md "The
   // reading nook against the published method").
   SolveOptions o;
   o.slide_friction = false;

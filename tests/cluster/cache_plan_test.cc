@@ -45,7 +45,7 @@ struct LeaseRow {
   std::string worker, state;
 };
 
-// Leases of one task, in attempt order (storage/src/job_store.cc schema).
+// Leases of one task, in attempt order (storage/src/schema.cc).
 std::vector<LeaseRow> LeasesOf(const fs::path& db_path, const std::string& task_key) {
   std::vector<LeaseRow> rows;
   sqlite3* db = nullptr;

@@ -24,6 +24,7 @@
 #include "in_process_job.h"
 #include "fabatlas/coordinator/coordinator.h"
 #include "fabatlas/coordinator/job_client.h"
+#include "fabatlas/coordinator/run_tasks.h"
 #include "fabatlas/error.h"
 #include "fabatlas/geometry/solid.h"
 #include "fabatlas/mesh/read_mesh.h"
@@ -369,7 +370,7 @@ TEST(ClusterFaults, StoppedWorkerReportsTheResultItsCancelledLongPollCarried) {
     p.set_kind(v1::TASK_KIND_NOOP);
     p.mutable_point_a()->add_key(tasks);
     const std::string key = Sha256Hex("stop-in-poll/" + std::to_string(tasks++));
-    ASSERT_EQ(c.RunTasks("noop-stop", {p.SerializeAsString()}, {key}).size(), 1u);
+    ASSERT_EQ(RunTasks(c, "noop-stop", {p.SerializeAsString()}, {key}).size(), 1u);
   } while (std::chrono::steady_clock::now() < connected);
   ::kill(worker, SIGTERM);
   EXPECT_EQ(WaitExit(worker, std::chrono::seconds(30)), 0);

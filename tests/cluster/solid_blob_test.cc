@@ -64,7 +64,9 @@ TEST(ProtocolSolidBlob, TruncatedAndFlippedBlobsAreInputErrors) {
     EXPECT_THROW(protocol::SolidOfBlob(blob.substr(0, n)), InputError) << n;
     // (GridOfBlob passes bytes without the zstd magic number through: an
     // earlier version's raw grid.)
-    if (n >= 4) EXPECT_THROW(protocol::GridOfBlob(blob.substr(0, n)), InputError) << n;
+    if (n >= 4) {
+      EXPECT_THROW(protocol::GridOfBlob(blob.substr(0, n)), InputError) << n;
+    }
   }
   // A flipped bit is an InputError (the frame's content checksum), or, where
   // zstd's entropy coding leaves a bit unused, the very same solid: never a

@@ -164,7 +164,7 @@ TEST(GeometrySolidNodes, LeavesAndTilesOfAnyValueRoundTripExactly) {
   for (openvdb::Index n = 0, tiles = 0; n < Lower::NUM_VALUES && tiles < 2; ++n)
     if (!lower[0]->isChildMaskOn(n)) lower[0]->addTile(n, tiles == 0 ? 1.5f : -0.0f, tiles++ == 0);
   grid->tree().root().addTile(openvdb::Coord(40960, 0, -4096), -3.0f, true);
-  const fg::Solid odd = fg::detail::MakeSolid(grid, tube.impl()->spec);
+  const fg::Solid odd = fg::internal::MakeSolid(grid, tube.impl()->spec);
   ExpectSameSolid(odd, RoundTrip(odd));
 }
 
@@ -172,10 +172,10 @@ TEST(GeometrySolidNodes, GridsItCannotEncodeExactlyAreDeclined) {
   const fg::Solid tube = Tube();
   FloatGrid::Ptr moved = tube.impl()->Grid()->deepCopy();
   moved->transform().postTranslate(openvdb::Vec3d(0.5, 0, 0));
-  EXPECT_FALSE(fg::SolidNodeBytes(fg::detail::MakeSolid(moved, tube.impl()->spec)).has_value());
+  EXPECT_FALSE(fg::SolidNodeBytes(fg::internal::MakeSolid(moved, tube.impl()->spec)).has_value());
   FloatGrid::Ptr tagged = tube.impl()->Grid()->deepCopy();
   tagged->insertMeta("note", openvdb::StringMetadata("x"));
-  EXPECT_FALSE(fg::SolidNodeBytes(fg::detail::MakeSolid(tagged, tube.impl()->spec)).has_value());
+  EXPECT_FALSE(fg::SolidNodeBytes(fg::internal::MakeSolid(tagged, tube.impl()->spec)).has_value());
 }
 
 TEST(GeometrySolidNodes, TruncatedOrCorruptBytesAreInputErrors) {

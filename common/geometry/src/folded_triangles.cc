@@ -20,7 +20,7 @@ using LeafT = openvdb::FloatTree::LeafNodeType;
 // The eight voxel values of the cell with minimum corner o, v[i][j][l] at
 // o + (i, j, l): read from o's leaf when the cell lies inside it (most
 // cells), else leaf by leaf through the cache; the same values either way.
-void CellValues(Accessor& acc, detail::LeafCache<Accessor>& leaves, const openvdb::Coord& o, double v[2][2][2]) {
+void CellValues(Accessor& acc, internal::LeafCache<Accessor>& leaves, const openvdb::Coord& o, double v[2][2][2]) {
   constexpr int kLast = static_cast<int>(LeafT::DIM) - 1;
   if ((o.x() & kLast) != kLast && (o.y() & kLast) != kLast && (o.z() & kLast) != kLast) {
     if (const LeafT* leaf = acc.probeConstLeaf(o)) {
@@ -58,7 +58,7 @@ FoldedTriangles FindFoldedTriangles(const Solid& s, const mesh::TriangleMesh& me
   std::vector<std::vector<Fold>> folds(chunks);
   tbb::parallel_for(std::size_t{0}, chunks, [&](std::size_t chunk) {
     Accessor acc(grid.tree());
-    detail::LeafCache<Accessor> leaves;
+    internal::LeafCache<Accessor> leaves;
     const std::size_t end = std::min(mesh.triangles.size(), (chunk + 1) * kChunk);
     for (std::size_t n = chunk * kChunk; n != end; ++n) {
       const auto& t = mesh.triangles[n];

@@ -26,21 +26,21 @@ namespace {
 
 FloatGrid::Ptr EmptyGrid(const GridSpec& spec) {
   FloatGrid::Ptr grid = FloatGrid::create(static_cast<float>(spec.half_width_voxels * spec.voxel_size));
-  grid->setTransform(detail::CanonicalTransform(spec.voxel_size));
+  grid->setTransform(internal::CanonicalTransform(spec.voxel_size));
   return grid;
 }
 
-Solid EmptyLike(const Solid& s) { return detail::MakeSolid(EmptyGrid(s.impl()->spec), s.impl()->spec); }
+Solid EmptyLike(const Solid& s) { return internal::MakeSolid(EmptyGrid(s.impl()->spec), s.impl()->spec); }
 
 double ActiveVoxels(const Solid& s) { return static_cast<double>(s.impl()->Grid()->activeVoxelCount()); }
 
 // Rebuild the zero level set of `src` (whose transform may be any affine map)
 // as a narrow band on the canonical transform of `spec`.
 Solid Rebuild(const FloatGrid& src, const GridSpec& spec) {
-  auto xform = detail::CanonicalTransform(spec.voxel_size);
+  auto xform = internal::CanonicalTransform(spec.voxel_size);
   const float hw = static_cast<float>(spec.half_width_voxels);
   FloatGrid::Ptr out = openvdb::tools::levelSetRebuild(src, static_cast<float>(kMeshIso * src.voxelSize()[0]), hw, hw, xform.get());
-  return detail::MakeSolid(out, spec);
+  return internal::MakeSolid(out, spec);
 }
 
 // `b` expressed on `a`'s grid spec (voxel size, band), resampling if needed.
@@ -81,7 +81,7 @@ Solid AssembleNarrowBand(const GridSpec& spec, double bg, const std::vector<open
   for (LeafT* leaf : out_leaves)
     if (leaf) out->tree().addLeaf(leaf);
   openvdb::tools::signedFloodFill(out->tree());
-  return detail::MakeSolid(out, spec);
+  return internal::MakeSolid(out, spec);
 }
 
 // Resample s after mapping its geometry by `post` (applied after s's
@@ -101,7 +101,7 @@ Solid MapAndRebuild(const Solid& s, Fn post, double scale = 1.0) {
     src->setTransform(xform);
     return Rebuild(*src, spec);
   }
-  const auto out_xform = detail::CanonicalTransform(spec.voxel_size);
+  const auto out_xform = internal::CanonicalTransform(spec.voxel_size);
   const double bg = spec.half_width_voxels * spec.voxel_size;
   // Candidate output voxels: the images of the input's active voxels,
   // dilated to close the gaps a rotation or enlargement leaves.
@@ -176,7 +176,7 @@ Solid Translate(const Solid& s, const Vec3& t) {
       }
     }
     openvdb::tools::signedFloodFill(out->tree());
-    return detail::MakeSolid(out, s.impl()->spec);
+    return internal::MakeSolid(out, s.impl()->spec);
   }
   return MapAndRebuild(s, [&](openvdb::math::Transform& x) { x.postTranslate(openvdb::Vec3d(t[0], t[1], t[2])); });
 }
@@ -206,14 +206,14 @@ Solid Rotate(const Solid& s, const Vec3& euler_xyz_deg) {
 }
 
 Solid Scale(const Solid& s, double factor) {
-  detail::RequirePositive(factor, "scale", "factor");
+  internal::RequirePositive(factor, "scale", "factor");
   if (!s.impl()) return s;
   if (factor == 1.0) return s;
   if (s.boundary())
     return MapBoundary(s, [&](const std::array<double, 3>& v) {
       return std::array<double, 3>{v[0] * factor, v[1] * factor, v[2] * factor};
     });
-  detail::CheckActiveVoxelEstimate(s.impl()->spec, ActiveVoxels(s) * factor * factor, "the scaled solid");
+  internal::CheckActiveVoxelEstimate(s.impl()->spec, ActiveVoxels(s) * factor * factor, "the scaled solid");
   return MapAndRebuild(s, [&](openvdb::math::Transform& x) { x.postScale(factor); }, factor);
 }
 
@@ -222,12 +222,12 @@ Solid Scale(const Solid& s, double factor) {
 Solid Union(const Solid& a, const Solid& b) {
   if (!a.impl()) return b;
   if (!b.impl()) return a;
-  return detail::MakeSolid(openvdb::tools::csgUnionCopy(*a.impl()->Grid(), *OnSpecOf(a, b)), a.impl()->spec);
+  return internal::MakeSolid(openvdb::tools::csgUnionCopy(*a.impl()->Grid(), *OnSpecOf(a, b)), a.impl()->spec);
 }
 
 // A sub-voxel sheet between flush faces (solid_impl.h): such a voxel takes the
 // smaller neighbour value; genuine material is negative and never changes.
-std::size_t detail::RemoveZeroSheets(FloatGrid& grid, double voxel_size) {
+std::size_t internal::RemoveZeroSheets(FloatGrid& grid, double voxel_size) {
   const float iso = static_cast<float>(kMeshIso * voxel_size);
   // Found leaf by leaf in parallel (every fix reads the unrepaired grid),
   // then applied.
@@ -236,7 +236,7 @@ std::size_t detail::RemoveZeroSheets(FloatGrid& grid, double voxel_size) {
   std::vector<std::vector<std::pair<openvdb::Coord, float>>> per_leaf(leaves.size());
   tbb::parallel_for(tbb::blocked_range<size_t>(0, leaves.size()), [&](const tbb::blocked_range<size_t>& r) {
     auto acc = grid.getConstAccessor();
-    detail::LeafCache<decltype(acc)> neighbours;
+    internal::LeafCache<decltype(acc)> neighbours;
     for (size_t i = r.begin(); i != r.end(); ++i) {
       const float* values = leaves[i]->buffer().data();
       for (auto on = leaves[i]->getValueMask().beginOn(); on; ++on) {
@@ -281,14 +281,14 @@ Solid Difference(const Solid& a, const Solid& b) {
   if (!a.impl()) return a;
   if (!b.impl()) return a;
   FloatGrid::Ptr out = openvdb::tools::csgDifferenceCopy(*a.impl()->Grid(), *OnSpecOf(a, b));
-  detail::RemoveZeroSheets(*out, a.voxel_size());
-  return detail::MakeSolid(out, a.impl()->spec);
+  internal::RemoveZeroSheets(*out, a.voxel_size());
+  return internal::MakeSolid(out, a.impl()->spec);
 }
 
 Solid Intersection(const Solid& a, const Solid& b) {
   if (!a.impl()) return a;
   if (!b.impl()) return b;
-  return detail::MakeSolid(openvdb::tools::csgIntersectionCopy(*a.impl()->Grid(), *OnSpecOf(a, b)),
+  return internal::MakeSolid(openvdb::tools::csgIntersectionCopy(*a.impl()->Grid(), *OnSpecOf(a, b)),
                            a.impl()->spec);
 }
 
@@ -302,10 +302,10 @@ Solid Offset(const Solid& s, double distance) {
   const double vs = spec.voxel_size;
   const int dilation = static_cast<int>(std::ceil(std::abs(distance) / vs)) + 2;
   const double band_growth = (spec.half_width_voxels + dilation) / spec.half_width_voxels;
-  detail::CheckActiveVoxelEstimate(spec, ActiveVoxels(s) * band_growth, "the widened offset band");
+  internal::CheckActiveVoxelEstimate(spec, ActiveVoxels(s) * band_growth, "the widened offset band");
   if (distance > 0) {
     const Box3 b = s.BoundingBox();
-    detail::CheckVoxelBudget(spec,
+    internal::CheckVoxelBudget(spec,
                              {b.max[0] - b.min[0] + 2 * distance, b.max[1] - b.min[1] + 2 * distance,
                               b.max[2] - b.min[2] + 2 * distance},
                              "offset solid");
@@ -332,7 +332,7 @@ Solid Offset(const Solid& s, double distance) {
 }
 
 Solid Shell(const Solid& s, double thickness) {
-  detail::RequirePositive(thickness, "shell", "thickness");
+  internal::RequirePositive(thickness, "shell", "thickness");
   return Difference(s, Offset(s, -thickness));
 }
 
@@ -350,7 +350,7 @@ Solid LinearArray(const Solid& s, int count, const Vec3& step) {
   for (double v : step)
     if (!std::isfinite(v)) throw InputError("linear array: step must be finite");
   if (!s.impl()) return s;
-  detail::CheckActiveVoxelEstimate(s.impl()->spec, ActiveVoxels(s) * count, "the linear array");
+  internal::CheckActiveVoxelEstimate(s.impl()->spec, ActiveVoxels(s) * count, "the linear array");
   std::vector<Solid> parts;
   parts.reserve(count);
   for (int i = 0; i < count; ++i) parts.push_back(Translate(s, {i * step[0], i * step[1], i * step[2]}));
@@ -361,7 +361,7 @@ Solid PolarArray(const Solid& s, int count, double total_angle_deg) {
   if (count < 1) throw InputError("polar array: count must be >= 1");
   if (!std::isfinite(total_angle_deg)) throw InputError("polar array: angle must be finite");
   if (!s.impl()) return s;
-  detail::CheckActiveVoxelEstimate(s.impl()->spec, ActiveVoxels(s) * count, "the polar array");
+  internal::CheckActiveVoxelEstimate(s.impl()->spec, ActiveVoxels(s) * count, "the polar array");
   std::vector<Solid> parts;
   parts.reserve(count);
   for (int i = 0; i < count; ++i) parts.push_back(Rotate(s, {0, 0, i * total_angle_deg / count}));
@@ -403,7 +403,7 @@ double DeltaG(const Solid& a, const Solid& b) {
 }
 
 double OpeningLossFraction(const Solid& s, double min_thickness) {
-  detail::RequirePositive(min_thickness, "opening", "minimum thickness");
+  internal::RequirePositive(min_thickness, "opening", "minimum thickness");
   if (s.empty()) return 0.0;
   const double v = s.Volume();
   const double r = min_thickness / 2;

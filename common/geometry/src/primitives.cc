@@ -108,12 +108,12 @@ inline int FloorDiv(int a, int b) { return (a >= 0) ? a / b : -((-a + b - 1) / b
 // Narrow-band level set of `sdf` (exact signed distance, mm, negative inside)
 // whose interior lies within [lo, hi].
 // zero_sheets: remove the zero-thickness sheets of flush CSG faces
-// (detail::RemoveZeroSheets) instead of only signing the inactive values.
+// (internal::RemoveZeroSheets) instead of only signing the inactive values.
 Solid SampleSdf(const GridSpec& g, const Vec3& lo, const Vec3& hi, const Sdf& sdf, const char* what,
                 bool zero_sheets = false) {
-  detail::ValidateSpec(g, what);
-  detail::EnsureOpenVdbInitialized();
-  detail::CheckVoxelBudget(g, {hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]}, what);
+  internal::ValidateSpec(g, what);
+  internal::EnsureOpenVdbInitialized();
+  internal::CheckVoxelBudget(g, {hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]}, what);
   const double vs = g.voxel_size;
   const double band = g.half_width_voxels * vs;
   int ilo[3], ihi[3];
@@ -133,13 +133,13 @@ Solid SampleSdf(const GridSpec& g, const Vec3& lo, const Vec3& hi, const Sdf& sd
     for (size_t b = r.begin(); b != r.end(); ++b) sampler.Visit(blocks[b], kTopBlock, per_block[b]);
   });
   FloatGrid::Ptr grid = FloatGrid::create(static_cast<float>(band));
-  grid->setTransform(detail::CanonicalTransform(vs));
+  grid->setTransform(internal::CanonicalTransform(vs));
   FloatTree& tree = grid->tree();
   for (auto& leaves : per_block)
     for (LeafT* leaf : leaves) tree.addLeaf(leaf);
-  if (zero_sheets) detail::RemoveZeroSheets(*grid, vs);
+  if (zero_sheets) internal::RemoveZeroSheets(*grid, vs);
   else openvdb::tools::signedFloodFill(tree);
-  return detail::MakeSolid(grid, g);
+  return internal::MakeSolid(grid, g);
 }
 
 // ---- 2-D helpers -------------------------------------------------------------
@@ -363,13 +363,13 @@ DistanceFunction ConvexMeshDistance(const mesh::TriangleMesh& m, double exact_wi
 // ---- Primitives ----------------------------------------------------------------
 
 Solid Sphere(const GridSpec& g, double radius) {
-  detail::RequirePositive(radius, "sphere", "radius");
+  internal::RequirePositive(radius, "sphere", "radius");
   Sdf sdf = [radius](double x, double y, double z) { return std::sqrt(x * x + y * y + z * z) - radius; };
   return SampleSdf(g, {-radius, -radius, -radius}, {radius, radius, radius}, sdf, "sphere");
 }
 
 Solid Box(const GridSpec& g, const Vec3& size) {
-  for (double s : size) detail::RequirePositive(s, "box", "edge length");
+  for (double s : size) internal::RequirePositive(s, "box", "edge length");
   const double hx = size[0] / 2, hy = size[1] / 2, hz = size[2] / 2;
   Sdf sdf = [=](double x, double y, double z) {
     const double qx = std::abs(x) - hx, qy = std::abs(y) - hy, qz = std::abs(z) - hz;
@@ -380,15 +380,15 @@ Solid Box(const GridSpec& g, const Vec3& size) {
 }
 
 Solid Cylinder(const GridSpec& g, double radius, double height) {
-  detail::RequirePositive(radius, "cylinder", "radius");
-  detail::RequirePositive(height, "cylinder", "height");
+  internal::RequirePositive(radius, "cylinder", "radius");
+  internal::RequirePositive(height, "cylinder", "height");
   const double hz = height / 2;
   Sdf sdf = [=](double x, double y, double z) { return Box2Sdf(std::hypot(x, y) - radius, std::abs(z) - hz); };
   return SampleSdf(g, {-radius, -radius, -hz}, {radius, radius, hz}, sdf, "cylinder");
 }
 
 Solid Cone(const GridSpec& g, double bottom_radius, double top_radius, double height) {
-  detail::RequirePositive(height, "cone", "height");
+  internal::RequirePositive(height, "cone", "height");
   if (!std::isfinite(bottom_radius) || !std::isfinite(top_radius) || bottom_radius < 0 || top_radius < 0 ||
       (bottom_radius == 0 && top_radius == 0)) {
     throw InputError("cone: radii must be finite, >= 0 and not both 0");
@@ -400,15 +400,15 @@ Solid Cone(const GridSpec& g, double bottom_radius, double top_radius, double he
 }
 
 Solid Torus(const GridSpec& g, double major_radius, double minor_radius) {
-  detail::RequirePositive(major_radius, "torus", "major radius");
-  detail::RequirePositive(minor_radius, "torus", "minor radius");
+  internal::RequirePositive(major_radius, "torus", "major radius");
+  internal::RequirePositive(minor_radius, "torus", "minor radius");
   const double R = major_radius + minor_radius, r = minor_radius;
   Sdf sdf = [=](double x, double y, double z) { return std::hypot(std::hypot(x, y) - major_radius, z) - r; };
   return SampleSdf(g, {-R, -R, -r}, {R, R, r}, sdf, "torus");
 }
 
 Solid Capsule(const GridSpec& g, const Vec3& a, const Vec3& b, double radius) {
-  detail::RequirePositive(radius, "capsule", "radius");
+  internal::RequirePositive(radius, "capsule", "radius");
   for (int k = 0; k < 3; ++k)
     if (!std::isfinite(a[k]) || !std::isfinite(b[k])) throw InputError("capsule: end points must be finite");
   const double ex = b[0] - a[0], ey = b[1] - a[1], ez = b[2] - a[2];
@@ -428,7 +428,7 @@ Solid Capsule(const GridSpec& g, const Vec3& a, const Vec3& b, double radius) {
 }
 
 Solid Extrude(const GridSpec& g, const std::vector<Vec2>& polygon, double height) {
-  detail::RequirePositive(height, "extrude", "height");
+  internal::RequirePositive(height, "extrude", "height");
   std::vector<Vec2> poly = CleanPolygon(polygon, "extrude");
   Vec2 lo, hi;
   PolygonBounds(poly, lo, hi);
@@ -445,15 +445,15 @@ Solid Revolve(const GridSpec& g, const std::vector<Vec2>& profile_in, int sides)
     if (p[0] < 0) throw InputError("revolve: profile radius r must be >= 0 at every point");
   if (sides == 0) return RevolveSmooth(g, profile, "revolve");
   if (sides < 3) throw InputError("revolve: sides must be 0 (smooth) or >= 3");
-  detail::ValidateSpec(g, "revolve");
-  detail::EnsureOpenVdbInitialized();
+  internal::ValidateSpec(g, "revolve");
+  internal::EnsureOpenVdbInitialized();
   // Faceted revolution: a closed triangle mesh whose cross-section at height z
   // is the regular n-gon with circumradius r(z) and a vertex on the +x axis;
   // meshToLevelSet turns it into a level set (it needs a closed surface, not
   // consistent orientation).
   Vec2 lo, hi;
   PolygonBounds(profile, lo, hi);
-  detail::CheckVoxelBudget(g, {2 * hi[0], 2 * hi[0], hi[1] - lo[1]}, "revolve");
+  internal::CheckVoxelBudget(g, {2 * hi[0], 2 * hi[0], hi[1] - lo[1]}, "revolve");
   std::vector<openvdb::Vec3s> points;
   std::vector<openvdb::Vec3I> tris;
   std::vector<int> first(profile.size());  // first vertex of each ring
@@ -482,14 +482,14 @@ Solid Revolve(const GridSpec& g, const std::vector<Vec2>& profile_in, int sides)
       if (!on_axis[j]) tris.emplace_back(vid(i, k + 1), vid(j, k + 1), vid(j, k));
     }
   }
-  auto grid = openvdb::tools::meshToLevelSet<FloatGrid>(*detail::CanonicalTransform(g.voxel_size), points, tris,
+  auto grid = openvdb::tools::meshToLevelSet<FloatGrid>(*internal::CanonicalTransform(g.voxel_size), points, tris,
                                                         static_cast<float>(g.half_width_voxels));
-  return detail::MakeSolid(grid, g);
+  return internal::MakeSolid(grid, g);
 }
 
 Solid FromMesh(const GridSpec& g, const mesh::TriangleMesh& m) {
-  detail::ValidateSpec(g, "mesh");
-  detail::EnsureOpenVdbInitialized();
+  internal::ValidateSpec(g, "mesh");
+  internal::EnsureOpenVdbInitialized();
   if (m.vertices.empty() || m.triangles.empty()) throw InputError("mesh: no triangles");
   Vec3 lo = m.vertices[0], hi = m.vertices[0];
   std::vector<openvdb::Vec3s> points;
@@ -522,7 +522,7 @@ Solid FromMesh(const GridSpec& g, const mesh::TriangleMesh& m) {
     }
     tris.emplace_back(tri[0], tri[1], tri[2]);
   }
-  detail::CheckVoxelBudget(g, {hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]}, "mesh");
+  internal::CheckVoxelBudget(g, {hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]}, "mesh");
   // A closed convex mesh (OpenSCAD's cubes, cylinders, spheres and hulls):
   // its exact signed distance sampled in the band, 10-30x faster than
   // meshToLevelSet, whose cost grows with the triangles' area.
@@ -531,9 +531,9 @@ Solid FromMesh(const GridSpec& g, const mesh::TriangleMesh& m) {
     if (s.empty()) throw InputError("mesh: no interior at this voxel size (open, flat or smaller than a voxel)");
     return s;
   }
-  auto grid = openvdb::tools::meshToLevelSet<FloatGrid>(*detail::CanonicalTransform(g.voxel_size), points, tris,
+  auto grid = openvdb::tools::meshToLevelSet<FloatGrid>(*internal::CanonicalTransform(g.voxel_size), points, tris,
                                                         static_cast<float>(g.half_width_voxels));
-  Solid s = detail::MakeSolid(grid, g);
+  Solid s = internal::MakeSolid(grid, g);
   if (s.empty()) throw InputError("mesh: no interior at this voxel size (open, flat or smaller than a voxel)");
   return s;
 }

@@ -23,7 +23,7 @@ using openvdb::FloatGrid;
 using openvdb::FloatTree;
 using LeafT = FloatTree::LeafNodeType;
 
-namespace detail {
+namespace internal {
 
 void EnsureOpenVdbInitialized() {
   static std::once_flag once;
@@ -81,7 +81,7 @@ Solid MakeSolid(FloatGrid::Ptr grid, const GridSpec& spec) {
   return Solid(std::shared_ptr<const Solid::Impl>(std::move(impl)));
 }
 
-}  // namespace detail
+}  // namespace internal
 
 namespace {
 
@@ -247,7 +247,7 @@ const FloatGrid::Ptr& Solid::Impl::Grid() const {
       grid = boundary->triangles.empty() ? FloatGrid::create(static_cast<float>(spec.half_width_voxels * spec.voxel_size))
                                          : FromMesh(spec, *boundary).impl()->Grid();
       if (boundary->triangles.empty()) {
-        grid->setTransform(detail::CanonicalTransform(spec.voxel_size));
+        grid->setTransform(internal::CanonicalTransform(spec.voxel_size));
         grid->setGridClass(openvdb::GRID_LEVEL_SET);
         grid->setName("solid");
       }
@@ -257,7 +257,7 @@ const FloatGrid::Ptr& Solid::Impl::Grid() const {
 }
 
 Solid MeshSolid(const GridSpec& g, mesh::TriangleMesh boundary) {
-  detail::ValidateSpec(g, "MeshSolid");
+  internal::ValidateSpec(g, "MeshSolid");
   for (const auto& v : boundary.vertices)
     if (!std::isfinite(v[0]) || !std::isfinite(v[1]) || !std::isfinite(v[2]))
       throw InputError("MeshSolid: a vertex coordinate is not a finite number");
@@ -475,7 +475,7 @@ std::string Solid::Serialize() const {
     out.append(reinterpret_cast<const char*>(b.triangles.data()), b.triangles.size() * sizeof(b.triangles[0]));
     return out;
   }
-  detail::EnsureOpenVdbInitialized();
+  internal::EnsureOpenVdbInitialized();
   FloatGrid::Ptr grid;
   GridSpec spec;
   if (impl_) {
@@ -523,7 +523,7 @@ Solid Solid::Deserialize(std::string_view bytes) {
     std::memcpy(m.triangles.data(), in.data() + nv * 24, nt * 12);
     return MeshSolid(spec, std::move(m));
   }
-  detail::EnsureOpenVdbInitialized();
+  internal::EnsureOpenVdbInitialized();
   try {
     std::istringstream is(std::string(bytes), std::ios_base::binary);
     openvdb::io::Stream stream(is, /*delayLoad=*/false);
@@ -540,11 +540,11 @@ Solid Solid::Deserialize(std::string_view bytes) {
     spec.half_width_voxels = meta->metaValue<double>("fabatlas_half_width_voxels");
     spec.max_active_voxels = static_cast<std::size_t>(meta->metaValue<int64_t>("fabatlas_max_active_voxels"));
     if (spec.voxel_size == 0) return Solid();
-    detail::ValidateSpec(spec, "Solid::Deserialize");
+    internal::ValidateSpec(spec, "Solid::Deserialize");
     if (std::abs(grid->voxelSize()[0] - spec.voxel_size) > 1e-12 * spec.voxel_size) {
       throw InputError("Solid::Deserialize: grid transform does not match its recorded voxel size");
     }
-    return detail::MakeSolid(grid, spec);
+    return internal::MakeSolid(grid, spec);
   } catch (const InputError&) {
     throw;
   } catch (const std::exception& e) {
@@ -553,7 +553,7 @@ Solid Solid::Deserialize(std::string_view bytes) {
 }
 
 Occupancy SampleOccupancy(const Solid& s, double cell_size, std::size_t max_cells) {
-  detail::RequirePositive(cell_size, "SampleOccupancy", "cell_size");
+  internal::RequirePositive(cell_size, "SampleOccupancy", "cell_size");
   Occupancy occ;
   occ.cell_size = cell_size;
   if (s.empty()) return occ;

@@ -38,7 +38,7 @@ struct Solid::Impl {
 // Iso-value used when meshing a level set, in voxels (see Solid::ToMesh).
 inline constexpr double kMeshIso = 1e-4;
 
-namespace detail {
+namespace internal {
 
 // openvdb::initialize() once per process (grid type registry, used by io).
 void EnsureOpenVdbInitialized();
@@ -103,5 +103,5 @@ class LeafCache {
 // Throws InputError with `where: message` unless value is finite and > 0.
 void RequirePositive(double value, const char* where, const char* name);
 
-}  // namespace detail
+}  // namespace internal
 }  // namespace fabatlas::geometry

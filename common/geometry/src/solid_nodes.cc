@@ -224,7 +224,7 @@ std::optional<std::string> SolidNodeBytes(const Solid& solid) {
   }
   const FloatGrid& grid = *impl->Grid();
   if (grid.metaCount() != 2 || grid.getName() != "solid" || grid.getGridClass() != openvdb::GRID_LEVEL_SET ||
-      grid.saveFloatAsHalf() || !(grid.transform() == *detail::CanonicalTransform(impl->spec.voxel_size)))
+      grid.saveFloatAsHalf() || !(grid.transform() == *internal::CanonicalTransform(impl->spec.voxel_size)))
     return std::nullopt;
   w.Put(impl->spec.voxel_size);
   w.Put(impl->spec.half_width_voxels);
@@ -250,7 +250,7 @@ std::optional<std::string> SolidNodeBytes(const Solid& solid) {
 }
 
 Solid SolidOfNodeBytes(std::string_view bytes) {
-  detail::EnsureOpenVdbInitialized();
+  internal::EnsureOpenVdbInitialized();
   if (!IsSolidNodeBytes(bytes)) throw InputError("solid node bytes: no node-encoding magic number");
   Reader r(bytes);
   r.Take(sizeof kMagic);
@@ -262,11 +262,11 @@ Solid SolidOfNodeBytes(std::string_view bytes) {
     if (r.left() != 0) r.Fail("bytes after the empty solid");
     return Solid();
   }
-  detail::ValidateSpec(spec, "solid node bytes");
+  internal::ValidateSpec(spec, "solid node bytes");
   const auto background = r.Get<float>();
   if (!(background > 0)) r.Fail("background is not a positive distance");
   FloatGrid::Ptr grid = FloatGrid::create(background);
-  grid->setTransform(detail::CanonicalTransform(spec.voxel_size));
+  grid->setTransform(internal::CanonicalTransform(spec.voxel_size));
   Root& root = grid->tree().root();
   const auto n_tiles = r.Get<std::uint32_t>();
   if (n_tiles > r.left() / 17) r.Fail("more root tiles than bytes");
@@ -288,7 +288,7 @@ Solid SolidOfNodeBytes(std::string_view bytes) {
     root.addChild(child.release());
   }
   if (r.left() != 0) r.Fail("bytes after the tree");
-  return detail::MakeSolid(grid, spec);
+  return internal::MakeSolid(grid, spec);
 }
 
 }  // namespace fabatlas::geometry

@@ -49,7 +49,7 @@ std::string Timestamp(std::int64_t ts_ms) {
   std::time_t secs = static_cast<std::time_t>(ts_ms / 1000);
   std::tm tm{};
   gmtime_r(&secs, &tm);
-  char buf[40];
+  char buf[96];  // room for every field at int's widest, as snprintf's check asks
   std::snprintf(buf, sizeof buf, "%04d-%02d-%02dT%02d:%02d:%02d.%03dZ", tm.tm_year + 1900, tm.tm_mon + 1,
                 tm.tm_mday, tm.tm_hour, tm.tm_min, tm.tm_sec, static_cast<int>(ts_ms % 1000));
   return buf;

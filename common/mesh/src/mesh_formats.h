@@ -10,7 +10,7 @@
 
 #include "fabatlas/mesh/triangle_mesh.h"
 
-namespace fabatlas::mesh::detail {
+namespace fabatlas::mesh::internal {
 
 // True when `data` starts with a ZIP local file header ("PK\3\4").
 bool IsZip(std::string_view data);
@@ -40,4 +40,4 @@ TriangleMesh Read3mf(const std::filesystem::path& path, std::string_view data);
 // as stored (the unit attribute is ignored, as OpenSCAD 2021.01 ignores it). `data` is the XML text or a ZIP holding it.
 TriangleMesh ReadAmf(const std::filesystem::path& path, std::string_view data);
 
-}  // namespace fabatlas::mesh::detail
+}  // namespace fabatlas::mesh::internal

@@ -2,7 +2,7 @@
 #include "fabatlas/error.h"
 #include "mesh_formats.h"
 
-namespace fabatlas::mesh::detail {
+namespace fabatlas::mesh::internal {
 
 std::string_view LocalName(const char* name) {
   std::string_view n(name);
@@ -23,4 +23,4 @@ void ParseXml(const std::filesystem::path& path, const std::string& format, cons
   if (!ok) throw InputError(path.string() + ": " + format + " line " + std::to_string(line) + ": " + error);
 }
 
-}  // namespace fabatlas::mesh::detail
+}  // namespace fabatlas::mesh::internal

@@ -14,7 +14,7 @@
 #include "fabatlas/error.h"
 #include "mesh_formats.h"
 
-namespace fabatlas::mesh::detail {
+namespace fabatlas::mesh::internal {
 namespace {
 
 using Transform = std::array<double, 12>;
@@ -166,4 +166,4 @@ TriangleMesh Read3mf(const std::filesystem::path& path, std::string_view data) {
   return out;
 }
 
-}  // namespace fabatlas::mesh::detail
+}  // namespace fabatlas::mesh::internal

@@ -12,7 +12,7 @@
 #include "fabatlas/error.h"
 #include "mesh_formats.h"
 
-namespace fabatlas::mesh::detail {
+namespace fabatlas::mesh::internal {
 namespace {
 
 struct Amf {
@@ -81,4 +81,4 @@ TriangleMesh ReadAmf(const std::filesystem::path& path, std::string_view data) {
   return std::move(a.mesh);
 }
 
-}  // namespace fabatlas::mesh::detail
+}  // namespace fabatlas::mesh::internal

@@ -536,8 +536,8 @@ TriangleMesh ReadMesh(const std::filesystem::path& path) {
   if (ext == ".stl") mesh = ReadStl(path, data);
   else if (ext == ".obj") mesh = ReadObj(path, data);
   else if (ext == ".off") mesh = ReadOff(path, data);
-  else if (ext == ".3mf") mesh = detail::Read3mf(path, data);
-  else if (ext == ".amf") mesh = detail::ReadAmf(path, data);
+  else if (ext == ".3mf") mesh = internal::Read3mf(path, data);
+  else if (ext == ".amf") mesh = internal::ReadAmf(path, data);
   else mesh = ReadPly(path, data);
 
   for (std::size_t i = 0; i < mesh.vertices.size(); ++i) {

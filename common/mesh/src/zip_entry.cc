@@ -8,7 +8,7 @@
 #include "fabatlas/error.h"
 #include "mesh_formats.h"
 
-namespace fabatlas::mesh::detail {
+namespace fabatlas::mesh::internal {
 namespace {
 
 constexpr std::uint64_t kMaxEntryBytes = std::uint64_t{1} << 30;
@@ -81,4 +81,4 @@ std::string ZipEntry(const std::filesystem::path& path, std::string_view d, cons
   throw InputError(path.string() + ": the archive has no entry " + (name.empty() ? std::string("at all") : name));
 }
 
-}  // namespace fabatlas::mesh::detail
+}  // namespace fabatlas::mesh::internal

@@ -27,7 +27,8 @@
 // keys, one per worker; a worker takes its own preferred tasks first, then
 // unclaimed ones, then steals, so no slot idles while work is queued.
 //
-// Threading: all public methods are thread-safe.
+// Threading: all public methods are thread-safe. Tasks without a job file
+// (the cluster benchmarks' no-op tasks): run_tasks.h.
 #pragma once
 
 #include <cstdint>
@@ -35,11 +36,6 @@
 #include <memory>
 #include <string>
 #include <vector>
-
-namespace fabatlas::storage {
-class JobStore;
-class BlobStore;
-}  // namespace fabatlas::storage
 
 namespace fabatlas::coordinator {
 
@@ -101,19 +97,12 @@ class Coordinator {
   // Blocks until Shutdown() is called from another thread.
   void Wait();
 
-  storage::JobStore& store();
-  storage::BlobStore& blobs();
-
-  // Runs tasks (serialized v1::TaskPayload) of a job through the workers and
-  // returns their serialized v1::TaskResults in order. Creates the job as
-  // running when it does not exist (for no-op benchmark jobs). Blocks.
-  std::vector<std::string> RunTasks(const std::string& job_id,
-                                    const std::vector<std::string>& payloads,
-                                    const std::vector<std::string>& keys);
-
   struct Impl;
 
  private:
+  friend std::vector<std::string> RunTasks(Coordinator& coordinator, const std::string& job_id,
+                                           const std::vector<std::string>& payloads,
+                                           const std::vector<std::string>& keys);
   std::unique_ptr<Impl> impl_;
 };
 

@@ -39,6 +39,10 @@
 #include <string>
 #include <vector>
 
+namespace fabatlas::sqlite {
+class Connection;
+}  // namespace fabatlas::sqlite
+
 namespace fabatlas::storage {
 
 // Values match fabatlas.v1.JobState.
@@ -49,78 +53,78 @@ enum class JobState { kQueued = 1, kRunning = 2, kSucceeded = 3, kFailed = 4, kC
 enum class TaskState { kQueued = 0, kLeased = 1, kDone = 2, kQuarantined = 3 };
 
 struct JobRecord {
-  std::string id;
-  std::string bundle_digest;
-  std::string design_name;
+  std::string id{};
+  std::string bundle_digest{};
+  std::string design_name{};
   JobState state = JobState::kQueued;
-  std::string error;
+  std::string error{};
   std::int64_t created_ms = 0;
   std::int64_t finished_ms = 0;
 };
 
 struct NewTask {
-  std::string key;
-  std::string job_id;
-  int kind = 0;          // fabatlas.v1.TaskKind
-  std::string payload;   // serialized fabatlas.v1.TaskPayload
+  std::string key{};
+  std::string job_id{};
+  int kind = 0;           // fabatlas.v1.TaskKind
+  std::string payload{};  // serialized fabatlas.v1.TaskPayload
   // Workers this task prefers (lease affinity, worker.proto): GrantLeases
   // hands it to one of them before anyone else. Empty = no preference.
   // Ignored when the task already exists.
-  std::vector<std::string> preferred_workers;
+  std::vector<std::string> preferred_workers{};
 };
 
 struct TaskRecord {
-  std::string key, job_id;
+  std::string key{}, job_id{};
   int kind = 0;
-  std::string payload;
+  std::string payload{};
   TaskState state = TaskState::kQueued;
   std::int64_t attempt = 0;      // attempts granted so far
   std::int64_t expiries = 0;     // leases that expired
   std::int64_t completions = 0;  // accepted results (0 or 1)
-  std::string result;            // serialized fabatlas.v1.TaskResult
+  std::string result{};          // serialized fabatlas.v1.TaskResult
 };
 
 struct LeaseGrant {
-  std::string lease_id, task_key, job_id, bundle_digest;
+  std::string lease_id{}, task_key{}, job_id{}, bundle_digest{};
   std::int64_t attempt = 0;
   int kind = 0;
-  std::string payload;
+  std::string payload{};
   std::int64_t deadline_ms = 0;
 };
 
 // One subtree root of a sample (fabatlas.v1.SubtreeRecord).
 struct SubtreeUse {
-  std::string key;          // cache key: hex SHA-256 of (τ, ρ, voxel size)
-  std::string topology;     // hex SHA-256 of τ
-  std::string op;
-  double seconds = 0;       // root compute time on the worker (for a cache hit:
-                            // the worker's last measurement of the key)
-  bool measured = true;     // false for a cache hit
-  std::int64_t bytes = 0;   // memory of the level set
-  std::vector<std::string> children;  // child keys, in tree order
-  std::string blob_digest;  // serialized Solid in the blob store, or ""
+  std::string key{};       // cache key: hex SHA-256 of (τ, ρ, voxel size)
+  std::string topology{};  // hex SHA-256 of τ
+  std::string op{};
+  double seconds = 0;                   // root compute time on the worker (for a cache hit:
+                                        // the worker's last measurement of the key)
+  bool measured = true;                 // false for a cache hit
+  std::int64_t bytes = 0;               // memory of the level set
+  std::vector<std::string> children{};  // child keys, in tree order
+  std::string blob_digest{};            // serialized Solid in the blob store, or ""
 };
 
 struct Completion {
-  std::string lease_id, task_key;
+  std::string lease_id{}, task_key{};
   std::int64_t attempt = 0;
-  std::string result;      // serialized TaskResult; ignored when failed
-  bool failed = false;     // the worker could not run the task: requeue
-  int sample_valid = -1;   // sample tasks: 1 valid, 0 invalid; -1 otherwise
+  std::string result{};   // serialized TaskResult; ignored when failed
+  bool failed = false;    // the worker could not run the task: requeue
+  int sample_valid = -1;  // sample tasks: 1 valid, 0 invalid; -1 otherwise
   // Sample tasks: the point key ("k0,k1,..." as in the task key) and the
   // sample's subtrees, post-order (root last); stored only when the result
   // is accepted, in the same transaction.
-  std::string point_key;
-  std::vector<SubtreeUse> subtrees;
-  std::string error;       // when failed: the worker's one-line reason (events)
+  std::string point_key{};
+  std::vector<SubtreeUse> subtrees{};
+  std::string error{};  // when failed: the worker's one-line reason (events)
 };
 
 enum class CompletionOutcome {
-  kAccepted,   // stored; the first completion of the key
-  kDuplicate,  // the key was already finished: acknowledged, ignored
-  kFenced,     // the lease is no longer current (expired, returned): ignored
-  kUnknown,    // no such task
-  kRequeued,   // failed: the task goes back to the queue
+  kAccepted,     // stored; the first completion of the key
+  kDuplicate,    // the key was already finished: acknowledged, ignored
+  kFenced,       // the lease is no longer current (expired, returned): ignored
+  kUnknown,      // no such task
+  kRequeued,     // failed: the task goes back to the queue
   kQuarantined,  // failed on quarantine_after different workers: finished
                  // with the quarantine result, like an expiry quarantine
 };
@@ -128,28 +132,28 @@ enum class CompletionOutcome {
 // One worker's Sync (worker.proto) against the store: what it reports and
 // asks for (JobStore::SyncWorker).
 struct WorkerSync {
-  std::string worker_id;
-  std::vector<Completion> completions;  // results it reports
-  std::vector<std::string> in_flight;   // leases it still holds (running or queued)
+  std::string worker_id{};
+  std::vector<Completion> completions{};  // results it reports
+  std::vector<std::string> in_flight{};   // leases it still holds (running or queued)
   std::int64_t now_ms = 0;
-  std::int64_t lease_ms = 0;            // leases granted or topped up run until now_ms + lease_ms
-  int want = 0;                         // leases to grant at most (0: none)
-  int steal = -1;                       // of them, tasks preferring other workers at most (< 0: want)
+  std::int64_t lease_ms = 0;  // leases granted or topped up run until now_ms + lease_ms
+  int want = 0;               // leases to grant at most (0: none)
+  int steal = -1;             // of them, tasks preferring other workers at most (< 0: want)
   // As for Complete.
   std::int64_t retry_backoff_ms = 0;
   int quarantine_after = 0;
-  std::function<std::string(int kind)> quarantine_result;
+  std::function<std::string(int kind)> quarantine_result{};
 };
 
 struct WorkerSyncOutcome {
-  std::vector<CompletionOutcome> outcomes;  // one per completion, in order
-  int returned = 0;                 // its active leases it no longer knows, queued again
-  std::vector<std::string> revoked; // in_flight ids that are not active leases of the worker
-  std::vector<LeaseGrant> grants;   // new leases
+  std::vector<CompletionOutcome> outcomes{};  // one per completion, in order
+  int returned = 0;                           // its active leases it no longer knows, queued again
+  std::vector<std::string> revoked{};         // in_flight ids that are not active leases of the worker
+  std::vector<LeaseGrant> grants{};           // new leases
 };
 
 struct ExpiredLease {
-  std::string lease_id, task_key, job_id, worker_id;
+  std::string lease_id{}, task_key{}, job_id{}, worker_id{};
   std::int64_t attempt = 0;   // the lease's attempt number (fencing)
   std::int64_t expiries = 0;  // the task's expiries, this one included
   bool quarantined = false;
@@ -164,10 +168,10 @@ struct TaskCounts {
 // A subtree of a job, over all its accepted sample results (the geometry
 // cache's dependency graph, Fab Forms Sec. 6).
 struct SubtreeRow {
-  std::string key, topology, op;
-  std::string blob_digest;  // first non-empty digest reported, or ""
+  std::string key{}, topology{}, op{};
+  std::string blob_digest{};  // first non-empty digest reported, or ""
   std::int64_t bytes = 0;
-  std::vector<std::string> children;
+  std::vector<std::string> children{};
   double seconds_sum = 0;          // over measured (not cached) evaluations
   std::int64_t seconds_count = 0;  // how many measured evaluations
   double last_seconds = 0;         // latest reported seconds (measured or carried)
@@ -178,14 +182,14 @@ struct SubtreeRow {
 
 // The subtrees of one accepted sample, post-order (root last).
 struct SampleSubtrees {
-  std::string task_key;
-  std::string point_key;  // "k0,k1,..." (sampling::PointKey in decimal)
-  std::vector<std::string> subtree_keys;
+  std::string task_key{};
+  std::string point_key{};  // "k0,k1,..." (sampling::PointKey in decimal)
+  std::vector<std::string> subtree_keys{};
 };
 
 struct Event {
   std::int64_t time_ms = 0;
-  std::string job_id, kind, message;
+  std::string job_id{}, kind{}, message{};
 };
 
 // Durability. The store runs in WAL mode. With synchronous=NORMAL (the
@@ -223,8 +227,7 @@ class JobStore {
   bool CreateJob(const JobRecord& job);
   std::optional<JobRecord> FindJob(const std::string& id);
   std::vector<JobRecord> Jobs();
-  void SetJobState(const std::string& id, JobState state, const std::string& error,
-                   std::int64_t finished_ms);
+  void SetJobState(const std::string& id, JobState state, const std::string& error, std::int64_t finished_ms);
   void PutJobOutput(const std::string& job_id, const std::string& name, const std::string& digest);
   std::map<std::string, std::string> JobOutputs(const std::string& job_id);
 
@@ -242,8 +245,8 @@ class JobStore {
   // first, then oldest), then tasks preferring nobody (oldest first), then
   // tasks preferring other workers (newest first; at most `steal` of them,
   // all `max` when negative). A granted task's preference is dropped.
-  std::vector<LeaseGrant> GrantLeases(const std::string& worker_id, int max, std::int64_t now_ms,
-                                      std::int64_t lease_ms, int steal = -1);
+  std::vector<LeaseGrant> GrantLeases(const std::string& worker_id, int max, std::int64_t now_ms, std::int64_t lease_ms,
+                                      int steal = -1);
   // Drops every preference for the worker (it left or went silent); tasks
   // left without a preferred worker prefer nobody. Returns how many tasks
   // lost it.
@@ -257,9 +260,8 @@ class JobStore {
   // is finished with quarantine_result(kind) instead, so a task no worker
   // can run ends the job's wait rather than cycling forever, while one
   // misconfigured worker failing everything quarantines nothing.
-  std::vector<CompletionOutcome> Complete(const std::vector<Completion>& completions,
-                                          std::int64_t now_ms, std::int64_t retry_backoff_ms,
-                                          int quarantine_after = 0,
+  std::vector<CompletionOutcome> Complete(const std::vector<Completion>& completions, std::int64_t now_ms,
+                                          std::int64_t retry_backoff_ms, int quarantine_after = 0,
                                           const std::function<std::string(int kind)>& quarantine_result = {});
   // A worker's Sync in one transaction (one commit at most, none when
   // nothing changes): Complete(completions), then ReturnUnknownLeases(
@@ -273,8 +275,7 @@ class JobStore {
   // Moves the deadline of the worker's listed active leases to deadline_ms,
   // leaving (not writing) those already due at deadline_ms - slack_ms or
   // later. Returns the listed ids that are not active leases of this worker.
-  std::vector<std::string> ExtendLeases(const std::string& worker_id,
-                                        const std::vector<std::string>& lease_ids,
+  std::vector<std::string> ExtendLeases(const std::string& worker_id, const std::vector<std::string>& lease_ids,
                                         std::int64_t deadline_ms, std::int64_t slack_ms = 0);
   // Active leases of the worker that are not in `known` (lost in transit or
   // forgotten by a restarted worker) go back to the queue at once, without
@@ -284,8 +285,7 @@ class JobStore {
   // queued again, eligible after backoff_ms * 2^(expiries-1) (capped at 30 s),
   // or, on its quarantine_after-th expiry, finished with
   // quarantine_result(kind) and marked quarantined.
-  std::vector<ExpiredLease> ExpireLeases(std::int64_t now_ms, std::int64_t backoff_ms,
-                                         int quarantine_after,
+  std::vector<ExpiredLease> ExpireLeases(std::int64_t now_ms, std::int64_t backoff_ms, int quarantine_after,
                                          const std::function<std::string(int kind)>& quarantine_result);
   // Gives every active lease until now_ms + grace_ms (used at start-up, so
   // workers that kept running while the coordinator was down can report).
@@ -352,21 +352,19 @@ class JobStore {
   // checkpointed. For background_checkpoints.
   int Checkpoint();
 
-  struct Db;  // the SQLite connection (src/job_store.cc)
-
  private:
   std::filesystem::path path_;
   JobStoreOptions options_;
-  std::unique_ptr<Db> db_;
+  std::unique_ptr<sqlite::Connection> db_;
   std::mutex mutex_;
   std::map<std::string, std::pair<int, std::int64_t>> touched_;  // worker -> (slots, last write ms)
-  std::int64_t preferring_tasks_ = 0;  // tasks with tasks.affine = 1 (lease affinity)
+  std::int64_t preferring_tasks_ = 0;                            // tasks with tasks.affine = 1 (lease affinity)
   // CountTasks of each job asked for so far, moved by every committed change
-  // (job_store.cc CountDeltas); under mutex_.
+  // (task_counts.h CountDeltas); under mutex_.
   std::map<std::string, TaskCounts> counts_;
   std::int64_t synced_changes_ = -1;  // sqlite3_total_changes64 at the last Sync; under mutex_
   std::mutex checkpoint_mutex_;
-  std::unique_ptr<Db> checkpoint_db_;
+  std::unique_ptr<sqlite::Connection> checkpoint_db_;  // Checkpoint()'s own
 };
 
 }  // namespace fabatlas::storage

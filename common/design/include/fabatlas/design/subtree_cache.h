@@ -24,9 +24,9 @@ struct SubtreeTrace;
 
 // One cache entry.
 struct CachedSubtree {
-  geometry::Solid solid;
-  std::shared_ptr<const SubtreeTrace> trace;  // null: nothing beyond the geometry
-  std::size_t trace_bytes = 0;                // memory `trace` holds, its meshes included
+  geometry::Solid solid{};
+  std::shared_ptr<const SubtreeTrace> trace{};  // null: nothing beyond the geometry
+  std::size_t trace_bytes = 0;                  // memory `trace` holds, its meshes included
 
   // The solid's memory plus the trace's: what a budgeted cache counts.
   std::size_t MemoryBytes() const { return solid.MemoryBytes() + trace_bytes; }

@@ -15,9 +15,11 @@
 
 #include <array>
 
+#include "fabatlas/vec3.h"
+
 namespace fabatlas::fem {
 
-using Mat3 = std::array<std::array<double, 3>, 3>;
+using Mat3 = std::array<Vec3, 3>;
 using Tangent9 = std::array<std::array<double, 9>, 9>;
 
 struct Material {

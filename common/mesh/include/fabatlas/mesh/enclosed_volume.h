@@ -6,6 +6,7 @@
 #include <array>
 
 #include "fabatlas/mesh/triangle_mesh.h"
+#include "fabatlas/vec3.h"
 
 namespace fabatlas::mesh {
 
@@ -16,6 +17,6 @@ namespace fabatlas::mesh {
 // counter-clockwise seen from outside (outward normals), negative when they
 // are all reversed; for an open mesh, the signed volume of the cone the
 // surface spans from o. Deterministic: triangles summed in order.
-double EnclosedVolume(const TriangleMesh& mesh, const std::array<double, 3>& origin = {0.0, 0.0, 0.0});
+double EnclosedVolume(const TriangleMesh& mesh, const Vec3& origin = {0.0, 0.0, 0.0});
 
 }  // namespace fabatlas::mesh

@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "fabatlas/mesh/triangle_mesh.h"
+#include "fabatlas/vec3.h"
 
 namespace fabatlas::mesh {
 
@@ -64,7 +65,7 @@ const char* BooleanOpName(BooleanOp op);
 // The convex hull of points (exact predicates: the hull's vertices are input
 // points) as a closed outward triangle mesh; empty when the points span no
 // volume (fewer than 4, or all in one plane).
-TriangleMesh ConvexHull(const std::vector<std::array<double, 3>>& points);
+TriangleMesh ConvexHull(const std::vector<Vec3>& points);
 
 // The Minkowski sum of closed triangle meshes, as OpenSCAD 2021.01 computes
 // it: each operand is split into convex parts (a convex operand is one part;

@@ -7,6 +7,7 @@
 #include <string>
 
 #include "fabatlas/mesh/triangle_mesh.h"
+#include "fabatlas/vec3.h"
 
 namespace fabatlas::mesh {
 
@@ -44,8 +45,8 @@ struct MeshReport {
   // Measures in millimetres.
   double volume = 0.0;  // signed, mm^3 (divergence theorem); meaningful when closed
   double area = 0.0;    // mm^2
-  std::array<double, 3> bbox_min{0, 0, 0};
-  std::array<double, 3> bbox_max{0, 0, 0};
+  Vec3 bbox_min{0, 0, 0};
+  Vec3 bbox_max{0, 0, 0};
 
   // All failed properties' reasons joined with "; " (empty when all pass).
   std::string Reasons() const;

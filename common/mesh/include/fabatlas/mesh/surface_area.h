@@ -5,6 +5,7 @@
 #include <array>
 
 #include "fabatlas/mesh/triangle_mesh.h"
+#include "fabatlas/vec3.h"
 
 namespace fabatlas::mesh {
 
@@ -13,6 +14,6 @@ namespace fabatlas::mesh {
 // bounding-box centre, it keeps rounding small for a mesh far from
 // (0, 0, 0)). Output: the area in mm^2. Deterministic: triangles summed in
 // order.
-double SurfaceArea(const TriangleMesh& mesh, const std::array<double, 3>& origin = {0.0, 0.0, 0.0});
+double SurfaceArea(const TriangleMesh& mesh, const Vec3& origin = {0.0, 0.0, 0.0});
 
 }  // namespace fabatlas::mesh

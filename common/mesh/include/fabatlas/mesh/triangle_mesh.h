@@ -8,10 +8,12 @@
 #include <cstdint>
 #include <vector>
 
+#include "fabatlas/vec3.h"
+
 namespace fabatlas::mesh {
 
 struct TriangleMesh {
-  std::vector<std::array<double, 3>> vertices;
+  std::vector<Vec3> vertices;
   std::vector<std::array<std::int32_t, 3>> triangles;
 
   bool empty() const { return triangles.empty(); }

@@ -14,6 +14,8 @@
 #include <string>
 #include <vector>
 
+#include "fabatlas/vec3.h"
+
 namespace fabatlas::prototype {
 
 struct Cuboid {
@@ -73,7 +75,7 @@ struct JointValue {
   double slide_guess = 0;    // free slide: the value it is kept near
   // Double pivot: translation of the child (about its centre, after the
   // rotation); `offset_free` components are solved for and kept near `offset`.
-  std::array<double, 3> offset{0, 0, 0};
+  Vec3 offset{0, 0, 0};
   bool offset_free = false;
 };
 

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "fabatlas/prototype/prototype.h"
+#include "fabatlas/vec3.h"
 
 namespace fabatlas::prototype {
 
@@ -22,7 +23,7 @@ struct SolveOptions {
 struct PivotSolution {
   std::string joint;
   double a = 0, b = 0;                       // pivot offsets along the long axes, mm
-  std::array<double, 3> child_pivot{}, parent_pivot{};  // base configuration, world mm
+  Vec3 child_pivot{}, parent_pivot{};  // base configuration, world mm
   double link_length = 0;                    // mm
   double link_length_bound = 0;              // motion constraint lower bound, mm (0 if none)
 };

@@ -1,7 +1,8 @@
 // fabatlas/sqlite/statement.h — one prepared SQLite statement: bind its
-// parameters, step through its rows, read their columns. The one wrapper the
-// job store (storage/) and the artifact file (artifact/) use; include it only
-// from .cc files (it includes sqlite3.h).
+// parameters, step through its rows, read their columns. Made by
+// sqlite::Connection (connection.h: Prepare, Cached) for the job store
+// (storage/) and the artifact file (artifact/); include it only from .cc
+// files (it includes sqlite3.h).
 //
 // Bind*(i, value) sets parameter i (from 1); Column*(c) reads column c (from
 // 0) of the current row. Next() steps to the next row, false at the end;

@@ -33,7 +33,7 @@ struct Quaternion {
 
 // x -> rotation * x + translation (rotation row-major, orthonormal).
 struct Transform {
-  std::array<std::array<double, 3>, 3> rotation{{{1, 0, 0}, {0, 1, 0}, {0, 0, 1}}};
+  std::array<Vec3, 3> rotation{{{1, 0, 0}, {0, 1, 0}, {0, 0, 1}}};
   Vec3 translation{0, 0, 0};
 
   Vec3 Apply(const Vec3& x) const;
