@@ -159,11 +159,7 @@ std::string PartsToGlb(const std::vector<GlbPart>& parts, bool exact) {
   model.asset.version = "2.0";
   model.asset.generator = "fabatlas";
   model.buffers.emplace_back();
-  tinygltf::Node root;
-  root.name = "geometry";
-  root.scale = {1e-3, 1e-3, 1e-3};  // as MeshToGlb: millimetres, z up, to metres, +Y up
-  root.rotation = {-std::sqrt(0.5), 0.0, 0.0, std::sqrt(0.5)};
-  model.nodes.push_back(root);
+  tinygltf::Scene scene;
   for (const GlbPart& part : parts) {
     if (!part.mesh || part.mesh->empty()) continue;
     mesh::TriangleMesh m = *part.mesh;
@@ -218,13 +214,13 @@ std::string PartsToGlb(const std::vector<GlbPart>& parts, bool exact) {
     model.meshes.push_back(std::move(gm));
     tinygltf::Node node;
     node.name = part.name;
+    node.scale = {1e-3, 1e-3, 1e-3};  // as MeshToGlb: millimetres, z up, to metres, +Y up
+    node.rotation = {-std::sqrt(0.5), 0.0, 0.0, std::sqrt(0.5)};
     node.mesh = static_cast<int>(model.meshes.size()) - 1;
     model.nodes.push_back(node);
-    model.nodes[0].children.push_back(static_cast<int>(model.nodes.size()) - 1);
+    scene.nodes.push_back(static_cast<int>(model.nodes.size()) - 1);
   }
   if (model.buffers[0].data.empty()) model.buffers.clear();
-  tinygltf::Scene scene;
-  scene.nodes.push_back(0);
   model.scenes.push_back(scene);
   model.defaultScene = 0;
   std::ostringstream stream;

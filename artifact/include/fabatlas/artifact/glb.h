@@ -36,9 +36,8 @@ struct GlbPart {
   std::array<double, 4> rgba{};  // sRGB red, green, blue, alpha in [0, 1] (OpenSCAD's color())
 };
 
-// The parts as one scene: a root node "geometry" with MeshToGlb's scale and
-// rotation, and below it one node per part (named after it) with its own
-// mesh of one primitive, normals as SolidPreviewGlb gives them (`exact`:
+// The parts as one scene of one node per part (named after it, with
+// MeshToGlb's scale and rotation) holding its own mesh of one primitive, normals as SolidPreviewGlb gives them (`exact`:
 // split at 30-degree creases). A coloured part's primitive has a material
 // named "part NAME" whose baseColorFactor is its colour converted from sRGB
 // to linear (glTF 2.0 Sec. 3.9.2: baseColorFactor is linear), metallic 0,
