@@ -78,8 +78,10 @@ ExportResult ExportDesign(const Customiser& c, const std::vector<double>& u, con
   // is encoded.
   design::EvaluateOptions evaluate;
   evaluate.run_checks = true;
+  // Parts: an OpenSCAD model's bodies and colours; any other design is one
+  // part, the solid (not meshed twice).
   std::vector<design::Part> parts;
-  evaluate.parts = &parts;
+  if (design.tree.op == "openscad") evaluate.parts = &parts;
   const auto start = std::chrono::steady_clock::now();
   const design::SampleResult r = design::EvaluateSample(design, precompute::DesignPointOf(design, u), evaluate);
   if (!r.valid) {
@@ -106,9 +108,14 @@ ExportResult ExportDesign(const Customiser& c, const std::vector<double>& u, con
     if (p.name == options.part) chosen = &p;
     coloured = coloured || p.coloured;
   }
-  if (!options.part.empty() && !chosen)
+  if (parts.empty()) {
+    out.parts = {"body1"};
+    names = "body1";
+  }
+  const bool whole = options.part.empty() || (parts.empty() && options.part == "body1");
+  if (!whole && !chosen)
     throw InputError("part '" + options.part + "' is not one of the design's parts at " + PointText(c, u) + ": " + names);
-  if (!options.part.empty() && f != "stl" && f != "obj")
+  if (!whole && f != "stl" && f != "obj")
     throw InputError("part= selects one part of an stl or obj file; a " + f + " file holds every part");
   const mesh::TriangleMesh m = chosen ? chosen->mesh : r.solid.ToMesh();
   mesh::InspectOptions inspect;
