@@ -1,7 +1,7 @@
 // Parts and colours in the customiser (issue 32; headless Chromium on the
 // name plate run, tests/viewer/data/name_plate.scad: a steelblue plate, an
-// orange stand and a crimson knob, three top-level bodies, imported on the
-// fly by `fabatlas sample`).
+// orange stand and a crimson knob, three top-level bodies; its import
+// data/name_plate.yaml sampled by data/name_plate.job.yaml).
 //   1. /api/preview.glb carries one node per body, each with a material
 //      named after its part whose baseColorFactor is its color() (the CSS
 //      keyword's sRGB, made linear as glTF wants).
