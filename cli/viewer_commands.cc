@@ -97,7 +97,7 @@ void Serve(const ServeArgs& a) {
 }
 
 struct ExportArgs {
-  std::string art, job, at, format, out;
+  std::string art, job, at, format, out, part;
   double voxel_size = 0;
 };
 
@@ -123,6 +123,7 @@ void Export(const ExportArgs& a) {
   viewer::ExportOptions options;
   options.format = format;
   options.voxel_size = a.voxel_size;
+  options.part = a.part;
   const viewer::ExportResult r = viewer::ExportDesign(customiser, PointOf(customiser, a.at), options);
   const fs::path out(a.out);
   const fs::path temp = out.string() + ".tmp-" + std::to_string(::getpid());
@@ -146,6 +147,8 @@ void Export(const ExportArgs& a) {
             << viewer::PointText(customiser, r.u) << ", " << r.triangles << " triangles, volume " << r.volume_mm3
             << " mm^3, voxel " << r.voxel_size << " mm, " << r.seconds << " s, checks passed there: ";
   for (std::size_t k = 0; k < r.checks.size(); ++k) std::cout << (k ? ", " : "") << r.checks[k];
+  std::cout << "; parts: ";
+  for (std::size_t k = 0; k < r.parts.size(); ++k) std::cout << (k ? ", " : "") << r.parts[k];
   std::cout << std::endl;
 }
 
@@ -176,6 +179,7 @@ void AddViewerCommands(CLI::App& app, int& exit_code) {
   ex->add_option("--out", e->out, "the file to write")->required();
   ex->add_option("--voxel-size", e->voxel_size, "mm (default: half the design's voxel size)")
       ->check(CLI::PositiveNumber);
+  ex->add_option("--part", e->part, "stl, obj: only this part (a body or colour region, as the output lists them)");
   ex->add_option("--job", e->job, "export from a run directory's form.json alone, with this job file's design");
   ex->callback([e] { Export(*e); });
   auto a = std::make_shared<ServeArgs>();

@@ -31,6 +31,9 @@ APT_PACKAGES=(
   openssl strace
   # a peer's mesh volumes: ADMesh, for the FabHacks volumes of tests/mesh (fabhacks_admesh_volumes.sh)
   admesh
+  # a slicer: PrusaSlicer's CLI slices the exported 3MF and STL of OpenSCAD
+  # models' parts (tests/scad/slice_parts_test.py)
+  prusa-slicer
 )
 # Node.js and npm: the machine's own if present, else Debian's.
 command -v npm >/dev/null 2>&1 || APT_PACKAGES+=(nodejs npm)

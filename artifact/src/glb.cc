@@ -122,6 +122,114 @@ std::string MeshToGlb(const mesh::TriangleMesh& m, const std::vector<std::array<
   return stream.str();
 }
 
+namespace {
+
+// sRGB to linear (IEC 61966-2-1).
+double Linear(double c) { return c <= 0.04045 ? c / 12.92 : std::pow((c + 0.055) / 1.055, 2.4); }
+
+// Appends `bytes` to buffer 0 as a new buffer view (4-byte aligned); its index.
+int AddView(tinygltf::Model& model, const void* bytes, std::size_t size, int target) {
+  auto& data = model.buffers[0].data;
+  while (data.size() % 4) data.push_back(0);
+  tinygltf::BufferView view;
+  view.buffer = 0;
+  view.byteOffset = data.size();
+  view.byteLength = size;
+  view.target = target;
+  const auto* b = static_cast<const unsigned char*>(bytes);
+  data.insert(data.end(), b, b + size);
+  model.bufferViews.push_back(view);
+  return static_cast<int>(model.bufferViews.size()) - 1;
+}
+
+int AddAccessor(tinygltf::Model& model, int view, int component, std::size_t count, int type) {
+  tinygltf::Accessor a;
+  a.bufferView = view;
+  a.componentType = component;
+  a.count = count;
+  a.type = type;
+  model.accessors.push_back(a);
+  return static_cast<int>(model.accessors.size()) - 1;
+}
+
+}  // namespace
+
+std::string PartsToGlb(const std::vector<GlbPart>& parts, bool exact) {
+  tinygltf::Model model;
+  model.asset.version = "2.0";
+  model.asset.generator = "fabatlas";
+  model.buffers.emplace_back();
+  tinygltf::Scene scene;
+  for (const GlbPart& part : parts) {
+    if (!part.mesh || part.mesh->empty()) continue;
+    mesh::TriangleMesh m = *part.mesh;
+    std::vector<std::array<float, 3>> normals;
+    if (exact) {
+      mesh::CreasedMesh creased = mesh::CreaseNormals(m, 30.0);
+      m = std::move(creased.mesh);
+      normals = std::move(creased.normals);
+    }
+    std::vector<float> positions;
+    std::vector<double> lo(3, std::numeric_limits<double>::infinity()), hi(3, -std::numeric_limits<double>::infinity());
+    for (const auto& v : m.vertices)
+      for (int k = 0; k < 3; ++k) {
+        const float f = static_cast<float>(v[k]);
+        lo[k] = std::min(lo[k], static_cast<double>(f));
+        hi[k] = std::max(hi[k], static_cast<double>(f));
+        positions.push_back(f);
+      }
+    std::vector<std::uint32_t> indices;
+    for (const auto& t : m.triangles)
+      for (int k = 0; k < 3; ++k) {
+        if (t[k] < 0 || static_cast<std::size_t>(t[k]) >= m.vertices.size())
+          throw InputError("glb: triangle index " + std::to_string(t[k]) + " out of range");
+        indices.push_back(static_cast<std::uint32_t>(t[k]));
+      }
+    tinygltf::Primitive primitive;
+    const int pv = AddView(model, positions.data(), positions.size() * sizeof(float), TINYGLTF_TARGET_ARRAY_BUFFER);
+    primitive.attributes["POSITION"] = AddAccessor(model, pv, TINYGLTF_COMPONENT_TYPE_FLOAT, m.vertices.size(), TINYGLTF_TYPE_VEC3);
+    model.accessors.back().minValues = lo;
+    model.accessors.back().maxValues = hi;
+    const int iv = AddView(model, indices.data(), indices.size() * sizeof(std::uint32_t), TINYGLTF_TARGET_ELEMENT_ARRAY_BUFFER);
+    primitive.indices = AddAccessor(model, iv, TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT, indices.size(), TINYGLTF_TYPE_SCALAR);
+    if (!normals.empty()) {
+      const int nv = AddView(model, normals.data(), normals.size() * sizeof(normals[0]), TINYGLTF_TARGET_ARRAY_BUFFER);
+      primitive.attributes["NORMAL"] = AddAccessor(model, nv, TINYGLTF_COMPONENT_TYPE_FLOAT, normals.size(), TINYGLTF_TYPE_VEC3);
+    }
+    primitive.mode = TINYGLTF_MODE_TRIANGLES;
+    if (part.coloured) {
+      tinygltf::Material material;
+      material.name = "part " + part.name;
+      material.pbrMetallicRoughness.baseColorFactor = {Linear(part.rgba[0]), Linear(part.rgba[1]), Linear(part.rgba[2]),
+                                                       part.rgba[3]};
+      material.pbrMetallicRoughness.metallicFactor = 0;
+      material.pbrMetallicRoughness.roughnessFactor = 0.6;
+      if (part.rgba[3] < 1) material.alphaMode = "BLEND";
+      model.materials.push_back(material);
+      primitive.material = static_cast<int>(model.materials.size()) - 1;
+    }
+    tinygltf::Mesh gm;
+    gm.name = part.name;
+    gm.primitives.push_back(std::move(primitive));
+    model.meshes.push_back(std::move(gm));
+    tinygltf::Node node;
+    node.name = part.name;
+    node.scale = {1e-3, 1e-3, 1e-3};  // as MeshToGlb: millimetres, z up, to metres, +Y up
+    node.rotation = {-std::sqrt(0.5), 0.0, 0.0, std::sqrt(0.5)};
+    node.mesh = static_cast<int>(model.meshes.size()) - 1;
+    model.nodes.push_back(node);
+    scene.nodes.push_back(static_cast<int>(model.nodes.size()) - 1);
+  }
+  if (model.buffers[0].data.empty()) model.buffers.clear();
+  model.scenes.push_back(scene);
+  model.defaultScene = 0;
+  std::ostringstream stream;
+  tinygltf::TinyGLTF writer;
+  if (!writer.WriteGltfSceneToStream(&model, stream, false, true))
+    throw InputError("glb: tinygltf could not write the parts");
+  return stream.str();
+}
+
 mesh::TriangleMesh GlbToMesh(std::string_view glb, const std::string& source) {
   tinygltf::Model model;
   tinygltf::TinyGLTF loader;

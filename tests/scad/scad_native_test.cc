@@ -161,7 +161,6 @@ TEST(ScadNative, WhatItDoesNotImplementIsDeclinedNamingTheLine) {
       {"include <lib.scad>\ncube(1);\n", "m.scad:1: include <...>"},
       {"\n!cube(1);\n", "m.scad:2: modifier '!'"},
       {"a = undef;\ncube(a + 1);\n", "m.scad:2: operator + on these operands"},
-      {"color(\"notacolour\") cube(1);\n", "m.scad:1: colour 'notacolour'"},
       {"text(\"\\u263A\");\n", "m.scad:1: a \\x or \\u escape"},
       {"a = 1;\na = 2;\ncube(a);\n", "m.scad:2: 'a' assigned twice in one scope"},
       {"cube(b);\n", "m.scad:1: unknown variable 'b'"},
@@ -198,6 +197,15 @@ TEST(ScadNative, WhatItDoesNotImplementIsDeclinedNamingTheLine) {
     EXPECT_FALSE(own.evaluated) << program;
     EXPECT_EQ(own.declined, reason) << program;
   }
+  // An unknown colour name is not declined but bad input (OpenSCAD would
+  // draw it grey), with its line (docs/openscad.md, "Parts and colours").
+  const scad::ModelEvaluation colour = scad::EvaluateModelText("cube(1);\ncolor(\"notacolour\") cube(1);\n", "m.scad", {});
+  EXPECT_FALSE(colour.evaluated);
+  EXPECT_EQ(colour.bad_input,
+            "m.scad:2: color(\"notacolour\"): unknown colour name (an SVG/CSS colour name, \"#rrggbb\" or [r, g, b, a])");
+  EXPECT_EQ(scad::UnknownColourName("cube(1);\n// color(\"x\")\ncolor(c = \"Reddish\", alpha = 0.5) cube(1);\ncolor(\"Red\") cube(1);\n", "m.scad"),
+            "m.scad:3: color(\"Reddish\"): unknown colour name (an SVG/CSS colour name, \"#rrggbb\" or [r, g, b, a])");
+  EXPECT_EQ(scad::UnknownColourName("color(\"#a0b0c0\") color(\"DarkOrchid\") cube(1);\n", "m.scad"), "");
 }
 
 // The openscad node: a model the evaluator takes needs no OpenSCAD (it

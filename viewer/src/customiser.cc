@@ -156,6 +156,16 @@ std::vector<MaterialReadout> Customiser::Materials(std::int64_t sample) const {
   return MaterialReadouts(it->second, source_.materials);
 }
 
+std::string PreviewGlbBytes(const PreviewResult& p) {
+  const bool exact = p.solid.boundary() != nullptr;
+  bool coloured = false;
+  for (const auto& part : p.parts) coloured = coloured || part.coloured;
+  if (p.parts.size() < 2 && !coloured) return artifact::SolidPreviewGlb(p.solid.ToMesh(), exact);
+  std::vector<artifact::GlbPart> parts;
+  for (const auto& part : p.parts) parts.push_back({part.name, &part.mesh, part.coloured, part.rgba});
+  return artifact::PartsToGlb(parts, exact);
+}
+
 PreviewResult Customiser::Preview(std::int64_t sample, bool with_cache) const {
   PreviewResult out = PreviewAt(source_.form.samples.at(sample).u, with_cache);
   out.sample = sample;
@@ -168,10 +178,11 @@ PreviewResult Customiser::PreviewAt(const std::vector<double>& u, bool with_cach
   options.cache = with_cache ? cache_.get() : nullptr;
   options.run_checks = false;  // the sample was checked during sampling
   options.lookup_before_children = true;  // a cached subtree skips everything below it
+  PreviewResult out;
+  if (source_.design->tree.op == "openscad") options.parts = &out.parts;  // bodies and colours
   const auto start = std::chrono::steady_clock::now();
   design::SampleResult r =
       design::EvaluateSample(*source_.design, precompute::DesignPointOf(*source_.design, u), options);
-  PreviewResult out;
   out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   out.valid = r.valid;
   out.failure = r.failure;
@@ -188,7 +199,7 @@ std::shared_ptr<const EncodedPreview> Customiser::PreviewGlb(std::int64_t sample
         const PreviewResult p = Preview(id);
         EncodedPreview e;
         e.sample = id;
-        e.glb = artifact::SolidPreviewGlb(p.solid.ToMesh(), p.solid.boundary() != nullptr);
+        e.glb = PreviewGlbBytes(p);
         e.seconds = p.seconds;
         e.subtrees = p.subtrees;
         e.cache_hits = p.cache_hits;
@@ -212,13 +223,12 @@ PointPreview Customiser::PreviewGlbAt(const std::vector<double>& u, std::int64_t
   const auto start = std::chrono::steady_clock::now();
   try {
     const PreviewResult p = PreviewAt(u);
-    const mesh::TriangleMesh surface = p.valid ? p.solid.ToMesh() : mesh::TriangleMesh{};
-    if (surface.triangles.empty()) {
+    if (!p.valid || p.solid.empty()) {
       out.fallback = "failed";
       return out;
     }
     auto e = std::make_shared<EncodedPreview>();
-    e->glb = artifact::SolidPreviewGlb(surface, p.solid.boundary() != nullptr);
+    e->glb = PreviewGlbBytes(p);
     e->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     e->subtrees = p.subtrees;
     e->cache_hits = p.cache_hits;

@@ -8,10 +8,12 @@
 
 #include "fabatlas/design/evaluate_sample.h"
 #include "fabatlas/error.h"
+#include "fabatlas/mesh/encode_3mf.h"
 #include "fabatlas/mesh/mesh_report.h"
 #include "fabatlas/mesh/write_mesh.h"
 #include "fabatlas/precompute/design_evaluator.h"
 #include "fabatlas/artifact/glb.h"
+#include "fabatlas/scad/part_trees.h"
 
 namespace fabatlas::viewer {
 
@@ -76,6 +78,10 @@ ExportResult ExportDesign(const Customiser& c, const std::vector<double>& u, con
   // is encoded.
   design::EvaluateOptions evaluate;
   evaluate.run_checks = true;
+  // Parts: an OpenSCAD model's bodies and colours; any other design is one
+  // part, the solid (not meshed twice).
+  std::vector<design::Part> parts;
+  if (design.tree.op == "openscad") evaluate.parts = &parts;
   const auto start = std::chrono::steady_clock::now();
   const design::SampleResult r = design::EvaluateSample(design, precompute::DesignPointOf(design, u), evaluate);
   if (!r.valid) {
@@ -92,22 +98,58 @@ ExportResult ExportDesign(const Customiser& c, const std::vector<double>& u, con
                      "), though the samples around it pass" +
                      (nearest < 0 ? std::string() : "; nearest valid point: " + PointText(c, c.form().samples[nearest].u)));
   }
-  const mesh::TriangleMesh m = r.solid.ToMesh();
+  ExportResult out;
+  const design::Part* chosen = nullptr;
+  std::string names;
+  bool coloured = false;
+  for (const auto& p : parts) {
+    out.parts.push_back(p.name + (p.coloured ? " " + scad::HexColour(p.rgba) : ""));
+    names += (names.empty() ? "" : ", ") + p.name;
+    if (p.name == options.part) chosen = &p;
+    coloured = coloured || p.coloured;
+  }
+  if (parts.empty()) {
+    out.parts = {"body1"};
+    names = "body1";
+  }
+  const bool whole = options.part.empty() || (parts.empty() && options.part == "body1");
+  if (!whole && !chosen)
+    throw InputError("part '" + options.part + "' is not one of the design's parts at " + PointText(c, u) + ": " + names);
+  if (!whole && f != "stl" && f != "obj")
+    throw InputError("part= selects one part of an stl or obj file; a " + f + " file holds every part");
+  const mesh::TriangleMesh m = chosen ? chosen->mesh : r.solid.ToMesh();
   mesh::InspectOptions inspect;
   inspect.check_self_intersection = false;
   const mesh::MeshReport report = mesh::InspectMesh(m, inspect);
   if (!report.closed)
     throw ResourceError(PointText(c, u) + ": the mesh at voxel size " + std::to_string(design.voxel_size) +
                         " mm is not closed (" + report.closed_reason + ")");
-  ExportResult out;
-  out.bytes = f == "glb" ? artifact::SolidPreviewGlb(m, r.solid.boundary() != nullptr) : mesh::EncodeMesh(m, "." + f);
+  const bool several = parts.size() > 1 || coloured;
+  if (several && (f == "3mf" || f == "glb")) {
+    for (const auto& p : parts) {
+      const mesh::MeshReport part_report = mesh::InspectMesh(p.mesh, inspect);
+      if (!part_report.closed)
+        throw ResourceError(PointText(c, u) + ": part " + p.name + " is not closed (" + part_report.closed_reason + ")");
+    }
+  }
+  if (several && f == "3mf") {
+    std::vector<mesh::Object3mf> objects;
+    for (const auto& p : parts) objects.push_back({p.name, &p.mesh, p.coloured, p.rgba});
+    out.bytes = mesh::Encode3mfObjects(objects);
+  } else if (several && f == "glb") {
+    std::vector<artifact::GlbPart> glb;
+    for (const auto& p : parts) glb.push_back({p.name, &p.mesh, p.coloured, p.rgba});
+    out.bytes = artifact::PartsToGlb(glb, r.solid.boundary() != nullptr);
+  } else {
+    out.bytes = f == "glb" ? artifact::SolidPreviewGlb(m, r.solid.boundary() != nullptr) : mesh::EncodeMesh(m, "." + f);
+  }
   out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   out.u = u;
   out.voxel_size = design.voxel_size;
   out.triangles = static_cast<std::int64_t>(m.triangles.size());
   out.volume_mm3 = report.volume;
   for (const auto& check : r.checks) out.checks.push_back(check.name);
-  std::string name = c.source().name + "-" + PointText(c, u);
+  std::string name = c.source().name + "-" + PointText(c, u) + (chosen ? "-" + chosen->name : "");
   for (char& ch : name)
     if (!std::isalnum(static_cast<unsigned char>(ch)) && ch != '-' && ch != '.' && ch != '=') ch = '_';
   out.file_name = name + "." + f;

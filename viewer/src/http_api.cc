@@ -414,6 +414,7 @@ ApiResponse Route(const Customiser& c, const std::string& path, const std::map<s
     ExportOptions options;
     const auto f = query.find("format");
     options.format = f == query.end() ? "stl" : f->second;
+    if (const auto part = query.find("part"); part != query.end()) options.part = part->second;
     const ExportResult e = ExportDesign(c, u, options);
     ApiResponse r;
     r.content_type = options.format == "glb"   ? "model/gltf-binary"
@@ -427,6 +428,9 @@ ApiResponse Route(const Customiser& c, const std::string& path, const std::map<s
     std::string checks;
     for (const auto& name : e.checks) checks += (checks.empty() ? "" : ",") + name;
     r.headers["X-Checks"] = checks;  // the checks passed at exactly u
+    std::string parts;
+    for (const auto& name : e.parts) parts += (parts.empty() ? "" : ",") + name;
+    r.headers["X-Parts"] = parts;  // every part at u, "name" or "name #rrggbb"
     return r;
   }
   if (path == "/api/state_graph") {

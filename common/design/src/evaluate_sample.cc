@@ -191,7 +191,9 @@ class TreeEvaluation {
     // Previews look a subtree up before evaluating its children, so a cached
     // subtree costs nothing below it (Fab Forms Sec. 6.2: traversal stops at
     // nodes in H).
-    if (options_.cache && options_.lookup_before_children) {
+    // The parts are computed with the root (EvaluateOptions::parts).
+    const bool parts_here = options_.parts && &node == &design_.tree && node.op == "openscad";
+    if (options_.cache && options_.lookup_before_children && !parts_here) {
       const Identity& id = IdentityOf(node);
       if (auto hit = options_.cache->Find(id.key)) {
         SubtreeRecord record = RecordOf(node, id, path);
@@ -226,7 +228,7 @@ class TreeEvaluation {
     SubtreeRecord record = RecordOf(node, IdentityOf(node), path);
 
     Result out{{}, record.key, record.topology};
-    if (options_.cache) {
+    if (options_.cache && !parts_here) {
       if (auto hit = options_.cache->Find(record.key)) {
         out.solid = hit->solid;
         record.from_cache = true;
@@ -259,6 +261,7 @@ class TreeEvaluation {
         context.warnings = &warnings_;
         context.confine_model_files = options_.confine_model_files;
         context.path = path;
+        context.parts = parts_here ? options_.parts : nullptr;
         OpenScadNodeResult scad = EvaluateOpenScadNode(node, args, design_.file.parent_path(), context);
         out.solid = std::move(scad.solid);
         if (!scad.root_key.empty()) record.children = {scad.root_key};
@@ -412,8 +415,15 @@ SampleResult EvaluateSample(const Design& design, const Point& u, const Evaluate
     // Kept for the checks: collision_free evaluates the objects (cached).
     TreeEvaluation tree(design, scope, options, r.subtrees);
     try {
+      if (options.parts) options.parts->clear();
       r.solid = tree.Evaluate(design.tree, "root").solid;
       r.warnings = tree.Warnings();
+      if (options.parts && options.parts->empty() && !r.solid.empty()) {
+        Part whole;
+        whole.name = "body1";
+        whole.mesh = r.solid.ToMesh();
+        options.parts->push_back(std::move(whole));
+      }
       if (r.solid.empty()) {
         geometry_check.passed = false;
         geometry_check.reason = "the tree produced no material";
@@ -436,6 +446,7 @@ SampleResult EvaluateSample(const Design& design, const Point& u, const Evaluate
       geometry_check.failure = geometry_failure;
       fail(geometry_failure, geometry_check.reason);
       r.solid = geometry::Solid();
+      if (options.parts) options.parts->clear();
     }
     r.checks.push_back(geometry_check);
 

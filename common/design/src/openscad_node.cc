@@ -31,6 +31,7 @@
 #include "fabatlas/scad/evaluate_2d.h"
 #include "fabatlas/scad/evaluate_model.h"
 #include "fabatlas/scad/model_files.h"
+#include "fabatlas/scad/part_trees.h"
 #include "fabatlas/scad/primitive_mesh.h"
 #include "fabatlas/scad/surface_mesh.h"
 #include "fabatlas/scad/region_distance.h"
@@ -1074,6 +1075,25 @@ class CsgEvaluation {
     }
   }
 
+ public:
+  // a minus every solid of `others` (the parts' disjointness: an earlier
+  // part keeps what it shares with a later one), as a difference node would.
+  Solid Minus(const Solid& a, const std::vector<Solid>& others) {
+    if (a.empty() || others.empty()) return a;
+    if (!mesh_road_) {
+      Solid out = a;
+      for (const Solid& b : others) out = geometry::Difference(out, b);
+      return out;
+    }
+    CsgNode n;
+    n.name = "difference";
+    std::vector<Result> kids{{a, nullptr, ""}};
+    for (const Solid& b : others) kids.push_back({b, nullptr, ""});
+    SubtreeRecord record;
+    return MeshOfChildren(n, kIdentity, kids, record);
+  }
+
+ private:
   void Warn(const std::string& text) {
     if (c_.warnings) c_.warnings->push_back(model_.filename().string() + ": " + text);
   }
@@ -1353,6 +1373,15 @@ OpenScadNodeResult EvaluateOpenScadNode(const Node& node, const ResolvedArgs& ar
   // implements the model's language (evaluate_model.h), else OpenSCAD's export.
   scad::ModelEvaluation own;
   if (native) own = scad::EvaluateModel(model, overrides);
+  if (!own.bad_input.empty()) throw DesignFault(own.bad_input);
+  if (!own.evaluated) {
+    // OpenSCAD draws an unknown colour name in its default colour (a
+    // warning --quiet hides); the designer meant a colour: bad input here too.
+    std::ifstream in(model, std::ios::binary);
+    std::stringstream text;
+    text << in.rdbuf();
+    if (const std::string bad = scad::UnknownColourName(text.str(), model.string()); !bad.empty()) throw DesignFault(bad);
+  }
   if (own.evaluated) {
     run.seconds = own.seconds;
   } else {
@@ -1413,6 +1442,44 @@ OpenScadNodeResult EvaluateOpenScadNode(const Node& node, const ResolvedArgs& ar
   result.solid = r.solid;
   result.root_key = r.key;
   result.root_trace = r.trace;
+  if (context.parts) context.parts->clear();
+  if (context.parts && !result.solid.empty()) {
+    // Each part evaluated apart (its subtrees keyed and cached as any), then
+    // made disjoint from the parts before it; one part is the solid itself.
+    const std::vector<scad::PartTree> trees = scad::PartTrees(root);
+    int bodies = 0;
+    std::map<int, int> regions;  // per body
+    for (const auto& t : trees) {
+      bodies = std::max(bodies, t.body);
+      ++regions[t.body];
+    }
+    OpenScadNodeContext quiet = context;  // no records, warnings or outside meshes twice
+    quiet.records = nullptr;
+    quiet.outside = nullptr;
+    quiet.warnings = nullptr;
+    quiet.parts = nullptr;
+    CsgEvaluation parts(quiet, model, work.path, /*mesh_road=*/render != "levelset");
+    std::vector<Solid> earlier;
+    for (const auto& t : trees) {
+      Solid solid;
+      if (trees.size() == 1) {
+        solid = result.solid;
+      } else {
+        const scad::CsgNode part = scad::ParseCsg(t.csg, model.string() + " (part)");
+        solid = parts.Evaluate3(part, kIdentity, context.path + "/part", /*need_solid=*/true).solid;
+      }
+      Solid own = parts.Minus(solid, earlier);
+      if (!solid.empty()) earlier.push_back(std::move(solid));
+      if (own.empty()) continue;
+      Part p;
+      p.name = "body" + std::to_string(t.body);
+      if (regions[t.body] > 1) p.name += "-" + scad::HexColour(t.rgba).substr(1);
+      p.coloured = t.coloured;
+      p.rgba = t.rgba;
+      p.mesh = own.ToMesh();
+      if (!p.mesh.triangles.empty()) context.parts->push_back(std::move(p));
+    }
+  }
   return result;
 }
 

@@ -69,6 +69,7 @@ struct OpenScadNodeContext {
   std::vector<std::string>* warnings = nullptr;   // what OpenSCAD would warn, and the mesh road's fallbacks
   bool confine_model_files = false;               // EvaluateOptions::confine_model_files
   std::string path;                             // the node's record path; CSG subtrees are PATH/csg/...
+  std::vector<Part>* parts = nullptr;             // when set: the model's bodies and colour regions (PartTrees)
 };
 
 // Record ops of CSG subtrees: "csg:NAME" evaluated by fabatlas (exact

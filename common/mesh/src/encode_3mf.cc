@@ -108,7 +108,9 @@ std::string Number(double v) {
 
 }  // namespace
 
-std::string Encode3mf(const TriangleMesh& mesh) {
+std::string Encode3mf(const TriangleMesh& mesh) { return Encode3mfObjects({{"", &mesh, false, {}}}); }
+
+std::string Encode3mfObjects(const std::vector<Object3mf>& objects) {
   const std::string content_types =
       "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
       "<Types xmlns=\"http://schemas.openxmlformats.org/package/2006/content-types\">"
@@ -126,15 +128,53 @@ std::string Encode3mf(const TriangleMesh& mesh) {
       "<model unit=\"millimeter\" xml:lang=\"en-US\" "
       "xmlns=\"http://schemas.microsoft.com/3dmanufacturing/core/2015/02\">\n"
       "<metadata name=\"Application\">fabatlas</metadata>\n"
-      "<resources>\n<object id=\"1\" type=\"model\">\n<mesh>\n<vertices>\n";
-  model.reserve(model.size() + mesh.vertices.size() * 48 + mesh.triangles.size() * 40);
-  for (const auto& v : mesh.vertices)
-    model += "<vertex x=\"" + Number(v[0]) + "\" y=\"" + Number(v[1]) + "\" z=\"" + Number(v[2]) + "\"/>\n";
-  model += "</vertices>\n<triangles>\n";
-  for (const auto& t : mesh.triangles)
-    model += "<triangle v1=\"" + std::to_string(t[0]) + "\" v2=\"" + std::to_string(t[1]) + "\" v3=\"" +
-             std::to_string(t[2]) + "\"/>\n";
-  model += "</triangles>\n</mesh>\n</object>\n</resources>\n<build>\n<item objectid=\"1\"/>\n</build>\n</model>\n";
+      "<resources>\n";
+  // The distinct colours, in order of first use (sRGB, as displaycolor is).
+  std::vector<std::string> colours;
+  std::vector<int> pindex;
+  for (const Object3mf& o : objects) {
+    if (!o.mesh) throw InputError("3mf: an object without a mesh");
+    if (!o.coloured) {
+      pindex.push_back(-1);
+      continue;
+    }
+    char hex[16];
+    auto byte = [](double v) { return static_cast<unsigned>(v <= 0 ? 0 : v >= 1 ? 255 : v * 255 + 0.5); };
+    std::snprintf(hex, sizeof hex, "#%02X%02X%02X%02X", byte(o.rgba[0]), byte(o.rgba[1]), byte(o.rgba[2]), byte(o.rgba[3]));
+    std::size_t k = 0;
+    while (k < colours.size() && colours[k] != hex) ++k;
+    if (k == colours.size()) colours.push_back(hex);
+    pindex.push_back(static_cast<int>(k));
+  }
+  const int first_id = colours.empty() ? 1 : 2;
+  if (!colours.empty()) {
+    model += "<basematerials id=\"1\">\n";
+    for (const std::string& c : colours) {
+      const std::string name = c.substr(6) == "FF" ? c.substr(0, 7) : c;
+      model += "<base name=\"" + name + "\" displaycolor=\"" + c + "\"/>\n";
+    }
+    model += "</basematerials>\n";
+  }
+  for (std::size_t i = 0; i < objects.size(); ++i) {
+    const TriangleMesh& mesh = *objects[i].mesh;
+    std::string name;  // XML-escaped
+    for (char ch : objects[i].name)
+      name += ch == '&' ? "&amp;" : ch == '<' ? "&lt;" : ch == '>' ? "&gt;" : ch == '"' ? "&quot;" : std::string(1, ch);
+    model += "<object id=\"" + std::to_string(first_id + i) + "\" type=\"model\"" +
+             (name.empty() ? "" : " name=\"" + name + "\"") +
+             (pindex[i] < 0 ? "" : " pid=\"1\" pindex=\"" + std::to_string(pindex[i]) + "\"") + ">\n<mesh>\n<vertices>\n";
+    model.reserve(model.size() + mesh.vertices.size() * 48 + mesh.triangles.size() * 40);
+    for (const auto& v : mesh.vertices)
+      model += "<vertex x=\"" + Number(v[0]) + "\" y=\"" + Number(v[1]) + "\" z=\"" + Number(v[2]) + "\"/>\n";
+    model += "</vertices>\n<triangles>\n";
+    for (const auto& t : mesh.triangles)
+      model += "<triangle v1=\"" + std::to_string(t[0]) + "\" v2=\"" + std::to_string(t[1]) + "\" v3=\"" +
+               std::to_string(t[2]) + "\"/>\n";
+    model += "</triangles>\n</mesh>\n</object>\n";
+  }
+  model += "</resources>\n<build>\n";
+  for (std::size_t i = 0; i < objects.size(); ++i) model += "<item objectid=\"" + std::to_string(first_id + i) + "\"/>\n";
+  model += "</build>\n</model>\n";
   return Zip({{"[Content_Types].xml", content_types}, {"_rels/.rels", rels}, {"3D/3dmodel.model", model}});
 }
 

@@ -12,7 +12,9 @@
 #include <utility>
 #include <vector>
 
+#include "fabatlas/scad/lex_source.h"
 #include "fabatlas/stopwatch.h"
+#include "evaluate_model/colours.h"
 #include "evaluate_model/csg_node.h"
 #include "evaluate_model/evaluator.h"
 #include "evaluate_model/parser.h"
@@ -25,6 +27,7 @@ namespace {
 
 using internal::CsgOut;
 using internal::ExprPtr;
+using internal::BadModel;
 using internal::NotNative;
 using internal::Parser;
 using internal::Scope;
@@ -90,6 +93,10 @@ ModelEvaluation EvaluateModelText(const std::string& text, const std::string& fi
     for (const CsgOut& r : roots) internal::Print(r, 0, result.csg);
     result.csg += "\n";  // OpenSCAD ends its export with an empty line
     result.evaluated = true;
+  } catch (const BadModel& e) {
+    result.csg.clear();
+    result.bad_input = file + ":" + std::to_string(e.line) + ": " + e.what;
+    result.declined = result.bad_input;
   } catch (const NotNative& e) {
     result.csg.clear();
     result.declined = file + (e.line > 0 ? ":" + std::to_string(e.line) : std::string()) + ": " + e.what;
@@ -112,6 +119,22 @@ ModelEvaluation EvaluateModel(const std::filesystem::path& model,
   ModelEvaluation result = EvaluateModelText(text.str(), model.string(), overrides);
   result.seconds = watch.Seconds();
   return result;
+}
+
+std::string UnknownColourName(const std::string& text, const std::string& file) {
+  const std::vector<SourceToken> t = LexSource(text).tokens;
+  auto symbol = [&](std::size_t i, const char* s) { return i < t.size() && t[i].kind == SourceToken::Kind::kSymbol && t[i].text == s; };
+  for (std::size_t i = 0; i + 2 < t.size(); ++i) {
+    if (t[i].kind != SourceToken::Kind::kIdent || t[i].text != "color" || !symbol(i + 1, "(")) continue;
+    std::size_t at = i + 2;
+    if (t[at].kind == SourceToken::Kind::kIdent && t[at].text == "c" && symbol(at + 1, "=")) at += 2;
+    if (at + 1 >= t.size() || t[at].kind != SourceToken::Kind::kString || !(symbol(at + 1, ")") || symbol(at + 1, ",")))
+      continue;
+    double rgba[4];
+    if (!internal::ColourByName(t[at].text, rgba))
+      return file + ":" + std::to_string(t[at].line) + ": " + internal::UnknownColourText(t[at].text);
+  }
+  return {};
 }
 
 }  // namespace fabatlas::scad

@@ -51,7 +51,15 @@ export async function meshFromGlb(buffer) {
       // Exact meshes carry normals split at creases (flat faces, sharp
       // edges); level-set surfaces get smooth ones here.
       if (!o.geometry.attributes.normal) o.geometry.computeVertexNormals();
-      o.material = material;
+      // A part an OpenSCAD model coloured (material "part NAME", its
+      // color() in baseColorFactor) keeps its colour and opacity.
+      const own = o.material;
+      if (own?.name?.startsWith('part ')) {
+        o.material = material.clone();
+        o.material.color.copy(own.color);
+        o.material.opacity = own.opacity;
+        o.material.transparent = own.transparent;
+      } else o.material = material;
       group.add(o.clone());
     }
   });

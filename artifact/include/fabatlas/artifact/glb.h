@@ -27,6 +27,23 @@ std::string MeshToGlb(const mesh::TriangleMesh& mesh, const std::vector<std::arr
 // split at creases of 30 degrees, a level-set surface without normals.
 std::string SolidPreviewGlb(const mesh::TriangleMesh& surface, bool exact);
 
+// One part of a multi-part GLB (a body or colour region of an OpenSCAD
+// model, design::Part).
+struct GlbPart {
+  std::string name;
+  const mesh::TriangleMesh* mesh = nullptr;
+  bool coloured = false;         // false: no material (viewers use their default)
+  std::array<double, 4> rgba{};  // sRGB red, green, blue, alpha in [0, 1] (OpenSCAD's color())
+};
+
+// The parts as one scene of one node per part (named after it, with
+// MeshToGlb's scale and rotation) holding its own mesh of one primitive, normals as SolidPreviewGlb gives them (`exact`:
+// split at 30-degree creases). A coloured part's primitive has a material
+// named "part NAME" whose baseColorFactor is its colour converted from sRGB
+// to linear (glTF 2.0 Sec. 3.9.2: baseColorFactor is linear), metallic 0,
+// roughness 0.6, alphaMode BLEND when alpha < 1. Deterministic.
+std::string PartsToGlb(const std::vector<GlbPart>& parts, bool exact);
+
 // Reads a GLB written by MeshToGlb (or any GLB whose first mesh primitive is
 // float positions with uint8/16/32 indices): the primitive's positions as
 // stored, node transforms not applied (for MeshToGlb's files: millimetres,

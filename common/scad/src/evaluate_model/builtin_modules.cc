@@ -65,6 +65,7 @@ class ModuleCall {
   const std::string& Name() const { return s_.name; }
   int Line() const { return s_.line; }
   [[noreturn]] void Decline(const std::string& what) const { throw NotNative{s_.line, what}; }
+  [[noreturn]] void Refuse(const std::string& what) const { throw BadModel{s_.line, what}; }
 
   // The arguments matched to `names`; $-arguments go to the children's scope.
   Arguments Match(const std::vector<std::string>& names) {
@@ -309,7 +310,10 @@ void Color(ModuleCall& m) {
   const Value& c = args["c"];
   double rgba[4] = {0, 0, 0, 1};
   if (c.kind == Value::Kind::kString) {
-    if (!ColourByName(c.text, rgba)) m.Decline("colour '" + c.text + "'");
+    // OpenSCAD warns "Unable to parse color" and draws the default colour;
+    // the designer meant a colour, so it is the model's error here.
+    if (!ColourByName(c.text, rgba))
+      m.Refuse(UnknownColourText(c.text));
   } else {
     if (!AllNumbers(c) || c.Items().size() < 3 || c.Items().size() > 4) m.Decline("colour malformed");
     for (std::size_t k = 0; k < c.Items().size(); ++k) rgba[k] = c.Items()[k].number;

@@ -3,6 +3,7 @@
 
 #include <cctype>
 #include <cstddef>
+#include <string>
 
 namespace fabatlas::scad::internal {
 namespace {
@@ -97,6 +98,10 @@ bool ColourByName(std::string name, double rgba[4]) {
     return true;
   }
   return false;
+}
+
+std::string UnknownColourText(const std::string& name) {
+  return "color(\"" + name + "\"): unknown colour name (an SVG/CSS colour name, \"#rrggbb\" or [r, g, b, a])";
 }
 
 }  // namespace fabatlas::scad::internal

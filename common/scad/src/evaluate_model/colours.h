@@ -12,4 +12,7 @@ namespace fabatlas::scad::internal {
 // any other name (rgba untouched then).
 bool ColourByName(std::string name, double rgba[4]);
 
+// What an unknown name is told: color("NAME"): unknown colour name (...).
+std::string UnknownColourText(const std::string& name);
+
 }  // namespace fabatlas::scad::internal

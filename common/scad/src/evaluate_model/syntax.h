@@ -19,6 +19,13 @@ struct NotNative {
   std::string what;
 };
 
+// The model is wrong whatever evaluates it (an unknown colour name): bad
+// input, reported to the user (ModelEvaluation::bad_input), not declined.
+struct BadModel {
+  int line;
+  std::string what;
+};
+
 using Token = SourceToken;
 using Tok = SourceToken::Kind;
 

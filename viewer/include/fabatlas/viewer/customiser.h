@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "fabatlas/design/design.h"
+#include "fabatlas/design/evaluate_sample.h"
 #include "fabatlas/design/subtree_cache.h"
 #include "fabatlas/geometry/solid.h"
 #include "fabatlas/sampling/form.h"
@@ -82,7 +83,15 @@ struct PreviewResult {
   geometry::Solid solid;
   double seconds = 0;           // wall time of EvaluateSample (constraints and tree; checks skipped)
   int subtrees = 0, cache_hits = 0;
+  // An OpenSCAD model's bodies and colour regions (design::Part; empty for
+  // other designs): the preview's glb shows them in their colours.
+  std::vector<design::Part> parts;
 };
+
+// The glb of a preview: its parts with their materials when it has several
+// or a coloured one (artifact::PartsToGlb), else the solid's surface
+// (artifact::SolidPreviewGlb); normals split at creases for exact meshes.
+std::string PreviewGlbBytes(const PreviewResult& preview);
 
 // A preview for a point u (Customiser::PreviewGlbAt): the design at exactly u
 // or u's snapped sample, and which.

@@ -22,6 +22,11 @@ double FabricationVoxelSize(double design_voxel_size_mm);
 struct ExportOptions {
   std::string format = "stl";  // stl (binary), 3mf, glb (metres, +Y up), obj
   double voxel_size = 0;       // mm; 0: FabricationVoxelSize(design voxel size)
+  // stl, obj: one part by name (ExportResult::parts; "body2", "body1-ff0000")
+  // instead of the whole; empty: the whole. 3mf and glb always hold every
+  // part (one 3MF object each, coloured by basematerials; a glb node each,
+  // with its material).
+  std::string part;
 };
 
 struct ExportResult {
@@ -33,6 +38,10 @@ struct ExportResult {
   double volume_mm3 = 0;       // of the closed mesh (divergence theorem)
   double seconds = 0;          // evaluation, checks and meshing, wall time
   std::vector<std::string> checks;  // the checks passed at exactly u (constraints, geometry, the design's)
+  // The design's parts at u (an OpenSCAD model's top-level bodies and colour
+  // regions, docs/openscad.md "Parts and colours"; one, "body1", otherwise),
+  // as "name" or "name #rrggbb".
+  std::vector<std::string> parts;
 };
 
 // Evaluates the design at exactly u (no snapping) with voxel size
@@ -44,8 +53,8 @@ struct ExportResult {
 //     with why it is invalid;
 //   - a u inside it (the region interpolates between samples) where a check
 //     fails at exactly u, naming the first failed check and its reason.
-// Also refuses an unknown format and a mesh that is not closed (its border
-// edge count). Thread-safe; evaluates on the calling thread.
+// Also refuses an unknown format, an unknown part (naming the parts) and a
+// mesh that is not closed (its border edge count), the whole's or a part's. Thread-safe; evaluates on the calling thread.
 ExportResult ExportDesign(const Customiser& customiser, const std::vector<double>& u, const ExportOptions& options = {});
 
 // "radius=15,wall=6": parameter names in the form's order, enumerated values

@@ -9,9 +9,11 @@
 //   GET /api/properties?u=..       the snapped sample's properties and material cost/weight
 //   GET /api/preview.glb?u=..      the snapped sample's geometry as glTF binary;
 //                                  &exact=1: the design at exactly u when cheap
-//                                  enough (Customiser::PreviewGlbAt)
+//                                  enough (Customiser::PreviewGlbAt); an OpenSCAD
+//                                  model's parts as nodes with their colours
 //   GET /api/map?a=i&b=j&n=N&u=..  N x N validity map over parameters i and j through u
-//   GET /api/export?u=..&format=F  the design at exactly u as a file (export_design.h)
+//   GET /api/export?u=..&format=F  the design at exactly u as a file (export_design.h);
+//                                  &part=NAME: one part's stl/obj; X-Parts lists them
 //   GET /api/optimise?min=P&hold=..   the best valid point for an objective (optimise.h)
 //   GET /api/pareto?axes=A,B        the Pareto front of two properties (pareto_front.h)
 //

@@ -2,6 +2,7 @@
 // the volumetric change ΔG of Eq. 2 between two evaluated samples.
 #pragma once
 
+#include <array>
 #include <map>
 #include <memory>
 #include <string>
@@ -63,6 +64,17 @@ struct SubtreeRecord {
   std::vector<std::string> children;  // keys of the child subtrees
 };
 
+// A part of the design's result, as the designer made it: a top-level body of
+// an OpenSCAD model, or one colour region of a body (docs/openscad.md, "Parts
+// and colours"). Closed and outward like the sample's solid; the parts of a
+// model are disjoint, and together they are the sample's solid.
+struct Part {
+  std::string name;              // "body1", or "body1-ff0000" for one colour of a body of several
+  bool coloured = false;         // whether the model gave it a colour (rgba meaningful)
+  std::array<double, 4> rgba{};  // red, green, blue, alpha in [0, 1] (OpenSCAD's color())
+  mesh::TriangleMesh mesh;       // millimetres, z up
+};
+
 struct EvaluateOptions {
   SubtreeCache* cache = nullptr;  // optional; subtrees are looked up and offered
   bool keep_solid = true;         // keep the root level set in the result
@@ -93,6 +105,13 @@ struct EvaluateOptions {
   // (resolve_collisions.h) and fails with `repairable` when that makes it
   // valid. false: no resolution (the resolution's own evaluations).
   bool repair_collisions = true;
+  // When set (and the point has geometry), filled with the result's parts:
+  // for a design whose tree is one `openscad` node, its model's top-level
+  // bodies and colour regions (evaluated apart, after the sample's solid:
+  // checks and properties still judge the union); for any other design one
+  // uncoloured part, the solid's surface. The root is then not looked up in
+  // `cache` as a whole (its CSG subtrees still are).
+  std::vector<Part>* parts = nullptr;
 };
 
 struct SampleResult {

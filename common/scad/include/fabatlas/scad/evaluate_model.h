@@ -36,7 +36,8 @@
 // module), loops of more than 1,000,000 iterations, more than 20 million
 // evaluation steps, vectors of more than a million values, more than two
 // million vector values built in all (about 200 MB), strings of more than
-// ten million characters, a failed assert.
+// ten million characters, a failed assert. A color() with a name that is
+// no colour is bad input (ModelEvaluation::bad_input), not declined.
 //
 // Numbers are written as OpenSCAD writes them (node fields as C's %g; vectors
 // and matrices with 6 significant digits, exact ties away from zero, `1e+6`,
@@ -54,6 +55,9 @@ struct ModelEvaluation {
   bool evaluated = false;  // false: the evaluator declined; ask OpenSCAD
   std::string csg;         // the .csg text (when evaluated)
   std::string declined;    // why not, "MODEL.scad:LINE: what" (when declined)
+  // The model is wrong whatever evaluates it, "MODEL.scad:LINE: what" (a
+  // color() with an unknown name); also in `declined`. Report it, exit 2.
+  std::string bad_input;
   double seconds = 0;      // wall time of reading, parsing and evaluating
 };
 
@@ -66,5 +70,14 @@ ModelEvaluation EvaluateModel(const std::filesystem::path& model,
 // The same for model text in memory (`file` names it in `declined`).
 ModelEvaluation EvaluateModelText(const std::string& text, const std::string& file,
                                   const std::vector<std::pair<std::string, std::string>>& overrides);
+
+// The first color() call in `text` whose literal name (`color("x")`,
+// `color(c = "x")`) is no colour OpenSCAD 2021.01 knows, as
+// "FILE:LINE: color(\"x\"): unknown colour name (...)", the line
+// ModelEvaluation::bad_input gives; empty when there is none. Reads the text
+// alone (not what it includes); a name computed at run time is the
+// evaluator's to find. For models OpenSCAD evaluates (its --quiet export
+// hides its own warning).
+std::string UnknownColourName(const std::string& text, const std::string& file);
 
 }  // namespace fabatlas::scad
