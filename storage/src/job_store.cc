@@ -336,6 +336,14 @@ JobStore::JobStore(const std::filesystem::path& path, JobStoreOptions options)
     sqlite3_prepare_v2(db_->handle, "SELECT COUNT(*) FROM tasks WHERE affine = 1", -1, &count, nullptr);
     if (count && sqlite3_step(count) == SQLITE_ROW) preferring_tasks_ = sqlite3_column_int64(count, 0);
     sqlite3_finalize(count);
+  } catch (const ResourceError& e) {
+    // Not a database, or a corrupt one: no restart makes it one (bad input,
+    // exit 2 in the coordinator); an I/O error or a full disk may pass.
+    const int code = sqlite3_errcode(db_->handle) & 0xff;
+    sqlite3_close(db_->handle);
+    db_->handle = nullptr;
+    if (code == SQLITE_NOTADB || code == SQLITE_CORRUPT) throw InputError(e.what());
+    throw;
   } catch (...) {
     sqlite3_close(db_->handle);
     db_->handle = nullptr;
