@@ -31,7 +31,7 @@ for mode in $modes; do
     n=$(( points - i * per < per ? points - i * per : per ))
     (( n > 0 )) || continue
     FABATLAS_POWER_POINTS="$n" FABATLAS_POWER_FIRST_SEED=$(( first + i * per )) FABATLAS_POWER_MINUTES="${MINUTES:-0}" \
-      nice -n 10 "$build/bin/cluster_power_loss_test" --gtest_filter="PowerLoss.${mode}*" \
+      nice -n 10 "$build/bin/cluster_power_loss_test" --gtest_filter="PowerLoss.${mode}FsyncCommits*" \
       > "$TMPDIR/power_loss_${mode}_$i.log" 2>&1 &
     pids+=($!)
   done
