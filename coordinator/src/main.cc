@@ -3,6 +3,10 @@
 //       --tls-cert server.pem --tls-key server.key [--token-file F] [--metrics 0.0.0.0:9450]
 // SIGTERM / SIGINT: drain (no new leases, wait up to --drain-seconds for
 // running leases), then stop; running jobs resume on the next start.
+// Exit status: 0 after a signal; 2 (one line) for bad input or
+// configuration, a state directory another process holds or a state.db
+// that is not a job store; 75 (one line) when the state directory cannot be
+// read or written at start (an I/O error, a full disk), which may pass.
 #include <CLI/CLI.hpp>
 
 #include <csignal>
@@ -70,6 +74,10 @@ int main(int argc, char** argv) {
     coordinator.Drain(static_cast<std::int64_t>(drain_seconds * 1000));
     coordinator.Shutdown();
     return 0;
+  } catch (const fabatlas::ResourceError& e) {
+    // The state directory cannot be read or written (an I/O error, a full
+    // disk): a restart once the disk is back resumes every job.
+    return log_flags.ErrorExit("fabatlas-coordinator", "coordinator_exit", e, fabatlas::coordinator::kExitStateUnavailable);
   } catch (const fabatlas::InputError& e) {
     return log_flags.BadInputExit("fabatlas-coordinator", "coordinator_exit", e);
   }

@@ -90,14 +90,26 @@ void Coordinator::Impl::CollectBlobs(const std::string& reason) {
 
 void Coordinator::Impl::Sweep() {
   std::int64_t last_checkpoint_ms = NowMs(), last_collect_ms = 0;
+  bool expiry_held = false;  // leases were kept past their deadlines while writes failed
   while (!stopping) {
     std::this_thread::sleep_for(std::chrono::milliseconds(100));
     try {
       std::int64_t now = NowMs();
       if (now - last_checkpoint_ms >= 1000) {
         last_checkpoint_ms = now;
-        store->Checkpoint();
-        StateWriteSucceeded();
+        // A checkpoint copies every WAL frame since the last one that
+        // completed, all or nothing (SQLite, "Write-Ahead Logging"): on a
+        // disk that fails one write in n, a backlog past n frames never
+        // completes. Its failure must not hold up what follows: the stopped
+        // drivers' restarts and the lease sweep (they once waited for a
+        // checkpoint to succeed, and a fault on every 25th store write
+        // starved the job).
+        try {
+          store->Checkpoint();
+          StateWriteSucceeded();
+        } catch (const ResourceError& e) {
+          StateWriteFailed("checkpoint", e.what());
+        }
         std::set<std::string> restart;
         {
           std::lock_guard lock(drivers_mu);
@@ -105,7 +117,28 @@ void Coordinator::Impl::Sweep() {
         }
         for (const auto& id : restart) StartDriver(id);
       }
-      auto expired = store->ExpireLeases(now, options.retry_backoff_ms, options.quarantine_after, QuarantineBytes);
+      // While the store cannot be written no lease expires: a worker's
+      // heartbeats and reports fail with the coordinator's own writes, so a
+      // lease past its deadline says nothing of its worker (expiring it
+      // fenced results on their way, and with a fault on every 25th store
+      // write the same tasks were leased again and again). One lease period
+      // after the last failed write, the leases get one period of grace, as
+      // after a restart, then expire as usual: a worker that died meanwhile
+      // is noticed then.
+      std::int64_t last_failure_ms = 0;
+      {
+        std::lock_guard lock(stall_mu);
+        last_failure_ms = stall_last_ms;
+      }
+      const bool hold = last_failure_ms > 0 && now - last_failure_ms < options.lease_ms;
+      if (hold) {
+        expiry_held = true;
+      } else if (expiry_held) {
+        store->ExtendAllLeases(now + options.lease_ms);
+        expiry_held = false;
+      }
+      std::vector<storage::ExpiredLease> expired;
+      if (!hold) expired = store->ExpireLeases(now, options.retry_backoff_ms, options.quarantine_after, QuarantineBytes);
       for (const auto& e : expired) {
         log::Warn("lease_expired", {{"task", e.task_key}, {"job", e.job_id}, {"worker", e.worker_id},
                                     {"attempt", e.attempt}, {"expiries", e.expiries}});

@@ -61,22 +61,30 @@ JobStore::JobStore(const std::filesystem::path& path, JobStoreOptions options) :
   if (path.has_parent_path()) std::filesystem::create_directories(path.parent_path(), ec);
   db_ = OpenConnection(path, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE | SQLITE_OPEN_FULLMUTEX,
                        "cannot open the job store");
-  sqlite3_busy_timeout(db_->get(), 10000);
-  // Refuse a store a newer coordinator wrote before touching it.
-  internal::CheckSchemaVersion(*db_, path.string());
-  db_->Exec("PRAGMA journal_mode=WAL");
-  db_->Exec(options_.fsync_every_commit ? "PRAGMA synchronous=FULL" : "PRAGMA synchronous=NORMAL");
-  if (options_.background_checkpoints) sqlite3_wal_autocheckpoint(db_->get(), 0);
-  // When a commit starts the WAL over (after a checkpoint RESTART,
-  // Checkpoint()), a file grown past 16 MiB while checkpoints could not keep
-  // up is cut back to 16 MiB: the WAL reuses its pages without keeping its
-  // high-water mark on disk. 16 rather than the restart's 8 MiB: a
-  // checkpoint comes once a second, so the WAL passes 8 MiB by up to a
-  // second of commits, and cutting those pages off at every restart would
-  // make the next pass extend the file again.
-  db_->Exec("PRAGMA journal_size_limit = 16777216");
-  internal::MigrateSchema(*db_);
-  preferring_tasks_ = db_->ExecInt("SELECT COUNT(*) FROM tasks WHERE affine = 1");
+  try {
+    sqlite3_busy_timeout(db_->get(), 10000);
+    // Refuse a store a newer coordinator wrote before touching it.
+    internal::CheckSchemaVersion(*db_, path.string());
+    db_->Exec("PRAGMA journal_mode=WAL");
+    db_->Exec(options_.fsync_every_commit ? "PRAGMA synchronous=FULL" : "PRAGMA synchronous=NORMAL");
+    if (options_.background_checkpoints) sqlite3_wal_autocheckpoint(db_->get(), 0);
+    // When a commit starts the WAL over (after a checkpoint RESTART,
+    // Checkpoint()), a file grown past 16 MiB while checkpoints could not keep
+    // up is cut back to 16 MiB: the WAL reuses its pages without keeping its
+    // high-water mark on disk. 16 rather than the restart's 8 MiB: a
+    // checkpoint comes once a second, so the WAL passes 8 MiB by up to a
+    // second of commits, and cutting those pages off at every restart would
+    // make the next pass extend the file again.
+    db_->Exec("PRAGMA journal_size_limit = 16777216");
+    internal::MigrateSchema(*db_);
+    preferring_tasks_ = db_->ExecInt("SELECT COUNT(*) FROM tasks WHERE affine = 1");
+  } catch (const ResourceError& e) {
+    // Not a database, or a corrupt one: no restart makes it one (bad input,
+    // exit 2 in the coordinator); an I/O error or a full disk may pass.
+    const int code = sqlite3_errcode(db_->get()) & 0xff;
+    if (code == SQLITE_NOTADB || code == SQLITE_CORRUPT) throw InputError(e.what());
+    throw;
+  }
 }
 
 JobStore::~JobStore() = default;

@@ -107,6 +107,7 @@ inline std::string ReadText(const fs::path& path) {
 struct CoordinatorProcess {
   pid_t pid = -1;
   int port = 0;
+  int exit_status = -1;  // when it ended before listening (then reaped), its exit status
 };
 
 // Starts fabatlas-coordinator on 127.0.0.1:port (0 = any) and waits for it
@@ -133,7 +134,7 @@ inline CoordinatorProcess StartCoordinator(const fs::path& state, int port,
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
     std::string text = ReadText(port_file);
     if (!text.empty()) c.port = std::atoi(text.c_str());
-    if (WaitExit(c.pid, std::chrono::milliseconds(0)) != -1) break;
+    if ((c.exit_status = WaitExit(c.pid, std::chrono::milliseconds(0))) != -1) break;
   }
   return c;
 }

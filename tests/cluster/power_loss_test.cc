@@ -37,6 +37,7 @@
 
 #include "cluster_job.h"
 #include "cluster_process.h"
+#include "fabatlas/coordinator/coordinator.h"
 #include "in_process_job.h"
 #include "fabatlas/storage/blob_store.h"
 #include "fabatlas/storage/job_store.h"
@@ -326,7 +327,11 @@ void RunPoints(bool fsync_commits, std::int64_t default_points) {
   }
   std::int64_t points = 0, cuts = 0, acknowledged = 0, lost = 0;
   const auto started = std::chrono::steady_clock::now();
+  // FABATLAS_POWER_MINUTES=m: no point starts after m minutes (a long run
+  // that must end by a given time; the seeds run are the ones printed).
+  const std::int64_t minutes = EnvInt("FABATLAS_POWER_MINUTES", 0);
   for (std::uint64_t seed : seeds) {
+    if (minutes > 0 && std::chrono::steady_clock::now() - started > std::chrono::minutes(minutes)) break;
     PointOutcome o;
     try {
       o = RunPoint(seed, fsync_commits);
@@ -360,12 +365,15 @@ void RunFaultLoop(const std::string& match, const std::string& error, std::int64
   const std::string what = error + " on write " + std::to_string(first) + " + n*" + std::to_string(stride) + " of '" +
                            match + "'";
   SCOPED_TRACE(what);
+  const int failures_before = FailuresSoFar();
+  const auto started = std::chrono::steady_clock::now();
   const fs::path dir = FreshDir("fault_" + std::to_string(first) + "_" + error + (match == "state.db" ? "_store" : "_blobs"));
   const fs::path state = dir / "state";
   CoordinatorProcess c;
-  // A fault while the store opens ends the start with one line (exit 2, as
-  // any unusable state directory); a supervisor starts it again, here with
-  // the next fault one stride on (the shim counts from the new start).
+  // A fault while the store opens ends the start with one line and exit
+  // status 75 (EX_TEMPFAIL: it may pass); a supervisor starts it again (the
+  // systemd unit does), here with the next fault one stride on (the shim
+  // counts from the new start).
   for (std::int64_t at = first; c.port == 0 && at < first + 5 * stride; at += stride) {
     const std::size_t log_size = ReadText(state / "coordinator.log").size();
     c = StartCoordinator(state, 0, kFastLeases,
@@ -373,6 +381,7 @@ void RunFaultLoop(const std::string& match, const std::string& error, std::int64
                                          "FABATLAS_FAULT_AT=" + std::to_string(at),
                                          "FABATLAS_FAULT_EVERY=" + std::to_string(stride), "FABATLAS_FAULT_MS=300"}));
     if (c.port > 0) break;
+    EXPECT_EQ(c.exit_status, coordinator::kExitStateUnavailable) << what << ": a start that met an I/O error";
     const std::string said = ReadText(state / "coordinator.log").substr(log_size);
     const std::string last = said.substr(said.rfind('\n', said.size() - 2) + 1);
     EXPECT_EQ(last.rfind("fabatlas-coordinator: " + (state / "state.db").string() + ": ", 0), 0u) << what << said;
@@ -404,9 +413,13 @@ void RunFaultLoop(const std::string& match, const std::string& error, std::int64
   }();
   EXPECT_GT(faults, 0) << what << ": no fault was injected";
   EXPECT_NE(log.find("state_write_failed"), std::string::npos) << what << ": no state_write_failed line\n" << log;
-  std::cerr << "fault loop " << what << ": " << faults << " faults, job succeeded\n";
   StopAndCheck(c, state, id, what);
-  if (!::testing::Test::HasFailure()) fs::remove_all(dir);
+  const bool failed = FailuresSoFar() > failures_before;
+  std::cerr << "fault loop " << what << ": " << faults << " faults, "
+            << (s.state() == v1::JOB_STATE_SUCCEEDED ? "job succeeded" : "job did not succeed") << ", "
+            << std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count() << " s"
+            << (failed ? "  FAILED" : "") << "\n";
+  if (!failed) fs::remove_all(dir);
 }
 
 // A fault every `stride` writes: more than the writes of the largest commit
@@ -418,10 +431,15 @@ void RunFaultLoop(const std::string& match, const std::string& error, std::int64
 void RunFaultLoops(const std::string& match, std::int64_t stride) {
   ASSERT_TRUE(fs::exists(ShimPath())) << ShimPath();
   ASSERT_FALSE(ReferenceArtifact().empty());
-  const std::int64_t all = EnvInt("FABATLAS_FAULT_STRIDE", 0);
+  const std::int64_t all = EnvInt(match == "state.db" ? "FABATLAS_FAULT_STRIDE" : "FABATLAS_BLOB_FAULT_STRIDE", 0);
+  // FABATLAS_FAULT_FROM / _TO: only the offsets from..to (a long run split
+  // over processes); FABATLAS_FAULT_ERROR: only EIO or only ENOSPC.
+  const std::int64_t from = EnvInt("FABATLAS_FAULT_FROM", 1), to = EnvInt("FABATLAS_FAULT_TO", all);
+  const char* only = std::getenv("FABATLAS_FAULT_ERROR");
   for (const std::string error : {"EIO", "ENOSPC"}) {
+    if (only && *only && error != only) continue;
     if (all > 0) {
-      for (std::int64_t first = 1; first <= all; ++first) RunFaultLoop(match, error, first, all);
+      for (std::int64_t first = from; first <= std::min(all, to); ++first) RunFaultLoop(match, error, first, all);
     } else {
       RunFaultLoop(match, error, error == "EIO" ? 3 : stride / 2, stride);
     }

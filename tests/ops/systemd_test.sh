@@ -29,5 +29,8 @@ for unit in "$src"/ops/systemd/*.service; do
   done
 done
 grep -q '^StateDirectory=fabatlas' "$src/ops/systemd/fabatlas-coordinator.service" || { echo "coordinator: no StateDirectory="; status=1; }
+# Exit status 75 (an I/O error at start) is restarted, however long it lasts.
+grep -q '^StartLimitIntervalSec=0' "$src/ops/systemd/fabatlas-coordinator.service" || { echo "coordinator: a start limit"; status=1; }
+if grep -q '^RestartPreventExitStatus=.*75' "$src/ops/systemd/fabatlas-coordinator.service"; then echo "coordinator: 75 not restarted"; status=1; fi
 if grep -q '^LoadCredential=server' "$src/ops/systemd/fabatlas-worker@.service"; then echo "worker unit loads the server key"; status=1; fi
 exit $status

@@ -39,6 +39,13 @@
 
 namespace fabatlas::coordinator {
 
+// Exit status of fabatlas-coordinator when its state directory cannot be
+// read or written at start (a ResourceError: an I/O error, a full disk), a
+// reason that may pass: sysexits.h's EX_TEMPFAIL, which the systemd unit
+// restarts, where it never restarts fabatlas::kExitBadInput (2: bad options,
+// a state directory in use, a state.db that is not a job store).
+inline constexpr int kExitStateUnavailable = 75;
+
 struct CoordinatorOptions {
   // gRPC listen address; port 0 picks a free port (see Coordinator::port()).
   std::string listen = "127.0.0.1:7450";

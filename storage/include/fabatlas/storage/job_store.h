@@ -24,9 +24,10 @@
 // (schema version N; ...)" before anything in it changes.
 //
 // Thread-safe: one connection guarded by a mutex (SQLite serialises writers
-// anyway). Errors: an unopenable or unwritable database, a full disk or a
-// corrupt file throw fabatlas::ResourceError naming the path and SQLite's
-// message.
+// anyway). Errors: an unopenable or unwritable database, a full disk or an
+// I/O error throw fabatlas::ResourceError naming the path and SQLite's
+// message (they may pass); a file that is not a job store (not SQLite, or
+// corrupt) found while opening throws fabatlas::InputError (it will not).
 #pragma once
 
 #include <cstdint>

@@ -34,11 +34,15 @@ struct LogFlags {
   // --log-format json a log line `event` with the error and the exit status,
   // else "<program>: <error>". Returns kExitBadInput (2).
   int BadInputExit(const std::string& program, const std::string& event, const std::exception& e) const {
+    return ErrorExit(program, event, e, kExitBadInput);
+  }
+  // The same line for another exit status; returns it.
+  int ErrorExit(const std::string& program, const std::string& event, const std::exception& e, int status) const {
     if (format == "json")
-      Error(event, {{"error", e.what()}, {"status", kExitBadInput}});
+      Error(event, {{"error", e.what()}, {"status", status}});
     else
       std::cerr << program << ": " << e.what() << "\n";
-    return kExitBadInput;
+    return status;
   }
 };
 
