@@ -86,7 +86,7 @@ void Start(void* data, const char* element, const char** attributes) {
       m.problem = "object " + std::to_string(m.current) + ": a vertex without finite x, y and z";
     m.objects[m.current].vertices.push_back(p);
   } else if (name == "triangle" && m.current >= 0) {
-    double v[3];
+    double v[3] = {0, 0, 0};  // read below; a triangle without them is m.problem
     if (!Number(Attribute(attributes, "v1"), &v[0]) || !Number(Attribute(attributes, "v2"), &v[1]) ||
         !Number(Attribute(attributes, "v3"), &v[2]))
       m.problem = "object " + std::to_string(m.current) + ": a triangle without v1, v2 and v3";

@@ -42,17 +42,32 @@ int TrueTypeFont::Width(const std::string& text, double px) const {
   return width;
 }
 
-void TrueTypeFont::Draw(Canvas& canvas, int x, int y, const std::string& text, unsigned colour, double px) const {
-  const float scale = stbtt_ScaleForPixelHeight(&face_->info, static_cast<float>(px));
+namespace {
+
+// Each glyph of `text` along a pen line: `blend(along, i, j, ox, oy, alpha)`
+// gets the pen's distance along the line (pixels), the glyph pixel (i, j)
+// right of and below the glyph's origin offset (ox, oy), and its coverage.
+template <class Blend>
+void Rasterise(const stbtt_fontinfo& info, const std::string& text, double px, Blend blend) {
+  const float scale = stbtt_ScaleForPixelHeight(&info, static_cast<float>(px));
+  int along = 0;
   for (unsigned char ch : text) {
     int advance = 0, lsb = 0, bw = 0, bh = 0, ox = 0, oy = 0;
-    stbtt_GetCodepointHMetrics(&face_->info, ch, &advance, &lsb);
-    unsigned char* bitmap = stbtt_GetCodepointBitmap(&face_->info, 0, scale, ch, &bw, &bh, &ox, &oy);
+    stbtt_GetCodepointHMetrics(&info, ch, &advance, &lsb);
+    unsigned char* bitmap = stbtt_GetCodepointBitmap(&info, 0, scale, ch, &bw, &bh, &ox, &oy);
     for (int j = 0; j < bh; ++j)
-      for (int i = 0; i < bw; ++i) canvas.Blend(x + ox + i, y + oy + j, colour, bitmap[j * bw + i] / 255.0);
+      for (int i = 0; i < bw; ++i) blend(along, i, j, ox, oy, bitmap[j * bw + i] / 255.0);
     stbtt_FreeBitmap(bitmap, nullptr);
-    x += static_cast<int>(std::lround(advance * scale));
+    along += static_cast<int>(std::lround(advance * scale));
   }
+}
+
+}  // namespace
+
+void TrueTypeFont::Draw(Canvas& canvas, int x, int y, const std::string& text, unsigned colour, double px) const {
+  Rasterise(face_->info, text, px, [&](int along, int i, int j, int ox, int oy, double alpha) {
+    canvas.Blend(x + along + ox + i, y + oy + j, colour, alpha);
+  });
 }
 
 void TrueTypeFont::DrawCentred(Canvas& canvas, int cx, int y, const std::string& text, unsigned colour,
@@ -64,16 +79,9 @@ void TrueTypeFont::DrawUpward(Canvas& canvas, int x, int y, const std::string& t
                               double px) const {
   // A glyph pixel (i, j) right of and below the pen goes up and right of it:
   // (x + j, y - i) for a pen at (x, y) moving up.
-  const float scale = stbtt_ScaleForPixelHeight(&face_->info, static_cast<float>(px));
-  for (unsigned char ch : text) {
-    int advance = 0, lsb = 0, bw = 0, bh = 0, ox = 0, oy = 0;
-    stbtt_GetCodepointHMetrics(&face_->info, ch, &advance, &lsb);
-    unsigned char* bitmap = stbtt_GetCodepointBitmap(&face_->info, 0, scale, ch, &bw, &bh, &ox, &oy);
-    for (int j = 0; j < bh; ++j)
-      for (int i = 0; i < bw; ++i) canvas.Blend(x + oy + j, y - ox - i, colour, bitmap[j * bw + i] / 255.0);
-    stbtt_FreeBitmap(bitmap, nullptr);
-    y -= static_cast<int>(std::lround(advance * scale));
-  }
+  Rasterise(face_->info, text, px, [&](int along, int i, int j, int ox, int oy, double alpha) {
+    canvas.Blend(x + oy + j, y - along - ox - i, colour, alpha);
+  });
 }
 
 }  // namespace fabatlas::picture
