@@ -496,10 +496,10 @@ class CsgEvaluation {
   // sampled once in its result's band instead of once per leaf plus a grid
   // copy per boolean. Both empty: no material.
   struct Result {
-    Solid solid;
-    std::shared_ptr<const Field> field;
-    std::string key;
-    std::shared_ptr<const SubtreeTrace> trace;  // with a subtree cache (null when found without one)
+    Solid solid{};
+    std::shared_ptr<const Field> field{};
+    std::string key{};
+    std::shared_ptr<const SubtreeTrace> trace{};  // with a subtree cache (null when found without one)
   };
 
   // need_solid: sample a field result (the root of the evaluation). Fields

@@ -11,8 +11,6 @@ namespace {
 
 const char* kCoord[6] = {"x0", "x1", "y0", "y1", "z0", "z1"};
 
-Affine3 Point(const Affine& x, const Affine& y, const Affine& z) { return {x, y, z}; }
-
 }  // namespace
 
 Eigen::Matrix3d AxisRotation(int axis, double degrees) {

@@ -87,14 +87,6 @@ double Cross(const Point2& o, const Point2& a, const Point2& b) {
   return (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0]);
 }
 
-// Adds a cap: the loop's triangulation on the ring starting at vertex `base`.
-void AddCap(TriangleMesh& m, const std::vector<std::array<int, 3>>& tris, int base, bool flip) {
-  for (const auto& t : tris) {
-    if (flip) m.triangles.push_back({base + t[0], base + t[2], base + t[1]});
-    else m.triangles.push_back({base + t[0], base + t[1], base + t[2]});
-  }
-}
-
 // A top scaled to zero in one axis is a segment: the walls' top edges
 // overlap along it. Each triangle edge on the segment is split at the top
 // vertices inside it (a fan from the opposite vertex), so that every piece

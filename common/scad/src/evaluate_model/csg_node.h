@@ -10,9 +10,9 @@ namespace fabatlas::scad::internal {
 // A node of the CSG tree: its head (`cube(size = [1, 1, 1], center = false)`)
 // and children.
 struct CsgOut {
-  std::string head;
-  std::vector<CsgOut> children;
-  std::string modifier;  // "%" or "#", written before the indentation as OpenSCAD does
+  std::string head{};
+  std::vector<CsgOut> children{};
+  std::string modifier{};  // "%" or "#", written before the indentation as OpenSCAD does
 };
 
 // Appends node n at `depth` (tabs) and its children to out.

@@ -49,7 +49,7 @@ struct CheckOutcome {
   double seconds = 0;
   // Quantities the check measured (e.g. fem_max_displacement in mm); they
   // become properties of valid samples.
-  std::map<std::string, double> measures;
+  std::map<std::string, double> measures{};
 };
 
 // One subtree root evaluated (or found in the cache) for this sample.
