@@ -322,7 +322,9 @@ TEST(ArtifactCli, EightDimensionalJobEndToEnd) {
     EXPECT_TRUE(truly_valid(u)) << u[0] << " " << u[1];
     // The valid stretches along a0 through u end no later than 4.5 - a1.
     for (const auto& s : customiser.Stretches(u, 0))
-      if (s.valid) EXPECT_LE(s.hi, 4.5 - u[1] + 1e-9);
+      if (s.valid) {
+        EXPECT_LE(s.hi, 4.5 - u[1] + 1e-9);
+      }
   }
   EXPECT_GT(inside, 100);
   // The table has exactly the 8 coordinate columns.
@@ -369,8 +371,11 @@ TEST(ArtifactCli, Version1ArtifactMigratesToTheCurrentVersion) {
   EXPECT_EQ(now.cache.size(), old.cache.size());
   // Only the samples table's checksum changes (its columns did).
   for (const auto& [table, sum] : old.manifest.checksums)
-    if (table == "samples") EXPECT_NE(now.manifest.checksums.at(table), sum);
-    else EXPECT_EQ(now.manifest.checksums.at(table), sum) << table;
+    if (table == "samples") {
+      EXPECT_NE(now.manifest.checksums.at(table), sum);
+    } else {
+      EXPECT_EQ(now.manifest.checksums.at(table), sum) << table;
+    }
 }
 
 // A job store written by a newer fabatlas: the coordinator refuses it with one

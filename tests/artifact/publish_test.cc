@@ -129,7 +129,9 @@ TEST(PublishCache, ChessLikeDesignPlansHoptHrfreeHtopAndTheFileHoldsTheCache) {
   for (const auto& p : art.cache_curves) {
     strategies.insert(p.strategy);
     EXPECT_LE(p.mean_seconds, p.worst_seconds + 1e-12);
-    if (p.step == 0) EXPECT_EQ(p.entries, 0);
+    if (p.step == 0) {
+      EXPECT_EQ(p.entries, 0);
+    }
   }
   EXPECT_EQ(strategies, (std::set<std::string>{"naive", "opt_ave", "opt_max"}));
 

@@ -70,7 +70,9 @@ TEST(AssemblyRodEnds, ReadingNookPegIsClosedAtBothEndsByTheScan) {
   const double reach = hook.Shape("arc_radius") + hook.Shape("thickness");
   for (const RodEndProbe& q : e.t0.probes) {
     EXPECT_TRUE(q.Enclosed()) << q.past_mm << " mm past t = 0: " << q.hits_from_inside << "/" << q.rays_hit;
-    if (q.past_mm >= 20) EXPECT_GT(q.distance_mm, reach) << q.past_mm;
+    if (q.past_mm >= 20) {
+      EXPECT_GT(q.distance_mm, reach) << q.past_mm;
+    }
   }
   for (const RodEndProbe& q : e.t1.probes)
     EXPECT_TRUE(q.Enclosed()) << q.past_mm << " mm past t = 1: " << q.hits_from_inside << "/" << q.rays_hit;
@@ -86,7 +88,9 @@ TEST(AssemblyRodEnds, CableIsBlockedAtThePlugAndFreeBelow) {
   ASSERT_TRUE(rod1.blocked_max);
   ASSERT_FALSE(rod1.blocked_min);
   for (const RodEndProbe& q : e.t1.probes)
-    if (q.past_mm <= 20) EXPECT_TRUE(q.Enclosed()) << q.past_mm << " mm past the plug end";
+    if (q.past_mm <= 20) {
+      EXPECT_TRUE(q.Enclosed()) << q.past_mm << " mm past the plug end";
+    }
   for (const RodEndProbe& q : e.t0.probes) EXPECT_FALSE(q.Enclosed()) << q.past_mm << " mm past the free end";
 }
 

@@ -269,7 +269,9 @@ PointOutcome RunPoint(std::uint64_t seed, bool fsync_commits) {
   }
   // The job finished before the crash point: the shutdown may still reach it.
   if (!gone) ::kill(c.pid, SIGTERM);
-  if (!gone) EXPECT_NE(WaitExit(c.pid, std::chrono::seconds(60)), -1) << what;
+  if (!gone) {
+    EXPECT_NE(WaitExit(c.pid, std::chrono::seconds(60)), -1) << what;
+  }
   out.cut = ReadText(state / "coordinator.log").find("power_loss_shim: power cut") != std::string::npos;
   if (!out.cut) {
     EXPECT_EQ(s.state(), v1::JOB_STATE_SUCCEEDED) << what << ReadText(state / "coordinator.log");
@@ -284,9 +286,13 @@ PointOutcome RunPoint(std::uint64_t seed, bool fsync_commits) {
   out.acknowledged = after.acknowledged;
   out.lost = after.lost;
   EXPECT_EQ(after.integrity, "ok") << what;
-  if (!id.empty()) EXPECT_TRUE(after.job_exists) << what << ": an acknowledged Submit was lost";
+  if (!id.empty()) {
+    EXPECT_TRUE(after.job_exists) << what << ": an acknowledged Submit was lost";
+  }
   EXPECT_EQ(after.bad_blobs, 0) << what;
-  if (fsync_commits) EXPECT_EQ(after.lost, 0) << what << ": acknowledged results lost";
+  if (fsync_commits) {
+    EXPECT_EQ(after.lost, 0) << what << ": acknowledged results lost";
+  }
   // Power back: the machine's processes start again, a coordinator without
   // the shim on the same directory and the worker on its cache directory
   // (a worker left running reconnects too, after gRPC's reconnect backoff

@@ -162,7 +162,10 @@ TEST(GeometrySolidNodes, LeavesAndTilesOfAnyValueRoundTripExactly) {
   grid->tree().getNodes(lower);
   ASSERT_FALSE(lower.empty());
   for (openvdb::Index n = 0, tiles = 0; n < Lower::NUM_VALUES && tiles < 2; ++n)
-    if (!lower[0]->isChildMaskOn(n)) lower[0]->addTile(n, tiles == 0 ? 1.5f : -0.0f, tiles++ == 0);
+    if (!lower[0]->isChildMaskOn(n)) {
+      const bool first = tiles++ == 0;  // the first tile active at 1.5, the second inactive at -0
+      lower[0]->addTile(n, first ? 1.5f : -0.0f, first);
+    }
   grid->tree().root().addTile(openvdb::Coord(40960, 0, -4096), -3.0f, true);
   const fg::Solid odd = fg::internal::MakeSolid(grid, tube.impl()->spec);
   ExpectSameSolid(odd, RoundTrip(odd));

@@ -281,7 +281,9 @@ TEST_F(MeshIo, ReadsAmfAndRefusesBrokenXml) {
                                     "<v2>1</v2><v3>2</v3></triangle></volume></mesh></object></amf>"),
                  "out of range");
   const fs::path broken = "/usr/share/openscad/testdata/amf/amf_broken.amf";  // OpenSCAD's own broken file
-  if (fs::exists(broken)) EXPECT_THROW(ReadMesh(broken), InputError);
+  if (fs::exists(broken)) {
+    EXPECT_THROW(ReadMesh(broken), InputError);
+  }
 }
 
 TEST_F(MeshIo, RejectsMissingFileAndUnknownExtension) {

@@ -274,7 +274,9 @@ TEST(MeshReport, FabHacksMeshesKeepTheirRecordedVerdicts) {
     EXPECT_EQ(r.closed, rec.closed) << r.Reasons();
     EXPECT_EQ(r.manifold, rec.manifold) << r.Reasons();
     EXPECT_EQ(r.self_intersecting, rec.self_intersecting) << r.Reasons();
-    if (!std::isnan(rec.volume)) EXPECT_NEAR(r.volume, rec.volume, 1e-4 * std::abs(rec.volume));
+    if (!std::isnan(rec.volume)) {
+      EXPECT_NEAR(r.volume, rec.volume, 1e-4 * std::abs(rec.volume));
+    }
     if (rec.mass > 0) {
       ++with_mass;
       EXPECT_TRUE(r.closed);

@@ -187,8 +187,12 @@ void ExpectSplitsFollowRanking(const Form& f, const SamplingOptions& o) {
         max_dg = std::max(max_dg, s[d][0]);
       }
       if (node.split_dimension < 0) {
-        if (node.stop == LeafStop::kThreshold) EXPECT_LT(max_dg, o.dg_threshold);
-        if (node.stop == LeafStop::kMaxDepth) EXPECT_EQ(node.depth, o.max_depth);
+        if (node.stop == LeafStop::kThreshold) {
+          EXPECT_LT(max_dg, o.dg_threshold);
+        }
+        if (node.stop == LeafStop::kMaxDepth) {
+          EXPECT_EQ(node.depth, o.max_depth);
+        }
         EXPECT_LE(node.depth, o.max_depth);
         continue;
       }
@@ -198,8 +202,9 @@ void ExpectSplitsFollowRanking(const Form& f, const SamplingOptions& o) {
         if (d == chosen) continue;
         const bool ranked_higher = s[d] > s[chosen] || (s[d] == s[chosen] && d < chosen);
         // A higher-ranked direction must have been unusable.
-        if (ranked_higher)
+        if (ranked_higher) {
           EXPECT_TRUE(!space.can_split(d, node.lo[d], node.hi[d]) || s[d][0] < o.dg_threshold);
+        }
       }
     }
 }
@@ -289,7 +294,9 @@ TEST(SamplingAdaptive, StopsAtThreshold) {
     for (const FormNode& node : t.nodes) {
       int valid = 0;
       for (auto id : CornerSampleIds(b.form, node)) valid += b.form.samples[id].outcome.valid;
-      if (valid > 0 && valid < 4) EXPECT_TRUE(node.split_dimension >= 0 || node.depth == 6);
+      if (valid > 0 && valid < 4) {
+        EXPECT_TRUE(node.split_dimension >= 0 || node.depth == 6);
+      }
     }
   EXPECT_LT(b.statistics.samples, s.statistics.samples);
 }

@@ -47,7 +47,9 @@ std::string RunPeer(const fs::path& model, const fs::path& out) {
   const std::string cmd = "openscad -o '" + out.string() + "' '" + model.string() + "' 2> '" + log.string() + "'";
   const int status = std::system(cmd.c_str());
   const std::string text = ReadText(log);
-  if (status != 0) EXPECT_NE(text.find("Current top level object is empty."), std::string::npos) << cmd << "\n" << text;
+  if (status != 0) {
+    EXPECT_NE(text.find("Current top level object is empty."), std::string::npos) << cmd << "\n" << text;
+  }
   return text;
 }
 
@@ -353,7 +355,9 @@ void ExpectSameSolids(const fs::path& model, std::size_t at_least, std::size_t s
   std::size_t sound = 0;
   for (const Solid& s : solids) {
     sound += s.defects.empty();
-    if (sound_at_least == SIZE_MAX) EXPECT_EQ(s.defects, "") << s.subtree;
+    if (sound_at_least == SIZE_MAX) {
+      EXPECT_EQ(s.defects, "") << s.subtree;
+    }
   }
   EXPECT_GE(sound, std::min(sound_at_least, solids.size()));
   for (const Solid& s : solids) {

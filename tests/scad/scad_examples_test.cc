@@ -240,7 +240,9 @@ TEST(ScadExampleJobs, CachedCsgSubtreesKeepTheirChildren) {
     ExpectClosedUnderChildren(r);
     for (const auto& s : r.subtrees) {
       auto [it, first] = children.emplace(s.key, s.children);
-      if (!first) EXPECT_EQ(s.children, it->second) << s.op << " " << s.path;
+      if (!first) {
+        EXPECT_EQ(s.children, it->second) << s.op << " " << s.path;
+      }
       hits_with_children += s.from_cache && s.op.rfind("csg:", 0) == 0 && !s.children.empty();
     }
   }

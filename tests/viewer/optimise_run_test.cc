@@ -215,10 +215,11 @@ TEST_F(OptimiseApi, ParetoAnswerIsTheFrontOfTheValidSamples) {
     const double v = p["a"], r0 = p["b"];
     EXPECT_TRUE(TrulyValid(p["u"][0], p["u"][1]));
     for (const auto& s : samples)
-      if (s.outcome.valid)
+      if (s.outcome.valid) {
         EXPECT_FALSE(s.outcome.properties.at("volume") <= v && s.u[0] >= r0 &&
                      (s.outcome.properties.at("volume") < v || s.u[0] > r0))
             << p.dump();
+      }
   }
 }
 
