@@ -68,13 +68,6 @@ std::vector<std::string> OpenScadColours(const fs::path& model, const fs::path& 
   return out;
 }
 
-std::string Text(const design::Part& p) {
-  if (!p.coloured) return "none";
-  std::ostringstream s;
-  s << p.rgba[0] << ", " << p.rgba[1] << ", " << p.rgba[2] << ", " << p.rgba[3];
-  return s.str();
-}
-
 // OpenSCAD's colour regression model: nine cubes of 10 mm, by vector, name,
 // vector and alpha, name and alpha, none, alpha alone, and one colour inside
 // another (the inner wins).
