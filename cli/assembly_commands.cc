@@ -72,12 +72,9 @@ int Run(const AssembleArgs& args) {
   j["relaxation_motion_deg"] = s.relax_rotation_deg;
   j["relaxation_termination"] = s.relaxation_termination;
   j["messages"] = s.messages;
-  j["timings_s"] = {{"quick_reject", s.precheck_seconds},
-                    {"feasibility", s.feasibility_seconds},
-                    {"feasibility_starts", s.feasibility_starts},
-                    {"objective", s.objective_seconds},
-                    {"relaxation", s.relaxation_seconds},
-                    {"total", s.seconds}};
+  j["timings_s"] = {{"quick_reject", s.precheck_seconds},         {"feasibility", s.feasibility_seconds},
+                    {"feasibility_starts", s.feasibility_starts}, {"objective", s.objective_seconds},
+                    {"relaxation", s.relaxation_seconds},         {"total", s.seconds}};
   for (std::size_t e = 0; e < prog.connections.size() && e < s.params.size(); ++e) {
     const auto& c = prog.connections[e];
     j["connections"].push_back({{"a", prog.instances[c.part_a].name + "." + c.primitive_a},
@@ -87,10 +84,9 @@ int Run(const AssembleArgs& args) {
   for (std::size_t i = 0; i < prog.instances.size() && i < s.poses.size(); ++i) {
     const Eigen::Isometry3d& p = s.poses[i];
     const Eigen::Vector3d t = p.translation();
-    j["poses"][prog.instances[i].name] = {{"position_mm", {t.x(), t.y(), t.z()}},
-                                         {"rotation", {{p(0, 0), p(0, 1), p(0, 2)},
-                                                       {p(1, 0), p(1, 1), p(1, 2)},
-                                                       {p(2, 0), p(2, 1), p(2, 2)}}}};
+    j["poses"][prog.instances[i].name] = {
+        {"position_mm", {t.x(), t.y(), t.z()}},
+        {"rotation", {{p(0, 0), p(0, 1), p(0, 2)}, {p(1, 0), p(1, 1), p(1, 2)}, {p(2, 0), p(2, 1), p(2, 2)}}}};
   }
   if (!args.mesh_out.empty()) {
     const mesh::TriangleMesh m = PosedAssembly(prog, s, mesh_dir);
@@ -121,8 +117,7 @@ int Run(const AssembleArgs& args) {
   for (const auto& m : s.messages) std::cout << "  " << m << "\n";
   if (s.feasible)
     std::cout << "  target deviation: " << s.final_target_error_mm << " mm, " << s.final_target_error_deg
-              << " deg (after step 1: " << s.step1_target_error_mm << " mm, " << s.step1_target_error_deg
-              << " deg)\n";
+              << " deg (after step 1: " << s.step1_target_error_mm << " mm, " << s.step1_target_error_deg << " deg)\n";
   std::cout << "  time (s): quick reject " << s.precheck_seconds << ", feasibility " << s.feasibility_seconds << " ("
             << s.feasibility_starts << " starts), step 1 " << s.objective_seconds << ", relaxation "
             << s.relaxation_seconds << ", total " << s.seconds << "\n";
@@ -140,8 +135,9 @@ void AddAssemblyCommands(CLI::App& app, int& exit_code) {
   c->add_option("--starts", args->options.restarts, "feasibility starts (default 16)");
   c->add_option("--objective-starts", args->options.objective_starts,
                 "feasible starts that run the target objective (default 4)");
-  c->add_flag("--no-slide-friction", [args](std::int64_t) { args->options.slide_friction = false; },
-              "connectors slide along rods without friction (the paper's model; docs/assembly.md)");
+  c->add_flag(
+      "--no-slide-friction", [args](std::int64_t) { args->options.slide_friction = false; },
+      "connectors slide along rods without friction (the paper's model; docs/assembly.md)");
   c->add_option("--relaxation-target-weight", args->options.relaxation_target_weight,
                 "start step 2 with the target term at this weight (J/mm², /10 per stage; default 0: none)");
   c->add_flag("--active-set", args->options.relaxation_active_set,

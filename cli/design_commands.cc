@@ -72,8 +72,8 @@ void Eval(const DesignArgs& args) {
     if (options.parts) {
       j["parts"] = nlohmann::json::array();
       for (const auto& p : parts) {
-        nlohmann::json part{{"name", p.name}, {"triangles", p.mesh.triangles.size()},
-                            {"volume", mesh::EnclosedVolume(p.mesh)}};
+        nlohmann::json part{
+            {"name", p.name}, {"triangles", p.mesh.triangles.size()}, {"volume", mesh::EnclosedVolume(p.mesh)}};
         if (p.coloured) part["rgba"] = p.rgba;
         j["parts"].push_back(part);
       }
@@ -121,12 +121,15 @@ void AddDesignCommands(CLI::App& app, int& exit_code) {
   eval->add_option("design", args->design, "design YAML or OpenSCAD model (.scad)")->required();
   eval->add_option("--at", args->at, "name=value,... (others take their defaults)");
   eval->add_flag("--json", args->json, "print JSON");
-  eval->add_option("--mesh", args->mesh_out, "write the sample's mesh (.stl, .obj, .off, .ply; .3mf: one object per part, coloured)");
+  eval->add_option("--mesh", args->mesh_out,
+                   "write the sample's mesh (.stl, .obj, .off, .ply; .3mf: one object per part, coloured)");
   eval->add_flag("--parts", args->parts, "list the parts: an OpenSCAD model's bodies and colour regions");
   eval->add_option("--part", args->part, "with --mesh: write only this part (as --parts lists it)");
   eval->callback([args] { Eval(*args); });
 
-  auto* dg = app.add_subcommand("dg", "volumetric change dG = vol(A xor B) / vol(A union B) between two samples (0 = the same solid, 1 = disjoint)");
+  auto* dg = app.add_subcommand(
+      "dg",
+      "volumetric change dG = vol(A xor B) / vol(A union B) between two samples (0 = the same solid, 1 = disjoint)");
   dg->add_option("design", args->design, "design YAML or OpenSCAD model (.scad)")->required();
   dg->add_option("--a", args->a, "first point, name=value,...")->required();
   dg->add_option("--b", args->b, "second point, name=value,...")->required();

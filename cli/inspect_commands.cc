@@ -81,7 +81,8 @@ json TimesJson(const std::optional<precompute::PreviewTimes>& t) {
   if (!t) return nullptr;
   json operations = json::object();
   for (const auto& [op, c] : t->operations)
-    operations[op] = {{"subtrees", c.subtrees}, {"measured_seconds", c.measured_seconds}, {"model_seconds", c.model_seconds}};
+    operations[op] = {
+        {"subtrees", c.subtrees}, {"measured_seconds", c.measured_seconds}, {"model_seconds", c.model_seconds}};
   return json{{"mean_seconds", t->mean_seconds},
               {"worst_seconds", t->worst_seconds},
               {"predicted_mean_seconds", t->predicted_mean_seconds},
@@ -162,7 +163,8 @@ void Inspect(const InspectArgs& a, int& exit_code) {
     // One cache in memory at a time (H_opt, then H_rfree), and only when
     // the artifact stores every entry of it (H_rfree's entries beyond H_opt
     // are stored only with `cache: {store_rfree: true}`, docs/artifact.md).
-    auto measure = [&](bool artifact::CacheEntry::*member, std::int64_t entries) -> std::optional<precompute::PreviewTimes> {
+    auto measure = [&](bool artifact::CacheEntry::*member,
+                       std::int64_t entries) -> std::optional<precompute::PreviewTimes> {
       std::int64_t stored = 0;
       for (const auto& e : art.cache) stored += e.*member;
       if (stored != entries) return std::nullopt;
@@ -181,8 +183,7 @@ void Inspect(const InspectArgs& a, int& exit_code) {
   // Fig. 14 as box plots of the measured times.
   std::string fig14_png;
   if (t_none) {
-    const fs::path out =
-        a.fig14_png.empty() ? fs::path(path).replace_extension(".fig14.png") : fs::path(a.fig14_png);
+    const fs::path out = a.fig14_png.empty() ? fs::path(path).replace_extension(".fig14.png") : fs::path(a.fig14_png);
     std::vector<precompute::PreviewTimesSeries> series = {{"no cache", t_none->seconds}};
     if (t_opt) series.push_back({"H_opt", t_opt->seconds});
     if (t_rfree) series.push_back({"H_rfree", t_rfree->seconds});
@@ -249,11 +250,16 @@ void Inspect(const InspectArgs& a, int& exit_code) {
 
 void AddInspectCommands(CLI::App& app, int& exit_code) {
   auto a = std::make_shared<InspectArgs>();
-  auto* inspect = app.add_subcommand("inspect", "show an artifact's statistics (samples, CPU time, valid volume, failure shares, cache sizes: Fab Forms Table 3) and preview times (Fig. 14), and plot preview time against cache size (Fig. 13)");
-  inspect->add_option("artifact", a->artifact, "an artifact (<design>.fabatlas) or the run directory holding it")->required();
+  auto* inspect = app.add_subcommand(
+      "inspect",
+      "show an artifact's statistics (samples, CPU time, valid volume, failure shares, cache sizes: Fab Forms Table 3) "
+      "and preview times (Fig. 14), and plot preview time against cache size (Fig. 13)");
+  inspect->add_option("artifact", a->artifact, "an artifact (<design>.fabatlas) or the run directory holding it")
+      ->required();
   inspect->add_flag("--json", a->json, "print JSON");
-  inspect->add_flag("--params", a->params,
-                    "instead: the parameter schema as JSON (exposed and fixed parameters, groups, ranges; /api/params)");
+  inspect->add_flag(
+      "--params", a->params,
+      "instead: the parameter schema as JSON (exposed and fixed parameters, groups, ranges; /api/params)");
   inspect->add_option("--png", a->png, "where to write the Fig. 13 curves (default: ART with .fig13.png)");
   inspect->add_option("--fig14-png", a->fig14_png,
                       "where to write the Fig. 14 preview-time box plots (default: ART with .fig14.png)");

@@ -49,15 +49,26 @@ nlohmann::json StatusJson(const v1::JobStatus& s) {
   for (int i = 0; i < d->field_count(); ++i) {
     const auto* f = d->field(i);
     switch (f->cpp_type()) {
-      case google::protobuf::FieldDescriptor::CPPTYPE_INT64: j[f->name()] = r->GetInt64(s, f); break;
-      case google::protobuf::FieldDescriptor::CPPTYPE_INT32: j[f->name()] = r->GetInt32(s, f); break;
-      case google::protobuf::FieldDescriptor::CPPTYPE_DOUBLE: j[f->name()] = r->GetDouble(s, f); break;
-      case google::protobuf::FieldDescriptor::CPPTYPE_BOOL: j[f->name()] = r->GetBool(s, f); break;
-      case google::protobuf::FieldDescriptor::CPPTYPE_STRING: j[f->name()] = r->GetString(s, f); break;
+      case google::protobuf::FieldDescriptor::CPPTYPE_INT64:
+        j[f->name()] = r->GetInt64(s, f);
+        break;
+      case google::protobuf::FieldDescriptor::CPPTYPE_INT32:
+        j[f->name()] = r->GetInt32(s, f);
+        break;
+      case google::protobuf::FieldDescriptor::CPPTYPE_DOUBLE:
+        j[f->name()] = r->GetDouble(s, f);
+        break;
+      case google::protobuf::FieldDescriptor::CPPTYPE_BOOL:
+        j[f->name()] = r->GetBool(s, f);
+        break;
+      case google::protobuf::FieldDescriptor::CPPTYPE_STRING:
+        j[f->name()] = r->GetString(s, f);
+        break;
       case google::protobuf::FieldDescriptor::CPPTYPE_ENUM:
         j[f->name()] = f->name() == "state" ? coordinator::JobStateName(s.state()) : r->GetEnum(s, f)->name();
         break;
-      default: break;
+      default:
+        break;
     }
   }
   return j;
@@ -68,9 +79,12 @@ void PrintJson(const nlohmann::json& j) { std::cout << j.dump() << std::endl; }
 void AddConnectionOptions(CLI::App* cmd, ClusterArgs& a) {
   const char* env = std::getenv("FABATLAS_COORDINATOR");
   a.coordinator = env ? env : "127.0.0.1:7450";
-  cmd->add_option("--coordinator", a.coordinator, "coordinator HOST:PORT (env FABATLAS_COORDINATOR)")->capture_default_str();
+  cmd->add_option("--coordinator", a.coordinator, "coordinator HOST:PORT (env FABATLAS_COORDINATOR)")
+      ->capture_default_str();
   cmd->add_option("--token", a.token, "bearer token (env FABATLAS_TOKEN; default: none)");
-  cmd->add_option("--tls-ca", a.tls_ca, "the deployment's CA certificate (PEM, ops/tls/make-certs.sh); enables TLS (default: plaintext, loopback only)");
+  cmd->add_option(
+      "--tls-ca", a.tls_ca,
+      "the deployment's CA certificate (PEM, ops/tls/make-certs.sh); enables TLS (default: plaintext, loopback only)");
   cmd->add_option("--tls-cert", a.tls_cert, "client certificate (PEM), when the coordinator requires one");
   cmd->add_option("--tls-key", a.tls_key, "client key (PEM)");
 }
@@ -134,8 +148,8 @@ pid_t SpawnWorker(const fs::path& binary, const std::string& target, int slots, 
   if (pid < 0) throw ResourceError("fork: cannot start " + binary.string());
   if (pid == 0) {
     ::prctl(PR_SET_PDEATHSIG, SIGTERM);
-    ::execl(binary_text.c_str(), binary_text.c_str(), "--coordinator", target.c_str(), "--slots",
-            slots_text.c_str(), "--cache-dir", cache_text.c_str(), "--log-level", "warn", static_cast<char*>(nullptr));
+    ::execl(binary_text.c_str(), binary_text.c_str(), "--coordinator", target.c_str(), "--slots", slots_text.c_str(),
+            "--cache-dir", cache_text.c_str(), "--log-level", "warn", static_cast<char*>(nullptr));
     ::_exit(127);
   }
   return pid;
@@ -145,7 +159,8 @@ int Run(const ClusterArgs& a) {
   if (a.workers < 1) throw InputError("run: --workers must be at least 1");
   fs::path self = fs::read_symlink("/proc/self/exe");
   fs::path worker_binary = self.parent_path() / "fabatlas-worker";
-  if (!fs::exists(worker_binary)) throw InputError(worker_binary.string() + ": fabatlas-worker not found beside fabatlas");
+  if (!fs::exists(worker_binary))
+    throw InputError(worker_binary.string() + ": fabatlas-worker not found beside fabatlas");
   fs::path out = a.out;
   // The progress line is the report here; the embedded coordinator and the
   // workers log only warnings and errors (lease expiries, a full disk).
@@ -160,7 +175,8 @@ int Run(const ClusterArgs& a) {
   std::string target = "127.0.0.1:" + std::to_string(coordinator.port());
   std::vector<pid_t> workers;
   for (int i = 0; i < a.workers; ++i)
-    workers.push_back(SpawnWorker(worker_binary, target, a.slots, out / "cluster-state" / ("worker-" + std::to_string(i))));
+    workers.push_back(
+        SpawnWorker(worker_binary, target, a.slots, out / "cluster-state" / ("worker-" + std::to_string(i))));
   auto stop_workers = [&] {
     for (pid_t p : workers) ::kill(p, SIGTERM);
     for (pid_t p : workers) ::waitpid(p, nullptr, 0);
@@ -201,11 +217,15 @@ int Run(const ClusterArgs& a) {
 void AddJobCommands(CLI::App& app, int& exit_code) {
   auto a = std::make_shared<ClusterArgs>();
 
-  auto* run = app.add_subcommand("run", "compute a job's form on this machine: a coordinator in this process and N worker processes");
+  auto* run = app.add_subcommand(
+      "run", "compute a job's form on this machine: a coordinator in this process and N worker processes");
   run->add_option("job", a->job, "job file (YAML, docs/job-format.md) or OpenSCAD model (.scad)")->required();
   run->add_option("--workers", a->workers, "worker processes");
   run->add_option("--slots", a->slots, "tasks each worker runs at once");
-  run->add_option("--out", a->out, "output directory (<design>.fabatlas, form.json, statistics.json; cluster-state/ keeps the store, so the same command resumes after a crash)")->required();
+  run->add_option("--out", a->out,
+                  "output directory (<design>.fabatlas, form.json, statistics.json; cluster-state/ keeps the store, so "
+                  "the same command resumes after a crash)")
+      ->required();
   run->add_flag("--quiet", a->quiet, "no progress line");
   run->add_flag("--json", a->json, "print the final status and the files written as one JSON object on stdout");
   run->callback([a, &exit_code] { exit_code = Run(*a); });
@@ -235,21 +255,27 @@ void AddJobCommands(CLI::App& app, int& exit_code) {
       throw;
     }
     if (!staging.empty()) fs::remove_all(staging);
-    if (a->json) PrintJson({{"job_id", id}, {"created", created}});
-    else std::cout << id << (created ? "" : " (already submitted)") << "\n";
+    if (a->json)
+      PrintJson({{"job_id", id}, {"created", created}});
+    else
+      std::cout << id << (created ? "" : " (already submitted)") << "\n";
   });
 
-  auto* status = app.add_subcommand("status", "show a job's progress: samples, valid %, tasks, tasks/s, ETA, failures, why it is stalled");
+  auto* status = app.add_subcommand(
+      "status", "show a job's progress: samples, valid %, tasks, tasks/s, ETA, failures, why it is stalled");
   status->add_option("job_id", a->job, "job id (from submit or jobs)")->required();
   status->add_flag("--json", a->json, "print the status as one JSON object");
   AddConnectionOptions(status, *a);
   status->callback([a] {
     v1::JobStatus s = ClientOf(*a).Status(a->job);
-    if (a->json) PrintJson(StatusJson(s));
-    else std::cout << coordinator::ProgressLine(s) << "\n";
+    if (a->json)
+      PrintJson(StatusJson(s));
+    else
+      std::cout << coordinator::ProgressLine(s) << "\n";
   });
 
-  auto* watch = app.add_subcommand("watch", "follow a job until it ends (samples, valid %, tasks/s, ETA, failures); exit 0 when it succeeded");
+  auto* watch = app.add_subcommand(
+      "watch", "follow a job until it ends (samples, valid %, tasks/s, ETA, failures); exit 0 when it succeeded");
   watch->add_option("job_id", a->job, "job id (from submit or jobs)")->required();
   watch->add_flag("--json", a->json, "print each status change as one JSON object per line on stdout");
   AddConnectionOptions(watch, *a);

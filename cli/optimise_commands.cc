@@ -55,9 +55,16 @@ void Optimise(const OptimiseArgs& a) {
     for (std::size_t k = 0; k < r.values.size(); ++k) values[r.properties[k]] = r.values[k];
     json point = json::object();
     for (int d = 0; d < c.dimension_count(); ++d) point[c.space().dimension(d).name] = r.u[d];
-    std::cout << json{{"design", c.source().name}, {"u", r.u}, {"point", point}, {"objective", r.objective},
-                      {"maximise", options.maximise}, {"values", values}, {"sample", r.sample},
-                      {"interpolated", r.sample < 0}, {"corners", r.corners}, {"candidates", r.candidates}}
+    std::cout << json{{"design", c.source().name},
+                      {"u", r.u},
+                      {"point", point},
+                      {"objective", r.objective},
+                      {"maximise", options.maximise},
+                      {"values", values},
+                      {"sample", r.sample},
+                      {"interpolated", r.sample < 0},
+                      {"corners", r.corners},
+                      {"candidates", r.candidates}}
                      .dump(2)
               << "\n";
     return;
@@ -67,8 +74,8 @@ void Optimise(const OptimiseArgs& a) {
     if (options.terms.size() > 1) what << (k ? " + " : "") << options.terms[k].weight << "*";
     what << r.properties[k];
   }
-  std::cout << "fabatlas optimise: " << c.source().name << ": " << (options.maximise ? "maximum" : "minimum")
-            << " of " << what.str() << " = " << r.objective << " at " << viewer::PointText(c, r.u);
+  std::cout << "fabatlas optimise: " << c.source().name << ": " << (options.maximise ? "maximum" : "minimum") << " of "
+            << what.str() << " = " << r.objective << " at " << viewer::PointText(c, r.u);
   if (r.sample >= 0) {
     std::cout << " (sample " << r.sample << ")";
   } else {
@@ -86,10 +93,12 @@ void Optimise(const OptimiseArgs& a) {
 void AddOptimiseCommands(CLI::App& app, int& exit_code) {
   (void)exit_code;
   auto a = std::make_shared<OptimiseArgs>();
-  auto* o = app.add_subcommand("optimise", "the valid design minimising or maximising a property, a weighted sum of "
-                                           "properties or a material's weight or cost, optionally with parameters held");
+  auto* o = app.add_subcommand("optimise",
+                               "the valid design minimising or maximising a property, a weighted sum of "
+                               "properties or a material's weight or cost, optionally with parameters held");
   o->add_option("art", a->art, "an artifact (<design>.fabatlas) or the run directory holding it")->required();
-  o->add_option("--min", a->min, "minimise this property (volume, weight:PLA or weight_PLA, cost:PLA, ...) or weights a=1,b=2");
+  o->add_option("--min", a->min,
+                "minimise this property (volume, weight:PLA or weight_PLA, cost:PLA, ...) or weights a=1,b=2");
   o->add_option("--max", a->max, "maximise this property or weighted sum");
   o->add_option("--weights", a->weights, "minimise the weighted sum a=1,b=-2 of properties");
   o->add_option("--hold", a->hold, "hold a parameter at a value: name=value (repeat, or comma-separate)");

@@ -55,16 +55,22 @@ int Run(const PrototypeArgs& args) {
   if (!s.satisfiable) {
     j["conflicts"] = s.conflicts;
     j["violated"] = s.violated;
-    if (args.json) std::cout << j.dump(2) << "\n";
-    else std::cout << p.name << ": " << s.Explain() << "\n";
+    if (args.json)
+      std::cout << j.dump(2) << "\n";
+    else
+      std::cout << p.name << ": " << s.Explain() << "\n";
     return 3;
   }
   j["deviation_mm"] = s.deviation;
   for (const auto& [name, b] : s.cuboids) j["cuboids"][name] = b;
   for (const auto& [name, v] : s.free_values) j["free_values"][name] = v;
   for (const auto& q : s.pivots)
-    j["pivots"].push_back({{"joint", q.joint}, {"a", q.a}, {"b", q.b}, {"child_pivot", q.child_pivot},
-                           {"parent_pivot", q.parent_pivot}, {"link_length", q.link_length},
+    j["pivots"].push_back({{"joint", q.joint},
+                           {"a", q.a},
+                           {"b", q.b},
+                           {"child_pivot", q.child_pivot},
+                           {"parent_pivot", q.parent_pivot},
+                           {"link_length", q.link_length},
                            {"link_length_bound", q.link_length_bound}});
   if (!args.stl.empty()) {
     geometry::GridSpec g;
@@ -78,9 +84,14 @@ int Run(const PrototypeArgs& args) {
     j["swept_cavities"] = fs.swept_cavities;
     j["joint_pieces"] = fs.joint_pieces;
     j["part_volumes"] = fs.part_volumes;
-    j["mesh"] = {{"triangles", m.triangles.size()}, {"closed", r.closed}, {"manifold", r.manifold},
-                 {"self_intersecting", r.self_intersecting}, {"outward", r.outward}, {"components", r.components},
-                 {"volume", r.volume}, {"reasons", r.Reasons()}};
+    j["mesh"] = {{"triangles", m.triangles.size()},
+                 {"closed", r.closed},
+                 {"manifold", r.manifold},
+                 {"self_intersecting", r.self_intersecting},
+                 {"outward", r.outward},
+                 {"components", r.components},
+                 {"volume", r.volume},
+                 {"reasons", r.Reasons()}};
   }
   if (args.json) {
     std::cout << j.dump(2) << "\n";
@@ -89,8 +100,7 @@ int Run(const PrototypeArgs& args) {
               << " constraints, deviation " << s.deviation << " mm, solved in " << s.seconds * 1000 << " ms\n";
     for (const auto& q : s.pivots)
       std::cout << "  pivot " << q.joint << ": a=" << q.a << " b=" << q.b << " link " << q.link_length << " mm\n";
-    if (j.contains("mesh"))
-      std::cout << "  wrote " << args.stl << ": " << j["mesh"].dump() << "\n";
+    if (j.contains("mesh")) std::cout << "  wrote " << args.stl << ": " << j["mesh"].dump() << "\n";
   }
   return 0;
 }

@@ -69,7 +69,8 @@ void Resolve(const ResolveArgs& args, int& exit_code) {
     std::cout << "  spacetime normal of '" << i.object_b << "': " << VecText(n.spacetime_normal) << " (energy "
               << n.energy << " mm, " << n.contour_samples << " samples with a contour)\n";
     if (n.has_first_contact)
-      std::cout << "  spatial normal at first contact (t = " << n.first_contact_t << "): " << VecText(n.first_contact_normal) << "\n";
+      std::cout << "  spatial normal at first contact (t = " << n.first_contact_t
+                << "): " << VecText(n.first_contact_normal) << "\n";
     else
       std::cout << "  spatial normal at first contact: none (in contact from the start)\n";
     std::cout << "  keyframe hint, translation control points of '" << i.object_b << "':";
@@ -109,13 +110,14 @@ void Resolve(const ResolveArgs& args, int& exit_code) {
 
 void AddResolveCommands(CLI::App& app, int& exit_code) {
   auto args = std::make_shared<ResolveArgs>();
-  auto* resolve = app.add_subcommand(
-      "resolve",
-      "a reconfigurable's collisions at a point: contact normals, hints, automatic resolution "
-      "(exit 3 when the design stays invalid)");
+  auto* resolve =
+      app.add_subcommand("resolve",
+                         "a reconfigurable's collisions at a point: contact normals, hints, automatic resolution "
+                         "(exit 3 when the design stays invalid)");
   resolve->add_option("design", args->design, "design YAML with objects and transitions")->required();
   resolve->add_option("--at", args->at, "name=value,... (others take their defaults)");
-  resolve->add_option("--parameters", args->parameters, "the degrees of freedom, name,... (default: every real parameter)");
+  resolve->add_option("--parameters", args->parameters,
+                      "the degrees of freedom, name,... (default: every real parameter)");
   resolve->add_option("-o,--out", args->out, "write the resolved design (YAML, defaults at the resolved point)");
   resolve->callback([args, &exit_code] { Resolve(*args, exit_code); });
 }

@@ -36,9 +36,9 @@ void Sample(const SampleArgs& args) {
   const pipeline::RunSummary run = pipeline::RunJob(job, executor, options);
   if (run.cache) {
     const auto& c = run.cache_manifest;
-    std::cout << "cache " << c.strategy << ": H_TOP " << c.top_entries << " subtrees / " << c.top_bytes
-              << " B, H_opt " << c.opt_entries << " / " << c.opt_bytes << " B, H_rfree " << c.rfree_entries << " / "
-              << c.rfree_bytes << " B (" << run.written.cache_entries << " entries stored)\n";
+    std::cout << "cache " << c.strategy << ": H_TOP " << c.top_entries << " subtrees / " << c.top_bytes << " B, H_opt "
+              << c.opt_entries << " / " << c.opt_bytes << " B, H_rfree " << c.rfree_entries << " / " << c.rfree_bytes
+              << " B (" << run.written.cache_entries << " entries stored)\n";
     if (run.cache_added.exact.solved())
       std::cout << "cache plan: exact worst case " << run.cache_added.exact.worst_seconds() << " s ("
                 << (run.cache_added.exact.optimal() ? "optimal" : "time limit") << "), H_opt gap "
@@ -59,7 +59,8 @@ void AddSampleCommands(CLI::App& app, int& exit_code) {
   sample->add_option("--out", args->out, "output directory")->required();
   sample->add_option("--threads", args->threads, "threads (default: the job file's)");
   sample->add_flag("--cache", args->cache,
-                   "plan the geometry cache and store it in the artifact even without a cache strategy in the job file (re-evaluates the valid samples' geometry)");
+                   "plan the geometry cache and store it in the artifact even without a cache strategy in the job file "
+                   "(re-evaluates the valid samples' geometry)");
   sample->callback([args] { Sample(*args); });
 }
 

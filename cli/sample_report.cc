@@ -10,8 +10,10 @@ nlohmann::json PointJson(const design::Design& d, const design::Point& u) {
   nlohmann::json j = nlohmann::json::object();
   for (const auto& p : d.exposed) {
     double v = u.at(p.name);
-    if (p.kind == design::ParameterKind::kEnumerated) j[p.name] = p.labels.at(static_cast<std::size_t>(v));
-    else j[p.name] = v;
+    if (p.kind == design::ParameterKind::kEnumerated)
+      j[p.name] = p.labels.at(static_cast<std::size_t>(v));
+    else
+      j[p.name] = v;
   }
   return j;
 }
@@ -36,8 +38,13 @@ nlohmann::json SampleJson(const design::Design& d, const design::SampleResult& r
   j["timings"] = r.timings;
   nlohmann::json subtrees = nlohmann::json::array();
   for (const auto& s : r.subtrees)
-    subtrees.push_back({{"path", s.path}, {"op", s.op}, {"key", s.key}, {"topology", s.topology},
-                        {"seconds", s.seconds}, {"from_cache", s.from_cache}, {"bytes", s.bytes}});
+    subtrees.push_back({{"path", s.path},
+                        {"op", s.op},
+                        {"key", s.key},
+                        {"topology", s.topology},
+                        {"seconds", s.seconds},
+                        {"from_cache", s.from_cache},
+                        {"bytes", s.bytes}});
   j["subtrees"] = subtrees;
   j["warnings"] = r.warnings;
   return j;
@@ -45,7 +52,8 @@ nlohmann::json SampleJson(const design::Design& d, const design::SampleResult& r
 
 std::string SampleText(const design::Design& d, const design::SampleResult& r) {
   std::ostringstream out;
-  out << d.name << " at " << PointJson(d, r.u).dump() << ": " << (r.valid ? "VALID" : "INVALID (" + r.failure + ")") << "\n";
+  out << d.name << " at " << PointJson(d, r.u).dump() << ": " << (r.valid ? "VALID" : "INVALID (" + r.failure + ")")
+      << "\n";
   for (const auto& c : r.checks) {
     out << "  " << std::left << std::setw(16) << c.name << (c.passed ? "pass" : "FAIL");
     if (!c.reason.empty()) out << "  " << c.reason;
@@ -53,7 +61,8 @@ std::string SampleText(const design::Design& d, const design::SampleResult& r) {
   }
   for (const auto& [name, value] : r.properties) out << "  " << std::left << std::setw(16) << name << value << "\n";
   for (const auto& w : r.warnings) out << "  warning: " << w << "\n";
-  out << "  " << std::left << std::setw(16) << "time" << std::fixed << std::setprecision(3) << r.timings.at("total") << " s\n";
+  out << "  " << std::left << std::setw(16) << "time" << std::fixed << std::setprecision(3) << r.timings.at("total")
+      << " s\n";
   return out.str();
 }
 

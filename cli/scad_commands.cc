@@ -111,14 +111,18 @@ std::string JobOrModel(const std::string& path, const std::string& dir) {
 void AddScadCommands(CLI::App& app, int& exit_code) {
   (void)exit_code;
   auto a = std::make_shared<ImportArgs>();
-  auto* cmd = app.add_subcommand("import-scad", "make a design (and a job beside it) from an OpenSCAD Customizer model");
+  auto* cmd =
+      app.add_subcommand("import-scad", "make a design (and a job beside it) from an OpenSCAD Customizer model");
   cmd->add_option("model", a->model, "OpenSCAD model (.scad); MODEL.json beside it gives presets")->required();
   cmd->add_option("--out", a->out, "design YAML to write; the job goes to the same name with .job.yaml")->required();
-  cmd->add_option("--expose", a->expose,
-                  "parameters to expose, exactly these: NAME or NAME=lo:hi[:step] (a range for a number), comma-separated or "
-                  "repeated (default: the sliders and dropdowns outside [Hidden], by Customizer group then file order, up to --max-dims)")
+  cmd->add_option(
+         "--expose", a->expose,
+         "parameters to expose, exactly these: NAME or NAME=lo:hi[:step] (a range for a number), comma-separated or "
+         "repeated (default: the sliders and dropdowns outside [Hidden], by Customizer group then file order, up to "
+         "--max-dims)")
       ->delimiter(',');
-  cmd->add_option("--max-dims", a->max_dims, "at most this many exposed parameters, 1..16 (default 6); the rest stay fixed");
+  cmd->add_option("--max-dims", a->max_dims,
+                  "at most this many exposed parameters, 1..16 (default 6); the rest stay fixed");
   cmd->add_option("--voxel", a->voxel, "level-set voxel size in mm (default: from the model's size)");
   cmd->callback([a] { ImportScadCommand(*a); });
 }

@@ -76,8 +76,8 @@ void Serve(const ServeArgs& a) {
   // One background thread fills the preview cache while requests are served.
   std::thread warm;
   viewer::Serve(customiser, options, g_stop, [&](int port) {
-    std::cout << "fabatlas serve: customiser for " << customiser.source().name << " at http://" << a.host << ":"
-              << port << "/" << std::endl;
+    std::cout << "fabatlas serve: customiser for " << customiser.source().name << " at http://" << a.host << ":" << port
+              << "/" << std::endl;
     warm = std::thread([&] {
       try {
         const auto start = std::chrono::steady_clock::now();
@@ -190,13 +190,17 @@ void AddViewerCommands(CLI::App& app, int& exit_code) {
   serve->add_option("--job", a->job, "serve a run directory's form.json alone, with this job file's design");
   serve->add_option("--port", a->port, "TCP port (0: any free port, printed)")->check(CLI::Range(0, 65535));
   serve->add_option("--host", a->host, "address to listen on (default 127.0.0.1)");
-  serve->add_option("--web", a->web, "directory of the built web page (default: PREFIX/share/fabatlas/web when installed, else build/web)");
-  serve->add_option("--preview-cache-mb", a->preview_cache_mb,
-                    "memory for encoded previews, filled in the background at start (default 192; 0: none)")
+  serve->add_option(
+      "--web", a->web,
+      "directory of the built web page (default: PREFIX/share/fabatlas/web when installed, else build/web)");
+  serve
+      ->add_option("--preview-cache-mb", a->preview_cache_mb,
+                   "memory for encoded previews, filled in the background at start (default 192; 0: none)")
       ->check(CLI::Range(0, 1 << 20));
-  serve->add_option("--exact-budget-ms", a->exact_budget_ms,
-                    "previews at the sliders' exact point when one is expected to take at most this long "
-                    "(default 150; 0: always the snapped sample)")
+  serve
+      ->add_option("--exact-budget-ms", a->exact_budget_ms,
+                   "previews at the sliders' exact point when one is expected to take at most this long "
+                   "(default 150; 0: always the snapped sample)")
       ->check(CLI::Range(0.0, 600000.0));
   serve->callback([a] { Serve(*a); });
 }

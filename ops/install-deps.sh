@@ -29,6 +29,8 @@ APT_PACKAGES=(
   python3-distributed
   # tests: certificates made by the TLS test, the journal syncs --fsync-commits makes
   openssl strace
+  # the layout check (tests/format_check.sh, .clang-format)
+  clang-format-14
   # a peer's mesh volumes: ADMesh, for the FabHacks volumes of tests/mesh (fabhacks_admesh_volumes.sh)
   admesh
   # a slicer: PrusaSlicer's CLI slices the exported 3MF and STL of OpenSCAD

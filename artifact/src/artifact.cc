@@ -79,11 +79,16 @@ struct TableOrder {
   const char* order;
 };
 constexpr TableOrder kTables[] = {
-    {"dimensions", "idx"},          {"trees", "tree"},
-    {"nodes", "tree, node"},        {"samples", "id"},
-    {"sample_properties", "sample_id, name"}, {"geometry_changes", "a, b"},
-    {"cache_entries", "key"},       {"cache_curves", "strategy, step"},
-    {"starting_points", "idx"},     {"bundle_files", "role, name"},
+    {"dimensions", "idx"},
+    {"trees", "tree"},
+    {"nodes", "tree, node"},
+    {"samples", "id"},
+    {"sample_properties", "sample_id, name"},
+    {"geometry_changes", "a, b"},
+    {"cache_entries", "key"},
+    {"cache_curves", "strategy, step"},
+    {"starting_points", "idx"},
+    {"bundle_files", "role, name"},
 };
 
 // ---- SQLite plumbing ----------------------------------------------------------
@@ -105,8 +110,7 @@ class Db : public sqlite::Connection {
 // A prepared statement of the artifact file; SQLite errors are Corrupt.
 class Stmt : public sqlite::Statement {
  public:
-  Stmt(Db& db, const std::string& sql)
-      : Statement(db.get(), sql, [&db](const std::string& what) { db.Fail(what); }) {}
+  Stmt(Db& db, const std::string& sql) : Statement(db.get(), sql, [&db](const std::string& what) { db.Fail(what); }) {}
 };
 
 // SHA-256 fed in pieces (the canonical content of a table with cache
@@ -142,7 +146,9 @@ std::string TableChecksum(Db& db, const TableOrder& t) {
   while (s.Next()) {
     for (int c = 0; c < s.ColumnCount(); ++c) {
       switch (s.ColumnType(c)) {
-        case SQLITE_NULL: canonical.push_back('N'); break;
+        case SQLITE_NULL:
+          canonical.push_back('N');
+          break;
         case SQLITE_INTEGER:
           canonical.push_back('I');
           put64(static_cast<std::uint64_t>(s.ColumnInt(c)));
@@ -178,11 +184,16 @@ std::vector<std::int64_t> SplitInts(const std::string& text, const char* what) {
 
 const char* StopName(sampling::LeafStop s) {
   switch (s) {
-    case sampling::LeafStop::kNone: return "none";
-    case sampling::LeafStop::kThreshold: return "threshold";
-    case sampling::LeafStop::kMaxDepth: return "max_depth";
-    case sampling::LeafStop::kUnsplittable: return "unsplittable";
-    case sampling::LeafStop::kBudget: return "budget";
+    case sampling::LeafStop::kNone:
+      return "none";
+    case sampling::LeafStop::kThreshold:
+      return "threshold";
+    case sampling::LeafStop::kMaxDepth:
+      return "max_depth";
+    case sampling::LeafStop::kUnsplittable:
+      return "unsplittable";
+    case sampling::LeafStop::kBudget:
+      return "budget";
   }
   return "none";
 }
@@ -296,9 +307,12 @@ std::map<std::string, std::string> ManifestRows(const Artifact& a) {
   r["schema_version"] = std::to_string(kArtifactSchemaVersion);
   ForEachManifestField(std::as_const(m), [&r](const char* key, const auto& field) {
     using T = std::decay_t<decltype(field)>;
-    if constexpr (std::is_same_v<T, std::string>) r[key] = field;
-    else if constexpr (std::is_same_v<T, double>) r[key] = ExactDecimal(field);
-    else r[key] = std::to_string(field);
+    if constexpr (std::is_same_v<T, std::string>)
+      r[key] = field;
+    else if constexpr (std::is_same_v<T, double>)
+      r[key] = ExactDecimal(field);
+    else
+      r[key] = std::to_string(field);
   });
   for (const auto& [type, share] : m.statistics.failure_shares) r[kFailureSharePrefix + type] = ExactDecimal(share);
   return r;
@@ -314,7 +328,11 @@ void InsertContent(Db& db, const Artifact& a, ArtifactWriteSummary& summary) {
     Stmt s(db, "INSERT INTO dimensions VALUES (?, ?, ?, ?, ?, ?)");
     for (int d = 0; d < n; ++d) {
       const auto& dim = form.dimensions[d];
-      s.Bind(1, d).BindText(2, dim.name).BindText(3, sampling::DimensionKindName(dim.kind)).BindReal(4, dim.lo).BindReal(5, dim.hi);
+      s.Bind(1, d)
+          .BindText(2, dim.name)
+          .BindText(3, sampling::DimensionKindName(dim.kind))
+          .BindReal(4, dim.lo)
+          .BindReal(5, dim.hi);
       s.BindText(6, dim.kind == sampling::DimensionKind::kEnumerated ? nlohmann::json(dim.values).dump() : "");
       s.Run();
     }
@@ -324,12 +342,15 @@ void InsertContent(Db& db, const Artifact& a, ArtifactWriteSummary& summary) {
     Stmt s(db, "INSERT INTO nodes VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?)");
     for (std::size_t ti = 0; ti < form.trees.size(); ++ti) {
       const auto& tree = form.trees[ti];
-      t.Bind(1, static_cast<std::int64_t>(ti)).BindText(2, sampling::PointKeyText({tree.cell.begin(), tree.cell.end()}));
+      t.Bind(1, static_cast<std::int64_t>(ti))
+          .BindText(2, sampling::PointKeyText({tree.cell.begin(), tree.cell.end()}));
       t.Run();
       for (std::size_t ni = 0; ni < tree.nodes.size(); ++ni) {
         const auto& node = tree.nodes[ni];
         s.Bind(1, static_cast<std::int64_t>(ti)).Bind(2, static_cast<std::int64_t>(ni)).Bind(3, node.depth);
-        s.BindText(4, sampling::PointKeyText(node.lo)).BindText(5, sampling::PointKeyText(node.hi)).Bind(6, node.split_dimension);
+        s.BindText(4, sampling::PointKeyText(node.lo))
+            .BindText(5, sampling::PointKeyText(node.hi))
+            .Bind(6, node.split_dimension);
         s.Bind(7, node.split_key).Bind(8, node.children[0]).Bind(9, node.children[1]).BindText(10, StopName(node.stop));
         s.Run();
       }
@@ -381,17 +402,24 @@ void InsertContent(Db& db, const Artifact& a, ArtifactWriteSummary& summary) {
       }
       const CacheEntry& e = streamed.grid.empty() ? *entries[i] : streamed;
       ++summary.cache_entries;
-      s.BindText(1, e.key).BindText(2, e.op).BindText(3, KeyListText(e.children)).Bind(4, e.bytes).BindReal(5, e.cost_seconds);
-      s.Bind(6, e.in_opt ? 1 : 0).Bind(7, e.in_rfree ? 1 : 0).Bind(8, e.grid).BindText(9, Sha256Hex(e.grid)).Bind(10, e.glb);
+      s.BindText(1, e.key)
+          .BindText(2, e.op)
+          .BindText(3, KeyListText(e.children))
+          .Bind(4, e.bytes)
+          .BindReal(5, e.cost_seconds);
+      s.Bind(6, e.in_opt ? 1 : 0)
+          .Bind(7, e.in_rfree ? 1 : 0)
+          .Bind(8, e.grid)
+          .BindText(9, Sha256Hex(e.grid))
+          .Bind(10, e.glb);
       s.Run();
     }
   }
   {
     std::vector<const CacheCurvePoint*> points;
     for (const auto& p : a.cache_curves) points.push_back(&p);
-    std::sort(points.begin(), points.end(), [](auto* x, auto* y) {
-      return std::tie(x->strategy, x->step) < std::tie(y->strategy, y->step);
-    });
+    std::sort(points.begin(), points.end(),
+              [](auto* x, auto* y) { return std::tie(x->strategy, x->step) < std::tie(y->strategy, y->step); });
     Stmt s(db, "INSERT INTO cache_curves VALUES (?, ?, ?, ?, ?, ?)");
     for (const auto* p : points) {
       s.BindText(1, p->strategy).Bind(2, p->step).Bind(3, p->entries).Bind(4, p->bytes).BindReal(5, p->mean_seconds);
@@ -494,9 +522,12 @@ Manifest ReadManifest(Db& db, int version, const ArtifactReadOptions& options) {
   man.schema_version = version;
   ForEachManifestField(man, [&m](const char* key, auto& field) {
     using T = std::decay_t<decltype(field)>;
-    if constexpr (std::is_same_v<T, std::string>) field = m.Text(key);
-    else if constexpr (std::is_same_v<T, double>) field = m.Real(key);
-    else field = static_cast<T>(m.Int(key));
+    if constexpr (std::is_same_v<T, std::string>)
+      field = m.Text(key);
+    else if constexpr (std::is_same_v<T, double>)
+      field = m.Real(key);
+    else
+      field = static_cast<T>(m.Int(key));
   });
   const std::string share_prefix = kFailureSharePrefix, checksum_prefix = kChecksumPrefix;
   for (const auto& [key, value] : rows) {
@@ -509,7 +540,8 @@ Manifest ReadManifest(Db& db, int version, const ArtifactReadOptions& options) {
       auto it = man.checksums.find(t.table);
       if (it == man.checksums.end()) throw Corrupt(std::string("manifest has no checksum of table ") + t.table);
       if (TableChecksum(db, t) != it->second)
-        throw Corrupt(std::string("table ") + t.table + " does not match its checksum (the file was altered or damaged)");
+        throw Corrupt(std::string("table ") + t.table +
+                      " does not match its checksum (the file was altered or damaged)");
     }
   }
   return man;
@@ -519,11 +551,13 @@ Manifest ReadManifest(Db& db, int version, const ArtifactReadOptions& options) {
 void ReadDimensions(Db& db, sampling::Form& form) {
   Stmt s(db, "SELECT idx, name, kind, lo, hi, enum_values FROM dimensions ORDER BY idx");
   while (s.Next()) {
-    if (s.ColumnInt(0) != static_cast<std::int64_t>(form.dimensions.size())) throw Corrupt("dimension indices are not 0..n-1");
+    if (s.ColumnInt(0) != static_cast<std::int64_t>(form.dimensions.size()))
+      throw Corrupt("dimension indices are not 0..n-1");
     sampling::Dimension d;
     d.name = s.ColumnText(1);
     std::string kind = s.ColumnText(2);
-    if (!sampling::DimensionKindFromName(kind, &d.kind)) throw Corrupt("dimension '" + d.name + "' has unknown kind '" + kind + "'");
+    if (!sampling::DimensionKindFromName(kind, &d.kind))
+      throw Corrupt("dimension '" + d.name + "' has unknown kind '" + kind + "'");
     d.lo = s.ColumnReal(3);
     d.hi = s.ColumnReal(4);
     if (d.kind == sampling::DimensionKind::kEnumerated) {
@@ -548,7 +582,8 @@ void ReadSamples(Db& db, int n, sampling::Form& form) {
     if (s.ColumnInt(0) != id) throw Corrupt("sample ids are not 0..n-1");
     sampling::FormSample sample;
     sample.key = SplitInts(s.ColumnText(1), "sample key");
-    if (static_cast<int>(sample.key.size()) != n) throw Corrupt("sample " + std::to_string(id) + " has a key of the wrong dimension");
+    if (static_cast<int>(sample.key.size()) != n)
+      throw Corrupt("sample " + std::to_string(id) + " has a key of the wrong dimension");
     for (int d = 0; d < n; ++d) {
       if (s.ColumnType(2 + d) != SQLITE_FLOAT && s.ColumnType(2 + d) != SQLITE_INTEGER)
         throw Corrupt("sample " + std::to_string(id) + " has no u" + std::to_string(d));
@@ -608,7 +643,8 @@ void ReadTrees(Db& db, int n, sampling::Form& form) {
          "ORDER BY tree, node");
   while (s.Next()) {
     auto ti = s.ColumnInt(0);
-    if (ti < 0 || ti >= static_cast<std::int64_t>(form.trees.size())) throw Corrupt("a node names a tree that does not exist");
+    if (ti < 0 || ti >= static_cast<std::int64_t>(form.trees.size()))
+      throw Corrupt("a node names a tree that does not exist");
     auto& tree = form.trees[ti];
     if (s.ColumnInt(1) != static_cast<std::int64_t>(tree.nodes.size()))
       throw Corrupt("node indices of tree " + std::to_string(ti) + " are not 0..n-1");
@@ -651,14 +687,18 @@ void ReadCache(Db& db, const ArtifactReadOptions& options, Artifact& a) {
       if (options.load_geometry) {
         e.grid = s.ColumnText(8);
         e.glb = s.ColumnText(9);
-        if (Sha256Hex(e.grid) != e.grid_sha256) throw Corrupt("cache entry " + e.key + " does not match its grid_sha256");
+        if (Sha256Hex(e.grid) != e.grid_sha256)
+          throw Corrupt("cache entry " + e.key + " does not match its grid_sha256");
       }
       a.cache.push_back(std::move(e));
     }
   }
-  Stmt s(db, "SELECT strategy, step, entries, bytes, mean_seconds, worst_seconds FROM cache_curves ORDER BY strategy, step");
+  Stmt s(
+      db,
+      "SELECT strategy, step, entries, bytes, mean_seconds, worst_seconds FROM cache_curves ORDER BY strategy, step");
   while (s.Next())
-    a.cache_curves.push_back({s.ColumnText(0), s.ColumnInt(1), s.ColumnInt(2), s.ColumnInt(3), s.ColumnReal(4), s.ColumnReal(5)});
+    a.cache_curves.push_back(
+        {s.ColumnText(0), s.ColumnInt(1), s.ColumnInt(2), s.ColumnInt(3), s.ColumnReal(4), s.ColumnReal(5)});
 }
 
 // The starting points, with their samples' parameter values.
@@ -763,7 +803,8 @@ ArtifactWriteSummary WriteArtifact(const Artifact& artifact, const fs::path& pat
       Db db(tmp.string(), SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE);
       db.Exec("PRAGMA page_size = " + std::to_string(kPageSize) +
               "; PRAGMA journal_mode = OFF; PRAGMA synchronous = OFF; PRAGMA cache_size = -16384;"
-              " PRAGMA application_id = " + std::to_string(kArtifactApplicationId) +
+              " PRAGMA application_id = " +
+              std::to_string(kArtifactApplicationId) +
               "; PRAGMA user_version = " + std::to_string(kArtifactSchemaVersion) + "; PRAGMA encoding = 'UTF-8';");
       db.Exec("BEGIN");
       db.Exec(kSchema);
@@ -777,7 +818,8 @@ ArtifactWriteSummary WriteArtifact(const Artifact& artifact, const fs::path& pat
   } catch (const Corrupt& e) {
     fs::remove(tmp, ec);
     std::string what = e.what();
-    if (what.find("full") != std::string::npos) throw ResourceError(path.string() + ": disk full while writing the artifact");
+    if (what.find("full") != std::string::npos)
+      throw ResourceError(path.string() + ": disk full while writing the artifact");
     throw ResourceError(path.string() + ": cannot write the artifact: " + what);
   } catch (...) {
     fs::remove(tmp, ec);

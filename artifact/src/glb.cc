@@ -187,14 +187,18 @@ std::string PartsToGlb(const std::vector<GlbPart>& parts, bool exact) {
       }
     tinygltf::Primitive primitive;
     const int pv = AddView(model, positions.data(), positions.size() * sizeof(float), TINYGLTF_TARGET_ARRAY_BUFFER);
-    primitive.attributes["POSITION"] = AddAccessor(model, pv, TINYGLTF_COMPONENT_TYPE_FLOAT, m.vertices.size(), TINYGLTF_TYPE_VEC3);
+    primitive.attributes["POSITION"] =
+        AddAccessor(model, pv, TINYGLTF_COMPONENT_TYPE_FLOAT, m.vertices.size(), TINYGLTF_TYPE_VEC3);
     model.accessors.back().minValues = lo;
     model.accessors.back().maxValues = hi;
-    const int iv = AddView(model, indices.data(), indices.size() * sizeof(std::uint32_t), TINYGLTF_TARGET_ELEMENT_ARRAY_BUFFER);
-    primitive.indices = AddAccessor(model, iv, TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT, indices.size(), TINYGLTF_TYPE_SCALAR);
+    const int iv =
+        AddView(model, indices.data(), indices.size() * sizeof(std::uint32_t), TINYGLTF_TARGET_ELEMENT_ARRAY_BUFFER);
+    primitive.indices =
+        AddAccessor(model, iv, TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT, indices.size(), TINYGLTF_TYPE_SCALAR);
     if (!normals.empty()) {
       const int nv = AddView(model, normals.data(), normals.size() * sizeof(normals[0]), TINYGLTF_TARGET_ARRAY_BUFFER);
-      primitive.attributes["NORMAL"] = AddAccessor(model, nv, TINYGLTF_COMPONENT_TYPE_FLOAT, normals.size(), TINYGLTF_TYPE_VEC3);
+      primitive.attributes["NORMAL"] =
+          AddAccessor(model, nv, TINYGLTF_COMPONENT_TYPE_FLOAT, normals.size(), TINYGLTF_TYPE_VEC3);
     }
     primitive.mode = TINYGLTF_MODE_TRIANGLES;
     if (part.coloured) {
@@ -236,13 +240,15 @@ mesh::TriangleMesh GlbToMesh(std::string_view glb, const std::string& source) {
   std::string error, warning;
   if (!loader.LoadBinaryFromMemory(&model, &error, &warning, reinterpret_cast<const unsigned char*>(glb.data()),
                                    static_cast<unsigned int>(glb.size())))
-    throw InputError(source + ": not a glTF binary: " + (error.empty() ? "unreadable" : error.substr(0, error.find('\n'))));
+    throw InputError(source +
+                     ": not a glTF binary: " + (error.empty() ? "unreadable" : error.substr(0, error.find('\n'))));
   mesh::TriangleMesh out;
   if (model.meshes.empty()) return out;
   if (model.meshes[0].primitives.empty()) throw InputError(source + ": the first mesh has no primitive");
   const tinygltf::Primitive& p = model.meshes[0].primitives[0];
   auto accessor_data = [&](int index, int component_type, std::size_t component_size, int type) {
-    if (index < 0 || index >= static_cast<int>(model.accessors.size())) throw InputError(source + ": accessor out of range");
+    if (index < 0 || index >= static_cast<int>(model.accessors.size()))
+      throw InputError(source + ": accessor out of range");
     const auto& a = model.accessors[index];
     if (a.componentType != component_type || a.type != type) throw InputError(source + ": unexpected accessor type");
     const auto& view = model.bufferViews.at(a.bufferView);
@@ -275,9 +281,14 @@ mesh::TriangleMesh GlbToMesh(std::string_view glb, const std::string& source) {
     for (int k = 0; k < 3; ++k) {
       const unsigned char* q = idx + (3 * t + k) * idx_stride;
       std::uint32_t v = 0;
-      if (size == 4) std::memcpy(&v, q, 4);
-      else if (size == 2) { std::uint16_t s; std::memcpy(&s, q, 2); v = s; }
-      else v = *q;
+      if (size == 4)
+        std::memcpy(&v, q, 4);
+      else if (size == 2) {
+        std::uint16_t s;
+        std::memcpy(&s, q, 2);
+        v = s;
+      } else
+        v = *q;
       if (v >= vertex_count) throw InputError(source + ": index out of range");
       tri[k] = static_cast<std::int32_t>(v);
     }

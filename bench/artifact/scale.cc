@@ -64,8 +64,10 @@ class TubeWall3D final : public sampling::SampleEvaluator {
     const auto& u = p.u;
     sampling::SampleOutcome o;
     o.valid = u[0] - u[1] >= 2 && u[1] >= 1 + 0.01 * u[0] * u[0] + 0.0005 * u[2] * u[2];
-    if (!o.valid) o.failure_type = "unsat_constraints";
-    else o.properties["volume"] = Volume(u);
+    if (!o.valid)
+      o.failure_type = "unsat_constraints";
+    else
+      o.properties["volume"] = Volume(u);
     return o;
   }
   double GeometryChange(const sampling::SamplePoint& a, const sampling::SamplePoint& b) override {
@@ -116,8 +118,9 @@ int Lookups(const std::filesystem::path& art, int points, std::uint64_t seed) {
   const double load_s = Seconds(start);
   std::printf("loaded %zu samples in %.2f s; peak resident after load %s\n", c.form().samples.size(), load_s,
               ProcStatus("VmHWM:").c_str());
-  std::printf("leaf corner table: %zu leaves, %zu bytes (%.1f per leaf)\n", c.corners().leaves(), c.corners().bytes(),
-              static_cast<double>(c.corners().bytes()) / static_cast<double>(std::max<std::size_t>(c.corners().leaves(), 1)));
+  std::printf(
+      "leaf corner table: %zu leaves, %zu bytes (%.1f per leaf)\n", c.corners().leaves(), c.corners().bytes(),
+      static_cast<double>(c.corners().bytes()) / static_cast<double>(std::max<std::size_t>(c.corners().leaves(), 1)));
   std::mt19937_64 rng(seed);
   std::vector<double> ms, cpu_ms;
   const auto thread_cpu_ms = [] {

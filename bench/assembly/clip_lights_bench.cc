@@ -29,12 +29,18 @@ int main(int argc, char** argv) {
   SolveOptions options;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
-    if (a == "--library" && i + 1 < argc) lib = argv[++i];
-    else if (a == "--flip-clip") flip_clip = true;
-    else if (a == "--no-slide-friction") options.slide_friction = false;
-    else if (a == "--active-set") options.relaxation_active_set = true;
-    else if (a == "--relaxation-target-weight" && i + 1 < argc) options.relaxation_target_weight = std::atof(argv[++i]);
-    else if (a == "--all") all = true;
+    if (a == "--library" && i + 1 < argc)
+      lib = argv[++i];
+    else if (a == "--flip-clip")
+      flip_clip = true;
+    else if (a == "--no-slide-friction")
+      options.slide_friction = false;
+    else if (a == "--active-set")
+      options.relaxation_active_set = true;
+    else if (a == "--relaxation-target-weight" && i + 1 < argc)
+      options.relaxation_target_weight = std::atof(argv[++i]);
+    else if (a == "--all")
+      all = true;
     else {
       std::fprintf(stderr, "assembly_clip_lights_bench: unknown argument %s\n", a.c_str());
       return fabatlas::kExitBadInput;
@@ -49,7 +55,9 @@ int main(int argc, char** argv) {
   const std::clock_t c0 = std::clock();
   int evaluated = 0, valid = 0, max_iterations = 0;
   std::map<std::string, int> terminations;  // how step 2 ended, over the 320 variations
-  std::printf("| ring | best n | best l (mm) | deviation (mm) | stable | paper n, l (mm) | deviation at paper n, l (mm) | stable there |\n|---|---|---|---|---|---|---|---|\n");
+  std::printf(
+      "| ring | best n | best l (mm) | deviation (mm) | stable | paper n, l (mm) | deviation at paper n, l (mm) | "
+      "stable there |\n|---|---|---|---|---|---|---|---|\n");
   try {
     for (int ri = 0; ri < 4; ++ri) {
       ClipLightsParams best;

@@ -24,8 +24,8 @@ int main(int argc, char** argv) {
       const double arc = argc > 9 ? std::atof(argv[9]) : 360;
       const Frame fr = ArcFrame(f, arc);
       std::printf("points %d centre [%.2f, %.2f, %.2f] normal [%.3f, %.3f, %.3f] radius %.2f wire %.2f span %.1f\n",
-                  f.points, f.centre.x(), f.centre.y(), f.centre.z(), f.normal.x(), f.normal.y(), f.normal.z(), f.radius,
-                  f.wire_radius, f.span_deg);
+                  f.points, f.centre.x(), f.centre.y(), f.centre.z(), f.normal.x(), f.normal.y(), f.normal.z(),
+                  f.radius, f.wire_radius, f.span_deg);
       std::printf("frame [[%.2f, %.2f, %.2f], [%.1f, %.1f, %.1f]]\n", fr.position.x(), fr.position.y(), fr.position.z(),
                   fr.euler_deg.x(), fr.euler_deg.y(), fr.euler_deg.z());
     } else {

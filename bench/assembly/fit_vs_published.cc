@@ -24,9 +24,9 @@ using namespace fabatlas::assembly;
 namespace {
 
 struct Row {
-  const char* part;       // in the library
+  const char* part;  // in the library
   const char* primitive;
-  Eigen::Vector3d lo, hi; // selection box, mesh frame (mm)
+  Eigen::Vector3d lo, hi;  // selection box, mesh frame (mm)
 };
 
 double AxisAngleDeg(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
@@ -60,7 +60,9 @@ int main(int argc, char** argv) {
   };
   try {
     const PartLibrary lib = LoadPartLibrary(library, DefaultMeshDir());
-    std::printf("| part.primitive | mesh | fitted points | centre distance (mm) | axis angle (deg) | radius fit / published (mm) | wire or rod radius fit / published (mm) |\n");
+    std::printf(
+        "| part.primitive | mesh | fitted points | centre distance (mm) | axis angle (deg) | radius fit / published "
+        "(mm) | wire or rod radius fit / published (mm) |\n");
     std::printf("|---|---|---|---|---|---|---|\n");
     for (const Row& r : rows) {
       const Part& part = lib.parts.at(r.part);

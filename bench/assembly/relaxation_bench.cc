@@ -2,7 +2,8 @@
 // (termination type, iterations) and how far the relaxed target moves when
 // every free parameter of the step-1 solution is moved by ±delta before the
 // relaxation (a converged relaxation is reproducible). Usage:
-//   assembly_relaxation_bench [--delta D] [--iterations N] [--datum MM] [--anchor K] [--target-weight W] [--active-set 0|1] [--only NAME] [--configs DIR]
+//   assembly_relaxation_bench [--delta D] [--iterations N] [--datum MM] [--anchor K] [--target-weight W] [--active-set
+//   0|1] [--only NAME] [--configs DIR]
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
@@ -32,10 +33,13 @@ int main(int argc, char** argv) {
     if (a == "--only") only = argv[i + 1];
     if (a == "--configs") dir = argv[i + 1];
   }
-  const char* all[] = {"demo", "toothbrush_holder", "charger_holder", "soap_bottle_holder", "soap_bottle_holder_one_hook",
-                       "mug_hanger", "bird_feeder", "paper_towel_holder", "diaper_caddy", "bathroom_basket",
-                       "clip_lights_1", "clip_lights_2", "clip_lights_3", "clip_lights_4", "reading_nook"};
-  std::printf("| example | termination | iterations | relaxation moves target (mm, deg) | final (mm, deg) | moved at +delta (mm, deg) | moved at -delta (mm, deg) | stable | falls apart | CPU (s) |\n");
+  const char* all[] = {
+      "demo",          "toothbrush_holder", "charger_holder",     "soap_bottle_holder", "soap_bottle_holder_one_hook",
+      "mug_hanger",    "bird_feeder",       "paper_towel_holder", "diaper_caddy",       "bathroom_basket",
+      "clip_lights_1", "clip_lights_2",     "clip_lights_3",      "clip_lights_4",      "reading_nook"};
+  std::printf(
+      "| example | termination | iterations | relaxation moves target (mm, deg) | final (mm, deg) | moved at +delta "
+      "(mm, deg) | moved at -delta (mm, deg) | stable | falls apart | CPU (s) |\n");
   std::printf("|---|---|---|---|---|---|---|---|---|---|\n");
   try {
     for (const char* name : all) {
@@ -55,10 +59,9 @@ int main(int argc, char** argv) {
       std::string falls;
       for (const auto& f : s.falls_apart) falls += (falls.empty() ? "" : ", ") + f;
       std::printf("| %s | %s | %d | %.2f, %.1f | %.2f, %.1f | %.2g, %.2g | %.2g, %.2g | %s | %s | %.4f |\n", name,
-                  s.relaxation_termination.c_str(), s.relaxation_iterations, s.relax_displacement_mm, s.relax_rotation_deg,
-                  s.final_target_error_mm,
-                  s.final_target_error_deg, moved[0][0], moved[0][1], moved[1][0], moved[1][1], s.stable ? "yes" : "no",
-                  falls.c_str(), cpu);
+                  s.relaxation_termination.c_str(), s.relaxation_iterations, s.relax_displacement_mm,
+                  s.relax_rotation_deg, s.final_target_error_mm, s.final_target_error_deg, moved[0][0], moved[0][1],
+                  moved[1][0], moved[1][1], s.stable ? "yes" : "no", falls.c_str(), cpu);
       std::fflush(stdout);
     }
   } catch (const fabatlas::InputError& e) {

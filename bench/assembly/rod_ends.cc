@@ -27,8 +27,8 @@ std::string Flags(const Primitive& p, bool min_end) {
 
 void PrintEnd(const Part& part, const Primitive& p, const RodEnd& e, bool min_end) {
   std::printf("| %s.%s | %s | %s | (%.1f, %.1f, %.1f) | (%.3f, %.3f, %.3f) |", part.name.c_str(), p.name.c_str(),
-              min_end ? "t = 0" : "t = 1", Flags(p, min_end).c_str(), e.position.x(), e.position.y(),
-              e.position.z(), e.outward.x(), e.outward.y(), e.outward.z());
+              min_end ? "t = 0" : "t = 1", Flags(p, min_end).c_str(), e.position.x(), e.position.y(), e.position.z(),
+              e.outward.x(), e.outward.y(), e.outward.z());
   for (const RodEndProbe& q : e.probes)
     std::printf(" %.1f, %d/%d%s |", q.distance_mm, q.hits_from_inside, q.rays_hit, q.Enclosed() ? " enclosed" : "");
   std::printf("\n");
@@ -42,7 +42,9 @@ int main(int argc, char** argv) {
     if (std::string(argv[i]) == "--library") library = argv[i + 1];
   try {
     const PartLibrary lib = LoadPartLibrary(library, DefaultMeshDir());
-    std::printf("| part.rod | end | library | end (mm, part frame) | outward | 5 mm past: distance (mm), rays from inside/hit | 10 mm | 20 mm | 40 mm |\n");
+    std::printf(
+        "| part.rod | end | library | end (mm, part frame) | outward | 5 mm past: distance (mm), rays from inside/hit "
+        "| 10 mm | 20 mm | 40 mm |\n");
     std::printf("|---|---|---|---|---|---|---|---|---|\n");
     for (const auto& [name, part] : lib.parts) {
       if (part.mesh.empty()) continue;

@@ -24,9 +24,7 @@ double Cpu() {
   clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
   return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
 }
-double Wall() {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
-}
+double Wall() { return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count(); }
 double Median(std::vector<double> v) {
   std::sort(v.begin(), v.end());
   return v[v.size() / 2];
@@ -71,9 +69,11 @@ int main(int argc, char** argv) {
   std::printf("graph: %lld subtrees, %lld samples, %zu edges\n", static_cast<long long>(g.node_count()),
               static_cast<long long>(g.sample_count()), g.child_ids.size());
   std::printf("build graph:            median CPU %.2f s\n", Median(build_cpu));
-  std::printf("OPT-MAX to H_rfree:     median CPU %.2f s, wall %.2f s (%lld steps, %lld dropped, %zu curve points, H %.1f GB)\n",
-              Median(full_cpu), Median(full_wall), static_cast<long long>(full.steps),
-              static_cast<long long>(full.dropped), full.curve.size(), static_cast<double>(full.cost.bytes) / 1e9);
+  std::printf(
+      "OPT-MAX to H_rfree:     median CPU %.2f s, wall %.2f s (%lld steps, %lld dropped, %zu curve points, H %.1f "
+      "GB)\n",
+      Median(full_cpu), Median(full_wall), static_cast<long long>(full.steps), static_cast<long long>(full.dropped),
+      full.curve.size(), static_cast<double>(full.cost.bytes) / 1e9);
   std::printf("OPT-MAX, 1/4 budget:    median CPU %.2f s, wall %.2f s (%lld steps, mean %.3f s, worst %.3f s)\n",
               Median(budget_cpu), Median(budget_wall), static_cast<long long>(budget.steps), budget.cost.mean_seconds,
               budget.cost.worst_seconds);

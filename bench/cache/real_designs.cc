@@ -59,17 +59,28 @@ int main(int argc, char** argv) {
       }
       return argv[++i];
     };
-    if (a == "--subdivisions") subdivisions = std::stoi(next());
-    else if (a == "--max-depth") max_depth = std::stoi(next());
-    else if (a == "--max-samples") max_samples = std::stol(next());
-    else if (a == "--threads") threads = std::stoi(next());
-    else if (a == "--min-seconds") min_seconds = std::stod(next());
-    else if (a == "--budget-fraction") budget_fraction = std::stod(next());
-    else if (a == "--costs") costs = next();
-    else if (a == "--records") records_path = next();
-    else if (a == "--graphs") graphs_dir = next();
-    else if (a == "--from") saved.push_back(next());
-    else designs.push_back(a);
+    if (a == "--subdivisions")
+      subdivisions = std::stoi(next());
+    else if (a == "--max-depth")
+      max_depth = std::stoi(next());
+    else if (a == "--max-samples")
+      max_samples = std::stol(next());
+    else if (a == "--threads")
+      threads = std::stoi(next());
+    else if (a == "--min-seconds")
+      min_seconds = std::stod(next());
+    else if (a == "--budget-fraction")
+      budget_fraction = std::stod(next());
+    else if (a == "--costs")
+      costs = next();
+    else if (a == "--records")
+      records_path = next();
+    else if (a == "--graphs")
+      graphs_dir = next();
+    else if (a == "--from")
+      saved.push_back(next());
+    else
+      designs.push_back(a);
   }
   std::ofstream records;
   if (!records_path.empty()) {
@@ -85,10 +96,11 @@ int main(int argc, char** argv) {
     cache::CacheReport report = cache::PlanCache(g, o);
     std::printf("   %s: %lld samples, %lld subtrees\n", name.c_str(), static_cast<long long>(g.sample_count()),
                 static_cast<long long>(g.node_count()));
-    std::printf("   H_TOP %s (%lld)  H_rfree %s (%lld)  ratio %.2f\n", Mb(report.top.bytes).c_str(),
-                static_cast<long long>(report.top.entries), Mb(report.rfree.bytes).c_str(),
-                static_cast<long long>(report.rfree.entries),
-                report.rfree.bytes ? static_cast<double>(report.top.bytes) / static_cast<double>(report.rfree.bytes) : 0.0);
+    std::printf(
+        "   H_TOP %s (%lld)  H_rfree %s (%lld)  ratio %.2f\n", Mb(report.top.bytes).c_str(),
+        static_cast<long long>(report.top.entries), Mb(report.rfree.bytes).c_str(),
+        static_cast<long long>(report.rfree.entries),
+        report.rfree.bytes ? static_cast<double>(report.top.bytes) / static_cast<double>(report.rfree.bytes) : 0.0);
     std::printf("   predicted preview mean/worst: none %.3f/%.3f s  rfree %.3f/%.3f s\n", report.none.mean_seconds,
                 report.none.worst_seconds, report.rfree.mean_seconds, report.rfree.worst_seconds);
     o.budget_bytes = static_cast<std::uint64_t>(budget_fraction * static_cast<double>(report.rfree.bytes));
@@ -113,8 +125,10 @@ int main(int argc, char** argv) {
       if (max.worst_seconds < ave.worst_seconds - 1e-12) ++better;
       if (ave.mean_seconds > 0) worst_mean_ratio = std::max(worst_mean_ratio, max.mean_seconds / ave.mean_seconds);
     }
-    std::printf("   budgets 10..100%% of H_rfree: OPT-MAX worst lower in %d, higher in %d of 10; mean at most %.3fx OPT-AVE's\n",
-                better, worse, worst_mean_ratio);
+    std::printf(
+        "   budgets 10..100%% of H_rfree: OPT-MAX worst lower in %d, higher in %d of 10; mean at most %.3fx "
+        "OPT-AVE's\n",
+        better, worse, worst_mean_ratio);
     cache::ExactCacheOptions eo;
     eo.budget_bytes = o.budget_bytes;
     eo.min_seconds = min_seconds;
@@ -123,9 +137,10 @@ int main(int argc, char** argv) {
     eo.start = cache::OptimizeCache(g, o).cache;
     cache::ExactCacheSummary ex = cache::SolveExactCache(g, eo);
     if (ex.solved)
-      std::printf("     exact    %s (%lld)  mean %.3f s  worst %.3f s  (%s, %lld variables)\n", Mb(ex.cost.bytes).c_str(),
-                  static_cast<long long>(ex.cost.entries), ex.cost.mean_seconds, ex.cost.worst_seconds,
-                  ex.optimal ? "optimal" : "not proven optimal", static_cast<long long>(ex.variables));
+      std::printf("     exact    %s (%lld)  mean %.3f s  worst %.3f s  (%s, %lld variables)\n",
+                  Mb(ex.cost.bytes).c_str(), static_cast<long long>(ex.cost.entries), ex.cost.mean_seconds,
+                  ex.cost.worst_seconds, ex.optimal ? "optimal" : "not proven optimal",
+                  static_cast<long long>(ex.variables));
     else
       std::printf("     exact    not solved: %s\n", ex.message.c_str());
   };

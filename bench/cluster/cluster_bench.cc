@@ -83,8 +83,8 @@ pid_t SpawnWorker(int port, int slots, const fs::path& dir) {
     prctl(PR_SET_PDEATHSIG, SIGKILL);
     FILE* f = std::freopen(log.c_str(), "w", stderr);
     (void)f;
-    execl(bin.c_str(), bin.c_str(), "--coordinator", target.c_str(), "--slots", s.c_str(), "--cache-dir",
-          cache.c_str(), static_cast<char*>(nullptr));
+    execl(bin.c_str(), bin.c_str(), "--coordinator", target.c_str(), "--slots", s.c_str(), "--cache-dir", cache.c_str(),
+          static_cast<char*>(nullptr));
     _exit(127);
   }
   return pid;
@@ -182,8 +182,9 @@ bool Run(const char* section) { return only.empty() || only == section; }
 
 int main(int argc, char** argv) {
   std::setvbuf(stdout, nullptr, _IOLBF, 0);
-  CLI::App app{"cluster benchmarks (results in docs/benchmarks.md, Cluster): no-op round trips through one "
-               "coordinator, per-task overhead, idle workers, blob ingest, speed-up of 2 workers over 1"};
+  CLI::App app{
+      "cluster benchmarks (results in docs/benchmarks.md, Cluster): no-op round trips through one "
+      "coordinator, per-task overhead, idle workers, blob ingest, speed-up of 2 workers over 1"};
   app.option_defaults()->always_capture_default();
   int tasks = 20000, repeats = 3, blob_mb = 128, idle = 1000, speedup_repeats = -1, overhead_slots = 1;
   std::string job = (fs::path(FABATLAS_BENCH_SOURCE_DIR) / "bench/cluster/data/pawn_small.yaml").string();
@@ -192,10 +193,12 @@ int main(int argc, char** argv) {
   app.add_option("--repeats", repeats, "runs of each measurement");
   app.add_option("--blob-mb", blob_mb, "size of the blob uploaded for the ingest rate, MB");
   app.add_option("--idle", idle, "idle workers connected during the third measurement");
-  app.add_option("--speedup-repeats", speedup_repeats, "1-worker/2-worker run pairs for the speed-up (default: --repeats)");
+  app.add_option("--speedup-repeats", speedup_repeats,
+                 "1-worker/2-worker run pairs for the speed-up (default: --repeats)");
   app.add_option("--overhead-slots", overhead_slots, "slots of the worker in the per-task overhead measurement");
   app.add_option("--job", job, "CPU-bound job file for the speed-up");
-  app.add_option("--only", only, "run one section only")->check(CLI::IsMember({"noop", "overhead", "idle", "blob", "speedup"}));
+  app.add_option("--only", only, "run one section only")
+      ->check(CLI::IsMember({"noop", "overhead", "idle", "blob", "speedup"}));
   app.add_flag("--fsync-commits", fsync_commits, "coordinator store fsyncs every commit (synchronous=FULL)");
   app.add_flag("--no-lease-affinity", no_lease_affinity, "lease tasks oldest first, ignoring affinity");
   CLI11_PARSE(app, argc, argv);
@@ -258,11 +261,12 @@ int main(int argc, char** argv) {
     double worker_cpu = StopWorkers(one);
     oc.Shutdown();
     std::sort(latencies.begin(), latencies.end());
-    std::printf("coordinator overhead per task (one no-op task at a time, RunTasks -> result, 1 idle worker x %d "
-                "slot(s)), %d tasks: p50 %.2f ms, p90 %.2f ms, p99 %.2f ms, max %.2f ms; coordinator CPU %.0f us/task, "
-                "worker CPU %.0f us/task\n",
-                overhead_slots, n, latencies[n / 2], latencies[n * 9 / 10], latencies[n * 99 / 100], latencies.back(), cpu_us,
-                1e6 * worker_cpu / n);
+    std::printf(
+        "coordinator overhead per task (one no-op task at a time, RunTasks -> result, 1 idle worker x %d "
+        "slot(s)), %d tasks: p50 %.2f ms, p90 %.2f ms, p99 %.2f ms, max %.2f ms; coordinator CPU %.0f us/task, "
+        "worker CPU %.0f us/task\n",
+        overhead_slots, n, latencies[n / 2], latencies[n * 9 / 10], latencies[n * 99 / 100], latencies.back(), cpu_us,
+        1e6 * worker_cpu / n);
   }
 
   // Idle workers: own connections (local subchannel pools), Sync with no free slot.
@@ -280,8 +284,8 @@ int main(int argc, char** argv) {
           grpc::ChannelArguments args;
           args.SetInt(GRPC_ARG_USE_LOCAL_SUBCHANNEL_POOL, 1);
           args.SetInt(GRPC_ARG_KEEPALIVE_TIME_MS, 20000);
-          stubs.push_back(v1::WorkerService::NewStub(
-              grpc::CreateCustomChannel(target, grpc::InsecureChannelCredentials(), args)));
+          stubs.push_back(
+              v1::WorkerService::NewStub(grpc::CreateCustomChannel(target, grpc::InsecureChannelCredentials(), args)));
         }
         while (!stop) {
           auto round = Clock::now();
@@ -312,10 +316,10 @@ int main(int argc, char** argv) {
     stop = true;
     for (auto& t : threads) t.join();
     std::sort(sync_ms.begin(), sync_ms.end());
-    std::printf("with %d idle workers connected (%ld idle syncs, %ld failed; idle sync p99 %.2f ms): median %.0f "
-                "no-op tasks/s\n",
-                idle, syncs.load(), failures.load(), sync_ms.empty() ? 0.0 : sync_ms[sync_ms.size() * 99 / 100],
-                Median(busy));
+    std::printf(
+        "with %d idle workers connected (%ld idle syncs, %ld failed; idle sync p99 %.2f ms): median %.0f "
+        "no-op tasks/s\n",
+        idle, syncs.load(), failures.load(), sync_ms.empty() ? 0.0 : sync_ms[sync_ms.size() * 99 / 100], Median(busy));
   }
   StopWorkers(workers);
 
@@ -356,15 +360,15 @@ int main(int argc, char** argv) {
         storage::JobStore state(o.state_dir / "state.db");
         std::vector<pid_t> pids;
         std::vector<fs::path> caches;
-        std::int64_t spawned_ms = std::chrono::duration_cast<std::chrono::milliseconds>(
-                                      std::chrono::system_clock::now().time_since_epoch()).count();
+        std::int64_t spawned_ms =
+            std::chrono::duration_cast<std::chrono::milliseconds>(std::chrono::system_clock::now().time_since_epoch())
+                .count();
         for (int i = 0; i < n; ++i) {
           caches.push_back(dir / ("cpu" + name + "_" + std::to_string(i)));
           pids.push_back(SpawnWorker(sc.port(), 1, caches.back()));
         }
         // Connected (one Sync each) before the job starts.
-        while (state.CountWorkers(spawned_ms - 1000) < n)
-          std::this_thread::sleep_for(std::chrono::milliseconds(20));
+        while (state.CountWorkers(spawned_ms - 1000) < n) std::this_thread::sleep_for(std::chrono::milliseconds(20));
         coordinator::JobClient client("127.0.0.1:" + std::to_string(sc.port()), {});
         std::vector<double> cpu_start;
         for (pid_t p : pids) cpu_start.push_back(LiveCpuSeconds(p));
@@ -391,12 +395,13 @@ int main(int argc, char** argv) {
           subtree_seconds += row.seconds_sum;
           subtree_computations += row.seconds_count;
         }
-        std::printf("  run %d, %d worker(s): %.2f s wall; workers CPU during the job %.2f s (busiest %.2f s; "
-                    "inside tasks: samples %.2f s, ΔG %.2f s; whole processes %.2f s); coordinator CPU %.2f s; "
-                    "%lld subtrees computed; %lld tasks, %s\n",
-                    r, n, wall[n].back(), job_cpu, busiest, sample_cpu, change_cpu, process_cpu[n].back(),
-                    coordinator_cpu[n].back(), static_cast<long long>(subtree_computations),
-                    static_cast<long long>(s.tasks_total()), coordinator::JobStateName(s.state()).c_str());
+        std::printf(
+            "  run %d, %d worker(s): %.2f s wall; workers CPU during the job %.2f s (busiest %.2f s; "
+            "inside tasks: samples %.2f s, ΔG %.2f s; whole processes %.2f s); coordinator CPU %.2f s; "
+            "%lld subtrees computed; %lld tasks, %s\n",
+            r, n, wall[n].back(), job_cpu, busiest, sample_cpu, change_cpu, process_cpu[n].back(),
+            coordinator_cpu[n].back(), static_cast<long long>(subtree_computations),
+            static_cast<long long>(s.tasks_total()), coordinator::JobStateName(s.state()).c_str());
         for (const auto& cache : caches)
           std::printf("    %s\n", LastLine(cache.parent_path() / (cache.filename().string() + ".log")).c_str());
         std::fflush(stdout);
@@ -410,13 +415,14 @@ int main(int argc, char** argv) {
       ratios.push_back(wall[1][r] / wall[2][r]);
       cpu_ratios.push_back(busiest_cpu[1][r] / busiest_cpu[2][r]);
     }
-    std::printf("%s, %lld tasks, %d pairs: wall-time speed-up median %.2fx (1 worker %.2f s, 2 workers %.2f s); "
-                "CPU-time speed-up median %.2fx (1 worker %.2f s, busier of 2 %.2f s, both %.2f s); coordinator "
-                "CPU per task %.2f ms (1 worker) / %.2f ms (2 workers)\n",
-                fs::path(job).filename().c_str(), task_count, speedup_repeats, Median(ratios), Median(wall[1]),
-                Median(wall[2]), Median(cpu_ratios), Median(busiest_cpu[1]), Median(busiest_cpu[2]),
-                Median(worker_cpu[2]), 1000.0 * Median(coordinator_cpu[1]) / std::max(1LL, task_count),
-                1000.0 * Median(coordinator_cpu[2]) / std::max(1LL, task_count));
+    std::printf(
+        "%s, %lld tasks, %d pairs: wall-time speed-up median %.2fx (1 worker %.2f s, 2 workers %.2f s); "
+        "CPU-time speed-up median %.2fx (1 worker %.2f s, busier of 2 %.2f s, both %.2f s); coordinator "
+        "CPU per task %.2f ms (1 worker) / %.2f ms (2 workers)\n",
+        fs::path(job).filename().c_str(), task_count, speedup_repeats, Median(ratios), Median(wall[1]), Median(wall[2]),
+        Median(cpu_ratios), Median(busiest_cpu[1]), Median(busiest_cpu[2]), Median(worker_cpu[2]),
+        1000.0 * Median(coordinator_cpu[1]) / std::max(1LL, task_count),
+        1000.0 * Median(coordinator_cpu[2]) / std::max(1LL, task_count));
   }
   fs::remove_all(dir);
   return 0;

@@ -72,13 +72,15 @@ int main(int argc, char** argv) {
     for (const char* name : {"vase", "cup", "pawn", "tealight"})
       designs.push_back(std::filesystem::path(FABATLAS_SOURCE_DIR) / "configs/designs" / (std::string(name) + ".yaml"));
 
-  std::printf("| design | voxel (mm) | samples | valid | median CPU s / sample (all) | median CPU s (valid) | median wall s (valid) | median CPU s / ΔG |\n");
+  std::printf(
+      "| design | voxel (mm) | samples | valid | median CPU s / sample (all) | median CPU s (valid) | median wall s "
+      "(valid) | median CPU s / ΔG |\n");
   std::printf("|---|---:|---:|---:|---:|---:|---:|---:|\n");
   for (const auto& path : designs) {
     design::Design d = design::LoadDesign(path);
     std::mt19937_64 rng(2026);
     std::vector<double> cpu_all, cpu_valid, wall_valid, cpu_dg;
-    std::map<std::string, std::vector<double>> stages;  // seconds per timing and check, valid samples
+    std::map<std::string, std::vector<double>> stages;             // seconds per timing and check, valid samples
     std::map<std::string, double> outcome_seconds, stage_seconds;  // --where
     std::map<std::string, int> outcome_count;
     double total_seconds = 0;

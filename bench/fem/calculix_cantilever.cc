@@ -197,7 +197,8 @@ Result RunCcx(const Cantilever& c, const std::string& type, const std::string& d
   WriteInp(c, type, job + ".inp");
   for (int k = 0; k < repeats; ++k) {
     const double c0 = CpuSeconds(RUSAGE_CHILDREN);
-    const std::string cmd = "cd '" + dir + "' && OMP_NUM_THREADS=1 ccx -i cant_" + type + " > cant_" + type + ".log 2>&1";
+    const std::string cmd =
+        "cd '" + dir + "' && OMP_NUM_THREADS=1 ccx -i cant_" + type + " > cant_" + type + ".log 2>&1";
     const int status = std::system(cmd.c_str());
     r.cpu.push_back(CpuSeconds(RUSAGE_CHILDREN) - c0);
     if (status != 0) r.note = "ccx exit status " + std::to_string(WEXITSTATUS(status)) + " (see " + job + ".log)";
@@ -222,7 +223,8 @@ Result RunFabatlas(const Cantilever& c, StaticSolveOptions::Element element, int
     for (int n : c.tip) uz += s.displacements[n][2];
     r.tip = -uz / c.tip.size();
     char note[200];
-    std::snprintf(note, sizeof note, "%d Newton its, %d factorisations, %d load steps; wall: assembly %.2f s, linear %.2f s, total %.2f s",
+    std::snprintf(note, sizeof note,
+                  "%d Newton its, %d factorisations, %d load steps; wall: assembly %.2f s, linear %.2f s, total %.2f s",
                   s.newton_iterations, s.factorizations, s.load_steps_taken, s.assembly_seconds, s.linear_solve_seconds,
                   s.total_seconds);
     r.note = s.converged ? note : s.message;

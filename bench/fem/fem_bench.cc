@@ -97,7 +97,7 @@ Row SandalHeel(int repeats, StaticSolveOptions::LinearSolver solver) {
         v.occupied[v.Index(i, j, k)] = (k < height && !arch) ? 1 : 0;
       }
   FemLoadCase lc;
-  lc.fixed_region.push_back({{-1, -1, -0.01}, {100, 100, 0.01}});  // ground plane z = 0
+  lc.fixed_region.push_back({{-1, -1, -0.01}, {100, 100, 0.01}});   // ground plane z = 0
   lc.loaded_region.push_back({{-1, -1, 30.0}, {21.0, 100, 40.0}});  // top of the heel
   lc.total_force = {0, 0, -700.0};
   lc.material = Material::FromYoungPoisson(20.0, 0.4);  // MPa, EVA-like foam
@@ -130,10 +130,14 @@ int main(int argc, char** argv) {
   const int cook_repeats = argc > 1 ? std::max(1, std::atoi(argv[1])) : 5;
   const int heel_repeats = argc > 2 ? std::max(1, std::atoi(argv[2])) : 3;
   const std::string solvers = argc > 3 ? argv[3] : "cholesky,ichol,jacobi";
-  auto wanted = [&](const char* s) { return ("," + solvers + ",").find("," + std::string(s) + ",") != std::string::npos; };
+  auto wanted = [&](const char* s) {
+    return ("," + solvers + ",").find("," + std::string(s) + ",") != std::string::npos;
+  };
   std::printf("median of %d (Cook) and %d (heel) runs; DOFs: free unknowns (Cook), 3 x nodes (heel)\n", cook_repeats,
               heel_repeats);
-  std::printf("| case | elements | DOFs | median wall s | median CPU s | assembly s | linear solve s | Newton its | CG its | result |\n");
+  std::printf(
+      "| case | elements | DOFs | median wall s | median CPU s | assembly s | linear solve s | Newton its | CG its | "
+      "result |\n");
   std::printf("|---|---|---|---|---|---|---|---|---|---|\n");
   Print("Cook's membrane 16/edge", CooksMembrane16(cook_repeats), "u_y(48,60) mm");
   // The heel with each linear solver, one after the other in the same run.

@@ -89,7 +89,6 @@ void BM_Serialize(benchmark::State& st) {
   for (auto _ : st) benchmark::DoNotOptimize(a.Serialize());
 }
 
-
 // The tube of bench/scale/tube_coarse.yaml at its defaults on its 2 mm voxel
 // (radius 15, wall 6, height 20 mm, centred on the origin: 8 top-level
 // nodes), a root solid a worker of the Scale jobs ships: OpenVDB's stream
@@ -121,8 +120,7 @@ void BM_TubeOfNodeBytes(benchmark::State& st) {
 
 }  // namespace
 
-#define FABATLAS_GEOMETRY_BENCH(fn) \
-  BENCHMARK(fn)->Arg(64)->Arg(128)->Unit(benchmark::kMillisecond)->UseRealTime()
+#define FABATLAS_GEOMETRY_BENCH(fn) BENCHMARK(fn)->Arg(64)->Arg(128)->Unit(benchmark::kMillisecond)->UseRealTime()
 FABATLAS_GEOMETRY_BENCH(BM_Sphere);
 FABATLAS_GEOMETRY_BENCH(BM_Box);
 FABATLAS_GEOMETRY_BENCH(BM_Cylinder);

@@ -43,17 +43,23 @@ void Sdf(benchmark::State& state, const TriangleMesh& (*mesh)()) {
     s = ShapeDiameter(m, {});  // opaque library call, result read after the loop
   }
   state.counters["triangles"] = static_cast<double>(m.triangles.size());
-  state.counters["rays_per_s"] = benchmark::Counter(static_cast<double>(m.triangles.size()) * 30,
-                                                    benchmark::Counter::kIsIterationInvariantRate);
+  state.counters["rays_per_s"] =
+      benchmark::Counter(static_cast<double>(m.triangles.size()) * 30, benchmark::Counter::kIsIterationInvariantRate);
   state.counters["sdf_min"] = s.min;
   state.counters["sdf_p5"] = s.percentile_5;
   state.counters["sdf_median"] = s.median;
 }
 
 BENCHMARK_CAPTURE(Inspect, bunny, &Bunny)->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime()->UseRealTime();
-BENCHMARK_CAPTURE(Inspect, doublehookmedium, &DoubleHook)->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime()->UseRealTime();
+BENCHMARK_CAPTURE(Inspect, doublehookmedium, &DoubleHook)
+    ->Unit(benchmark::kMillisecond)
+    ->MeasureProcessCPUTime()
+    ->UseRealTime();
 BENCHMARK_CAPTURE(Sdf, bunny, &Bunny)->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime()->UseRealTime();
-BENCHMARK_CAPTURE(Sdf, doublehookmedium, &DoubleHook)->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime()->UseRealTime();
+BENCHMARK_CAPTURE(Sdf, doublehookmedium, &DoubleHook)
+    ->Unit(benchmark::kMillisecond)
+    ->MeasureProcessCPUTime()
+    ->UseRealTime();
 
 }  // namespace
 }  // namespace fabatlas::mesh

@@ -43,7 +43,8 @@ static void Slides(const std::string& root, const char* name) {
     for (const prototype::Configuration& c : p.configurations) {
       auto it = c.values.find(j.name);
       if (it == c.values.end()) continue;
-      double d = it->second.slide == "free" ? s.free_values.at(j.name + "@" + c.name + ".s") : std::stod(it->second.slide);
+      double d =
+          it->second.slide == "free" ? s.free_values.at(j.name + "@" + c.name + ".s") : std::stod(it->second.slide);
       int steps = static_cast<int>(std::ceil(std::abs(d) / 2.5));
       for (int k = 1; k <= steps; ++k) {
         swept::Transform t;
@@ -69,16 +70,19 @@ int main(int argc, char** argv) {
   std::string root = FABATLAS_SOURCE_DIR_DEFAULT;
   for (int i = 1; i < argc; ++i)
     if (!std::strcmp(argv[i], "--slides")) {
-      std::printf("| example | slide | runs in | poses | printed child against its parent | CPU (s) |\n|---|---|---|---|---|---|\n");
+      std::printf(
+          "| example | slide | runs in | poses | printed child against its parent | CPU (s) "
+          "|\n|---|---|---|---|---|---|\n");
       for (const char* name : {"cabinet", "crate_bar", "printer", "cellphone", "tablet", "toolbox", "jewellery_box"})
         Slides(root, name);
       return 0;
     }
-  std::printf("| example | variables | constraints | deviation (mm) | median solve wall (ms) | median solve CPU (ms) |"
-              " geometry (s) | voxel (mm) | triangles | closed | manifold | self-int. | pieces |\n");
+  std::printf(
+      "| example | variables | constraints | deviation (mm) | median solve wall (ms) | median solve CPU (ms) |"
+      " geometry (s) | voxel (mm) | triangles | closed | manifold | self-int. | pieces |\n");
   std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
-  for (const char* name : {"cabinet", "crate_bar", "crate_bed", "sofa_bunk", "printer", "cellphone", "tablet", "toolbox",
-                           "jewellery_box"}) {
+  for (const char* name : {"cabinet", "crate_bar", "crate_bed", "sofa_bunk", "printer", "cellphone", "tablet",
+                           "toolbox", "jewellery_box"}) {
     prototype::Prototype p = prototype::LoadPrototype(root + "/configs/prototypes/" + name + ".yaml");
     std::vector<double> wall, cpu;
     prototype::SolveSummary s;
@@ -108,7 +112,8 @@ int main(int argc, char** argv) {
     std::fflush(stdout);
   }
   // Conflict explanation cost: the sofa bunk beyond its headrest bound.
-  prototype::Prototype p = prototype::LoadPrototype(root + "/configs/prototypes/sofa_bunk.yaml", {{"headrest_height", 150}});
+  prototype::Prototype p =
+      prototype::LoadPrototype(root + "/configs/prototypes/sofa_bunk.yaml", {{"headrest_height", 150}});
   std::vector<double> wall;
   prototype::SolveSummary s;
   for (int r = 0; r < runs; ++r) {
@@ -116,7 +121,9 @@ int main(int argc, char** argv) {
     s = prototype::SolvePrototype(p);
     wall.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() * 1e3);
   }
-  std::printf("\nsofa_bunk at headrest_height=150 (unsatisfiable): median %.1f ms including the deletion filter; %zu groups in the conflict\n",
-              Median(wall), s.conflicts.size());
+  std::printf(
+      "\nsofa_bunk at headrest_height=150 (unsatisfiable): median %.1f ms including the deletion filter; %zu groups in "
+      "the conflict\n",
+      Median(wall), s.conflicts.size());
   return 0;
 }

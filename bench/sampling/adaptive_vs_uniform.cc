@@ -101,17 +101,28 @@ int main(int argc, char** argv) {
   double threshold = 0.5, burn_ms = 20.0;
   int repeats = 5, points = 200000, subdivisions = 5, overhead_depth = 3;
   for (int i = 1; i + 1 < argc; i += 2) {
-    if (!std::strcmp(argv[i], "--threshold")) threshold = std::atof(argv[i + 1]);
-    else if (!std::strcmp(argv[i], "--burn-ms")) burn_ms = std::atof(argv[i + 1]);
-    else if (!std::strcmp(argv[i], "--repeats")) repeats = std::atoi(argv[i + 1]);
-    else if (!std::strcmp(argv[i], "--iou-points")) points = std::atoi(argv[i + 1]);
-    else if (!std::strcmp(argv[i], "--subdivisions")) subdivisions = std::atoi(argv[i + 1]);
-    else if (!std::strcmp(argv[i], "--overhead-depth")) overhead_depth = std::atoi(argv[i + 1]);
-    else { std::fprintf(stderr, "unknown option %s\n", argv[i]); return 2; }
+    if (!std::strcmp(argv[i], "--threshold"))
+      threshold = std::atof(argv[i + 1]);
+    else if (!std::strcmp(argv[i], "--burn-ms"))
+      burn_ms = std::atof(argv[i + 1]);
+    else if (!std::strcmp(argv[i], "--repeats"))
+      repeats = std::atoi(argv[i + 1]);
+    else if (!std::strcmp(argv[i], "--iou-points"))
+      points = std::atoi(argv[i + 1]);
+    else if (!std::strcmp(argv[i], "--subdivisions"))
+      subdivisions = std::atoi(argv[i + 1]);
+    else if (!std::strcmp(argv[i], "--overhead-depth"))
+      overhead_depth = std::atoi(argv[i + 1]);
+    else {
+      std::fprintf(stderr, "unknown option %s\n", argv[i]);
+      return 2;
+    }
   }
-  std::printf("IoU by Monte Carlo, %d points (seed 12345); adaptive: subdivisions %d, dg_threshold %.3g\n\n",
-              points, subdivisions, threshold);
-  std::printf("| design | IoU target | uniform samples (grid n, IoU) | adaptive samples (max_depth, IoU) | adaptive / uniform |\n");
+  std::printf("IoU by Monte Carlo, %d points (seed 12345); adaptive: subdivisions %d, dg_threshold %.3g\n\n", points,
+              subdivisions, threshold);
+  std::printf(
+      "| design | IoU target | uniform samples (grid n, IoU) | adaptive samples (max_depth, IoU) | adaptive / uniform "
+      "|\n");
   std::printf("|---|---|---|---|---|\n");
   auto row = [&](const char* name, double target, const Reach& u, const Reach& a) {
     std::printf("| %s | %.2f | %lld (n=%d, %.4f) | %lld (depth %d, %.4f) | %.3f |\n", name, target, u.samples,
@@ -141,7 +152,8 @@ int main(int argc, char** argv) {
   // and burn_ms / 4 per ΔG.
   std::printf("\nOverhead (3-D hollow cylinder, max_depth %d, %.1f ms CPU per sample, %.1f ms per ΔG), %d repeats\n\n",
               overhead_depth, burn_ms, burn_ms / 4, repeats);
-  std::printf("| threads | samples | ΔG calls | job wall s (median) | sampling logic %% (median) | overhead %% (median) |\n");
+  std::printf(
+      "| threads | samples | ΔG calls | job wall s (median) | sampling logic %% (median) | overhead %% (median) |\n");
   std::printf("|---|---|---|---|---|---|\n");
   for (int threads : {1, 2}) {
     std::vector<double> wall, logic, overhead;

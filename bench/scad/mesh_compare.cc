@@ -111,14 +111,17 @@ int Main(int argc, char** argv) {
     if ((arg == "--samples" || arg == "--seed") && i + 1 < argc) {
       const std::string value = argv[++i];
       try {
-        if (arg == "--samples") samples = std::stoi(value);
-        else seed = std::stoull(value);
+        if (arg == "--samples")
+          samples = std::stoi(value);
+        else
+          seed = std::stoull(value);
       } catch (const std::exception&) {
         throw fabatlas::InputError(arg + " " + value + ": not a whole number");
       }
       if (samples < 1) throw fabatlas::InputError("--samples must be at least 1");
     } else if (!arg.empty() && arg[0] == '-') {
-      throw fabatlas::InputError("unknown option " + arg + " (bench_mesh_compare A.stl [B.stl] [--samples N] [--seed S])");
+      throw fabatlas::InputError("unknown option " + arg +
+                                 " (bench_mesh_compare A.stl [B.stl] [--samples N] [--seed S])");
     } else {
       paths.push_back(arg);
     }

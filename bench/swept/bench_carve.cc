@@ -68,9 +68,9 @@ int main(int argc, char** argv) {
   geometry::GridSpec g;
   g.voxel_size = 3;
   const design::SourcePlace place{"cabinet_insert.yaml", 0, 0};
-  std::printf("cabinet insert: foam %.0f mm^3, mug %.0f mm^3, voxel 3 mm, offset 3 mm\n", foam.Volume(),
-              mug.Volume());
-  std::printf("| method | cutter triangles | target triangles | sweep s | subtract s | carve CPU s | carved volume mm^3 |\n");
+  std::printf("cabinet insert: foam %.0f mm^3, mug %.0f mm^3, voxel 3 mm, offset 3 mm\n", foam.Volume(), mug.Volume());
+  std::printf(
+      "| method | cutter triangles | target triangles | sweep s | subtract s | carve CPU s | carved volume mm^3 |\n");
   std::printf("|---|---|---|---|---|---|---|\n");
   for (bool exact : {true, false}) {
     std::vector<double> sweep, subtract, cpu;
@@ -84,8 +84,9 @@ int main(int argc, char** argv) {
       subtract.push_back(s.subtract_seconds);
       volume = carved.Volume();
     }
-    std::printf("| %s | %zu | %zu | %.3f | %.3f | %.3f | %.0f |\n", exact ? "exact (CGAL corefinement)" : "level-set difference",
-                s.cutter_triangles, s.target_triangles, Median(sweep), Median(subtract), Median(cpu), volume);
+    std::printf("| %s | %zu | %zu | %.3f | %.3f | %.3f | %.0f |\n",
+                exact ? "exact (CGAL corefinement)" : "level-set difference", s.cutter_triangles, s.target_triangles,
+                Median(sweep), Median(subtract), Median(cpu), volume);
   }
   return 0;
 }

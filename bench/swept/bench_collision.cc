@@ -33,11 +33,16 @@ int main(int argc, char** argv) {
     if (!std::strcmp(argv[i], "--no-all-pairs")) {
       all_pairs = false;
       --i;
-    } else if (i + 1 >= argc) return std::fprintf(stderr, "usage: bench_collision [--parts N] [--steps N] [--repeats N] [--no-all-pairs]\n"), 2;
-    else if (!std::strcmp(argv[i], "--parts")) parts_n = std::atoi(argv[i + 1]);
-    else if (!std::strcmp(argv[i], "--steps")) steps = std::atoi(argv[i + 1]);
-    else if (!std::strcmp(argv[i], "--repeats")) repeats = std::atoi(argv[i + 1]);
-    else return std::fprintf(stderr, "usage: bench_collision [--parts N] [--steps N] [--repeats N]\n"), 2;
+    } else if (i + 1 >= argc)
+      return std::fprintf(stderr, "usage: bench_collision [--parts N] [--steps N] [--repeats N] [--no-all-pairs]\n"), 2;
+    else if (!std::strcmp(argv[i], "--parts"))
+      parts_n = std::atoi(argv[i + 1]);
+    else if (!std::strcmp(argv[i], "--steps"))
+      steps = std::atoi(argv[i + 1]);
+    else if (!std::strcmp(argv[i], "--repeats"))
+      repeats = std::atoi(argv[i + 1]);
+    else
+      return std::fprintf(stderr, "usage: bench_collision [--parts N] [--steps N] [--repeats N]\n"), 2;
   }
   // Unit cubes on straight lines between random points of a 60 mm cube (fixed seed).
   std::mt19937 rng(7);
@@ -80,8 +85,8 @@ int main(int argc, char** argv) {
   CollisionReport h, e, a;
   const Timing th = run(SpacetimeOptions::BroadPhase::kHierarchy, &h);
   const Timing te = run(SpacetimeOptions::BroadPhase::kEmbree, &e);
-  std::printf("%d parts, %d steps, %zu proxies, %zu candidate proxy pairs, %zu exact tests, %zu intervals\n",
-              parts_n, steps, h.proxies, h.candidate_pairs, h.exact_tests, h.intervals.size());
+  std::printf("%d parts, %d steps, %zu proxies, %zu candidate proxy pairs, %zu exact tests, %zu intervals\n", parts_n,
+              steps, h.proxies, h.candidate_pairs, h.exact_tests, h.intervals.size());
   std::printf("4D hierarchy: median %.4f s wall, %.4f s CPU (broad phase %.5f s wall)\n", th.total, th.cpu, th.broad);
   std::printf("Embree rtcCollide: median %.4f s wall, %.4f s CPU (broad phase %.5f s wall); same intervals: %s\n",
               te.total, te.cpu, te.broad, same(h, e) ? "yes" : "NO");
@@ -90,7 +95,8 @@ int main(int argc, char** argv) {
     const Timing ta = run(SpacetimeOptions::BroadPhase::kAllPairs, &a);
     std::printf("all pairs: median %.4f s wall, %.4f s CPU (broad phase %.5f s wall); same intervals: %s\n", ta.total,
                 ta.cpu, ta.broad, same(h, a) ? "yes" : "NO");
-    std::printf("ratio all pairs / hierarchy: %.1f whole, %.1f broad phase\n", ta.total / th.total, ta.broad / th.broad);
+    std::printf("ratio all pairs / hierarchy: %.1f whole, %.1f broad phase\n", ta.total / th.total,
+                ta.broad / th.broad);
   }
   return 0;
 }

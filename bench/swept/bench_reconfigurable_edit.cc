@@ -50,7 +50,8 @@ int main(int argc, char** argv) {
   options.cache = &cache;
   std::mt19937 rng(11);
   std::vector<double> check_wall, sample_wall, sample_cpu;
-  std::printf("| edit | point | collision_free s | sample wall s | sample CPU s | outcome |\n|---|---|---|---|---|---|\n");
+  std::printf(
+      "| edit | point | collision_free s | sample wall s | sample CPU s | outcome |\n|---|---|---|---|---|---|\n");
   for (int e = 0; e < edits; ++e) {
     design::Point u;
     std::string where;
@@ -80,7 +81,9 @@ int main(int argc, char** argv) {
     sample_cpu.push_back(cpu);
     std::printf("| %d | %s | %.3f | %.3f | %.3f | %s |\n", e + 1, where.c_str(), check, wall, cpu, outcome.c_str());
   }
-  std::printf("\nmedian over %d edits: collision_free %.3f s wall, sample %.3f s wall, %.3f s CPU; subtree cache %zu hits, %zu misses\n",
-              edits, Median(check_wall), Median(sample_wall), Median(sample_cpu), cache.hits(), cache.misses());
+  std::printf(
+      "\nmedian over %d edits: collision_free %.3f s wall, sample %.3f s wall, %.3f s CPU; subtree cache %zu hits, %zu "
+      "misses\n",
+      edits, Median(check_wall), Median(sample_wall), Median(sample_cpu), cache.hits(), cache.misses());
   return 0;
 }

@@ -32,9 +32,7 @@ double Cpu() {
   clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
   return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
 }
-double Wall() {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
-}
+double Wall() { return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count(); }
 
 }  // namespace
 
@@ -46,22 +44,25 @@ int main(int argc, char** argv) {
     cases = {{dir + "bench_table.yaml", "armrest_height=650,hinge_offset=50"},
              {dir + "cabinet_insert.yaml", "mug_height=140,pocket_floor=30"}};
   }
-  std::printf("| design | point | triangles per object | contact normals s (wall / CPU) | hints s | resolution s | "
-              "evaluations | s per evaluation | edit | resolved |\n|---|---|---|---|---|---|---|---|---|---|\n");
+  std::printf(
+      "| design | point | triangles per object | contact normals s (wall / CPU) | hints s | resolution s | "
+      "evaluations | s per evaluation | edit | resolved |\n|---|---|---|---|---|---|---|---|---|---|\n");
   for (const auto& [file, at] : cases) {
     const design::Design d = design::LoadDesign(file);
     const design::Point u = design::ParsePoint(d, at, "point");
     const design::StateGraphResult r = design::EvaluateStateGraph(d, u);
     std::string triangles;
     for (std::size_t i = 0; i < r.graph.objects.size(); ++i)
-      triangles += (i ? ", " : "") + r.graph.object_names[i] + " " + std::to_string(r.graph.objects[i].triangles.size());
+      triangles +=
+          (i ? ", " : "") + r.graph.object_names[i] + " " + std::to_string(r.graph.objects[i].triangles.size());
     double w = Wall(), c = Cpu();
     for (const auto& t : r.graph.transitions) {
       std::vector<swept::MovingPart> parts;
       for (std::size_t i = 0; i < r.graph.objects.size(); ++i) parts.push_back({r.graph.objects[i], t.motions[i]});
       swept::ContactNormalOptions o;
       o.time_steps = r.graph.time_steps;
-      for (const auto& i : t.collisions) swept::SpacetimeContactNormal(parts, i.part_a, i.part_b, i.t_begin, i.t_end, o);
+      for (const auto& i : t.collisions)
+        swept::SpacetimeContactNormal(parts, i.part_a, i.part_b, i.t_begin, i.t_end, o);
     }
     const double normal_wall = Wall() - w, normal_cpu = Cpu() - c;
     w = Wall(), c = Cpu();
@@ -71,7 +72,8 @@ int main(int argc, char** argv) {
     const design::ResolveSummary s = design::ResolveCollisions(d, u);
     const double resolve_wall = Wall() - w, resolve_cpu = Cpu() - c;
     std::string edit;
-    for (const auto& [name, v] : s.edit) edit += (edit.empty() ? "" : ", ") + name + (v >= 0 ? " +" : " ") + std::to_string(v);
+    for (const auto& [name, v] : s.edit)
+      edit += (edit.empty() ? "" : ", ") + name + (v >= 0 ? " +" : " ") + std::to_string(v);
     std::printf("| %s | %s | %s | %.3f / %.3f | %.2f / %.2f | %.2f / %.2f | %d | %.2f | %s (size %.3f) | %s |\n",
                 d.name.c_str(), at.c_str(), triangles.c_str(), normal_wall, normal_cpu, hint_wall, hint_cpu,
                 resolve_wall, resolve_cpu, s.evaluations, resolve_cpu / s.evaluations, edit.c_str(), s.edit_size,

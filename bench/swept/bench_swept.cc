@@ -53,7 +53,10 @@ double Dot(const Vec3& a, const Vec3& b) { return a[0] * b[0] + a[1] * b[1] + a[
 double PointTriangleDistance2(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c) {
   const Vec3 ab = Sub(b, a), ac = Sub(c, a), ap = Sub(p, a);
   const double d1 = Dot(ab, ap), d2 = Dot(ac, ap);
-  auto dist2 = [&](const Vec3& q) { const Vec3 d = Sub(p, q); return Dot(d, d); };
+  auto dist2 = [&](const Vec3& q) {
+    const Vec3 d = Sub(p, q);
+    return Dot(d, d);
+  };
   if (d1 <= 0 && d2 <= 0) return dist2(a);
   const Vec3 bp = Sub(p, b);
   const double d3 = Dot(ab, bp), d4 = Dot(ac, bp);
@@ -102,8 +105,8 @@ class TriangleTree {
       if (n.count > 0) {
         for (int i = n.first; i < n.first + n.count; ++i) {
           const auto& t = mesh_.triangles[tree_.order()[i]];
-          best = std::min(best, PointTriangleDistance2(p, mesh_.vertices[t[0]], mesh_.vertices[t[1]],
-                                                      mesh_.vertices[t[2]]));
+          best = std::min(best,
+                          PointTriangleDistance2(p, mesh_.vertices[t[0]], mesh_.vertices[t[1]], mesh_.vertices[t[2]]));
         }
         continue;
       }
@@ -179,10 +182,14 @@ void DenseStep(const TriangleTree& tree, const Lattice& g, const Transform& f, i
 int main(int argc, char** argv) {
   int span = 256, steps = 100, dense_steps = 5, repeats = 3;
   for (int i = 1; i + 1 < argc; i += 2) {
-    if (!std::strcmp(argv[i], "--span")) span = std::atoi(argv[i + 1]);
-    else if (!std::strcmp(argv[i], "--steps")) steps = std::atoi(argv[i + 1]);
-    else if (!std::strcmp(argv[i], "--dense-steps")) dense_steps = std::atoi(argv[i + 1]);
-    else if (!std::strcmp(argv[i], "--repeats")) repeats = std::atoi(argv[i + 1]);
+    if (!std::strcmp(argv[i], "--span"))
+      span = std::atoi(argv[i + 1]);
+    else if (!std::strcmp(argv[i], "--steps"))
+      steps = std::atoi(argv[i + 1]);
+    else if (!std::strcmp(argv[i], "--dense-steps"))
+      dense_steps = std::atoi(argv[i + 1]);
+    else if (!std::strcmp(argv[i], "--repeats"))
+      repeats = std::atoi(argv[i + 1]);
     else {
       std::fprintf(stderr, "usage: bench_swept [--span N] [--steps N] [--dense-steps N] [--repeats N]\n");
       return 2;
@@ -279,19 +286,21 @@ int main(int argc, char** argv) {
     }
 
   const double sparse_med = Median(sparse_times);
-  std::printf("sparse: median %.3f s over %d runs (%d steps, band %.3f mm, %zu body band voxels, %llu voxel "
-              "updates, %zu active voxels); meshing iso %.3f mm: %.3f s, %zu triangles\n",
-              sparse_med, repeats, summary.time_steps, summary.band_half_width, summary.body_band_voxels,
-              static_cast<unsigned long long>(summary.voxel_updates), summary.active_voxels, options.offset,
-              mesh_time, surface.triangles.size());
-  std::printf("dense:  median %.3f s per step over %d steps -> %.1f s for %d steps (tree %.3f s)\n",
-              Median(step_times), dense_steps, dense_total, steps, tree_time);
+  std::printf(
+      "sparse: median %.3f s over %d runs (%d steps, band %.3f mm, %zu body band voxels, %llu voxel "
+      "updates, %zu active voxels); meshing iso %.3f mm: %.3f s, %zu triangles\n",
+      sparse_med, repeats, summary.time_steps, summary.band_half_width, summary.body_band_voxels,
+      static_cast<unsigned long long>(summary.voxel_updates), summary.active_voxels, options.offset, mesh_time,
+      surface.triangles.size());
+  std::printf("dense:  median %.3f s per step over %d steps -> %.1f s for %d steps (tree %.3f s)\n", Median(step_times),
+              dense_steps, dense_total, steps, tree_time);
   std::printf("dense, queries culled at the band (%.3f mm): median %.3f s per step -> %.1f s for %d steps\n",
               field.band_half_width(), Median(culled_times), culled_total, steps);
   std::printf("speedup dense/sparse: %.1fx; culled dense/sparse: %.1fx\n", dense_total / sparse_med,
               culled_total / sparse_med);
-  std::printf("accuracy (z-slice %d, all steps): %zu outside voxels in band, max |sparse - dense| = %.4f mm "
-              "(%.3f voxel); %zu voxels on different sides of the offset surface\n",
-              zmid, compared, max_err, max_err / h, disagree);
+  std::printf(
+      "accuracy (z-slice %d, all steps): %zu outside voxels in band, max |sparse - dense| = %.4f mm "
+      "(%.3f voxel); %zu voxels on different sides of the offset surface\n",
+      zmid, compared, max_err, max_err / h, disagree);
   return 0;
 }

@@ -78,9 +78,11 @@ Pass Run(const viewer::Customiser& c, int port, int clients, int requests, unsig
 
 void Print(const char* what, const Pass& p, const viewer::Customiser& c) {
   const auto s = c.preview_cache_stats();
-  std::printf("%-9s %7.0f previews/s  p50 %7.1f ms  p99 %7.1f ms  max %7.1f ms  errors %d  cache hits %lld misses %lld entries %zu bytes %zu\n",
-              what, p.rate, p.p50, p.p99, p.max, p.errors, static_cast<long long>(s.hits),
-              static_cast<long long>(s.misses), s.entries, s.bytes);
+  std::printf(
+      "%-9s %7.0f previews/s  p50 %7.1f ms  p99 %7.1f ms  max %7.1f ms  errors %d  cache hits %lld misses %lld entries "
+      "%zu bytes %zu\n",
+      what, p.rate, p.p50, p.p99, p.max, p.errors, static_cast<long long>(s.hits), static_cast<long long>(s.misses),
+      s.entries, s.bytes);
   std::fflush(stdout);
 }
 

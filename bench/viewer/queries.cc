@@ -31,7 +31,9 @@ namespace {
 
 void Print(const char* what, std::vector<double> ms, std::size_t bytes) {
   std::sort(ms.begin(), ms.end());
-  const auto at = [&](double q) { return ms[std::min(ms.size() - 1, static_cast<std::size_t>(q * (ms.size() - 1) + 0.5))]; };
+  const auto at = [&](double q) {
+    return ms[std::min(ms.size() - 1, static_cast<std::size_t>(q * (ms.size() - 1) + 0.5))];
+  };
   std::printf("%-16s n=%4zu  p50 %8.3f ms  p99 %8.3f ms  max %8.3f ms  answer %zu B\n", what, ms.size(), at(0.5),
               at(0.99), ms.back(), bytes);
 }
@@ -56,9 +58,10 @@ int main(int argc, char** argv) {
         break;
       }
     if (property.empty()) throw std::runtime_error("no valid sample records a property");
-    std::printf("artifact %s: design %s, %zu samples, %zu leaves, loaded in %.2f s; objective '%s', %d queries, seed %llu\n",
-                argv[1], c.source().name.c_str(), c.form().samples.size(), c.corners().leaves(), load_s,
-                property.c_str(), count, static_cast<unsigned long long>(seed));
+    std::printf(
+        "artifact %s: design %s, %zu samples, %zu leaves, loaded in %.2f s; objective '%s', %d queries, seed %llu\n",
+        argv[1], c.source().name.c_str(), c.form().samples.size(), c.corners().leaves(), load_s, property.c_str(),
+        count, static_cast<unsigned long long>(seed));
     std::mt19937_64 rng(seed);
     const int n = c.dimension_count();
     const auto answer = [&](const std::string& path, const std::map<std::string, std::string>& query, double* ms) {

@@ -9,15 +9,13 @@
 
 namespace fabatlas::coordinator {
 
-
 namespace {
 
 class BlobServiceImpl final : public ServiceOn<v1::BlobService::Service> {
  public:
   using ServiceOn::ServiceOn;
 
-  Status FindMissing(ServerContext* ctx, const v1::FindMissingRequest* req,
-                     v1::FindMissingResponse* resp) override {
+  Status FindMissing(ServerContext* ctx, const v1::FindMissingRequest* req, v1::FindMissingResponse* resp) override {
     if (Status s = Authorise(*ctx); !s.ok()) return s;
     for (const auto& d : req->digests())
       if (!impl_.blobs->Contains(d)) resp->add_missing_digests(d);
@@ -95,6 +93,8 @@ class BlobServiceImpl final : public ServiceOn<v1::BlobService::Service> {
 
 }  // namespace
 
-std::unique_ptr<grpc::Service> MakeBlobService(Coordinator::Impl& impl) { return std::make_unique<BlobServiceImpl>(impl); }
+std::unique_ptr<grpc::Service> MakeBlobService(Coordinator::Impl& impl) {
+  return std::make_unique<BlobServiceImpl>(impl);
+}
 
 }  // namespace fabatlas::coordinator

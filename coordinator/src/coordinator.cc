@@ -33,7 +33,6 @@ grpc::Status FromException(const std::exception& e) {
   return grpc::Status(grpc::StatusCode::INTERNAL, e.what());
 }
 
-
 Coordinator::Coordinator(CoordinatorOptions options) : impl_(std::make_unique<Impl>(std::move(options))) {}
 
 Coordinator::~Coordinator() { Shutdown(); }
@@ -50,8 +49,8 @@ void Coordinator::Start() {
                                               ? GRPC_SSL_DONT_REQUEST_CLIENT_CERTIFICATE
                                               : GRPC_SSL_REQUEST_AND_REQUIRE_CLIENT_CERTIFICATE_AND_VERIFY);
     if (!o.tls_client_ca.empty()) ssl.pem_root_certs = protocol::ReadPemFile(o.tls_client_ca, "client CA");
-    ssl.pem_key_cert_pairs.push_back({protocol::ReadPemFile(o.tls_key, "TLS key"),
-                                      protocol::ReadPemFile(o.tls_cert, "TLS certificate")});
+    ssl.pem_key_cert_pairs.push_back(
+        {protocol::ReadPemFile(o.tls_key, "TLS key"), protocol::ReadPemFile(o.tls_cert, "TLS certificate")});
     credentials = grpc::SslServerCredentials(ssl);
   } else {
     if (!protocol::IsLoopback(o.listen) && !o.allow_insecure_network)
@@ -126,8 +125,11 @@ void Coordinator::Start() {
       m.StartDriver(job.id);
       ++resumed;
     }
-  log::Info("coordinator_started", {{"listen", o.listen}, {"port", m.port}, {"state_dir", o.state_dir.string()},
-                                    {"jobs_resumed", resumed}, {"leases_in_grace", in_grace},
+  log::Info("coordinator_started", {{"listen", o.listen},
+                                    {"port", m.port},
+                                    {"state_dir", o.state_dir.string()},
+                                    {"jobs_resumed", resumed},
+                                    {"leases_in_grace", in_grace},
                                     {"tls", static_cast<bool>(!o.tls_cert.empty())}});
 }
 
@@ -144,9 +146,11 @@ void Coordinator::Drain(std::int64_t timeout_ms) {
   auto until = started + std::chrono::milliseconds(timeout_ms);
   while (std::chrono::steady_clock::now() < until && m.store->ActiveLeases() > 0)
     std::this_thread::sleep_for(std::chrono::milliseconds(100));
-  log::Info("drain_finished", {{"active_leases", m.store->ActiveLeases()},
-                               {"waited_ms", std::chrono::duration_cast<std::chrono::milliseconds>(
-                                                 std::chrono::steady_clock::now() - started).count()}});
+  log::Info(
+      "drain_finished",
+      {{"active_leases", m.store->ActiveLeases()},
+       {"waited_ms",
+        std::chrono::duration_cast<std::chrono::milliseconds>(std::chrono::steady_clock::now() - started).count()}});
 }
 
 void Coordinator::Shutdown() {

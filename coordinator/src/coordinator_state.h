@@ -42,8 +42,7 @@
 namespace fabatlas::coordinator {
 
 inline std::int64_t NowMs() {
-  return std::chrono::duration_cast<std::chrono::milliseconds>(
-             std::chrono::system_clock::now().time_since_epoch())
+  return std::chrono::duration_cast<std::chrono::milliseconds>(std::chrono::system_clock::now().time_since_epoch())
       .count();
 }
 
@@ -61,18 +60,23 @@ struct JobCancelled {};
 // The task kind of a result, named as protocol::TaskKindName names kinds.
 inline std::string ResultKind(const v1::TaskResult& r) {
   switch (r.result_case()) {
-    case v1::TaskResult::kSample: return "sample";
-    case v1::TaskResult::kGeometryChange: return "geometry_change";
-    case v1::TaskResult::kNoop: return "noop";
-    case v1::TaskResult::kSweptVolume: return "swept_volume";
-    case v1::TaskResult::kCachePlan: return "cache_plan";
-    default: return "unknown";
+    case v1::TaskResult::kSample:
+      return "sample";
+    case v1::TaskResult::kGeometryChange:
+      return "geometry_change";
+    case v1::TaskResult::kNoop:
+      return "noop";
+    case v1::TaskResult::kSweptVolume:
+      return "swept_volume";
+    case v1::TaskResult::kCachePlan:
+      return "cache_plan";
+    default:
+      return "unknown";
   }
 }
 
 inline bool Terminal(storage::JobState s) {
-  return s == storage::JobState::kSucceeded || s == storage::JobState::kFailed ||
-         s == storage::JobState::kCancelled;
+  return s == storage::JobState::kSucceeded || s == storage::JobState::kFailed || s == storage::JobState::kCancelled;
 }
 
 struct Coordinator::Impl {
@@ -220,8 +224,8 @@ struct Coordinator::Impl {
   // lease) and than 10 s (a client uploads a bundle just before it submits
   // it; a held blob named again is touched: BlobStore::Touch). Mark and
   // sweep are read-only on the store and idempotent on disk, so a kill -9
-  // between any two steps loses nothing and the next pass finishes the work. Order matters: the cutoff is taken before the
-  // references, so a lease that completes in between has its blobs marked.
+  // between any two steps loses nothing and the next pass finishes the work. Order matters: the cutoff is taken before
+  // the references, so a lease that completes in between has its blobs marked.
   void CollectBlobs(const std::string& reason);
 
   // Runs the tasks (serialized payloads) through the workers; results in
@@ -232,7 +236,6 @@ struct Coordinator::Impl {
                                     const std::vector<std::string>& keys, const std::vector<int>& kinds,
                                     const std::vector<std::vector<std::string>>& preferred = {},
                                     std::vector<std::string>* workers_out = nullptr);
-
 
   void Event(const std::string& job_id, const std::string& kind, const std::string& message);
 

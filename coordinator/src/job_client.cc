@@ -14,7 +14,9 @@
 namespace fabatlas::coordinator {
 
 JobClient::JobClient(std::string target, protocol::ClientSecurity security, std::chrono::milliseconds timeout)
-    : target_(std::move(target)), security_(std::move(security)), timeout_(timeout),
+    : target_(std::move(target)),
+      security_(std::move(security)),
+      timeout_(timeout),
       channel_(protocol::MakeChannel(target_, security_)) {}
 
 void JobClient::Fail(const std::string& what, const grpc::Status& status) const {
@@ -24,10 +26,11 @@ void JobClient::Fail(const std::string& what, const grpc::Status& status) const 
   if (status.error_code() == grpc::StatusCode::UNAVAILABLE ||
       status.error_code() == grpc::StatusCode::DEADLINE_EXCEEDED)
     throw InputError("cannot reach coordinator " + target_ + " (" + what + "): " + reason);
-  static const char* names[] = {"OK", "CANCELLED", "UNKNOWN", "INVALID_ARGUMENT", "DEADLINE_EXCEEDED",
-                                "NOT_FOUND", "ALREADY_EXISTS", "PERMISSION_DENIED", "RESOURCE_EXHAUSTED",
-                                "FAILED_PRECONDITION", "ABORTED", "OUT_OF_RANGE", "UNIMPLEMENTED",
-                                "INTERNAL", "UNAVAILABLE", "DATA_LOSS", "UNAUTHENTICATED"};
+  static const char* names[] = {
+      "OK",        "CANCELLED",      "UNKNOWN",           "INVALID_ARGUMENT",   "DEADLINE_EXCEEDED",
+      "NOT_FOUND", "ALREADY_EXISTS", "PERMISSION_DENIED", "RESOURCE_EXHAUSTED", "FAILED_PRECONDITION",
+      "ABORTED",   "OUT_OF_RANGE",   "UNIMPLEMENTED",     "INTERNAL",           "UNAVAILABLE",
+      "DATA_LOSS", "UNAUTHENTICATED"};
   int code = static_cast<int>(status.error_code());
   std::string name = code >= 0 && code <= 16 ? names[code] : std::to_string(code);
   throw InputError("coordinator " + target_ + " (" + what + "): " + name + ": " + reason);
@@ -79,8 +82,7 @@ v1::JobStatus JobClient::Status(const std::string& job_id) {
                               [&](auto& stub, auto* ctx, auto* r) { return stub.GetStatus(ctx, req, r); });
 }
 
-v1::JobStatus JobClient::Watch(const std::string& job_id,
-                               const std::function<bool(const v1::JobStatus&)>& on_status,
+v1::JobStatus JobClient::Watch(const std::string& job_id, const std::function<bool(const v1::JobStatus&)>& on_status,
                                std::chrono::milliseconds reconnect_for) {
   auto stub = v1::JobService::NewStub(channel_);
   v1::GetStatusRequest req;
@@ -116,7 +118,8 @@ v1::JobStatus JobClient::Watch(const std::string& job_id,
       case grpc::StatusCode::PERMISSION_DENIED:
       case grpc::StatusCode::UNIMPLEMENTED:
         Fail("watch " + job_id, s);
-      default: break;
+      default:
+        break;
     }
     if (std::chrono::steady_clock::now() - last_heard > reconnect_for) {
       if (s.ok()) s = grpc::Status(grpc::StatusCode::UNAVAILABLE, "the watch stream ended before the job did");
@@ -168,10 +171,9 @@ std::string ProgressLine(const v1::JobStatus& s) {
   std::snprintf(buffer, sizeof buffer,
                 "job %s %-9s samples %lld (%.1f%% valid)  tasks %lld/%lld  %.1f tasks/s  ETA %s  "
                 "failures: %lld expired, %lld quarantined",
-                s.job_id().c_str(), JobStateName(s.state()).c_str(),
-                static_cast<long long>(s.samples_done()), valid, static_cast<long long>(s.tasks_done()),
-                static_cast<long long>(s.tasks_total()), s.tasks_per_second(), eta.c_str(),
-                static_cast<long long>(s.lease_expiries()), static_cast<long long>(s.tasks_quarantined()));
+                s.job_id().c_str(), JobStateName(s.state()).c_str(), static_cast<long long>(s.samples_done()), valid,
+                static_cast<long long>(s.tasks_done()), static_cast<long long>(s.tasks_total()), s.tasks_per_second(),
+                eta.c_str(), static_cast<long long>(s.lease_expiries()), static_cast<long long>(s.tasks_quarantined()));
   if (!s.stalled_reason().empty()) return std::string(buffer) + "  STALLED: " + s.stalled_reason();
   return buffer;
 }

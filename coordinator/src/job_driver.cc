@@ -22,16 +22,17 @@ void Coordinator::Impl::Event(const std::string& job_id, const std::string& kind
   }
 }
 
-v1::CachePlanReport Coordinator::Impl::PlanCacheOnWorkers(const std::string& job_id, const std::string& evaluation_digest,
-                                         int subdivisions, const v1::CachePlanInput& input) {
+v1::CachePlanReport Coordinator::Impl::PlanCacheOnWorkers(const std::string& job_id,
+                                                          const std::string& evaluation_digest, int subdivisions,
+                                                          const v1::CachePlanInput& input) {
   v1::TaskPayload payload;
   payload.set_kind(v1::TASK_KIND_CACHE_PLAN);
   payload.mutable_cache_plan()->set_input_digest(blobs->Put(input.SerializeAsString()));
   store->AddJobBlob(job_id, payload.cache_plan().input_digest());
   const std::string key = protocol::TaskKey(payload, evaluation_digest, subdivisions);
-  Event(job_id, "cache_plan", "cache plan task " + key.substr(0, 16) + ": " +
-                                  std::to_string(input.subtrees_size()) + " subtree records, " +
-                                  std::to_string(input.sample_roots_size()) + " samples");
+  Event(job_id, "cache_plan",
+        "cache plan task " + key.substr(0, 16) + ": " + std::to_string(input.subtrees_size()) + " subtree records, " +
+            std::to_string(input.sample_roots_size()) + " samples");
   const auto results = RunTasks(job_id, {payload.SerializeAsString()}, {key}, {v1::TASK_KIND_CACHE_PLAN});
   v1::TaskResult result;
   result.ParseFromString(results.at(0));
@@ -62,16 +63,16 @@ void Coordinator::Impl::Drive(const std::string& job_id) {
     run_options.out_dir = dir / "out";
     const pipeline::RunSummary run = pipeline::RunJob(loaded, executor, run_options);
     if (run.cache)
-      Event(job_id, "cache", "geometry cache " + run.cache_manifest.strategy + ": " +
-                                 std::to_string(run.written.cache_entries) + " entries, " +
-                                 std::to_string(run.written.cache_entries_left_out) + " without geometry; " +
-                                 pipeline::ExactText(run.cache_added.exact));
+      Event(job_id, "cache",
+            "geometry cache " + run.cache_manifest.strategy + ": " + std::to_string(run.written.cache_entries) +
+                " entries, " + std::to_string(run.written.cache_entries_left_out) + " without geometry; " +
+                pipeline::ExactText(run.cache_added.exact));
     // A kept subtree whose geometry no worker could give back is missing from
     // the artifact: say so where operators look, not only in the job's events.
     if (run.written.cache_entries_left_out > 0)
-      log::Warn("cache_entries_left_out", {{"job", job_id},
-                                           {"entries", run.written.cache_entries},
-                                           {"left_out", run.written.cache_entries_left_out}});
+      log::Warn(
+          "cache_entries_left_out",
+          {{"job", job_id}, {"entries", run.written.cache_entries}, {"left_out", run.written.cache_entries_left_out}});
     for (const auto& entry : fs::directory_iterator(run_options.out_dir)) {
       if (!entry.is_regular_file()) continue;
       std::string name = entry.path().filename().string();
@@ -81,7 +82,9 @@ void Coordinator::Impl::Drive(const std::string& job_id) {
     store->SetJobState(job_id, storage::JobState::kSucceeded, "", NowMs());
     Event(job_id, "succeeded", precompute::Table3Row(loaded.design, run.sampling.statistics));
     log::Info("job_succeeded",
-              {{"job", job_id}, {"design", loaded.design.name}, {"samples", run.sampling.statistics.samples},
+              {{"job", job_id},
+               {"design", loaded.design.name},
+               {"samples", run.sampling.statistics.samples},
                {"valid_samples", run.sampling.statistics.valid_samples},
                {"publish_seconds",
                 std::chrono::duration<double>(std::chrono::steady_clock::now() - executor.publish_started()).count()}});

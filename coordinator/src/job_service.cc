@@ -35,8 +35,7 @@ class JobServiceImpl final : public ServiceOn<v1::JobService::Service> {
       auto files = protocol::Materialize(bundle, dir);
       sampling::ParseJobFile(bundle.job_file(), files.job_file.string());
       design::Design design = design::LoadDesign(files.design_file);
-      bool created = impl_.store->CreateJob(
-          {id, digest, design.name, storage::JobState::kRunning, "", NowMs(), 0});
+      bool created = impl_.store->CreateJob({id, digest, design.name, storage::JobState::kRunning, "", NowMs(), 0});
       if (!created) {
         auto job = impl_.store->FindJob(id);
         if (job && (job->state == storage::JobState::kCancelled || job->state == storage::JobState::kFailed)) {
@@ -113,8 +112,7 @@ class JobServiceImpl final : public ServiceOn<v1::JobService::Service> {
     return Status::OK;
   }
 
-  Status FetchResult(ServerContext* ctx, const v1::FetchResultRequest* req,
-                     v1::FetchResultResponse* resp) override {
+  Status FetchResult(ServerContext* ctx, const v1::FetchResultRequest* req, v1::FetchResultResponse* resp) override {
     if (Status s = Authorise(*ctx); !s.ok()) return s;
     auto job = impl_.store->FindJob(req->job_id());
     if (!job) return Status(StatusCode::NOT_FOUND, "no job " + req->job_id());
@@ -135,6 +133,8 @@ class JobServiceImpl final : public ServiceOn<v1::JobService::Service> {
 
 }  // namespace
 
-std::unique_ptr<grpc::Service> MakeJobService(Coordinator::Impl& impl) { return std::make_unique<JobServiceImpl>(impl); }
+std::unique_ptr<grpc::Service> MakeJobService(Coordinator::Impl& impl) {
+  return std::make_unique<JobServiceImpl>(impl);
+}
 
 }  // namespace fabatlas::coordinator

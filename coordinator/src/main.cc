@@ -69,15 +69,16 @@ int main(int argc, char** argv) {
     }
     int sig = 0;
     sigwait(&signals, &sig);
-    fabatlas::log::Info("signal_received", {{"signal", sig == SIGTERM ? "SIGTERM" : "SIGINT"},
-                                            {"drain_seconds", drain_seconds}});
+    fabatlas::log::Info("signal_received",
+                        {{"signal", sig == SIGTERM ? "SIGTERM" : "SIGINT"}, {"drain_seconds", drain_seconds}});
     coordinator.Drain(static_cast<std::int64_t>(drain_seconds * 1000));
     coordinator.Shutdown();
     return 0;
   } catch (const fabatlas::ResourceError& e) {
     // The state directory cannot be read or written (an I/O error, a full
     // disk): a restart once the disk is back resumes every job.
-    return log_flags.ErrorExit("fabatlas-coordinator", "coordinator_exit", e, fabatlas::coordinator::kExitStateUnavailable);
+    return log_flags.ErrorExit("fabatlas-coordinator", "coordinator_exit", e,
+                               fabatlas::coordinator::kExitStateUnavailable);
   } catch (const fabatlas::InputError& e) {
     return log_flags.BadInputExit("fabatlas-coordinator", "coordinator_exit", e);
   }

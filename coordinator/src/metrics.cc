@@ -12,8 +12,8 @@ std::string Coordinator::Impl::Metrics() {
   log::MetricsText m;
   storage::TaskCounts c = store->CountTasks("");
   std::int64_t now = NowMs();
-  for (const auto& [state, n] : {std::pair{"queued", c.queued}, {"leased", c.leased}, {"done", c.done},
-                                 {"quarantined", c.quarantined}})
+  for (const auto& [state, n] :
+       {std::pair{"queued", c.queued}, {"leased", c.leased}, {"done", c.done}, {"quarantined", c.quarantined}})
     m.Gauge("fabatlas_tasks", "Tasks in the store by state.", static_cast<double>(n), {{"state", state}});
   m.Counter("fabatlas_tasks_completed_total", "Results accepted since start-up (rate() = throughput).",
             static_cast<double>(completed_total.load()));
@@ -44,14 +44,16 @@ std::string Coordinator::Impl::Metrics() {
   for (const auto& j : running) {
     storage::TaskCounts jc = store->CountTasks(j.id);
     log::Labels id = {{"job", j.id}, {"design", j.design_name}};
-    for (const auto& [state, n] : {std::pair{"queued", jc.queued}, {"leased", jc.leased}, {"done", jc.done},
-                                   {"quarantined", jc.quarantined}}) {
+    for (const auto& [state, n] :
+         {std::pair{"queued", jc.queued}, {"leased", jc.leased}, {"done", jc.done}, {"quarantined", jc.quarantined}}) {
       log::Labels l = id;
       l.emplace_back("state", state);
       m.Gauge("fabatlas_job_tasks", "Tasks of a running job by state.", static_cast<double>(n), l);
     }
-    m.Gauge("fabatlas_job_samples", "Samples evaluated so far in a running job.", static_cast<double>(jc.samples_done), id);
-    m.Gauge("fabatlas_job_valid_samples", "Valid samples so far in a running job.", static_cast<double>(jc.samples_valid), id);
+    m.Gauge("fabatlas_job_samples", "Samples evaluated so far in a running job.", static_cast<double>(jc.samples_done),
+            id);
+    m.Gauge("fabatlas_job_valid_samples", "Valid samples so far in a running job.",
+            static_cast<double>(jc.samples_valid), id);
     m.Gauge("fabatlas_job_start_time_seconds", "When a running job was submitted (Unix time).",
             static_cast<double>(j.created_ms) / 1000.0, id);
   }

@@ -64,10 +64,12 @@ void Coordinator::Impl::Deliver(const std::vector<Delivery>& results, const std:
   }
 }
 
-std::vector<std::string> Coordinator::Impl::RunTasks(const std::string& job_id, const std::vector<std::string>& payloads,
-                                    const std::vector<std::string>& keys, const std::vector<int>& kinds,
-                                    const std::vector<std::vector<std::string>>& preferred,
-                                    std::vector<std::string>* workers_out) {
+std::vector<std::string> Coordinator::Impl::RunTasks(const std::string& job_id,
+                                                     const std::vector<std::string>& payloads,
+                                                     const std::vector<std::string>& keys,
+                                                     const std::vector<int>& kinds,
+                                                     const std::vector<std::vector<std::string>>& preferred,
+                                                     std::vector<std::string>* workers_out) {
   Waiter waiter;
   waiter.job_id = job_id;
   std::vector<storage::NewTask> tasks;
@@ -100,16 +102,16 @@ std::vector<std::string> Coordinator::Impl::RunTasks(const std::string& job_id, 
     unregister();
     throw;
   }
-  log::Info("round_started", {{"job", job_id}, {"kind", kinds.empty() ? "" : protocol::TaskKindName(kinds[0])},
-                              {"tasks", tasks.size()}, {"stored", finished.size()}});
+  log::Info("round_started", {{"job", job_id},
+                              {"kind", kinds.empty() ? "" : protocol::TaskKindName(kinds[0])},
+                              {"tasks", tasks.size()},
+                              {"stored", finished.size()}});
   std::vector<Delivery> stored;
   for (const auto& [key, result] : finished) stored.push_back({&key, &result});
   Deliver(stored);
   SignalWork();
   std::unique_lock lock(results_mu);
-  results_cv.wait(lock, [&] {
-    return waiter.pending == 0 || stopping || cancelled_jobs.count(job_id) > 0;
-  });
+  results_cv.wait(lock, [&] { return waiter.pending == 0 || stopping || cancelled_jobs.count(job_id) > 0; });
   unregister();
   if (waiter.pending > 0) {
     if (stopping) throw Stopping{};
@@ -126,12 +128,11 @@ std::vector<std::string> Coordinator::Impl::RunTasks(const std::string& job_id, 
 }
 
 std::vector<sampling::SampleOutcome> RemoteExecutor::RunSampleTasks(const std::vector<sampling::SampleTask>& tasks,
-                                                        sampling::SampleEvaluator&,
-                                                        std::vector<sampling::TaskTiming>* timings) {
+                                                                    sampling::SampleEvaluator&,
+                                                                    std::vector<sampling::TaskTiming>* timings) {
   std::vector<v1::TaskPayload> payloads;
   for (const auto& t : tasks) payloads.push_back(protocol::SamplePayload(t));
-  const std::vector<std::vector<std::string>> preferred =
-      SampleBatchAffinity(tasks.size(), impl_.ConnectedWorkers());
+  const std::vector<std::vector<std::string>> preferred = SampleBatchAffinity(tasks.size(), impl_.ConnectedWorkers());
   std::vector<std::string> producers;
   if (!tasks.empty()) dims_ = tasks[0].point.key.size();
   BeginBatch(/*samples=*/true, tasks.size());
@@ -148,8 +149,8 @@ std::vector<sampling::SampleOutcome> RemoteExecutor::RunSampleTasks(const std::v
 }
 
 std::vector<sampling::GeometryChangeResult> RemoteExecutor::RunGeometryChangeTasks(
-        const std::vector<sampling::GeometryChangeTask>& tasks, sampling::SampleEvaluator&,
-        std::vector<sampling::TaskTiming>* timings) {
+    const std::vector<sampling::GeometryChangeTask>& tasks, sampling::SampleEvaluator&,
+    std::vector<sampling::TaskTiming>* timings) {
   std::vector<v1::TaskPayload> payloads;
   std::vector<std::vector<std::string>> preferred;
   for (const auto& t : tasks) {
@@ -163,8 +164,8 @@ std::vector<sampling::GeometryChangeResult> RemoteExecutor::RunGeometryChangeTas
     // Lease affinity: the workers holding the solids in memory.
     std::vector<std::string> holders;
     for (const auto* key : {&t.point_a.key, &t.point_b.key})
-      if (auto it = holders_.find(*key); it != holders_.end() &&
-          std::find(holders.begin(), holders.end(), it->second) == holders.end())
+      if (auto it = holders_.find(*key);
+          it != holders_.end() && std::find(holders.begin(), holders.end(), it->second) == holders.end())
         holders.push_back(it->second);
     preferred.push_back(std::move(holders));
   }
@@ -191,7 +192,7 @@ void RemoteExecutor::SamplingFinished() {
 }
 
 std::vector<design::SweptVolumeResult> RemoteExecutor::RunSweptVolumeTasks(
-        const std::vector<pipeline::SweptVolumeTask>& tasks) {
+    const std::vector<pipeline::SweptVolumeTask>& tasks) {
   std::vector<v1::TaskPayload> payloads;
   for (const auto& t : tasks) {
     v1::TaskPayload p = protocol::SamplePayload({t.point});
@@ -221,8 +222,8 @@ std::vector<design::SweptVolumeResult> RemoteExecutor::RunSweptVolumeTasks(
 pipeline::CacheAssembly RemoteExecutor::CacheSubtrees(const sampling::Form& form) {
   for (const auto& row : impl_.store->Subtrees(job_id_))
     if (!row.blob_digest.empty() && !impl_.blobs->Contains(row.blob_digest))
-      impl_.Event(job_id_, "blob_missing", "subtree " + row.key + " names blob " + row.blob_digest +
-                                               ", which is not in the store");
+      impl_.Event(job_id_, "blob_missing",
+                  "subtree " + row.key + " names blob " + row.blob_digest + ", which is not in the store");
   return CollectSubtreesFromStore(*impl_.store, *impl_.blobs, job_id_, job_.design, form);
 }
 
@@ -231,8 +232,8 @@ v1::CachePlanReport RemoteExecutor::RunCachePlan(const v1::CachePlanInput& input
 }
 
 std::vector<v1::TaskResult> RemoteExecutor::Run(const std::vector<v1::TaskPayload>& payloads,
-                                    const std::vector<std::vector<std::string>>& preferred,
-                                    std::vector<std::string>* producers) {
+                                                const std::vector<std::vector<std::string>>& preferred,
+                                                std::vector<std::string>* producers) {
   std::vector<std::string> bytes, keys;
   std::vector<int> kinds;
   for (const auto& p : payloads) {

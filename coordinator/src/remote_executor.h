@@ -30,17 +30,21 @@ class RemoteExecutor : public pipeline::Executor {
  public:
   // bundle_digest: the job's bundle blob (JobRecord::bundle_digest).
   RemoteExecutor(Coordinator::Impl& impl, std::string job_id, std::string bundle_digest, const pipeline::Job& job)
-      : impl_(impl), job_id_(std::move(job_id)), bundle_digest_(std::move(bundle_digest)), job_(job),
-        digest_(protocol::EvaluationDigest(job.bundle)), subdivisions_(job.file.subdivisions),
+      : impl_(impl),
+        job_id_(std::move(job_id)),
+        bundle_digest_(std::move(bundle_digest)),
+        job_(job),
+        digest_(protocol::EvaluationDigest(job.bundle)),
+        subdivisions_(job.file.subdivisions),
         sampling_(job.file.sampling) {}
 
   std::vector<sampling::SampleOutcome> RunSampleTasks(const std::vector<sampling::SampleTask>& tasks,
-                                                        sampling::SampleEvaluator&,
-                                                        std::vector<sampling::TaskTiming>* timings) override;
+                                                      sampling::SampleEvaluator&,
+                                                      std::vector<sampling::TaskTiming>* timings) override;
 
   std::vector<sampling::GeometryChangeResult> RunGeometryChangeTasks(
-        const std::vector<sampling::GeometryChangeTask>& tasks, sampling::SampleEvaluator&,
-        std::vector<sampling::TaskTiming>* timings) override;
+      const std::vector<sampling::GeometryChangeTask>& tasks, sampling::SampleEvaluator&,
+      std::vector<sampling::TaskTiming>* timings) override;
 
   // Sampling is over: the ETA is the publishing left, and the job's
   // shared solids are forgotten.
@@ -51,7 +55,7 @@ class RemoteExecutor : public pipeline::Executor {
   // TASK_KIND_SWEPT_VOLUME tasks; each worker uploads its cutter surface
   // as a blob, read back here.
   std::vector<design::SweptVolumeResult> RunSweptVolumeTasks(
-        const std::vector<pipeline::SweptVolumeTask>& tasks) override;
+      const std::vector<pipeline::SweptVolumeTask>& tasks) override;
 
   // The subtrees the workers reported while sampling. Every subtree blob
   // the store names is still here (the collector keeps a running job's
@@ -64,8 +68,8 @@ class RemoteExecutor : public pipeline::Executor {
   // order. preferred: lease affinity per task (may be empty); producers:
   // the worker whose result was accepted ("" = already in the store).
   std::vector<v1::TaskResult> Run(const std::vector<v1::TaskPayload>& payloads,
-                                    const std::vector<std::vector<std::string>>& preferred = {},
-                                    std::vector<std::string>* producers = nullptr);
+                                  const std::vector<std::vector<std::string>>& preferred = {},
+                                  std::vector<std::string>* producers = nullptr);
 
  private:
   // The schedule for the ETA (JobStatus.eta_seconds, job_eta.h): every

@@ -8,7 +8,7 @@ namespace fabatlas::coordinator {
 
 std::set<std::string> restart_drivers;  // jobs whose driver stopped on a state write; under drivers_mu
 
-  void Coordinator::Impl::StateWriteFailed(const std::string& where, const std::string& error) {
+void Coordinator::Impl::StateWriteFailed(const std::string& where, const std::string& error) {
   ++state_write_failures_total;
   std::int64_t now = NowMs();
   std::lock_guard lock(stall_mu);
@@ -18,7 +18,9 @@ std::set<std::string> restart_drivers;  // jobs whose driver stopped on a state 
   stall_reason = error;
   if (now - stall_logged_ms < 10000) return;
   stall_logged_ms = now;
-  log::Error("state_write_failed", {{"where", where}, {"error", error}, {"state_dir", options.state_dir.string()},
+  log::Error("state_write_failed", {{"where", where},
+                                    {"error", error},
+                                    {"state_dir", options.state_dir.string()},
                                     {"stalled_ms", now - stall_since_ms}});
 }
 
@@ -83,8 +85,10 @@ void Coordinator::Impl::CollectBlobs(const std::string& reason) {
   blobs_collected_total += c.blobs_removed;
   blob_bytes_collected_total += c.bytes_removed;
   if (c.blobs_removed > 0)
-    log::Info("blobs_collected", {{"reason", reason}, {"removed", c.blobs_removed},
-                                  {"removed_bytes", c.bytes_removed}, {"kept", c.blobs_kept},
+    log::Info("blobs_collected", {{"reason", reason},
+                                  {"removed", c.blobs_removed},
+                                  {"removed_bytes", c.bytes_removed},
+                                  {"kept", c.blobs_kept},
                                   {"kept_bytes", c.bytes_kept}});
 }
 
@@ -138,10 +142,14 @@ void Coordinator::Impl::Sweep() {
         expiry_held = false;
       }
       std::vector<storage::ExpiredLease> expired;
-      if (!hold) expired = store->ExpireLeases(now, options.retry_backoff_ms, options.quarantine_after, QuarantineBytes);
+      if (!hold)
+        expired = store->ExpireLeases(now, options.retry_backoff_ms, options.quarantine_after, QuarantineBytes);
       for (const auto& e : expired) {
-        log::Warn("lease_expired", {{"task", e.task_key}, {"job", e.job_id}, {"worker", e.worker_id},
-                                    {"attempt", e.attempt}, {"expiries", e.expiries}});
+        log::Warn("lease_expired", {{"task", e.task_key},
+                                    {"job", e.job_id},
+                                    {"worker", e.worker_id},
+                                    {"attempt", e.attempt},
+                                    {"expiries", e.expiries}});
         if (!e.quarantined) continue;
         log::Error("task_quarantined", {{"task", e.task_key}, {"job", e.job_id}, {"expiries", e.expiries}});
         if (auto task = store->FindTask(e.task_key)) Deliver(e.task_key, task->result);

@@ -13,7 +13,8 @@ std::string Coordinator::Impl::SolidKey(const v1::SolidRef& ref) {
 
 void Coordinator::Impl::ForgetShares(const std::string& bundle_digest) {
   std::lock_guard lock(share_mu);
-  for (auto it = shares.lower_bound(bundle_digest + ":"); it != shares.end() && it->first.rfind(bundle_digest + ":", 0) == 0;)
+  for (auto it = shares.lower_bound(bundle_digest + ":");
+       it != shares.end() && it->first.rfind(bundle_digest + ":", 0) == 0;)
     it = shares.erase(it);
 }
 
@@ -61,7 +62,8 @@ void Coordinator::Impl::FetchSolid(const v1::FetchSolidRequest& req, v1::FetchSo
   }
 }
 
-void Coordinator::Impl::ShareSolids(const v1::ShareSolidsRequest& req, v1::ShareSolidsResponse* resp, grpc::ServerContext* ctx) {
+void Coordinator::Impl::ShareSolids(const v1::ShareSolidsRequest& req, v1::ShareSolidsResponse* resp,
+                                    grpc::ServerContext* ctx) {
   const std::int64_t wait_ms = std::clamp<std::int64_t>(req.max_wait_ms(), 0, 10000);
   const auto until = std::chrono::steady_clock::now() + std::chrono::milliseconds(wait_ms);
   std::unique_lock lock(share_mu);

@@ -25,8 +25,7 @@ namespace {
 }
 
 void CheckDigest(const std::string& digest) {
-  if (!IsDigest(digest))
-    throw InputError("blob digest '" + digest.substr(0, 80) + "': not 64 lowercase hex digits");
+  if (!IsDigest(digest)) throw InputError("blob digest '" + digest.substr(0, 80) + "': not 64 lowercase hex digits");
 }
 
 void WriteAll(int fd, const fs::path& path, const char* data, std::size_t size) {
@@ -52,9 +51,8 @@ void FsyncDirectory(const fs::path& dir) {
 }  // namespace
 
 bool IsDigest(const std::string& digest) {
-  return digest.size() == 64 && std::all_of(digest.begin(), digest.end(), [](char c) {
-           return (c >= '0' && c <= '9') || (c >= 'a' && c <= 'f');
-         });
+  return digest.size() == 64 && std::all_of(digest.begin(), digest.end(),
+                                            [](char c) { return (c >= '0' && c <= '9') || (c >= 'a' && c <= 'f'); });
 }
 
 std::string Sha256OfFile(const fs::path& path) {
@@ -85,13 +83,9 @@ BlobStore::BlobStore(fs::path root) : root_(std::move(root)) {
   if (ec) throw ResourceError(root_.string() + ": cannot create the blob store: " + ec.message());
 }
 
-fs::path BlobStore::PathOf(const std::string& digest) const {
-  return root_ / digest.substr(0, 2) / digest;
-}
+fs::path BlobStore::PathOf(const std::string& digest) const { return root_ / digest.substr(0, 2) / digest; }
 
-fs::path BlobStore::PartialPath(const std::string& digest) const {
-  return root_ / "partial" / digest;
-}
+fs::path BlobStore::PartialPath(const std::string& digest) const { return root_ / "partial" / digest; }
 
 bool BlobStore::Contains(const std::string& digest) const {
   if (!IsDigest(digest)) return false;
@@ -115,8 +109,7 @@ std::int64_t BlobStore::CommittedSize(const std::string& digest) const {
   return ec ? 0 : static_cast<std::int64_t>(size);
 }
 
-std::int64_t BlobStore::Append(const std::string& digest, std::int64_t offset,
-                               const std::string& data) {
+std::int64_t BlobStore::Append(const std::string& digest, std::int64_t offset, const std::string& data) {
   CheckDigest(digest);
   std::lock_guard lock(mutex_);
   std::int64_t full = Size(digest);
@@ -127,8 +120,8 @@ std::int64_t BlobStore::Append(const std::string& digest, std::int64_t offset,
   std::int64_t held = ec ? 0 : static_cast<std::int64_t>(held_u);
   if (offset < held && offset + static_cast<std::int64_t>(data.size()) <= held) return held;
   if (offset != held)
-    throw InputError("blob " + digest + ": chunk at offset " + std::to_string(offset) +
-                     " but " + std::to_string(held) + " bytes are held (resume at that offset)");
+    throw InputError("blob " + digest + ": chunk at offset " + std::to_string(offset) + " but " + std::to_string(held) +
+                     " bytes are held (resume at that offset)");
   int fd = ::open(partial.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
   if (fd < 0) IoFail(partial, "open", errno);
   try {
@@ -164,8 +157,7 @@ void BlobStore::Finish(const std::string& digest) {
   if (actual != digest) {
     std::error_code ec;
     fs::remove(partial, ec);
-    throw InputError("blob " + digest + ": the uploaded bytes hash to " + actual +
-                     " (upload discarded)");
+    throw InputError("blob " + digest + ": the uploaded bytes hash to " + actual + " (upload discarded)");
   }
   fs::path final_path = PathOf(digest);
   std::error_code ec;
@@ -214,8 +206,7 @@ std::string BlobStore::PutFile(const fs::path& path) {
   return digest;
 }
 
-std::string BlobStore::Read(const std::string& digest, std::int64_t offset,
-                            std::int64_t max_bytes) const {
+std::string BlobStore::Read(const std::string& digest, std::int64_t offset, std::int64_t max_bytes) const {
   CheckDigest(digest);
   fs::path path = PathOf(digest);
   std::ifstream in(path, std::ios::binary);
@@ -281,7 +272,7 @@ BlobStore::Collection BlobStore::Collect(const std::vector<std::string>& keep, s
     for (const auto& f : fs::directory_iterator(dir.path(), ec)) {
       const std::string name = f.path().filename().string();
       if (!IsDigest(name)) continue;
-      struct stat st{};
+      struct stat st {};
       if (::stat(f.path().c_str(), &st) != 0) continue;
       const std::int64_t modified = ModifiedUnixMs(st);
       const bool referenced = !partial && std::binary_search(sorted.begin(), sorted.end(), name);

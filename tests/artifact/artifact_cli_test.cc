@@ -175,7 +175,9 @@ TEST(ArtifactCli, DamagedArtifactsAreOneLineErrorsWithStatus2) {
   newer[63] = static_cast<char>(fabatlas::artifact::kArtifactSchemaVersion + 1);
   std::ofstream(dir / "newer.fabatlas", std::ios::binary) << newer;
   for (const auto& [file, what] : std::vector<std::pair<std::string, std::string>>{
-           {"cut.fabatlas", "truncated"}, {"text.fabatlas", "not a fabatlas artifact"}, {"none.fabatlas", "no such file"},
+           {"cut.fabatlas", "truncated"},
+           {"text.fabatlas", "not a fabatlas artifact"},
+           {"none.fabatlas", "no such file"},
            {"newer.fabatlas", "written by a newer fabatlas (schema version " +
                                   std::to_string(fabatlas::artifact::kArtifactSchemaVersion + 1)}}) {
     CommandRun r = Fabatlas("inspect " + (dir / file).string());

@@ -178,8 +178,8 @@ TEST(Artifact, StandardToolsReadIt) {
   const Artifact a = SmallArtifact();
   WriteArtifact(a, path);
   const fs::path out = path.parent_path() / "count.txt";
-  const std::string command = "sqlite3 " + path.string() +
-                              " \"SELECT count(*) || ' ' || sum(valid) FROM samples\" > " + out.string();
+  const std::string command =
+      "sqlite3 " + path.string() + " \"SELECT count(*) || ' ' || sum(valid) FROM samples\" > " + out.string();
   ASSERT_EQ(std::system(command.c_str()), 0);
   std::int64_t valid = 0;
   for (const auto& s : a.form.samples) valid += s.outcome.valid;
@@ -238,10 +238,9 @@ TEST(Artifact, DamagedFilesGiveOneLineErrors) {
   std::string newer = bytes;
   newer[63] = static_cast<char>(kArtifactSchemaVersion + 1);
   WriteBytes(dir / "newer.fabatlas", newer);
-  ExpectReadError(dir / "newer.fabatlas", "written by a newer fabatlas (schema version " +
-                                              std::to_string(kArtifactSchemaVersion + 1) +
-                                              "; this reader knows versions 1 to " +
-                                              std::to_string(kArtifactSchemaVersion) + ")");
+  ExpectReadError(dir / "newer.fabatlas",
+                  "written by a newer fabatlas (schema version " + std::to_string(kArtifactSchemaVersion + 1) +
+                      "; this reader knows versions 1 to " + std::to_string(kArtifactSchemaVersion) + ")");
 
   // A ΔG value altered in place (the file stays a valid database).
   const fs::path altered = dir / "altered.fabatlas";
@@ -316,7 +315,8 @@ TEST(Artifact, KilledWriterNeverLeavesAPartialArtifact) {
     const std::string name = entry.path().filename().string();
     EXPECT_TRUE(name == "job.fabatlas" || name == "timing.fabatlas" || name.find(".tmp-") != std::string::npos) << name;
   }
-  std::cout << "write " << write_ms << " ms; kills left the old file " << saw_old << "x, the new one " << saw_new << "x\n";
+  std::cout << "write " << write_ms << " ms; kills left the old file " << saw_old << "x, the new one " << saw_new
+            << "x\n";
 }
 
 // A full disk (a 4 MiB tmpfs; the new artifact needs ~24 MiB): publishing

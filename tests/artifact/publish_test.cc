@@ -75,7 +75,8 @@ struct ChessLike {
 
 TEST(PublishCache, ChessLikeDesignPlansHoptHrfreeHtopAndTheFileHoldsTheCache) {
   ChessLike chess;
-  artifact::Artifact art = artifact::ReadArtifact(testing::SourceDir() / "tests/data/artifact_v1/tube_wall_2d.fabatlas");
+  artifact::Artifact art =
+      artifact::ReadArtifact(testing::SourceDir() / "tests/data/artifact_v1/tube_wall_2d.fabatlas");
   const CacheAssemblySummary summary = AddCache(art, chess.assembly);
   const auto& m = art.manifest.cache;
   EXPECT_EQ(m.strategy, "opt_max");
@@ -164,7 +165,8 @@ TEST(PublishCache, ChessLikeDesignPlansHoptHrfreeHtopAndTheFileHoldsTheCache) {
 }
 
 TEST(PublishCache, StartingPointsAreValidSamplesOfTheForm) {
-  artifact::Artifact art = artifact::ReadArtifact(testing::SourceDir() / "tests/data/artifact_v1/tube_wall_2d.fabatlas");
+  artifact::Artifact art =
+      artifact::ReadArtifact(testing::SourceDir() / "tests/data/artifact_v1/tube_wall_2d.fabatlas");
   AddStartingPoints(art);
   ASSERT_FALSE(art.starting_points.empty());
   for (const auto& p : art.starting_points) {
@@ -208,7 +210,8 @@ TEST(PreviewCache, CachedRootSkipsItsChildren) {
 
   // Without the root, a cached child is used and the other child evaluated.
   precompute::FrozenSubtreeCache child;
-  child.Add(first.subtrees[0].key, geometry::Solid::Deserialize(full_cache.Find(first.subtrees[0].key)->solid.Serialize()));
+  child.Add(first.subtrees[0].key,
+            geometry::Solid::Deserialize(full_cache.Find(first.subtrees[0].key)->solid.Serialize()));
   preview.cache = &child;
   const design::SampleResult third = design::EvaluateSample(d, u, preview);
   ASSERT_EQ(third.subtrees.size(), 3u);

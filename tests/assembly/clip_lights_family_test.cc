@@ -52,7 +52,8 @@ TEST(AssemblyClipLightsFamily, FlippedClipSelectsThePapersVariations) {
       for (int k = 0; k < 20; ++k) {
         const ClipLightsParams p{n, 2.285 * k, kRings[r], true};
         const ClipLightsResult res = EvaluateClipLights(p, Lib());
-        if (res.feasible && res.stable && res.target_deviation_mm < best_mm) best_mm = res.target_deviation_mm, best = p;
+        if (res.feasible && res.stable && res.target_deviation_mm < best_mm)
+          best_mm = res.target_deviation_mm, best = p;
         if (n == kPaperPairs[r])
           std::printf("%s n %d l %.3f: %.1f mm%s\n", ToString(kRings[r]), n, p.extension, res.target_deviation_mm,
                       res.stable ? "" : " (falls apart)");

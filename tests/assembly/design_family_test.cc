@@ -16,7 +16,9 @@ using namespace fabatlas;
 
 namespace {
 
-design::Design ClipLights() { return design::LoadDesign(fabatlas::testing::SourceDir() / "configs/assemblies/clip_lights_family.yaml"); }
+design::Design ClipLights() {
+  return design::LoadDesign(fabatlas::testing::SourceDir() / "configs/assemblies/clip_lights_family.yaml");
+}
 
 const design::CheckOutcome& Check(const design::SampleResult& r, const std::string& name) {
   for (const auto& c : r.checks)
@@ -28,8 +30,10 @@ const design::CheckOutcome& Check(const design::SampleResult& r, const std::stri
 
 TEST(AssemblyDesignFamily, ExtensionStepsLowerTheLightByTheirLength) {
   const design::Design d = ClipLights();
-  const design::SampleResult a = design::EvaluateSample(d, design::ParsePoint(d, "pairs=1,extension_step=0,ring=S", "--at"));
-  const design::SampleResult b = design::EvaluateSample(d, design::ParsePoint(d, "pairs=1,extension_step=19,ring=S", "--at"));
+  const design::SampleResult a =
+      design::EvaluateSample(d, design::ParsePoint(d, "pairs=1,extension_step=0,ring=S", "--at"));
+  const design::SampleResult b =
+      design::EvaluateSample(d, design::ParsePoint(d, "pairs=1,extension_step=19,ring=S", "--at"));
   for (const auto* r : {&a, &b}) {
     ASSERT_TRUE(Check(*r, "geometry").passed) << Check(*r, "geometry").reason;
     ASSERT_TRUE(Check(*r, "assembly_feasible").passed) << Check(*r, "assembly_feasible").reason;

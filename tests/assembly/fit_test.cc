@@ -19,7 +19,9 @@ std::string Mesh(const std::string& name) {
   return (fabatlas::testing::SharedDir() / "data/fabhacks/meshes" / name).string();
 }
 
-ArcFit Arc(const std::string& mesh, Eigen::Vector3d lo, Eigen::Vector3d hi) { return FitArc(MeshPointsIn(Mesh(mesh), lo, hi)); }
+ArcFit Arc(const std::string& mesh, Eigen::Vector3d lo, Eigen::Vector3d hi) {
+  return FitArc(MeshPointsIn(Mesh(mesh), lo, hi));
+}
 
 const Eigen::Vector3d kBig(1000, 1000, 1000);
 
@@ -90,7 +92,8 @@ TEST(AssemblyFit, MeshFitsRecoverTheReferenceShapes) {
   EXPECT_NEAR(f.radius, 11.6, 0.5);
   EXPECT_NEAR(f.wire_radius, 2, 0.1);
   // Hanger bar: Rod(390, 3.5) along y.
-  const AxisFit a = FitAxis(MeshPointsIn(Mesh("hanger.off"), Eigen::Vector3d(-100, -250, -200), Eigen::Vector3d(100, 250, -104)));
+  const AxisFit a =
+      FitAxis(MeshPointsIn(Mesh("hanger.off"), Eigen::Vector3d(-100, -250, -200), Eigen::Vector3d(100, 250, -104)));
   EXPECT_GT(std::abs(a.axis.y()), 0.999);
   EXPECT_NEAR(a.radius, 3.5, 0.6);
 }
@@ -100,8 +103,8 @@ TEST(AssemblyFit, HangingLoadRestsInsideTheHookRange) {
   // lie strictly inside θ ∈ [0, 300], not at a bound (where the load would
   // slide off and the solve reports "falls apart"): both for the published
   // frame (PARTS.md) and for the one fitted on ceilinghook.obj.
-  const PartLibrary lib = LoadPartLibrary(
-      (fabatlas::testing::SourceDir() / "configs/assemblies/parts.yaml").string(), DefaultMeshDir());
+  const PartLibrary lib =
+      LoadPartLibrary((fabatlas::testing::SourceDir() / "configs/assemblies/parts.yaml").string(), DefaultMeshDir());
   Primitive hook = *lib.parts.at("CeilingHook").Find("hook");
   Primitive fitted = hook;
   fitted.frame = ArcFrame(Arc("ceilinghook.obj", -Eigen::Vector3d::Constant(100), Eigen::Vector3d(100, 100, -33)), 300);

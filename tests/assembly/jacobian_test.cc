@@ -13,14 +13,13 @@
 using namespace fabatlas::assembly;
 
 TEST(AssemblyJacobian, AnalyticEqualsAutodiff) {
-  const char* all[] = {"demo", "toothbrush_holder", "charger_holder", "soap_bottle_holder",
-                       "soap_bottle_holder_one_hook", "mug_hanger", "bird_feeder", "paper_towel_holder",
-                       "diaper_caddy", "bathroom_basket", "clip_lights_1", "clip_lights_2", "clip_lights_3",
-                       "clip_lights_4", "reading_nook"};
+  const char* all[] = {
+      "demo",          "toothbrush_holder", "charger_holder",     "soap_bottle_holder", "soap_bottle_holder_one_hook",
+      "mug_hanger",    "bird_feeder",       "paper_towel_holder", "diaper_caddy",       "bathroom_basket",
+      "clip_lights_1", "clip_lights_2",     "clip_lights_3",      "clip_lights_4",      "reading_nook"};
   int checked = 0;
   for (const char* name : all) {
-    const Program p =
-        LoadProgram(fabatlas::testing::SourceDir().string() + "/configs/assemblies/" + name + ".yaml");
+    const Program p = LoadProgram(fabatlas::testing::SourceDir().string() + "/configs/assemblies/" + name + ".yaml");
     for (int start = 0; start < 4; ++start)
       for (int phase = 0; phase < 3; ++phase) {
         const internal::JacobianCheck c = internal::CheckJacobian(p, start, phase);

@@ -115,10 +115,11 @@ TEST(AssemblyProgram, ParseErrorsNameFileLineColumn) {
   const std::string lib = Source() + "/configs/assemblies/parts.yaml";
   const std::string mesh = Shared() + "/data/fabhacks/meshes";
   try {
-    ParseProgram("start_with: {name: door, part: DoorRod, frame: [[0,0,0],[0,0,0]]}\n"
-                 "end_with: {name: b, part: SoapBottle, frame: [[0,0,0],[0,0,0]]}\n"
-                 "steps:\n  - {attach: b.surface, to: door.pole}\n",
-                 "prog.yaml", lib, mesh);
+    ParseProgram(
+        "start_with: {name: door, part: DoorRod, frame: [[0,0,0],[0,0,0]]}\n"
+        "end_with: {name: b, part: SoapBottle, frame: [[0,0,0],[0,0,0]]}\n"
+        "steps:\n  - {attach: b.surface, to: door.pole}\n",
+        "prog.yaml", lib, mesh);
     FAIL() << "expected InputError";
   } catch (const fabatlas::InputError& e) {
     EXPECT_EQ(std::string(e.what()).rfind("prog.yaml:4:", 0), 0u) << e.what();
@@ -143,8 +144,8 @@ TEST(AssemblyProgram, ConnectionSemanticsOfTheReference) {
   // gets the reduced range 77/496 .. 1 − 77/496 and the bottle's surface its
   // fixed base form; the two eyehook rings share the door rod, so their
   // starting t are spread to 1/3 and 2/3.
-  const Program p = LoadProgram(Source() + "/configs/assemblies/soap_bottle_holder.yaml",
-                                Shared() + "/data/fabhacks/meshes");
+  const Program p =
+      LoadProgram(Source() + "/configs/assemblies/soap_bottle_holder.yaml", Shared() + "/data/fabhacks/meshes");
   ASSERT_EQ(p.connections.size(), 5u);
   EXPECT_EQ(p.connections[0].key, "Rod_RingFlex");
   EXPECT_FALSE(p.connections[0].closing);

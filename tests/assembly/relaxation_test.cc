@@ -20,9 +20,20 @@
 using namespace fabatlas::assembly;
 
 TEST(AssemblyRelaxation, TableFiveRelaxationsConvergeAndAreReproducible) {
-  const char* all[] = {"demo", "toothbrush_holder", "charger_holder", "soap_bottle_holder", "mug_hanger",
-                       "bird_feeder", "paper_towel_holder", "diaper_caddy", "bathroom_basket", "clip_lights_1",
-                       "clip_lights_2", "clip_lights_3", "clip_lights_4", "soap_bottle_holder_one_hook"};
+  const char* all[] = {"demo",
+                       "toothbrush_holder",
+                       "charger_holder",
+                       "soap_bottle_holder",
+                       "mug_hanger",
+                       "bird_feeder",
+                       "paper_towel_holder",
+                       "diaper_caddy",
+                       "bathroom_basket",
+                       "clip_lights_1",
+                       "clip_lights_2",
+                       "clip_lights_3",
+                       "clip_lights_4",
+                       "soap_bottle_holder_one_hook"};
   for (const char* name : all) {
     const Program p =
         LoadProgram(fabatlas::testing::SourceDir().string() + "/configs/assemblies/" + std::string(name) + ".yaml");

@@ -23,8 +23,7 @@ using namespace fabatlas::assembly;
 namespace {
 
 PartLibrary Library() {
-  return LoadPartLibrary((fabatlas::testing::SourceDir() / "configs/assemblies/parts.yaml").string(),
-                         DefaultMeshDir());
+  return LoadPartLibrary((fabatlas::testing::SourceDir() / "configs/assemblies/parts.yaml").string(), DefaultMeshDir());
 }
 
 PartMesh Mesh(const Part& part) { return ReadPartMesh(DefaultMeshDir() + "/" + part.mesh); }

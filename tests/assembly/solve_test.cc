@@ -48,9 +48,9 @@ TEST(AssemblySolve, SoapBottleOneEyehookFallsTwoHold) {
 }
 
 TEST(AssemblySolve, TableFiveExamplesAreFeasibleAndStable) {
-  const char* all[] = {"demo", "toothbrush_holder", "charger_holder", "soap_bottle_holder", "mug_hanger",
-                       "bird_feeder", "paper_towel_holder", "diaper_caddy", "bathroom_basket", "clip_lights_1",
-                       "clip_lights_2", "clip_lights_3", "clip_lights_4", "reading_nook"};
+  const char* all[] = {"demo",          "toothbrush_holder",  "charger_holder", "soap_bottle_holder", "mug_hanger",
+                       "bird_feeder",   "paper_towel_holder", "diaper_caddy",   "bathroom_basket",    "clip_lights_1",
+                       "clip_lights_2", "clip_lights_3",      "clip_lights_4",  "reading_nook"};
   int stable = 0;
   for (const char* name : all) {
     const Program p = LoadProgram(Config(name));
@@ -108,12 +108,12 @@ namespace {
 // the load past the rod's normal plane is the tilt.
 SolveSummary HookOnTiltedRod(double tilt_deg, bool friction) {
   const std::string a = std::to_string(90 - tilt_deg);
-  const Program p = ParseProgram("start_with: {name: env, part: DemoRod, frame: [[0, 0, 400], [" + a +
-                                     ", 0, 90]]}\n"
-                                     "end_with: {name: dh, part: DoubleHook, frame: [[0, 0, 370], [0, 0, 0]]}\n"
-                                     "steps:\n  - {attach: dh.hook1, to: env.rod}\n",
-                                 "tilted_rod.yaml", fabatlas::testing::SourceDir().string() +
-                                                        "/configs/assemblies/parts.yaml");
+  const Program p =
+      ParseProgram("start_with: {name: env, part: DemoRod, frame: [[0, 0, 400], [" + a +
+                       ", 0, 90]]}\n"
+                       "end_with: {name: dh, part: DoubleHook, frame: [[0, 0, 370], [0, 0, 0]]}\n"
+                       "steps:\n  - {attach: dh.hook1, to: env.rod}\n",
+                   "tilted_rod.yaml", fabatlas::testing::SourceDir().string() + "/configs/assemblies/parts.yaml");
   SolveOptions o;
   o.slide_friction = friction;
   return SolveAssembly(p, o);

@@ -67,7 +67,8 @@ TEST(ExampleDesigns, ChessPairRedundancyFreeCacheIsSeveralTimesSmallerThanTopLev
 // program GLPK proves optimal within the limit on this machine; cup and vase
 // end at the limit (docs/cache.md), so no bound is claimed for them.
 class ExactExampleDesign : public ::testing::TestWithParam<const char*> {};
-INSTANTIATE_TEST_SUITE_P(Graphs, ExactExampleDesign, ::testing::Values("chess_pair", "pawn", "tube_wall_2d", "tube_wall_3d"));
+INSTANTIATE_TEST_SUITE_P(Graphs, ExactExampleDesign,
+                         ::testing::Values("chess_pair", "pawn", "tube_wall_2d", "tube_wall_3d"));
 
 TEST_P(ExactExampleDesign, ExactOptimumBoundsOptMaxFromBelow) {
   DependencyGraph g = Load(GetParam());

@@ -228,8 +228,8 @@ TEST(CostModel, DeterministicAndGrowingWithGeometry) {
   std::map<std::string, std::pair<double, double>> sums;  // op -> (measured, model)
   std::map<std::string, int> counts;
   for (const char* design : {"chess_pair", "cup", "pawn", "tube_wall_2d", "tube_wall_3d", "vase"}) {
-    const auto graph =
-        testing::ReadGraphFile((fabatlas::testing::SourceDir() / "tests/cache/data" / (std::string(design) + ".graph")).string());
+    const auto graph = testing::ReadGraphFile(
+        (fabatlas::testing::SourceDir() / "tests/cache/data" / (std::string(design) + ".graph")).string());
     std::map<std::string, std::uint64_t> bytes;
     for (const auto& n : graph.nodes) bytes[n.key] = n.bytes;
     for (std::size_t i = 0; i < graph.nodes.size(); ++i) {

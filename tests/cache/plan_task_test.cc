@@ -63,7 +63,8 @@ TEST(PlanTask, SameBitsForShuffledAndRepeatedRecords) {
       std::shuffle(repeated.begin(), repeated.end(), rng);
       v1::CachePlanInput input = Input(g);
       for (const auto& r : repeated) *input.add_subtrees() = r;
-      EXPECT_TRUE(CanonicalBytes(RunCachePlan(input)) == expected) << "the report differs: seed " << seed << " trial " << trial;
+      EXPECT_TRUE(CanonicalBytes(RunCachePlan(input)) == expected)
+          << "the report differs: seed " << seed << " trial " << trial;
     }
   }
 }

@@ -50,9 +50,10 @@ Tally Compare(const CacheOptions& base) {
       if (ratio > 1.05) ++t.mean_off;
     }
   }
-  std::printf("%d cases: OPT-MAX worst case lower than OPT-AVE's in %d, higher in %d; "
-              "mean > 1.05x OPT-AVE's in %d; mean ratio averages %.4f\n",
-              t.cases, t.better, t.worse, t.mean_off, t.mean_ratio_sum / t.cases);
+  std::printf(
+      "%d cases: OPT-MAX worst case lower than OPT-AVE's in %d, higher in %d; "
+      "mean > 1.05x OPT-AVE's in %d; mean ratio averages %.4f\n",
+      t.cases, t.better, t.worse, t.mean_off, t.mean_ratio_sum / t.cases);
   return t;
 }
 
@@ -165,9 +166,9 @@ TEST(ExactCache, ExactOptimumNeverLosesToOptMaxOnSmallGraphs) {
       ASSERT_TRUE(ex.solved) << ex.message;
       ASSERT_TRUE(ex.optimal) << "seed " << seed << " f " << f << ": " << ex.message;
       if (ex.cost.worst_seconds > max.cost.worst_seconds + 1e-9)
-        std::printf("seed %d f %.1f exact %.4f (obj %.4f, %llu bytes) opt_max %.4f (%llu bytes) budget %llu\n", (int)seed, f,
-                    ex.cost.worst_seconds, ex.objective, (unsigned long long)ex.cost.bytes, max.cost.worst_seconds,
-                    (unsigned long long)max.cost.bytes, (unsigned long long)o.budget_bytes);
+        std::printf("seed %d f %.1f exact %.4f (obj %.4f, %llu bytes) opt_max %.4f (%llu bytes) budget %llu\n",
+                    (int)seed, f, ex.cost.worst_seconds, ex.objective, (unsigned long long)ex.cost.bytes,
+                    max.cost.worst_seconds, (unsigned long long)max.cost.bytes, (unsigned long long)o.budget_bytes);
       ++cases;
       // Both caches hold something and shorten the worst preview, so the
       // comparison below is not one an empty answer passes.

@@ -81,8 +81,7 @@ TEST(StartingPoints, LargeSegmentsUseTheDescentAndStayInTheBand) {
   Form form = TwoBandForm();
   auto points = ChooseStartingPoints(form, {.count = 2, .seed = 1, .max_exact_centroid = 4});
   ASSERT_EQ(points.size(), 2u);
-  for (const auto& p : points)
-    EXPECT_TRUE(std::abs(p.u[1] - 0.4) < 1e-9 || std::abs(p.u[1] - 0.6) < 1e-9) << p.u[1];
+  for (const auto& p : points) EXPECT_TRUE(std::abs(p.u[1] - 0.4) < 1e-9 || std::abs(p.u[1] - 0.6) < 1e-9) << p.u[1];
 }
 
 TEST(StartingPoints, NoValidSampleNoStartingPoint) {

@@ -47,7 +47,8 @@ inline SyntheticGraph MakeSyntheticGraph(const SyntheticDesign& d) {
     for (int p = 0; p < d.parameters; ++p)
       if (rng() % 2) depends[static_cast<std::size_t>(j)].push_back(p);
     if (depends[static_cast<std::size_t>(j)].empty())
-      depends[static_cast<std::size_t>(j)].push_back(static_cast<int>(rng() % static_cast<std::uint64_t>(d.parameters)));
+      depends[static_cast<std::size_t>(j)].push_back(
+          static_cast<int>(rng() % static_cast<std::uint64_t>(d.parameters)));
     auto& dep = depends[static_cast<std::size_t>(j)];
     sub_depends[static_cast<std::size_t>(j)] = dep[rng() % dep.size()];
   }
@@ -58,7 +59,8 @@ inline SyntheticGraph MakeSyntheticGraph(const SyntheticDesign& d) {
     for (auto& x : u) x = static_cast<int>(rng() % static_cast<std::uint64_t>(d.values));
     std::string below;
     for (int j = 0; j < d.parts; ++j) {
-      std::string sub = "s" + std::to_string(j) + ":" + std::to_string(u[static_cast<std::size_t>(sub_depends[static_cast<std::size_t>(j)])]);
+      std::string sub = "s" + std::to_string(j) + ":" +
+                        std::to_string(u[static_cast<std::size_t>(sub_depends[static_cast<std::size_t>(j)])]);
       if (!made[sub]) {
         made[sub] = true;
         g.nodes.push_back({sub, {}, uniform(0.05, 1.0), bytes(), true});

@@ -32,7 +32,8 @@ TEST(Cli, ValidateExample) {
 }
 
 TEST(Cli, ValidateRejectsWithOneLineAndExitTwo) {
-  auto path = fabatlas::testing::TempDesign("name: x\nparameters:\n  r: {type: real, min: 2, max: 1}\ntree: {op: sphere, radius: r}\n");
+  auto path = fabatlas::testing::TempDesign(
+      "name: x\nparameters:\n  r: {type: real, min: 2, max: 1}\ntree: {op: sphere, radius: r}\n");
   CommandRun r = Fabatlas("validate " + path.string());
   EXPECT_EQ(r.status, 2);
   EXPECT_EQ(Lines(r.err), 1) << r.err;
@@ -94,7 +95,8 @@ StlFile ReadBinaryStl(const std::filesystem::path& path) {
     const auto& [a, b, c] = v;
     f.volume += (double{a[0]} * (double{b[1]} * c[2] - double{b[2]} * c[1]) -
                  double{a[1]} * (double{b[0]} * c[2] - double{b[2]} * c[0]) +
-                 double{a[2]} * (double{b[0]} * c[1] - double{b[1]} * c[0])) / 6;
+                 double{a[2]} * (double{b[0]} * c[1] - double{b[1]} * c[0])) /
+                6;
     for (int k = 0; k < 3; ++k) {
       ++edges[{v[k], v[(k + 1) % 3]}];
       for (int d = 0; d < 3; ++d) {
@@ -198,7 +200,8 @@ TEST(Cli, MissingDesignAndBadMesh) {
   // A broken mesh (garbage bytes with an .stl name).
   auto dir = fabatlas::testing::TempDesign("", "placeholder").parent_path();
   std::ofstream(dir / "broken.stl") << "solid x\nfacet normal 0 0 nope\n";
-  std::ofstream(dir / "d.yaml") << "name: m\nparameters: {s: {type: real, min: 1, max: 2}}\ntree: {op: mesh, file: broken.stl}\n";
+  std::ofstream(dir / "d.yaml")
+      << "name: m\nparameters: {s: {type: real, min: 1, max: 2}}\ntree: {op: mesh, file: broken.stl}\n";
   r = Fabatlas("eval " + (dir / "d.yaml").string());
   EXPECT_EQ(r.status, 2) << r.out;
   EXPECT_EQ(Lines(r.err), 1) << r.err;
@@ -282,7 +285,8 @@ relationships:
   - {type: cover, name: door covers the opening, covering: [door.y1], covered: [body.opening.y0]}
   - {type: geometric, name: narrow door, expression: "door.w <= 80"}
   - {type: geometric, name: wide opening, expression: "body.opening.w >= 100"}
-)", "door.yaml");
+)",
+                                                      "door.yaml");
   r = Fabatlas("prototype " + conflict.string());
   EXPECT_EQ(r.status, 3) << r.err;
   for (const char* name : {"door covers the opening", "narrow door", "wide opening"})

@@ -51,8 +51,8 @@ std::vector<LeaseRow> LeasesOf(const fs::path& db_path, const std::string& task_
   sqlite3* db = nullptr;
   EXPECT_EQ(sqlite3_open_v2(db_path.string().c_str(), &db, SQLITE_OPEN_READONLY, nullptr), SQLITE_OK);
   sqlite3_stmt* st = nullptr;
-  EXPECT_EQ(sqlite3_prepare_v2(db, "SELECT worker_id, state FROM leases WHERE task_key = ? ORDER BY attempt", -1,
-                               &st, nullptr),
+  EXPECT_EQ(sqlite3_prepare_v2(db, "SELECT worker_id, state FROM leases WHERE task_key = ? ORDER BY attempt", -1, &st,
+                               nullptr),
             SQLITE_OK);
   sqlite3_bind_text(st, 1, task_key.c_str(), -1, SQLITE_TRANSIENT);
   while (sqlite3_step(st) == SQLITE_ROW)
@@ -71,8 +71,8 @@ TEST(ClusterCachePlan, PlanTaskSurvivesAWorkerKilledMidPlanAndPublishesTheSameBy
   ASSERT_FALSE(reference.empty());
 
   // Fast failure detection: a lost lease expires after 1.5 s.
-  CoordinatorProcess c = StartCoordinator(dir / "state", 0,
-                                          {"--lease-ms", "1500", "--heartbeat-ms", "300", "--retry-backoff-ms", "50"});
+  CoordinatorProcess c =
+      StartCoordinator(dir / "state", 0, {"--lease-ms", "1500", "--heartbeat-ms", "300", "--retry-backoff-ms", "50"});
   ASSERT_GT(c.port, 0) << ReadText(dir / "state/coordinator.log");
   // The only worker while sampling runs; it kills itself (SIGKILL) once it
   // has computed a cache plan, before reporting it.

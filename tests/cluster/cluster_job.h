@@ -21,8 +21,7 @@ inline coordinator::JobClient Client(int port, const std::string& token = "") {
 
 // Polls until the job ends (tolerating a coordinator that is down) or the
 // timeout passes; calls between() after each poll.
-inline v1::JobStatus WaitForJob(const std::function<int()>& port, const std::string& id,
-                                std::chrono::seconds timeout,
+inline v1::JobStatus WaitForJob(const std::function<int()>& port, const std::string& id, std::chrono::seconds timeout,
                                 const std::function<void(const v1::JobStatus&)>& between = {}) {
   auto until = std::chrono::steady_clock::now() + timeout;
   v1::JobStatus last;

@@ -113,8 +113,7 @@ struct CoordinatorProcess {
 // Starts fabatlas-coordinator on 127.0.0.1:port (0 = any) and waits for it
 // to listen. `env`: NAME=VALUE settings added to its environment (through
 // /usr/bin/env, so this process's environment stays as it is).
-inline CoordinatorProcess StartCoordinator(const fs::path& state, int port,
-                                           const std::vector<std::string>& extra = {},
+inline CoordinatorProcess StartCoordinator(const fs::path& state, int port, const std::vector<std::string>& extra = {},
                                            const std::vector<std::string>& env = {}) {
   fs::path port_file = state / "port";
   fs::create_directories(state);
@@ -124,9 +123,9 @@ inline CoordinatorProcess StartCoordinator(const fs::path& state, int port,
     argv.push_back("/usr/bin/env");
     argv.insert(argv.end(), env.begin(), env.end());
   }
-  argv.insert(argv.end(), {(BinDir() / "fabatlas-coordinator").string(), "--listen",
-                                   "127.0.0.1:" + std::to_string(port), "--state-dir", state.string(),
-                                   "--port-file", port_file.string()});
+  argv.insert(argv.end(),
+              {(BinDir() / "fabatlas-coordinator").string(), "--listen", "127.0.0.1:" + std::to_string(port),
+               "--state-dir", state.string(), "--port-file", port_file.string()});
   argv.insert(argv.end(), extra.begin(), extra.end());
   CoordinatorProcess c;
   c.pid = Spawn(argv, state / "coordinator.log");

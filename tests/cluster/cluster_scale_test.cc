@@ -58,8 +58,8 @@ TEST(ClusterScale, TenThousandSamplesUnderWorkerAndCoordinatorKillsPublishTheSam
   const std::string reference = ReferenceArtifact(&samples, &tasks);
   ASSERT_GE(samples, 10000);
 
-  const std::vector<std::string> fast = {"--lease-ms", "1500", "--heartbeat-ms", "300", "--retry-backoff-ms", "50",
-                                         "--quarantine-after", "1000"};
+  const std::vector<std::string> fast = {"--lease-ms",         "1500", "--heartbeat-ms",     "300",
+                                         "--retry-backoff-ms", "50",   "--quarantine-after", "1000"};
   CoordinatorProcess c = StartCoordinator(dir / "state", 0, fast);
   ASSERT_GT(c.port, 0) << ReadText(dir / "state/coordinator.log");
   const int port = c.port;
@@ -71,34 +71,37 @@ TEST(ClusterScale, TenThousandSamplesUnderWorkerAndCoordinatorKillsPublishTheSam
   int worker_kills = 0, coordinator_kills = 0;
   std::int64_t done_at_last_kill = 0;
   const auto started = std::chrono::steady_clock::now();
-  v1::JobStatus s = WaitForJob([&] { return port; }, id, std::chrono::seconds(3300), [&](const v1::JobStatus& st) {
-    if (st.tasks_done() <= done_at_last_kill) return;  // one fault per stretch of new progress
-    // Faults follow the job's progress in sample and ΔG tasks (known
-    // exactly from the reference run): the coordinator at 30 % and 70 %, a
-    // worker holding leases every 6 % up to 72 %.
-    const std::int64_t progress = st.tasks_done() * 100 / tasks;
-    const int coordinator_at[] = {30, 70};
-    if (coordinator_kills < 2 && progress >= coordinator_at[coordinator_kills]) {
-      KillAndReap(c.pid);
-      ++coordinator_kills;
-      c = StartCoordinator(dir / "state", port, fast);
-      ASSERT_EQ(c.port, port) << ReadText(dir / "state/coordinator.log");
-    } else if (worker_kills < 12 && st.tasks_leased() > 0 && progress >= 6 * (worker_kills + 1)) {
-      const std::size_t victim = rng() % workers.size();
-      KillAndReap(workers[victim]);
-      workers[victim] = spawn();
-      ++worker_kills;
-    } else {
-      return;
-    }
-    done_at_last_kill = st.tasks_done();
-  });
+  v1::JobStatus s =
+      WaitForJob([&] { return port; }, id, std::chrono::seconds(3300),
+                 [&](const v1::JobStatus& st) {
+                   if (st.tasks_done() <= done_at_last_kill) return;  // one fault per stretch of new progress
+                   // Faults follow the job's progress in sample and ΔG tasks (known
+                   // exactly from the reference run): the coordinator at 30 % and 70 %, a
+                   // worker holding leases every 6 % up to 72 %.
+                   const std::int64_t progress = st.tasks_done() * 100 / tasks;
+                   const int coordinator_at[] = {30, 70};
+                   if (coordinator_kills < 2 && progress >= coordinator_at[coordinator_kills]) {
+                     KillAndReap(c.pid);
+                     ++coordinator_kills;
+                     c = StartCoordinator(dir / "state", port, fast);
+                     ASSERT_EQ(c.port, port) << ReadText(dir / "state/coordinator.log");
+                   } else if (worker_kills < 12 && st.tasks_leased() > 0 && progress >= 6 * (worker_kills + 1)) {
+                     const std::size_t victim = rng() % workers.size();
+                     KillAndReap(workers[victim]);
+                     workers[victim] = spawn();
+                     ++worker_kills;
+                   } else {
+                     return;
+                   }
+                   done_at_last_kill = st.tasks_done();
+                 });
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
-  std::printf("cluster: %lld samples, %lld tasks, %d worker SIGKILLs, %d coordinator kill -9s, %lld lease expiries, "
-              "%lld fenced results, %.1f s wall\n",
-              static_cast<long long>(s.samples_done()), static_cast<long long>(s.tasks_total()), worker_kills,
-              coordinator_kills, static_cast<long long>(s.lease_expiries()), static_cast<long long>(s.fenced_results()),
-              seconds);
+  std::printf(
+      "cluster: %lld samples, %lld tasks, %d worker SIGKILLs, %d coordinator kill -9s, %lld lease expiries, "
+      "%lld fenced results, %.1f s wall\n",
+      static_cast<long long>(s.samples_done()), static_cast<long long>(s.tasks_total()), worker_kills,
+      coordinator_kills, static_cast<long long>(s.lease_expiries()), static_cast<long long>(s.fenced_results()),
+      seconds);
   ASSERT_EQ(s.state(), v1::JOB_STATE_SUCCEEDED) << s.error();
   EXPECT_GE(worker_kills, 10);
   EXPECT_EQ(coordinator_kills, 2);

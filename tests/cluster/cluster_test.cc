@@ -66,8 +66,8 @@ const std::string& ReferenceArtifact() {
 }
 
 // Fast failure detection for the fault tests.
-const std::vector<std::string> kFastLeases = {"--lease-ms", "1500", "--heartbeat-ms", "300",
-                                              "--retry-backoff-ms", "50", "--quarantine-after", "1000"};
+const std::vector<std::string> kFastLeases = {"--lease-ms",         "1500", "--heartbeat-ms",     "300",
+                                              "--retry-backoff-ms", "50",   "--quarantine-after", "1000"};
 
 // Stops the coordinator (SIGTERM: drain and exit) and checks the store.
 void StopAndCheckStore(const CoordinatorProcess& c, const fs::path& state, const std::string& job_id) {
@@ -144,7 +144,8 @@ std::string RunJobOnWorkers(const std::string& name, int workers, int slots, std
   EXPECT_EQ(s.state(), v1::JOB_STATE_SUCCEEDED) << s.error();
   auto outputs = Client(c.port).Fetch(id);
   std::string form = outputs["form.json"];
-  EXPECT_TRUE(outputs[kArtifactName] == ReferenceArtifact()) << name << ": the artifact differs from the in-process one";
+  EXPECT_TRUE(outputs[kArtifactName] == ReferenceArtifact())
+      << name << ": the artifact differs from the in-process one";
   for (pid_t p : pids) ::kill(p, SIGTERM);
   for (pid_t p : pids) EXPECT_EQ(WaitExit(p, std::chrono::seconds(30)), 0);
   // ΔG tasks take the samples' solids from memory or from the blob the
@@ -279,20 +280,21 @@ TEST(ClusterFaults, TwentyWorkerKillsMidTaskLoseNothing) {
   std::mt19937 rng(4);
   int kills = 0;
   std::int64_t progress_at_last_kill = -1;
-  v1::JobStatus s = WaitForJob([&] { return c.port; }, id, std::chrono::seconds(300), [&](const v1::JobStatus& st) {
-    // Kill a random worker while leases are out (mid-task), once per step of
-    // the job's progress since the last kill — a task completed or a lease
-    // expired (a worker of short tasks reports up to eight results per Sync,
-    // so completions alone come in batches): the faults follow the job, not the
-    // speed of the machine.
-    const std::int64_t progress = st.tasks_done() + st.lease_expiries();
-    if (kills >= 30 || st.tasks_leased() == 0 || progress <= progress_at_last_kill) return;
-    std::size_t victim = rng() % workers.size();
-    KillAndReap(workers[victim]);
-    workers[victim] = spawn();
-    ++kills;
-    progress_at_last_kill = progress;
-  });
+  v1::JobStatus s = WaitForJob([&] { return c.port; }, id, std::chrono::seconds(300),
+                               [&](const v1::JobStatus& st) {
+                                 // Kill a random worker while leases are out (mid-task), once per step of
+                                 // the job's progress since the last kill — a task completed or a lease
+                                 // expired (a worker of short tasks reports up to eight results per Sync,
+                                 // so completions alone come in batches): the faults follow the job, not the
+                                 // speed of the machine.
+                                 const std::int64_t progress = st.tasks_done() + st.lease_expiries();
+                                 if (kills >= 30 || st.tasks_leased() == 0 || progress <= progress_at_last_kill) return;
+                                 std::size_t victim = rng() % workers.size();
+                                 KillAndReap(workers[victim]);
+                                 workers[victim] = spawn();
+                                 ++kills;
+                                 progress_at_last_kill = progress;
+                               });
   EXPECT_EQ(s.state(), v1::JOB_STATE_SUCCEEDED) << s.error();
   EXPECT_GE(kills, 20);
   EXPECT_GT(s.lease_expiries(), 0);  // the kills did hit leased work
@@ -741,18 +743,20 @@ TEST(ClusterFaults, CoordinatorKilledThreeTimesResumesByReplay) {
   std::int64_t gap = 5 + rng() % 20;
   int kills = 0;
   std::int64_t done_at_last_kill = -1;
-  v1::JobStatus s = WaitForJob([&] { return port; }, id, std::chrono::seconds(300), [&](const v1::JobStatus& st) {
-    // kill -9 once a random number (5..24) of tasks was done since the last
-    // restart: faults follow the job's progress, not the poll rate.
-    if (kills >= 3 || st.tasks_done() == 0 || st.tasks_done() < std::max<std::int64_t>(done_at_last_kill, 0) + gap)
-      return;
-    gap = 5 + rng() % 20;
-    KillAndReap(c.pid);
-    ++kills;
-    done_at_last_kill = st.tasks_done();
-    c = StartCoordinator(dir / "state", port, kFastLeases);
-    ASSERT_EQ(c.port, port) << ReadText(dir / "state/coordinator.log");
-  });
+  v1::JobStatus s = WaitForJob(
+      [&] { return port; }, id, std::chrono::seconds(300),
+      [&](const v1::JobStatus& st) {
+        // kill -9 once a random number (5..24) of tasks was done since the last
+        // restart: faults follow the job's progress, not the poll rate.
+        if (kills >= 3 || st.tasks_done() == 0 || st.tasks_done() < std::max<std::int64_t>(done_at_last_kill, 0) + gap)
+          return;
+        gap = 5 + rng() % 20;
+        KillAndReap(c.pid);
+        ++kills;
+        done_at_last_kill = st.tasks_done();
+        c = StartCoordinator(dir / "state", port, kFastLeases);
+        ASSERT_EQ(c.port, port) << ReadText(dir / "state/coordinator.log");
+      });
   EXPECT_EQ(kills, 3);
   EXPECT_EQ(s.state(), v1::JOB_STATE_SUCCEEDED) << s.error();
   EXPECT_EQ(Client(port).Fetch(id)["form.json"], ReferenceForm());
@@ -765,8 +769,8 @@ TEST(ClusterFaults, CoordinatorKilledThreeTimesResumesByReplay) {
 TEST(ClusterBadInput, UnreachableCoordinatorIsAOneLineErrorAndNonZeroExit) {
   fs::path dir = FreshDir("unreachable");
   // Port 1 on loopback: nothing listens there.
-  pid_t cli = Spawn({(BinDir() / "fabatlas").string(), "status", "0123456789abcdef", "--coordinator",
-                     "127.0.0.1:1"}, dir / "cli.log");
+  pid_t cli = Spawn({(BinDir() / "fabatlas").string(), "status", "0123456789abcdef", "--coordinator", "127.0.0.1:1"},
+                    dir / "cli.log");
   EXPECT_EQ(WaitExit(cli, std::chrono::seconds(60)), 2);
   std::string text = ReadText(dir / "cli.log");
   EXPECT_NE(text.find("cannot reach coordinator 127.0.0.1:1"), std::string::npos) << text;
@@ -799,8 +803,8 @@ TEST(ClusterBadInput, WrongTokenIsRefused) {
 TEST(ClusterSecurity, TlsWithTokenRunsTheJobAndServesMetrics) {
   fs::path dir = FreshDir("tls");
   fs::path certs = dir / "certs";
-  std::string make = "bash " + (SourceDir() / "ops/tls/make-certs.sh").string() + " " + certs.string() +
-                     " > " + (dir / "certs.log").string() + " 2>&1";
+  std::string make = "bash " + (SourceDir() / "ops/tls/make-certs.sh").string() + " " + certs.string() + " > " +
+                     (dir / "certs.log").string() + " 2>&1";
   ASSERT_EQ(std::system(make.c_str()), 0) << ReadText(dir / "certs.log");
   std::string token = ReadText(certs / "token");
   while (!token.empty() && token.back() == '\n') token.pop_back();
@@ -808,8 +812,8 @@ TEST(ClusterSecurity, TlsWithTokenRunsTheJobAndServesMetrics) {
   const int metrics_port = FreePort();
   CoordinatorProcess c = StartCoordinator(
       dir / "state", 0,
-      {"--tls-cert", (certs / "server.pem").string(), "--tls-key", (certs / "server.key").string(),
-       "--token-file", (certs / "token").string(), "--metrics", "127.0.0.1:" + std::to_string(metrics_port)});
+      {"--tls-cert", (certs / "server.pem").string(), "--tls-key", (certs / "server.key").string(), "--token-file",
+       (certs / "token").string(), "--metrics", "127.0.0.1:" + std::to_string(metrics_port)});
   ASSERT_GT(c.port, 0) << ReadText(dir / "state/coordinator.log");
   protocol::ClientSecurity security;
   security.token = token;
@@ -817,9 +821,9 @@ TEST(ClusterSecurity, TlsWithTokenRunsTheJobAndServesMetrics) {
   coordinator::JobClient client("127.0.0.1:" + std::to_string(c.port), security);
   // Plaintext to a TLS port fails.
   EXPECT_THROW(Client(c.port, token).List(), InputError);
-  pid_t worker = StartWorker(c.port, dir / "w",
-                             {"--tls-ca", (certs / "ca.pem").string(), "--token-file", (certs / "token").string(),
-                              "--slots", "2"});
+  pid_t worker = StartWorker(
+      c.port, dir / "w",
+      {"--tls-ca", (certs / "ca.pem").string(), "--token-file", (certs / "token").string(), "--slots", "2"});
   std::string id = client.Submit(JobPath());
   v1::JobStatus s = client.Watch(id, [](const v1::JobStatus&) { return true; });
   EXPECT_EQ(s.state(), v1::JOB_STATE_SUCCEEDED) << s.error();
@@ -845,9 +849,9 @@ TEST(ClusterSecurity, TlsWithTokenRunsTheJobAndServesMetrics) {
 
 TEST(ClusterSecurity, PlaintextOnANonLoopbackAddressIsRefused) {
   fs::path dir = FreshDir("plaintext");
-  pid_t pid = Spawn({(BinDir() / "fabatlas-coordinator").string(), "--listen", "0.0.0.0:0", "--state-dir",
-                     (dir / "state").string()},
-                    dir / "log");
+  pid_t pid = Spawn(
+      {(BinDir() / "fabatlas-coordinator").string(), "--listen", "0.0.0.0:0", "--state-dir", (dir / "state").string()},
+      dir / "log");
   EXPECT_EQ(WaitExit(pid, std::chrono::seconds(30)), 2);
   std::string text = ReadText(dir / "log");
   EXPECT_NE(text.find("refusing plaintext on non-loopback address 0.0.0.0:0"), std::string::npos) << text;
@@ -897,7 +901,8 @@ struct TwoHosts {
 }  // namespace
 
 TEST(ClusterMultiHost, WorkersInNetworkNamespacesSurviveAPartition) {
-  if (::geteuid() != 0 || Sh("ip netns list") != 0) GTEST_SKIP() << "needs CAP_NET_ADMIN for ip netns; loopback tests cover the rest";
+  if (::geteuid() != 0 || Sh("ip netns list") != 0)
+    GTEST_SKIP() << "needs CAP_NET_ADMIN for ip netns; loopback tests cover the rest";
   TwoHosts hosts;
   if (!hosts.Setup()) GTEST_SKIP() << "cannot create network namespaces and veth pairs here (needs CAP_NET_ADMIN)";
   fs::path dir = FreshDir("netns");
@@ -909,13 +914,19 @@ TEST(ClusterMultiHost, WorkersInNetworkNamespacesSurviveAPartition) {
   while (!token.empty() && token.back() == '\n') token.pop_back();
   // Not loopback: TLS and a token (plaintext would be refused).
   std::vector<std::string> flags = kFastLeases;
-  for (const std::string& f : {std::string("--tls-cert"), (certs / "server.pem").string(), std::string("--tls-key"),
-                               (certs / "server.key").string(), std::string("--token-file"), (certs / "token").string()})
+  for (const std::string& f :
+       {std::string("--tls-cert"), (certs / "server.pem").string(), std::string("--tls-key"),
+        (certs / "server.key").string(), std::string("--token-file"), (certs / "token").string()})
     flags.push_back(f);
   fs::path state = dir / "state";
   fs::create_directories(state);
-  std::vector<std::string> argv = {(BinDir() / "fabatlas-coordinator").string(), "--listen", "0.0.0.0:0",
-                                   "--state-dir", state.string(), "--port-file", (state / "port").string()};
+  std::vector<std::string> argv = {(BinDir() / "fabatlas-coordinator").string(),
+                                   "--listen",
+                                   "0.0.0.0:0",
+                                   "--state-dir",
+                                   state.string(),
+                                   "--port-file",
+                                   (state / "port").string()};
   argv.insert(argv.end(), flags.begin(), flags.end());
   CoordinatorProcess c;
   c.pid = Spawn(argv, state / "coordinator.log");
@@ -972,8 +983,8 @@ TEST(ClusterMultiHost, WorkersInNetworkNamespacesSurviveAPartition) {
 
 TEST(ClusterFaults, TaskThatKillsThreeWorkersIsQuarantinedAndTheJobFinishes) {
   fs::path dir = FreshDir("quarantine");
-  std::vector<std::string> flags = {"--lease-ms", "1500", "--heartbeat-ms", "300", "--retry-backoff-ms", "50",
-                                    "--quarantine-after", "3"};
+  std::vector<std::string> flags = {"--lease-ms",         "1500", "--heartbeat-ms",     "300",
+                                    "--retry-backoff-ms", "50",   "--quarantine-after", "3"};
   CoordinatorProcess c = StartCoordinator(dir / "state", 0, flags);
   ASSERT_GT(c.port, 0);
   std::string id = Client(c.port).Submit(JobPath());
@@ -983,21 +994,24 @@ TEST(ClusterFaults, TaskThatKillsThreeWorkersIsQuarantinedAndTheJobFinishes) {
   for (int i = 0; i < 500 && poison.empty(); ++i) {
     storage::JobStore store(dir / "state/state.db");
     auto tasks = store.Tasks(id);
-    if (!tasks.empty()) poison = tasks.front().key;
-    else std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    if (!tasks.empty())
+      poison = tasks.front().key;
+    else
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
   }
   ASSERT_FALSE(poison.empty());
   ::setenv("FABATLAS_WORKER_CRASH_KEY_PREFIX", poison.c_str(), 1);
   std::vector<pid_t> workers;
   int spawned = 0, deaths = 0;
   for (int i = 0; i < 2; ++i) workers.push_back(StartWorker(c.port, dir / ("w" + std::to_string(spawned++))));
-  v1::JobStatus s = WaitForJob([&] { return c.port; }, id, std::chrono::seconds(240), [&](const v1::JobStatus&) {
-    for (pid_t& p : workers)
-      if (WaitExit(p, std::chrono::milliseconds(0)) != -1) {
-        ++deaths;
-        p = StartWorker(c.port, dir / ("w" + std::to_string(spawned++)));
-      }
-  });
+  v1::JobStatus s = WaitForJob([&] { return c.port; }, id, std::chrono::seconds(240),
+                               [&](const v1::JobStatus&) {
+                                 for (pid_t& p : workers)
+                                   if (WaitExit(p, std::chrono::milliseconds(0)) != -1) {
+                                     ++deaths;
+                                     p = StartWorker(c.port, dir / ("w" + std::to_string(spawned++)));
+                                   }
+                               });
   ::unsetenv("FABATLAS_WORKER_CRASH_KEY_PREFIX");
   EXPECT_EQ(s.state(), v1::JOB_STATE_SUCCEEDED) << s.error();
   EXPECT_EQ(s.tasks_quarantined(), 1);
@@ -1058,7 +1072,8 @@ TEST(ClusterCli, CancelStopsTheJobOverGrpc) {
   // the cancelled job's work and got none.
   for (int i = 0; i < 600 && ReadText(dir / "w0/worker.log").find("worker_connected") == std::string::npos; ++i)
     std::this_thread::sleep_for(std::chrono::milliseconds(50));
-  ASSERT_NE(ReadText(dir / "w0/worker.log").find("worker_connected"), std::string::npos) << ReadText(dir / "w0/worker.log");
+  ASSERT_NE(ReadText(dir / "w0/worker.log").find("worker_connected"), std::string::npos)
+      << ReadText(dir / "w0/worker.log");
   {
     storage::JobStore store(dir / "state/state.db");
     EXPECT_GE(store.CountWorkers(0), 1);
@@ -1069,8 +1084,8 @@ TEST(ClusterCli, CancelStopsTheJobOverGrpc) {
   v1::JobStatus after = Client(c.port).Status(id);
   EXPECT_EQ(after.state(), v1::JOB_STATE_CANCELLED);
   EXPECT_EQ(after.tasks_done(), 0);
-  pid_t unknown =
-      Spawn({(BinDir() / "fabatlas").string(), "cancel", "0123456789abcdef", "--coordinator", target}, dir / "unknown.log");
+  pid_t unknown = Spawn({(BinDir() / "fabatlas").string(), "cancel", "0123456789abcdef", "--coordinator", target},
+                        dir / "unknown.log");
   EXPECT_EQ(WaitExit(unknown, std::chrono::seconds(30)), 2);
   std::string message = ReadText(dir / "unknown.log");
   EXPECT_NE(message.find("NOT_FOUND"), std::string::npos) << message;
@@ -1195,9 +1210,7 @@ TEST(ClusterBlobs, UploadInterruptedByACoordinatorKillResumes) {
   std::string data((5 << 20) + 123, '\0');
   for (char& ch : data) ch = static_cast<char>(rng());
   const std::string digest = Sha256Hex(data);
-  auto stub = [&] {
-    return v1::BlobService::NewStub(protocol::MakeChannel("127.0.0.1:" + std::to_string(port), {}));
-  };
+  auto stub = [&] { return v1::BlobService::NewStub(protocol::MakeChannel("127.0.0.1:" + std::to_string(port), {})); };
   auto committed = [&] {
     grpc::ClientContext ctx;
     protocol::Prepare(ctx, {}, std::chrono::seconds(5));
@@ -1306,8 +1319,9 @@ TEST(ClusterSwept, WorkerComputesTheCapsuleOfASphereAlongASegment) {
   double enclosed = 0;
   for (const auto& t : m.triangles) {
     const auto &a = m.vertices[t[0]], &b = m.vertices[t[1]], &e = m.vertices[t[2]];
-    enclosed += (a[0] * (b[1] * e[2] - b[2] * e[1]) - a[1] * (b[0] * e[2] - b[2] * e[0]) +
-                 a[2] * (b[0] * e[1] - b[1] * e[0])) / 6;
+    enclosed +=
+        (a[0] * (b[1] * e[2] - b[2] * e[1]) - a[1] * (b[0] * e[2] - b[2] * e[0]) + a[2] * (b[0] * e[1] - b[1] * e[0])) /
+        6;
   }
   EXPECT_NEAR(enclosed, volume, 1e-9 * volume);
   ::kill(worker, SIGTERM);
@@ -1479,9 +1493,20 @@ JournalSyncs CountJournalSyncs(const std::string& name, bool fsync_commits, int 
   fs::path dir = FreshDir(name);
   fs::path state = dir / "state";
   fs::create_directories(state);
-  std::vector<std::string> argv = {"/usr/bin/strace", "-f", "-qq", "-y", "-e", "trace=fsync,fdatasync", "-o",
-                                   (dir / "trace.txt").string(), (BinDir() / "fabatlas-coordinator").string(),
-                                   "--listen", "127.0.0.1:0", "--state-dir", state.string(), "--port-file",
+  std::vector<std::string> argv = {"/usr/bin/strace",
+                                   "-f",
+                                   "-qq",
+                                   "-y",
+                                   "-e",
+                                   "trace=fsync,fdatasync",
+                                   "-o",
+                                   (dir / "trace.txt").string(),
+                                   (BinDir() / "fabatlas-coordinator").string(),
+                                   "--listen",
+                                   "127.0.0.1:0",
+                                   "--state-dir",
+                                   state.string(),
+                                   "--port-file",
                                    (state / "port").string()};
   if (fsync_commits) argv.push_back("--fsync-commits");
   const pid_t strace = Spawn(argv, state / "coordinator.log");

@@ -80,8 +80,10 @@ TEST(JobBundle, AssemblyPartMeshesTravelInTheBundle) {
   const protocol::MaterializedBundle m = protocol::Materialize(bundle, dir);
   ::setenv("FABATLAS_SHARED_DIR", (dir / "no-shared-data").c_str(), 1);  // the worker has only the bundle
   const design::SampleResult got = design::EvaluateSample(design::LoadDesign(m.design_file), u);
-  if (shared) ::setenv("FABATLAS_SHARED_DIR", saved.c_str(), 1);
-  else ::unsetenv("FABATLAS_SHARED_DIR");
+  if (shared)
+    ::setenv("FABATLAS_SHARED_DIR", saved.c_str(), 1);
+  else
+    ::unsetenv("FABATLAS_SHARED_DIR");
   EXPECT_EQ(got.valid, expected.valid);
   EXPECT_EQ(got.failure, expected.failure);
   EXPECT_EQ(got.failure_reason, expected.failure_reason);
@@ -124,7 +126,8 @@ TEST(JobBundle, ModelFilesOutsideTheModelsDirectoryAreRefusedWithTheirLine) {
       {"include <" + abs_scad + ">", "include <" + abs_scad + ">", "names an absolute path"},
       {"use <../outside/secret.scad>", "use <../outside/secret.scad>", "leaves the model's directory"},
       {"import(\"" + abs_stl + "\");", "import(\"" + abs_stl + "\")", "names an absolute path"},
-      {"import(file = \"../outside/secret.stl\");", "import(\"../outside/secret.stl\")", "leaves the model's directory"},
+      {"import(file = \"../outside/secret.stl\");", "import(\"../outside/secret.stl\")",
+       "leaves the model's directory"},
       {"surface(file = \"sub/../../outside/secret.dat\");", "surface(\"sub/../../outside/secret.dat\")",
        "leaves the model's directory"},
       {"include <link.scad>", "include <link.scad>", "is a link to " + abs_scad},

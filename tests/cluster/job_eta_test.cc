@@ -63,8 +63,10 @@ JobEtaInput Upto(int batches_done, bool running_samples_next) {
   }
   // The next batch starts now (nothing of it done).
   const int d = batches_done / 2;
-  if (running_samples_next) in.batches.push_back({true, kS[d], 0});
-  else in.batches.push_back({false, kG[d], 0});
+  if (running_samples_next)
+    in.batches.push_back({true, kS[d], 0});
+  else
+    in.batches.push_back({false, kG[d], 0});
   in.running_left = in.batches.back().tasks;
   in.progress = History(200, 100, 100, 0);
   return in;
@@ -98,8 +100,7 @@ TEST(JobEta, TheBudgetEndsRefinementAndTheDepthLimitEndsRounds) {
   // Budget: 2,900 samples leave S_3 = 700 of its 1,600 (and G_3 = 2.5 x 700).
   JobEtaInput in = Upto(4, true);
   in.max_samples = 2900;
-  EXPECT_NEAR(EstimateJobEta(in, Options()).seconds, (800 * kWs + 2000 * kWg + 700 * kWs + 1750 * kWg) / kRate,
-              1e-9);
+  EXPECT_NEAR(EstimateJobEta(in, Options()).seconds, (800 * kWs + 2000 * kWg + 700 * kWs + 1750 * kWg) / kRate, 1e-9);
   EXPECT_NEAR(EstimateJobEta(in, Options()).predicted_samples, 2900, 1e-9);
   // max_depth 2: S_2 and its ΔG batch are the last.
   in.max_samples = 100000;
@@ -127,8 +128,7 @@ TEST(JobEta, TheRunningBatchsOwnCpuWeighsInByTheShareOfItDone) {
   first.max_depth = 1;
   first.running_left = 750;
   first.running_done = {0, 3, 250};
-  EXPECT_NEAR(EstimateJobEta(first, Options()).seconds,
-              (750 * 0.013 + 2000 * kWs + 2.5 * 2000 * 0.013) / kRate, 1e-9);
+  EXPECT_NEAR(EstimateJobEta(first, Options()).seconds, (750 * 0.013 + 2000 * kWs + 2.5 * 2000 * 0.013) / kRate, 1e-9);
   // Before any ΔG result, ΔG tasks are priced as sample tasks.
   JobEtaInput bootstrap = Upto(0, true);
   bootstrap.max_depth = 0;

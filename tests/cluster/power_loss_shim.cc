@@ -81,8 +81,8 @@ F Next(const char* name) {
 // A watched file written since its last sync: its content then, block by
 // block, as far as this process changed it.
 struct Unsynced {
-  int fd = -1;            // the shim's own O_RDWR descriptor of the inode
-  off_t synced_size = 0;  // size at the last sync
+  int fd = -1;                          // the shim's own O_RDWR descriptor of the inode
+  off_t synced_size = 0;                // size at the last sync
   std::map<off_t, std::string> before;  // block index -> its bytes at the last sync (short at the end)
 };
 
@@ -242,8 +242,7 @@ struct Shim {
       }
     }
     RawLine("power_loss_shim: power cut at event " + std::to_string(events) + ": " + std::to_string(dropped) +
-            " unsynced blocks of " + std::to_string(files) + " files dropped, " + std::to_string(kept) +
-            " kept\n");
+            " unsynced blocks of " + std::to_string(files) + " files dropped, " + std::to_string(kept) + " kept\n");
     syscall(SYS_kill, getpid(), SIGKILL);
     for (;;) pause();
   }
@@ -276,8 +275,7 @@ const std::string* WatchedFd(Shim& s, int fd) {
   return it == s.watched.end() ? nullptr : &it->second;
 }
 
-int OpenWatched(Shim& s, const char* path, int flags, mode_t mode, int (*real)(int, const char*, int, ...),
-                int dirfd) {
+int OpenWatched(Shim& s, const char* path, int flags, mode_t mode, int (*real)(int, const char*, int, ...), int dirfd) {
   // A truncating open of a file with content changes it: recorded first.
   if (flags & O_TRUNC) {
     long fd = RawOpen(path, O_RDONLY | O_CLOEXEC);

@@ -51,8 +51,8 @@ fs::path JobPath() { return SourceDir() / "tests/cluster/data/tube_power.yaml"; 
 const char* const kArtifactName = "tube_wall_2d.fabatlas";
 fs::path ShimPath() { return BinDir() / "libfabatlas_power_loss_shim.so"; }
 
-const std::vector<std::string> kFastLeases = {"--lease-ms", "1500", "--heartbeat-ms", "300",
-                                              "--retry-backoff-ms", "50", "--quarantine-after", "1000"};
+const std::vector<std::string> kFastLeases = {"--lease-ms",         "1500", "--heartbeat-ms",     "300",
+                                              "--retry-backoff-ms", "50",   "--quarantine-after", "1000"};
 
 const std::string& ReferenceArtifact() {
   static const std::string bytes = [] {
@@ -112,7 +112,7 @@ std::vector<std::string> WorkerArgs() { return {"--slots", "2", "--log-level", "
 // What the store holds right after a cut, read as the next coordinator
 // would read it (SQLite recovers the WAL on open).
 struct AfterCut {
-  std::string integrity;          // "ok" or SQLite's report
+  std::string integrity;  // "ok" or SQLite's report
   bool job_exists = false;
   std::int64_t acknowledged = 0;  // results the worker saw acknowledged
   std::int64_t lost = 0;          // of them, not done in the store
@@ -137,19 +137,19 @@ AfterCut ReadAfterCut(const fs::path& state, const std::string& job_id, const st
       a.integrity = sql + ": " + sqlite3_errmsg(db);
       return;
     }
-    for (std::size_t i = 0; i < args.size(); ++i) sqlite3_bind_text(s, static_cast<int>(i + 1), args[i].c_str(), -1, SQLITE_TRANSIENT);
+    for (std::size_t i = 0; i < args.size(); ++i)
+      sqlite3_bind_text(s, static_cast<int>(i + 1), args[i].c_str(), -1, SQLITE_TRANSIENT);
     while (sqlite3_step(s) == SQLITE_ROW) row(s);
     sqlite3_finalize(s);
   };
-  query("PRAGMA integrity_check", {}, [&](sqlite3_stmt* s) {
-    a.integrity += reinterpret_cast<const char*>(sqlite3_column_text(s, 0));
-  });
+  query("PRAGMA integrity_check", {},
+        [&](sqlite3_stmt* s) { a.integrity += reinterpret_cast<const char*>(sqlite3_column_text(s, 0)); });
   if (!job_id.empty()) query("SELECT 1 FROM jobs WHERE id = ?", {job_id}, [&](sqlite3_stmt*) { a.job_exists = true; });
   for (const auto& id : acked) {
     ++a.acknowledged;
     bool done = false;
-    query("SELECT t.state, t.completions FROM leases l JOIN tasks t ON t.key = l.task_key WHERE l.lease_id = ?",
-          {id}, [&](sqlite3_stmt* s) { done = sqlite3_column_int(s, 0) >= 2 && sqlite3_column_int(s, 1) == 1; });
+    query("SELECT t.state, t.completions FROM leases l JOIN tasks t ON t.key = l.task_key WHERE l.lease_id = ?", {id},
+          [&](sqlite3_stmt* s) { done = sqlite3_column_int(s, 0) >= 2 && sqlite3_column_int(s, 1) == 1; });
     if (!done) ++a.lost;
   }
   sqlite3_close(db);
@@ -181,7 +181,8 @@ std::map<std::string, std::int64_t> CountEvents(bool fsync_commits) {
   const fs::path state = dir / "state";
   std::vector<std::string> args = kFastLeases;
   if (fsync_commits) args.push_back("--fsync-commits");
-  CoordinatorProcess c = StartCoordinator(state, 0, args, ShimEnv(state, {"FABATLAS_SHIM_EVENTS=" + (dir / "events").string()}));
+  CoordinatorProcess c =
+      StartCoordinator(state, 0, args, ShimEnv(state, {"FABATLAS_SHIM_EVENTS=" + (dir / "events").string()}));
   EXPECT_GT(c.port, 0) << ReadText(state / "coordinator.log");
   pid_t worker = StartWorker(c.port, dir / "w", WorkerArgs());
   const std::string id = Client(c.port).Submit(JobPath());
@@ -201,8 +202,8 @@ std::int64_t EventsOfRun(bool fsync_commits) {
     const auto counts = CountEvents(fsync_commits);
     events[fsync_commits] = counts.at("events");
     std::cerr << "undisturbed job" << (fsync_commits ? " with --fsync-commits" : "") << ": " << counts.at("events")
-              << " watched events, " << counts.at("store_writes") << " job store writes, "
-              << counts.at("blob_writes") << " blob store writes\n";
+              << " watched events, " << counts.at("store_writes") << " job store writes, " << counts.at("blob_writes")
+              << " blob store writes\n";
   }
   return events[fsync_commits];
 }
@@ -216,7 +217,7 @@ int FailuresSoFar() {
 }
 
 struct PointOutcome {
-  bool cut = false;        // the coordinator died at its crash point
+  bool cut = false;  // the coordinator died at its crash point
   std::int64_t acknowledged = 0, lost = 0;
   double cut_seconds = 0, total_seconds = 0;  // from the point's start
   bool failed = false;
@@ -227,7 +228,8 @@ struct PointOutcome {
 PointOutcome RunPoint(std::uint64_t seed, bool fsync_commits) {
   const std::int64_t events = EventsOfRun(fsync_commits);
   const std::uint64_t r = Mix(seed);
-  const std::int64_t crash_at = 1 + static_cast<std::int64_t>(r % static_cast<std::uint64_t>(std::max<std::int64_t>(events, 1)));
+  const std::int64_t crash_at =
+      1 + static_cast<std::int64_t>(r % static_cast<std::uint64_t>(std::max<std::int64_t>(events, 1)));
   const bool torn = (Mix(r) & 3) == 0;  // a quarter of the points tear and reorder blocks
   const std::string what = "seed " + std::to_string(seed) + (fsync_commits ? " --fsync-commits" : "") +
                            " (crash at event " + std::to_string(crash_at) + " of " + std::to_string(events) +
@@ -259,11 +261,12 @@ PointOutcome RunPoint(std::uint64_t seed, bool fsync_commits) {
   struct Gone {};
   if (!gone && !id.empty()) {
     try {
-      s = WaitForJob([&] { return port; }, id, std::chrono::seconds(120), [&](const v1::JobStatus&) {
-        if (WaitExit(c.pid, std::chrono::milliseconds(0)) == -1) return;
-        gone = true;
-        throw Gone{};
-      });
+      s = WaitForJob([&] { return port; }, id, std::chrono::seconds(120),
+                     [&](const v1::JobStatus&) {
+                       if (WaitExit(c.pid, std::chrono::milliseconds(0)) == -1) return;
+                       gone = true;
+                       throw Gone{};
+                     });
     } catch (const Gone&) {
     }
   }
@@ -354,10 +357,10 @@ void RunPoints(bool fsync_commits, std::int64_t default_points) {
               << o.lost << ", " << o.cut_seconds << " s to the cut, " << o.total_seconds << " s in all"
               << (o.failed ? "  FAILED" : "") << "\n";
   }
-  std::cerr << "power loss " << (fsync_commits ? "with" : "without") << " --fsync-commits: " << points
-            << " points, " << cuts << " cuts, " << acknowledged << " acknowledged results before the cuts, " << lost
-            << " of them lost, "
-            << std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count() << " s\n";
+  std::cerr << "power loss " << (fsync_commits ? "with" : "without") << " --fsync-commits: " << points << " points, "
+            << cuts << " cuts, " << acknowledged << " acknowledged results before the cuts, " << lost
+            << " of them lost, " << std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count()
+            << " s\n";
   EXPECT_GT(cuts, 0);
 }
 
@@ -368,12 +371,13 @@ TEST(PowerLoss, WithoutFsyncCommitsLostWorkIsRedoneAndTheArtifactIsTheSame) { Ru
 // One fault loop: faults of `error` on every `stride`-th write of the files
 // matching `match`, from write `first`, each for 300 ms.
 void RunFaultLoop(const std::string& match, const std::string& error, std::int64_t first, std::int64_t stride) {
-  const std::string what = error + " on write " + std::to_string(first) + " + n*" + std::to_string(stride) + " of '" +
-                           match + "'";
+  const std::string what =
+      error + " on write " + std::to_string(first) + " + n*" + std::to_string(stride) + " of '" + match + "'";
   SCOPED_TRACE(what);
   const int failures_before = FailuresSoFar();
   const auto started = std::chrono::steady_clock::now();
-  const fs::path dir = FreshDir("fault_" + std::to_string(first) + "_" + error + (match == "state.db" ? "_store" : "_blobs"));
+  const fs::path dir =
+      FreshDir("fault_" + std::to_string(first) + "_" + error + (match == "state.db" ? "_store" : "_blobs"));
   const fs::path state = dir / "state";
   CoordinatorProcess c;
   // A fault while the store opens ends the start with one line and exit

@@ -56,9 +56,9 @@ TEST_P(Roads, InProcessAndClusterPublishTheSameBytes) {
   // clip-lights family's meshes: ../shared/data/...), as `fabatlas` is run
   // from there.
   fs::current_path(SourceDir());
-  const pid_t local = Spawn({(BinDir() / "fabatlas").string(), "sample", job.string(), "--out",
-                             (dir / "process").string()},
-                            dir / "process.log");
+  const pid_t local =
+      Spawn({(BinDir() / "fabatlas").string(), "sample", job.string(), "--out", (dir / "process").string()},
+            dir / "process.log");
   ASSERT_EQ(WaitExit(local, std::chrono::minutes(10)), 0) << ReadText(dir / "process.log");
   const pid_t cluster = Spawn({(BinDir() / "fabatlas").string(), "run", job.string(), "--workers", "2", "--out",
                                (dir / "cluster").string(), "--quiet"},
@@ -68,14 +68,14 @@ TEST_P(Roads, InProcessAndClusterPublishTheSameBytes) {
   std::vector<std::string> compared;
   for (const auto& e : fs::directory_iterator(dir / "process")) {
     const std::string file = e.path().filename().string();
-    const bool published = e.path().extension() == ".fabatlas" || file == "form.json" ||
-                           file == "swept_volumes.json" || file.rfind("swept_", 0) == 0;
+    const bool published = e.path().extension() == ".fabatlas" || file == "form.json" || file == "swept_volumes.json" ||
+                           file.rfind("swept_", 0) == 0;
     if (!e.is_regular_file() || !published) continue;
     compared.push_back(file);
     const std::string process = ReadText(e.path()), on_cluster = ReadText(dir / "cluster" / file);
     EXPECT_FALSE(process.empty()) << file;
-    EXPECT_TRUE(process == on_cluster) << name << ": " << file << " differs (" << process.size() << " bytes in process, "
-                                       << on_cluster.size() << " on the cluster)";
+    EXPECT_TRUE(process == on_cluster) << name << ": " << file << " differs (" << process.size()
+                                       << " bytes in process, " << on_cluster.size() << " on the cluster)";
   }
   // The artifact and form.json at least; cabinet_insert's swept volume too.
   EXPECT_GE(compared.size(), 2u);

@@ -110,7 +110,8 @@ TEST(LoadJobContext, AModelNamingAFileOutsideItsBundleIsRefusedBeforeItIsRead) {
   ASSERT_EQ(bundle.files().count("model.scad"), 1u);
   (*bundle.mutable_files())["model.scad"] = "size = 10;\ncube(size);\n" + statement + ";\n";
 
-  auto ctx = worker::LoadJobContext(bundle, dir / "cache", 256, [](const std::string& bytes) { return Sha256Hex(bytes); });
+  auto ctx =
+      worker::LoadJobContext(bundle, dir / "cache", 256, [](const std::string& bytes) { return Sha256Hex(bytes); });
   ASSERT_TRUE(ctx->evaluator);
   sampling::SamplePoint point;
   point.key = {0};

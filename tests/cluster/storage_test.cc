@@ -45,8 +45,7 @@ TEST(ClusterStorage, SHA256OfKnownVector) {
   // FIPS 180-2 test vector "abc".
   fs::path dir = FreshDir("sha");
   std::ofstream(dir / "abc") << "abc";
-  EXPECT_EQ(Sha256OfFile(dir / "abc"),
-            "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad");
+  EXPECT_EQ(Sha256OfFile(dir / "abc"), "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad");
 }
 
 TEST(ClusterStorage, LeaseCompleteDuplicateAndDurability) {
@@ -387,8 +386,8 @@ TEST(ClusterStorage, StealingIsCappedAtTheIdleSlots) {
   ASSERT_TRUE(store.CreateJob({"job1", std::string(64, 'a'), "d", JobState::kRunning, "", 1, 0}));
   std::vector<NewTask> batch;
   for (int i = 0; i < 6; ++i)
-    batch.push_back({Key(i), "job1", 2, "p" + std::to_string(i), i == 0 ? std::vector<std::string>{}
-                                                                        : std::vector<std::string>{"w2"}});
+    batch.push_back({Key(i), "job1", 2, "p" + std::to_string(i),
+                     i == 0 ? std::vector<std::string>{} : std::vector<std::string>{"w2"}});
   store.AddTasks(batch);
   auto keys = [](const std::vector<LeaseGrant>& grants) {
     std::vector<std::string> got;
@@ -420,9 +419,9 @@ TEST(ClusterStorage, StoreWithoutAffinityColumnIsMigrated) {
   {
     sqlite3* db = nullptr;
     ASSERT_EQ(sqlite3_open((dir / "state.db").string().c_str(), &db), SQLITE_OK);
-    EXPECT_EQ(sqlite3_exec(db, "DROP INDEX tasks_queued; ALTER TABLE tasks DROP COLUMN affine;", nullptr,
-                           nullptr, nullptr),
-              SQLITE_OK);
+    EXPECT_EQ(
+        sqlite3_exec(db, "DROP INDEX tasks_queued; ALTER TABLE tasks DROP COLUMN affine;", nullptr, nullptr, nullptr),
+        SQLITE_OK);
     sqlite3_close(db);
   }
   JobStore store(dir / "state.db");
@@ -454,8 +453,10 @@ TEST(ClusterStorage, StoreWithTheEarlierIndexesAndLeaseIdsIsMigrated) {
     sqlite3* db = nullptr;
     EXPECT_EQ(sqlite3_open((dir / "state.db").string().c_str(), &db), SQLITE_OK);
     sqlite3_stmt* s = nullptr;
-    sqlite3_prepare_v2(db, "SELECT name FROM sqlite_schema WHERE type = 'index' AND name NOT LIKE 'sqlite_%' "
-                           "AND (tbl_name = 'tasks' OR tbl_name = 'leases') ORDER BY name", -1, &s, nullptr);
+    sqlite3_prepare_v2(db,
+                       "SELECT name FROM sqlite_schema WHERE type = 'index' AND name NOT LIKE 'sqlite_%' "
+                       "AND (tbl_name = 'tasks' OR tbl_name = 'leases') ORDER BY name",
+                       -1, &s, nullptr);
     while (sqlite3_step(s) == SQLITE_ROW) names.push_back(reinterpret_cast<const char*>(sqlite3_column_text(s, 0)));
     sqlite3_finalize(s);
     sqlite3_close(db);
@@ -465,11 +466,13 @@ TEST(ClusterStorage, StoreWithTheEarlierIndexesAndLeaseIdsIsMigrated) {
   // As the previous version wrote it: its indexes, and the first lease's id
   // from its task key.
   const std::string old_id = grants[0].task_key.substr(0, 16) + ".1";
-  exec("DROP INDEX tasks_of_job; DROP INDEX tasks_queued; DROP INDEX leases_due; DROP INDEX leases_of_worker; "
-       "CREATE INDEX tasks_job ON tasks (job_id, state); CREATE INDEX tasks_neutral ON tasks (state, affine, seq); "
-       "CREATE INDEX leases_active ON leases (state, deadline_ms); "
-       "CREATE INDEX leases_worker ON leases (worker_id, state); "
-       "UPDATE leases SET lease_id = '" + old_id + "' WHERE lease_id = '" + grants[0].lease_id + "'");
+  exec(
+      "DROP INDEX tasks_of_job; DROP INDEX tasks_queued; DROP INDEX leases_due; DROP INDEX leases_of_worker; "
+      "CREATE INDEX tasks_job ON tasks (job_id, state); CREATE INDEX tasks_neutral ON tasks (state, affine, seq); "
+      "CREATE INDEX leases_active ON leases (state, deadline_ms); "
+      "CREATE INDEX leases_worker ON leases (worker_id, state); "
+      "UPDATE leases SET lease_id = '" +
+      old_id + "' WHERE lease_id = '" + grants[0].lease_id + "'");
   JobStore store(dir / "state.db");
   EXPECT_EQ(indexes(), (std::vector<std::string>{"leases_due", "leases_of_worker", "tasks_of_job", "tasks_queued"}));
   EXPECT_EQ(store.ActiveLeases(), 2);
@@ -668,8 +671,10 @@ TEST(ClusterStorage, ReferencedBlobsAndCollection) {
   EXPECT_EQ(kept.blobs_removed, 0);
   EXPECT_TRUE(blobs.Contains(stray));
   // A cutoff after them: only the stray goes while the job runs.
-  const std::int64_t later = std::chrono::duration_cast<std::chrono::milliseconds>(
-                                 std::chrono::system_clock::now().time_since_epoch()).count() + 60000;
+  const std::int64_t later =
+      std::chrono::duration_cast<std::chrono::milliseconds>(std::chrono::system_clock::now().time_since_epoch())
+          .count() +
+      60000;
   auto swept = blobs.Collect(store.ReferencedBlobs(), later);
   EXPECT_EQ(swept.blobs_removed, 1);
   EXPECT_FALSE(blobs.Contains(stray));
@@ -707,8 +712,9 @@ TEST(ClusterStorage, CollectKeepsAPartialUploadForADayThenRemovesIt) {
   const std::string finished = blobs.Put("an unreferenced finished blob");
   const fs::path partial = dir / "blobs/partial" / digest;
   ASSERT_TRUE(fs::exists(partial));
-  const std::int64_t now_ms = std::chrono::duration_cast<std::chrono::milliseconds>(
-                                  std::chrono::system_clock::now().time_since_epoch()).count();
+  const std::int64_t now_ms =
+      std::chrono::duration_cast<std::chrono::milliseconds>(std::chrono::system_clock::now().time_since_epoch())
+          .count();
   const std::int64_t day_ms = 86400000, hour_ms = 3600000;
   const auto set_age = [&](const fs::path& file, std::int64_t modified_ms) {
     timespec times[2];

@@ -56,8 +56,8 @@ variables: {d: {min: 0, max: 10, default: 4}}
 constraints: ["d >= r"]
 tree: {op: sphere, radius: r}
 )");
-  EXPECT_NEAR(design::SolveConstraints(d, {{"r", 1}}).values["d"], 4.0, 1e-6);   // inactive: least change
-  EXPECT_NEAR(design::SolveConstraints(d, {{"r", 6}}).values["d"], 6.0, 1e-5);   // active: moves the least
+  EXPECT_NEAR(design::SolveConstraints(d, {{"r", 1}}).values["d"], 4.0, 1e-6);  // inactive: least change
+  EXPECT_NEAR(design::SolveConstraints(d, {{"r", 6}}).values["d"], 6.0, 1e-5);  // active: moves the least
 }
 
 TEST(ConstraintSolve, ReportsUnsatisfiable) {
@@ -91,7 +91,8 @@ TEST(ConstraintSolve, DefinitionsNeverCallASatisfiablePointUnsatisfiable) {
   for (const char* name : {"holey_vase", "vase", "cup", "toy_car", "yinyang_cup2", "pawn", "tealight", "chess_pair",
                            "box_8d", "tube_wall_2d", "tube_wall_3d", "sandal"}) {
     SCOPED_TRACE(name);
-    const design::Design d = design::LoadDesign(fabatlas::testing::SourceDir() / "configs/designs" / (std::string(name) + ".yaml"));
+    const design::Design d =
+        design::LoadDesign(fabatlas::testing::SourceDir() / "configs/designs" / (std::string(name) + ".yaml"));
     std::mt19937_64 rng(33);
     const int points = std::string(name) == "holey_vase" ? 1500 : 150;
     int decided = 0, unsat = 0;

@@ -57,9 +57,10 @@ TEST(ExampleDesigns, ImportsARealMesh) {
   // lists as 24398 mm^3. Scaling by s scales the volume by s^3.
   auto mesh = SharedDir() / "data/fabhacks/meshes/toothbrush.obj";
   ASSERT_TRUE(std::filesystem::exists(mesh)) << mesh;
-  design::Design d = design::LoadDesign(TempDesign(
-      "name: toothbrush\nvoxel_size: 0.5\nparameters: {s: {type: real, min: 0.5, max: 1.5, default: 1}}\n"
-      "tree: {op: scale, factor: s, children: [{op: mesh, file: " + mesh.string() + "}]}\nproperties: [volume]\n"));
+  design::Design d = design::LoadDesign(
+      TempDesign("name: toothbrush\nvoxel_size: 0.5\nparameters: {s: {type: real, min: 0.5, max: 1.5, default: 1}}\n"
+                 "tree: {op: scale, factor: s, children: [{op: mesh, file: " +
+                 mesh.string() + "}]}\nproperties: [volume]\n"));
   design::SampleResult r = Eval(d, "");
   ASSERT_TRUE(r.valid) << r.failure_reason;
   EXPECT_NEAR(r.properties["volume"], 24398, 0.01 * 24398);
@@ -72,9 +73,10 @@ TEST(ExampleDesigns, OpenScadModelAtTwoSettings) {
   // Debian's openscad ships the customizer example candleStand.scad.
   std::filesystem::path scad = "/usr/share/openscad/examples/Parametric/candleStand.scad";
   if (!std::filesystem::exists(scad)) GTEST_SKIP() << "openscad examples not installed";
-  design::Design d = design::LoadDesign(TempDesign(
-      "name: candles\nvoxel_size: 1.0\nparameters: {count: {type: integer, min: 3, max: 14, default: 7}}\n"
-      "tree: {op: openscad, file: " + scad.string() + ", set: {count: count}}\nproperties: [volume]\n"));
+  design::Design d = design::LoadDesign(
+      TempDesign("name: candles\nvoxel_size: 1.0\nparameters: {count: {type: integer, min: 3, max: 14, default: 7}}\n"
+                 "tree: {op: openscad, file: " +
+                 scad.string() + ", set: {count: count}}\nproperties: [volume]\n"));
   design::SampleResult a = Eval(d, "count=5"), b = Eval(d, "count=9");
   ASSERT_TRUE(a.valid) << a.failure_reason;
   ASSERT_TRUE(b.valid) << b.failure_reason;

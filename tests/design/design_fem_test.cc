@@ -107,7 +107,8 @@ TEST(DesignFem, CantileverMatchesEulerBernoulli) {
   const double I = b * h * h * h / 12;
   const double expected = F * L * L * L / (3 * E * I);  // 0.1 mm
   for (auto [voxel, tolerance] : {std::pair{2.0, 0.01}, std::pair{1.25, 0.01}}) {
-    design::Design d = design::LoadDesign(TempDesign(Cantilever(L, b, h, voxel, E, F, "[[-1, -1, -1], [0.01, 11, 11]]")));
+    design::Design d =
+        design::LoadDesign(TempDesign(Cantilever(L, b, h, voxel, E, F, "[[-1, -1, -1], [0.01, 11, 11]]")));
     auto start = std::chrono::steady_clock::now();
     design::SampleResult r = Evaluate(d);
     double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -143,7 +144,8 @@ void ExpectOneLineError(const std::string& text, const std::string& needle) {
 // A region that selects nothing at a sample makes that sample invalid with
 // its reason (the job goes on); it depends on the sample's geometry.
 TEST(DesignFem, EmptyFixedRegionMakesTheSampleInvalid) {
-  design::Design d = design::LoadDesign(TempDesign(Cantilever(100, 10, 10, 2, 1000, 0.25, "[[-10, -10, -10], [-5, -5, -5]]")));
+  design::Design d =
+      design::LoadDesign(TempDesign(Cantilever(100, 10, 10, 2, 1000, 0.25, "[[-10, -10, -10], [-5, -5, -5]]")));
   design::SampleResult r = Evaluate(d);
   EXPECT_FALSE(r.valid);
   EXPECT_EQ(r.failure, design::kLoadCaseMissesSolid);
@@ -155,7 +157,8 @@ TEST(DesignFem, EmptyFixedRegionMakesTheSampleInvalid) {
 // at x = 100, L = 100.5 voxelises the beam to x = 100 (the cell [100, 102]
 // has its centre outside), which the box misses.
 TEST(DesignFem, LoadedRegionMissingAtOneSampleOnlyInvalidatesThatSample) {
-  design::Design d = design::LoadDesign(TempDesign(Cantilever(100, 10, 10, 2, 1000, 0.25, "[[-1, -1, -1], [0.01, 11, 11]]")));
+  design::Design d =
+      design::LoadDesign(TempDesign(Cantilever(100, 10, 10, 2, 1000, 0.25, "[[-1, -1, -1], [0.01, 11, 11]]")));
   design::SampleResult hit = Evaluate(d, "L=100");
   EXPECT_TRUE(hit.valid) << hit.failure << ": " << hit.failure_reason;
   design::SampleResult miss = Evaluate(d, "L=100.5");

@@ -72,11 +72,11 @@ TEST(DesignModel, PointsTakeDefaultsAndRejectBadValues) {
   EXPECT_DOUBLE_EQ(u["r"], 1.5);
   EXPECT_DOUBLE_EQ(u["n"], 3);
   EXPECT_DOUBLE_EQ(u["finish"], 0);
-  EXPECT_THROW(design::ParsePoint(d, "r=5", "--at"), InputError);      // out of range
-  EXPECT_THROW(design::ParsePoint(d, "r=nan", "--at"), InputError);    // NaN
-  EXPECT_THROW(design::ParsePoint(d, "q=1", "--at"), InputError);      // unknown name
-  EXPECT_THROW(design::ParsePoint(d, "n=1.5", "--at"), InputError);    // not whole
-  EXPECT_THROW(design::ParsePoint(d, "r", "--at"), InputError);        // not name=value
+  EXPECT_THROW(design::ParsePoint(d, "r=5", "--at"), InputError);    // out of range
+  EXPECT_THROW(design::ParsePoint(d, "r=nan", "--at"), InputError);  // NaN
+  EXPECT_THROW(design::ParsePoint(d, "q=1", "--at"), InputError);    // unknown name
+  EXPECT_THROW(design::ParsePoint(d, "n=1.5", "--at"), InputError);  // not whole
+  EXPECT_THROW(design::ParsePoint(d, "r", "--at"), InputError);      // not name=value
 }
 
 TEST(DesignModel, MalformedYamlNamesLineAndColumn) {

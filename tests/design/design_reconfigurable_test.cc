@@ -124,7 +124,8 @@ TEST(DesignReconfigurable, StateGraphHoldsWhatTheCheckTested) {
   std::string text = kSlider;
   text.erase(text.find("checks:"));
   const design::Design unchecked = design::LoadDesign(TempDesign(text));
-  const design::StateGraphResult u = design::EvaluateStateGraph(unchecked, design::ParsePoint(unchecked, "dy=0", "--at"));
+  const design::StateGraphResult u =
+      design::EvaluateStateGraph(unchecked, design::ParsePoint(unchecked, "dy=0", "--at"));
   EXPECT_TRUE(u.sample.valid);
   EXPECT_FALSE(u.graph.collisions_checked);
   EXPECT_EQ(u.graph.objects.size(), 2u);
@@ -173,7 +174,8 @@ voxel_size: 0.5
 parameters:
   r: {type: real, min: 4, max: 6, default: 5}
 objects:
-  plate:)") + plate + R"(
+  plate:)") +
+         plate + R"(
   ball: {op: sphere, radius: r}
 states: [above, below]
 transitions:
@@ -376,8 +378,7 @@ TEST(DesignReconfigurable, ExactSubtractionRejectsBadMeshes) {
   mesh::TriangleMesh overlapping;
   cube(0, 0, 0, 2, &overlapping);
   cube(1, 1, 1, 2, &overlapping);
-  EXPECT_NE(failure_of(overlapping).find("operand 1 intersects itself"), std::string::npos)
-      << failure_of(overlapping);
+  EXPECT_NE(failure_of(overlapping).find("operand 1 intersects itself"), std::string::npos) << failure_of(overlapping);
   mesh::TriangleMesh open = cutter;
   open.triangles.pop_back();
   EXPECT_NE(failure_of(open).find("operand 1 is not closed"), std::string::npos) << failure_of(open);

@@ -132,7 +132,8 @@ TEST(DesignResolve, RepairableOnlyWithinTheDeclaredParameters) {
     with("lift, nope");
     ADD_FAILURE() << "loaded";
   } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("repair_with: 'nope' is not an exposed real parameter"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("repair_with: 'nope' is not an exposed real parameter"), std::string::npos)
+        << e.what();
   }
 }
 
@@ -141,8 +142,8 @@ TEST(DesignResolve, RejectsUnknownParametersAndDesignsWithoutTransitions) {
   design::ResolutionOptions o;
   o.parameters = {"nope"};
   EXPECT_THROW(design::ResolutionHints(d, design::DefaultPoint(d), o), InputError);
-  const design::Design plain =
-      design::LoadDesign(TempDesign("name: p\nparameters:\n  r: {type: real, min: 1, max: 2}\ntree: {op: sphere, radius: r}\n"));
+  const design::Design plain = design::LoadDesign(
+      TempDesign("name: p\nparameters:\n  r: {type: real, min: 1, max: 2}\ntree: {op: sphere, radius: r}\n"));
   EXPECT_THROW(design::ResolveCollisions(plain, design::DefaultPoint(plain)), InputError);
 }
 

@@ -85,7 +85,8 @@ double ClampedPlateCentre(int n, int layers, Element element, double* reference)
   const double D = E * t * t * t / (12 * (1 - nu * nu));
   const double q = 0.01 * t * D / (0.00126532 * a * a * a * a);
   *reference = 0.00126532 * q * a * a * a * a / D;
-  const HexMesh mesh = HexMeshFromQuadPatch({Vec2{0, 0}, Vec2{a / 2, 0}, Vec2{a / 2, a / 2}, Vec2{0, a / 2}}, n, n, t, layers);
+  const HexMesh mesh =
+      HexMeshFromQuadPatch({Vec2{0, 0}, Vec2{a / 2, 0}, Vec2{a / 2, a / 2}, Vec2{0, a / 2}}, n, n, t, layers);
   auto id = [n](int i, int j, int k) { return i + (n + 1) * (j + (n + 1) * k); };
   BoundaryConditions bc;
   for (int k = 0; k <= layers; ++k)
@@ -102,7 +103,8 @@ double ClampedPlateCentre(int n, int layers, Element element, double* reference)
   pressure.total_force = {0, 0, -q * (a / 2) * (a / 2)};
   for (int j = 0; j < n; ++j)
     for (int i = 0; i < n; ++i)
-      pressure.faces.push_back({id(i, j, layers), id(i + 1, j, layers), id(i + 1, j + 1, layers), id(i, j + 1, layers)});
+      pressure.faces.push_back(
+          {id(i, j, layers), id(i + 1, j, layers), id(i + 1, j + 1, layers), id(i, j + 1, layers)});
   bc.tractions.push_back(pressure);
   StaticSolveOptions o;
   o.element = element;

@@ -20,7 +20,9 @@ inline Elastica ElasticaTip(double alpha) {
     const int n = 4000;
     const double h = 1.0 / n;
     double th = 0, k = k0, x = 0, y = 0;
-    auto f = [alpha](double t, double kk) { return std::array<double, 4>{kk, -alpha * std::cos(t), std::cos(t), std::sin(t)}; };
+    auto f = [alpha](double t, double kk) {
+      return std::array<double, 4>{kk, -alpha * std::cos(t), std::cos(t), std::sin(t)};
+    };
     for (int i = 0; i < n; ++i) {
       const auto a = f(th, k);
       const auto b = f(th + 0.5 * h * a[0], k + 0.5 * h * a[1]);

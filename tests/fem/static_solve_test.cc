@@ -32,8 +32,7 @@ enum class Thickness { kPublishedSymmetricSlab, kPlaneStrain };
 
 StaticSolveSummary SolveCooksMembrane(int n, Thickness mode,
                                       StaticSolveOptions::Element element = StaticSolveOptions::Element::kQ1) {
-  const HexMesh mesh = HexMeshFromQuadPatch({Vec2{0, 0}, Vec2{48, 44}, Vec2{48, 60}, Vec2{0, 44}},
-                                            n, n, 1.0, 1);
+  const HexMesh mesh = HexMeshFromQuadPatch({Vec2{0, 0}, Vec2{48, 44}, Vec2{48, 60}, Vec2{0, 44}}, n, n, 1.0, 1);
   auto id = [n](int i, int j, int k) { return i + (n + 1) * (j + (n + 1) * k); };
   BoundaryConditions bc;
   for (int j = 0; j <= n; ++j)
@@ -75,9 +74,8 @@ TEST_P(FemCooksMembrane, TipDisplacementMatchesPublishedWithinOnePercent) {
 }
 
 INSTANTIATE_TEST_SUITE_P(ElementsPerEdge, FemCooksMembrane,
-                         ::testing::Values(CookCase{1, 5.15}, CookCase{2, 8.72}, CookCase{4, 12.02},
-                                           CookCase{8, 13.61}, CookCase{16, 14.13},
-                                           CookCase{32, 14.28}),
+                         ::testing::Values(CookCase{1, 5.15}, CookCase{2, 8.72}, CookCase{4, 12.02}, CookCase{8, 13.61},
+                                           CookCase{16, 14.13}, CookCase{32, 14.28}),
                          [](const auto& info) { return "n" + std::to_string(info.param.n); });
 
 // The incompatible-mode element (the default) on the same meshes: the
@@ -111,9 +109,7 @@ TEST(FemStaticSolve, PatchTestUniaxialStretch) {
   const Material mat = Material::FromYoungPoisson(10.0, 0.3);
   const double stretch = 1.2;
   // Lateral stretch s with P_yy(diag(stretch, s, s)) = 0, by bisection.
-  auto Pyy = [&](double s) {
-    return NeoHookeanStress(mat, Mat3{{{stretch, 0, 0}, {0, s, 0}, {0, 0, s}}})[1][1];
-  };
+  auto Pyy = [&](double s) { return NeoHookeanStress(mat, Mat3{{{stretch, 0, 0}, {0, s, 0}, {0, 0, s}}})[1][1]; };
   double lo = 0.5, hi = 1.0;
   for (int i = 0; i < 200; ++i) {
     const double mid = 0.5 * (lo + hi);

@@ -37,15 +37,18 @@ TEST(LevelSetExtraction, IsClosedAndManifoldForAnySigns) {
   for (int i = 0; i < 20; ++i) {
     const double p = 0.2 + 0.03 * i;
     const std::uint32_t seed = rng();
-    const Solid s = FromDistance(g, {{-3, -3, -3}, {3, 3, 3}}, [&](double x, double y, double z) {
-      const double box = std::max({std::abs(x), std::abs(y), std::abs(z)}) - 2.5;
-      std::uint32_t h = seed ^ static_cast<std::uint32_t>(std::lround(x / 0.5) * 73856093) ^
-                        static_cast<std::uint32_t>(std::lround(y / 0.5) * 19349663) ^
-                        static_cast<std::uint32_t>(std::lround(z / 0.5) * 83492791);
-      h = (h ^ (h >> 13)) * 0x5bd1e995u;
-      h ^= h >> 15;
-      return std::max(box, (h % 1000) < p * 1000 ? -0.25 : 0.25);
-    }, "noise");
+    const Solid s = FromDistance(
+        g, {{-3, -3, -3}, {3, 3, 3}},
+        [&](double x, double y, double z) {
+          const double box = std::max({std::abs(x), std::abs(y), std::abs(z)}) - 2.5;
+          std::uint32_t h = seed ^ static_cast<std::uint32_t>(std::lround(x / 0.5) * 73856093) ^
+                            static_cast<std::uint32_t>(std::lround(y / 0.5) * 19349663) ^
+                            static_cast<std::uint32_t>(std::lround(z / 0.5) * 83492791);
+          h = (h ^ (h >> 13)) * 0x5bd1e995u;
+          h ^= h >> 15;
+          return std::max(box, (h % 1000) < p * 1000 ? -0.25 : 0.25);
+        },
+        "noise");
     const mesh::TriangleMesh m = s.ToMesh();
     ASSERT_GT(m.triangles.size(), 0u) << "p " << p;
     mesh::InspectOptions topology;
@@ -93,7 +96,7 @@ TEST(FoldedTriangles, AWallThinnerThanAVoxelFolds) {
   EXPECT_TRUE(r.closed && r.manifold && !r.self_intersecting) << r.Reasons();
   const FoldedTriangles folds = FindFoldedTriangles(thin, thin_mesh);
   EXPECT_GT(folds.area, 0.5 * 0.5);  // more than a voxel face: what the watertight check fails on
-  EXPECT_GT(folds.first[2], 0.5);  // on the wall (z 0.3-5.7), above the base (z -0.5-0.5)
+  EXPECT_GT(folds.first[2], 0.5);    // on the wall (z 0.3-5.7), above the base (z -0.5-0.5)
   EXPECT_EQ(FindFoldedTriangles(thick, thick_mesh).count, 0);
 }
 

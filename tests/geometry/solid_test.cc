@@ -246,7 +246,8 @@ TEST(GeometrySolid, ConvexMeshDistanceOfAnAxisAlignedBoxIsTheTrianglePaths) {
          (t * k * k - sn * k) * x + (t * k * k + sn * k) * y + (t * k * k + c) * z};
   }
   const double band = 3.0;
-  const fg::DistanceFunction closed = fg::ConvexMeshDistance(box, band), triangles = fg::ConvexMeshDistance(turned, band);
+  const fg::DistanceFunction closed = fg::ConvexMeshDistance(box, band),
+                             triangles = fg::ConvexMeshDistance(turned, band);
   ASSERT_TRUE(closed && triangles);
   int compared = 0;
   for (double x = -1.3; x <= 65; x += 0.7)
@@ -258,9 +259,9 @@ TEST(GeometrySolid, ConvexMeshDistanceOfAnAxisAlignedBoxIsTheTrianglePaths) {
         ++compared;
       }
   EXPECT_GT(compared, 10000);
-  EXPECT_NEAR(closed(2, -3, 1), 0, 1e-12);            // a corner
+  EXPECT_NEAR(closed(2, -3, 1), 0, 1e-12);                         // a corner
   EXPECT_NEAR(closed(-1, -7, -3), std::sqrt(9 + 16 + 16), 1e-12);  // 3, 4, 4 mm off the corner
-  EXPECT_NEAR(closed(32, 17, 8.5), -7.5, 1e-12);     // the centre: half the 15 mm height inside
+  EXPECT_NEAR(closed(32, 17, 8.5), -7.5, 1e-12);                   // the centre: half the 15 mm height inside
 }
 
 // A closed convex mesh takes the exact signed-distance path: the regular

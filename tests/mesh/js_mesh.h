@@ -63,8 +63,8 @@ inline TriangleMesh LoadJsMesh(const std::filesystem::path& path) {
   }
   for (const auto& c : ReadJsArray(text, "cells")) {
     for (std::size_t k = 1; k + 1 < c.size(); ++k) {
-      mesh.triangles.push_back({static_cast<std::int32_t>(c[0]), static_cast<std::int32_t>(c[k]),
-                                static_cast<std::int32_t>(c[k + 1])});
+      mesh.triangles.push_back(
+          {static_cast<std::int32_t>(c[0]), static_cast<std::int32_t>(c[k]), static_cast<std::int32_t>(c[k + 1])});
     }
   }
   return mesh;

@@ -30,9 +30,8 @@ namespace fs = std::filesystem;
 class MeshIo : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("fabatlas_mesh_io_" + std::to_string(::getpid()) + "_" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    dir_ = fs::temp_directory_path() / ("fabatlas_mesh_io_" + std::to_string(::getpid()) + "_" +
+                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
     fs::create_directories(dir_);
   }
   void TearDown() override { fs::remove_all(dir_); }
@@ -130,9 +129,9 @@ TEST_F(MeshIo, ReadsAsciiAndBigEndianPly) {
       "element vertex 4\nproperty float x\nproperty float y\nproperty float z\nproperty uchar red\n"
       "element face 4\nproperty list uchar int vertex_indices\nelement extra 1\nproperty list uchar short junk\n"
       "end_header\n";
-  const TriangleMesh ascii = ReadMesh(Write(
-      "tet.ply", "ply\nformat ascii 1.0\ncomment unit tetrahedron\n" + header_tail +
-                     "0 0 0 1\n1 0 0 1\n0 1 0 1\n0 0 1 1\n3 0 2 1\n3 0 1 3\n3 1 2 3\n3 2 0 3\n2 7 8\n"));
+  const TriangleMesh ascii =
+      ReadMesh(Write("tet.ply", "ply\nformat ascii 1.0\ncomment unit tetrahedron\n" + header_tail +
+                                    "0 0 0 1\n1 0 0 1\n0 1 0 1\n0 0 1 1\n3 0 2 1\n3 0 1 3\n3 1 2 3\n3 2 0 3\n2 7 8\n"));
   ASSERT_EQ(ascii.triangles.size(), 4u);
   EXPECT_DOUBLE_EQ(InspectMesh(ascii).volume, 1.0 / 6.0);
 
@@ -277,8 +276,9 @@ TEST_F(MeshIo, ReadsAmfAndRefusesBrokenXml) {
         "</volume></mesh></object></amf>");
   EXPECT_NEAR(EnclosedVolume(ReadMesh(dir_ / "two.amf")), 1.0 / 6, 1e-12);  // the unit tetrahedron
   ExpectRejected(Write("open.amf", "<amf><object id=\"0\"><mesh>"), "AMF line 1");
-  ExpectRejected(Write("index.amf", "<amf><object id=\"0\"><mesh><vertices></vertices><volume><triangle><v1>0</v1>"
-                                    "<v2>1</v2><v3>2</v3></triangle></volume></mesh></object></amf>"),
+  ExpectRejected(Write("index.amf",
+                       "<amf><object id=\"0\"><mesh><vertices></vertices><volume><triangle><v1>0</v1>"
+                       "<v2>1</v2><v3>2</v3></triangle></volume></mesh></object></amf>"),
                  "out of range");
   const fs::path broken = "/usr/share/openscad/testdata/amf/amf_broken.amf";  // OpenSCAD's own broken file
   if (fs::exists(broken)) {
@@ -293,7 +293,8 @@ TEST_F(MeshIo, RejectsMissingFileAndUnknownExtension) {
 }
 
 TEST_F(MeshIo, RejectsEmptyFiles) {
-  for (const char* name : {"empty.stl", "empty.obj", "empty.off", "empty.ply"}) ExpectRejected(Write(name, ""), "empty");
+  for (const char* name : {"empty.stl", "empty.obj", "empty.off", "empty.ply"})
+    ExpectRejected(Write(name, ""), "empty");
 }
 
 TEST_F(MeshIo, RejectsTruncatedBinaryStl) {
@@ -314,10 +315,11 @@ TEST_F(MeshIo, RejectsOutOfRangeIndices) {
   ExpectRejected(Write("range.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n"), "out of range");
   ExpectRejected(Write("neg.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 -4\n"), "out of range");
   ExpectRejected(Write("range.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 3\n"), "out of range");
-  ExpectRejected(Write("range.ply",
-                       "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
-                       "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n"),
-                 "out of range");
+  ExpectRejected(
+      Write("range.ply",
+            "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+            "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n"),
+      "out of range");
 }
 
 TEST_F(MeshIo, RejectsFilesWithoutTriangles) {
@@ -328,8 +330,9 @@ TEST_F(MeshIo, RejectsFilesWithoutTriangles) {
 
 TEST_F(MeshIo, RejectsTruncatedTextFormats) {
   ExpectRejected(Write("cut.off", "OFF\n8 12 0\n0 0 0\n1 0 0\n"), "truncated");
-  ExpectRejected(Write("cut.ply", "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\n"
-                                  "property float y\nproperty float z\nend_header\n\x01\x02"),
+  ExpectRejected(Write("cut.ply",
+                       "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\n"
+                       "property float y\nproperty float z\nend_header\n\x01\x02"),
                  "truncated");
   ExpectRejected(Write("cut.stl", "solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\n"), "truncated");
 }

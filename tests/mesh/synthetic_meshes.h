@@ -38,7 +38,8 @@ inline TriangleMesh GridBox(double sx, double sy, double sz, int n) {
   TriangleMesh m;
   std::map<std::array<long long, 3>, std::int32_t> index;  // lattice coordinates -> vertex
   auto vertex = [&](long long i, long long j, long long k) {
-    auto [it, inserted] = index.emplace(std::array<long long, 3>{i, j, k}, static_cast<std::int32_t>(m.vertices.size()));
+    auto [it, inserted] =
+        index.emplace(std::array<long long, 3>{i, j, k}, static_cast<std::int32_t>(m.vertices.size()));
     if (inserted) m.vertices.push_back({sx * i / n, sy * j / n, sz * k / n});
     return it->second;
   };
@@ -77,11 +78,11 @@ inline TriangleMesh GridBox(double sx, double sy, double sz, int n) {
 inline TriangleMesh IcoSphere(double radius, int levels) {
   const double t = (1.0 + std::sqrt(5.0)) / 2.0;
   TriangleMesh m;
-  m.vertices = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0}, {0, -1, t}, {0, 1, t},
-                {0, -1, -t}, {0, 1, -t}, {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
-  m.triangles = {{0, 11, 5}, {0, 5, 1}, {0, 1, 7}, {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
-                 {11, 10, 2}, {10, 7, 6}, {7, 1, 8}, {3, 9, 4}, {3, 4, 2}, {3, 2, 6}, {3, 6, 8},
-                 {3, 8, 9}, {4, 9, 5}, {2, 4, 11}, {6, 2, 10}, {8, 6, 7}, {9, 8, 1}};
+  m.vertices = {{-1, t, 0},  {1, t, 0},  {-1, -t, 0}, {1, -t, 0}, {0, -1, t},  {0, 1, t},
+                {0, -1, -t}, {0, 1, -t}, {t, 0, -1},  {t, 0, 1},  {-t, 0, -1}, {-t, 0, 1}};
+  m.triangles = {{0, 11, 5},  {0, 5, 1},  {0, 1, 7},  {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
+                 {11, 10, 2}, {10, 7, 6}, {7, 1, 8},  {3, 9, 4},  {3, 4, 2},   {3, 2, 6}, {3, 6, 8},
+                 {3, 8, 9},   {4, 9, 5},  {2, 4, 11}, {6, 2, 10}, {8, 6, 7},   {9, 8, 1}};
   for (int level = 0; level < levels; ++level) {
     std::map<std::pair<std::int32_t, std::int32_t>, std::int32_t> middle;
     auto mid = [&](std::int32_t a, std::int32_t b) {

@@ -18,8 +18,12 @@ TEST(LogLine, JsonLineParsesBackWithEveryField) {
   // 2026-11-24T01:40:00.123Z as Unix milliseconds (date -u -d ... +%s%3N).
   const std::int64_t ts = 1795484400123;
   std::string line = FormatLine(Format::kJson, Level::kWarn, ts, "lease_expired",
-                                {{"task", "ab\"c\\d\n"}, {"worker", "w-1"}, {"attempt", 3}, {"ratio", 0.1},
-                                 {"quarantined", false}, {"bytes", std::int64_t{1} << 40}});
+                                {{"task", "ab\"c\\d\n"},
+                                 {"worker", "w-1"},
+                                 {"attempt", 3},
+                                 {"ratio", 0.1},
+                                 {"quarantined", false},
+                                 {"bytes", std::int64_t{1} << 40}});
   EXPECT_EQ(line.find('\n'), std::string::npos);
   nlohmann::json j = nlohmann::json::parse(line);
   EXPECT_EQ(j["ts"], "2026-11-24T01:40:00.123Z");

@@ -109,7 +109,8 @@ std::pair<int, std::string> Shell(const fs::path& dir, const std::string& comman
 // form.json of the job as `fabatlas sample` computes it in this process
 // (run in `dir`, outputs in dir/reference): what the cluster must publish.
 std::string InProcessForm(const fs::path& dir) {
-  auto [code, out] = Shell(dir, (BinDir() / "fabatlas").string() + " sample " + JobPath().string() + " --out reference");
+  auto [code, out] =
+      Shell(dir, (BinDir() / "fabatlas").string() + " sample " + JobPath().string() + " --out reference");
   EXPECT_EQ(code, 0) << out;
   return ReadText(dir / "reference/form.json");
 }
@@ -129,8 +130,9 @@ TEST(OpsLogs, JsonLinesTellTheStoryOfAJobWithAKilledWorker) {
   ASSERT_TRUE(WaitForText(dir / "w1/worker.log", "worker_connected", w1)) << ReadText(dir / "w1/worker.log");
   std::string id = Client(c.port).Submit(JobPath());
   EXPECT_EQ(WaitExit(w1, std::chrono::seconds(120)), 128 + SIGKILL);
-  pid_t w2 = StartWorker(c.port, dir / "w2", {"--id", "w2", "--log-format", "json", "--metrics",
-                                              "127.0.0.1:" + std::to_string(worker_metrics)});
+  pid_t w2 =
+      StartWorker(c.port, dir / "w2",
+                  {"--id", "w2", "--log-format", "json", "--metrics", "127.0.0.1:" + std::to_string(worker_metrics)});
   v1::JobStatus s = WaitForJob(c.port, id, std::chrono::seconds(240));
   EXPECT_EQ(s.state(), v1::JOB_STATE_SUCCEEDED) << s.error();
   // Metrics: every accepted sample result is one observation of the
@@ -164,9 +166,9 @@ TEST(OpsLogs, JsonLinesTellTheStoryOfAJobWithAKilledWorker) {
   EXPECT_EQ(WaitExit(c.pid, std::chrono::seconds(30)), 0);
 
   auto coordinator = JsonLines(dir / "state/coordinator.log");
-  for (const char* event : {"coordinator_started", "job_submitted", "job_started", "round_started", "worker_joined",
-                            "lease_expired", "job_succeeded", "signal_received", "drain_started", "drain_finished",
-                            "coordinator_stopped"})
+  for (const char* event :
+       {"coordinator_started", "job_submitted", "job_started", "round_started", "worker_joined", "lease_expired",
+        "job_succeeded", "signal_received", "drain_started", "drain_finished", "coordinator_stopped"})
     EXPECT_FALSE(Events(coordinator, event).empty()) << "coordinator logged no " << event;
   // The expiry names the task, the worker that died and the attempt. (w1
   // may also have held leases taken in advance, a 1-slot worker of short
@@ -262,7 +264,8 @@ TEST(OpsLock, ASecondCoordinatorOnOneStateDirectoryExits2AndAKilledOnesLockIsTak
   pid_t second = Spawn({(BinDir() / "fabatlas-coordinator").string(), "--listen", "127.0.0.1:0", "--state-dir",
                         (dir / "state").string(), "--port-file", (dir / "second.port").string()},
                        dir / "second.log");
-  ExpectRefusedByHolder(second, dir / "second.log", "fabatlas-coordinator", dir / "state", "state directory", first.pid);
+  ExpectRefusedByHolder(second, dir / "second.log", "fabatlas-coordinator", dir / "state", "state directory",
+                        first.pid);
   EXPECT_FALSE(fs::exists(dir / "second.port"));
   // The holder's line stays the first's while it runs.
   EXPECT_EQ(ReadText(dir / "state/LOCK").rfind("pid " + std::to_string(first.pid) + " host ", 0), 0u);
@@ -320,9 +323,9 @@ TEST(OpsLock, RunOnAStateDirectoryInUseExits2) {
   fs::path dir = FreshDir("ops_lock_run");
   CoordinatorProcess c = StartCoordinator(dir / "out/cluster-state", 0);
   ASSERT_GT(c.port, 0) << ReadText(dir / "out/cluster-state/coordinator.log");
-  pid_t run = Spawn({(BinDir() / "fabatlas").string(), "run", JobPath().string(), "--workers", "1", "--out",
-                     (dir / "out").string()},
-                    dir / "run.log");
+  pid_t run = Spawn(
+      {(BinDir() / "fabatlas").string(), "run", JobPath().string(), "--workers", "1", "--out", (dir / "out").string()},
+      dir / "run.log");
   ExpectRefusedByHolder(run, dir / "run.log", "fabatlas", dir / "out/cluster-state", "state directory", c.pid);
   ::kill(c.pid, SIGTERM);
   EXPECT_EQ(WaitExit(c.pid, std::chrono::seconds(30)), 0);
@@ -358,8 +361,8 @@ TEST(OpsCli, JobFileAndOutWithoutADirectoryPart) {
   job.replace(job.find("../../../configs/designs/"), std::string("../../../configs/designs/").size(), "");
   std::ofstream(dir / "job.yaml") << job;
   const std::string bin = (BinDir() / "fabatlas").string();
-  auto [full_status, full_out] = Shell(dir, bin + " sample " + (dir / "job.yaml").string() + " --out " +
-                                                (dir / "full").string());
+  auto [full_status, full_out] =
+      Shell(dir, bin + " sample " + (dir / "job.yaml").string() + " --out " + (dir / "full").string());
   ASSERT_EQ(full_status, 0) << full_out;
   auto [sample_status, sample_out] = Shell(dir, bin + " sample job.yaml --out out");
   ASSERT_EQ(sample_status, 0) << sample_out;
@@ -392,8 +395,8 @@ TEST(OpsDiskFull, CoordinatorStateOnAFullFileSystemStallsVisiblyAndLosesNothing)
   const fs::path log = dir / "coordinator.log";
   CoordinatorProcess c;
   c.pid = Spawn({(BinDir() / "fabatlas-coordinator").string(), "--listen", "127.0.0.1:0", "--state-dir",
-                 (mnt / "state").string(), "--port-file", (dir / "port").string(), "--log-format", "json",
-                 "--metrics", "127.0.0.1:" + std::to_string(metrics_port)},
+                 (mnt / "state").string(), "--port-file", (dir / "port").string(), "--log-format", "json", "--metrics",
+                 "127.0.0.1:" + std::to_string(metrics_port)},
                 log);
   ASSERT_TRUE(WaitForText(dir / "port", "\n", c.pid)) << ReadText(log);
   c.port = std::atoi(ReadText(dir / "port").c_str());
@@ -411,8 +414,8 @@ TEST(OpsDiskFull, CoordinatorStateOnAFullFileSystemStallsVisiblyAndLosesNothing)
   EXPECT_EQ(s.state(), v1::JOB_STATE_RUNNING);
   EXPECT_NE(s.stalled_reason().find("cannot write its state"), std::string::npos) << s.stalled_reason();
   EXPECT_NE(coordinator::ProgressLine(s).find("STALLED: "), std::string::npos);
-  auto [status_code, status_out] = Shell(dir, (BinDir() / "fabatlas").string() + " status " + id +
-                                                  " --coordinator 127.0.0.1:" + std::to_string(c.port));
+  auto [status_code, status_out] = Shell(
+      dir, (BinDir() / "fabatlas").string() + " status " + id + " --coordinator 127.0.0.1:" + std::to_string(c.port));
   EXPECT_EQ(status_code, 0);
   EXPECT_NE(status_out.find("STALLED: coordinator cannot write its state"), std::string::npos) << status_out;
   auto [metrics_status, metrics] = HttpGet(metrics_port, "/metrics");
@@ -485,8 +488,8 @@ TEST(OpsDiskFull, WorkerCacheDirOnAFullFileSystemFailsTasksCleanlyAndRecovers) {
   // behind is checked once the worker has exited, below.
   auto under_way = [](const fs::path& p) { return p.filename().string().find(".tmp-") != std::string::npos; };
   for (const auto& entry : fs::recursive_directory_iterator(disk.dir()))
-    EXPECT_TRUE(entry.is_directory() || entry.path().filename() == ".filler" || entry.path() == disk.dir() / "cache/LOCK" ||
-                under_way(entry.path()))
+    EXPECT_TRUE(entry.is_directory() || entry.path().filename() == ".filler" ||
+                entry.path() == disk.dir() / "cache/LOCK" || under_way(entry.path()))
         << "left behind: " << entry.path();
 
   disk.Free();
@@ -710,9 +713,9 @@ void StartUntilALeaseIsHeld(const fs::path& dir, const std::vector<std::string>&
 TEST(OpsDrain, SigtermWaitsForRunningLeasesThenTheJobResumes) {
   fs::path dir = FreshDir("ops_drain");
   LeaseHeld run;
-  ASSERT_NO_FATAL_FAILURE(StartUntilALeaseIsHeld(
-      dir, {"--log-format", "json", "--drain-seconds", "120", "--lease-ms", "60000"}, "w",
-      {"--log-format", "json", "--connect-timeout", "120"}, run));
+  ASSERT_NO_FATAL_FAILURE(
+      StartUntilALeaseIsHeld(dir, {"--log-format", "json", "--drain-seconds", "120", "--lease-ms", "60000"}, "w",
+                             {"--log-format", "json", "--connect-timeout", "120"}, run));
   CoordinatorProcess c = run.coordinator;
   const pid_t w = run.worker;
   const std::string id = run.job_id;
@@ -768,8 +771,9 @@ TEST(OpsDrain, DrainSecondsBoundsTheWaitAndAStuckLeaseIsRecomputedAfterRestart) 
   fs::path dir = FreshDir("ops_drain_bound");
   // Leases outlive the 1 s drain by far (10 s), so only the bound can end it.
   LeaseHeld run;
-  ASSERT_NO_FATAL_FAILURE(StartUntilALeaseIsHeld(dir, {"--log-format", "json", "--drain-seconds", "1", "--lease-ms", "10000"},
-                                                 "stuck", {"--id", "stuck", "--log-format", "json"}, run));
+  ASSERT_NO_FATAL_FAILURE(
+      StartUntilALeaseIsHeld(dir, {"--log-format", "json", "--drain-seconds", "1", "--lease-ms", "10000"}, "stuck",
+                             {"--id", "stuck", "--log-format", "json"}, run));
   CoordinatorProcess c = run.coordinator;
   const pid_t stuck = run.worker;
   const std::string id = run.job_id;

@@ -33,7 +33,10 @@ TEST(PreviewTimesPlot, MedianBarOnTheLogAxisAndAntiAliasedText) {
   ASSERT_NE(rgb, nullptr);
   EXPECT_EQ(w, options.width);
   EXPECT_EQ(h, options.height);
-  const auto px = [&](int x, int y) { const unsigned char* p = rgb + 3 * (y * w + x); return p[0] + 256 * p[1] + 65536 * p[2]; };
+  const auto px = [&](int x, int y) {
+    const unsigned char* p = rgb + 3 * (y * w + x);
+    return p[0] + 256 * p[1] + 65536 * p[2];
+  };
   // Axis: decades 1 ms .. 100 ms between y = h - 110 (bottom) and 80 (top).
   const double bottom = h - 110, top = 80;
   const int median_y = static_cast<int>(std::lround(bottom - std::log10(50.5) / 2 * (bottom - top)));

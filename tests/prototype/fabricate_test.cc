@@ -97,7 +97,8 @@ parts:
   carriage: {box: [0, 10, 0, 20, 3, 8]}
 joints:
   s: {type: slide, child: carriage, parent: bed, axis: x, on: [carriage.z0, bed.z1]}
-)", "thin.yaml");
+)",
+                               "thin.yaml");
   SolveSummary s = SolvePrototype(p);
   ASSERT_TRUE(s.satisfiable) << s.Explain();
   geometry::GridSpec g;
@@ -108,7 +109,8 @@ joints:
   } catch (const InputError& e) {
     EXPECT_EQ(std::string(e.what()).rfind("thin.yaml:7:", 0), 0u) << e.what();
     EXPECT_NE(std::string(e.what()).find("slide s: bed is 3.00 mm deep under its rail face; rails need 3.50"),
-              std::string::npos) << e.what();
+              std::string::npos)
+        << e.what();
   }
 }
 

@@ -47,7 +47,8 @@ joints:
   dp: {type: double_pivot, child: panel, parent: frame, face: x0, pivot_child: [0.5, 0.5], pivot_parent: [0.5, 0.5]}
 configurations:
   moved: {dp: {angle: 0, offset: [0, 40, 0], free: false}}
-)", "translate.yaml");
+)",
+                               "translate.yaml");
   SolveSummary s = SolvePrototype(p);
   ASSERT_TRUE(s.satisfiable) << s.Explain();
   ASSERT_EQ(s.pivots.size(), 1u);
@@ -78,7 +79,8 @@ relationships:
   - {type: geometric, name: narrow door, expression: "door.w <= 80"}
   - {type: geometric, name: wide opening, expression: "body.opening.w >= 100"}
   - {type: flush, name: knob on the door, faces: [knob.y1, door.y0]}
-)", "conflict.yaml");
+)",
+                               "conflict.yaml");
   SolveSummary s = SolvePrototype(p);
   ASSERT_FALSE(s.satisfiable);
   EXPECT_TRUE(Mentions(s.conflicts, "door covers the opening")) << s.Explain();
@@ -200,7 +202,8 @@ parts:
 relationships:
   - {type: geometric, name: tall block, expression: "block.h == 20"}
   - {type: geometric, name: cap moved, expression: "block.cap.x0 == 3"}
-)", "pieces.yaml"));
+)",
+                                                 "pieces.yaml"));
   ASSERT_TRUE(s.satisfiable) << s.Explain();
   auto cap = s.cuboids.at("block.cap");
   EXPECT_NEAR(cap[4], 20, 1e-4);
@@ -224,7 +227,8 @@ parts:
     pieces: {cap: {box: [2, 8, 2, 8, 10, 15]}}
 relationships:
   - {type: fit, name: block in the room, inner: [block], outer: case.room}
-)", "fit_pieces.yaml"));
+)",
+                                                 "fit_pieces.yaml"));
   ASSERT_TRUE(s.satisfiable) << s.Explain();
   EXPECT_NEAR(s.cuboids.at("block")[4], 1, 1e-4);
   EXPECT_NEAR(s.cuboids.at("block")[5], 10, 1e-4);
@@ -245,7 +249,8 @@ joints:
   s: {type: slide, child: carriage, parent: bed, axis: x, on: [carriage.z0, bed.z1]}
 configurations:
   far: {s: {free: true, guess: 1000}}
-)", "rails.yaml");
+)",
+                               "rails.yaml");
   SolveSummary s = SolvePrototype(p);
   ASSERT_TRUE(s.satisfiable) << s.Explain();
   EXPECT_NEAR(s.free_values.at("s@far.s"), 99.0, 1e-3);
@@ -303,8 +308,10 @@ TEST(PrototypeSolve, RemovingAPartRemovesWhatHangsFromIt) {
 
 TEST(PrototypeSolve, BadInputNamesThePlace) {
   try {
-    ParsePrototype("parts:\n  a: {box: [0, 1, 0, 1, 0, 1]}\njoints:\n  j: {type: hinge, child: a, parent: b, axis: x, at: [a.y0, a.z0]}\n",
-                   "bad.yaml");
+    ParsePrototype(
+        "parts:\n  a: {box: [0, 1, 0, 1, 0, 1]}\njoints:\n  j: {type: hinge, child: a, parent: b, axis: x, at: [a.y0, "
+        "a.z0]}\n",
+        "bad.yaml");
     FAIL();
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("bad.yaml:4:"), std::string::npos) << e.what();

@@ -83,7 +83,7 @@ TEST(SamplingAdaptive, HollowCylinder3DReachesIoU95) {
   EXPECT_NEAR(shares.at("min_thickness") + shares.at("tips_over"), 1.0, 1e-12);
   EXPECT_EQ(s.statistics.samples - s.statistics.valid_samples,
             std::llround(0.0 + std::count_if(s.form.samples.begin(), s.form.samples.end(),
-                                              [](const FormSample& x) { return !x.outcome.valid; })));
+                                             [](const FormSample& x) { return !x.outcome.valid; })));
 }
 
 // 1 thread, 2 threads and shuffled completion on two threads give the same

@@ -40,8 +40,10 @@ inline double HollowCylinderChange(double R1, double t1, double h1, double R2, d
 inline SampleOutcome HollowCylinderOutcome(const char* failure, double R, double t, double h) {
   SampleOutcome o;
   o.valid = failure == nullptr;
-  if (failure) o.failure_type = failure;
-  else o.properties["volume_mm3"] = HollowCylinderVolume(R, t, h);
+  if (failure)
+    o.failure_type = failure;
+  else
+    o.properties["volume_mm3"] = HollowCylinderVolume(R, t, h);
   return o;
 }
 
@@ -52,8 +54,7 @@ inline SampleOutcome HollowCylinderOutcome(const char* failure, double R, double
 class HollowCylinder2D : public SampleEvaluator {
  public:
   static std::vector<Dimension> Dimensions() {
-    return {{"outer_radius", DimensionKind::kReal, 5.0, 20.0, {}},
-            {"wall", DimensionKind::kReal, 0.5, 5.0, {}}};
+    return {{"outer_radius", DimensionKind::kReal, 5.0, 20.0, {}}, {"wall", DimensionKind::kReal, 0.5, 5.0, {}}};
   }
   static bool TrulyValid(const std::vector<double>& u) { return u[1] >= 0.5 + 0.01 * u[0] * u[0]; }
   SampleOutcome EvaluateSample(const SamplePoint& p) override {
@@ -215,7 +216,8 @@ class ShuffledExecutor : public Executor {
                                                            SampleEvaluator& ev,
                                                            std::vector<TaskTiming>* timings) override {
     std::vector<GeometryChangeResult> out(tasks.size());
-    Run(tasks.size(), [&](size_t i) { out[i].geometry_change = ev.GeometryChange(tasks[i].point_a, tasks[i].point_b); });
+    Run(tasks.size(),
+        [&](size_t i) { out[i].geometry_change = ev.GeometryChange(tasks[i].point_a, tasks[i].point_b); });
     if (timings) timings->assign(tasks.size(), TaskTiming{});
     return out;
   }
@@ -240,8 +242,7 @@ class ShuffledExecutor : public Executor {
 // IoU of the estimated valid region (all-valid leaves) with the true region,
 // by Monte Carlo with a fixed seed over the bounded space.
 template <class TrulyValid>
-double EstimatedRegionIoU(const Form& form, TrulyValid truly_valid, int points = 200000,
-                          unsigned seed = 12345) {
+double EstimatedRegionIoU(const Form& form, TrulyValid truly_valid, int points = 200000, unsigned seed = 12345) {
   std::mt19937_64 rng(seed);
   std::vector<std::uniform_real_distribution<double>> dist;
   for (const Dimension& d : form.dimensions) dist.emplace_back(d.lo, d.hi);

@@ -58,7 +58,8 @@ TEST(SamplingDesignSpace, RejectsBadDimensionsWithOneLineMessages) {
             std::string::npos);
   EXPECT_NE(bad({{"a", DimensionKind::kReal, 0, 1, {}}}, 0).find("subdivisions"), std::string::npos);
   std::vector<Dimension> too_many;
-  for (int i = 0; i <= kMaxDimensions; ++i) too_many.push_back({"d" + std::to_string(i), DimensionKind::kReal, 0, 1, {}});
+  for (int i = 0; i <= kMaxDimensions; ++i)
+    too_many.push_back({"d" + std::to_string(i), DimensionKind::kReal, 0, 1, {}});
   EXPECT_NE(bad(too_many).find("17 exposed parameters, at most 16"), std::string::npos);
   too_many.pop_back();  // 16 dimensions are fine
   EXPECT_EQ(bad(too_many), "no error");

@@ -63,13 +63,13 @@ TEST(SamplingJobFile, ErrorsNameFileLineAndColumn) {
             "dg_threshold, max_samples)");
   EXPECT_EQ(ErrorOf("design: a.yaml\nsampling:\n  dg_threshold: 1.5\n"),
             "jobs/vase.yaml:3:17: sampling.dg_threshold must be in [0.000000, 1.000000], got 1.5");
-  EXPECT_EQ(ErrorOf("design: a.yaml\nthreads: two\n"),
-            "jobs/vase.yaml:2:10: threads must be an integer, got 'two'");
+  EXPECT_EQ(ErrorOf("design: a.yaml\nthreads: two\n"), "jobs/vase.yaml:2:10: threads must be an integer, got 'two'");
   EXPECT_EQ(ErrorOf("sampling: {max_depth: 3}\n"), "jobs/vase.yaml:1:1: missing required key 'design'");
   EXPECT_EQ(ErrorOf("design: a.yaml\ncache:\n  min_subtree_seconds: -1\n"),
             "jobs/vase.yaml:3:24: cache.min_subtree_seconds must be in [0.000000, 1000000000.000000], got -1");
-  EXPECT_EQ(ErrorOf("design: a.yaml\nwhatever: 1\n"),
-            "jobs/vase.yaml:2:1: unknown key 'whatever' (expected design, sampling, threads, materials, cluster, cache)");
+  EXPECT_EQ(
+      ErrorOf("design: a.yaml\nwhatever: 1\n"),
+      "jobs/vase.yaml:2:1: unknown key 'whatever' (expected design, sampling, threads, materials, cluster, cache)");
   const std::string syntax = ErrorOf("design: [a.yaml\n");
   EXPECT_EQ(syntax.rfind("jobs/vase.yaml:", 0), 0u) << syntax;
   EXPECT_EQ(syntax.find('\n'), std::string::npos);
@@ -139,7 +139,8 @@ Png ReadPng(const std::string& path) {
 TEST(SamplingValidityMap, PixelsShowValidAndFailureRegions) {
   const auto s = SampleCylinder(6);
   const std::string path =
-      (std::filesystem::temp_directory_path() / ("sampling_validity_map_" + std::to_string(::getpid()) + ".png")).string();
+      (std::filesystem::temp_directory_path() / ("sampling_validity_map_" + std::to_string(::getpid()) + ".png"))
+          .string();
   ValidityMapOptions opt;
   const ValidityMapLayout layout = WriteValidityMap(s.form, opt, path);
   const Png img = ReadPng(path);

@@ -179,10 +179,10 @@ void ExpectSame2d(const fs::path& model, const fs::path& work = {}) {
 
 TEST(Scad2d, CorpusBooleansMatchOpenScad) {
   if (!fs::exists(kCorpus)) GTEST_SKIP() << "openscad-testing-data not installed";
-  for (const char* f : {"difference-2d-tests.scad", "intersection2-tests.scad", "polygon-tests.scad",
-                        "polygons-touch.scad", "square-tests.scad", "circle-tests.scad", "scale2D-tests.scad",
-                        "render-2d-tests.scad", "nullspace-2d.scad", "control-hull-dimension.scad",
-                        "highlight-modifier-2d.scad"})
+  for (const char* f :
+       {"difference-2d-tests.scad", "intersection2-tests.scad", "polygon-tests.scad", "polygons-touch.scad",
+        "square-tests.scad", "circle-tests.scad", "scale2D-tests.scad", "render-2d-tests.scad", "nullspace-2d.scad",
+        "control-hull-dimension.scad", "highlight-modifier-2d.scad"})
     ExpectSame2d(kCorpus / "2D/features" / f);
 }
 
@@ -195,14 +195,16 @@ TEST(Scad2d, CorpusOffsetHullMinkowskiResizeMatchOpenScad) {
 
 TEST(Scad2d, CorpusProjectionsMatchOpenScad) {
   if (!fs::exists(kCorpus)) GTEST_SKIP() << "openscad-testing-data not installed";
-  for (const char* f : {"projection-tests.scad", "projection-cut-tests.scad"}) ExpectSame2d(kCorpus / "2D/features" / f);
+  for (const char* f : {"projection-tests.scad", "projection-cut-tests.scad"})
+    ExpectSame2d(kCorpus / "2D/features" / f);
 }
 
 // A 3-D child under a 2-D operation is ignored, with OpenSCAD's warning.
 TEST(Scad2d, ThreeDimensionalChildIsIgnoredWithOpenScadsWarning) {
   const fs::path dir = fabatlas::testing::FreshTempDir("scad-2d-mixed");
-  const fs::path model = Program(dir, "mixed.scad", "difference() { square(10); cube(4); }\n"
-                                                    "translate([20, 0]) offset(1) { circle(3); sphere(2); }");
+  const fs::path model = Program(dir, "mixed.scad",
+                                 "difference() { square(10); cube(4); }\n"
+                                 "translate([20, 0]) offset(1) { circle(3); sphere(2); }");
   const Compared c = Compare2d(model);
   EXPECT_NEAR(c.ours_area, c.peer_area, 1e-5 * c.peer_area);
   // The cube cut nothing; the sphere added nothing to the offset circle.
@@ -228,7 +230,8 @@ TEST(Scad2d, NonFinitePoints) {
 
   // NaN: OpenSCAD hands Clipper an undefined integer, so there is no peer
   // answer; the point is dropped.
-  CsgNode nan_polygon = fabatlas::scad::ParseCsg("polygon(points = [[0, 0], [10, 0], [nan, 5], [10, 10], [0, 10]]);", "nan.csg");
+  CsgNode nan_polygon =
+      fabatlas::scad::ParseCsg("polygon(points = [[0, 0], [10, 0], [nan, 5], [10, 10], [0, 10]]);", "nan.csg");
   std::vector<std::string> warnings;
   const auto p = fabatlas::scad::Evaluate2d(nan_polygon, {}, &warnings);
   EXPECT_NEAR(SignedArea(p.loops), 100, 1e-9);
@@ -258,8 +261,9 @@ TEST(Scad2d, ImportIsResolvedBelowTheModelAndRefusedOutside) {
   if (!fs::exists(dxf)) GTEST_SKIP() << "openscad-testing-data not installed";
   const fs::path dir = fabatlas::testing::FreshTempDir("scad-2d-import");
   fs::copy_file(dxf, dir / "polygons.dxf");
-  ExpectSame2d(Program(dir, "imp.scad", "import(\"polygons.dxf\"); translate([0, 200]) offset(1) import(\"polygons.dxf\");"),
-               dir);
+  ExpectSame2d(
+      Program(dir, "imp.scad", "import(\"polygons.dxf\"); translate([0, 200]) offset(1) import(\"polygons.dxf\");"),
+      dir);
   CsgNode outside = fabatlas::scad::ParseCsg("import(file = \"../../etc/passwd.svg\");", "outside.csg");
   fabatlas::scad::Evaluate2dOptions o = PeerOptions(dir, dir);
   EXPECT_THROW(fabatlas::scad::Evaluate2d(outside, o, nullptr), fabatlas::InputError);
@@ -395,25 +399,29 @@ TEST(Scad2d, DebianExampleExtrusionsMatchOpenScad) {
 
 TEST(Scad2d, ExtrusionIdiomsMatchOpenScad) {
   const fs::path dir = fabatlas::testing::FreshTempDir("scad-extrude-idioms");
-  ExpectSameSolids(Program(dir, "idioms.scad",
-                           "rotate_extrude(angle = 90, $fn = 40) translate([10, 0]) difference() { circle(4); circle(2); }\n"
-                           "rotate_extrude(angle = -200) translate([5, 0]) square([3, 8]);\n"
-                           "rotate_extrude($fn = 7) polygon([[0, 0], [6, 0], [2, 5], [0, 9]]);\n"
-                           "linear_extrude(height = 12, twist = 90, scale = [0.5, 1.5]) difference() { square(10, center = true); circle(3); }\n"
-                           "linear_extrude(height = 5, scale = 0) circle(4);\n"
-                           "linear_extrude(height = 7, twist = -130, scale = 0.3, center = true) translate([2, 0]) square([6, 3]);"),
-                   6);
+  ExpectSameSolids(
+      Program(dir, "idioms.scad",
+              "rotate_extrude(angle = 90, $fn = 40) translate([10, 0]) difference() { circle(4); circle(2); }\n"
+              "rotate_extrude(angle = -200) translate([5, 0]) square([3, 8]);\n"
+              "rotate_extrude($fn = 7) polygon([[0, 0], [6, 0], [2, 5], [0, 9]]);\n"
+              "linear_extrude(height = 12, twist = 90, scale = [0.5, 1.5]) difference() { square(10, center = true); "
+              "circle(3); }\n"
+              "linear_extrude(height = 5, scale = 0) circle(4);\n"
+              "linear_extrude(height = 7, twist = -130, scale = 0.3, center = true) translate([2, 0]) square([6, 3]);"),
+      6);
 }
 
 // Points on both sides of the axis: no solid, OpenSCAD's error line.
 TEST(Scad2d, RotateExtrudeAcrossTheAxisIsEmptyWithOpenScadsError) {
-  CsgNode n = fabatlas::scad::ParseCsg("rotate_extrude(angle = 360, $fn = 0, $fa = 12, $fs = 2) { square(size = [4, 4], center = true); }",
-                                       "across.csg");
+  CsgNode n = fabatlas::scad::ParseCsg(
+      "rotate_extrude(angle = 360, $fn = 0, $fa = 12, $fs = 2) { square(size = [4, 4], center = true); }",
+      "across.csg");
   std::vector<std::string> warnings;
   const TriangleMesh m = fabatlas::scad::RotateExtrude(n.children[0], {}, &warnings);
   EXPECT_TRUE(m.empty());
   ASSERT_EQ(warnings.size(), 1u);
-  EXPECT_NE(warnings[0].find("must have the same X coordinate sign (range is -2.00 -> 2.00)"), std::string::npos) << warnings[0];
+  EXPECT_NE(warnings[0].find("must have the same X coordinate sign (range is -2.00 -> 2.00)"), std::string::npos)
+      << warnings[0];
 }
 
 }  // namespace

@@ -60,7 +60,7 @@ TEST(ScadCli, SampleAModelDirectly) {
   int checked = 0;
   for (const auto& s : j["samples"]) {
     if (!s.value("valid", false)) continue;
-    const double n = s["u"][0].get<double>();                 // dimensions in order: n, shape
+    const double n = s["u"][0].get<double>();               // dimensions in order: n, shape
     const double h = s["u"][1].get<double>() == 1 ? 8 : 4;  // enum index: flat, tall
     EXPECT_NEAR(s["properties"]["volume"].get<double>(), 100 * n * h, 0.02 * 100 * n * h);
     ++checked;
@@ -156,7 +156,9 @@ TEST(ScadCli, ImportAnyModelWithRangesAndABudget) {
   CommandRun r = Fabatlas("import-scad organiser.scad --out organiser.yaml --voxel 0.5", dir);
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_EQ(std::count(r.out.begin(), r.out.end(), '\n'), 19) << r.out;  // 18 decisions and "wrote ..."
-  EXPECT_NE(r.out.find("exposed divider: slider [0.8:0.2:4] in group 'Compartments', within --max-dims 6\n"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("exposed divider: slider [0.8:0.2:4] in group 'Compartments', within --max-dims 6\n"),
+            std::string::npos)
+      << r.out;
   EXPECT_NE(r.out.find("fixed wall = 2: beyond --max-dims 6"), std::string::npos) << r.out;
   CommandRun budget = Fabatlas("import-scad organiser.scad --out b.yaml --voxel 0.5 --max-dims 2", dir);
   ASSERT_EQ(budget.status, 0) << budget.err;
@@ -170,7 +172,8 @@ TEST(ScadCli, ImportAnyModelWithRangesAndABudget) {
   const double ours = nlohmann::json::parse(e.out)["properties"]["volume"].get<double>();
   if (std::system("command -v openscad >/dev/null 2>&1") != 0) GTEST_SKIP() << "openscad not installed";
   const std::string stl = (dir / "peer.stl").string();
-  const std::string cmd = "cd '" + dir.string() + "' && openscad --quiet -o " + stl + " -D width=100 -D lip=3 organiser.scad 2>/dev/null";
+  const std::string cmd =
+      "cd '" + dir.string() + "' && openscad --quiet -o " + stl + " -D width=100 -D lip=3 organiser.scad 2>/dev/null";
   ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
   const double peer = std::abs(fabatlas::mesh::EnclosedVolume(fabatlas::mesh::ReadMesh(stl)));
   EXPECT_NEAR(ours, peer, 0.01 * peer) << "fabatlas " << ours << " mm^3, OpenSCAD " << peer << " mm^3";

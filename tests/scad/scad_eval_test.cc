@@ -75,7 +75,8 @@ TEST(ScadEval, NativeCsgMatchesOpenScadsOwnRenderAndIsCachedPerSubtree) {
 
   design::Design d = design::ParseDesign(
       "name: candles\nvoxel_size: 0.25\nparameters: {count: {type: integer, min: 3, max: 14, default: 7}}\n"
-      "tree: {op: openscad, file: " + scad.string() + ", set: {count: count}}\nproperties: [volume]\n",
+      "tree: {op: openscad, file: " +
+          scad.string() + ", set: {count: count}}\nproperties: [volume]\n",
       dir / "candles.yaml");
   design::InMemorySubtreeCache cache;
   design::EvaluateOptions options;
@@ -120,7 +121,8 @@ TEST(ScadEval, TextIsExtrudedFromOpenScadsOutline) {
   const double peer = MeshVolume(fabatlas::mesh::ReadMesh(stl));
   design::Design d = design::ParseDesign(
       "name: sign\nvoxel_size: 0.6\nparameters: {radius: {type: real, min: 60, max: 200, default: 80}}\n"
-      "tree: {op: openscad, file: " + scad.string() + ", set: {radius: radius}}\nproperties: [volume]\n",
+      "tree: {op: openscad, file: " +
+          scad.string() + ", set: {radius: radius}}\nproperties: [volume]\n",
       dir / "sign.yaml");
   design::EvaluateOptions options;
   options.run_checks = false;
@@ -190,13 +192,17 @@ TEST(ScadEval, TwistedExtrusionIsOpenScadsMesh) {
   ASSERT_EQ(region.loops.size(), 2u);  // the cross's outline and the hole
   double r_sqr = 0;
   for (const auto& loop : region.loops)
-    for (int i : loop) r_sqr = std::max(r_sqr, region.points[i][0] * region.points[i][0] + region.points[i][1] * region.points[i][1]);
+    for (int i : loop)
+      r_sqr = std::max(r_sqr, region.points[i][0] * region.points[i][0] + region.points[i][1] * region.points[i][1]);
   for (const double twist : {-100.0, 100.0}) {
-    std::ofstream(dir / "t.scad") << "linear_extrude(height = 20, twist = " << twist << ") difference() {\n"
-                                     "  union() { translate([0, -2]) square([20, 8]); translate([4, -5]) square([6, 18]); }\n"
-                                     "  translate([12, 0]) square([3, 3]);\n}\n";
+    std::ofstream(dir / "t.scad")
+        << "linear_extrude(height = 20, twist = " << twist
+        << ") difference() {\n"
+           "  union() { translate([0, -2]) square([20, 8]); translate([4, -5]) square([6, 18]); }\n"
+           "  translate([12, 0]) square([3, 3]);\n}\n";
     const std::string stl = (dir / "t.stl").string();
-    ASSERT_EQ(std::system(("openscad --quiet -o " + stl + " " + (dir / "t.scad").string() + " 2>/dev/null").c_str()), 0);
+    ASSERT_EQ(std::system(("openscad --quiet -o " + stl + " " + (dir / "t.scad").string() + " 2>/dev/null").c_str()),
+              0);
     const double peer = MeshVolume(fabatlas::mesh::ReadMesh(stl));
     const int slices = scad::ExtrudeSlices(r_sqr, 0, height, twist, {1, 1}, 0, 2, 12);
     EXPECT_EQ(slices, 9);  // ceil(100 / 12): fewer than the helix's length over $fs
@@ -220,11 +226,11 @@ TEST(ScadEval, TwistedExamplesMatchOpenScad) {
     const std::string stl = (dir / "peer.stl").string();
     ASSERT_EQ(std::system(("openscad --quiet -o " + stl + " " + scad.string() + " 2>/dev/null").c_str()), 0);
     const double peer = MeshVolume(fabatlas::mesh::ReadMesh(stl));
-    design::Design d = design::ParseDesign(
-        "name: twisted\nvoxel_size: " + std::to_string(voxel) +
-            "\nparameters: {unused: {type: real, min: 0, max: 1}}\n"
-            "tree: {op: openscad, file: " + scad.string() + "}\nproperties: [volume]\n",
-        dir / "twisted.yaml");
+    design::Design d = design::ParseDesign("name: twisted\nvoxel_size: " + std::to_string(voxel) +
+                                               "\nparameters: {unused: {type: real, min: 0, max: 1}}\n"
+                                               "tree: {op: openscad, file: " +
+                                               scad.string() + "}\nproperties: [volume]\n",
+                                           dir / "twisted.yaml");
     design::EvaluateOptions options;
     options.run_checks = false;
     design::SampleResult r = design::EvaluateSample(d, design::DefaultPoint(d), options);
@@ -258,7 +264,8 @@ TEST(ScadEval, RotateExtrudeFacetsAsOpenScad) {
     const double peer = MeshVolume(fabatlas::mesh::ReadMesh(stl));
     design::Design d = design::ParseDesign(
         "name: rotate\nvoxel_size: 0.1\nparameters: {unused: {type: real, min: 0, max: 1}}\n"
-        "tree: {op: openscad, file: " + scad.string() + "}\nproperties: [volume]\n",
+        "tree: {op: openscad, file: " +
+            scad.string() + "}\nproperties: [volume]\n",
         dir / "rotate.yaml");
     design::EvaluateOptions options;
     options.run_checks = false;
@@ -322,7 +329,6 @@ TEST(ScadEval, SideDataOfCachedSubtreesStaysWithinTheCacheBudget) {
   EXPECT_LT(grown_mb, 24.0);
   std::filesystem::remove_all(dir);
 }
-
 
 // A subtree found in the cache still brings the meshes that entered it from
 // outside fabatlas to the watertight check: a polyhedron cube without its

@@ -122,41 +122,42 @@ void ExpectClosedUnderChildren(const design::SampleResult& r) {
 TEST(ScadExampleJobs, YinYangCup2MatchesOpenScad) {
   // The body as the design's smooth revolutions (128 fragments: 0.04% below
   // the circle), the handle as the model with the node's -D values.
-  ExpectMatchesOpenScad(
-      "yinyang_cup2", 3,
-      {"radius", "foot_r", "foot_h", "height", "wall", "inner_r", "handle_x", "handle_z", "handle_reach",
-       "handle_thick"},
-      "module handle() { include <" + Model("yinyang_handle.scad") +
-      ">\n reach = handle_reach; thick = handle_thick; }\n"
-      "difference() {\n"
-      "  rotate_extrude($fn = 128) polygon([[0, 0], [foot_r, 0], [radius, foot_h], [radius, height], [0, height]]);\n"
-      "  rotate_extrude($fn = 128) polygon([[0, wall], [foot_r - wall, wall], [inner_r, foot_h + wall], [inner_r, height + 2], [0, height + 2]]);\n"
-      "}\n"
-      "difference() {\n"
-      "  translate([handle_x, 0, handle_z]) handle();\n"
-      "  translate([0, 0, wall]) cylinder(r = inner_r, h = height, $fn = 128);\n"
-      "}\n");
+  ExpectMatchesOpenScad("yinyang_cup2", 3,
+                        {"radius", "foot_r", "foot_h", "height", "wall", "inner_r", "handle_x", "handle_z",
+                         "handle_reach", "handle_thick"},
+                        "module handle() { include <" + Model("yinyang_handle.scad") +
+                            ">\n reach = handle_reach; thick = handle_thick; }\n"
+                            "difference() {\n"
+                            "  rotate_extrude($fn = 128) polygon([[0, 0], [foot_r, 0], [radius, foot_h], [radius, "
+                            "height], [0, height]]);\n"
+                            "  rotate_extrude($fn = 128) polygon([[0, wall], [foot_r - wall, wall], [inner_r, foot_h + "
+                            "wall], [inner_r, height + 2], [0, height + 2]]);\n"
+                            "}\n"
+                            "difference() {\n"
+                            "  translate([handle_x, 0, handle_z]) handle();\n"
+                            "  translate([0, 0, wall]) cylinder(r = inner_r, h = height, $fn = 128);\n"
+                            "}\n");
 }
 
 TEST(ScadExampleJobs, ToyCarMatchesOpenScad) {
   ExpectMatchesOpenScad(
       "toy_car", 4,
-      {"length", "body_w", "body_h", "axle_z", "cabin_x", "cabin_l", "cabin_w", "cabin_height", "window_l",
-       "window_h", "wheelbase", "track", "wheel_radius", "tyre_w", "spokes"},
+      {"length", "body_w", "body_h", "axle_z", "cabin_x", "cabin_l", "cabin_w", "cabin_height", "window_l", "window_h",
+       "wheelbase", "track", "wheel_radius", "tyre_w", "spokes"},
       "module wheel() { include <" + Model("toy_car_wheel.scad") +
-      ">\n radius = wheel_radius; width = tyre_w; spokes = spokes_; }\n"
-      "spokes_ = spokes;\n"
-      "union() {\n"
-      "  translate([0, 0, axle_z]) cube([length, body_w, body_h], center = true);\n"
-      "  translate([cabin_x, 0, axle_z + body_h / 2 + cabin_height / 2]) difference() {\n"
-      "    cube([cabin_l, cabin_w, cabin_height], center = true);\n"
-      "    cube([window_l, cabin_w + 4, window_h], center = true);\n"
-      "  }\n"
-      "  for (x = [-wheelbase / 2, wheelbase / 2]) {\n"
-      "    translate([x, 0, axle_z]) rotate([90, 0, 0]) cylinder(r = 2.5, h = track, center = true, $fn = 96);\n"
-      "    for (y = [-track / 2, track / 2]) translate([x, y, axle_z]) rotate([90, 0, 0]) wheel();\n"
-      "  }\n"
-      "}\n");
+          ">\n radius = wheel_radius; width = tyre_w; spokes = spokes_; }\n"
+          "spokes_ = spokes;\n"
+          "union() {\n"
+          "  translate([0, 0, axle_z]) cube([length, body_w, body_h], center = true);\n"
+          "  translate([cabin_x, 0, axle_z + body_h / 2 + cabin_height / 2]) difference() {\n"
+          "    cube([cabin_l, cabin_w, cabin_height], center = true);\n"
+          "    cube([window_l, cabin_w + 4, window_h], center = true);\n"
+          "  }\n"
+          "  for (x = [-wheelbase / 2, wheelbase / 2]) {\n"
+          "    translate([x, 0, axle_z]) rotate([90, 0, 0]) cylinder(r = 2.5, h = track, center = true, $fn = 96);\n"
+          "    for (y = [-track / 2, track / 2]) translate([x, y, axle_z]) rotate([90, 0, 0]) wheel();\n"
+          "  }\n"
+          "}\n");
 }
 
 // The car's spokes: by the wheel model's geometry (openings of radius
@@ -198,16 +199,19 @@ TEST(ScadExampleJobs, HoleyVaseMatchesOpenScad) {
   // fabatlas's n-sided revolve has a vertex on +x; OpenSCAD's rotate_extrude
   // starts at -x, hence the half turn.
   ExpectMatchesOpenScad(
-      "holey_vase", 6, {"sides", "base_r", "bulge_r", "bulge_z", "neck_r", "wall", "holes", "hole_r", "hole_z", "drill"},
+      "holey_vase", 6,
+      {"sides", "base_r", "bulge_r", "bulge_z", "neck_r", "wall", "holes", "hole_r", "hole_z", "drill"},
       "module drills() { include <" + Model("holey_vase_holes.scad") +
-      ">\n count = holes; radius = hole_r; reach = drill; }\n"
-      "off = wall / cos(180 / sides);  // the cavity's radial offset: `wall` across the flats\n"
-      "difference() {\n"
-      "  rotate([0, 0, 180]) rotate_extrude($fn = sides) polygon([[0, 0], [base_r, 0], [bulge_r, bulge_z], [neck_r, 100], [0, 100]]);\n"
-      "  rotate([0, 0, 180]) rotate_extrude($fn = sides) polygon([[0, 4], [base_r - off, 4], [bulge_r - off, bulge_z], [neck_r - off, 100],\n"
-      "    [neck_r - off + (neck_r - bulge_r) * 2 / (100 - bulge_z), 102], [0, 102]]);\n"
-      "  translate([0, 0, hole_z]) drills();\n"
-      "}\n");
+          ">\n count = holes; radius = hole_r; reach = drill; }\n"
+          "off = wall / cos(180 / sides);  // the cavity's radial offset: `wall` across the flats\n"
+          "difference() {\n"
+          "  rotate([0, 0, 180]) rotate_extrude($fn = sides) polygon([[0, 0], [base_r, 0], [bulge_r, bulge_z], "
+          "[neck_r, 100], [0, 100]]);\n"
+          "  rotate([0, 0, 180]) rotate_extrude($fn = sides) polygon([[0, 4], [base_r - off, 4], [bulge_r - off, "
+          "bulge_z], [neck_r - off, 100],\n"
+          "    [neck_r - off + (neck_r - bulge_r) * 2 / (100 - bulge_z), 102], [0, 102]]);\n"
+          "  translate([0, 0, hole_z]) drills();\n"
+          "}\n");
 }
 
 // The cup's handle is the same model at the same values for two radii: the

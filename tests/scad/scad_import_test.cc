@@ -229,7 +229,8 @@ TEST(Customizer, DebianParametricExamples) {
 
 TEST(Import, ExposeAndItsErrors) {
   auto dir = fabatlas::testing::FreshTempDir("scad-import");
-  std::ofstream(dir / "m.scad") << "/* [A] */\nw = 10; // [1:20]\nflag = true;\nfree = 3;\n/* [Hidden] */\nh = 2; // [1:5]\ncube([w, h, 1]);\n";
+  std::ofstream(dir / "m.scad")
+      << "/* [A] */\nw = 10; // [1:20]\nflag = true;\nfree = 3;\n/* [Hidden] */\nh = 2; // [1:5]\ncube([w, h, 1]);\n";
   fabatlas::scad::ImportOptions o;
   o.expose = {"flag", "h"};
   fabatlas::scad::ImportSummary s = fabatlas::scad::ImportScad(dir / "m.scad", o);
@@ -256,9 +257,10 @@ TEST(Import, ExposeAndItsErrors) {
 TEST(Import, ManyParametersUnderADimensionBudget) {
   const std::filesystem::path model = fabatlas::testing::SourceDir() / "tests/scad/data/organiser.scad";
   std::ifstream in(model);
-  const CustomizerModel m = fabatlas::scad::ReadCustomizer(std::string(std::istreambuf_iterator<char>(in), {}), "organiser.scad");
+  const CustomizerModel m =
+      fabatlas::scad::ReadCustomizer(std::string(std::istreambuf_iterator<char>(in), {}), "organiser.scad");
   EXPECT_TRUE(m.warnings.empty());
-  ASSERT_EQ(m.parameters.size(), 18u);  // width .. label_text, $fn, eps, tag
+  ASSERT_EQ(m.parameters.size(), 18u);         // width .. label_text, $fn, eps, tag
   EXPECT_EQ(Find(m, "lip").widget, W::kNone);  // `// .5`: a spin box's step, not a range
 
   // Default: sliders and dropdowns by group (tab) then file order, up to 6.
@@ -291,8 +293,9 @@ TEST(Import, ManyParametersUnderADimensionBudget) {
   // A larger budget takes the next sliders in order.
   fabatlas::scad::ImportOptions o;
   o.max_dims = 8;
-  EXPECT_EQ(fabatlas::scad::ImportScad(model, o).exposed,
-            (std::vector<std::string>{"width", "depth", "height", "columns", "rows", "divider", "divider_ratio", "wall"}));
+  EXPECT_EQ(
+      fabatlas::scad::ImportScad(model, o).exposed,
+      (std::vector<std::string>{"width", "depth", "height", "columns", "rows", "divider", "divider_ratio", "wall"}));
 
   // Ranges: a spin box gets one (real: the model's 1.5 is not whole), a
   // slider's is replaced (integer: whole ends, step and value).
@@ -318,7 +321,8 @@ TEST(Import, ManyParametersUnderADimensionBudget) {
 // choice takes a group's sliders together, in file order within it.
 TEST(Import, GroupsBeforeFileOrder) {
   auto dir = fabatlas::testing::FreshTempDir("scad-import-groups");
-  std::ofstream(dir / "g.scad") << "/* [A] */\na1 = 1; // [0:2]\n/* [B] */\nb1 = 1; // [0:2]\n/* [A] */\na2 = 1; // [0:2]\ncube(a1 + b1 + a2);\n";
+  std::ofstream(dir / "g.scad")
+      << "/* [A] */\na1 = 1; // [0:2]\n/* [B] */\nb1 = 1; // [0:2]\n/* [A] */\na2 = 1; // [0:2]\ncube(a1 + b1 + a2);\n";
   fabatlas::scad::ImportOptions o;
   o.max_dims = 2;
   fabatlas::scad::ImportSummary s = fabatlas::scad::ImportScad(dir / "g.scad", o);
@@ -341,18 +345,25 @@ TEST(Import, BadRangesAreOneLine) {
     }
     return std::string("accepted");
   };
-  EXPECT_EQ(message({"lip=0:x"}), "--expose lip=0:x: malformed range '0:x' (expected NAME=lo:hi or NAME=lo:hi:step, numbers)");
+  EXPECT_EQ(message({"lip=0:x"}),
+            "--expose lip=0:x: malformed range '0:x' (expected NAME=lo:hi or NAME=lo:hi:step, numbers)");
   EXPECT_NE(message({"lip=0:3:"}).find("malformed range '0:3:'"), std::string::npos);
   EXPECT_EQ(message({"lip=3:1"}), "--expose lip=3:1: lo 3 is not below hi 1");
   EXPECT_EQ(message({"lip=0:3:0"}), "--expose lip=0:3:0: step 0 must be positive");
-  EXPECT_NE(message({"lip=2:3"}).find("organiser.scad:39: --expose lip: the model's value 1.5 lies outside 2:3"), std::string::npos);
-  EXPECT_NE(message({"label_text=0:1"}).find("organiser.scad:43: --expose label_text: the parameter is a string (text box) (\"tools\"), a range needs a number"),
+  EXPECT_NE(message({"lip=2:3"}).find("organiser.scad:39: --expose lip: the model's value 1.5 lies outside 2:3"),
+            std::string::npos);
+  EXPECT_NE(message({"label_text=0:1"})
+                .find("organiser.scad:43: --expose label_text: the parameter is a string (text box) (\"tools\"), a "
+                      "range needs a number"),
             std::string::npos);
   EXPECT_NE(message({"label=0:2"}).find("--expose label: the parameter is a dropdown"), std::string::npos);
-  EXPECT_NE(message({"nope=0:2"}).find("--expose nope: the model has no Customizer parameter 'nope'"), std::string::npos);
-  EXPECT_NE(message({"lip_inset"}).find("organiser.scad:41: --expose lip_inset: the parameter has no slider or dropdown annotation"),
+  EXPECT_NE(message({"nope=0:2"}).find("--expose nope: the model has no Customizer parameter 'nope'"),
             std::string::npos);
-  EXPECT_NE(message({"width", "depth", "height"}, 2).find("--expose names 3 parameters, more than --max-dims 2"), std::string::npos);
+  EXPECT_NE(message({"lip_inset"})
+                .find("organiser.scad:41: --expose lip_inset: the parameter has no slider or dropdown annotation"),
+            std::string::npos);
+  EXPECT_NE(message({"width", "depth", "height"}, 2).find("--expose names 3 parameters, more than --max-dims 2"),
+            std::string::npos);
   EXPECT_NE(message({}, 17).find("--max-dims 17 is outside 1..16"), std::string::npos);
 }
 
@@ -434,8 +445,8 @@ TEST(Customizer, NamesAreReadAsTheNativeEvaluatorReadsThem) {
 }
 
 TEST(ScadCsgTree, CommentsAndStringsFollowOpenScadsLexicalRules) {
-  auto root = fabatlas::scad::ParseCsg(
-      "// exported\n/* two\nlines */ text(text = \"a\\\"b\\n\");\n\ncube(size = 1);\n", "m.csg");
+  auto root = fabatlas::scad::ParseCsg("// exported\n/* two\nlines */ text(text = \"a\\\"b\\n\");\n\ncube(size = 1);\n",
+                                       "m.csg");
   ASSERT_EQ(root.children.size(), 2u);
   EXPECT_EQ(root.children[0].line, 3);
   EXPECT_EQ(root.children[0].args.at("text").text, "a\"b\n");

@@ -62,9 +62,11 @@ Measured Peer(const fs::path& model, const fs::path& dir) {
 // fabatlas's mesh road on the model at its own values (one exposed parameter
 // the model does not read).
 design::SampleResult Evaluate(const fs::path& model, const fs::path& dir, const std::string& road = "mesh") {
-  design::Design d = design::ParseDesign("name: corpus\nvoxel_size: 0.25\nparameters: {unused: {type: integer, min: 0, max: 1, default: 0}}\n"
-                                         "tree: {op: openscad, file: '" + model.string() + "', render: " + road + "}\n",
-                                         dir / "corpus.yaml");
+  design::Design d = design::ParseDesign(
+      "name: corpus\nvoxel_size: 0.25\nparameters: {unused: {type: integer, min: 0, max: 1, default: 0}}\n"
+      "tree: {op: openscad, file: '" +
+          model.string() + "', render: " + road + "}\n",
+      dir / "corpus.yaml");
   design::EvaluateOptions geometry_only;
   geometry_only.run_checks = false;
   return design::EvaluateSample(d, design::DefaultPoint(d), geometry_only);
@@ -97,22 +99,20 @@ TEST_P(CorpusModel, MeshRoadMatchesOpenScadsStl) {
 // PNG and DAT height maps (a short DAT row, a missing file), 2D objects
 // among 3D ones (ignored), boxes meeting along an edge as an operand of a
 // further union, a polyhedron OpenSCAD takes as approximately convex.
-INSTANTIATE_TEST_SUITE_P(Features, CorpusModel,
-                         ::testing::Values("features/cube-tests.scad", "features/sphere-tests.scad",
-                                           "features/cylinder-tests.scad", "features/union-tests.scad",
-                                           "features/union-coincident-test.scad", "features/difference-tests.scad",
-                                           "features/intersection-tests.scad", "features/mirror-tests.scad",
-                                           "features/transform-tests.scad", "features/hull3-tests.scad",
-                                           "features/minkowski3-tests.scad", "features/resize-tests.scad",
-                                           "features/linear_extrude-tests.scad", "features/rotate_extrude-tests.scad",
-                                           "features/rotate_extrude-angle.scad", "features/polyhedron-concave-test.scad",
-                                           "features/import_stl-tests.scad", "features/2d-3d.scad",
-                                           "features/for-tests.scad", "features/child-tests.scad",
-                                           "features/minkowski3-erosion.scad", "issues/issue911.scad",
-                                           "features/surface-png-image3-tests.scad", "features/surface-tests.scad",
-                                           "issues/issue1223.scad", "features/import_3mf-tests.scad",
-                                           "features/highlight-modifier2.scad", "issues/issue1867.scad",
-                                           "features/primitive-inf-tests.scad", "misc/camera-tests.scad"));
+INSTANTIATE_TEST_SUITE_P(
+    Features, CorpusModel,
+    ::testing::Values("features/cube-tests.scad", "features/sphere-tests.scad", "features/cylinder-tests.scad",
+                      "features/union-tests.scad", "features/union-coincident-test.scad",
+                      "features/difference-tests.scad", "features/intersection-tests.scad",
+                      "features/mirror-tests.scad", "features/transform-tests.scad", "features/hull3-tests.scad",
+                      "features/minkowski3-tests.scad", "features/resize-tests.scad",
+                      "features/linear_extrude-tests.scad", "features/rotate_extrude-tests.scad",
+                      "features/rotate_extrude-angle.scad", "features/polyhedron-concave-test.scad",
+                      "features/import_stl-tests.scad", "features/2d-3d.scad", "features/for-tests.scad",
+                      "features/child-tests.scad", "features/minkowski3-erosion.scad", "issues/issue911.scad",
+                      "features/surface-png-image3-tests.scad", "features/surface-tests.scad", "issues/issue1223.scad",
+                      "features/import_3mf-tests.scad", "features/highlight-modifier2.scad", "issues/issue1867.scad",
+                      "features/primitive-inf-tests.scad", "misc/camera-tests.scad"));
 
 // A primitive alone is the sample's solid: its volume is OpenSCAD's, with
 // its sign (a sphere's rings run north to south; $fn = inf gives a triangle).
@@ -135,7 +135,8 @@ TEST(MeshRoad, AmfImportsMatchOpenScadsStl) {
   const fs::path amf = "/usr/share/openscad/testdata/amf";
   if (!fs::exists(amf)) GTEST_SKIP() << "openscad-testing-data is not installed";
   const fs::path dir = fabatlas::testing::FreshTempDir("scad-mesh-road-amf");
-  for (const char* name : {"cube-with-hole", "multi-volume-binary", "sphere20face", "split_pyramid", "tetra_multicolor"}) {
+  for (const char* name :
+       {"cube-with-hole", "multi-volume-binary", "sphere20face", "split_pyramid", "tetra_multicolor"}) {
     const fs::path model = dir / (std::string(name) + ".scad");
     std::ofstream(model) << "import(\"" << (amf / (std::string(name) + ".amf")).string() << "\");\n";
     const Measured peer = Peer(model, dir);
@@ -150,7 +151,8 @@ TEST(MeshRoad, SurfaceIsOpenScadsOwnTriangles) {
   // and every one of its vertices is a vertex of ours (the exact faces of
   // the model), where a level set would carry thousands and round the edges.
   const fs::path dir = fabatlas::testing::FreshTempDir("scad-mesh-road-faces");
-  std::ofstream(dir / "box.scad") << "difference() { cube([20, 20, 10]); translate([10, 10, -1]) cylinder(r = 5, h = 12, $fn = 24); }\n";
+  std::ofstream(dir / "box.scad")
+      << "difference() { cube([20, 20, 10]); translate([10, 10, -1]) cylinder(r = 5, h = 12, $fn = 24); }\n";
   const Measured peer = Peer(dir / "box.scad", dir);
   const design::SampleResult r = Evaluate(dir / "box.scad", dir);
   ASSERT_TRUE(r.valid) << r.failure_reason;
@@ -212,7 +214,8 @@ TEST(ExactBoolean, DisjointOperandsAreSettledByTheirBoxes) {
   mesh::BooleanSummary summary;
   EXPECT_DOUBLE_EQ(std::abs(mesh::EnclosedVolume(mesh::ExactBoolean(mesh::BooleanOp::kUnion, {a, b}, &summary))), 2.0);
   EXPECT_TRUE(mesh::ExactBoolean(mesh::BooleanOp::kIntersection, {a, b}, &summary).empty());
-  EXPECT_DOUBLE_EQ(std::abs(mesh::EnclosedVolume(mesh::ExactBoolean(mesh::BooleanOp::kDifference, {a, b}, &summary))), 1.0);
+  EXPECT_DOUBLE_EQ(std::abs(mesh::EnclosedVolume(mesh::ExactBoolean(mesh::BooleanOp::kDifference, {a, b}, &summary))),
+                   1.0);
   EXPECT_EQ(summary.corefinements, 0);
 }
 
@@ -251,7 +254,9 @@ TEST(MeshRoad, AModelOpenScadRejectsIsBadInputNamingItsLine) {
     FAIL() << "a model OpenSCAD cannot parse evaluated";
   } catch (const fabatlas::InputError& e) {
     const std::string what = e.what();
-    EXPECT_NE(what.find((dir / "bad.scad").string() + ":3: OpenSCAD rejects the model: Parser error"), std::string::npos) << what;
+    EXPECT_NE(what.find((dir / "bad.scad").string() + ":3: OpenSCAD rejects the model: Parser error"),
+              std::string::npos)
+        << what;
     EXPECT_EQ(what.find('\n'), std::string::npos) << what;
   }
 }

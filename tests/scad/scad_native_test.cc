@@ -90,7 +90,8 @@ TEST(ScadNative, LanguageFormsAreOpenScadsExport) {
       "function fact(n) = n <= 1 ? 1 : n * fact(n - 1);\nfunction pts(n, r) = [for (i = [0 : n - 1]) "
       "let(a = i * 360 / n) r * [cos(a), sin(a)]];\nv = [for (i = [1:3]) i * 2, each [7, 8], if (true) 9 else 10, "
       "for (i = [10 : -3 : 0]) if (i % 2 == 0) i];\nlinear_extrude(height = fact(3), twist = 30, slices = 4) "
-      "polygon(pts(7, 4));\ntranslate([len(v), v[3], lookup(2.5, [[1, 10], [2, 20], [3, 40]])]) cube(concat([1], [2, 3]));\n"
+      "polygon(pts(7, 4));\ntranslate([len(v), v[3], lookup(2.5, [[1, 10], [2, 20], [3, 40]])]) cube(concat([1], [2, "
+      "3]));\n"
       "text(str(\"n\", 12, \"x\"), size = 4, halign = \"center\");\nfor (i = [0 : 0.25 : 1], j = [1, 2]) "
       "translate([i, j, 0]) cube(0.1);\n",
       // if/else chains, let statements, disabled statements, matrices, mirror, scale, multmatrix, colour
@@ -169,7 +170,8 @@ TEST(ScadNative, WhatItDoesNotImplementIsDeclinedNamingTheLine) {
   };
   // Recursion: 100 levels of a function and of a module are evaluated, a
   // million are declined within the evaluator's stack budget (no crash).
-  const std::string deep = "function f(n) = n <= 0 ? 0 : 1 + f(n - 1);\nmodule m(n) { if (n > 0) m(n - 1); else cube(f(N)); }\nm(N);\n";
+  const std::string deep =
+      "function f(n) = n <= 0 ? 0 : 1 + f(n - 1);\nmodule m(n) { if (n > 0) m(n - 1); else cube(f(N)); }\nm(N);\n";
   auto depth = [&](const std::string& n) {
     std::string p = deep;
     for (std::size_t at; (at = p.find('N')) != std::string::npos;) p.replace(at, 1, n);
@@ -179,18 +181,21 @@ TEST(ScadNative, WhatItDoesNotImplementIsDeclinedNamingTheLine) {
   EXPECT_NE(depth("100").csg.find("cube(size = [100, 100, 100]"), std::string::npos);
   EXPECT_EQ(depth("1000000").declined, "m.scad:2: recursion deeper than the evaluator's stack budget");
   // Exponential work (2^40 calls) declines after a bounded number of steps.
-  EXPECT_EQ(scad::EvaluateModelText("function f(n) = n == 0 ? 1 : f(n - 1) + f(n - 1);\ncube(f(40));\n", "m.scad", {}).declined,
+  EXPECT_EQ(scad::EvaluateModelText("function f(n) = n == 0 ? 1 : f(n - 1) + f(n - 1);\ncube(f(40));\n", "m.scad", {})
+                .declined,
             "m.scad:1: more than 20 million evaluation steps");
   // Doubling a vector 30 times declines before it takes the memory.
   EXPECT_EQ(scad::EvaluateModelText("function g(v, n) = n == 0 ? v : g(concat(v, v), n - 1);\ncube(len(g([1], 30)));\n",
-                                    "m.scad", {}).declined,
+                                    "m.scad", {})
+                .declined,
             "m.scad:1: a vector of more than 1,000,000 values");
   // Growing a 300,000-value vector by one at each of 100 levels of recursion
   // (each level keeps its copy: 30 million values, gigabytes) declines at
   // two million values built.
   EXPECT_EQ(scad::EvaluateModelText("function g(v, n) = n == 0 ? len(v) : g(concat(v, [n]), n - 1);\n"
                                     "cube(g([for (i = [1 : 300000]) i], 100) > 0 ? 1 : 2);\n",
-                                    "m.scad", {}).declined,
+                                    "m.scad", {})
+                .declined,
             "m.scad: more than 2 million vector values built");
   for (const auto& [program, reason] : cases) {
     const scad::ModelEvaluation own = scad::EvaluateModelText(program, "m.scad", {});
@@ -199,11 +204,15 @@ TEST(ScadNative, WhatItDoesNotImplementIsDeclinedNamingTheLine) {
   }
   // An unknown colour name is not declined but bad input (OpenSCAD would
   // draw it grey), with its line (docs/openscad.md, "Parts and colours").
-  const scad::ModelEvaluation colour = scad::EvaluateModelText("cube(1);\ncolor(\"notacolour\") cube(1);\n", "m.scad", {});
+  const scad::ModelEvaluation colour =
+      scad::EvaluateModelText("cube(1);\ncolor(\"notacolour\") cube(1);\n", "m.scad", {});
   EXPECT_FALSE(colour.evaluated);
-  EXPECT_EQ(colour.bad_input,
-            "m.scad:2: color(\"notacolour\"): unknown colour name (an SVG/CSS colour name, \"#rrggbb\" or [r, g, b, a])");
-  EXPECT_EQ(scad::UnknownColourName("cube(1);\n// color(\"x\")\ncolor(c = \"Reddish\", alpha = 0.5) cube(1);\ncolor(\"Red\") cube(1);\n", "m.scad"),
+  EXPECT_EQ(
+      colour.bad_input,
+      "m.scad:2: color(\"notacolour\"): unknown colour name (an SVG/CSS colour name, \"#rrggbb\" or [r, g, b, a])");
+  EXPECT_EQ(scad::UnknownColourName(
+                "cube(1);\n// color(\"x\")\ncolor(c = \"Reddish\", alpha = 0.5) cube(1);\ncolor(\"Red\") cube(1);\n",
+                "m.scad"),
             "m.scad:3: color(\"Reddish\"): unknown colour name (an SVG/CSS colour name, \"#rrggbb\" or [r, g, b, a])");
   EXPECT_EQ(scad::UnknownColourName("color(\"#a0b0c0\") color(\"DarkOrchid\") cube(1);\n", "m.scad"), "");
 }
@@ -216,8 +225,9 @@ TEST(ScadNative, TheOpenScadNodeFallsBackToOpenScadsExport) {
   std::ofstream(dir / "plain.scad") << "s = 10;\ncube(s);\n";
   std::ofstream(dir / "rounded.scad") << "s = 10;\nminkowski() { cube(s - 2); sphere(1, $fn = 8); }\n";
   auto load = [&](const char* model) {
-    std::ofstream(dir / "d.yaml") << "name: d\nvoxel_size: 0.25\nparameters: {s: {type: real, min: 4, max: 12, default: 10}}\n"
-                                  << "tree: {op: openscad, file: " << model << ", set: {s: s}}\nproperties: [volume]\n";
+    std::ofstream(dir / "d.yaml")
+        << "name: d\nvoxel_size: 0.25\nparameters: {s: {type: real, min: 4, max: 12, default: 10}}\n"
+        << "tree: {op: openscad, file: " << model << ", set: {s: s}}\nproperties: [volume]\n";
     return design::LoadDesign(dir / "d.yaml");
   };
   auto volume = [&](const design::Design& d, bool* failed = nullptr) {

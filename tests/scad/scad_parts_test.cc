@@ -34,7 +34,8 @@ const fs::path kFeatures = "/usr/share/openscad/testdata/scad/3D/features";
 design::SampleResult Evaluate(const fs::path& model, const fs::path& dir, std::vector<design::Part>* parts) {
   design::Design d = design::ParseDesign(
       "name: parts\nvoxel_size: 0.5\nparameters: {unused: {type: integer, min: 0, max: 1, default: 0}}\n"
-      "tree: {op: openscad, file: '" + model.string() + "'}\n",
+      "tree: {op: openscad, file: '" +
+          model.string() + "'}\n",
       dir / "parts.yaml");
   design::EvaluateOptions options;
   options.run_checks = false;
@@ -86,16 +87,22 @@ TEST(Parts, OpenScadsColourTestsKeepEveryBodyInOpenScadsColour) {
     bool coloured;
     std::array<double, 4> rgba;
   };
-  const std::vector<Expected> expected = {
-      {"body3", false, {}},                  {"body4", true, {1, 0, 0, 1}},   {"body5", true, {k128, 0, k128, 1}},
-      {"body6", true, {0, 0, 1, 0.5}},       {"body7", true, {0, 0, 1, 0.5}}, {"body8", true, {0, k128, 0, 0.2}},
-      {"body9", false, {}},                  {"body10", false, {}},           {"body11", true, {0, 0, 1, 1}}};
+  const std::vector<Expected> expected = {{"body3", false, {}},
+                                          {"body4", true, {1, 0, 0, 1}},
+                                          {"body5", true, {k128, 0, k128, 1}},
+                                          {"body6", true, {0, 0, 1, 0.5}},
+                                          {"body7", true, {0, 0, 1, 0.5}},
+                                          {"body8", true, {0, k128, 0, 0.2}},
+                                          {"body9", false, {}},
+                                          {"body10", false, {}},
+                                          {"body11", true, {0, 0, 1, 1}}};
   ASSERT_EQ(parts.size(), expected.size());
   double sum = 0;
   for (std::size_t i = 0; i < parts.size(); ++i) {
     EXPECT_EQ(parts[i].name, expected[i].name);
     EXPECT_EQ(parts[i].coloured, expected[i].coloured) << parts[i].name;
-    for (int k = 0; k < 4 && expected[i].coloured; ++k) EXPECT_NEAR(parts[i].rgba[k], expected[i].rgba[k], 1e-6) << parts[i].name;
+    for (int k = 0; k < 4 && expected[i].coloured; ++k)
+      EXPECT_NEAR(parts[i].rgba[k], expected[i].rgba[k], 1e-6) << parts[i].name;
     const double volume = mesh::EnclosedVolume(parts[i].mesh);
     EXPECT_NEAR(volume, 1000, 1e-9) << parts[i].name;
     sum += volume;
@@ -122,12 +129,13 @@ TEST(Parts, OpenScadsColourTestsKeepEveryBodyInOpenScadsColour) {
 // colours, each cut.
 TEST(Parts, UnionKeepsBothColoursAndDifferenceItsFirstChilds) {
   const fs::path dir = fabatlas::testing::FreshTempDir("scad-parts-union");
-  const fs::path model = Write(dir, "union.scad",
-                               "union() { color(\"red\") cube(10); color(\"blue\") translate([5, 0, 0]) cube(10); }\n"
-                               "translate([0, 30, 0]) difference() {\n"
-                               "  union() { color(\"red\") cube(10); color(\"#00ff00\") translate([10, 0, 0]) cube(10); }\n"
-                               "  translate([5, -1, -1]) cube([10, 12, 12]);\n"
-                               "}\n");
+  const fs::path model =
+      Write(dir, "union.scad",
+            "union() { color(\"red\") cube(10); color(\"blue\") translate([5, 0, 0]) cube(10); }\n"
+            "translate([0, 30, 0]) difference() {\n"
+            "  union() { color(\"red\") cube(10); color(\"#00ff00\") translate([10, 0, 0]) cube(10); }\n"
+            "  translate([5, -1, -1]) cube([10, 12, 12]);\n"
+            "}\n");
   std::vector<design::Part> parts;
   const design::SampleResult r = Evaluate(model, dir, &parts);
   ASSERT_TRUE(r.valid) << r.failure_reason;
@@ -164,15 +172,17 @@ TEST(Parts, OneUncolouredBodyIsTheSolid) {
 TEST(Parts, AnUnknownColourNameIsOneLineWithTheModelsLine) {
   const fs::path dir = fabatlas::testing::FreshTempDir("scad-parts-unknown");
   const fs::path ours = Write(dir, "ours.scad", "cube(1);\ncolor(\"reddish\") sphere(1);\n");
-  const fs::path theirs = Write(dir, "theirs.scad", "minkowski() { cube(1); sphere(0.1); }\n\ncolor(\"reddish\") sphere(1);\n");
+  const fs::path theirs =
+      Write(dir, "theirs.scad", "minkowski() { cube(1); sphere(0.1); }\n\ncolor(\"reddish\") sphere(1);\n");
   for (const auto& [model, line] : {std::pair{ours, 2}, std::pair{theirs, 3}}) {
     try {
       Evaluate(model, dir, nullptr);
       ADD_FAILURE() << model << ": no error";
     } catch (const fabatlas::InputError& e) {
       const std::string what = e.what();
-      EXPECT_EQ(what, model.string() + ":" + std::to_string(line) +
-                          ": color(\"reddish\"): unknown colour name (an SVG/CSS colour name, \"#rrggbb\" or [r, g, b, a])");
+      EXPECT_EQ(what,
+                model.string() + ":" + std::to_string(line) +
+                    ": color(\"reddish\"): unknown colour name (an SVG/CSS colour name, \"#rrggbb\" or [r, g, b, a])");
       EXPECT_EQ(what.find('\n'), std::string::npos);
     }
   }

@@ -51,8 +51,8 @@ TEST(SweptVolume, BoxTurningAboutOffAxisIsAnnulus) {
   EXPECT_NEAR(mesh::EnclosedVolume(field.Surface(0.0)) / expected, 1.0, 0.01);
   ASSERT_GE(field.band_half_width(), 0.6);
   EXPECT_NEAR(field.Value({0, 0, 0}), field.band_half_width(), 1e-6);  // 4 mm away: clamped to the band
-  EXPECT_NEAR(field.Value({0, -6, 2.7}), -0.3, 0.05);                   // 0.3 mm inside the top face
-  EXPECT_NEAR(field.Value({-3.7, 0, 0}), 0.3, 0.05);                    // in the hole
+  EXPECT_NEAR(field.Value({0, -6, 2.7}), -0.3, 0.05);                  // 0.3 mm inside the top face
+  EXPECT_NEAR(field.Value({-3.7, 0, 0}), 0.3, 0.05);                   // in the hole
 }
 
 TEST(SweptVolume, CoarseTimeStepsWidenTheBandAndStaySigned) {
@@ -68,7 +68,7 @@ TEST(SweptVolume, CoarseTimeStepsWidenTheBandAndStaySigned) {
   const auto field = ComputeSweptDistance(sphere, poses, o, &s);
   EXPECT_GE(s.band_half_width, 8.0);
   EXPECT_NEAR(field.Value({8, 0, 0}), -5.0, 0.05);
-  EXPECT_NEAR(field.Value({4, 0, 0}), -1.0, 0.05);              // min of the two spheres' distances
+  EXPECT_NEAR(field.Value({4, 0, 0}), -1.0, 0.05);                    // min of the two spheres' distances
   EXPECT_NEAR(field.Value({4, 3.5, 0}), std::sqrt(28.25) - 5, 0.05);  // the waist is outside
 }
 

@@ -19,7 +19,8 @@ using mesh::testing::IcoSphere;
 // Axis-aligned box [lo, hi], 12 triangles, outward.
 inline mesh::TriangleMesh BoxMesh(const std::array<double, 3>& lo, const std::array<double, 3>& hi) {
   mesh::TriangleMesh m;
-  for (int i = 0; i < 8; ++i) m.vertices.push_back({(i & 1) ? hi[0] : lo[0], (i & 2) ? hi[1] : lo[1], (i & 4) ? hi[2] : lo[2]});
+  for (int i = 0; i < 8; ++i)
+    m.vertices.push_back({(i & 1) ? hi[0] : lo[0], (i & 2) ? hi[1] : lo[1], (i & 4) ? hi[2] : lo[2]});
   m.triangles = {{0, 2, 1}, {1, 2, 3}, {4, 5, 6}, {5, 7, 6}, {0, 1, 4}, {1, 5, 4},
                  {2, 6, 3}, {3, 6, 7}, {0, 4, 2}, {2, 4, 6}, {1, 3, 5}, {3, 7, 5}};
   return m;

@@ -79,7 +79,7 @@ TEST_F(Api, AVolumeLimitShrinksTheWallStretchToTheClosedFormBound) {
   // wall, so the stretch must end in [7.4, w*].
   const double r = 15, v = TubeVolume(15, 8.5);
   const double w_star = r - std::sqrt(r * r - v / (20 * std::numbers::pi));  // = 8.5
-  const double last_sample_within = 0.5 + 3 * 2.3;                         // 7.4
+  const double last_sample_within = 0.5 + 3 * 2.3;                           // 7.4
   const auto valid_hi = [&](const json& j) {
     double hi = -1;
     for (const auto& s : j["dimensions"][1])
@@ -100,8 +100,8 @@ TEST_F(Api, AVolumeLimitShrinksTheWallStretchToTheClosedFormBound) {
     if (!s["valid"].get<bool>() && s["lo"].get<double>() >= limited_hi - 1e-9) beyond = s;
   ASSERT_FALSE(beyond.is_null()) << limited.dump();
   EXPECT_EQ(beyond["failures"], json::array({"limit:volume"}));
-  const json why = Get("/api/reason", {{"u", "15," + std::to_string(limited_hi + 1)},
-                                       {"limits", "volume<=" + std::to_string(v)}});
+  const json why =
+      Get("/api/reason", {{"u", "15," + std::to_string(limited_hi + 1)}, {"limits", "volume<=" + std::to_string(v)}});
   EXPECT_EQ(why["check"], "limits");
   EXPECT_NE(why["reason"].get<std::string>().find("above your limit"), std::string::npos) << why.dump();
   // Snapping and properties keep to the limit.
@@ -156,8 +156,12 @@ TEST(ApiExport, ChecksRunAtExactlyThePointBeforeWriting) {
   const ApiResponse r = HandleApiRequest(c, "/api/export", {{"u", "17.5,1,0"}, {"format", "stl"}});
   EXPECT_EQ(r.status, 400);
   EXPECT_EQ(std::count(r.body.begin(), r.body.end(), '\n'), 1) << r.body;
-  EXPECT_EQ(r.body.rfind("length=17.5,pegs=1,peg=thin fails check 'max_volume' at exactly this point (too_much_material: "
-                         "material volume ", 0), 0u) << r.body;
+  EXPECT_EQ(
+      r.body.rfind("length=17.5,pegs=1,peg=thin fails check 'max_volume' at exactly this point (too_much_material: "
+                   "material volume ",
+                   0),
+      0u)
+      << r.body;
   const ApiResponse ok = HandleApiRequest(c, "/api/export", {{"u", "16,1,0"}, {"format", "stl"}});
   EXPECT_EQ(ok.status, 200) << ok.body;
   EXPECT_EQ(ok.headers.at("X-Checks"), "constraints,geometry,max_volume");

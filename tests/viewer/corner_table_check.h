@@ -17,8 +17,7 @@
 
 namespace fabatlas::viewer {
 
-inline void ExpectCornerTableMatchesSampleIdSearch(const sampling::Form& form, const LeafCorners& corners,
-                                                   int points) {
+inline void ExpectCornerTableMatchesSampleIdSearch(const sampling::Form& form, const LeafCorners& corners, int points) {
   const sampling::DesignSpace space = form.space();
   ASSERT_TRUE(corners.Fits(form));
   std::size_t leaves = 0;

@@ -29,7 +29,6 @@ using cluster_test::WaitExit;
 using viewer_test::PegRunDir;
 using viewer_test::RunDir;
 
-
 using viewer_test::TrulyValid;
 using viewer_test::TubeVolume;
 
@@ -72,8 +71,9 @@ StlFacts ReadStl(const std::string& b) {
     std::array<std::array<float, 3>, 3> v;
     std::memcpy(v.data(), b.data() + 84 + 50 * t + 12, 36);
     const auto& [a, c, d] = v;
-    f.volume += (a[0] * (c[1] * d[2] - c[2] * d[1]) - a[1] * (c[0] * d[2] - c[2] * d[0]) +
-                 a[2] * (c[0] * d[1] - c[1] * d[0])) / 6.0;
+    f.volume +=
+        (a[0] * (c[1] * d[2] - c[2] * d[1]) - a[1] * (c[0] * d[2] - c[2] * d[0]) + a[2] * (c[0] * d[1] - c[1] * d[0])) /
+        6.0;
     for (int k = 0; k < 3; ++k) {
       for (int i = 0; i < 3; ++i) {
         f.lo[i] = std::min<double>(f.lo[i], v[k][i]);
@@ -98,9 +98,9 @@ class Export : public ::testing::Test {
 };
 
 TEST_F(Export, StlIsClosedWithTheTubesAnalyticVolume) {
-  const Outcome r = Fabatlas({"export", RunDir().string(), "--at", "radius=15,wall=6", "--format", "stl", "--out",
-                          (dir_ / "t.stl").string()},
-                         dir_);
+  const Outcome r = Fabatlas(
+      {"export", RunDir().string(), "--at", "radius=15,wall=6", "--format", "stl", "--out", (dir_ / "t.stl").string()},
+      dir_);
   ASSERT_EQ(r.status, 0) << r.output;
   const StlFacts f = ReadStl(ReadBytes(dir_ / "t.stl"));
   EXPECT_GT(f.triangles, 1000u);
@@ -115,8 +115,8 @@ TEST_F(Export, StlIsClosedWithTheTubesAnalyticVolume) {
 }
 
 TEST_F(Export, GlbIsInMetresWithYUp) {
-  const Outcome r = Fabatlas({"export", RunDir().string(), "--at", "radius=15,wall=6", "--out", (dir_ / "t.glb").string()},
-                         dir_);
+  const Outcome r =
+      Fabatlas({"export", RunDir().string(), "--at", "radius=15,wall=6", "--out", (dir_ / "t.glb").string()}, dir_);
   ASSERT_EQ(r.status, 0) << r.output;
   const std::string g = ReadBytes(dir_ / "t.glb");
   ASSERT_EQ(g.substr(0, 4), "glTF");
@@ -153,9 +153,9 @@ TEST_F(Export, GlbIsInMetresWithYUp) {
 }
 
 TEST_F(Export, ThreeMfOpensInPythonWithTheTubesVolume) {
-  const Outcome r = Fabatlas({"export", RunDir().string(), "--at", "radius=20,wall=8", "--format", "3mf", "--out",
-                          (dir_ / "t.3mf").string()},
-                         dir_);
+  const Outcome r = Fabatlas(
+      {"export", RunDir().string(), "--at", "radius=20,wall=8", "--format", "3mf", "--out", (dir_ / "t.3mf").string()},
+      dir_);
   ASSERT_EQ(r.status, 0) << r.output;
   // An independent reader: Python's zipfile (CRCs checked) and ElementTree.
   const fs::path script = dir_ / "read3mf.py";
@@ -174,7 +174,8 @@ bad = sum(1 for (p, q), k in edges.items() if k != 1 or edges.get((q, p)) != 1)
 print(n, bad, vol)
 )";
   const fs::path out = dir_ / "py.txt";
-  ASSERT_EQ(std::system(("python3 " + script.string() + " " + (dir_ / "t.3mf").string() + " > " + out.string()).c_str()), 0);
+  ASSERT_EQ(
+      std::system(("python3 " + script.string() + " " + (dir_ / "t.3mf").string() + " > " + out.string()).c_str()), 0);
   std::istringstream facts(ReadText(out));
   std::size_t triangles = 0, bad_edges = 1;
   double volume = 0;
@@ -185,8 +186,8 @@ print(n, bad, vol)
 }
 
 TEST_F(Export, AnInvalidPointIsRefusedNamingATrulyValidNearestPoint) {
-  const Outcome r = Fabatlas({"export", RunDir().string(), "--at", "radius=29,wall=1", "--out", (dir_ / "bad.stl").string()},
-                         dir_);
+  const Outcome r =
+      Fabatlas({"export", RunDir().string(), "--at", "radius=29,wall=1", "--out", (dir_ / "bad.stl").string()}, dir_);
   EXPECT_EQ(r.status, 2);
   EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << r.output;
   EXPECT_FALSE(fs::exists(dir_ / "bad.stl"));
@@ -196,17 +197,19 @@ TEST_F(Export, AnInvalidPointIsRefusedNamingATrulyValidNearestPoint) {
   const double radius = std::stod(m[1]), wall = std::stod(m[2]);
   EXPECT_TRUE(TrulyValid(radius, wall)) << r.output;
   // ... and that point exports.
-  const Outcome ok = Fabatlas({"export", RunDir().string(), "--at", "radius=" + m[1].str() + ",wall=" + m[2].str(), "--out",
-                           (dir_ / "ok.stl").string()},
-                          dir_);
+  const Outcome ok = Fabatlas({"export", RunDir().string(), "--at", "radius=" + m[1].str() + ",wall=" + m[2].str(),
+                               "--out", (dir_ / "ok.stl").string()},
+                              dir_);
   EXPECT_EQ(ok.status, 0) << ok.output;
   const StlFacts f = ReadStl(ReadBytes(dir_ / "ok.stl"));
   EXPECT_NEAR(f.volume, TubeVolume(radius, wall), 0.01 * TubeVolume(radius, wall));
   // Bad arguments: one line, exit 2.
   for (const std::vector<std::string>& args :
-       {std::vector<std::string>{"export", RunDir().string(), "--at", "radius=15,wall=6", "--out", (dir_ / "x.3ds").string()},
+       {std::vector<std::string>{"export", RunDir().string(), "--at", "radius=15,wall=6", "--out",
+                                 (dir_ / "x.3ds").string()},
         std::vector<std::string>{"export", RunDir().string(), "--at", "radius=nan", "--out", (dir_ / "x.stl").string()},
-        std::vector<std::string>{"export", (dir_ / "missing").string(), "--at", "radius=15", "--out", (dir_ / "x.stl").string()}}) {
+        std::vector<std::string>{"export", (dir_ / "missing").string(), "--at", "radius=15", "--out",
+                                 (dir_ / "x.stl").string()}}) {
     const Outcome bad = Fabatlas(args, dir_);
     EXPECT_EQ(bad.status, 2) << bad.output;
     EXPECT_EQ(std::count(bad.output.begin(), bad.output.end(), '\n'), 1) << bad.output;
@@ -232,9 +235,9 @@ TEST_F(Export, APointValidOnlyBetweenSamplesIsCheckedAtExactlyThatPoint) {
   // ... but there the rail is 22 mm high: 17.5 x 6 x 22 = 2310 mm^3 of
   // material (the peg stands inside it), above the design's max_volume 1000.
   ASSERT_GT(17.5 * 6 * RailHeight(17.5), 1000);
-  const Outcome r = Fabatlas({"export", PegRunDir().string(), "--at", "length=17.5,pegs=1,peg=thin", "--out",
-                              (dir_ / "bulge.stl").string()},
-                             dir_);
+  const Outcome r = Fabatlas(
+      {"export", PegRunDir().string(), "--at", "length=17.5,pegs=1,peg=thin", "--out", (dir_ / "bulge.stl").string()},
+      dir_);
   EXPECT_EQ(r.status, 2) << r.output;
   EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << r.output;
   EXPECT_NE(r.output.find("fails check 'max_volume' at exactly this point (too_much_material"), std::string::npos)
@@ -243,9 +246,9 @@ TEST_F(Export, APointValidOnlyBetweenSamplesIsCheckedAtExactlyThatPoint) {
   // Off the bulge (at 16 the bump is 20 e^-14 mm) the checks pass at the
   // exact point and the file holds the analytic volume: the 16 x 6 x 2 rail
   // and the peg's 5.5 mm above it (radius 1).
-  const Outcome ok = Fabatlas({"export", PegRunDir().string(), "--at", "length=16,pegs=1,peg=thin", "--out",
-                               (dir_ / "rail.stl").string()},
-                              dir_);
+  const Outcome ok = Fabatlas(
+      {"export", PegRunDir().string(), "--at", "length=16,pegs=1,peg=thin", "--out", (dir_ / "rail.stl").string()},
+      dir_);
   ASSERT_EQ(ok.status, 0) << ok.output;
   EXPECT_NE(ok.output.find("checks passed there: constraints, geometry, max_volume"), std::string::npos) << ok.output;
   const double exact = 16 * 6 * RailHeight(16) + std::numbers::pi * (7.5 - RailHeight(16));

@@ -59,8 +59,8 @@ Outcome Fabatlas(const std::vector<std::string>& args) {
   static int runs = 0;
   std::vector<std::string> argv = {(testing::BinDir() / "fabatlas").string()};
   argv.insert(argv.end(), args.begin(), args.end());
-  const fs::path log = fs::temp_directory_path() / ("fabatlas-optimise-test-" + std::to_string(::getpid()) + "-" +
-                                                    std::to_string(runs++) + ".log");
+  const fs::path log = fs::temp_directory_path() /
+                       ("fabatlas-optimise-test-" + std::to_string(::getpid()) + "-" + std::to_string(runs++) + ".log");
   const pid_t pid = Spawn(argv, log);
   Outcome r;
   r.status = WaitExit(pid, std::chrono::minutes(2));
@@ -70,8 +70,8 @@ Outcome Fabatlas(const std::vector<std::string>& args) {
 }
 
 TEST(OptimiseCommand, LightestTubeOfRadius15InPla) {
-  const Outcome r = Fabatlas({"optimise", viewer_test::RunDir().string(), "--min", "weight_PLA", "--hold",
-                              "radius=15", "--json"});
+  const Outcome r =
+      Fabatlas({"optimise", viewer_test::RunDir().string(), "--min", "weight_PLA", "--hold", "radius=15", "--json"});
   ASSERT_EQ(r.status, 0) << r.output;
   const json j = json::parse(r.output);
   const double radius = j["point"]["radius"], wall = j["point"]["wall"];
@@ -87,8 +87,8 @@ TEST(OptimiseCommand, LightestTubeOfRadius15InPla) {
   EXPECT_GE(j["sample"].get<int>(), 0);  // radius 15 is a grid line: a sample, exact
   EXPECT_FALSE(j["interpolated"].get<bool>());
 
-  const Outcome text = Fabatlas({"optimise", viewer_test::RunDir().string(), "--min", "weight:PLA", "--hold",
-                                 "radius=15"});
+  const Outcome text =
+      Fabatlas({"optimise", viewer_test::RunDir().string(), "--min", "weight:PLA", "--hold", "radius=15"});
   ASSERT_EQ(text.status, 0) << text.output;
   EXPECT_NE(text.output.find("minimum of weight:PLA"), std::string::npos) << text.output;
   EXPECT_NE(text.output.find("radius=15"), std::string::npos) << text.output;
@@ -118,9 +118,9 @@ TEST(OptimiseCommand, BadInputIsOneLineAndExitStatus2) {
 TEST(OptimiseCommand, InspectParetoWritesTheFrontOfVolumeAgainstRadius) {
   const fs::path dir = fs::temp_directory_path() / ("fabatlas-pareto-" + std::to_string(::getpid()));
   fs::create_directories(dir);
-  const Outcome r = Fabatlas({"inspect", viewer_test::RunDir().string(), "--pareto", "volume,max:radius",
-                              "--pareto-csv", (dir / "front.csv").string(), "--pareto-png",
-                              (dir / "front.png").string()});
+  const Outcome r =
+      Fabatlas({"inspect", viewer_test::RunDir().string(), "--pareto", "volume,max:radius", "--pareto-csv",
+                (dir / "front.csv").string(), "--pareto-png", (dir / "front.png").string()});
   ASSERT_EQ(r.status, 0) << r.output;
   EXPECT_EQ(ReadText(dir / "front.png").substr(0, 4), "\x89PNG");
   std::ifstream csv(dir / "front.csv");
@@ -187,9 +187,11 @@ TEST_F(OptimiseApi, GetAndPostAgreeAndBadRequestsAre400) {
   // The bound: the lightest tube of radius r weighs V*(r) = TubeVolume(r, 1 + 0.01 r^2).
   EXPECT_LE(TubeVolume(limited["u"][0].get<double>(), WallMin(limited["u"][0].get<double>())), 9000.0 * 1.01);
 
-  for (const auto& query : std::vector<std::map<std::string, std::string>>{
-           {{"min", "nosuch"}}, {}, {{"min", "volume"}, {"max", "volume"}}, {{"min", "volume"}, {"hold", "radius=99"}},
-           {{"weights", "volume=x"}}}) {
+  for (const auto& query : std::vector<std::map<std::string, std::string>>{{{"min", "nosuch"}},
+                                                                           {},
+                                                                           {{"min", "volume"}, {"max", "volume"}},
+                                                                           {{"min", "volume"}, {"hold", "radius=99"}},
+                                                                           {{"weights", "volume=x"}}}) {
     const ApiResponse r = Get("/api/optimise", query);
     EXPECT_EQ(r.status, 400) << r.body;
     EXPECT_EQ(std::count(r.body.begin(), r.body.end(), '\n'), 1) << r.body;

@@ -48,8 +48,10 @@ class Band : public sampling::SampleEvaluator {
  public:
   SampleOutcome EvaluateSample(const SamplePoint& p) override {
     SampleOutcome o;
-    if (p.u[1] < 0.35) o.failure_type = "too_thin";
-    else if (p.u[1] > 0.45) o.failure_type = "too_thick";
+    if (p.u[1] < 0.35)
+      o.failure_type = "too_thin";
+    else if (p.u[1] > 0.45)
+      o.failure_type = "too_thick";
     o.valid = o.failure_type.empty();
     return o;
   }
@@ -92,8 +94,8 @@ TEST(ViewerValidRegion, FaceRuleMakesAnAllValidGridLineValid) {
   const sampling::Form form = Sample(band, UnitSquare(), 5, 0);
   const sampling::DesignSpace space = form.space();
   const LeafCorners corners(form);
-  EXPECT_TRUE(IsValidPoint(form, space, corners, {0.3, 0.4}));   // on the all-valid face
-  EXPECT_TRUE(IsValidPoint(form, space, corners, {0.4, 0.4}));   // on an all-valid vertex
+  EXPECT_TRUE(IsValidPoint(form, space, corners, {0.3, 0.4}));    // on the all-valid face
+  EXPECT_TRUE(IsValidPoint(form, space, corners, {0.4, 0.4}));    // on an all-valid vertex
   EXPECT_FALSE(IsValidPoint(form, space, corners, {0.3, 0.41}));  // inside a cell with invalid corners
   EXPECT_FALSE(IsValidPoint(form, space, corners, {0.3, 0.2}));
   EXPECT_FALSE(IsValidPoint(form, space, corners, {0.3, 1.5}));  // outside the space

@@ -24,14 +24,13 @@ namespace fabatlas::viewer {
 namespace {
 
 namespace fs = std::filesystem;
-using nlohmann::json;
 using cluster_test::KillAndReap;
 using cluster_test::ReadText;
 using cluster_test::Spawn;
 using cluster_test::WaitExit;
+using nlohmann::json;
 using viewer_test::RunDir;
 using viewer_test::TubeVolume;
-
 
 class Server : public ::testing::Test {
  protected:
@@ -52,8 +51,10 @@ class Server : public ::testing::Test {
     for (int i = 0; i < 1000 && port_ == 0; ++i) {
       std::smatch m;
       const std::string text = ReadText(log);
-      if (std::regex_search(text, m, listening)) port_ = std::stoi(m[1]);
-      else if (WaitExit(pid_, std::chrono::milliseconds(20)) != -1) break;
+      if (std::regex_search(text, m, listening))
+        port_ = std::stoi(m[1]);
+      else if (WaitExit(pid_, std::chrono::milliseconds(20)) != -1)
+        break;
     }
     ASSERT_GT(port_, 0) << ReadText(log);
     client_ = std::make_unique<httplib::Client>("127.0.0.1", port_);
@@ -181,7 +182,8 @@ GlbMesh ReadGlbMesh(const std::string& glb) {
   };
   if (doc["accessors"][prim["indices"].get<int>()]["componentType"] != 5125) return m;  // uint32
   std::size_t vertices = 0, indices = 0;
-  const std::size_t pos_at = view(prim["attributes"]["POSITION"], &vertices), index_at = view(prim["indices"], &indices);
+  const std::size_t pos_at = view(prim["attributes"]["POSITION"], &vertices),
+                    index_at = view(prim["indices"], &indices);
   std::vector<std::array<float, 3>> p(vertices);
   std::memcpy(p.data(), glb.data() + pos_at, 12 * vertices);
   for (const auto& v : p) {
@@ -196,7 +198,8 @@ GlbMesh ReadGlbMesh(const std::string& glb) {
     const auto& c = p[u32(index_at + 4 * t + 8)];
     m.volume += (double{a[0]} * (double{b[1]} * c[2] - double{b[2]} * c[1]) -
                  double{a[1]} * (double{b[0]} * c[2] - double{b[2]} * c[0]) +
-                 double{a[2]} * (double{b[0]} * c[1] - double{b[1]} * c[0])) / 6;
+                 double{a[2]} * (double{b[0]} * c[1] - double{b[1]} * c[0])) /
+                6;
   }
   return m;
 }
@@ -224,10 +227,10 @@ TEST_F(Server, PreviewIsGlbOfTheSnappedSampleAndChangesWithU) {
 }
 
 TEST_F(Server, BadRequestsGet400WithOneLine) {
-  for (const std::string q : {"/api/intervals?u=nan,1", "/api/intervals?u=1", "/api/intervals?u=15,6,1",
-                              "/api/intervals?u=15,100", "/api/snap?u=abc,1", "/api/intervals?u=inf,1",
-                              "/api/intervals", "/api/preview.glb?u=4,6", "/api/map?a=0&b=0&u=15,6",
-                              "/api/map?a=0&b=1&n=100000&u=15,6"}) {
+  for (const std::string q :
+       {"/api/intervals?u=nan,1", "/api/intervals?u=1", "/api/intervals?u=15,6,1", "/api/intervals?u=15,100",
+        "/api/snap?u=abc,1", "/api/intervals?u=inf,1", "/api/intervals", "/api/preview.glb?u=4,6",
+        "/api/map?a=0&b=0&u=15,6", "/api/map?a=0&b=1&n=100000&u=15,6"}) {
     auto r = Get(q);
     ASSERT_TRUE(r) << q;
     EXPECT_EQ(r->status, 400) << q;
@@ -249,9 +252,10 @@ TEST_F(Server, OnlyThePageAndTheApiAreReachable) {
   EXPECT_EQ(asset->status, 200);
   // Traversal attempts, raw and encoded, toward files that do exist.
   httplib::Client raw("127.0.0.1", port_);
-  for (const std::string& path : std::vector<std::string>{"/../secret.txt", "/assets/../../secret.txt", "/%2e%2e/secret.txt", "/..%2fsecret.txt",
-        "/assets/%2e%2e/%2e%2e/secret.txt", "/api/../../secret.txt", "//etc/passwd", "/../../../../etc/passwd",
-        "/index.html/../../secret.txt", "/form.json", "/" + RunDir().string() + "/form.json"}) {
+  for (const std::string& path : std::vector<std::string>{
+           "/../secret.txt", "/assets/../../secret.txt", "/%2e%2e/secret.txt", "/..%2fsecret.txt",
+           "/assets/%2e%2e/%2e%2e/secret.txt", "/api/../../secret.txt", "//etc/passwd", "/../../../../etc/passwd",
+           "/index.html/../../secret.txt", "/form.json", "/" + RunDir().string() + "/form.json"}) {
     auto r = raw.Get(path);
     // Refused outright is fine too, but the server must still be answering.
     auto alive = Get("/api/form");
@@ -270,10 +274,13 @@ TEST_F(Server, EveryResponseCarriesTheContentSecurityPolicyAndErrorsArePlainText
   httplib::Client raw("127.0.0.1", port_);
   const std::string hostile = "<script>document.title='XSS'</script>";
   const std::string encoded = "%3Cscript%3Edocument.title%3D%27XSS%27%3C%2Fscript%3E";  // hostile, URL-encoded
-  const std::vector<std::pair<std::string, int>> gets = {
-      {"/", 200}, {"/assets/app.js", 200}, {"/api/form", 200}, {"/api/intervals?u=15,6", 200},
-      {"/api/snap?u=" + encoded + ",1", 400},
-      {"/api/" + encoded, 404}, {"/nothing.html", 404}};
+  const std::vector<std::pair<std::string, int>> gets = {{"/", 200},
+                                                         {"/assets/app.js", 200},
+                                                         {"/api/form", 200},
+                                                         {"/api/intervals?u=15,6", 200},
+                                                         {"/api/snap?u=" + encoded + ",1", 400},
+                                                         {"/api/" + encoded, 404},
+                                                         {"/nothing.html", 404}};
   for (const auto& [path, status] : gets) {
     auto r = raw.Get(path.c_str());
     ASSERT_TRUE(r) << path;
@@ -320,8 +327,9 @@ TEST_F(Server, ExportSendsTheSameBytesAsTheCommandAndRefusesWithItsText) {
   ASSERT_TRUE(r);
   ASSERT_EQ(r->status, 200) << r->body;
   EXPECT_EQ(r->body, ReadText(stl));
-  EXPECT_NE(r->get_header_value("Content-Disposition").find("attachment; filename=\"tube_wall_2d-radius=15_wall=6.stl\""),
-            std::string::npos);
+  EXPECT_NE(
+      r->get_header_value("Content-Disposition").find("attachment; filename=\"tube_wall_2d-radius=15_wall=6.stl\""),
+      std::string::npos);
   auto three = Get("/api/export?u=15,6&format=3mf");
   ASSERT_TRUE(three);
   EXPECT_EQ(three->status, 200);
@@ -395,8 +403,10 @@ TEST(ServeExactPreview, TheBudgetOptionDecidesExactOrSnapped) {
     for (int i = 0; i < 3000 && port == 0; ++i) {
       std::smatch m;
       const std::string text = ReadText(dir / (budget + ".log"));
-      if (std::regex_search(text, m, listening)) port = std::stoi(m[1]);
-      else if (WaitExit(pid, std::chrono::milliseconds(20)) != -1) break;
+      if (std::regex_search(text, m, listening))
+        port = std::stoi(m[1]);
+      else if (WaitExit(pid, std::chrono::milliseconds(20)) != -1)
+        break;
     }
     ASSERT_GT(port, 0) << ReadText(dir / (budget + ".log"));
     httplib::Client client("127.0.0.1", port);
@@ -442,16 +452,18 @@ TEST(ServeErrors, MissingOrDamagedArtifactAndABusyPortAreOneLine) {
   EXPECT_EQ(std::count(cut.begin(), cut.end(), '\n'), 1) << cut;
   EXPECT_NE(cut.find("cut.fabatlas"), std::string::npos) << cut;
   // A port already taken: another fabatlas serve listens on it.
-  const pid_t first = Spawn({(testing::BinDir() / "fabatlas").string(), "serve", art.string(), "--port", "0",
-                             "--preview-cache-mb", "0"},
-                            dir / "first.log");
+  const pid_t first = Spawn(
+      {(testing::BinDir() / "fabatlas").string(), "serve", art.string(), "--port", "0", "--preview-cache-mb", "0"},
+      dir / "first.log");
   int port = 0;
   const std::regex listening(R"(at http://127\.0\.0\.1:(\d+)/)");
   for (int i = 0; i < 3000 && port == 0; ++i) {
     std::smatch m;
     const std::string text = ReadText(dir / "first.log");
-    if (std::regex_search(text, m, listening)) port = std::stoi(m[1]);
-    else if (WaitExit(first, std::chrono::milliseconds(20)) != -1) break;
+    if (std::regex_search(text, m, listening))
+      port = std::stoi(m[1]);
+    else if (WaitExit(first, std::chrono::milliseconds(20)) != -1)
+      break;
   }
   ASSERT_GT(port, 0) << ReadText(dir / "first.log");
   auto [busy_status, busy] = serve({art.string(), "--port", std::to_string(port)}, "busy.log");

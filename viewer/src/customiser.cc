@@ -97,10 +97,12 @@ CustomiserSource LoadArtifact(const std::filesystem::path& artifact, CacheChoice
   const std::filesystem::path design_dir = source.bundle_dir / "design";
   WriteBundled(design_dir, art.bundle.design_file_name, art.bundle.design_file, artifact);
   for (const auto& [name, bytes] : art.bundle.files) WriteBundled(design_dir, name, bytes, artifact);
-  source.design = design::LoadDesign(design_dir / std::filesystem::path(art.bundle.design_file_name).lexically_normal());
+  source.design =
+      design::LoadDesign(design_dir / std::filesystem::path(art.bundle.design_file_name).lexically_normal());
   if (!art.bundle.job_file.empty()) {
     // The job's design path points elsewhere; only its materials matter here.
-    source.materials = sampling::ParseJobFile(art.bundle.job_file, artifact.string() + ":" + art.bundle.job_file_name).materials;
+    source.materials =
+        sampling::ParseJobFile(art.bundle.job_file, artifact.string() + ":" + art.bundle.job_file_name).materials;
   }
   const auto& exposed = source.design->exposed;
   bool same = exposed.size() == source.form.dimensions.size();
@@ -109,8 +111,8 @@ CustomiserSource LoadArtifact(const std::filesystem::path& artifact, CacheChoice
 
   const bool has_cache = !art.manifest.cache.strategy.empty();
   source.cache_name = !has_cache || cache == CacheChoice::kNone ? "none"
-                      : cache == CacheChoice::kOpt               ? "H_opt"
-                                                                 : "H_rfree";
+                      : cache == CacheChoice::kOpt              ? "H_opt"
+                                                                : "H_rfree";
   if (has_cache && cache != CacheChoice::kNone)
     artifact::ReadCacheGeometry(
         artifact, [&](const artifact::CacheEntry& e) { return cache == CacheChoice::kOpt ? e.in_opt : e.in_rfree; },
@@ -133,8 +135,11 @@ std::vector<MaterialReadout> MaterialReadouts(double volume_mm3, const std::vect
 }
 
 Customiser::Customiser(CustomiserSource source, PreviewCacheOptions preview_cache, ExactPreviewOptions exact_preview)
-    : source_(std::move(source)), space_(source_.form.space()), corners_(source_.form),
-      preview_options_(preview_cache), previews_(std::make_unique<PreviewCache>(preview_cache)),
+    : source_(std::move(source)),
+      space_(source_.form.space()),
+      corners_(source_.form),
+      preview_options_(preview_cache),
+      previews_(std::make_unique<PreviewCache>(preview_cache)),
       exact_options_(exact_preview) {
   starting_points_ = source_.starting_points;
   if (starting_points_.empty())  // a run directory: the artifact's rule (cache/starting_points.h)
@@ -176,7 +181,7 @@ PreviewResult Customiser::PreviewAt(const std::vector<double>& u, bool with_cach
   if (!source_.design) throw InputError("this form has no design to preview");
   design::EvaluateOptions options;
   options.cache = with_cache ? cache_.get() : nullptr;
-  options.run_checks = false;  // the sample was checked during sampling
+  options.run_checks = false;             // the sample was checked during sampling
   options.lookup_before_children = true;  // a cached subtree skips everything below it
   PreviewResult out;
   if (source_.design->tree.op == "openscad") options.parts = &out.parts;  // bodies and colours

@@ -27,8 +27,10 @@ std::string PointText(const Customiser& c, const std::vector<double>& u) {
     if (d) out << ',';
     out << dim.name << '=';
     const auto i = static_cast<std::size_t>(std::llround(u[d]));
-    if (dim.kind == sampling::DimensionKind::kEnumerated && i < dim.values.size()) out << dim.values[i];
-    else out << u[d];
+    if (dim.kind == sampling::DimensionKind::kEnumerated && i < dim.values.size())
+      out << dim.values[i];
+    else
+      out << u[d];
   }
   return out.str();
 }
@@ -64,7 +66,8 @@ ExportResult ExportDesign(const Customiser& c, const std::vector<double>& u, con
                      std::to_string(c.dimension_count()) + " parameters");
   if (!c.IsValid(u)) {
     std::string why;
-    for (const auto& failure : FailuresAt(c.form(), c.space(), c.corners(), u)) why += (why.empty() ? "" : ", ") + failure;
+    for (const auto& failure : FailuresAt(c.form(), c.space(), c.corners(), u))
+      why += (why.empty() ? "" : ", ") + failure;
     const std::int64_t nearest = NearestValidSample(c, u);
     throw InputError(PointText(c, u) + " is outside the valid region" + (why.empty() ? "" : " (" + why + ")") +
                      (nearest < 0 ? std::string("; the form has no valid point")
@@ -92,11 +95,11 @@ ExportResult ExportDesign(const Customiser& c, const std::vector<double>& u, con
         break;
       }
     const std::int64_t nearest = NearestValidSample(c, u);
-    throw InputError(PointText(c, u) + " fails check '" + (failed ? failed->name : r.failure) +
-                     "' at exactly this point (" + r.failure + ": " +
-                     (r.failure_reason.empty() && failed ? failed->reason : r.failure_reason) +
-                     "), though the samples around it pass" +
-                     (nearest < 0 ? std::string() : "; nearest valid point: " + PointText(c, c.form().samples[nearest].u)));
+    throw InputError(
+        PointText(c, u) + " fails check '" + (failed ? failed->name : r.failure) + "' at exactly this point (" +
+        r.failure + ": " + (r.failure_reason.empty() && failed ? failed->reason : r.failure_reason) +
+        "), though the samples around it pass" +
+        (nearest < 0 ? std::string() : "; nearest valid point: " + PointText(c, c.form().samples[nearest].u)));
   }
   ExportResult out;
   const design::Part* chosen = nullptr;
@@ -114,7 +117,8 @@ ExportResult ExportDesign(const Customiser& c, const std::vector<double>& u, con
   }
   const bool whole = options.part.empty() || (parts.empty() && options.part == "body1");
   if (!whole && !chosen)
-    throw InputError("part '" + options.part + "' is not one of the design's parts at " + PointText(c, u) + ": " + names);
+    throw InputError("part '" + options.part + "' is not one of the design's parts at " + PointText(c, u) + ": " +
+                     names);
   if (!whole && f != "stl" && f != "obj")
     throw InputError("part= selects one part of an stl or obj file; a " + f + " file holds every part");
   const mesh::TriangleMesh m = chosen ? chosen->mesh : r.solid.ToMesh();
@@ -129,7 +133,8 @@ ExportResult ExportDesign(const Customiser& c, const std::vector<double>& u, con
     for (const auto& p : parts) {
       const mesh::MeshReport part_report = mesh::InspectMesh(p.mesh, inspect);
       if (!part_report.closed)
-        throw ResourceError(PointText(c, u) + ": part " + p.name + " is not closed (" + part_report.closed_reason + ")");
+        throw ResourceError(PointText(c, u) + ": part " + p.name + " is not closed (" + part_report.closed_reason +
+                            ")");
     }
   }
   if (several && f == "3mf") {

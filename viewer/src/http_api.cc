@@ -63,7 +63,8 @@ std::vector<double> ParsePoint(const Customiser& c, const std::map<std::string, 
   if (!it->second.empty() && it->second.back() == ',') throw BadRequest{"u ends with a comma"};
   const int n = c.dimension_count();
   if (static_cast<int>(u.size()) != n)
-    throw BadRequest{"u has " + std::to_string(u.size()) + " values, the form has " + std::to_string(n) + " parameters"};
+    throw BadRequest{"u has " + std::to_string(u.size()) + " values, the form has " + std::to_string(n) +
+                     " parameters"};
   for (int d = 0; d < n; ++d) {
     const auto& dim = c.space().dimension(d);
     const double lo = c.space().value(d, c.space().key_lo(d)), hi = c.space().value(d, c.space().key_hi(d));
@@ -76,13 +77,13 @@ std::vector<double> ParsePoint(const Customiser& c, const std::map<std::string, 
   return u;
 }
 
-
 json SampleJson(const Customiser& c, std::int64_t id) {
   const auto& s = c.form().samples.at(id);
   json properties = json::object();
   for (const auto& [name, value] : s.outcome.properties) properties[name] = value;
   json materials = json::array();
-  for (const auto& m : c.Materials(id)) materials.push_back({{"name", m.name}, {"weight_g", m.weight_g}, {"cost", m.cost}});
+  for (const auto& m : c.Materials(id))
+    materials.push_back({{"name", m.name}, {"weight_g", m.weight_g}, {"cost", m.cost}});
   return {{"sample", id}, {"u", s.u}, {"valid", s.outcome.valid}, {"properties", properties}, {"materials", materials}};
 }
 
@@ -143,7 +144,8 @@ json ParamsJson(const Customiser& c) {
           {"valid_stretches",
            {{"route", "/api/intervals"},
             {"query", "u=<one value per exposed parameter, in dimension order; enumerated by index>[&limits=...]"},
-            {"answer", "per exposed parameter, the valid and invalid stretches [{lo, hi, valid, failures}] along it through u"},
+            {"answer",
+             "per exposed parameter, the valid and invalid stretches [{lo, hi, valid, failures}] along it through u"},
             {"source", "the form's k-d cells and their sampled corners (Fab Forms Sec. 7.2)"}}}};
 }
 
@@ -168,7 +170,8 @@ json FormJson(const Customiser& c) {
   for (std::int64_t id : c.starting_points()) starts.push_back(SampleJson(c, id));
   json materials = json::array();
   for (const auto& m : c.source().materials)
-    materials.push_back({{"name", m.name}, {"density_g_per_cm3", m.density_g_per_cm3}, {"price_per_kg", m.price_per_kg}});
+    materials.push_back(
+        {{"name", m.name}, {"density_g_per_cm3", m.density_g_per_cm3}, {"price_per_kg", m.price_per_kg}});
   std::int64_t valid = 0;
   std::set<std::string> property_names;  // what limits can bound
   for (const auto& s : c.form().samples) {
@@ -218,11 +221,12 @@ json StretchesJson(const std::vector<Stretch>& stretches) {
 json StateGraphJson(const Customiser& c, const std::vector<double>& u, int frames) {
   if (!c.source().design) throw BadRequest{"this form has no design"};
   const design::Design& d = *c.source().design;
-  if (d.objects.empty() || d.transitions.empty()) throw BadRequest{"this design has no state graph (objects and transitions)"};
+  if (d.objects.empty() || d.transitions.empty())
+    throw BadRequest{"this design has no state graph (objects and transitions)"};
   const design::StateGraphResult r = design::EvaluateStateGraph(d, precompute::DesignPointOf(d, u));
   const design::StateGraph& g = r.graph;
-  json j = {{"u", u}, {"valid", r.sample.valid}, {"collisions_checked", g.collisions_checked},
-            {"time_steps", g.time_steps}};
+  json j = {
+      {"u", u}, {"valid", r.sample.valid}, {"collisions_checked", g.collisions_checked}, {"time_steps", g.time_steps}};
   if (!r.sample.valid) {
     j["failure"] = r.sample.failure;
     j["reason"] = r.sample.failure_reason;
@@ -252,7 +256,9 @@ json StateGraphJson(const Customiser& c, const std::vector<double>& u, int frame
       times.insert(ci.t_begin);
       times.insert(ci.t_end);
       const json pair = {g.object_names.at(ci.part_a), g.object_names.at(ci.part_b)};
-      collisions.push_back({{"t_begin", ci.t_begin}, {"t_end", ci.t_end}, {"objects", pair},
+      collisions.push_back({{"t_begin", ci.t_begin},
+                            {"t_end", ci.t_end},
+                            {"objects", pair},
                             {"where", {{"min", ci.where.min}, {"max", ci.where.max}}}});
       if (first.is_null() || ci.t_begin < first["t"].get<double>())
         first = {{"transition", t.name}, {"t", ci.t_begin}, {"t_end", ci.t_end}, {"objects", pair}};
@@ -271,7 +277,11 @@ json StateGraphJson(const Customiser& c, const std::vector<double>& u, int frame
       }
       poses.push_back(at);
     }
-    transitions.push_back({{"name", t.name}, {"from", t.from}, {"to", t.to}, {"times", times}, {"poses", poses},
+    transitions.push_back({{"name", t.name},
+                           {"from", t.from},
+                           {"to", t.to},
+                           {"times", times},
+                           {"poses", poses},
                            {"collisions", collisions}});
   }
   j["transitions"] = transitions;
@@ -289,7 +299,8 @@ json StateGraphJson(const Customiser& c, const std::vector<double>& u, int frame
 json ResolveJson(const Customiser& c, const std::vector<double>& u) {
   if (!c.source().design) throw BadRequest{"this form has no design"};
   const design::Design& d = *c.source().design;
-  if (d.objects.empty() || d.transitions.empty()) throw BadRequest{"this design has no state graph (objects and transitions)"};
+  if (d.objects.empty() || d.transitions.empty())
+    throw BadRequest{"this design has no state graph (objects and transitions)"};
   const design::Point at = precompute::DesignPointOf(d, u);
   const design::HintSummary h = design::ResolutionHints(d, at);
   json j = {{"u", u}, {"valid", h.sample.valid}, {"failure", h.sample.failure}, {"energy", h.energy}};
@@ -298,23 +309,34 @@ json ResolveJson(const Customiser& c, const std::vector<double>& u) {
     const auto& n = i.normal;
     swept::Vec3 centre;
     for (int k = 0; k < 3; ++k) centre[k] = 0.5 * (i.where.min[k] + i.where.max[k]);
-    intervals.push_back({{"transition", i.transition}, {"objects", {i.object_a, i.object_b}}, {"object", i.object_b},
-                         {"t_begin", i.t_begin}, {"t_end", i.t_end}, {"at", centre}, {"normal", n.spacetime_normal},
+    intervals.push_back({{"transition", i.transition},
+                         {"objects", {i.object_a, i.object_b}},
+                         {"object", i.object_b},
+                         {"t_begin", i.t_begin},
+                         {"t_end", i.t_end},
+                         {"at", centre},
+                         {"normal", n.spacetime_normal},
                          {"energy", n.energy},
                          {"first_contact_normal", n.has_first_contact ? json(n.first_contact_normal) : json(nullptr)}});
   }
   j["intervals"] = intervals;
   json pairs = json::array();
   for (const auto& p : h.pairs)
-    pairs.push_back({{"objects", {p.object_a, p.object_b}}, {"energy", p.energy}, {"descent", p.descent}, {"step", p.step}});
+    pairs.push_back(
+        {{"objects", {p.object_a, p.object_b}}, {"energy", p.energy}, {"descent", p.descent}, {"step", p.step}});
   j["pairs"] = pairs;
   json resolution = nullptr;
   if (!h.sample.valid && !h.intervals.empty()) {
     const design::ResolveSummary r = design::ResolveCollisions(d, at);
     std::vector<double> after;
     for (const auto& e : d.exposed) after.push_back(r.after.at(e.name));
-    resolution = {{"resolved", r.resolved}, {"u", after}, {"edit", r.edit}, {"edit_size", r.edit_size},
-                  {"failure", r.failure_after}, {"steps", r.steps.size()}, {"evaluations", r.evaluations}};
+    resolution = {{"resolved", r.resolved},
+                  {"u", after},
+                  {"edit", r.edit},
+                  {"edit_size", r.edit_size},
+                  {"failure", r.failure_after},
+                  {"steps", r.steps.size()},
+                  {"evaluations", r.evaluations}};
   }
   j["resolution"] = resolution;
   return j;
@@ -345,14 +367,16 @@ ApiResponse Route(const Customiser& c, const std::string& path, const std::map<s
   const sampling::Form& form = *shown;
   const auto snap_or_fail = [&](const std::vector<double>& u) {
     const auto snap = SnapToValidSample(form, c.space(), u);
-    if (!snap) throw BadRequest{limits.empty() ? "the form has no valid sample to snap to"
-                                               : "no valid sample meets your limits"};
+    if (!snap)
+      throw BadRequest{limits.empty() ? "the form has no valid sample to snap to"
+                                      : "no valid sample meets your limits"};
     return snap->sample;
   };
   if (path == "/api/intervals") {
     const auto u = ParsePoint(c, query);
     json dims = json::array();
-    for (int d = 0; d < c.dimension_count(); ++d) dims.push_back(StretchesJson(LineStretches(form, c.space(), c.corners(), u, d)));
+    for (int d = 0; d < c.dimension_count(); ++d)
+      dims.push_back(StretchesJson(LineStretches(form, c.space(), c.corners(), u, d)));
     const bool valid = IsValidPoint(form, c.space(), c.corners(), u);
     json j = {{"u", u}, {"valid", valid}, {"dimensions", dims}};
     if (!valid) j["failures"] = FailuresAt(form, c.space(), c.corners(), u);
@@ -362,7 +386,11 @@ ApiResponse Route(const Customiser& c, const std::string& path, const std::map<s
     const auto u = ParsePoint(c, query);
     const auto r = ReasonAt(c, form, limits, u);
     if (!r) return Json({{"u", u}, {"sample", -1}});
-    return Json({{"u", u}, {"sample", r->sample}, {"sample_u", r->u}, {"check", r->check}, {"failure", r->failure},
+    return Json({{"u", u},
+                 {"sample", r->sample},
+                 {"sample_u", r->u},
+                 {"check", r->check},
+                 {"failure", r->failure},
                  {"reason", r->reason}});
   }
   if (path == "/api/snap") {
@@ -466,8 +494,13 @@ ApiResponse Route(const Customiser& c, const std::string& path, const std::map<s
         cells.push_back(it->second);
       }
     }
-    return Json({{"a", a}, {"b", b}, {"n", n}, {"a_range", {alo, ahi}}, {"b_range", {blo, bhi}},
-                 {"failures", failure_names}, {"cells", cells}});
+    return Json({{"a", a},
+                 {"b", b},
+                 {"n", n},
+                 {"a_range", {alo, ahi}},
+                 {"b_range", {blo, bhi}},
+                 {"failures", failure_names},
+                 {"cells", cells}});
   }
   if (path == "/api/optimise") {
     // The objective: min=P or max=P (P a property, or weights a=1,b=2), or
@@ -506,13 +539,15 @@ ApiResponse Route(const Customiser& c, const std::string& path, const std::map<s
     options.keep_dominated = dominated > 0;
     const ParetoFront front = ParetoFrontOf(form, c.source().materials, options);
     const auto point_json = [&](const ParetoPoint& p) {
-      return json{{"sample", p.sample}, {"u", form.samples[static_cast<std::size_t>(p.sample)].u}, {"a", p.a}, {"b", p.b}};
+      return json{
+          {"sample", p.sample}, {"u", form.samples[static_cast<std::size_t>(p.sample)].u}, {"a", p.a}, {"b", p.b}};
     };
     json points = json::array(), others = json::array();
     for (const auto& p : front.points) points.push_back(point_json(p));
     const std::size_t stride = dominated > 0 ? (front.dominated.size() + dominated - 1) / dominated : 1;
     for (std::size_t k = 0; k < front.dominated.size(); k += std::max<std::size_t>(stride, 1))
-      others.push_back({{"sample", front.dominated[k].sample}, {"a", front.dominated[k].a}, {"b", front.dominated[k].b}});
+      others.push_back(
+          {{"sample", front.dominated[k].sample}, {"a", front.dominated[k].a}, {"b", front.dominated[k].b}});
     return Json({{"a", front.a},
                  {"b", front.b},
                  {"a_maximise", options.a.maximise},
@@ -531,7 +566,8 @@ ApiResponse Route(const Customiser& c, const std::string& path, const std::map<s
 
 }  // namespace
 
-ApiResponse HandleApiRequest(const Customiser& c, const std::string& path, const std::map<std::string, std::string>& query) {
+ApiResponse HandleApiRequest(const Customiser& c, const std::string& path,
+                             const std::map<std::string, std::string>& query) {
   try {
     return Route(c, path, query);
   } catch (const BadRequest& e) {

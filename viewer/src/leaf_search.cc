@@ -55,8 +55,8 @@ std::vector<LeafHit> LeavesMeeting(const Form& form, const DesignSpace& space, c
   std::vector<std::vector<int>> cells(n);
   for (int d = 0; d < n; ++d) {
     for (int j = 0; j < space.cell_count(d); ++j) {
-      if (free[d] || (x[d] >= static_cast<double>(space.grid_key(d, j)) &&
-                                  x[d] <= static_cast<double>(space.grid_key(d, j + 1))))
+      if (free[d] ||
+          (x[d] >= static_cast<double>(space.grid_key(d, j)) && x[d] <= static_cast<double>(space.grid_key(d, j + 1))))
         cells[d].push_back(j);
     }
   }
@@ -80,8 +80,10 @@ bool FaceAllValid(const Form& form, const FormNode& leaf, const std::int32_t* co
   std::vector<int> fixed(n, -1);
   for (int d = 0; d < n; ++d) {
     if (d == free_dimension) continue;
-    if (x[d] == static_cast<double>(leaf.lo[d])) fixed[d] = 0;
-    else if (x[d] == static_cast<double>(leaf.hi[d])) fixed[d] = 1;
+    if (x[d] == static_cast<double>(leaf.lo[d]))
+      fixed[d] = 0;
+    else if (x[d] == static_cast<double>(leaf.hi[d]))
+      fixed[d] = 1;
   }
   bool all_valid = true;
   for (size_t c = 0; c < (size_t{1} << n); ++c) {

@@ -191,7 +191,8 @@ OptimiseResult Optimise(const sampling::Form& form, const LeafCorners& corners,
       if (!held[d]) continue;
       held_mask |= std::size_t{1} << d;
       const double lo = static_cast<double>(leaf.lo[d]), hi = static_cast<double>(leaf.hi[d]);
-      if ((*x)[d] == hi) fixed_bits |= std::size_t{1} << d;
+      if ((*x)[d] == hi)
+        fixed_bits |= std::size_t{1} << d;
       else if ((*x)[d] != lo) {
         inside.push_back(d);
         t[d] = ((*x)[d] - lo) / (hi - lo);
@@ -218,7 +219,8 @@ OptimiseResult Optimise(const sampling::Form& form, const LeafCorners& corners,
           }
         }
         const double* v = values.of(ids[corner]);
-        if (!v) recorded = false;
+        if (!v)
+          recorded = false;
         else
           for (std::size_t k = 0; k < terms; ++k) interpolated[k] += w * v[k];
         used.push_back(ids[corner]);
@@ -230,8 +232,7 @@ OptimiseResult Optimise(const sampling::Form& form, const LeafCorners& corners,
         best = sign * f;
         result.found = true;
         result.u.resize(n);
-        for (int d = 0; d < n; ++d)
-          result.u[d] = held[d] ? u0[d] : space.value(d, static_cast<std::int64_t>(p[d]));
+        for (int d = 0; d < n; ++d) result.u[d] = held[d] ? u0[d] : space.value(d, static_cast<std::int64_t>(p[d]));
         result.objective = f;
         result.values = interpolated;
         result.corners = used;

@@ -20,8 +20,10 @@ ParetoOptions ParseParetoAxes(const std::string& text) {
   const auto axis = [&](const std::string& item) {
     ParetoAxis a;
     a.property = item;
-    if (item.rfind("max:", 0) == 0) a.maximise = true, a.property = item.substr(4);
-    else if (item.rfind("min:", 0) == 0) a.property = item.substr(4);
+    if (item.rfind("max:", 0) == 0)
+      a.maximise = true, a.property = item.substr(4);
+    else if (item.rfind("min:", 0) == 0)
+      a.property = item.substr(4);
     if (a.property.empty()) throw InputError("pareto '" + text + "': an axis names no property");
     return a;
   };
@@ -37,8 +39,8 @@ ParetoFront ParetoFrontOf(const sampling::Form& form, const std::vector<sampling
   const Quantity a = ResolveQuantity(options.a.property, form, materials);
   const Quantity b = ResolveQuantity(options.b.property, form, materials);
   if (a.name == b.name && options.a.maximise == options.b.maximise)
-    throw InputError("pareto: both axes " + std::string(options.a.maximise ? "maximise" : "minimise") + " '" +
-                     a.name + "': nothing to trade off");
+    throw InputError("pareto: both axes " + std::string(options.a.maximise ? "maximise" : "minimise") + " '" + a.name +
+                     "': nothing to trade off");
   front.a = a.name;
   front.b = b.name;
   const double sa = options.a.maximise ? -1 : 1, sb = options.b.maximise ? -1 : 1;
@@ -121,8 +123,9 @@ void WriteParetoPng(const ParetoFront& front, const std::filesystem::path& path,
                             front.a + " and " + front.b + " (" + std::to_string(front.points.size()) + " of " +
                             std::to_string(front.candidates) + " valid samples)";
   img.Text(left, 12, title, 0x000000);
-  for (const auto& p : front.dominated) img.Rect(static_cast<int>(X(p.a)) - 1, static_cast<int>(Y(p.b)) - 1,
-                                                 static_cast<int>(X(p.a)) + 2, static_cast<int>(Y(p.b)) + 2, 0xAAAAAA);
+  for (const auto& p : front.dominated)
+    img.Rect(static_cast<int>(X(p.a)) - 1, static_cast<int>(Y(p.b)) - 1, static_cast<int>(X(p.a)) + 2,
+             static_cast<int>(Y(p.b)) + 2, 0xAAAAAA);
   // A staircase: from each point along a to the next one's a, then along b.
   for (std::size_t k = 1; k < front.points.size(); ++k) {
     const auto &p = front.points[k - 1], &q = front.points[k];

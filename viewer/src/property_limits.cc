@@ -166,10 +166,14 @@ std::string LimitReason(const std::map<std::string, double>& properties, const s
     // "weight in PLA 11.6 g", "volume 9322.85 mm^3", "bbox_z 45 mm".
     const std::string& p = limit.property;
     std::string label = p, unit;
-    if (p.rfind("weight:", 0) == 0) label = "weight in " + p.substr(7), unit = " g";
-    else if (p.rfind("cost:", 0) == 0) label = "cost in " + p.substr(5);
-    else if (p == "volume") unit = " mm³";
-    else if (p.rfind("bbox", 0) == 0) unit = " mm";
+    if (p.rfind("weight:", 0) == 0)
+      label = "weight in " + p.substr(7), unit = " g";
+    else if (p.rfind("cost:", 0) == 0)
+      label = "cost in " + p.substr(5);
+    else if (p == "volume")
+      unit = " mm³";
+    else if (p.rfind("bbox", 0) == 0)
+      unit = " mm";
     if (*v > limit.max) return label + " " + Number(*v) + unit + " above your limit " + Number(limit.max) + unit;
     if (*v < limit.min) return label + " " + Number(*v) + unit + " below your limit " + Number(limit.min) + unit;
   }

@@ -22,7 +22,8 @@ void RequireFits(const LeafCorners& corners, const Form& form) {
 
 }  // namespace
 
-bool IsValidPoint(const Form& form, const DesignSpace& space, const LeafCorners& corners, const std::vector<double>& u) {
+bool IsValidPoint(const Form& form, const DesignSpace& space, const LeafCorners& corners,
+                  const std::vector<double>& u) {
   RequireFits(corners, form);
   const auto x = internal::KeyCoordinates(space, u);
   if (!x) return false;
@@ -47,7 +48,8 @@ std::vector<Stretch> LineStretches(const Form& form, const DesignSpace& space, c
                                    const std::vector<double>& u, int dimension) {
   RequireFits(corners, form);
   const int n = space.dimension_count();
-  if (dimension < 0 || dimension >= n) throw InputError("dimension index " + std::to_string(dimension) + " out of range");
+  if (dimension < 0 || dimension >= n)
+    throw InputError("dimension index " + std::to_string(dimension) + " out of range");
   auto x = internal::KeyCoordinates(space, u);
   if (!x) throw InputError("point outside the design space (or wrong number of coordinates)");
   const int d = dimension;
@@ -80,15 +82,19 @@ std::vector<Stretch> LineStretches(const Form& form, const DesignSpace& space, c
     leaf_failures.clear();
     const bool inside = internal::FaceAllValid(form, *leaf, leaf_corners, *x, d, &leaf_failures);
     for (size_t e = 2 * a + 1; e < 2 * b; ++e) {
-      if (inside) valid[e] = 1;
-      else failures[e].insert(leaf_failures.begin(), leaf_failures.end());
+      if (inside)
+        valid[e] = 1;
+      else
+        failures[e].insert(leaf_failures.begin(), leaf_failures.end());
     }
     // Its two end faces along d.
     for (size_t i : {a, b}) {
       probe[d] = static_cast<double>(cuts[i]);
       leaf_failures.clear();
-      if (internal::FaceAllValid(form, *leaf, leaf_corners, probe, -1, &leaf_failures)) valid[2 * i] = 1;
-      else failures[2 * i].insert(leaf_failures.begin(), leaf_failures.end());
+      if (internal::FaceAllValid(form, *leaf, leaf_corners, probe, -1, &leaf_failures))
+        valid[2 * i] = 1;
+      else
+        failures[2 * i].insert(leaf_failures.begin(), leaf_failures.end());
     }
   }
 

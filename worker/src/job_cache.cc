@@ -32,8 +32,8 @@ std::shared_ptr<JobContext> LoadJobContext(const v1::JobBundle& bundle, const st
   options.on_solid_dropped = [job](const sampling::PointKey& key, const geometry::Solid& solid) {
     if (!job->shelf.Holds(key)) job->shelf.Put(key, protocol::SolidBlobOf(solid));
   };
-  options.on_subtree_computed = [job, upload = std::move(upload)](const std::string& key,
-                                                                  const geometry::Solid& solid, double seconds) {
+  options.on_subtree_computed = [job, upload = std::move(upload)](const std::string& key, const geometry::Solid& solid,
+                                                                  double seconds) {
     {
       std::lock_guard lock(job->mu);
       job->last_seconds[key] = seconds;

@@ -22,8 +22,7 @@ namespace {
 std::string DefaultWorkerId() {
   char host[256] = {0};
   gethostname(host, sizeof host - 1);
-  auto ms = std::chrono::duration_cast<std::chrono::milliseconds>(
-                std::chrono::system_clock::now().time_since_epoch())
+  auto ms = std::chrono::duration_cast<std::chrono::milliseconds>(std::chrono::system_clock::now().time_since_epoch())
                 .count();
   return std::string(host) + "-" + std::to_string(::getpid()) + "-" + std::to_string(ms);
 }
@@ -35,7 +34,8 @@ Worker::Worker(WorkerOptions options, const std::atomic<bool>& stop) : o_(std::m
   if (o_.slots < 1 || o_.slots > 1024) throw InputError("worker: --slots must be in 1..1024");
   if (o_.memory_mb < 256) throw InputError("worker: --memory-mb must be at least 256");
   if (o_.worker_id.empty()) o_.worker_id = DefaultWorkerId();
-  if (o_.cache_dir.empty()) o_.cache_dir = fs::temp_directory_path() / ("fabatlas-worker-" + std::to_string(::getpid()));
+  if (o_.cache_dir.empty())
+    o_.cache_dir = fs::temp_directory_path() / ("fabatlas-worker-" + std::to_string(::getpid()));
   cache_lock_ = std::make_unique<DirectoryLock>(o_.cache_dir, "worker cache directory");
   channel_ = protocol::MakeChannel(o_.coordinator, o_.security);
   stub_ = v1::WorkerService::NewStub(channel_);
@@ -229,14 +229,18 @@ void Worker::SyncLoop() {
         // leases expire, so waiting for a coordinator that may never come
         // back gains nothing (systemd and Kubernetes would SIGKILL).
         std::lock_guard lock(mu_);
-        log::Warn("worker_leaving_unreported", {{"worker", o_.worker_id}, {"coordinator", o_.coordinator},
-                                                {"error", status.error_message()}, {"results", done_.size()},
+        log::Warn("worker_leaving_unreported", {{"worker", o_.worker_id},
+                                                {"coordinator", o_.coordinator},
+                                                {"error", status.error_message()},
+                                                {"results", done_.size()},
                                                 {"leases", in_flight_.size()}});
         return;
       }
       if (!stop_)
-        log::Warn("worker_reconnecting", {{"worker", o_.worker_id}, {"coordinator", o_.coordinator},
-                                          {"error", status.error_message()}, {"backoff_ms", backoff_ms}});
+        log::Warn("worker_reconnecting", {{"worker", o_.worker_id},
+                                          {"coordinator", o_.coordinator},
+                                          {"error", status.error_message()},
+                                          {"backoff_ms", backoff_ms}});
       std::this_thread::sleep_for(std::chrono::milliseconds(stop_ ? 200 : backoff_ms));
       backoff_ms = std::min<std::int64_t>(backoff_ms * 2, 5000);
       patient = false;
@@ -435,8 +439,9 @@ void Worker::RunLease(const v1::Lease& lease) {
   const double seconds = std::chrono::duration<double>(Clock::now() - started).count();
   task_seconds_.Observe(kind, seconds);
   if (!done.error().empty())
-    log::Warn("task_failed", {{"task", lease.task_key()}, {"job", lease.job_id()}, {"attempt", lease.attempt()},
-                              {"reason", done.error()}});
+    log::Warn(
+        "task_failed",
+        {{"task", lease.task_key()}, {"job", lease.job_id()}, {"attempt", lease.attempt()}, {"reason", done.error()}});
   std::lock_guard lock(mu_);
   short_tasks_ = seconds < kShortTaskSeconds;
   held_seconds_ += seconds;

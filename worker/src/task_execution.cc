@@ -34,8 +34,8 @@ std::shared_ptr<JobContext> Worker::ContextFor(const v1::Lease& lease) {
   if (ctx && ctx->evaluator) return ctx;
   try {
     std::string bytes;
-    grpc::Status s = protocol::DownloadBlob(*blob_stub_, o_.security, lease.job_bundle_digest(),
-                                            std::chrono::seconds(120), &bytes);
+    grpc::Status s =
+        protocol::DownloadBlob(*blob_stub_, o_.security, lease.job_bundle_digest(), std::chrono::seconds(120), &bytes);
     if (!s.ok()) throw InputError("cannot fetch job bundle: " + s.error_message());
     v1::JobBundle bundle;
     if (!bundle.ParseFromString(bytes)) throw InputError("job bundle does not parse");
@@ -121,7 +121,8 @@ std::string Worker::Upload(const std::string& bytes) {
 
 v1::TaskResult Worker::PlanCache(const v1::CachePlanTask& task) {
   std::string bytes;
-  grpc::Status s = protocol::DownloadBlob(*blob_stub_, o_.security, task.input_digest(), std::chrono::seconds(300), &bytes);
+  grpc::Status s =
+      protocol::DownloadBlob(*blob_stub_, o_.security, task.input_digest(), std::chrono::seconds(300), &bytes);
   if (!s.ok()) throw InputError("cache plan input " + task.input_digest() + ": " + s.error_message());
   v1::CachePlanInput input;
   if (!input.ParseFromString(bytes)) throw InputError("cache plan input " + task.input_digest() + " does not parse");
@@ -171,7 +172,7 @@ v1::TaskResult Worker::EvaluateSample(JobContext& ctx, const sampling::SamplePoi
 }
 
 geometry::Solid Worker::SolidOf(JobContext& ctx, const v1::Lease& lease, const sampling::SamplePoint& point,
-                          std::string digest, const std::string& holder) {
+                                std::string digest, const std::string& holder) {
   if (auto solid = ctx.evaluator->RememberedSolid(point.key)) return *solid;
   if (auto blob = ctx.shelf.Get(point.key)) {
     geometry::Solid solid = protocol::SolidOfBlob(*blob);

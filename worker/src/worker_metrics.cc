@@ -35,7 +35,8 @@ std::string Worker::MetricsPage() {
     connected = connected_;
   }
   for (const auto& [kind, n] : run)
-    m.Counter("fabatlas_worker_tasks_total", "Tasks this worker ran, by kind.", static_cast<double>(n), {{"kind", kind}});
+    m.Counter("fabatlas_worker_tasks_total", "Tasks this worker ran, by kind.", static_cast<double>(n),
+              {{"kind", kind}});
   for (const auto& [kind, n] : failed)
     m.Counter("fabatlas_worker_task_failures_total", "Tasks this worker could not run, by kind.",
               static_cast<double>(n), {{"kind", kind}});
@@ -55,10 +56,12 @@ std::string Worker::MetricsPage() {
   m.Gauge("fabatlas_worker_solid_cache_bytes", "Root solids held for ΔG tasks, as level sets and compressed.",
           static_cast<double>(level_sets), {{"form", "level_set"}});
   m.Gauge("fabatlas_worker_solid_cache_bytes", "", static_cast<double>(compressed), {{"form", "compressed"}});
-  m.Gauge("fabatlas_worker_subtree_cache_bytes", "Subtree cache of the design evaluators.", static_cast<double>(subtrees));
+  m.Gauge("fabatlas_worker_subtree_cache_bytes", "Subtree cache of the design evaluators.",
+          static_cast<double>(subtrees));
   m.Gauge("fabatlas_worker_memory_budget_bytes", "The resident budget (--memory-mb).",
           static_cast<double>(static_cast<std::int64_t>(o_.memory_mb) << 20));
-  m.Gauge("process_resident_memory_bytes", "Resident memory of the worker.", static_cast<double>(log::ResidentMemoryBytes()));
+  m.Gauge("process_resident_memory_bytes", "Resident memory of the worker.",
+          static_cast<double>(log::ResidentMemoryBytes()));
   m.Gauge("fabatlas_worker_slots", "Tasks this worker runs at once (--slots).", o_.slots);
   m.Gauge("fabatlas_worker_running_tasks", "Tasks running now.", running);
   m.Gauge("fabatlas_worker_connected", "1 once the coordinator has answered.", connected ? 1 : 0);

@@ -185,9 +185,9 @@ class Worker {
   std::vector<v1::CompletedTask> done_;
   int running_ = 0;
   bool exiting_ = false;
-  bool connected_ = false;         // the coordinator has answered a Sync
-  bool syncing_ = false;           // a Sync is under way (one at a time)
-  bool sync_loop_waits_ = false;   // the sync loop waits for a slot thread's Sync
+  bool connected_ = false;        // the coordinator has answered a Sync
+  bool syncing_ = false;          // a Sync is under way (one at a time)
+  bool sync_loop_waits_ = false;  // the sync loop waits for a slot thread's Sync
   // The last task took less than kShortTaskSeconds: a 1-slot worker then
   // takes up to kResultsPerSync - 1 leases in advance and runs them before
   // it reports, until the results it holds took kShortTaskSeconds together,
@@ -203,7 +203,7 @@ class Worker {
   std::vector<std::thread> slots_;
   std::thread heartbeat_, share_;
   std::thread stop_watch_;
-  std::set<grpc::ClientContext*> calls_;  // calls under way (Call), under mu_
+  std::set<grpc::ClientContext*> calls_;                                  // calls under way (Call), under mu_
   std::map<std::string, std::int64_t> tasks_by_kind_, failures_by_kind_;  // under mu_
   log::DurationHistogram task_seconds_{"kind"};
   std::unique_ptr<httplib::Server> metrics_;

@@ -8,16 +8,21 @@ namespace fabatlas::assembly {
 
 const char* ToString(RingSize s) {
   switch (s) {
-    case RingSize::kXS: return "XS";
-    case RingSize::kS: return "S";
-    case RingSize::kM: return "M";
-    case RingSize::kL: return "L";
+    case RingSize::kXS:
+      return "XS";
+    case RingSize::kS:
+      return "S";
+    case RingSize::kM:
+      return "M";
+    case RingSize::kL:
+      return "L";
   }
   return "?";
 }
 
 Program BuildClipLights(const ClipLightsParams& p, const std::string& library_path, const std::string& mesh_dir) {
-  if (p.pairs < 1 || p.pairs > 4) throw InputError("clip lights: pairs must be in 1..4, got " + std::to_string(p.pairs));
+  if (p.pairs < 1 || p.pairs > 4)
+    throw InputError("clip lights: pairs must be in 1..4, got " + std::to_string(p.pairs));
   if (!(p.extension >= 0 && p.extension <= 45.7))
     throw InputError("clip lights: extension must be in [0, 45.7] mm, got " + std::to_string(p.extension));
   // PARTS.md §4 ex 16–20: ceiling hook → n × (turnbuckle → ring) → fabric
@@ -28,7 +33,8 @@ Program BuildClipLights(const ClipLightsParams& p, const std::string& library_pa
   std::ostringstream y;
   y << "start_with: {name: ceiling, part: CeilingHook, frame: [[0, 0, 1000], [0, 0, 0]]}\n"
     << "parts: {";
-  for (int k = 1; k <= p.pairs; ++k) y << "tb" << k << ": ParamTurnbuckle, ring" << k << ": Ring" << ToString(p.ring) << ", ";
+  for (int k = 1; k <= p.pairs; ++k)
+    y << "tb" << k << ": ParamTurnbuckle, ring" << k << ": Ring" << ToString(p.ring) << ", ";
   y << "hanger: FabricHanger}\n"
     << "end_with: {name: light, part: ClipLight, primitive: clip, frame: [[0, 0, 0], [180, 90, 0]]}\n"
     << "steps:\n  - {attach: tb1.hook1, to: ceiling.hook}\n";

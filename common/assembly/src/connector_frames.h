@@ -55,8 +55,7 @@ Mat4<T> LocalConnectorFrame(const Primitive& p, const T* s) {
       const double L = p.Shape("length"), r = p.Shape("radius");
       if (p.ctl)  // RodCtl: on the centre line
         return Translate<T>(T(0), T(0), (s[0] - T(0.5)) * T(L)) * RotAxis<T>(0, T(-90));
-      return Translate<T>(T(0), T(r), (s[0] - T(0.5)) * T(L)) * RotAxis<T>(0, T(-90)) *
-             RotAxis<T>(0, s[1] - T(90));
+      return Translate<T>(T(0), T(r), (s[0] - T(0.5)) * T(L)) * RotAxis<T>(0, T(-90)) * RotAxis<T>(0, s[1] - T(90));
     }
     case PrimitiveType::kHook:
     case PrimitiveType::kRing: {
@@ -64,8 +63,7 @@ Mat4<T> LocalConnectorFrame(const Primitive& p, const T* s) {
         return RotAxis<T>(1, s[0]) * RotAxis<T>(0, s[1]);
       const double rp = p.Shape("arc_radius") - p.Shape("thickness");
       const T th = s[0];
-      Mat4<T> m = Translate<T>(T(0), -T(rp) * sin(th * deg), -T(rp) * cos(th * deg)) *
-                  RotAxis<T>(0, -th);
+      Mat4<T> m = Translate<T>(T(0), -T(rp) * sin(th * deg), -T(rp) * cos(th * deg)) * RotAxis<T>(0, -th);
       if (p.flex) m = m * RotAxis<T>(2, s[1] - T(90));
       return m;
     }
@@ -82,8 +80,7 @@ Mat4<T> LocalConnectorFrame(const Primitive& p, const T* s) {
     case PrimitiveType::kEdge:
       return Translate<T>((s[0] - T(0.5)) * T(p.Shape("length")), T(0.5 * p.Shape("width")), T(0));
     case PrimitiveType::kSurface:  // +0.05: the top of the 0.1 mm plate (§1.7)
-      return Translate<T>((s[1] - T(0.5)) * T(p.Shape("length")),
-                          (T(0.5) - s[0]) * T(p.Shape("width")), T(0.05)) *
+      return Translate<T>((s[1] - T(0.5)) * T(p.Shape("length")), (T(0.5) - s[0]) * T(p.Shape("width")), T(0.05)) *
              RotAxis<T>(2, s[2]);
     case PrimitiveType::kHemisphere: {
       // T(R sinφ, R cosφ sinθ, −R cosφ cosθ) · R(−θ, φ, 0) · R(0, 0, spin) (§1.8).
@@ -103,11 +100,16 @@ Mat4<T> LocalConnectorFrame(const Primitive& p, const T* s) {
 // Ring x (its axis), Rod z, Tube y (its axis), Hemisphere z.
 inline int SymmetryAxis(PrimitiveType t) {
   switch (t) {
-    case PrimitiveType::kRing: return 0;
-    case PrimitiveType::kRod: return 2;
-    case PrimitiveType::kTube: return 1;
-    case PrimitiveType::kHemisphere: return 2;
-    default: return -1;
+    case PrimitiveType::kRing:
+      return 0;
+    case PrimitiveType::kRod:
+      return 2;
+    case PrimitiveType::kTube:
+      return 1;
+    case PrimitiveType::kHemisphere:
+      return 2;
+    default:
+      return -1;
   }
 }
 

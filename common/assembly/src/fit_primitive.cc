@@ -67,7 +67,8 @@ ArcFit FitArcOnce(const std::vector<Eigen::Vector3d>& p) {
   for (double r : rho) sum += r;
   f.radius = sum / static_cast<double>(rho.size());
   std::vector<double> tube;
-  for (std::size_t i = 0; i < p.size(); ++i) tube.push_back(std::hypot(rho[i] - f.radius, (p[i] - f.centre).dot(f.normal)));
+  for (std::size_t i = 0; i < p.size(); ++i)
+    tube.push_back(std::hypot(rho[i] - f.radius, (p[i] - f.centre).dot(f.normal)));
   f.wire_radius = Median(tube);
   // Angular span: 360° minus the largest gap between vertex angles.
   std::vector<double> ang;
@@ -177,7 +178,8 @@ Frame AxisFrame(const AxisFit& fit, const Eigen::Vector3d& up) {
   return f;
 }
 
-std::vector<Eigen::Vector3d> MeshPointsIn(const std::string& path, const Eigen::Vector3d& lo, const Eigen::Vector3d& hi) {
+std::vector<Eigen::Vector3d> MeshPointsIn(const std::string& path, const Eigen::Vector3d& lo,
+                                          const Eigen::Vector3d& hi) {
   std::vector<Eigen::Vector3d> out;
   for (const auto& v : ReadPartMesh(path).vertices)
     if ((v.array() >= lo.array()).all() && (v.array() <= hi.array()).all()) out.push_back(v);

@@ -73,8 +73,8 @@ Soup ReadOff(const std::string& path, std::istream& in) {
 
 Soup ReadStl(const std::string& path, const std::string& data) {
   Soup s;
-  const bool ascii = data.rfind("solid", 0) == 0 && data.find("facet", 0) != std::string::npos &&
-                     data.find("facet") < 512;
+  const bool ascii =
+      data.rfind("solid", 0) == 0 && data.find("facet", 0) != std::string::npos && data.find("facet") < 512;
   if (ascii) {
     std::istringstream in(data);
     std::string tok;

@@ -76,8 +76,8 @@ std::vector<ParamSpec> Primitive::Params() const {
 std::vector<ParamSpec> Primitive::BaseFormParams() const {
   std::vector<ParamSpec> p = Params();
   for (auto& s : p) {
-    if (type == PrimitiveType::kRing && s.name == "theta") continue;   // θ stays free
-    if (type == PrimitiveType::kTube && s.name == "theta") continue;   // θ stays free
+    if (type == PrimitiveType::kRing && s.name == "theta") continue;  // θ stays free
+    if (type == PrimitiveType::kTube && s.name == "theta") continue;  // θ stays free
     s.held = true;
     if (type == PrimitiveType::kRing && ctl) s.init = s.name == "u1" ? 180 : 0;  // R(0,180,0)
   }
@@ -112,8 +112,8 @@ double Primitive::CriticalDimension() const {
 }
 
 double Primitive::OccupiedSize(PrimitiveType partner) const {
-  const bool partner_is_radius = partner == PrimitiveType::kHook || partner == PrimitiveType::kRing ||
-                                 partner == PrimitiveType::kTube;
+  const bool partner_is_radius =
+      partner == PrimitiveType::kHook || partner == PrimitiveType::kRing || partner == PrimitiveType::kTube;
   switch (type) {
     case PrimitiveType::kHook:
     case PrimitiveType::kRing:
@@ -149,14 +149,22 @@ Eigen::Isometry3d ConnectorFrame(const Primitive& p, const std::vector<double>& 
 
 const char* ToString(PrimitiveType t) {
   switch (t) {
-    case PrimitiveType::kHook: return "hook";
-    case PrimitiveType::kRod: return "rod";
-    case PrimitiveType::kRing: return "ring";
-    case PrimitiveType::kTube: return "tube";
-    case PrimitiveType::kHemisphere: return "hemisphere";
-    case PrimitiveType::kClip: return "clip";
-    case PrimitiveType::kEdge: return "edge";
-    case PrimitiveType::kSurface: return "surface";
+    case PrimitiveType::kHook:
+      return "hook";
+    case PrimitiveType::kRod:
+      return "rod";
+    case PrimitiveType::kRing:
+      return "ring";
+    case PrimitiveType::kTube:
+      return "tube";
+    case PrimitiveType::kHemisphere:
+      return "hemisphere";
+    case PrimitiveType::kClip:
+      return "clip";
+    case PrimitiveType::kEdge:
+      return "edge";
+    case PrimitiveType::kSurface:
+      return "surface";
   }
   return "?";
 }
@@ -204,9 +212,12 @@ Eigen::Matrix3d AlignmentOffset(const std::string& key, bool flip) {
   if (flip)
     for (int ax : o.flip_axes) {
       double& v = o.euler[ax];
-      if (v == 0) v = 180;
-      else if (v == 180) v = 0;
-      else v = -v;
+      if (v == 0)
+        v = 180;
+      else if (v == 180)
+        v = 0;
+      else
+        v = -v;
     }
   return EulerToRotation(o.euler);
 }
@@ -215,19 +226,23 @@ bool CanConnect(PrimitiveType a, PrimitiveType b) {
   auto pair = [&](PT x, PT y) { return (a == x && b == y) || (a == y && b == x); };
   return pair(PT::kHook, PT::kRod) || pair(PT::kHook, PT::kRing) || pair(PT::kHook, PT::kHook) ||
          pair(PT::kHook, PT::kTube) || pair(PT::kHook, PT::kEdge) || pair(PT::kRing, PT::kRod) ||
-         pair(PT::kRing, PT::kRing) || pair(PT::kRing, PT::kTube) || pair(PT::kRod, PT::kTube) || pair(PT::kTube, PT::kTube) ||
-         pair(PT::kRod, PT::kClip) || pair(PT::kClip, PT::kEdge) || pair(PT::kSurface, PT::kSurface) ||
-         pair(PT::kHemisphere, PT::kSurface);
+         pair(PT::kRing, PT::kRing) || pair(PT::kRing, PT::kTube) || pair(PT::kRod, PT::kTube) ||
+         pair(PT::kTube, PT::kTube) || pair(PT::kRod, PT::kClip) || pair(PT::kClip, PT::kEdge) ||
+         pair(PT::kSurface, PT::kSurface) || pair(PT::kHemisphere, PT::kSurface);
 }
 
 namespace {
 
 PrimitiveType ParseType(const std::string& file, const YAML::Node& n) {
   const std::string s = internal::AsString(file, n, "primitive type");
-  static const std::map<std::string, PT> kTypes{{"hook", PT::kHook},   {"rod", PT::kRod},
-                                                {"ring", PT::kRing},   {"tube", PT::kTube},
-                                                {"hemisphere", PT::kHemisphere}, {"clip", PT::kClip},
-                                                {"edge", PT::kEdge},   {"surface", PT::kSurface}};
+  static const std::map<std::string, PT> kTypes{{"hook", PT::kHook},
+                                                {"rod", PT::kRod},
+                                                {"ring", PT::kRing},
+                                                {"tube", PT::kTube},
+                                                {"hemisphere", PT::kHemisphere},
+                                                {"clip", PT::kClip},
+                                                {"edge", PT::kEdge},
+                                                {"surface", PT::kSurface}};
   auto it = kTypes.find(s);
   if (it == kTypes.end()) internal::Fail(file, n, "unknown primitive type '" + s + "'");
   return it->second;
@@ -248,7 +263,8 @@ const std::map<PT, std::vector<std::string>>& RequiredShape() {
 
 Eigen::Vector3d AsVector(const std::string& file, const YAML::Node& n, const std::string& what) {
   if (!n.IsSequence() || n.size() != 3) internal::Fail(file, n, what + " must be [x, y, z]");
-  return {internal::AsDouble(file, n[0], what), internal::AsDouble(file, n[1], what), internal::AsDouble(file, n[2], what)};
+  return {internal::AsDouble(file, n[0], what), internal::AsDouble(file, n[1], what),
+          internal::AsDouble(file, n[2], what)};
 }
 
 // fit: {select: [[x0,y0,z0],[x1,y1,z1]], up: [x,y,z], down: [x,y,z], shift: [x,y,z]} — the
@@ -264,7 +280,8 @@ Frame FitFrame(const std::string& file, const YAML::Node& n, const Primitive& p,
       Fail(file, kv.first, "unknown key '" + k + "' in fit (expected select, up, down, shift)");
   const Eigen::Vector3d lo = AsVector(file, n["select"][0], "select"), hi = AsVector(file, n["select"][1], "select");
   const Eigen::Vector3d up = n["up"] ? AsVector(file, n["up"], "up") : Eigen::Vector3d::UnitZ();
-  const Eigen::Vector3d down = n["down"] ? AsVector(file, n["down"], "down") : Eigen::Vector3d(-Eigen::Vector3d::UnitZ());
+  const Eigen::Vector3d down =
+      n["down"] ? AsVector(file, n["down"], "down") : Eigen::Vector3d(-Eigen::Vector3d::UnitZ());
   const bool arc = p.type == PrimitiveType::kHook || p.type == PrimitiveType::kRing;
   if (!arc && p.type != PrimitiveType::kRod) Fail(file, n, "fit is implemented for hooks, rings and rods");
   const double arc_angle = p.type == PrimitiveType::kHook ? p.Shape("arc_angle") : 360;
@@ -306,8 +323,8 @@ PartLibrary LoadPartLibrary(const std::string& file, const std::string& mesh_dir
     const YAML::Node& n = kv.second;
     if (!n.IsMap()) Fail(file, n, "part '" + part.name + "' must be a map");
     for (const auto& key : n)
-      if (const auto k = key.first.as<std::string>(); k != "mesh" && k != "mass" && k != "centre_of_mass" &&
-                                                      k != "primitives")
+      if (const auto k = key.first.as<std::string>();
+          k != "mesh" && k != "mass" && k != "centre_of_mass" && k != "primitives")
         Fail(file, key.first, "unknown key '" + k + "' in part '" + part.name + "'");
     if (n["mesh"]) {
       part.mesh = AsString(file, n["mesh"], "mesh");
@@ -334,12 +351,18 @@ PartLibrary LoadPartLibrary(const std::string& file, const std::string& mesh_dir
       for (const auto& e : pn) {
         const std::string k = e.first.as<std::string>();
         if (k == "type") continue;
-        if (k == "frame") p.frame = AsFrame(file, e.second, "frame");
-        else if (k == "fit") continue;  // after the shape, below
-        else if (k == "closed") p.closed = e.second.as<bool>();
-        else if (k == "flex") p.flex = e.second.as<bool>();
-        else if (k == "clamped") p.clamped = e.second.as<bool>();
-        else if (k == "ctl") p.ctl = e.second.as<bool>();
+        if (k == "frame")
+          p.frame = AsFrame(file, e.second, "frame");
+        else if (k == "fit")
+          continue;  // after the shape, below
+        else if (k == "closed")
+          p.closed = e.second.as<bool>();
+        else if (k == "flex")
+          p.flex = e.second.as<bool>();
+        else if (k == "clamped")
+          p.clamped = e.second.as<bool>();
+        else if (k == "ctl")
+          p.ctl = e.second.as<bool>();
         else if (k == "blocked") {  // "min" / "max" / "both": that end of the slide parameter is blocked
           const std::string v = AsString(file, e.second, "blocked");
           if (v == "min" || v == "both") p.blocked_min = true;
@@ -349,11 +372,12 @@ PartLibrary LoadPartLibrary(const std::string& file, const std::string& mesh_dir
           if (!e.second.IsSequence() || e.second.size() != 2) Fail(file, e.second, "range must be [min, max]");
           p.shape["theta_min"] = AsDouble(file, e.second[0], "range");
           p.shape["theta_max"] = AsDouble(file, e.second[1], "range");
-        }
-        else p.shape[k] = AsDouble(file, e.second, "shape parameter '" + k + "'");
+        } else
+          p.shape[k] = AsDouble(file, e.second, "shape parameter '" + k + "'");
       }
       for (const auto& req : RequiredShape().at(p.type))
-        if (!p.shape.count(req)) Fail(file, pn, std::string(ToString(p.type)) + " '" + p.name + "' lacks '" + req + "'");
+        if (!p.shape.count(req))
+          Fail(file, pn, std::string(ToString(p.type)) + " '" + p.name + "' lacks '" + req + "'");
       if (p.type == PT::kRing) p.closed = true;  // rings are always closed for connecting (FabHacks, 4.1)
       if (pn["fit"]) {
         if (pn["frame"]) Fail(file, pn["fit"], "primitive '" + p.name + "' has both 'frame' and 'fit'");

@@ -128,7 +128,9 @@ PrecheckSummary Precheck(const Program& prog, const PrecheckOptions& opt) {
       sum.issues.push_back({PrecheckFailure::kDisconnected,
                             prog.file + ": part '" + prog.instances[v].name + "' is not connected to the environment"});
     }
-  auto other = [&](int e, int u) { return prog.connections[e].part_a == u ? prog.connections[e].part_b : prog.connections[e].part_a; };
+  auto other = [&](int e, int u) {
+    return prog.connections[e].part_a == u ? prog.connections[e].part_b : prog.connections[e].part_a;
+  };
   auto prim_at = [&](int e, int u) -> const Primitive& {
     const auto& c = prog.connections[e];
     return c.part_a == u ? prog.PrimitiveA(c) : prog.PrimitiveB(c);

@@ -46,8 +46,8 @@ Program Build(const YAML::Node& root, const std::string& file, std::string libra
   if (!root.IsMap()) Fail(file, root, "a program must be a map");
   for (const auto& kv : root) {
     const std::string k = kv.first.as<std::string>();
-    if (k != "library" && k != "start_with" && k != "end_with" && k != "parts" && k != "steps" &&
-        k != "name" && k != "description")
+    if (k != "library" && k != "start_with" && k != "end_with" && k != "parts" && k != "steps" && k != "name" &&
+        k != "description")
       Fail(file, kv.first, "unknown key '" + k + "'");
   }
   if (library_path.empty()) library_path = LibraryPathOf(root, file);
@@ -103,7 +103,8 @@ Program Build(const YAML::Node& root, const std::string& file, std::string libra
     }
   }
   const YAML::Node steps = root["steps"];
-  if (!steps || !steps.IsSequence() || steps.size() == 0) Fail(file, steps ? steps : root, "'steps' must be a non-empty list");
+  if (!steps || !steps.IsSequence() || steps.size() == 0)
+    Fail(file, steps ? steps : root, "'steps' must be a non-empty list");
   auto ref = [&](const YAML::Node& n, int& inst, std::string& prim) {
     const std::string s = AsString(file, n, "connector reference");
     const auto dot = s.find('.');
@@ -135,9 +136,10 @@ Program Build(const YAML::Node& root, const std::string& file, std::string libra
       if (!placed[con.part_a] || !placed[con.part_b])
         Fail(file, c, "connect joins two parts already placed by earlier steps");
     } else {
-      ref(c["to"], con.part_a, con.primitive_a);  // placed
+      ref(c["to"], con.part_a, con.primitive_a);      // placed
       ref(c["attach"], con.part_b, con.primitive_b);  // new
-      if (!placed[con.part_a]) Fail(file, c["to"], "attach: '" + prog.instances[con.part_a].name + "' is not placed yet");
+      if (!placed[con.part_a])
+        Fail(file, c["to"], "attach: '" + prog.instances[con.part_a].name + "' is not placed yet");
       if (placed[con.part_b])
         Fail(file, c["attach"], "attach: '" + prog.instances[con.part_b].name + "' is already placed (use connect)");
       placed[con.part_b] = true;
@@ -187,8 +189,10 @@ Program Build(const YAML::Node& root, const std::string& file, std::string libra
       auto& lp = a_shorter ? con.params_b : con.params_a;
       const double h = 0.5 * (large.Shape("length") - small.Shape("length")) / large.Shape("length");
       lp[0].min = 0.5 - h, lp[0].max = 0.5 + h;
-      if (k.find("Rod") != std::string::npos && lp.size() > 1) lp[1].min = lp[1].max = 90;
-      else if (lp.size() > 1) lp[1].min = 0, lp[1].max = 360;
+      if (k.find("Rod") != std::string::npos && lp.size() > 1)
+        lp[1].min = lp[1].max = 90;
+      else if (lp.size() > 1)
+        lp[1].min = 0, lp[1].max = 360;
     }
     for (auto* side : {&con.params_a, &con.params_b})
       for (auto& p : *side) p.init = std::clamp(p.init, p.min, p.max);
@@ -196,8 +200,7 @@ Program Build(const YAML::Node& root, const std::string& file, std::string libra
     prog.connections.push_back(con);
   }
   for (size_t i = 0; i < placed.size(); ++i)
-    if (!placed[i])
-      Fail(file, steps, "part '" + prog.instances[i].name + "' is never attached");
+    if (!placed[i]) Fail(file, steps, "part '" + prog.instances[i].name + "' is never attached");
   // PARTS.md §1: several connections on one primitive start spread evenly,
   // value_i = min + (max − min)·(i+1)/(n+1), in program order.
   std::map<std::pair<int, std::string>, std::vector<std::vector<ParamSpec>*>> users;
@@ -209,7 +212,8 @@ Program Build(const YAML::Node& root, const std::string& file, std::string libra
     if (sides.size() < 2) continue;
     for (size_t i = 0; i < sides.size(); ++i)
       for (auto& p : *sides[i])
-        if (!p.held) p.init = p.min + (p.max - p.min) * static_cast<double>(i + 1) / static_cast<double>(sides.size() + 1);
+        if (!p.held)
+          p.init = p.min + (p.max - p.min) * static_cast<double>(i + 1) / static_cast<double>(sides.size() + 1);
   }
   return prog;
 }
@@ -232,8 +236,6 @@ Program ParseProgram(const std::string& text, const std::string& name, const std
   return Build(root, name, library_path, mesh_dir);
 }
 
-std::string ProgramLibraryPath(const std::string& file) {
-  return LibraryPathOf(internal::LoadYamlFile(file), file);
-}
+std::string ProgramLibraryPath(const std::string& file) { return LibraryPathOf(internal::LoadYamlFile(file), file); }
 
 }  // namespace fabatlas::assembly

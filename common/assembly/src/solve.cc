@@ -55,8 +55,10 @@ bool Step1(const Program& prog, const SolveOptions& opt, Solver& solver, SolveSu
   for (int k = 0; k < opt.restarts; ++k) {
     ++out.starts_tried;
     const Stopwatch feasibility_time;
-    if (k == opt.chain_start && solver.ClosesCycles()) solver.SetChainStart();
-    else solver.SetStart(k);
+    if (k == opt.chain_start && solver.ClosesCycles())
+      solver.SetChainStart();
+    else
+      solver.SetStart(k);
     if (solver.ConstraintResidual() >= opt.feasibility_tolerance) solver.Run(Phase::kFeasibility, 1.0);
     const double c = solver.ConstraintResidual();
     out.feasibility_seconds += feasibility_time.Seconds();

@@ -54,8 +54,8 @@ DirectoryLock::DirectoryLock(const std::filesystem::path& dir, const std::string
       throw InputError(path_.string() + ": cannot lock the " + what + ": " + std::strerror(error));
     if (holder.rfind("pid ", 0) == 0) holder = holder.substr(4);
     throw InputError(dir.string() + ": " + what + " in use by " +
-                     (holder.empty() ? "another process (not yet recorded)" : "pid " + holder) + " (" +
-                     path_.string() + ")");
+                     (holder.empty() ? "another process (not yet recorded)" : "pid " + holder) + " (" + path_.string() +
+                     ")");
   }
   // Ours: record who holds it. Best effort: the flock is the lock.
   const std::string text = HolderText() + "\n";

@@ -16,14 +16,12 @@ std::int32_t DependencyGraph::Find(const std::string& key) const {
   return static_cast<std::int32_t>(it - keys.begin());
 }
 
-DependencyGraph BuildDependencyGraph(const std::vector<SubtreeNode>& nodes,
-                                     const std::vector<SampleTree>& samples) {
+DependencyGraph BuildDependencyGraph(const std::vector<SubtreeNode>& nodes, const std::vector<SampleTree>& samples) {
   DependencyGraph g;
   // Order the records by key (stable pointers into the input).
   std::vector<const SubtreeNode*> order(nodes.size());
   for (std::size_t i = 0; i < nodes.size(); ++i) order[i] = &nodes[i];
-  std::sort(order.begin(), order.end(),
-            [](const SubtreeNode* a, const SubtreeNode* b) { return a->key < b->key; });
+  std::sort(order.begin(), order.end(), [](const SubtreeNode* a, const SubtreeNode* b) { return a->key < b->key; });
   std::vector<const SubtreeNode*> first;  // one record per key
   std::vector<double> times;
   for (std::size_t i = 0; i < order.size();) {
@@ -98,8 +96,8 @@ DependencyGraph BuildDependencyGraph(const std::vector<SubtreeNode>& nodes,
 namespace {
 void CheckCacheSize(const DependencyGraph& g, const CacheSet& cache) {
   if (cache.size() != g.keys.size())
-    throw InputError("cache set has " + std::to_string(cache.size()) + " flags for " +
-                     std::to_string(g.keys.size()) + " subtrees");
+    throw InputError("cache set has " + std::to_string(cache.size()) + " flags for " + std::to_string(g.keys.size()) +
+                     " subtrees");
 }
 
 // Requests per node: how many times the node is asked for (whether it is then

@@ -63,8 +63,8 @@ ExactCacheSummary SolveExactCache(const DependencyGraph& g, const ExactCacheOpti
   struct SampleDag {
     Id root;
     int weight;
-    std::vector<Id> nodes;            // topological
-    std::map<Id, int> column;         // node -> k column
+    std::vector<Id> nodes;     // topological
+    std::map<Id, int> column;  // node -> k column
   };
   std::vector<SampleDag> dags;
   std::int64_t k_columns = 0;
@@ -86,8 +86,9 @@ ExactCacheSummary SolveExactCache(const DependencyGraph& g, const ExactCacheOpti
       }
     }
     for (Id v : d.nodes) seen[static_cast<std::size_t>(v)] = 0;
-    std::sort(d.nodes.begin(), d.nodes.end(),
-              [&](Id a, Id b) { return topo_pos[static_cast<std::size_t>(a)] < topo_pos[static_cast<std::size_t>(b)]; });
+    std::sort(d.nodes.begin(), d.nodes.end(), [&](Id a, Id b) {
+      return topo_pos[static_cast<std::size_t>(a)] < topo_pos[static_cast<std::size_t>(b)];
+    });
     k_columns += static_cast<std::int64_t>(d.nodes.size());
     dags.push_back(std::move(d));
   }
@@ -195,7 +196,8 @@ ExactCacheSummary SolveExactCache(const DependencyGraph& g, const ExactCacheOpti
         double k = cached ? 0.0 : q[v];
         start[static_cast<std::size_t>(d.column.at(v))] = k;
         t += g.seconds[static_cast<std::size_t>(v)] * k;
-        for (std::int64_t e = g.child_begin[v]; e < g.child_begin[v + 1]; ++e) q[g.child_ids[static_cast<std::size_t>(e)]] += k;
+        for (std::int64_t e = g.child_begin[v]; e < g.child_begin[v + 1]; ++e)
+          q[g.child_ids[static_cast<std::size_t>(e)]] += k;
       }
       z = std::max(z, t);
     }

@@ -23,9 +23,12 @@ namespace fabatlas::cache {
 
 const char* StrategyName(Strategy strategy) {
   switch (strategy) {
-    case Strategy::kNaive: return "naive";
-    case Strategy::kOptAve: return "opt_ave";
-    case Strategy::kOptMax: return "opt_max";
+    case Strategy::kNaive:
+      return "naive";
+    case Strategy::kOptAve:
+      return "opt_ave";
+    case Strategy::kOptMax:
+      return "opt_max";
   }
   return "?";
 }
@@ -56,7 +59,8 @@ class Planner {
     memo_stamp_.assign(n, 0);
     memo_.assign(n, 0.0);
     delta_.assign(n, 0.0);
-    for (std::size_t i = 0; i < n; ++i) topo_pos_[static_cast<std::size_t>(g.topological_order[i])] = static_cast<Id>(i);
+    for (std::size_t i = 0; i < n; ++i)
+      topo_pos_[static_cast<std::size_t>(g.topological_order[i])] = static_cast<Id>(i);
     for (Id r : g.sample_roots) q_[static_cast<std::size_t>(r)] += 1;
     for (Id v : g.topological_order) {
       double qv = q_[static_cast<std::size_t>(v)];
@@ -120,17 +124,21 @@ class Planner {
   }
 
  private:
-  std::size_t Child(std::int64_t e) const { return static_cast<std::size_t>(g_.child_ids[static_cast<std::size_t>(e)]); }
+  std::size_t Child(std::int64_t e) const {
+    return static_cast<std::size_t>(g_.child_ids[static_cast<std::size_t>(e)]);
+  }
   // What a strategy maximises (CacheOptions::score). Every variant only
   // decreases as H grows (q and the H-free subtree time both do), which the
   // lazy heap relies on.
   double Score(Id x) {
     auto i = static_cast<std::size_t>(x);
     switch (o_.score) {
-      case ScoreKind::kTimesCount: return g_.seconds[i] * q_[i];
+      case ScoreKind::kTimesCount:
+        return g_.seconds[i] * q_[i];
       case ScoreKind::kPerByte:
         return g_.seconds[i] * q_[i] / static_cast<double>(std::max<std::uint64_t>(g_.bytes[i], 1));
-      case ScoreKind::kSavedPerByte: return SavedPerByte(x, RootTime(x));
+      case ScoreKind::kSavedPerByte:
+        return SavedPerByte(x, RootTime(x));
     }
     return 0;
   }
@@ -207,8 +215,10 @@ class Planner {
         continue;
       }
       if (worst < 0) worst = t;
-      if (t == worst) tied->push_back(top.id);
-      else roots_.push({t, top.id});
+      if (t == worst)
+        tied->push_back(top.id);
+      else
+        roots_.push({t, top.id});
     }
     for (Id r : *tied) roots_.push({worst, r});
     return worst < 0 ? 0.0 : worst;
@@ -234,7 +244,8 @@ class Planner {
         Id v = walk_.back();
         walk_.pop_back();
         if (Choosable(v) && Fits(v)) {
-          double s = o_.score == ScoreKind::kSavedPerByte ? SavedPerByte(v, memo_[static_cast<std::size_t>(v)]) : Score(v);
+          double s =
+              o_.score == ScoreKind::kSavedPerByte ? SavedPerByte(v, memo_[static_cast<std::size_t>(v)]) : Score(v);
           if (s > best_score || (s == best_score && best >= 0 && v < best)) {
             best = v;
             best_score = s;
@@ -310,8 +321,9 @@ class Planner {
         if (!in_h_[c]) walk_.push_back(static_cast<Id>(c));
       }
     }
-    std::sort(below_.begin(), below_.end(),
-              [&](Id a, Id b) { return topo_pos_[static_cast<std::size_t>(a)] < topo_pos_[static_cast<std::size_t>(b)]; });
+    std::sort(below_.begin(), below_.end(), [&](Id a, Id b) {
+      return topo_pos_[static_cast<std::size_t>(a)] < topo_pos_[static_cast<std::size_t>(b)];
+    });
     for (std::int64_t e = g_.child_begin[x]; e < g_.child_begin[x + 1]; ++e) delta_[Child(e)] += q_[xi];
     for (Id v : below_) {
       auto vi = static_cast<std::size_t>(v);

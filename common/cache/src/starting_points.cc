@@ -18,8 +18,8 @@ namespace {
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
 struct ValidGraph {
-  std::vector<std::int64_t> ids;                          // local -> form sample id
-  std::vector<std::vector<std::pair<int, double>>> adj;   // local adjacency, ΔG weights
+  std::vector<std::int64_t> ids;                         // local -> form sample id
+  std::vector<std::vector<std::pair<int, double>>> adj;  // local adjacency, ΔG weights
 };
 
 ValidGraph BuildValidGraph(const sampling::Form& form) {
@@ -58,8 +58,8 @@ ValidGraph BuildValidGraph(const sampling::Form& form) {
 // Dijkstra from `source` over nodes with allowed(v); writes dist (kInf when
 // not reached) for the nodes it reaches, starting from `dist` as given when
 // `improve_only` (multi-source farthest-point update) or from kInf.
-void Dijkstra(const ValidGraph& g, int source, std::vector<double>& dist,
-              const std::function<bool(int)>& allowed, std::vector<int>* owner = nullptr, int owner_id = -1) {
+void Dijkstra(const ValidGraph& g, int source, std::vector<double>& dist, const std::function<bool(int)>& allowed,
+              std::vector<int>* owner = nullptr, int owner_id = -1) {
   using Item = std::pair<double, int>;
   std::priority_queue<Item, std::vector<Item>, std::greater<Item>> heap;
   dist[static_cast<std::size_t>(source)] = 0;
@@ -91,8 +91,10 @@ std::pair<std::int64_t, double> Spread(const ValidGraph& g, int v, const std::ve
   double sum = 0;
   for (int m : members) {
     double d = dist[static_cast<std::size_t>(m)];
-    if (d == kInf) ++unreached;
-    else sum += d;
+    if (d == kInf)
+      ++unreached;
+    else
+      sum += d;
   }
   return {unreached, sum};
 }
@@ -176,7 +178,9 @@ std::vector<StartingPoint> ChooseStartingPoints(const sampling::Form& form, cons
         Dijkstra(g, from, d, in_segment);
         int far = from;
         for (int v : m)
-          if (d[static_cast<std::size_t>(v)] != kInf && d[static_cast<std::size_t>(v)] > d[static_cast<std::size_t>(far)]) far = v;
+          if (d[static_cast<std::size_t>(v)] != kInf &&
+              d[static_cast<std::size_t>(v)] > d[static_cast<std::size_t>(far)])
+            far = v;
         return far;
       };
       std::vector<double> da(static_cast<std::size_t>(n), kInf), db(static_cast<std::size_t>(n), kInf);

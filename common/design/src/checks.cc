@@ -96,8 +96,9 @@ CheckOutcome Watertight(CheckContext& c) {
   const double voxel = c.solid().voxel_size();
   if (folds.area > voxel * voxel) {
     char where[200];
-    std::snprintf(where, sizeof where, "first near (%.4g, %.4g, %.4g) mm): a part there is thinner than a voxel (%g mm)",
-                  folds.first[0], folds.first[1], folds.first[2], voxel);
+    std::snprintf(where, sizeof where,
+                  "first near (%.4g, %.4g, %.4g) mm): a part there is thinner than a voxel (%g mm)", folds.first[0],
+                  folds.first[1], folds.first[2], voxel);
     o.passed = false;
     o.failure = kThinParts;  // the model's cause; the fold is what it does to our surface
     o.reason = "the level-set surface folds over itself at " + std::to_string(folds.count) + " triangle" +
@@ -137,8 +138,10 @@ CheckOutcome MinThickness(const CheckSpec& spec, CheckContext& c) {
     reason << 100 * sdf.area_fraction_below << "% of the surface has shape diameter below " << Mm(value)
            << " (thinnest " << Mm(sdf.min) << ", allowed " << 100 * allowed << "%)";
   }
-  if (!o.passed) o.reason = reason.str();
-  else o.failure.clear();
+  if (!o.passed)
+    o.reason = reason.str();
+  else
+    o.failure.clear();
   return o;
 }
 
@@ -162,8 +165,11 @@ CheckOutcome Stands(const CheckSpec& spec, CheckContext& c) {
   if (!o.passed) {
     o.failure = kUnstable;
     std::ostringstream reason;
-    if (inside < 0) reason << "centre of mass lies " << Mm(-inside) << " outside the support polygon";
-    else reason << "centre of mass lies only " << Mm(inside) << " inside the support polygon (margin " << Mm(margin) << ")";
+    if (inside < 0)
+      reason << "centre of mass lies " << Mm(-inside) << " outside the support polygon";
+    else
+      reason << "centre of mass lies only " << Mm(inside) << " inside the support polygon (margin " << Mm(margin)
+             << ")";
     o.reason = reason.str();
   }
   return o;
@@ -182,7 +188,6 @@ CheckOutcome MaxVolume(const CheckSpec& spec, CheckContext& c) {
   }
   return o;
 }
-
 
 // Largest number of voxel hexahedra the fem check meshes; beyond it the sparse
 // factorisation takes minutes and gigabytes (docs/benchmarks.md (FEM): 20k elements
@@ -209,8 +214,7 @@ fem::AxisBox FemBox(CheckContext& c, const CheckSpec& spec, const std::string& n
     box.min[k] = EvaluateItem(c, spec, a.items[0].items[k]);
     box.max[k] = EvaluateItem(c, spec, a.items[1].items[k]);
     if (!(box.min[k] <= box.max[k]))
-      throw InputError(a.place.str() + ": check '" + spec.name + "': '" + name + "' has min > max along " +
-                       "xyz"[k]);
+      throw InputError(a.place.str() + ": check '" + spec.name + "': '" + name + "' has min > max along " + "xyz"[k]);
   }
   return box;
 }
@@ -241,10 +245,11 @@ CheckOutcome Fem(const CheckSpec& spec, CheckContext& c) {
   // `element`: incompatible_modes (default, does not lock in bending) or q1
   // (docs/fem.md).
   if (auto it = spec.args.find("element"); it != spec.args.end()) {
-    if (it->second.text == "q1") options.solve.element = fem::StaticSolveOptions::Element::kQ1;
+    if (it->second.text == "q1")
+      options.solve.element = fem::StaticSolveOptions::Element::kQ1;
     else if (it->second.text != "incompatible_modes")
-      throw InputError(it->second.place.str() + ": check '" + spec.name + "': 'element' must be incompatible_modes or q1, got '" +
-                       it->second.text + "'");
+      throw InputError(it->second.place.str() + ": check '" + spec.name +
+                       "': 'element' must be incompatible_modes or q1, got '" + it->second.text + "'");
   }
   options.max_strain = c.Number(spec, "max_strain", 0.0);
 
@@ -297,15 +302,15 @@ CheckOutcome Fem(const CheckSpec& spec, CheckContext& c) {
   reason << "max displacement " << result.max_displacement << " mm"
          << (result.max_displacement > limit ? " exceeds " : " (limit ") << limit << " mm"
          << (result.max_displacement > limit ? "" : ")") << ", max strain " << result.max_strain;
-  if (options.max_strain > 0) reason << (result.max_strain > options.max_strain ? " exceeds " : " (limit ")
-                                     << options.max_strain << (result.max_strain > options.max_strain ? "" : ")");
+  if (options.max_strain > 0)
+    reason << (result.max_strain > options.max_strain ? " exceeds " : " (limit ") << options.max_strain
+           << (result.max_strain > options.max_strain ? "" : ")");
   reason << ", " << result.num_elements << " elements of " << voxel << " mm";
   o.reason = reason.str();
   o.measures["fem_max_displacement"] = result.max_displacement;
   o.measures["fem_max_strain"] = result.max_strain;
   return o;
 }
-
 
 // Reconfigurables, section 5: every transition of the state graph is collision-free.
 // For each transition, every object moves by its resolved motion; collision
@@ -387,7 +392,8 @@ CheckOutcome CollisionFree(const CheckSpec& spec, CheckContext& c) {
     }
   }
   // When first (time span, then transition order), then where.
-  std::stable_sort(hits.begin(), hits.end(), [](const Hit& a, const Hit& b) { return a.interval.t_begin < b.interval.t_begin; });
+  std::stable_sort(hits.begin(), hits.end(),
+                   [](const Hit& a, const Hit& b) { return a.interval.t_begin < b.interval.t_begin; });
   std::ostringstream reason;
   reason.precision(4);
   if (!hits.empty()) {
@@ -407,8 +413,10 @@ CheckOutcome CollisionFree(const CheckSpec& spec, CheckContext& c) {
     o.measures["collision_t_begin"] = hits[0].interval.t_begin;
     o.measures["collision_t_end"] = hits[0].interval.t_end;
   } else {
-    if (std::isfinite(clearance)) reason << "min clearance " << clearance << " mm (" << closest << ")";
-    else reason << "no two objects (clearance unbounded)";
+    if (std::isfinite(clearance))
+      reason << "min clearance " << clearance << " mm (" << closest << ")";
+    else
+      reason << "no two objects (clearance unbounded)";
     if (clearance < required) {
       o.failure = kTooLittleClearance;
       reason << " is below " << required << " mm";
@@ -433,8 +441,8 @@ CheckOutcome AssemblyFeasible(CheckContext& c) {
     o.failure = kInfeasible;
     reason << (s.messages.empty() ? std::string("the assembly does not solve") : s.messages.front());
   } else {
-    reason << "feasible after " << s.starts_tried << " start" << (s.starts_tried > 1 ? "s" : "") << " (C = "
-           << s.constraint_residual << " mm^2)";
+    reason << "feasible after " << s.starts_tried << " start" << (s.starts_tried > 1 ? "s" : "")
+           << " (C = " << s.constraint_residual << " mm^2)";
   }
   o.reason = reason.str();
   return o;
@@ -479,7 +487,8 @@ CheckOutcome TargetReached(const CheckSpec& spec, CheckContext& c) {
   o.passed = s.final_target_error_mm <= tol && (!rotation || s.final_target_error_deg <= tol_deg);
   reason << "target deviation " << s.final_target_error_mm << " mm";
   if (rotation) reason << ", " << s.final_target_error_deg << " deg";
-  reason << (o.passed ? " (within " : " (exceeds ") << tol << " mm" << (rotation ? ", " + std::to_string(tol_deg) + " deg" : "") << ")";
+  reason << (o.passed ? " (within " : " (exceeds ") << tol << " mm"
+         << (rotation ? ", " + std::to_string(tol_deg) + " deg" : "") << ")";
   if (!o.passed) o.failure = kTargetMissed;
   o.reason = reason.str();
   o.measures["target_deviation"] = s.final_target_error_mm;
@@ -512,15 +521,24 @@ double CheckContext::Number(const CheckSpec& spec, const std::string& name, doub
 CheckOutcome RunCheck(const CheckSpec& spec, CheckContext& context) {
   auto start = std::chrono::steady_clock::now();
   CheckOutcome o;
-  if (spec.type == "watertight") o = Watertight(context);
-  else if (spec.type == "min_thickness") o = MinThickness(spec, context);
-  else if (spec.type == "stands") o = Stands(spec, context);
-  else if (spec.type == "max_volume") o = MaxVolume(spec, context);
-  else if (spec.type == "fem") o = Fem(spec, context);
-  else if (spec.type == "collision_free") o = CollisionFree(spec, context);
-  else if (spec.type == "assembly_feasible") o = AssemblyFeasible(context);
-  else if (spec.type == "assembly_stable") o = AssemblyStable(context);
-  else if (spec.type == "target_reached") o = TargetReached(spec, context);
+  if (spec.type == "watertight")
+    o = Watertight(context);
+  else if (spec.type == "min_thickness")
+    o = MinThickness(spec, context);
+  else if (spec.type == "stands")
+    o = Stands(spec, context);
+  else if (spec.type == "max_volume")
+    o = MaxVolume(spec, context);
+  else if (spec.type == "fem")
+    o = Fem(spec, context);
+  else if (spec.type == "collision_free")
+    o = CollisionFree(spec, context);
+  else if (spec.type == "assembly_feasible")
+    o = AssemblyFeasible(context);
+  else if (spec.type == "assembly_stable")
+    o = AssemblyStable(context);
+  else if (spec.type == "target_reached")
+    o = TargetReached(spec, context);
   o.name = spec.name;
   o.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return o;

@@ -36,9 +36,15 @@ class ConstraintResidual : public ceres::CostFunction {
     for (std::size_t k = 0; k < design_.constraints.size(); ++k) {
       double diff = lhs_[k].Evaluate() - rhs_[k].Evaluate();
       switch (design_.constraints[k].relation) {
-        case Relation::kEqual: out[k] = diff; break;
-        case Relation::kLessEqual: out[k] = std::max(0.0, diff); break;
-        case Relation::kGreaterEqual: out[k] = std::min(0.0, diff); break;
+        case Relation::kEqual:
+          out[k] = diff;
+          break;
+        case Relation::kLessEqual:
+          out[k] = std::max(0.0, diff);
+          break;
+        case Relation::kGreaterEqual:
+          out[k] = std::min(0.0, diff);
+          break;
       }
       if (!std::isfinite(out[k])) out[k] = 1e6;
     }
@@ -100,13 +106,15 @@ void Solve(const Design& d, const Point& u, double weight, std::vector<double>& 
   ceres::Solve(options, &problem, &summary);
 }
 
-
 // The violation of constraint k given lhs - rhs (as ConstraintResidual).
 double Violation(Relation relation, double diff) {
   switch (relation) {
-    case Relation::kEqual: return std::abs(diff);
-    case Relation::kLessEqual: return std::max(0.0, diff);
-    case Relation::kGreaterEqual: return std::max(0.0, -diff);
+    case Relation::kEqual:
+      return std::abs(diff);
+    case Relation::kLessEqual:
+      return std::max(0.0, diff);
+    case Relation::kGreaterEqual:
+      return std::max(0.0, -diff);
   }
   return std::abs(diff);
 }
@@ -219,8 +227,7 @@ std::optional<ConstraintSolveSummary> SolveByDefinitions(const Design& d, const 
     if (!std::isfinite(miss)) return std::nullopt;
     holds = holds && miss <= options.tolerance;
     if (defining[k] || miss <= options.tolerance) continue;
-    const double allowed =
-        options.tolerance + spread([&] { return lhs[k].Evaluate() - rhs[k].Evaluate(); }, reads[k]);
+    const double allowed = options.tolerance + spread([&] { return lhs[k].Evaluate() - rhs[k].Evaluate(); }, reads[k]);
     unsat = unsat || miss > options.definition_safety * allowed;
   }
 

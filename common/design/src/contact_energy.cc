@@ -66,10 +66,13 @@ bool SameMesh(const mesh::TriangleMesh& x, const mesh::TriangleMesh& y) {
 std::vector<Freedom> Freedoms(const Design& design, const ResolutionOptions& options) {
   std::vector<Freedom> out;
   for (const auto& p : design.exposed) {
-    const bool named = std::find(options.parameters.begin(), options.parameters.end(), p.name) != options.parameters.end();
+    const bool named =
+        std::find(options.parameters.begin(), options.parameters.end(), p.name) != options.parameters.end();
     if (!options.parameters.empty() && !named) continue;
     if (p.kind != ParameterKind::kReal) {
-      if (named) throw InputError(design.file.string() + ": parameter '" + p.name + "' is not real; only real parameters can be resolved");
+      if (named)
+        throw InputError(design.file.string() + ": parameter '" + p.name +
+                         "' is not real; only real parameters can be resolved");
       continue;
     }
     if (p.max > p.min) out.push_back({p.name, p.min, p.max});
@@ -180,8 +183,8 @@ std::vector<Perturbation> Perturb(const Design& design, const ContactState& at, 
   return out;
 }
 
-std::map<std::string, double> PairDescent(const ContactState& at, const std::vector<Perturbation>& perturbations,
-                                          int a, int b) {
+std::map<std::string, double> PairDescent(const ContactState& at, const std::vector<Perturbation>& perturbations, int a,
+                                          int b) {
   std::map<std::string, double> out;
   for (const Perturbation& p : perturbations) {
     double sum = 0;
@@ -231,9 +234,9 @@ Point Moved(const Point& u, const std::map<std::string, double>& direction, doub
   return out;
 }
 
-LineSearch GoldenSectionSearch(const Design& design, const ContactState& at, const std::map<std::string, double>& descent,
-                               const std::vector<Freedom>& free, const ResolutionOptions& options, int time_steps,
-                               SubtreeCache* cache) {
+LineSearch GoldenSectionSearch(const Design& design, const ContactState& at,
+                               const std::map<std::string, double>& descent, const std::vector<Freedom>& free,
+                               const ResolutionOptions& options, int time_steps, SubtreeCache* cache) {
   LineSearch ls;
   ls.u = at.u;
   ls.state = at;
@@ -282,8 +285,10 @@ LineSearch GoldenSectionSearch(const Design& design, const ContactState& at, con
     // Flat energy above zero: the contour has not left yet, look further;
     // at zero: resolved, look for the smallest such step.
     bool keep_lower;
-    if (std::abs(fc - fd) <= tolerance) keep_lower = fd <= tolerance;
-    else keep_lower = fc < fd;
+    if (std::abs(fc - fd) <= tolerance)
+      keep_lower = fd <= tolerance;
+    else
+      keep_lower = fc < fd;
     if (keep_lower) {
       hi = d, d = c, fd = fc;
       c = hi - ratio * (hi - lo);

@@ -63,22 +63,22 @@ std::vector<Perturbation> Perturb(const Design& design, const ContactState& at, 
                                   const ResolutionOptions& options, SubtreeCache* cache);
 
 // Eq. 3: -dE/du_k for the forces of pair (a, b) at `at`, per parameter.
-std::map<std::string, double> PairDescent(const ContactState& at, const std::vector<Perturbation>& perturbations,
-                                          int a, int b);
+std::map<std::string, double> PairDescent(const ContactState& at, const std::vector<Perturbation>& perturbations, int a,
+                                          int b);
 
 // The line search along `descent` (scaled to each parameter's range,
 // projected on the bounds): the best point it evaluated.
 struct LineSearch {
-  bool moved = false;                  // a step that lowered the energy was found
-  Point u;                             // the best point (u itself if none)
-  ContactState state;                  // there
+  bool moved = false;                       // a step that lowered the energy was found
+  Point u;                                  // the best point (u itself if none)
+  ContactState state;                       // there
   std::map<std::string, double> direction;  // parameter change per unit step
-  double step = 0, bracket = 0;        // chosen step; final bracket width (unit steps)
+  double step = 0, bracket = 0;             // chosen step; final bracket width (unit steps)
   int evaluations = 0;
 };
-LineSearch GoldenSectionSearch(const Design& design, const ContactState& at, const std::map<std::string, double>& descent,
-                               const std::vector<Freedom>& free, const ResolutionOptions& options, int time_steps,
-                               SubtreeCache* cache);
+LineSearch GoldenSectionSearch(const Design& design, const ContactState& at,
+                               const std::map<std::string, double>& descent, const std::vector<Freedom>& free,
+                               const ResolutionOptions& options, int time_steps, SubtreeCache* cache);
 
 // The point moved by `direction` x step, clamped to the ranges.
 Point Moved(const Point& u, const std::map<std::string, double>& direction, double step,

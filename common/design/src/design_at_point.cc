@@ -29,7 +29,10 @@ std::size_t ValueEnd(const std::string& line, std::size_t from) {
   for (std::size_t i = from; i < line.size(); ++i) {
     const char c = line[i];
     if (c == '[' || c == '{') ++depth;
-    if ((c == ']' || c == '}') && depth > 0) { --depth; continue; }
+    if ((c == ']' || c == '}') && depth > 0) {
+      --depth;
+      continue;
+    }
     if (depth == 0 && (c == ',' || c == '}' || c == '#')) return i;
   }
   return line.size();
@@ -48,8 +51,10 @@ std::string DesignTextAt(const Design& design, const Point& u) {
     const auto it = u.find(p.name);
     if (it == u.end()) continue;
     std::string value;
-    if (p.kind == ParameterKind::kEnumerated) value = p.labels.at(static_cast<std::size_t>(it->second));
-    else value = Shortest(it->second);
+    if (p.kind == ParameterKind::kEnumerated)
+      value = p.labels.at(static_cast<std::size_t>(it->second));
+    else
+      value = Shortest(it->second);
     const std::size_t row = static_cast<std::size_t>(p.place.line) - 1;
     if (p.place.line < 1 || row >= lines.size())
       throw InputError(file + ": cannot place the default of parameter '" + p.name + "'");
@@ -66,7 +71,9 @@ std::string DesignTextAt(const Design& design, const Point& u) {
         if (close >= line.size() || line[close] != '}') {
           std::size_t end = open + 1;
           while (end < line.size() && line[end] != '}') end = ValueEnd(line, end) + 1;
-          if (end >= line.size()) throw InputError(file + ":" + std::to_string(p.place.line) + ": cannot place the default of parameter '" + p.name + "'");
+          if (end >= line.size())
+            throw InputError(file + ":" + std::to_string(p.place.line) + ": cannot place the default of parameter '" +
+                             p.name + "'");
           line.insert(end, ", default: " + value);
         } else {
           line.insert(close, ", default: " + value);
@@ -88,7 +95,9 @@ std::string DesignTextAt(const Design& design, const Point& u) {
         placed = true;
       }
     }
-    if (!placed) throw InputError(file + ":" + std::to_string(p.place.line) + ": parameter '" + p.name + "' has no default: line to set");
+    if (!placed)
+      throw InputError(file + ":" + std::to_string(p.place.line) + ": parameter '" + p.name +
+                       "' has no default: line to set");
   }
   std::string text;
   for (const auto& line : lines) text += line + "\n";

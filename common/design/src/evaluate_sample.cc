@@ -29,7 +29,6 @@
 namespace fabatlas::design {
 namespace {
 
-
 // A plain value OpenSCAD reads as a number or boolean (else it is a string).
 bool IsScadNumberOrBoolean(const std::string& s) {
   if (s == "true" || s == "false") return true;
@@ -63,8 +62,8 @@ std::string OpenScadLiteral(const Node& node, const std::string& key, double val
       if (c->second.keys[i] != key) continue;
       const auto& options = c->second.items[i].items;
       if (value != std::round(value) || value < 0 || value >= static_cast<double>(options.size()))
-        throw SampleFailure(kNoGeometry, place.str() + ": '" + key + "' = " + ExactDecimal(value) + " is not an index of its " +
-                                             std::to_string(options.size()) + " choices");
+        throw SampleFailure(kNoGeometry, place.str() + ": '" + key + "' = " + ExactDecimal(value) +
+                                             " is not an index of its " + std::to_string(options.size()) + " choices");
       const Argument& chosen = options[static_cast<std::size_t>(value)];
       return chosen.quoted || !IsScadNumberOrBoolean(chosen.text) ? scad::QuoteScadString(chosen.text) : chosen.text;
     }
@@ -151,7 +150,8 @@ class TreeEvaluation {
       for (const auto& t : Transitions())
         if (t.name == args.Text("transition")) transition = &t;
       tau += "[moving:" + moving.topology + "]";
-      rho += "moving=" + moving.key + ";motion=" + transition->canonical[ObjectIndex(design_, args.Text("moving"))] + ";";
+      rho +=
+          "moving=" + moving.key + ";motion=" + transition->canonical[ObjectIndex(design_, args.Text("moving"))] + ";";
       if (!args.Text("frame").empty())
         rho += "frame_motion=" + transition->canonical[ObjectIndex(design_, args.Text("frame"))] + ";";
     }
@@ -305,7 +305,9 @@ class TreeEvaluation {
         return value;
       };
       switch (spec.shape) {
-        case ArgShape::kNumber: v.numbers = {number(a)}; break;
+        case ArgShape::kNumber:
+          v.numbers = {number(a)};
+          break;
         case ArgShape::kVec3:
           for (const auto& x : a.items) v.numbers.push_back(number(x));
           break;
@@ -340,7 +342,7 @@ class TreeEvaluation {
   geometry::GridSpec grid_;
   std::map<const Node*, Identity> identities_;
   std::map<std::string, Result> objects_;
-  std::vector<OutsideMesh> outside_;  // meshes from outside fabatlas met in this sample
+  std::vector<OutsideMesh> outside_;   // meshes from outside fabatlas met in this sample
   std::vector<std::string> warnings_;  // OpenSCAD's warnings and the mesh road's fallbacks, in evaluation order
   std::optional<std::vector<ResolvedTransition>> transitions_;
 };
@@ -481,12 +483,13 @@ SampleResult EvaluateSample(const Design& design, const Point& u, const Evaluate
       for (const auto& object : design.objects) g.object_names.push_back(object.name);
       try {
         if (g.objects.empty())
-          for (const auto& object : design.objects) g.objects.push_back(tree.EvaluateObject(object.name).solid.ToMesh());
+          for (const auto& object : design.objects)
+            g.objects.push_back(tree.EvaluateObject(object.name).solid.ToMesh());
         {
           const auto& resolved = tree.Transitions();
           for (std::size_t k = g.transitions.size(); k < resolved.size(); ++k)
-            g.transitions.push_back({resolved[k].name, design.transitions[k].from, design.transitions[k].to,
-                                     resolved[k].motions, {}});
+            g.transitions.push_back(
+                {resolved[k].name, design.transitions[k].from, design.transitions[k].to, resolved[k].motions, {}});
         }
       } catch (const SampleFailure& e) {
         fail(e.type(), e.what());
@@ -540,7 +543,6 @@ SampleResult EvaluateSample(const Design& design, const Point& u, const Evaluate
   return r;
 }
 
-
 SweptVolumeResult ComputeSweptVolume(const Design& design, const Point& u, const std::string& node_path) {
   const std::string where = design.file.string() + ": swept volume task '" + node_path + "'";
   // Find the node: "root/i/j" or "object:NAME/i/j".
@@ -551,7 +553,8 @@ SweptVolumeResult ComputeSweptVolume(const Design& design, const Point& u, const
     rest = node_path.substr(4);
   } else if (node_path.rfind("object:", 0) == 0) {
     const std::size_t slash = node_path.find('/');
-    const DesignObject* object = design.FindObject(node_path.substr(7, slash == std::string::npos ? std::string::npos : slash - 7));
+    const DesignObject* object =
+        design.FindObject(node_path.substr(7, slash == std::string::npos ? std::string::npos : slash - 7));
     if (object) node = &object->tree;
     rest = slash == std::string::npos ? "" : node_path.substr(slash);
   }
@@ -573,7 +576,8 @@ SweptVolumeResult ComputeSweptVolume(const Design& design, const Point& u, const
   if (!node || node->op != "carve_swept") throw InputError(where + ": no carve_swept node at that path");
 
   ConstraintSolveSummary solve = SolveConstraints(design, u);
-  if (!solve.satisfiable) throw InputError(where + ": constraint '" + solve.worst_constraint + "' is not satisfiable here");
+  if (!solve.satisfiable)
+    throw InputError(where + ": constraint '" + solve.worst_constraint + "' is not satisfiable here");
   Scope scope(ParameterNames(design));
   for (const auto& [name, value] : solve.values) scope.Set(name, value);
   std::vector<SubtreeRecord> records;

@@ -71,8 +71,10 @@ geometry::Solid SolidOfExactResult(const mesh::TriangleMesh& result, const geome
   geometry::Solid material, cavities;
   for (const mesh::TriangleMesh& shell : Shells(result)) {
     geometry::Solid s = geometry::FromMesh(grid, shell);
-    if (mesh::EnclosedVolume(shell) >= 0) material = material.empty() ? s : geometry::Union(material, s);
-    else cavities = cavities.empty() ? s : geometry::Union(cavities, s);
+    if (mesh::EnclosedVolume(shell) >= 0)
+      material = material.empty() ? s : geometry::Union(material, s);
+    else
+      cavities = cavities.empty() ? s : geometry::Union(cavities, s);
   }
   return cavities.empty() ? material : geometry::Difference(material, cavities);
 }

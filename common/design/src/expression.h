@@ -8,7 +8,9 @@
 
 #include "fabatlas/design/design.h"
 
-namespace mu { class Parser; }
+namespace mu {
+class Parser;
+}
 
 namespace fabatlas::design {
 

@@ -112,7 +112,8 @@ class Reader {
 void LintArgument(const Argument& a, const ArgSpec& spec, Scope& scope, const std::filesystem::path& dir) {
   auto fail = [&](const std::string& what) { throw InputError(a.place.str() + ": '" + spec.name + "' " + what); };
   auto scalar_expr = [&](const Argument& x) {
-    if (x.kind != Argument::Kind::kScalar) throw InputError(x.place.str() + ": '" + spec.name + "' must hold numbers or expressions");
+    if (x.kind != Argument::Kind::kScalar)
+      throw InputError(x.place.str() + ": '" + spec.name + "' must hold numbers or expressions");
     Expression(x.text, scope, x.place);
   };
   auto tuple = [&](const Argument& x, std::size_t n) {
@@ -198,7 +199,8 @@ Node ReadNode(const Reader& r, const YAML::Node& y, Scope& scope, const std::fil
     } else if (key == "children") {
       const YAML::Node list = it->second;  // a copy: the iterator yields temporaries
       if (!list.IsSequence()) r.Fail(list, "'children' must be a list of nodes");
-      for (std::size_t i = 0; i < list.size(); ++i) node.children.push_back(ReadNode(r, list[i], scope, dir, depth + 1));
+      for (std::size_t i = 0; i < list.size(); ++i)
+        node.children.push_back(ReadNode(r, list[i], scope, dir, depth + 1));
     } else {
       node.args[key] = r.ToArgument(it->second);
     }
@@ -206,9 +208,9 @@ Node ReadNode(const Reader& r, const YAML::Node& y, Scope& scope, const std::fil
   const OpSchema& schema = schema_it->second;
   int n = static_cast<int>(node.children.size());
   if (n < schema.min_children || (schema.max_children >= 0 && n > schema.max_children)) {
-    std::string want = schema.max_children == 0 ? "no children"
+    std::string want = schema.max_children == 0  ? "no children"
                        : schema.max_children < 0 ? "at least " + std::to_string(schema.min_children) + " children"
-                                                  : std::to_string(schema.max_children) + " children";
+                                                 : std::to_string(schema.max_children) + " children";
     r.Fail(node.place, "'" + node.op + "' takes " + want + ", got " + std::to_string(n));
   }
   LintArgs(node.args, schema, node.place, "'" + node.op + "'", scope, dir);
@@ -217,7 +219,8 @@ Node ReadNode(const Reader& r, const YAML::Node& y, Scope& scope, const std::fil
     for (std::size_t i = 0; i < c->second.keys.size(); ++i)
       if (set == node.args.end() ||
           std::find(set->second.keys.begin(), set->second.keys.end(), c->second.keys[i]) == set->second.keys.end())
-        r.Fail(c->second.items[i].place, "choices for '" + c->second.keys[i] + "' need an entry in 'set' giving the index");
+        r.Fail(c->second.items[i].place,
+               "choices for '" + c->second.keys[i] + "' need an entry in 'set' giving the index");
   }
   return node;
 }
@@ -226,11 +229,11 @@ void CheckUnique(const Reader& r, std::set<std::string>& seen, const std::string
   if (name.empty() || !(std::isalpha(static_cast<unsigned char>(name[0])) || name[0] == '_'))
     r.Fail(at, "parameter name '" + name + "' must start with a letter");
   for (char c : name)
-    if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_')) r.Fail(at, "parameter name '" + name + "' may use only letters, digits and _");
+    if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_'))
+      r.Fail(at, "parameter name '" + name + "' may use only letters, digits and _");
   if (name == "pi") r.Fail(at, "'pi' is reserved");
   if (!seen.insert(name).second) r.Fail(at, "parameter '" + name + "' is declared twice");
 }
-
 
 // A list of points each with `n` expressions (motions: [x, y, z] or
 // [ax, ay, az, degrees]); every expression must compile.
@@ -240,7 +243,8 @@ void LintTuples(const Argument& a, std::size_t n, const std::string& what, Scope
     if (p.kind != Argument::Kind::kList || p.items.size() != n)
       throw InputError(p.place.str() + ": " + what + " needs entries of " + std::to_string(n) + " numbers");
     for (const auto& x : p.items) {
-      if (x.kind != Argument::Kind::kScalar) throw InputError(x.place.str() + ": " + what + " must hold numbers or expressions");
+      if (x.kind != Argument::Kind::kScalar)
+        throw InputError(x.place.str() + ": " + what + " must hold numbers or expressions");
       Expression(x.text, scope, x.place);
     }
   }
@@ -350,7 +354,8 @@ void LintReferences(const Design& d) {
     }
     if (n.op == "carve_swept") {
       const Argument* moving = text("moving");
-      if (!d.FindObject(moving->text)) throw InputError(moving->place.str() + ": unknown object '" + moving->text + "'");
+      if (!d.FindObject(moving->text))
+        throw InputError(moving->place.str() + ": unknown object '" + moving->text + "'");
       out.insert(moving->text);
       if (const Argument* frame = text("frame")) {
         if (!d.FindObject(frame->text)) throw InputError(frame->place.str() + ": unknown object '" + frame->text + "'");
@@ -406,8 +411,9 @@ Design ParseDesign(const std::string& text, const std::filesystem::path& path) {
     FailAt(YamlPlace(file, e.mark), "malformed YAML: " + e.msg);
   }
   if (!root.IsMap()) throw InputError(file + ": a design file must be a YAML map (name, parameters, tree, ...)");
-  r.OnlyKeys(root, {"name", "voxel_size", "parameters", "variables", "constraints", "tree", "checks", "properties", "description",
-                   "objects", "states", "transitions", "presets", "fixed"},
+  r.OnlyKeys(root,
+             {"name", "voxel_size", "parameters", "variables", "constraints", "tree", "checks", "properties",
+              "description", "objects", "states", "transitions", "presets", "fixed"},
              "design");
 
   d.name = root["name"] ? r.String(root["name"], "name") : path.stem().string();
@@ -418,7 +424,8 @@ Design ParseDesign(const std::string& text, const std::filesystem::path& path) {
 
   std::set<std::string> names;
   if (!root["parameters"] || !root["parameters"].IsMap() || root["parameters"].size() == 0)
-    r.Fail(root["parameters"] ? root["parameters"] : root, "design needs a 'parameters' map with at least one exposed parameter");
+    r.Fail(root["parameters"] ? root["parameters"] : root,
+           "design needs a 'parameters' map with at least one exposed parameter");
   for (auto it = root["parameters"].begin(); it != root["parameters"].end(); ++it) {
     ExposedParameter p;
     p.name = it->first.Scalar();
@@ -453,7 +460,8 @@ Design ParseDesign(const std::string& text, const std::filesystem::path& path) {
       if (spec["default"]) {
         std::string def = r.String(spec["default"], "default");
         auto f = std::find(p.labels.begin(), p.labels.end(), def);
-        if (f == p.labels.end()) r.Fail(spec["default"], "default '" + def + "' is not one of the values of '" + p.name + "'");
+        if (f == p.labels.end())
+          r.Fail(spec["default"], "default '" + def + "' is not one of the values of '" + p.name + "'");
         p.default_value = static_cast<double>(f - p.labels.begin());
       }
     } else {
@@ -475,8 +483,9 @@ Design ParseDesign(const std::string& text, const std::filesystem::path& path) {
       if (spec["min"]) m.min = r.Number(spec["min"], "min");
       if (spec["max"]) m.max = r.Number(spec["max"], "max");
       if (m.min > m.max) r.Fail(spec["min"], "variable '" + m.name + "' has min > max");
-      m.default_value = spec["default"] ? r.Number(spec["default"], "default")
-                                        : (spec["min"] && spec["max"] ? 0.5 * (m.min + m.max) : std::clamp(0.0, m.min, m.max));
+      m.default_value = spec["default"]
+                            ? r.Number(spec["default"], "default")
+                            : (spec["min"] && spec["max"] ? 0.5 * (m.min + m.max) : std::clamp(0.0, m.min, m.max));
       if (m.default_value < m.min || m.default_value > m.max)
         r.Fail(spec["default"], "default of '" + m.name + "' is outside [min, max]");
       d.mutables.push_back(m);
@@ -490,9 +499,13 @@ Design ParseDesign(const std::string& text, const std::filesystem::path& path) {
       Constraint k;
       k.text = r.String(c, "constraint");
       k.place = r.At(c);
-      struct Op { const char* token; Relation rel; bool swap; };
-      const Op ops[] = {{"==", Relation::kEqual, false}, {"<=", Relation::kLessEqual, false},
-                        {">=", Relation::kGreaterEqual, false}};
+      struct Op {
+        const char* token;
+        Relation rel;
+        bool swap;
+      };
+      const Op ops[] = {
+          {"==", Relation::kEqual, false}, {"<=", Relation::kLessEqual, false}, {">=", Relation::kGreaterEqual, false}};
       bool found = false;
       for (const auto& op : ops) {
         auto pos = k.text.find(op.token);
@@ -530,8 +543,10 @@ Design ParseDesign(const std::string& text, const std::filesystem::path& path) {
         for (auto it = c.begin(); it != c.end(); ++it) {
           std::string key = it->first.Scalar();
           if (key == "type") continue;
-          if (key == "name") check.name = r.String(it->second, "name");
-          else check.args[key] = r.ToArgument(it->second);
+          if (key == "name")
+            check.name = r.String(it->second, "name");
+          else
+            check.args[key] = r.ToArgument(it->second);
         }
       } else {
         r.Fail(c, "a check is a type name or a map with 'type'");
@@ -599,11 +614,14 @@ Design ParseDesign(const std::string& text, const std::filesystem::path& path) {
         if (p->kind == ParameterKind::kEnumerated) {
           const std::string label = r.String(v->second, "preset value");
           auto f = std::find(p->labels.begin(), p->labels.end(), label);
-          if (f == p->labels.end()) r.Fail(v->second, "preset '" + preset.name + "': '" + label + "' is not one of the values of '" + name + "'");
+          if (f == p->labels.end())
+            r.Fail(v->second,
+                   "preset '" + preset.name + "': '" + label + "' is not one of the values of '" + name + "'");
           x = static_cast<double>(f - p->labels.begin());
         } else {
           x = r.Number(v->second, "preset value");
-          if (x < p->min || x > p->max) r.Fail(v->second, "preset '" + preset.name + "': " + name + " is outside [min, max]");
+          if (x < p->min || x > p->max)
+            r.Fail(v->second, "preset '" + preset.name + "': " + name + " is outside [min, max]");
           if (p->kind == ParameterKind::kInteger && x != std::round(x))
             r.Fail(v->second, "preset '" + preset.name + "': " + name + " takes whole numbers");
         }
@@ -614,13 +632,15 @@ Design ParseDesign(const std::string& text, const std::filesystem::path& path) {
   }
   // fixed: {name: {value, description, group, why}}: shown, never sampled.
   if (root["fixed"]) {
-    if (!root["fixed"].IsMap()) r.Fail(root["fixed"], "'fixed' must be a map of name: {value, description, group, why}");
+    if (!root["fixed"].IsMap())
+      r.Fail(root["fixed"], "'fixed' must be a map of name: {value, description, group, why}");
     for (auto it = root["fixed"].begin(); it != root["fixed"].end(); ++it) {
       FixedParameter f;
       f.name = it->first.Scalar();
       f.place = r.At(it->first);
       // The model's names (OpenSCAD's rules, not the expressions'): unique.
-      if (f.name.empty() || !names.insert(f.name).second) r.Fail(it->first, "parameter '" + f.name + "' is declared twice");
+      if (f.name.empty() || !names.insert(f.name).second)
+        r.Fail(it->first, "parameter '" + f.name + "' is declared twice");
       const YAML::Node spec = it->second;  // a copy: the iterator yields temporaries
       if (!spec.IsMap() || !spec["value"]) r.Fail(spec, "fixed parameter '" + f.name + "' must be a map with a value");
       r.OnlyKeys(spec, {"value", "description", "group", "why"}, "fixed parameter '" + f.name + "'");

@@ -30,7 +30,10 @@ const std::map<std::string, OpSchema>& OperationSchemas() {
       // for; `render: native` (default) evaluates OpenSCAD's CSG tree with
       // level sets, `render: openscad` imports OpenSCAD's own STL.
       {"openscad",
-       {{{"file", S::kString}, {"set", S::kNumberMap, false}, {"choices", S::kChoiceMap, false}, {"render", S::kString, false}},
+       {{{"file", S::kString},
+         {"set", S::kNumberMap, false},
+         {"choices", S::kChoiceMap, false},
+         {"render", S::kString, false}},
         0,
         0}},
       // A works-like prototype (Koo et al., docs/prototype.md): solved, then
@@ -40,7 +43,10 @@ const std::map<std::string, OpSchema>& OperationSchemas() {
       // generated family (`family`, its part library as `file`, parameters in
       // `set`), solved; its parts placed at the solved poses.
       {"assembly",
-       {{{"file", S::kString}, {"family", S::kString, false}, {"set", S::kNumberMap, false}, {"meshes", S::kString, false}},
+       {{{"file", S::kString},
+         {"family", S::kString, false},
+         {"set", S::kNumberMap, false},
+         {"meshes", S::kString, false}},
         0,
         0}},
       // Transforms: several children are unioned first.
@@ -94,7 +100,9 @@ const std::map<std::string, OpSchema>& CheckSchemas() {
         0,
         0}},
       {"collision_free",
-       {{{"time_steps", S::kNumber, false}, {"clearance", S::kNumber, false}, {"repair_with", S::kString, false}}, 0, 0}},
+       {{{"time_steps", S::kNumber, false}, {"clearance", S::kNumber, false}, {"repair_with", S::kString, false}},
+        0,
+        0}},
       // Assemblies (FabHacks): the design's `assembly` node solved at the sample.
       {"assembly_feasible", {{}, 0, 0}},
       {"assembly_stable", {{}, 0, 0}},

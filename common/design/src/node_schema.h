@@ -10,13 +10,13 @@ namespace fabatlas::design {
 
 // The shape an argument must have.
 enum class ArgShape {
-  kNumber,      // expression -> double
-  kVec3,        // list of 3 expressions
-  kVec2List,    // list of [x, y] pairs (>= 3 points)
-  kVec3List,    // list of [x, y, z] triples
-  kString,      // literal string (file names, options)
-  kNumberMap,   // map name -> expression (OpenSCAD -D overrides)
-  kChoiceMap,   // map name -> list of literal values an index selects (OpenSCAD enums)
+  kNumber,     // expression -> double
+  kVec3,       // list of 3 expressions
+  kVec2List,   // list of [x, y] pairs (>= 3 points)
+  kVec3List,   // list of [x, y, z] triples
+  kString,     // literal string (file names, options)
+  kNumberMap,  // map name -> expression (OpenSCAD -D overrides)
+  kChoiceMap,  // map name -> list of literal values an index selects (OpenSCAD enums)
 };
 
 struct ArgSpec {

@@ -4,7 +4,6 @@
 
 #include <unistd.h>
 
-
 #include <algorithm>
 #include <array>
 #include <atomic>
@@ -48,7 +47,6 @@ using scad::CsgNode;
 using scad::CsgValue;
 using scad::Loop;
 
-
 // An affine map x -> A x + t, row-major 3x4.
 using Affine = std::array<double, 12>;
 constexpr Affine kIdentity = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0};
@@ -71,7 +69,8 @@ std::string AffineText(const Affine& a) {
 void Transform(mesh::TriangleMesh& m, const Affine& a) {
   for (auto& v : m.vertices) {
     const double x = v[0], y = v[1], z = v[2];
-    v = {a[0] * x + a[1] * y + a[2] * z + a[3], a[4] * x + a[5] * y + a[6] * z + a[7], a[8] * x + a[9] * y + a[10] * z + a[11]};
+    v = {a[0] * x + a[1] * y + a[2] * z + a[3], a[4] * x + a[5] * y + a[6] * z + a[7],
+         a[8] * x + a[9] * y + a[10] * z + a[11]};
   }
 }
 
@@ -156,9 +155,12 @@ bool Inside(const Shape2& s, const scad::Point2& p) {
   bool in = Inside(s.parts[0], p);
   for (std::size_t i = 1; i < s.parts.size(); ++i) {
     const bool x = Inside(s.parts[i], p);
-    if (s.op == Shape2::Op::kUnion) in = in || x;
-    else if (s.op == Shape2::Op::kDifference) in = in && !x;
-    else in = in && x;
+    if (s.op == Shape2::Op::kUnion)
+      in = in || x;
+    else if (s.op == Shape2::Op::kDifference)
+      in = in && !x;
+    else
+      in = in && x;
   }
   return in;
 }
@@ -224,7 +226,8 @@ Shape2 Evaluate2(const CsgNode& n, const Affine2& t, const Render2& render2) {
       for (const auto& path : paths->second.items) {
         Loop loop;
         for (double i : Numbers(path)) {
-          if (i < 0 || i >= static_cast<double>(points.size())) throw NoNativeEquivalent{"polygon path index out of range"};
+          if (i < 0 || i >= static_cast<double>(points.size()))
+            throw NoNativeEquivalent{"polygon path index out of range"};
           loop.push_back(points[static_cast<std::size_t>(i)]);
         }
         if (loop.size() >= 3) s.loops.push_back(Apply(t, loop));
@@ -302,9 +305,12 @@ Distance2 RegionOf(const Shape2& s) {
     double d = parts[0](x, y);
     for (std::size_t i = 1; i < parts.size(); ++i) {
       const double e = parts[i](x, y);
-      if (op == Shape2::Op::kUnion) d = std::min(d, e);
-      else if (op == Shape2::Op::kDifference) d = std::max(d, -e);
-      else d = std::max(d, e);
+      if (op == Shape2::Op::kUnion)
+        d = std::min(d, e);
+      else if (op == Shape2::Op::kDifference)
+        d = std::max(d, -e);
+      else
+        d = std::max(d, e);
     }
     return d;
   };
@@ -359,7 +365,6 @@ double SimilarityScale(const Affine& a) {
   return std::sqrt(s2);
 }
 
-
 enum class Combine { kUnion, kDifference, kIntersection };
 
 // A subtree's signed distance bound not sampled yet: exact within `band` of
@@ -412,8 +417,8 @@ class FieldProgram {
     // evaluated without the cut's test.
     const geometry::BoxDistance* box = f.parts.empty() ? f.leaf.target<geometry::BoxDistance>() : nullptr;
     if (box && !(box->lo == f.bounds.min && box->hi == f.bounds.max)) box = nullptr;
-    nodes_.push_back({f.bounds, f.parts.empty() ? &f.leaf : nullptr, box, f.op,
-                      static_cast<std::uint32_t>(f.parts.size()), 0});
+    nodes_.push_back(
+        {f.bounds, f.parts.empty() ? &f.leaf : nullptr, box, f.op, static_cast<std::uint32_t>(f.parts.size()), 0});
     for (const auto& p : f.parts) Append(*p);
     nodes_[i].end = static_cast<std::uint32_t>(nodes_.size());
   }
@@ -434,10 +439,14 @@ class FieldProgram {
         e = geometry::BoxDistance{part.bounds.min, part.bounds.max}(x, y, z);
         if (!(e >= band_)) e = part.leaf ? (*part.leaf)(x, y, z) : Evaluate(c, x, y, z);
       }
-      if (k == 0) d = e;
-      else if (n.op == Combine::kUnion) d = std::min(d, e);
-      else if (n.op == Combine::kDifference) d = std::max(d, -e);
-      else d = std::max(d, e);
+      if (k == 0)
+        d = e;
+      else if (n.op == Combine::kUnion)
+        d = std::min(d, e);
+      else if (n.op == Combine::kDifference)
+        d = std::max(d, -e);
+      else
+        d = std::max(d, e);
     }
     return d;
   }
@@ -484,11 +493,9 @@ class CsgEvaluation {
   // mesh_road: every subtree an exact mesh (mesh::ExactBoolean and friends),
   // else today's level sets (docs/openscad.md, "Two roads").
   CsgEvaluation(OpenScadNodeContext& context, const fs::path& model, const fs::path& work, bool mesh_road)
-      : c_(context),
-        model_(model),
-        work_(work),
-        mesh_road_(mesh_road),
-        render2_([this](const CsgNode& n) { return Outline2(n); }) {}
+      : c_(context), model_(model), work_(work), mesh_road_(mesh_road), render2_([this](const CsgNode& n) {
+          return Outline2(n);
+        }) {}
 
   // A subtree's geometry: a level set, or (while every node below is a
   // convex primitive, a straight prism or a boolean of them) its signed
@@ -574,7 +581,7 @@ class CsgEvaluation {
         result.solid = Rendered(n, m, e.what);
       }
     } else if (boolean) {
-      const Combine op = n.name == "difference" ? Combine::kDifference
+      const Combine op = n.name == "difference"     ? Combine::kDifference
                          : n.name == "intersection" ? Combine::kIntersection
                                                     : Combine::kUnion;
       bool all_fields = true;
@@ -632,8 +639,8 @@ class CsgEvaluation {
  private:
   // The cache key of subtree n under the composed transform m.
   std::string KeyOf(const CsgNode& n, const Affine& m) const {
-    return Sha256Hex(std::string(mesh_road_ ? "csg-mesh" : "csg") + "|voxel=" + scad::FormatScadNumber(c_.grid.voxel_size) +
-                     "|m=" + AffineText(m) + "|" + n.canonical);
+    return Sha256Hex(std::string(mesh_road_ ? "csg-mesh" : "csg") + "|voxel=" +
+                     scad::FormatScadNumber(c_.grid.voxel_size) + "|m=" + AffineText(m) + "|" + n.canonical);
   }
 
   // Whether n is evaluated from its 3D children (booleans and multmatrix
@@ -706,8 +713,10 @@ class CsgEvaluation {
         for (std::size_t j = 0; j < s.loops.size(); ++j)
           if (i != j && PointInLoop(s.loops[i][0], s.loops[j])) ++depth;
         Solid one = FromMesh(build(s.loops[i]), m);
-        if (depth % 2) holes = geometry::Union(holes, one);
-        else filled = geometry::Union(filled, one);
+        if (depth % 2)
+          holes = geometry::Union(holes, one);
+        else
+          filled = geometry::Union(filled, one);
       }
       return holes.empty() || filled.empty() ? filled : geometry::Difference(filled, holes);
     }
@@ -715,10 +724,14 @@ class CsgEvaluation {
     bool first = true;
     for (const auto& p : s.parts) {
       Solid x = Extruded(p, build, m);
-      if (first) acc = x;
-      else if (s.op == Shape2::Op::kUnion) acc = geometry::Union(acc, x);
-      else if (s.op == Shape2::Op::kDifference) acc = geometry::Difference(acc, x);
-      else acc = geometry::Intersection(acc, x);
+      if (first)
+        acc = x;
+      else if (s.op == Shape2::Op::kUnion)
+        acc = geometry::Union(acc, x);
+      else if (s.op == Shape2::Op::kDifference)
+        acc = geometry::Difference(acc, x);
+      else
+        acc = geometry::Intersection(acc, x);
       first = false;
     }
     return acc;
@@ -778,7 +791,8 @@ class CsgEvaluation {
       for (const auto& face : f->second.items) {
         std::vector<int> ids;
         for (double i : Numbers(face)) {
-          if (i < 0 || i >= static_cast<double>(points.size())) throw NoNativeEquivalent{"polyhedron face index out of range"};
+          if (i < 0 || i >= static_cast<double>(points.size()))
+            throw NoNativeEquivalent{"polyhedron face index out of range"};
           ids.push_back(static_cast<int>(i));
         }
         faces.push_back(ids);
@@ -792,7 +806,8 @@ class CsgEvaluation {
     if (n.name == "cube" || n.name == "sphere" || n.name == "cylinder") return Convex(PrimitiveMesh(n), m);
     if (n.name == "polyhedron") {
       mesh::TriangleMesh mm = PrimitiveMesh(n);
-      Outside(model_.filename().string() + ": polyhedron (CSG line " + std::to_string(n.line) + ")", Sha256Hex(n.canonical), mm);
+      Outside(model_.filename().string() + ": polyhedron (CSG line " + std::to_string(n.line) + ")",
+              Sha256Hex(n.canonical), mm);
       return {FromMesh(std::move(mm), m), nullptr, ""};
     }
     if (n.name == "linear_extrude") {
@@ -843,7 +858,9 @@ class CsgEvaluation {
       const double angle = std::clamp(n.Number("angle", 360), -360.0, 360.0);
       // OpenSCAD 2021.01 truncates: 31 fragments through 180 degrees are 15 sectors.
       const int fragments = static_cast<int>(std::max(FragmentsOf(n, max_x) * std::abs(angle) / 360, 1.0));
-      return {Extruded(s, [&](const Loop& l) { return scad::RotateExtrudeMesh(l, angle, fragments); }, m), nullptr, ""};
+      return {Extruded(
+                  s, [&](const Loop& l) { return scad::RotateExtrudeMesh(l, angle, fragments); }, m),
+              nullptr, ""};
     }
     if (n.name == "hull") {
       std::vector<std::array<double, 3>> points;
@@ -896,7 +913,8 @@ class CsgEvaluation {
       // OpenSCAD renders the whole model, so a subtree it cannot render on
       // its own is one it leaves empty there ("Current top level object is
       // empty"): no material, named in the log.
-      Warn(n.name + " (CSG line " + std::to_string(n.line) + "): OpenSCAD renders it to no material (" + run.log_tail + ")");
+      Warn(n.name + " (CSG line " + std::to_string(n.line) + "): OpenSCAD renders it to no material (" + run.log_tail +
+           ")");
       return Solid();
     }
     if (!rendered)
@@ -907,13 +925,15 @@ class CsgEvaluation {
       mm = mesh::ReadMesh(stl);
     } catch (const InputError& e) {
       if (mesh_road_) {  // OpenSCAD renders this subtree to nothing: no material, as in OpenSCAD's own render
-        Warn(n.name + " (CSG line " + std::to_string(n.line) + "): OpenSCAD renders it to no material (" + e.what() + ")");
+        Warn(n.name + " (CSG line " + std::to_string(n.line) + "): OpenSCAD renders it to no material (" + e.what() +
+             ")");
         return Solid();
       }
       throw SampleFailure(kNoGeometry, model_.string() + ": OpenSCAD's render of " + n.name + ": " + e.what());
     }
-    Outside(model_.filename().string() + ": OpenSCAD's render of " + n.name + " (CSG line " + std::to_string(n.line) + ")",
-            Sha256Hex(n.canonical), mm);
+    Outside(
+        model_.filename().string() + ": OpenSCAD's render of " + n.name + " (CSG line " + std::to_string(n.line) + ")",
+        Sha256Hex(n.canonical), mm);
     if (mesh_road_) return MeshOf(std::move(mm), m);
     return FromMesh(std::move(mm), m);
   }
@@ -936,7 +956,8 @@ class CsgEvaluation {
     }
     fs::path svg;
     scad::OpenScadRun run;
-    if (!ExportSubtree(n, "outline", ".svg", svg, run)) throw NoNativeEquivalent{n.name + " (no 2D outline: " + run.log_tail + ")"};
+    if (!ExportSubtree(n, "outline", ".svg", svg, run))
+      throw NoNativeEquivalent{n.name + " (no 2D outline: " + run.log_tail + ")"};
     std::string text;
     {
       std::ifstream in(svg, std::ios::binary);
@@ -1050,7 +1071,8 @@ class CsgEvaluation {
   static bool MeshChildFrame(const CsgNode& n, const Affine& m, Affine* inner) {
     if (n.name == "hull") {
       *inner = m;
-      return std::any_of(n.children.begin(), n.children.end(), [](const CsgNode& c) { return scad::Dimension(c) == 3; });
+      return std::any_of(n.children.begin(), n.children.end(),
+                         [](const CsgNode& c) { return scad::Dimension(c) == 3; });
     }
     if (n.name == "minkowski" || n.name == "resize") {
       *inner = kIdentity;
@@ -1063,8 +1085,8 @@ class CsgEvaluation {
   // turned inside out by the map, so its triangles are reversed.
   Solid MeshOf(mesh::TriangleMesh mm, const Affine& a) {
     Transform(mm, a);
-    const double det = a[0] * (a[5] * a[10] - a[6] * a[9]) - a[1] * (a[4] * a[10] - a[6] * a[8]) +
-                       a[2] * (a[4] * a[9] - a[5] * a[8]);
+    const double det =
+        a[0] * (a[5] * a[10] - a[6] * a[9]) - a[1] * (a[4] * a[10] - a[6] * a[8]) + a[2] * (a[4] * a[9] - a[5] * a[8]);
     if (det < 0)
       for (auto& t : mm.triangles) std::swap(t[1], t[2]);
     try {
@@ -1116,9 +1138,12 @@ class CsgEvaluation {
     std::vector<mesh::TriangleMesh> operands;
     bool meshes = true;
     for (const auto& k : kids) {
-      if (k.solid.empty()) operands.emplace_back();
-      else if (const mesh::TriangleMesh* b = k.solid.boundary()) operands.push_back(*b);
-      else meshes = false;
+      if (k.solid.empty())
+        operands.emplace_back();
+      else if (const mesh::TriangleMesh* b = k.solid.boundary())
+        operands.push_back(*b);
+      else
+        meshes = false;
     }
     if (n.name == "resize") return MeshResized(n, m, kids);
     if (n.name == "minkowski") {
@@ -1152,10 +1177,14 @@ class CsgEvaluation {
     Solid acc;
     bool first = true;
     for (const auto& k : kids) {
-      if (first) acc = k.solid;
-      else if (op == mesh::BooleanOp::kUnion) acc = geometry::Union(acc, k.solid);
-      else if (op == mesh::BooleanOp::kDifference) acc = geometry::Difference(acc, k.solid);
-      else acc = geometry::Intersection(acc, k.solid);
+      if (first)
+        acc = k.solid;
+      else if (op == mesh::BooleanOp::kUnion)
+        acc = geometry::Union(acc, k.solid);
+      else if (op == mesh::BooleanOp::kDifference)
+        acc = geometry::Difference(acc, k.solid);
+      else
+        acc = geometry::Intersection(acc, k.solid);
       first = false;
     }
     return acc;
@@ -1175,7 +1204,8 @@ class CsgEvaluation {
       for (std::size_t i = 0; i < 3 && i < v.size(); ++i) size[i] = v[i];
     }
     if (auto it = n.args.find("auto"); it != n.args.end()) {
-      if (it->second.type == CsgValue::Type::kBoolean) automatic = {it->second.boolean, it->second.boolean, it->second.boolean};
+      if (it->second.type == CsgValue::Type::kBoolean)
+        automatic = {it->second.boolean, it->second.boolean, it->second.boolean};
       for (std::size_t i = 0; i < 3 && i < it->second.items.size(); ++i)
         automatic[i] = it->second.items[i].type == CsgValue::Type::kBoolean ? it->second.items[i].boolean
                                                                             : Num(it->second.items[i], 0) != 0;
@@ -1213,7 +1243,8 @@ class CsgEvaluation {
                "): a point is not finite; left out, as OpenSCAD's render of it encloses nothing");
           return Solid();
         }
-      Outside(model_.filename().string() + ": polyhedron (CSG line " + std::to_string(n.line) + ")", Sha256Hex(n.canonical), mm);
+      Outside(model_.filename().string() + ": polyhedron (CSG line " + std::to_string(n.line) + ")",
+              Sha256Hex(n.canonical), mm);
       mm = Outward(std::move(mm));
       // OpenSCAD renders an approximately convex polyhedron as its hull.
       if (scad::ApproximatelyConvex(mm)) mm = mesh::ConvexHull(mm.vertices);
@@ -1271,7 +1302,7 @@ class CsgEvaluation {
       for (const std::string& w : warnings) Warn("surface (CSG line " + std::to_string(n.line) + "): " + w);
       return MeshOf(scad::SurfaceMesh(map, n.Boolean("center", false)), m);
     }
-    if (IsTwoD(n.name)) return Solid();  // 2D among 3D objects: ignored, as OpenSCAD ignores it
+    if (IsTwoD(n.name)) return Solid();    // 2D among 3D objects: ignored, as OpenSCAD ignores it
     if (n.name == "hull") return Solid();  // a hull of 2D children only
     throw NoNativeEquivalent{n.name};
   }
@@ -1312,8 +1343,9 @@ std::size_t TraceBytes(const SubtreeTrace& t) {
   for (const auto& c : t.child_traces) bytes += sizeof(c) + (c ? TraceBytes(*c) : 0);
   for (const OutsideMesh& m : t.outside) {
     bytes += sizeof(OutsideMesh) + m.what.capacity() + m.key.capacity();
-    if (m.mesh) bytes += sizeof(mesh::TriangleMesh) + m.mesh->vertices.capacity() * sizeof(m.mesh->vertices[0]) +
-                         m.mesh->triangles.capacity() * sizeof(m.mesh->triangles[0]);
+    if (m.mesh)
+      bytes += sizeof(mesh::TriangleMesh) + m.mesh->vertices.capacity() * sizeof(m.mesh->vertices[0]) +
+               m.mesh->triangles.capacity() * sizeof(m.mesh->triangles[0]);
   }
   return bytes;
 }
@@ -1363,7 +1395,8 @@ OpenScadNodeResult EvaluateOpenScadNode(const Node& node, const ResolvedArgs& ar
   }
   std::vector<std::pair<std::string, std::string>> overrides;
   if (auto it = args.values.find("set"); it != args.values.end())
-    for (std::size_t i = 0; i < it->second.keys.size(); ++i) overrides.emplace_back(it->second.keys[i], it->second.literals[i]);
+    for (std::size_t i = 0; i < it->second.keys.size(); ++i)
+      overrides.emplace_back(it->second.keys[i], it->second.literals[i]);
   WorkDir work(node.place.str());
   const std::string render = args.Text("render", "mesh");
   const bool native = render != "openscad";  // mesh (native) or levelset: fabatlas evaluates the CSG tree
@@ -1380,14 +1413,14 @@ OpenScadNodeResult EvaluateOpenScadNode(const Node& node, const ResolvedArgs& ar
     std::ifstream in(model, std::ios::binary);
     std::stringstream text;
     text << in.rdbuf();
-    if (const std::string bad = scad::UnknownColourName(text.str(), model.string()); !bad.empty()) throw DesignFault(bad);
+    if (const std::string bad = scad::UnknownColourName(text.str(), model.string()); !bad.empty())
+      throw DesignFault(bad);
   }
   if (own.evaluated) {
     run.seconds = own.seconds;
   } else {
     try {
-      if (!scad::RunOpenScad(model, out, overrides, &run))
-      {
+      if (!scad::RunOpenScad(model, out, overrides, &run)) {
         // A parser error is the model's, whatever the values: bad input
         // (one line naming the model and OpenSCAD's line, exit 2), where a
         // failure at these values only (an assert) fails the sample.
@@ -1419,7 +1452,8 @@ OpenScadNodeResult EvaluateOpenScadNode(const Node& node, const ResolvedArgs& ar
     }
     if (context.outside) {
       std::string key = Sha256Hex(args.Canonical());
-      context.outside->push_back({model.filename().string() + ": OpenSCAD's render", key, std::make_shared<const mesh::TriangleMesh>(m)});
+      context.outside->push_back(
+          {model.filename().string() + ": OpenSCAD's render", key, std::make_shared<const mesh::TriangleMesh>(m)});
     }
     result.solid = geometry::FromMesh(context.grid, m);
     return result;

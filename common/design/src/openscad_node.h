@@ -43,12 +43,12 @@ struct OutsideMesh {
 //    hit still brings them to the watertight check.
 // Immutable once built; shared between a parent's trace and its children's.
 struct SubtreeTrace {
-  std::string topology, op;  // op empty: no record kept
-  std::size_t bytes = 0;     // the subtree's grid bytes (its record's)
-  std::vector<std::string> children;     // keys, in tree order
-  std::vector<std::string> child_paths;  // each child's path below this one ("/0", "/csg")
+  std::string topology, op;                                       // op empty: no record kept
+  std::size_t bytes = 0;                                          // the subtree's grid bytes (its record's)
+  std::vector<std::string> children;                              // keys, in tree order
+  std::vector<std::string> child_paths;                           // each child's path below this one ("/0", "/csg")
   std::vector<std::shared_ptr<const SubtreeTrace>> child_traces;  // per child; null: none kept
-  std::vector<OutsideMesh> outside;      // every outside mesh of the subtree, in evaluation order
+  std::vector<OutsideMesh> outside;  // every outside mesh of the subtree, in evaluation order
 };
 
 // The cache entry of a computed subtree: its solid and `trace` (dropped when
@@ -63,12 +63,12 @@ void AppendDescendantRecords(const SubtreeTrace& trace, const std::string& path,
 
 struct OpenScadNodeContext {
   geometry::GridSpec grid;
-  SubtreeCache* cache = nullptr;               // looked up and offered per CSG subtree
+  SubtreeCache* cache = nullptr;                  // looked up and offered per CSG subtree
   std::vector<SubtreeRecord>* records = nullptr;  // CSG subtree records are appended (post-order)
   std::vector<OutsideMesh>* outside = nullptr;    // outside meshes are appended
   std::vector<std::string>* warnings = nullptr;   // what OpenSCAD would warn, and the mesh road's fallbacks
   bool confine_model_files = false;               // EvaluateOptions::confine_model_files
-  std::string path;                             // the node's record path; CSG subtrees are PATH/csg/...
+  std::string path;                               // the node's record path; CSG subtrees are PATH/csg/...
   std::vector<Part>* parts = nullptr;             // when set: the model's bodies and colour regions (PartTrees)
 };
 
@@ -83,9 +83,9 @@ inline constexpr const char* kCsgLevelSetOp = "csg-levelset:";
 
 struct OpenScadNodeResult {
   geometry::Solid solid;
-  std::string root_key;        // the CSG root's key (the node's one child record); empty for render: openscad
+  std::string root_key;  // the CSG root's key (the node's one child record); empty for render: openscad
   std::shared_ptr<const SubtreeTrace> root_trace;  // the CSG root's, when computed with a cache
-  double export_seconds = 0;   // OpenSCAD's .csg export (or STL render) wall time
+  double export_seconds = 0;                       // OpenSCAD's .csg export (or STL render) wall time
 };
 
 // `args` holds file, set (with OpenSCAD literals), render. Throws

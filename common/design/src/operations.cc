@@ -54,7 +54,8 @@ Solid UnionAll(std::vector<Solid> solids) {
 int Count(const ResolvedArgs& a, const std::string& name, const Node& node) {
   double c = a.Number(name);
   if (c < 1 || c > 10000 || c != std::round(c))
-    throw SampleFailure("no_geometry", node.place.str() + ": '" + name + "' of " + node.op + " must be a whole number in [1, 10000], got " + std::to_string(c));
+    throw SampleFailure("no_geometry", node.place.str() + ": '" + name + "' of " + node.op +
+                                           " must be a whole number in [1, 10000], got " + std::to_string(c));
   return static_cast<int>(c);
 }
 
@@ -79,14 +80,16 @@ Solid Tentacle(const geometry::GridSpec& g, const ResolvedArgs& a, const Node& n
     spheres.push_back(geometry::Translate(geometry::Sphere(g, r), c));
     if (s >= length) break;
     s = std::min(length, s + spacing * std::min(r, r1));
-    if (spheres.size() > 5000) throw SampleFailure("no_geometry", node.place.str() + ": tentacle would need more than 5000 spheres");
+    if (spheres.size() > 5000)
+      throw SampleFailure("no_geometry", node.place.str() + ": tentacle would need more than 5000 spheres");
   }
   return UnionAll(std::move(spheres));
 }
 
 // A works-like prototype file with its parameters set from the design: the
 // two-stage solve, then the printable geometry on this evaluation's grid.
-Solid PrototypeNode(const geometry::GridSpec& g, const ResolvedArgs& a, const Node& node, const std::filesystem::path& dir) {
+Solid PrototypeNode(const geometry::GridSpec& g, const ResolvedArgs& a, const Node& node,
+                    const std::filesystem::path& dir) {
   std::map<std::string, double> set;
   if (auto it = a.values.find("set"); it != a.values.end())
     for (std::size_t i = 0; i < it->second.keys.size(); ++i) set[it->second.keys[i]] = it->second.numbers[i];
@@ -103,8 +106,8 @@ Solid PrototypeNode(const geometry::GridSpec& g, const ResolvedArgs& a, const No
 
 }  // namespace
 
-Solid ApplyOperation(const Node& node, const ResolvedArgs& a, std::vector<Solid>& children,
-                     const geometry::GridSpec& g, const std::filesystem::path& dir, std::vector<OutsideMesh>* outside) {
+Solid ApplyOperation(const Node& node, const ResolvedArgs& a, std::vector<Solid>& children, const geometry::GridSpec& g,
+                     const std::filesystem::path& dir, std::vector<OutsideMesh>* outside) {
   const std::string& op = node.op;
   if (op == "sphere") return geometry::Sphere(g, a.Number("radius"));
   if (op == "box") return geometry::Box(g, a.Vec3("size"));
@@ -116,12 +119,14 @@ Solid ApplyOperation(const Node& node, const ResolvedArgs& a, std::vector<Solid>
   if (op == "revolve") {
     double sides = a.Number("sides", 0);
     if (sides != std::round(sides) || (sides != 0 && sides < 3) || sides > 1000)
-      throw SampleFailure("no_geometry", node.place.str() + ": revolve sides must be 0 (smooth) or a whole number >= 3");
+      throw SampleFailure("no_geometry",
+                          node.place.str() + ": revolve sides must be 0 (smooth) or a whole number >= 3");
     return geometry::Revolve(g, Points2(a, "profile"), static_cast<int>(sides));
   }
   if (op == "spheres") {
     std::vector<Solid> balls;
-    for (const Vec3& c : Points3(a, "centers")) balls.push_back(geometry::Translate(geometry::Sphere(g, a.Number("radius")), c));
+    for (const Vec3& c : Points3(a, "centers"))
+      balls.push_back(geometry::Translate(geometry::Sphere(g, a.Number("radius")), c));
     return UnionAll(std::move(balls));
   }
   if (op == "tentacle") return Tentacle(g, a, node);
@@ -150,9 +155,12 @@ Solid ApplyOperation(const Node& node, const ResolvedArgs& a, std::vector<Solid>
     if (a.Text("exact", "false") == "true") return ExactBoolean(op, children, g);
     Solid acc = children[0];
     for (std::size_t i = 1; i < children.size(); ++i) {
-      if (op == "union") acc = geometry::Union(acc, children[i]);
-      else if (op == "difference") acc = geometry::Difference(acc, children[i]);
-      else acc = geometry::Intersection(acc, children[i]);
+      if (op == "union")
+        acc = geometry::Union(acc, children[i]);
+      else if (op == "difference")
+        acc = geometry::Difference(acc, children[i]);
+      else
+        acc = geometry::Intersection(acc, children[i]);
     }
     return acc;
   }

@@ -33,11 +33,11 @@ class DesignFault : public InputError {
 // A node's arguments with every expression evaluated at the current sample.
 struct ResolvedArgs {
   struct Value {
-    std::vector<double> numbers;     // scalars, vectors, flattened point lists
-    std::vector<std::string> keys;   // map keys (OpenSCAD overrides)
+    std::vector<double> numbers;        // scalars, vectors, flattened point lists
+    std::vector<std::string> keys;      // map keys (OpenSCAD overrides)
     std::vector<std::string> literals;  // `set` of openscad: each key's value as an OpenSCAD literal
-    std::string text;                // strings
-    std::string digest;              // file contents digest, for keys
+    std::string text;                   // strings
+    std::string digest;                 // file contents digest, for keys
     SourcePlace place;
   };
   std::map<std::string, Value> values;

@@ -38,7 +38,8 @@ Point ParsePoint(const Design& design, const std::string& text, const std::strin
     } catch (const std::exception&) {
       used = 0;
     }
-    if (used == 0 || used != value.size()) throw InputError(what + ": value of '" + name + "' is not a number: '" + value + "'");
+    if (used == 0 || used != value.size())
+      throw InputError(what + ": value of '" + name + "' is not a number: '" + value + "'");
     if (!std::isfinite(v)) throw InputError(what + ": value of '" + name + "' is not finite");
     if (v < p->min || v > p->max) {
       std::ostringstream msg;

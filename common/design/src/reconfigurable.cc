@@ -21,7 +21,8 @@ using swept::Transform;
 
 double Number(const Argument& a, Scope& scope) {
   double v = Expression(a.text, scope, a.place).Evaluate();
-  if (!std::isfinite(v)) throw SampleFailure(kNoGeometry, a.place.str() + ": motion value evaluates to " + ExactDecimal(v));
+  if (!std::isfinite(v))
+    throw SampleFailure(kNoGeometry, a.place.str() + ": motion value evaluates to " + ExactDecimal(v));
   return v;
 }
 
@@ -63,7 +64,8 @@ std::string Canonical(const RigidMotion& m) {
   for (const auto& p : m.translation)
     for (double x : p) s += ExactDecimal(x) + ",";
   s += ";R=";
-  for (const auto& q : m.rotation_keys) s += ExactDecimal(q.w) + "," + ExactDecimal(q.x) + "," + ExactDecimal(q.y) + "," + ExactDecimal(q.z) + ",";
+  for (const auto& q : m.rotation_keys)
+    s += ExactDecimal(q.w) + "," + ExactDecimal(q.x) + "," + ExactDecimal(q.y) + "," + ExactDecimal(q.z) + ",";
   s += ";P=";
   for (double x : m.pivot) s += ExactDecimal(x) + ",";
   return s;
@@ -126,7 +128,8 @@ std::vector<ResolvedTransition> ResolveTransitions(const Design& design, Scope& 
 
 mesh::TriangleMesh SweptCutter(const geometry::Solid& moving, const swept::RigidMotion& f_moving,
                                const swept::RigidMotion& f_frame, double offset, int time_steps,
-                               const geometry::GridSpec& g, const SourcePlace& place, swept::SweptVolumeSummary* summary) {
+                               const geometry::GridSpec& g, const SourcePlace& place,
+                               swept::SweptVolumeSummary* summary) {
   if (!(offset >= 0)) throw SampleFailure(kNoGeometry, place.str() + ": carve_swept offset must be >= 0");
   if (time_steps < 2 || time_steps > 100000)
     throw SampleFailure(kNoGeometry, place.str() + ": carve_swept time_steps must be in [2, 100000]");

@@ -65,7 +65,8 @@ HintSummary ResolutionHints(const Design& design, const Point& u, const Resoluti
         if (ls.u.at(f.name) != u.at(f.name)) h.step[f.name] = ls.u.at(f.name) - u.at(f.name);
     out.pairs.push_back(std::move(h));
   }
-  std::stable_sort(out.pairs.begin(), out.pairs.end(), [](const PairHint& x, const PairHint& y) { return x.energy > y.energy; });
+  std::stable_sort(out.pairs.begin(), out.pairs.end(),
+                   [](const PairHint& x, const PairHint& y) { return x.energy > y.energy; });
   return out;
 }
 

@@ -88,7 +88,7 @@ ResolveSummary ResolveCollisions(const Design& design, const Point& u, const Res
     }
   }
   out.after = at;
-  out.energy_after = at == state.u ? state.energy
+  out.energy_after = at == state.u                   ? state.energy
                      : last.graph.collisions_checked ? ContactsOf(at, std::move(last.graph), steps).energy
                                                      : state.energy;
   out.resolved = verdict.valid;

@@ -22,9 +22,21 @@ void InMemorySubtreeCache::Offer(const std::string& key, const CachedSubtree& su
   bytes_ += size;
 }
 
-std::size_t InMemorySubtreeCache::hits() const { std::lock_guard<std::mutex> l(mutex_); return hits_; }
-std::size_t InMemorySubtreeCache::misses() const { std::lock_guard<std::mutex> l(mutex_); return misses_; }
-std::size_t InMemorySubtreeCache::entries() const { std::lock_guard<std::mutex> l(mutex_); return entries_.size(); }
-std::size_t InMemorySubtreeCache::bytes() const { std::lock_guard<std::mutex> l(mutex_); return bytes_; }
+std::size_t InMemorySubtreeCache::hits() const {
+  std::lock_guard<std::mutex> l(mutex_);
+  return hits_;
+}
+std::size_t InMemorySubtreeCache::misses() const {
+  std::lock_guard<std::mutex> l(mutex_);
+  return misses_;
+}
+std::size_t InMemorySubtreeCache::entries() const {
+  std::lock_guard<std::mutex> l(mutex_);
+  return entries_.size();
+}
+std::size_t InMemorySubtreeCache::bytes() const {
+  std::lock_guard<std::mutex> l(mutex_);
+  return bytes_;
+}
 
 }  // namespace fabatlas::design

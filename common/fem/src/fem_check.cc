@@ -6,7 +6,6 @@
 #include <cstdio>
 #include <string>
 
-
 namespace fabatlas::fem {
 
 bool AxisBox::Contains(const Vec3& p, double tol) const {
@@ -32,8 +31,7 @@ std::string Format(const char* fmt, double a, double b) {
 
 }  // namespace
 
-FemCheckResult RunFemCheck(const VoxelSolid& solid, const FemLoadCase& load,
-                           const FemCheckOptions& options) {
+FemCheckResult RunFemCheck(const VoxelSolid& solid, const FemLoadCase& load, const FemCheckOptions& options) {
   const auto t0 = std::chrono::steady_clock::now();
   const HexMesh mesh = HexMeshFromVoxels(solid);
   FemCheckResult r;
@@ -81,11 +79,11 @@ FemCheckResult RunFemCheck(const VoxelSolid& solid, const FemLoadCase& load,
   if (!s.converged) {
     r.reason = "static solve did not converge: " + s.message;
   } else if (s.max_displacement > options.max_displacement) {
-    r.reason = Format("max displacement %.4g mm exceeds the threshold %.4g mm", s.max_displacement,
-                      options.max_displacement);
+    r.reason =
+        Format("max displacement %.4g mm exceeds the threshold %.4g mm", s.max_displacement, options.max_displacement);
   } else if (options.max_strain > 0 && s.max_principal_strain > options.max_strain) {
-    r.reason = Format("max principal strain %.4g exceeds the threshold %.4g", s.max_principal_strain,
-                      options.max_strain);
+    r.reason =
+        Format("max principal strain %.4g exceeds the threshold %.4g", s.max_principal_strain, options.max_strain);
   }
   r.passed = r.reason.empty();
   r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

@@ -17,8 +17,8 @@ HexMesh HexMeshFromVoxels(const VoxelSolid& s) {
   }
   const std::size_t nvox = static_cast<std::size_t>(s.dims[0]) * s.dims[1] * s.dims[2];
   if (s.occupied.size() != nvox) {
-    throw InputError("VoxelSolid: occupied has " + std::to_string(s.occupied.size()) +
-                     " entries, dims give " + std::to_string(nvox));
+    throw InputError("VoxelSolid: occupied has " + std::to_string(s.occupied.size()) + " entries, dims give " +
+                     std::to_string(nvox));
   }
   HexMesh mesh;
   const std::size_t lx = s.dims[0] + 1, ly = s.dims[1] + 1, lz = s.dims[2] + 1;
@@ -40,8 +40,8 @@ HexMesh HexMeshFromVoxels(const VoxelSolid& s) {
         int& n = node_of_lattice[lattice(i, j, k)];
         if (n < 0) continue;
         n = static_cast<int>(mesh.nodes.size());
-        mesh.nodes.push_back({s.origin[0] + s.voxel_size * i, s.origin[1] + s.voxel_size * j,
-                              s.origin[2] + s.voxel_size * k});
+        mesh.nodes.push_back(
+            {s.origin[0] + s.voxel_size * i, s.origin[1] + s.voxel_size * j, s.origin[2] + s.voxel_size * k});
       }
   // Corner offsets in the standard Q1 order.
   static constexpr int kCorner[8][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0},
@@ -59,8 +59,7 @@ HexMesh HexMeshFromVoxels(const VoxelSolid& s) {
   return mesh;
 }
 
-HexMesh HexMeshFromQuadPatch(const std::array<Vec2, 4>& c, int nu, int nv, double thickness,
-                             int layers) {
+HexMesh HexMeshFromQuadPatch(const std::array<Vec2, 4>& c, int nu, int nv, double thickness, int layers) {
   if (nu < 1 || nv < 1 || layers < 1 || !(thickness > 0)) {
     throw InputError("HexMeshFromQuadPatch: need nu, nv, layers >= 1 and thickness > 0");
   }
@@ -71,16 +70,14 @@ HexMesh HexMeshFromQuadPatch(const std::array<Vec2, 4>& c, int nu, int nv, doubl
         const double s = static_cast<double>(i) / nu, t = static_cast<double>(j) / nv;
         const double w0 = (1 - s) * (1 - t), w1 = s * (1 - t), w2 = s * t, w3 = (1 - s) * t;
         mesh.nodes.push_back({w0 * c[0][0] + w1 * c[1][0] + w2 * c[2][0] + w3 * c[3][0],
-                              w0 * c[0][1] + w1 * c[1][1] + w2 * c[2][1] + w3 * c[3][1],
-                              thickness * k / layers});
+                              w0 * c[0][1] + w1 * c[1][1] + w2 * c[2][1] + w3 * c[3][1], thickness * k / layers});
       }
   auto id = [&](int i, int j, int k) { return i + (nu + 1) * (j + (nv + 1) * k); };
   for (int k = 0; k < layers; ++k)
     for (int j = 0; j < nv; ++j)
       for (int i = 0; i < nu; ++i) {
-        mesh.elements.push_back({id(i, j, k), id(i + 1, j, k), id(i + 1, j + 1, k), id(i, j + 1, k),
-                                 id(i, j, k + 1), id(i + 1, j, k + 1), id(i + 1, j + 1, k + 1),
-                                 id(i, j + 1, k + 1)});
+        mesh.elements.push_back({id(i, j, k), id(i + 1, j, k), id(i + 1, j + 1, k), id(i, j + 1, k), id(i, j, k + 1),
+                                 id(i + 1, j, k + 1), id(i + 1, j + 1, k + 1), id(i, j + 1, k + 1)});
       }
   return mesh;
 }

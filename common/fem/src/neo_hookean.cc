@@ -10,8 +10,7 @@ namespace fabatlas::fem {
 namespace {
 
 double Det(const Mat3& F) {
-  return F[0][0] * (F[1][1] * F[2][2] - F[1][2] * F[2][1]) -
-         F[0][1] * (F[1][0] * F[2][2] - F[1][2] * F[2][0]) +
+  return F[0][0] * (F[1][1] * F[2][2] - F[1][2] * F[2][1]) - F[0][1] * (F[1][0] * F[2][2] - F[1][2] * F[2][0]) +
          F[0][2] * (F[1][0] * F[2][1] - F[1][1] * F[2][0]);
 }
 
@@ -58,8 +57,7 @@ Material Material::FromShearPoisson(double mu, double nu) {
 double NeoHookeanEnergy(const Material& m, const Mat3& F) {
   const double J = Det(F);
   if (!(J > 0)) return std::numeric_limits<double>::infinity();
-  return 0.5 * m.mu * (std::pow(J, -2.0 / 3.0) * TraceC(F) - 3.0) +
-         0.25 * m.kappa * (J * J - 1.0 - 2.0 * std::log(J));
+  return 0.5 * m.mu * (std::pow(J, -2.0 / 3.0) * TraceC(F) - 3.0) + 0.25 * m.kappa * (J * J - 1.0 - 2.0 * std::log(J));
 }
 
 Mat3 NeoHookeanStress(const Material& m, const Mat3& F) {
@@ -91,9 +89,9 @@ Tangent9 NeoHookeanTangent(const Material& m, const Mat3& F) {
     for (int jj = 0; jj < 3; ++jj)
       for (int k = 0; k < 3; ++k)
         for (int l = 0; l < 3; ++l) {
-          double v = a * ((i == k && jj == l ? 1.0 : 0.0) - 2.0 / 3.0 * F[i][jj] * H[k][l] -
-                          2.0 / 3.0 * H[i][jj] * F[k][l] + 2.0 / 9.0 * I1 * H[i][jj] * H[k][l] +
-                          I1 / 3.0 * H[i][l] * H[k][jj]);
+          double v =
+              a * ((i == k && jj == l ? 1.0 : 0.0) - 2.0 / 3.0 * F[i][jj] * H[k][l] - 2.0 / 3.0 * H[i][jj] * F[k][l] +
+                   2.0 / 9.0 * I1 * H[i][jj] * H[k][l] + I1 / 3.0 * H[i][l] * H[k][jj]);
           v += kJ2 * H[i][jj] * H[k][l] - b * H[i][l] * H[k][jj];
           A[3 * i + jj][3 * k + l] = v;
         }

@@ -102,7 +102,7 @@ class Dissection {
   const HexMesh& mesh_;
   std::vector<std::size_t> offset_;  // CSR adjacency
   std::vector<int> adjacent_;
-  std::vector<std::uint8_t> part_;   // 1: in the lower part being split
+  std::vector<std::uint8_t> part_;  // 1: in the lower part being split
   std::vector<int> order_;
 };
 

@@ -83,8 +83,8 @@ void StepTheLoad(const internal::Equilibrium& eq, Eigen::VectorXd& u, Eigen::Vec
       failure = "no convergence in " + std::to_string(options.max_newton_iterations) + " Newton iterations";
     }
     if (cutbacks >= options.max_cutbacks) {
-      summary.message = failure + " at load factor " + std::to_string(target) + " after " +
-                        std::to_string(cutbacks) + " cutbacks";
+      summary.message =
+          failure + " at load factor " + std::to_string(target) + " after " + std::to_string(cutbacks) + " cutbacks";
       break;
     }
     ++cutbacks;
@@ -96,8 +96,8 @@ void StepTheLoad(const internal::Equilibrium& eq, Eigen::VectorXd& u, Eigen::Vec
 
 }  // namespace
 
-StaticSolveSummary SolveStatic(const HexMesh& mesh, const Material& material,
-                               const BoundaryConditions& bc, const StaticSolveOptions& options) {
+StaticSolveSummary SolveStatic(const HexMesh& mesh, const Material& material, const BoundaryConditions& bc,
+                               const StaticSolveOptions& options) {
   const Stopwatch total_time;
   StaticSolveSummary summary;
   CheckInput(mesh, material, options);

@@ -39,7 +39,8 @@ double ActiveVoxels(const Solid& s) { return static_cast<double>(s.impl()->Grid(
 Solid Rebuild(const FloatGrid& src, const GridSpec& spec) {
   auto xform = internal::CanonicalTransform(spec.voxel_size);
   const float hw = static_cast<float>(spec.half_width_voxels);
-  FloatGrid::Ptr out = openvdb::tools::levelSetRebuild(src, static_cast<float>(kMeshIso * src.voxelSize()[0]), hw, hw, xform.get());
+  FloatGrid::Ptr out =
+      openvdb::tools::levelSetRebuild(src, static_cast<float>(kMeshIso * src.voxelSize()[0]), hw, hw, xform.get());
   return internal::MakeSolid(out, spec);
 }
 
@@ -192,8 +193,8 @@ Solid Rotate(const Solid& s, const Vec3& euler_xyz_deg) {
     const double cy = std::cos(euler_xyz_deg[1] * k), sy = std::sin(euler_xyz_deg[1] * k);
     const double cz = std::cos(euler_xyz_deg[2] * k), sz = std::sin(euler_xyz_deg[2] * k);
     return MapBoundary(s, [&](const std::array<double, 3>& v) {
-      const double y1 = cx * v[1] - sx * v[2], z1 = sx * v[1] + cx * v[2];  // about x
-      const double x2 = cy * v[0] + sy * z1, z2 = -sy * v[0] + cy * z1;      // about y
+      const double y1 = cx * v[1] - sx * v[2], z1 = sx * v[1] + cx * v[2];     // about x
+      const double x2 = cy * v[0] + sy * z1, z2 = -sy * v[0] + cy * z1;        // about y
       return std::array<double, 3>{cz * x2 - sz * y1, sz * x2 + cz * y1, z2};  // about z
     });
   }
@@ -214,7 +215,8 @@ Solid Scale(const Solid& s, double factor) {
       return std::array<double, 3>{v[0] * factor, v[1] * factor, v[2] * factor};
     });
   internal::CheckActiveVoxelEstimate(s.impl()->spec, ActiveVoxels(s) * factor * factor, "the scaled solid");
-  return MapAndRebuild(s, [&](openvdb::math::Transform& x) { x.postScale(factor); }, factor);
+  return MapAndRebuild(
+      s, [&](openvdb::math::Transform& x) { x.postScale(factor); }, factor);
 }
 
 // ---- CSG ------------------------------------------------------------------------
@@ -276,7 +278,6 @@ std::size_t internal::RemoveZeroSheets(FloatGrid& grid, double voxel_size) {
   return fixed;
 }
 
-
 Solid Difference(const Solid& a, const Solid& b) {
   if (!a.impl()) return a;
   if (!b.impl()) return a;
@@ -288,8 +289,7 @@ Solid Difference(const Solid& a, const Solid& b) {
 Solid Intersection(const Solid& a, const Solid& b) {
   if (!a.impl()) return a;
   if (!b.impl()) return b;
-  return internal::MakeSolid(openvdb::tools::csgIntersectionCopy(*a.impl()->Grid(), *OnSpecOf(a, b)),
-                           a.impl()->spec);
+  return internal::MakeSolid(openvdb::tools::csgIntersectionCopy(*a.impl()->Grid(), *OnSpecOf(a, b)), a.impl()->spec);
 }
 
 // ---- Offsets --------------------------------------------------------------------
@@ -305,10 +305,10 @@ Solid Offset(const Solid& s, double distance) {
   internal::CheckActiveVoxelEstimate(spec, ActiveVoxels(s) * band_growth, "the widened offset band");
   if (distance > 0) {
     const Box3 b = s.BoundingBox();
-    internal::CheckVoxelBudget(spec,
-                             {b.max[0] - b.min[0] + 2 * distance, b.max[1] - b.min[1] + 2 * distance,
-                              b.max[2] - b.min[2] + 2 * distance},
-                             "offset solid");
+    internal::CheckVoxelBudget(
+        spec,
+        {b.max[0] - b.min[0] + 2 * distance, b.max[1] - b.min[1] + 2 * distance, b.max[2] - b.min[2] + 2 * distance},
+        "offset solid");
   }
   // Exact distances (to the mesh of the zero level set) in a band widened on
   // the side we move towards, then a standard band around the iso-value.
@@ -316,8 +316,8 @@ Solid Offset(const Solid& s, double distance) {
   const float widened = hw + static_cast<float>(dilation);
   const FloatGrid& in = *s.impl()->Grid();
   const float iso0 = static_cast<float>(kMeshIso * vs);
-  FloatGrid::Ptr wide = openvdb::tools::levelSetRebuild(in, iso0, distance > 0 ? widened : hw,
-                                                        distance < 0 ? widened : hw);
+  FloatGrid::Ptr wide =
+      openvdb::tools::levelSetRebuild(in, iso0, distance > 0 ? widened : hw, distance < 0 ? widened : hw);
   // phi - distance is the signed distance to the offset surface (exact on the
   // side the surface moved towards, a lower bound at creases); keep the band.
   const double bg = spec.half_width_voxels * vs;

@@ -137,8 +137,10 @@ Solid SampleSdf(const GridSpec& g, const Vec3& lo, const Vec3& hi, const Sdf& sd
   FloatTree& tree = grid->tree();
   for (auto& leaves : per_block)
     for (LeafT* leaf : leaves) tree.addLeaf(leaf);
-  if (zero_sheets) internal::RemoveZeroSheets(*grid, vs);
-  else openvdb::tools::signedFloodFill(tree);
+  if (zero_sheets)
+    internal::RemoveZeroSheets(*grid, vs);
+  else
+    openvdb::tools::signedFloodFill(tree);
   return internal::MakeSolid(grid, g);
 }
 
@@ -156,7 +158,7 @@ double PolygonSdf(const std::vector<Vec2>& v, double px, double py) {
     const double t = std::clamp((wx * ex + wy * ey) / (ex * ex + ey * ey), 0.0, 1.0);
     const double bx = wx - ex * t, by = wy - ey * t;
     d = std::min(d, bx * bx + by * by);
-    const bool c1 = py >= v[i][1], c2 = py < v[j][1], c3 = ex * wy > ey * wx;
+    const bool c1 = py >= v[i][1], c2 = py<v[j][1], c3 = ex * wy> ey * wx;
     if ((c1 && c2 && c3) || (!c1 && !c2 && !c3)) s = -s;
   }
   return s * std::sqrt(d);
@@ -218,8 +220,8 @@ Solid RevolveSmooth(const GridSpec& g, const std::vector<Vec2>& profile, const c
 // (inside: the largest plane value; outside: the nearest point lies on a
 // face whose plane the point is in front of).
 struct ConvexFace {
-  Vec3 n;      // unit outward normal
-  double d;    // n . x = d on the face
+  Vec3 n;    // unit outward normal
+  double d;  // n . x = d on the face
   std::vector<std::array<Vec3, 3>> triangles;
 };
 
@@ -394,8 +396,7 @@ Solid Cone(const GridSpec& g, double bottom_radius, double top_radius, double he
     throw InputError("cone: radii must be finite, >= 0 and not both 0");
   }
   const double hz = height / 2;
-  std::vector<Vec2> profile = CleanPolygon(
-      {{0, -hz}, {bottom_radius, -hz}, {top_radius, hz}, {0, hz}}, "cone");
+  std::vector<Vec2> profile = CleanPolygon({{0, -hz}, {bottom_radius, -hz}, {top_radius, hz}, {0, hz}}, "cone");
   return RevolveSmooth(g, profile, "cone");
 }
 

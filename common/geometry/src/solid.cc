@@ -163,7 +163,7 @@ Measures ComputeMeasures(const FloatGrid& grid, double half_width_voxels) {
   const double deep = 0.99 * grid.background();
   const double e1 = 1.0, e2 = std::min(2.0, half_width_voxels);  // voxels
   const double eps1 = e1 * vs, eps2 = e2 * vs;                   // mm
-  const bool halves = e2 == 2 * e1;  // one sin and cos serve both widths
+  const bool halves = e2 == 2 * e1;                              // one sin and cos serve both widths
   constexpr double inf = std::numeric_limits<double>::infinity();
   struct LeafMeasures {
     std::array<Moments, 2> m;
@@ -244,8 +244,9 @@ Measures ComputeMeasures(const FloatGrid& grid, double half_width_voxels) {
 const FloatGrid::Ptr& Solid::Impl::Grid() const {
   if (boundary) {
     std::call_once(grid_once, [this] {
-      grid = boundary->triangles.empty() ? FloatGrid::create(static_cast<float>(spec.half_width_voxels * spec.voxel_size))
-                                         : FromMesh(spec, *boundary).impl()->Grid();
+      grid = boundary->triangles.empty()
+                 ? FloatGrid::create(static_cast<float>(spec.half_width_voxels * spec.voxel_size))
+                 : FromMesh(spec, *boundary).impl()->Grid();
       if (boundary->triangles.empty()) {
         grid->setTransform(internal::CanonicalTransform(spec.voxel_size));
         grid->setGridClass(openvdb::GRID_LEVEL_SET);
@@ -303,7 +304,8 @@ const Solid::Impl& WithMeasures(const Solid::Impl& impl) {
     if (impl.boundary) {  // the mesh's own: divergence theorem over its triangles
       const mesh::TriangleMesh& b = *impl.boundary;
       double six = 0, c[3] = {0, 0, 0};
-      Box3 box{{b.vertices[0][0], b.vertices[0][1], b.vertices[0][2]}, {b.vertices[0][0], b.vertices[0][1], b.vertices[0][2]}};
+      Box3 box{{b.vertices[0][0], b.vertices[0][1], b.vertices[0][2]},
+               {b.vertices[0][0], b.vertices[0][1], b.vertices[0][2]}};
       for (const auto& v : b.vertices)
         for (int k = 0; k < 3; ++k) {
           box.min[k] = std::min(box.min[k], v[k]);
@@ -497,8 +499,7 @@ std::string Solid::Serialize() const {
   openvdb::MetaMap meta;
   meta.insertMeta("fabatlas_voxel_size", openvdb::DoubleMetadata(spec.voxel_size));
   meta.insertMeta("fabatlas_half_width_voxels", openvdb::DoubleMetadata(spec.half_width_voxels));
-  meta.insertMeta("fabatlas_max_active_voxels",
-                  openvdb::Int64Metadata(static_cast<int64_t>(spec.max_active_voxels)));
+  meta.insertMeta("fabatlas_max_active_voxels", openvdb::Int64Metadata(static_cast<int64_t>(spec.max_active_voxels)));
   openvdb::GridCPtrVec grids{grid};
   stream.write(grids, meta);
   std::string bytes = os.str();
@@ -569,8 +570,8 @@ Occupancy SampleOccupancy(const Solid& s, double cell_size, std::size_t max_cell
   if (cells > static_cast<double>(max_cells)) {
     std::ostringstream m;
     m << "SampleOccupancy: cell size " << cell_size << " mm over a " << box.max[0] - box.min[0] << " x "
-      << box.max[1] - box.min[1] << " x " << box.max[2] - box.min[2] << " mm box needs " << cells
-      << " cells (limit " << max_cells << ")";
+      << box.max[1] - box.min[1] << " x " << box.max[2] - box.min[2] << " mm box needs " << cells << " cells (limit "
+      << max_cells << ")";
     throw InputError(m.str());
   }
   for (int a = 0; a < 3; ++a) {
@@ -583,7 +584,7 @@ Occupancy SampleOccupancy(const Solid& s, double cell_size, std::size_t max_cell
   tbb::parallel_for(std::size_t{0}, nz, [&](std::size_t k) {
     FloatGrid::ConstAccessor accessor = grid.getConstAccessor();
     openvdb::tools::GridSampler<FloatGrid::ConstAccessor, openvdb::tools::BoxSampler> sampler(accessor,
-                                                                                               grid.transform());
+                                                                                              grid.transform());
     for (std::size_t j = 0; j < ny; ++j)
       for (std::size_t i = 0; i < nx; ++i) {
         const openvdb::Vec3d p(occ.origin[0] + (i + 0.5) * cell_size, occ.origin[1] + (j + 0.5) * cell_size,

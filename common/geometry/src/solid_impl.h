@@ -84,7 +84,9 @@ class LeafCache {
     const openvdb::Coord origin(p.x() & kMask, p.y() & kMask, p.z() & kMask);
     const unsigned slot =
         (static_cast<unsigned>(origin.x()) * 73856093u ^ static_cast<unsigned>(origin.y()) * 19349663u ^
-         static_cast<unsigned>(origin.z()) * 83492791u) >> 3 & (kSlots - 1);
+         static_cast<unsigned>(origin.z()) * 83492791u) >>
+            3 &
+        (kSlots - 1);
     if (!valid_[slot] || origin_[slot] != origin) {
       origin_[slot] = origin;
       leaf_[slot] = acc.probeConstLeaf(p);

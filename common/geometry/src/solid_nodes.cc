@@ -55,8 +55,10 @@ void WriteLeaf(Writer& w, const Leaf& leaf, std::uint32_t bg) {
   for (openvdb::Index n = 0; n < Leaf::NUM_VALUES && band; ++n) {
     if (words[n >> 6] >> (n & 63) & 1) continue;
     const std::uint32_t b = Bits(values[n]);
-    if (b == (bg ^ kSignBit)) inside[n >> 6] |= std::uint64_t{1} << (n & 63);
-    else if (b != bg) band = false;
+    if (b == (bg ^ kSignBit))
+      inside[n >> 6] |= std::uint64_t{1} << (n & 63);
+    else if (b != bg)
+      band = false;
   }
   w.Put(band ? kLeafBand : kLeafFull);
   w.PutBytes(words, sizeof words);
@@ -99,8 +101,10 @@ void WriteInternal(Writer& w, const Node& node, std::uint32_t bg) {
     w.Put(static_cast<std::uint8_t>(node.isValueMaskOn(n)));
   }
   for (std::uint16_t n : children) {
-    if constexpr (std::is_same_v<Node, Lower>) WriteLeaf(w, *table[n].getChild(), bg);
-    else WriteInternal(w, *table[n].getChild(), bg);
+    if constexpr (std::is_same_v<Node, Lower>)
+      WriteLeaf(w, *table[n].getChild(), bg);
+    else
+      WriteInternal(w, *table[n].getChild(), bg);
   }
 }
 
@@ -136,8 +140,7 @@ std::unique_ptr<Leaf> ReadLeaf(Reader& r, const Coord& origin, float background)
   auto leaf = std::make_unique<Leaf>(origin, background, false);
   std::uint64_t words[Leaf::NUM_VALUES / 64];
   std::memcpy(words, r.Take(sizeof words), sizeof words);
-  for (openvdb::Index i = 0; i < Leaf::NUM_VALUES / 64; ++i)
-    leaf->getValueMask().getWord<std::uint64_t>(i) = words[i];
+  for (openvdb::Index i = 0; i < Leaf::NUM_VALUES / 64; ++i) leaf->getValueMask().getWord<std::uint64_t>(i) = words[i];
   float* values = leaf->buffer().data();
   if (kind == kLeafFull) {
     std::memcpy(values, r.Take(Leaf::NUM_VALUES * sizeof(float)), Leaf::NUM_VALUES * sizeof(float));
@@ -146,8 +149,10 @@ std::unique_ptr<Leaf> ReadLeaf(Reader& r, const Coord& origin, float background)
   std::uint64_t inside[Leaf::NUM_VALUES / 64];
   std::memcpy(inside, r.Take(sizeof inside), sizeof inside);
   for (openvdb::Index n = 0; n < Leaf::NUM_VALUES; ++n) {
-    if (words[n >> 6] >> (n & 63) & 1) values[n] = r.Get<float>();
-    else if (inside[n >> 6] >> (n & 63) & 1) values[n] = -background;
+    if (words[n >> 6] >> (n & 63) & 1)
+      values[n] = r.Get<float>();
+    else if (inside[n >> 6] >> (n & 63) & 1)
+      values[n] = -background;
   }
   return leaf;
 }

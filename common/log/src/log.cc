@@ -36,11 +36,16 @@ spdlog::logger& Logger() {
 
 const char* LevelName(Level level) {
   switch (level) {
-    case Level::kDebug: return "debug";
-    case Level::kInfo: return "info";
-    case Level::kWarn: return "warn";
-    case Level::kError: return "error";
-    case Level::kOff: return "off";
+    case Level::kDebug:
+      return "debug";
+    case Level::kInfo:
+      return "info";
+    case Level::kWarn:
+      return "warn";
+    case Level::kError:
+      return "error";
+    case Level::kOff:
+      return "off";
   }
   return "info";
 }
@@ -50,8 +55,8 @@ std::string Timestamp(std::int64_t ts_ms) {
   std::tm tm{};
   gmtime_r(&secs, &tm);
   char buf[96];  // room for every field at int's widest, as snprintf's check asks
-  std::snprintf(buf, sizeof buf, "%04d-%02d-%02dT%02d:%02d:%02d.%03dZ", tm.tm_year + 1900, tm.tm_mon + 1,
-                tm.tm_mday, tm.tm_hour, tm.tm_min, tm.tm_sec, static_cast<int>(ts_ms % 1000));
+  std::snprintf(buf, sizeof buf, "%04d-%02d-%02dT%02d:%02d:%02d.%03dZ", tm.tm_year + 1900, tm.tm_mon + 1, tm.tm_mday,
+                tm.tm_hour, tm.tm_min, tm.tm_sec, static_cast<int>(ts_ms % 1000));
   return buf;
 }
 
@@ -59,11 +64,21 @@ void AppendJsonString(std::string& out, std::string_view s) {
   out += '"';
   for (unsigned char c : s) {
     switch (c) {
-      case '"': out += "\\\""; break;
-      case '\\': out += "\\\\"; break;
-      case '\n': out += "\\n"; break;
-      case '\r': out += "\\r"; break;
-      case '\t': out += "\\t"; break;
+      case '"':
+        out += "\\\"";
+        break;
+      case '\\':
+        out += "\\\\";
+        break;
+      case '\n':
+        out += "\\n";
+        break;
+      case '\r':
+        out += "\\r";
+        break;
+      case '\t':
+        out += "\\t";
+        break;
       default:
         if (c < 0x20) {
           char buf[8];
@@ -83,8 +98,10 @@ void AppendTextValue(std::string& out, const Field& f) {
   bool bare = !f.value.empty();
   for (unsigned char c : f.value)
     if (c <= ' ' || c == '"' || c == '=' || c == '\\') bare = false;
-  if (bare || !f.quoted) out += f.value;
-  else AppendJsonString(out, f.value);
+  if (bare || !f.quoted)
+    out += f.value;
+  else
+    AppendJsonString(out, f.value);
 }
 
 }  // namespace
@@ -141,8 +158,10 @@ std::string FormatLine(Format format, Level level, std::int64_t ts_ms, std::stri
       line += ',';
       AppendJsonString(line, f.key);
       line += ':';
-      if (f.quoted) AppendJsonString(line, f.value);
-      else line += f.value;
+      if (f.quoted)
+        AppendJsonString(line, f.value);
+      else
+        line += f.value;
     }
     line += '}';
   } else {
@@ -157,9 +176,9 @@ std::string FormatLine(Format format, Level level, std::int64_t ts_ms, std::stri
 
 void Write(Level level, std::string_view event, std::initializer_list<Field> fields) {
   if (!Enabled(level)) return;
-  std::int64_t now = std::chrono::duration_cast<std::chrono::milliseconds>(
-                         std::chrono::system_clock::now().time_since_epoch())
-                         .count();
+  std::int64_t now =
+      std::chrono::duration_cast<std::chrono::milliseconds>(std::chrono::system_clock::now().time_since_epoch())
+          .count();
   std::string line = FormatLine(static_cast<Format>(g_format.load()), level, now, event, fields);
   Logger().log(spdlog::level::info, spdlog::string_view_t(line.data(), line.size()));
 }

@@ -55,16 +55,16 @@ std::string Zip(const std::vector<Entry>& entries) {
     const auto offset = static_cast<std::uint32_t>(out.size());
     // Local file header.
     Put32(&out, 0x04034b50);
-    Put16(&out, 20);      // version needed: 2.0 (deflate)
-    Put16(&out, 0);       // flags
-    Put16(&out, 8);       // method: deflate
-    Put16(&out, 0);       // time
-    Put16(&out, 0x21);    // date: 1980-01-01
+    Put16(&out, 20);    // version needed: 2.0 (deflate)
+    Put16(&out, 0);     // flags
+    Put16(&out, 8);     // method: deflate
+    Put16(&out, 0);     // time
+    Put16(&out, 0x21);  // date: 1980-01-01
     Put32(&out, crc);
     Put32(&out, static_cast<std::uint32_t>(packed.size()));
     Put32(&out, static_cast<std::uint32_t>(e.data.size()));
     Put16(&out, static_cast<std::uint16_t>(e.name.size()));
-    Put16(&out, 0);       // extra length
+    Put16(&out, 0);  // extra length
     out += e.name;
     out += packed;
     // Central directory record.
@@ -79,11 +79,11 @@ std::string Zip(const std::vector<Entry>& entries) {
     Put32(&central, static_cast<std::uint32_t>(packed.size()));
     Put32(&central, static_cast<std::uint32_t>(e.data.size()));
     Put16(&central, static_cast<std::uint16_t>(e.name.size()));
-    Put16(&central, 0);   // extra
-    Put16(&central, 0);   // comment
-    Put16(&central, 0);   // disk
-    Put16(&central, 0);   // internal attributes
-    Put32(&central, 0);   // external attributes
+    Put16(&central, 0);  // extra
+    Put16(&central, 0);  // comment
+    Put16(&central, 0);  // disk
+    Put16(&central, 0);  // internal attributes
+    Put32(&central, 0);  // external attributes
     Put32(&central, offset);
     central += e.name;
   }
@@ -140,7 +140,8 @@ std::string Encode3mfObjects(const std::vector<Object3mf>& objects) {
     }
     char hex[16];
     auto byte = [](double v) { return static_cast<unsigned>(v <= 0 ? 0 : v >= 1 ? 255 : v * 255 + 0.5); };
-    std::snprintf(hex, sizeof hex, "#%02X%02X%02X%02X", byte(o.rgba[0]), byte(o.rgba[1]), byte(o.rgba[2]), byte(o.rgba[3]));
+    std::snprintf(hex, sizeof hex, "#%02X%02X%02X%02X", byte(o.rgba[0]), byte(o.rgba[1]), byte(o.rgba[2]),
+                  byte(o.rgba[3]));
     std::size_t k = 0;
     while (k < colours.size() && colours[k] != hex) ++k;
     if (k == colours.size()) colours.push_back(hex);
@@ -162,7 +163,8 @@ std::string Encode3mfObjects(const std::vector<Object3mf>& objects) {
       name += ch == '&' ? "&amp;" : ch == '<' ? "&lt;" : ch == '>' ? "&gt;" : ch == '"' ? "&quot;" : std::string(1, ch);
     model += "<object id=\"" + std::to_string(first_id + i) + "\" type=\"model\"" +
              (name.empty() ? "" : " name=\"" + name + "\"") +
-             (pindex[i] < 0 ? "" : " pid=\"1\" pindex=\"" + std::to_string(pindex[i]) + "\"") + ">\n<mesh>\n<vertices>\n";
+             (pindex[i] < 0 ? "" : " pid=\"1\" pindex=\"" + std::to_string(pindex[i]) + "\"") +
+             ">\n<mesh>\n<vertices>\n";
     model.reserve(model.size() + mesh.vertices.size() * 48 + mesh.triangles.size() * 40);
     for (const auto& v : mesh.vertices)
       model += "<vertex x=\"" + Number(v[0]) + "\" y=\"" + Number(v[1]) + "\" z=\"" + Number(v[2]) + "\"/>\n";
@@ -173,7 +175,8 @@ std::string Encode3mfObjects(const std::vector<Object3mf>& objects) {
     model += "</triangles>\n</mesh>\n</object>\n";
   }
   model += "</resources>\n<build>\n";
-  for (std::size_t i = 0; i < objects.size(); ++i) model += "<item objectid=\"" + std::to_string(first_id + i) + "\"/>\n";
+  for (std::size_t i = 0; i < objects.size(); ++i)
+    model += "<item objectid=\"" + std::to_string(first_id + i) + "\"/>\n";
   model += "</build>\n</model>\n";
   return Zip({{"[Content_Types].xml", content_types}, {"_rels/.rels", rels}, {"3D/3dmodel.model", model}});
 }

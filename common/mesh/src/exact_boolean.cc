@@ -84,12 +84,15 @@ bool SplitShellsAtSharedEdges(std::vector<Point>& points, std::vector<std::vecto
   };
   auto vec = [&](std::size_t from, std::size_t to) {
     const Point &p = points[from], &q = points[to];
-    return std::array<double, 3>{CGAL::to_double(q.x() - p.x()), CGAL::to_double(q.y() - p.y()), CGAL::to_double(q.z() - p.z())};
+    return std::array<double, 3>{CGAL::to_double(q.x() - p.x()), CGAL::to_double(q.y() - p.y()),
+                                 CGAL::to_double(q.z() - p.z())};
   };
   auto cross = [](const std::array<double, 3>& u, const std::array<double, 3>& v) {
     return std::array<double, 3>{u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
   };
-  auto dot = [](const std::array<double, 3>& u, const std::array<double, 3>& v) { return u[0] * v[0] + u[1] * v[1] + u[2] * v[2]; };
+  auto dot = [](const std::array<double, 3>& u, const std::array<double, 3>& v) {
+    return u[0] * v[0] + u[1] * v[1] + u[2] * v[2];
+  };
   bool shared = false;
   for (const auto& [edge, list] : around) {
     if (list.size() <= 2) {
@@ -101,7 +104,8 @@ bool SplitShellsAtSharedEdges(std::vector<Point>& points, std::vector<std::vecto
     const auto d = vec(edge.first, edge.second);
     const double len = std::sqrt(dot(d, d));
     // A frame around the edge: e1 any unit vector across it, e2 = d x e1.
-    std::array<double, 3> e1 = std::abs(d[0]) < 0.9 * len ? std::array<double, 3>{1, 0, 0} : std::array<double, 3>{0, 1, 0};
+    std::array<double, 3> e1 =
+        std::abs(d[0]) < 0.9 * len ? std::array<double, 3>{1, 0, 0} : std::array<double, 3>{0, 1, 0};
     const double along = dot(e1, d) / (len * len);
     for (int k = 0; k < 3; ++k) e1[k] -= along * d[k];
     auto e2 = cross(d, e1);
@@ -117,8 +121,8 @@ bool SplitShellsAtSharedEdges(std::vector<Point>& points, std::vector<std::vecto
       for (std::size_t v : faces[f])
         if (v != edge.first && v != edge.second) w = v;
       const auto r = vec(edge.first, w);
-      sheets.push_back({std::atan2(dot(r, e2), dot(r, e1)), f,
-                        cross(vec(faces[f][0], faces[f][1]), vec(faces[f][0], faces[f][2]))});
+      sheets.push_back(
+          {std::atan2(dot(r, e2), dot(r, e1)), f, cross(vec(faces[f][0], faces[f][1]), vec(faces[f][0], faces[f][2]))});
     }
     std::sort(sheets.begin(), sheets.end(), [](const Sheet& a, const Sheet& b) { return a.angle < b.angle; });
     std::vector<int> partners(sheets.size(), 0);
@@ -225,7 +229,8 @@ void AppendExact(const Exact& e, TriangleMesh& out) {
   std::vector<std::vector<std::size_t>> polygons;
   CGAL::convert_nef_polyhedron_to_polygon_soup(*e.nef, points, polygons, /*triangulate_all_faces=*/true);
   const auto base = static_cast<std::int32_t>(out.vertices.size());
-  for (const Point& p : points) out.vertices.push_back({CGAL::to_double(p.x()), CGAL::to_double(p.y()), CGAL::to_double(p.z())});
+  for (const Point& p : points)
+    out.vertices.push_back({CGAL::to_double(p.x()), CGAL::to_double(p.y()), CGAL::to_double(p.z())});
   for (const auto& f : polygons)
     if (f.size() == 3)
       out.triangles.push_back({base + static_cast<std::int32_t>(f[0]), base + static_cast<std::int32_t>(f[1]),
@@ -420,8 +425,8 @@ std::size_t FaceCount(const Exact& e) {
 // of OpenSCAD's corpus, a Minkowski sum's union of 24 hulls: 2.3x less
 // time). An operand whose box meets no other piece's is a piece of the
 // result as it is.
-std::vector<Exact> UnionOfTouching(std::vector<Exact> pieces, std::vector<std::size_t> index, const BooleanOptions& options,
-                                   BooleanSummary& summary) {
+std::vector<Exact> UnionOfTouching(std::vector<Exact> pieces, std::vector<std::size_t> index,
+                                   const BooleanOptions& options, BooleanSummary& summary) {
   std::vector<Exact> done;
   while (!pieces.empty()) {
     std::size_t smallest = 0;
@@ -481,9 +486,12 @@ TriangleMesh Canonical(TriangleMesh m) {
 
 const char* BooleanOpName(BooleanOp op) {
   switch (op) {
-    case BooleanOp::kUnion: return "union";
-    case BooleanOp::kDifference: return "difference";
-    case BooleanOp::kIntersection: return "intersection";
+    case BooleanOp::kUnion:
+      return "union";
+    case BooleanOp::kDifference:
+      return "difference";
+    case BooleanOp::kIntersection:
+      return "intersection";
   }
   return "union";
 }
@@ -525,7 +533,8 @@ TriangleMesh UnorderedBoolean(BooleanOp op, const std::vector<TriangleMesh>& ope
         pieces.push_back(std::move(present[k]));
         pieces_index.push_back(present_index[k]);
       }
-      for (const Exact& piece : UnionOfTouching(std::move(pieces), pieces_index, options, summary)) AppendExact(piece, out);
+      for (const Exact& piece : UnionOfTouching(std::move(pieces), pieces_index, options, summary))
+        AppendExact(piece, out);
     }
     return out;
   }
@@ -556,7 +565,8 @@ TriangleMesh UnorderedBoolean(BooleanOp op, const std::vector<TriangleMesh>& ope
           members.push_back(away[k]);
           members_index.push_back(away_index[k]);
         }
-        for (Exact& piece : UnionOfTouching(std::move(members), members_index, options, summary)) pieces.push_back(std::move(piece));
+        for (Exact& piece : UnionOfTouching(std::move(members), members_index, options, summary))
+          pieces.push_back(std::move(piece));
       }
       if (std::none_of(pieces.begin(), pieces.end(), [](const Exact& e) { return e.nef.has_value(); })) {
         Exact joined = std::move(pieces[0]);
@@ -569,7 +579,8 @@ TriangleMesh UnorderedBoolean(BooleanOp op, const std::vector<TriangleMesh>& ope
         away_index.resize(1);
       }
     }
-    for (std::size_t k = 0; k < away.size() && !acc.empty; ++k) acc = Apply(op, acc, away[k], away_index[k], options, summary);
+    for (std::size_t k = 0; k < away.size() && !acc.empty; ++k)
+      acc = Apply(op, acc, away[k], away_index[k], options, summary);
     AppendExact(acc, out);
     return out;
   }
@@ -577,7 +588,7 @@ TriangleMesh UnorderedBoolean(BooleanOp op, const std::vector<TriangleMesh>& ope
     if (in[i].empty || !Meet(acc.box, in[i].box)) {
       ++summary.disjoint;
       if (op == BooleanOp::kIntersection) return out;  // nothing in common
-      continue;  // nothing to take away
+      continue;                                        // nothing to take away
     }
     acc = Apply(op, acc, in[i], i, options, summary);
   }
@@ -640,7 +651,8 @@ std::vector<ConvexPart> ConvexParts(const TriangleMesh& m) {
     nef.convert_inner_shell_to_polyhedron(volume_it->shells_begin(), part);
     ConvexPart points;
     for (auto v = part.vertices_begin(); v != part.vertices_end(); ++v)
-      points.push_back({CGAL::to_double(v->point().x()), CGAL::to_double(v->point().y()), CGAL::to_double(v->point().z())});
+      points.push_back(
+          {CGAL::to_double(v->point().x()), CGAL::to_double(v->point().y()), CGAL::to_double(v->point().z())});
     if (!points.empty()) parts.push_back(std::move(points));
   }
   return parts;

@@ -37,7 +37,8 @@ void ParseXml(const std::filesystem::path& path, const std::string& format, cons
 TriangleMesh Read3mf(const std::filesystem::path& path, std::string_view data);
 
 // AMF: every object's vertices and every volume's triangles; coordinates
-// as stored (the unit attribute is ignored, as OpenSCAD 2021.01 ignores it). `data` is the XML text or a ZIP holding it.
+// as stored (the unit attribute is ignored, as OpenSCAD 2021.01 ignores it). `data` is the XML text or a ZIP holding
+// it.
 TriangleMesh ReadAmf(const std::filesystem::path& path, std::string_view data);
 
 }  // namespace fabatlas::mesh::internal

@@ -192,7 +192,7 @@ MeshReport InspectMesh(const TriangleMesh& mesh, const InspectOptions& options) 
       tbb::blocked_range<std::size_t>(0, points.size(), 1024), Counts{},
       [&](const tbb::blocked_range<std::size_t>& range, Counts c) {
         std::vector<std::pair<std::int32_t, std::int32_t>> around;  // (other vertex, local face)
-        DisjointSets fans(0);                                        // the faces' fans around one vertex
+        DisjointSets fans(0);                                       // the faces' fans around one vertex
         for (std::size_t v = range.begin(); v != range.end(); ++v) {
           const auto begin = edges.begin() + first[v], end = edges.begin() + first[v + 1];
           std::sort(begin, end);
@@ -201,9 +201,12 @@ MeshReport InspectMesh(const TriangleMesh& mesh, const InspectOptions& options) 
             int forward = 0;
             while (j != end && j->hi == i->hi) forward += (j++)->forward;
             const auto n = j - i;
-            if (n == 1) ++c.border;
-            else if (n > 2) ++c.non_manifold_edges;
-            else if (forward != 1) ++c.inconsistent;
+            if (n == 1)
+              ++c.border;
+            else if (n > 2)
+              ++c.non_manifold_edges;
+            else if (forward != 1)
+              ++c.inconsistent;
             i = j;
           }
           const std::int32_t deg = start[v + 1] - start[v];
@@ -278,12 +281,15 @@ MeshReport InspectMesh(const TriangleMesh& mesh, const InspectOptions& options) 
 
   // Verdicts.
   report.closed = !tris.empty() && report.border_edges == 0;
-  if (tris.empty()) report.closed_reason = "mesh has no non-degenerate triangles";
-  else if (!report.closed) report.closed_reason = "mesh has " + Plural(report.border_edges, "border edge") + " (not watertight)";
+  if (tris.empty())
+    report.closed_reason = "mesh has no non-degenerate triangles";
+  else if (!report.closed)
+    report.closed_reason = "mesh has " + Plural(report.border_edges, "border edge") + " (not watertight)";
   report.manifold = report.non_manifold_edges == 0 && report.non_manifold_vertices == 0;
   if (!report.manifold) {
     report.manifold_reason = "mesh has " + Plural(report.non_manifold_edges, "non-manifold edge") + " (3+ faces) and " +
-                             Plural(report.non_manifold_vertices, "non-manifold vertex", "non-manifold vertices") + " (several fans)";
+                             Plural(report.non_manifold_vertices, "non-manifold vertex", "non-manifold vertices") +
+                             " (several fans)";
   }
   if (!report.closed) {
     report.outward = false;
@@ -291,10 +297,11 @@ MeshReport InspectMesh(const TriangleMesh& mesh, const InspectOptions& options) 
   } else if (report.non_manifold_edges > 0) {
     report.outward_reason = "orientation undefined: mesh has " + Plural(report.non_manifold_edges, "non-manifold edge");
   } else if (report.inconsistent_edges > 0) {
-    report.outward_reason = "faces are not consistently oriented (" +
-                            Plural(report.inconsistent_edges, "edge") + " traversed the same way by both faces)";
+    report.outward_reason = "faces are not consistently oriented (" + Plural(report.inconsistent_edges, "edge") +
+                            " traversed the same way by both faces)";
   } else if (!(report.volume > 0)) {
-    report.outward_reason = "signed volume " + std::to_string(report.volume) + " mm^3 is not positive (normals point inward)";
+    report.outward_reason =
+        "signed volume " + std::to_string(report.volume) + " mm^3 is not positive (normals point inward)";
   } else {
     report.outward = true;
   }
@@ -324,8 +331,9 @@ MeshReport InspectMesh(const TriangleMesh& mesh, const InspectOptions& options) 
     report.intersecting_pairs = count;
     report.self_intersecting = count > 0;
     if (report.self_intersecting) {
-      report.self_intersection_reason = std::string("mesh has ") + (report.intersecting_pairs_capped ? "at least " : "") +
-                                        Plural(count, "pair") + " of intersecting triangles";
+      report.self_intersection_reason = std::string("mesh has ") +
+                                        (report.intersecting_pairs_capped ? "at least " : "") + Plural(count, "pair") +
+                                        " of intersecting triangles";
     }
   }
   return report;

@@ -99,8 +99,10 @@ void Start(void* data, const char* element, const char** attributes) {
     c.object = static_cast<int>(id);
     if (!ParseTransform(Attribute(attributes, "transform"), &c.transform))
       m.problem = std::string(name) + " with a transform that is not 12 finite numbers";
-    if (name == "item") m.items.push_back(c);
-    else if (m.current >= 0) m.objects[m.current].components.push_back(c);
+    if (name == "item")
+      m.items.push_back(c);
+    else if (m.current >= 0)
+      m.objects[m.current].components.push_back(c);
   }
 }
 

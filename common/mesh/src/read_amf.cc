@@ -52,7 +52,8 @@ void End(void* data, const char* element) {
   const std::string_view name = LocalName(element);
   const std::string vertex_number = std::to_string(a.mesh.vertices.size() - a.object_base);
   if (name == "x" || name == "y" || name == "z") {
-    if (!Parse(a.text, &a.point[name[0] - 'x'])) a.problem = "vertex " + vertex_number + ": " + std::string(name) + " is not a finite number";
+    if (!Parse(a.text, &a.point[name[0] - 'x']))
+      a.problem = "vertex " + vertex_number + ": " + std::string(name) + " is not a finite number";
   } else if (name == "v1" || name == "v2" || name == "v3") {
     double v = 0;
     if (!Parse(a.text, &v) || v < 0 || v != std::floor(v)) a.problem = "a triangle corner that is not a vertex index";

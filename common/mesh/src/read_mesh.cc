@@ -84,8 +84,7 @@ class Lines {
 
 void AddPolygon(const std::vector<long long>& corners, TriangleMesh* mesh) {
   for (std::size_t k = 1; k + 1 < corners.size(); ++k) {
-    mesh->triangles.push_back({static_cast<std::int32_t>(corners[0]),
-                               static_cast<std::int32_t>(corners[k]),
+    mesh->triangles.push_back({static_cast<std::int32_t>(corners[0]), static_cast<std::int32_t>(corners[k]),
                                static_cast<std::int32_t>(corners[k + 1])});
   }
 }
@@ -184,14 +183,13 @@ TriangleMesh ReadStl(const std::filesystem::path& path, std::string_view data) {
   std::string_view head = data.substr(0, std::min<std::size_t>(data.size(), 512));
   std::size_t start = 0;
   while (start < head.size() && IsSpace(head[start])) ++start;
-  const bool ascii = Lower(std::string(head.substr(start, 5))) == "solid" &&
-                     head.find('\0') == std::string_view::npos;
+  const bool ascii = Lower(std::string(head.substr(start, 5))) == "solid" && head.find('\0') == std::string_view::npos;
   if (ascii) return ReadAsciiStl(path, data);
   if (data.size() < 84) Fail(path, "truncated binary STL (" + std::to_string(data.size()) + " bytes, header needs 84)");
   std::uint32_t n = 0;
   std::memcpy(&n, data.data() + 80, 4);
-  Fail(path, "truncated or corrupt binary STL: header announces " + std::to_string(n) +
-                 " triangles (" + std::to_string(84 + std::uint64_t{n} * 50) + " bytes) but the file has " +
+  Fail(path, "truncated or corrupt binary STL: header announces " + std::to_string(n) + " triangles (" +
+                 std::to_string(84 + std::uint64_t{n} * 50) + " bytes) but the file has " +
                  std::to_string(data.size()) + " bytes");
 }
 
@@ -208,8 +206,7 @@ TriangleMesh ReadObj(const std::filesystem::path& path, std::string_view data) {
     const std::string where = "line " + std::to_string(lines.number()) + ": ";
     if (tok[0] == "v") {
       std::array<double, 3> p{};
-      if (tok.size() < 4 || !ParseDouble(tok[1], &p[0]) || !ParseDouble(tok[2], &p[1]) ||
-          !ParseDouble(tok[3], &p[2])) {
+      if (tok.size() < 4 || !ParseDouble(tok[1], &p[0]) || !ParseDouble(tok[2], &p[1]) || !ParseDouble(tok[3], &p[2])) {
         Fail(path, where + "expected 'v x y z'");
       }
       mesh.vertices.push_back(p);
@@ -219,19 +216,19 @@ TriangleMesh ReadObj(const std::filesystem::path& path, std::string_view data) {
       for (std::size_t k = 1; k < tok.size(); ++k) {
         std::string_view idx = tok[k].substr(0, tok[k].find('/'));
         long long v = 0;
-        if (!ParseInt(idx, &v) || v == 0) Fail(path, where + "bad face index '" + std::string(tok[k].substr(0, 40)) + "'");
+        if (!ParseInt(idx, &v) || v == 0)
+          Fail(path, where + "bad face index '" + std::string(tok[k].substr(0, 40)) + "'");
         const long long n = static_cast<long long>(mesh.vertices.size());
         const long long zero_based = v > 0 ? v - 1 : n + v;
         if (zero_based < 0 || zero_based >= n) {
-          Fail(path, where + "face index " + std::to_string(v) + " out of range (" + std::to_string(n) +
-                         " vertices so far)");
+          Fail(path,
+               where + "face index " + std::to_string(v) + " out of range (" + std::to_string(n) + " vertices so far)");
         }
         corners.push_back(zero_based);
       }
       AddPolygon(corners, &mesh);
-    } else if (tok[0].size() > 32 || std::any_of(tok[0].begin(), tok[0].end(), [](char c) {
-                 return !std::isprint(static_cast<unsigned char>(c));
-               })) {
+    } else if (tok[0].size() > 32 || std::any_of(tok[0].begin(), tok[0].end(),
+                                                 [](char c) { return !std::isprint(static_cast<unsigned char>(c)); })) {
       Fail(path, where + "not an OBJ record");
     }
     // vt, vn, vp, g, o, s, l, usemtl, mtllib, ...: not geometry we need.
@@ -313,11 +310,11 @@ enum class PlyType { kInt8, kUInt8, kInt16, kUInt16, kInt32, kUInt32, kFloat32, 
 
 bool ParsePlyType(const std::string& s, PlyType* t) {
   static const std::map<std::string, PlyType> kTypes = {
-      {"char", PlyType::kInt8},     {"int8", PlyType::kInt8},       {"uchar", PlyType::kUInt8},
-      {"uint8", PlyType::kUInt8},   {"short", PlyType::kInt16},     {"int16", PlyType::kInt16},
-      {"ushort", PlyType::kUInt16}, {"uint16", PlyType::kUInt16},   {"int", PlyType::kInt32},
-      {"int32", PlyType::kInt32},   {"uint", PlyType::kUInt32},     {"uint32", PlyType::kUInt32},
-      {"float", PlyType::kFloat32}, {"float32", PlyType::kFloat32}, {"double", PlyType::kFloat64},
+      {"char", PlyType::kInt8},      {"int8", PlyType::kInt8},       {"uchar", PlyType::kUInt8},
+      {"uint8", PlyType::kUInt8},    {"short", PlyType::kInt16},     {"int16", PlyType::kInt16},
+      {"ushort", PlyType::kUInt16},  {"uint16", PlyType::kUInt16},   {"int", PlyType::kInt32},
+      {"int32", PlyType::kInt32},    {"uint", PlyType::kUInt32},     {"uint32", PlyType::kUInt32},
+      {"float", PlyType::kFloat32},  {"float32", PlyType::kFloat32}, {"double", PlyType::kFloat64},
       {"float64", PlyType::kFloat64}};
   auto it = kTypes.find(s);
   if (it == kTypes.end()) return false;
@@ -327,10 +324,18 @@ bool ParsePlyType(const std::string& s, PlyType* t) {
 
 int PlySize(PlyType t) {
   switch (t) {
-    case PlyType::kInt8: case PlyType::kUInt8: return 1;
-    case PlyType::kInt16: case PlyType::kUInt16: return 2;
-    case PlyType::kInt32: case PlyType::kUInt32: case PlyType::kFloat32: return 4;
-    case PlyType::kFloat64: return 8;
+    case PlyType::kInt8:
+    case PlyType::kUInt8:
+      return 1;
+    case PlyType::kInt16:
+    case PlyType::kUInt16:
+      return 2;
+    case PlyType::kInt32:
+    case PlyType::kUInt32:
+    case PlyType::kFloat32:
+      return 4;
+    case PlyType::kFloat64:
+      return 8;
   }
   return 1;
 }
@@ -362,7 +367,8 @@ class PlyBody {
       if (end == pos_) Fail(path_, "truncated PLY body");
       double v = 0;
       if (!ParseDouble(body_.substr(pos_, end - pos_), &v)) {
-        Fail(path_, "unparsable PLY value '" + std::string(body_.substr(pos_, std::min<std::size_t>(end - pos_, 40))) + "'");
+        Fail(path_,
+             "unparsable PLY value '" + std::string(body_.substr(pos_, std::min<std::size_t>(end - pos_, 40))) + "'");
       }
       pos_ = end;
       return v;
@@ -375,14 +381,46 @@ class PlyBody {
     const bool big = format_ == 2;
     if (big != (std::endian::native == std::endian::big)) std::reverse(b, b + n);
     switch (t) {
-      case PlyType::kInt8: { std::int8_t v; std::memcpy(&v, b, 1); return v; }
-      case PlyType::kUInt8: { std::uint8_t v; std::memcpy(&v, b, 1); return v; }
-      case PlyType::kInt16: { std::int16_t v; std::memcpy(&v, b, 2); return v; }
-      case PlyType::kUInt16: { std::uint16_t v; std::memcpy(&v, b, 2); return v; }
-      case PlyType::kInt32: { std::int32_t v; std::memcpy(&v, b, 4); return v; }
-      case PlyType::kUInt32: { std::uint32_t v; std::memcpy(&v, b, 4); return v; }
-      case PlyType::kFloat32: { float v; std::memcpy(&v, b, 4); return v; }
-      case PlyType::kFloat64: { double v; std::memcpy(&v, b, 8); return v; }
+      case PlyType::kInt8: {
+        std::int8_t v;
+        std::memcpy(&v, b, 1);
+        return v;
+      }
+      case PlyType::kUInt8: {
+        std::uint8_t v;
+        std::memcpy(&v, b, 1);
+        return v;
+      }
+      case PlyType::kInt16: {
+        std::int16_t v;
+        std::memcpy(&v, b, 2);
+        return v;
+      }
+      case PlyType::kUInt16: {
+        std::uint16_t v;
+        std::memcpy(&v, b, 2);
+        return v;
+      }
+      case PlyType::kInt32: {
+        std::int32_t v;
+        std::memcpy(&v, b, 4);
+        return v;
+      }
+      case PlyType::kUInt32: {
+        std::uint32_t v;
+        std::memcpy(&v, b, 4);
+        return v;
+      }
+      case PlyType::kFloat32: {
+        float v;
+        std::memcpy(&v, b, 4);
+        return v;
+      }
+      case PlyType::kFloat64: {
+        double v;
+        std::memcpy(&v, b, 8);
+        return v;
+      }
     }
     return 0;
   }
@@ -415,10 +453,14 @@ TriangleMesh ReadPly(const std::filesystem::path& path, std::string_view data) {
       break;
     } else if (tok[0] == "format") {
       if (tok.size() < 2) Fail(path, where + "bad format line");
-      if (tok[1] == "ascii") format = 0;
-      else if (tok[1] == "binary_little_endian") format = 1;
-      else if (tok[1] == "binary_big_endian") format = 2;
-      else Fail(path, where + "unknown PLY format '" + std::string(tok[1].substr(0, 40)) + "'");
+      if (tok[1] == "ascii")
+        format = 0;
+      else if (tok[1] == "binary_little_endian")
+        format = 1;
+      else if (tok[1] == "binary_big_endian")
+        format = 2;
+      else
+        Fail(path, where + "unknown PLY format '" + std::string(tok[1].substr(0, 40)) + "'");
     } else if (tok[0] == "element") {
       long long n = 0;
       if (tok.size() != 3 || !ParseInt(tok[2], &n) || n < 0) Fail(path, where + "expected 'element name count'");
@@ -433,7 +475,8 @@ TriangleMesh ReadPly(const std::filesystem::path& path, std::string_view data) {
         }
         p.name = std::string(tok[4]);
       } else if (tok.size() == 3) {
-        if (!ParsePlyType(std::string(tok[1]), &p.type)) Fail(path, where + "unknown PLY type '" + std::string(tok[1].substr(0, 40)) + "'");
+        if (!ParsePlyType(std::string(tok[1]), &p.type))
+          Fail(path, where + "unknown PLY type '" + std::string(tok[1].substr(0, 40)) + "'");
         p.name = std::string(tok[2]);
       } else {
         Fail(path, where + "bad property line");
@@ -481,7 +524,8 @@ TriangleMesh ReadPly(const std::filesystem::path& path, std::string_view data) {
         const PlyProperty& prop = e.properties[k];
         if (prop.is_list) {
           const double cnt = body.Read(prop.count_type);
-          if (!(cnt >= 0) || cnt > 1e6 || cnt != std::floor(cnt)) Fail(path, "bad PLY list length in element '" + e.name + "'");
+          if (!(cnt >= 0) || cnt > 1e6 || cnt != std::floor(cnt))
+            Fail(path, "bad PLY list length in element '" + e.name + "'");
           const long long n = static_cast<long long>(cnt);
           if (is_face && static_cast<int>(k) == ilist) {
             if (n < 3) Fail(path, "PLY face " + std::to_string(i) + " has fewer than 3 vertices");
@@ -519,7 +563,8 @@ TriangleMesh ReadPly(const std::filesystem::path& path, std::string_view data) {
 TriangleMesh ReadMesh(const std::filesystem::path& path) {
   const std::string ext = Lower(path.extension().string());
   if (ext != ".stl" && ext != ".obj" && ext != ".off" && ext != ".ply" && ext != ".3mf" && ext != ".amf") {
-    Fail(path, "unknown mesh extension '" + path.extension().string() + "' (expected .stl, .obj, .off, .ply, .3mf or .amf)");
+    Fail(path,
+         "unknown mesh extension '" + path.extension().string() + "' (expected .stl, .obj, .off, .ply, .3mf or .amf)");
   }
   std::error_code ec;
   if (!std::filesystem::exists(path, ec)) Fail(path, "file does not exist");
@@ -533,12 +578,18 @@ TriangleMesh ReadMesh(const std::filesystem::path& path) {
   if (data.empty()) Fail(path, "file is empty");
 
   TriangleMesh mesh;
-  if (ext == ".stl") mesh = ReadStl(path, data);
-  else if (ext == ".obj") mesh = ReadObj(path, data);
-  else if (ext == ".off") mesh = ReadOff(path, data);
-  else if (ext == ".3mf") mesh = internal::Read3mf(path, data);
-  else if (ext == ".amf") mesh = internal::ReadAmf(path, data);
-  else mesh = ReadPly(path, data);
+  if (ext == ".stl")
+    mesh = ReadStl(path, data);
+  else if (ext == ".obj")
+    mesh = ReadObj(path, data);
+  else if (ext == ".off")
+    mesh = ReadOff(path, data);
+  else if (ext == ".3mf")
+    mesh = internal::Read3mf(path, data);
+  else if (ext == ".amf")
+    mesh = internal::ReadAmf(path, data);
+  else
+    mesh = ReadPly(path, data);
 
   for (std::size_t i = 0; i < mesh.vertices.size(); ++i) {
     for (double c : mesh.vertices[i]) {
@@ -551,7 +602,8 @@ TriangleMesh ReadMesh(const std::filesystem::path& path) {
   const auto n = static_cast<std::int64_t>(mesh.vertices.size());
   for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
     for (std::int32_t v : mesh.triangles[t]) {
-      if (v < 0 || v >= n) Fail(path, "triangle " + std::to_string(t) + " has vertex index " + std::to_string(v) + " out of range");
+      if (v < 0 || v >= n)
+        Fail(path, "triangle " + std::to_string(t) + " has vertex index " + std::to_string(v) + " out of range");
     }
   }
   return mesh;

@@ -188,9 +188,9 @@ ShapeDiameterSummary ShapeDiameter(const TriangleMesh& mesh, const ShapeDiameter
   const std::size_t nq = first.size();
   RTCGeometry geometry = rtcNewGeometry(embree.device, RTC_GEOMETRY_TYPE_QUAD);
   auto* vb = static_cast<float*>(rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
-                                                          3 * sizeof(float), mesh.vertices.size()));
-  auto* ib = static_cast<unsigned*>(rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT4,
-                                                             4 * sizeof(unsigned), nq));
+                                                         3 * sizeof(float), mesh.vertices.size()));
+  auto* ib = static_cast<unsigned*>(
+      rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT4, 4 * sizeof(unsigned), nq));
   if (!vb || !ib) {
     rtcReleaseGeometry(geometry);
     throw std::runtime_error("shape diameter: Embree buffer allocation failed");
@@ -240,110 +240,111 @@ ShapeDiameterSummary ShapeDiameter(const TriangleMesh& mesh, const ShapeDiameter
   }
 
   summary.faces_measured = static_cast<std::int64_t>(measured_faces);
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, measured_faces), [&](const tbb::blocked_range<std::size_t>& range) {
-    std::vector<std::pair<double, double>> hits;  // (length, weight)
-    std::vector<double> lengths;
-    RTCIntersectContext context;
-    for (std::size_t i = range.begin(); i != range.end(); ++i) {
-      const std::size_t f = i * stride;
-      if (area[i] <= 0) continue;
-      const Vec axis = {-normal[i][0], -normal[i][1], -normal[i][2]};
-      Vec t, b;
-      Basis(axis, &t, &b);
-      hits.clear();
-      // The face's rays in packets of eight (one ray per lane of Embree's
-      // AVX2 packet traversal, rtcIntersect8): they share an origin and
-      // spread over a cone, so a packet walks the tree together, and each
-      // lane's hit is the one rtcIntersect1 finds: per-face values bit for
-      // bit the same on the tray, sign.scad and candleStand.scad (every face),
-      // in 14-22% less time (docs/benchmarks.md "OpenSCAD"; a try before
-      // the AVX2 cap, on AVX-512 kernels, moved some hit lengths).
-      for (int k0 = 0; k0 < n_rays; k0 += 8) {
-        alignas(32) int valid[8];
-        alignas(32) RTCRayHit8 packet;
-        std::array<Vec, 8> dir;
-        for (int l = 0; l < 8; ++l) {
-          const int k = std::min(k0 + l, n_rays - 1);
-          valid[l] = k0 + l < n_rays ? -1 : 0;
-          const auto& r = pattern[k];
-          dir[l] = {r[0] * t[0] + r[1] * b[0] + r[2] * axis[0], r[0] * t[1] + r[1] * b[1] + r[2] * axis[1],
-                    r[0] * t[2] + r[1] * b[2] + r[2] * axis[2]};
-          packet.ray.org_x[l] = static_cast<float>(centroid[i][0]);
-          packet.ray.org_y[l] = static_cast<float>(centroid[i][1]);
-          packet.ray.org_z[l] = static_cast<float>(centroid[i][2]);
-          packet.ray.dir_x[l] = static_cast<float>(dir[l][0]);
-          packet.ray.dir_y[l] = static_cast<float>(dir[l][1]);
-          packet.ray.dir_z[l] = static_cast<float>(dir[l][2]);
-          packet.ray.tnear[l] = t_near;
-          packet.ray.tfar[l] = std::numeric_limits<float>::infinity();
-          packet.ray.time[l] = 0;
-          packet.ray.mask[l] = 0xFFFFFFFFu;
-          packet.ray.id[l] = 0;
-          packet.ray.flags[l] = 0;
-          packet.hit.geomID[l] = RTC_INVALID_GEOMETRY_ID;
-          packet.hit.primID[l] = RTC_INVALID_GEOMETRY_ID;
-          packet.hit.instID[0][l] = RTC_INVALID_GEOMETRY_ID;
-        }
-        rtcInitIntersectContext(&context);
-        rtcIntersect8(valid, embree.scene, &context, &packet);
-        for (int l = 0; l < 8 && k0 + l < n_rays; ++l) {
-          if (packet.hit.geomID[l] == RTC_INVALID_GEOMETRY_ID) continue;
-          // The face itself: its own quad, and in it the triangle hit (a
-          // quad's second when u + v > 1, Embree's quad parametrisation).
-          // Only a hit on its own quad reads first and paired (a cache miss
-          // per ray otherwise).
-          const unsigned q = packet.hit.primID[l];
-          if (q == quad_of[i] && first[q] + (paired[q] && packet.hit.u[l] + packet.hit.v[l] > 1 ? 1 : 0) == f)
-            continue;
-          // The hit face's unit normal from Embree's geometric normal (the
-          // counter-clockwise one, as ours; rounded to float, equal to the
-          // double one to 1e-9 in cosine on the tray): reading ours would be
-          // a cache miss per ray into an array of every face's.
-          const Vec ng = {packet.hit.Ng_x[l], packet.hit.Ng_y[l], packet.hit.Ng_z[l]};
-          const double ng_length = Norm(ng);
-          if (!(ng_length > 0)) continue;
-          // Valid only on the inner side of a wall: the hit face's outward
-          // normal points along the ray (dot(ng, dir) / |ng| > 0) ...
-          // ... and only on the far side of a wall: the hit face turns back
-          // towards this one (normals more than 180 - wall_angle degrees
-          // apart, dot(ng, n) / |ng| <= -min_opposition). A neighbouring
-          // face across a convex edge (a cube's, 90 degrees) is no wall:
-          // near such an edge its short rays would outvote the opposite
-          // face's in the median and the outlier test.
-          // Both on the unnormalised normal where it decides them by more
-          // than 1e-9 of |ng| (rounding moves these dot products by ~1e-15
-          // of it), else on the normalised one: the same decisions as
-          // normalising always, without three divisions per hit.
-          const double along = Dot(ng, dir[l]), turned = Dot(ng, normal[i]) + min_opposition * ng_length;
-          const double margin = 1e-9 * ng_length;
-          if (std::abs(along) > margin && std::abs(turned) > margin) {
-            if (along <= 0 || turned > 0) continue;
-          } else {
-            const Vec hit_normal = {ng[0] / ng_length, ng[1] / ng_length, ng[2] / ng_length};
-            if (Dot(hit_normal, dir[l]) <= 0) continue;
-            if (Dot(hit_normal, normal[i]) > -min_opposition) continue;
+  tbb::parallel_for(
+      tbb::blocked_range<std::size_t>(0, measured_faces), [&](const tbb::blocked_range<std::size_t>& range) {
+        std::vector<std::pair<double, double>> hits;  // (length, weight)
+        std::vector<double> lengths;
+        RTCIntersectContext context;
+        for (std::size_t i = range.begin(); i != range.end(); ++i) {
+          const std::size_t f = i * stride;
+          if (area[i] <= 0) continue;
+          const Vec axis = {-normal[i][0], -normal[i][1], -normal[i][2]};
+          Vec t, b;
+          Basis(axis, &t, &b);
+          hits.clear();
+          // The face's rays in packets of eight (one ray per lane of Embree's
+          // AVX2 packet traversal, rtcIntersect8): they share an origin and
+          // spread over a cone, so a packet walks the tree together, and each
+          // lane's hit is the one rtcIntersect1 finds: per-face values bit for
+          // bit the same on the tray, sign.scad and candleStand.scad (every face),
+          // in 14-22% less time (docs/benchmarks.md "OpenSCAD"; a try before
+          // the AVX2 cap, on AVX-512 kernels, moved some hit lengths).
+          for (int k0 = 0; k0 < n_rays; k0 += 8) {
+            alignas(32) int valid[8];
+            alignas(32) RTCRayHit8 packet;
+            std::array<Vec, 8> dir;
+            for (int l = 0; l < 8; ++l) {
+              const int k = std::min(k0 + l, n_rays - 1);
+              valid[l] = k0 + l < n_rays ? -1 : 0;
+              const auto& r = pattern[k];
+              dir[l] = {r[0] * t[0] + r[1] * b[0] + r[2] * axis[0], r[0] * t[1] + r[1] * b[1] + r[2] * axis[1],
+                        r[0] * t[2] + r[1] * b[2] + r[2] * axis[2]};
+              packet.ray.org_x[l] = static_cast<float>(centroid[i][0]);
+              packet.ray.org_y[l] = static_cast<float>(centroid[i][1]);
+              packet.ray.org_z[l] = static_cast<float>(centroid[i][2]);
+              packet.ray.dir_x[l] = static_cast<float>(dir[l][0]);
+              packet.ray.dir_y[l] = static_cast<float>(dir[l][1]);
+              packet.ray.dir_z[l] = static_cast<float>(dir[l][2]);
+              packet.ray.tnear[l] = t_near;
+              packet.ray.tfar[l] = std::numeric_limits<float>::infinity();
+              packet.ray.time[l] = 0;
+              packet.ray.mask[l] = 0xFFFFFFFFu;
+              packet.ray.id[l] = 0;
+              packet.ray.flags[l] = 0;
+              packet.hit.geomID[l] = RTC_INVALID_GEOMETRY_ID;
+              packet.hit.primID[l] = RTC_INVALID_GEOMETRY_ID;
+              packet.hit.instID[0][l] = RTC_INVALID_GEOMETRY_ID;
+            }
+            rtcInitIntersectContext(&context);
+            rtcIntersect8(valid, embree.scene, &context, &packet);
+            for (int l = 0; l < 8 && k0 + l < n_rays; ++l) {
+              if (packet.hit.geomID[l] == RTC_INVALID_GEOMETRY_ID) continue;
+              // The face itself: its own quad, and in it the triangle hit (a
+              // quad's second when u + v > 1, Embree's quad parametrisation).
+              // Only a hit on its own quad reads first and paired (a cache miss
+              // per ray otherwise).
+              const unsigned q = packet.hit.primID[l];
+              if (q == quad_of[i] && first[q] + (paired[q] && packet.hit.u[l] + packet.hit.v[l] > 1 ? 1 : 0) == f)
+                continue;
+              // The hit face's unit normal from Embree's geometric normal (the
+              // counter-clockwise one, as ours; rounded to float, equal to the
+              // double one to 1e-9 in cosine on the tray): reading ours would be
+              // a cache miss per ray into an array of every face's.
+              const Vec ng = {packet.hit.Ng_x[l], packet.hit.Ng_y[l], packet.hit.Ng_z[l]};
+              const double ng_length = Norm(ng);
+              if (!(ng_length > 0)) continue;
+              // Valid only on the inner side of a wall: the hit face's outward
+              // normal points along the ray (dot(ng, dir) / |ng| > 0) ...
+              // ... and only on the far side of a wall: the hit face turns back
+              // towards this one (normals more than 180 - wall_angle degrees
+              // apart, dot(ng, n) / |ng| <= -min_opposition). A neighbouring
+              // face across a convex edge (a cube's, 90 degrees) is no wall:
+              // near such an edge its short rays would outvote the opposite
+              // face's in the median and the outlier test.
+              // Both on the unnormalised normal where it decides them by more
+              // than 1e-9 of |ng| (rounding moves these dot products by ~1e-15
+              // of it), else on the normalised one: the same decisions as
+              // normalising always, without three divisions per hit.
+              const double along = Dot(ng, dir[l]), turned = Dot(ng, normal[i]) + min_opposition * ng_length;
+              const double margin = 1e-9 * ng_length;
+              if (std::abs(along) > margin && std::abs(turned) > margin) {
+                if (along <= 0 || turned > 0) continue;
+              } else {
+                const Vec hit_normal = {ng[0] / ng_length, ng[1] / ng_length, ng[2] / ng_length};
+                if (Dot(hit_normal, dir[l]) <= 0) continue;
+                if (Dot(hit_normal, normal[i]) > -min_opposition) continue;
+              }
+              hits.push_back({static_cast<double>(packet.ray.tfar[l]), pattern[k0 + l][3]});
+            }
           }
-          hits.push_back({static_cast<double>(packet.ray.tfar[l]), pattern[k0 + l][3]});
+          if (hits.empty()) continue;
+          // Outlier removal: keep lengths within one standard deviation of the median.
+          lengths.clear();
+          for (const auto& h : hits) lengths.push_back(h.first);
+          std::sort(lengths.begin(), lengths.end());
+          const std::size_t m = lengths.size();
+          const double median = m % 2 ? lengths[m / 2] : 0.5 * (lengths[m / 2 - 1] + lengths[m / 2]);
+          double mean = 0;
+          for (double l : lengths) mean += l;
+          mean /= m;
+          double var = 0;
+          for (double l : lengths) var += (l - mean) * (l - mean);
+          const double sigma = std::sqrt(var / m);
+          std::erase_if(hits, [&](const auto& h) { return std::abs(h.first - median) > sigma; });
+          if (hits.empty()) continue;  // cannot happen: some length is within sigma of the median
+          summary.per_face[f] = WeightedMedian(hits);
         }
-      }
-      if (hits.empty()) continue;
-      // Outlier removal: keep lengths within one standard deviation of the median.
-      lengths.clear();
-      for (const auto& h : hits) lengths.push_back(h.first);
-      std::sort(lengths.begin(), lengths.end());
-      const std::size_t m = lengths.size();
-      const double median = m % 2 ? lengths[m / 2] : 0.5 * (lengths[m / 2 - 1] + lengths[m / 2]);
-      double mean = 0;
-      for (double l : lengths) mean += l;
-      mean /= m;
-      double var = 0;
-      for (double l : lengths) var += (l - mean) * (l - mean);
-      const double sigma = std::sqrt(var / m);
-      std::erase_if(hits, [&](const auto& h) { return std::abs(h.first - median) > sigma; });
-      if (hits.empty()) continue;  // cannot happen: some length is within sigma of the median
-      summary.per_face[f] = WeightedMedian(hits);
-    }
-  });
+      });
 
   // Area-weighted statistics over faces with a value.
   std::vector<std::pair<double, double>> valued;  // (value, area)

@@ -158,10 +158,14 @@ std::string EncodeMesh(const TriangleMesh& mesh, const std::string& extension) {
   }
   if (ext == ".3mf") return Encode3mf(mesh);
   Bytes bytes;
-  if (ext == ".stl") WriteStl(mesh, &bytes);
-  else if (ext == ".obj") WriteObj(mesh, &bytes);
-  else if (ext == ".off") WriteOff(mesh, &bytes);
-  else WritePly(mesh, &bytes);
+  if (ext == ".stl")
+    WriteStl(mesh, &bytes);
+  else if (ext == ".obj")
+    WriteObj(mesh, &bytes);
+  else if (ext == ".off")
+    WriteOff(mesh, &bytes);
+  else
+    WritePly(mesh, &bytes);
   return bytes.Take();
 }
 

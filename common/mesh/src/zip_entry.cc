@@ -67,9 +67,11 @@ std::string ZipEntry(const std::filesystem::path& path, std::string_view d, cons
     if (!name.empty() && entry_name != name && entry_name != "/" + name) continue;
     if (flags & 1) Damaged(path, "entry " + std::string(entry_name) + " is encrypted");
     if (size > kMaxEntryBytes) Damaged(path, "entry " + std::string(entry_name) + " is over 1 GiB uncompressed");
-    if (local + 30 > d.size() || U32(d, local) != 0x04034b50) Damaged(path, "local header of " + std::string(entry_name));
+    if (local + 30 > d.size() || U32(d, local) != 0x04034b50)
+      Damaged(path, "local header of " + std::string(entry_name));
     const std::size_t begin = local + 30 + U16(d, local + 26) + U16(d, local + 28);
-    if (begin > d.size() || packed > d.size() - begin) Damaged(path, "entry " + std::string(entry_name) + " is truncated");
+    if (begin > d.size() || packed > d.size() - begin)
+      Damaged(path, "entry " + std::string(entry_name) + " is truncated");
     const std::string_view bytes = d.substr(begin, packed);
     if (method == 0) {
       if (packed != size) Damaged(path, "stored entry " + std::string(entry_name) + " has two sizes");

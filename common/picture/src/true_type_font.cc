@@ -75,8 +75,7 @@ void TrueTypeFont::DrawCentred(Canvas& canvas, int cx, int y, const std::string&
   Draw(canvas, cx - Width(text, px) / 2, y, text, colour, px);
 }
 
-void TrueTypeFont::DrawUpward(Canvas& canvas, int x, int y, const std::string& text, unsigned colour,
-                              double px) const {
+void TrueTypeFont::DrawUpward(Canvas& canvas, int x, int y, const std::string& text, unsigned colour, double px) const {
   // A glyph pixel (i, j) right of and below the pen goes up and right of it:
   // (x + j, y - i) for a pen at (x, y) moving up.
   Rasterise(face_->info, text, px, [&](int along, int i, int j, int ox, int oy, double alpha) {

@@ -28,8 +28,8 @@ v1::JobBundle ProtoBundle(const artifact::JobBundle& b) {
   return bundle;
 }
 
-artifact::Artifact ArtifactOf(const v1::JobBundle& bundle, const std::string& design_name,
-                             const sampling::JobFile& job, const sampling::Form& form) {
+artifact::Artifact ArtifactOf(const v1::JobBundle& bundle, const std::string& design_name, const sampling::JobFile& job,
+                              const sampling::Form& form) {
   artifact::Artifact a;
   a.form = form;
   artifact::Manifest& m = a.manifest;

@@ -27,8 +27,7 @@ v1::CachePlanInput CachePlanInputOf(const CacheAssembly& a) {
   return input;
 }
 
-CacheAssemblySummary AddCache(artifact::Artifact& artifact, const CacheAssembly& a,
-                              const v1::CachePlanReport& report) {
+CacheAssemblySummary AddCache(artifact::Artifact& artifact, const CacheAssembly& a, const v1::CachePlanReport& report) {
   CacheAssemblySummary summary;
   summary.exact = report.exact();
   const cache::CacheOptions& options = a.options;

@@ -29,10 +29,14 @@ cache::CacheOptions CacheOptionsOf(const sampling::JobFile& job) {
     try {
       if (key == "strategy") {
         const std::string v = kv.second.as<std::string>();
-        if (v == "naive") o.strategy = cache::Strategy::kNaive;
-        else if (v == "opt_ave") o.strategy = cache::Strategy::kOptAve;
-        else if (v == "opt_max") o.strategy = cache::Strategy::kOptMax;
-        else throw InputError(where + "strategy '" + v + "' is not naive, opt_ave or opt_max");
+        if (v == "naive")
+          o.strategy = cache::Strategy::kNaive;
+        else if (v == "opt_ave")
+          o.strategy = cache::Strategy::kOptAve;
+        else if (v == "opt_max")
+          o.strategy = cache::Strategy::kOptMax;
+        else
+          throw InputError(where + "strategy '" + v + "' is not naive, opt_ave or opt_max");
       } else if (key == "budget_mb") {
         const double v = kv.second.as<double>();
         if (!(v > 0) || !std::isfinite(v)) throw InputError(where + "budget_mb must be a positive number");

@@ -68,8 +68,7 @@ CacheAssembly CollectSubtreesInProcess(const design::Design& design, const sampl
   options.run_checks = false;
   for (const auto& sample : form.samples) {
     if (!sample.outcome.valid) continue;
-    const design::SampleResult r =
-        design::EvaluateSample(design, precompute::DesignPointOf(design, sample.u), options);
+    const design::SampleResult r = design::EvaluateSample(design, precompute::DesignPointOf(design, sample.u), options);
     if (r.subtrees.empty()) continue;
     for (const auto& s : r.subtrees)
       a.subtrees.push_back({s.key, s.op, s.children, static_cast<std::int64_t>(s.bytes), true});
@@ -107,8 +106,7 @@ std::vector<design::SweptVolumeResult> LocalExecutor::RunSweptVolumeTasks(const 
   std::vector<design::SweptVolumeResult> out;
   for (const auto& t : tasks) {
     try {
-      out.push_back(
-          design::ComputeSweptVolume(design_, precompute::DesignPointOf(design_, t.point.u), t.node_path));
+      out.push_back(design::ComputeSweptVolume(design_, precompute::DesignPointOf(design_, t.point.u), t.node_path));
     } catch (const std::exception&) {
       out.emplace_back();  // not computed, as a quarantined cluster task
     }

@@ -13,7 +13,7 @@ namespace fabatlas::pipeline {
 std::vector<SweptVolumeTask> SweptVolumeTasks(const design::Design& design, const sampling::DesignSpace& space) {
   std::vector<std::string> paths;
   std::function<void(const design::Node&, const std::string&)> walk = [&](const design::Node& n,
-                                                                            const std::string& path) {
+                                                                          const std::string& path) {
     if (n.op == "carve_swept") paths.push_back(path);
     for (std::size_t i = 0; i < n.children.size(); ++i) walk(n.children[i], path + "/" + std::to_string(i));
   };

@@ -68,7 +68,8 @@ void WriteCacheCurvesPng(const std::vector<artifact::CacheCurvePoint>& points, c
   img.Line(left, top, left, bottom, 0x000000, 2);
   img.Line(left, bottom, right, bottom, 0x000000, 2);
   font.DrawCentred(img, (left + right) / 2, bottom + 48, "cache size (MiB)", 0x000000, 15);
-  font.DrawUpward(img, 24, (top + bottom) / 2 + font.Width("preview time (s)", 15) / 2, "preview time (s)", 0x000000, 15);
+  font.DrawUpward(img, 24, (top + bottom) / 2 + font.Width("preview time (s)", 15) / 2, "preview time (s)", 0x000000,
+                  15);
   const std::string title = (options.title.empty() ? std::string() : options.title + ": ") +
                             "mean and worst preview time vs cache size (Fab Forms Fig. 13)";
   font.Draw(img, left, 32, title, 0x000000, 18);
@@ -80,7 +81,8 @@ void WriteCacheCurvesPng(const std::vector<artifact::CacheCurvePoint>& points, c
       for (std::size_t i = 1; i < c.size(); ++i) {
         const double a = mean ? c[i - 1].mean_seconds : c[i - 1].worst_seconds;
         const double b = mean ? c[i].mean_seconds : c[i].worst_seconds;
-        const double xa = static_cast<double>(c[i - 1].bytes) / (1 << 20), xb = static_cast<double>(c[i].bytes) / (1 << 20);
+        const double xa = static_cast<double>(c[i - 1].bytes) / (1 << 20),
+                     xb = static_cast<double>(c[i].bytes) / (1 << 20);
         img.Line(X(xa), Y(a), X(xb), Y(b), colour, 3, mean ? 6 : 0);
       }
       if (c.size() == 1) {

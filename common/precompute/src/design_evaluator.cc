@@ -14,8 +14,12 @@ sampling::DesignSpace DesignSpaceOf(const design::Design& d, int subdivisions) {
     dim.lo = p.min;
     dim.hi = p.max;
     switch (p.kind) {
-      case design::ParameterKind::kReal: dim.kind = sampling::DimensionKind::kReal; break;
-      case design::ParameterKind::kInteger: dim.kind = sampling::DimensionKind::kInteger; break;
+      case design::ParameterKind::kReal:
+        dim.kind = sampling::DimensionKind::kReal;
+        break;
+      case design::ParameterKind::kInteger:
+        dim.kind = sampling::DimensionKind::kInteger;
+        break;
       case design::ParameterKind::kEnumerated:
         dim.kind = sampling::DimensionKind::kEnumerated;
         dim.values = p.labels;
@@ -116,7 +120,8 @@ geometry::Solid DesignSampleEvaluator::SolidOf(const sampling::SamplePoint& poin
 }
 
 void DesignSampleEvaluator::Remember(const sampling::PointKey& key, const geometry::Solid& solid) {
-  const std::size_t budget = options_.solid_memory_budget ? options_.solid_memory_budget() : options_.solid_memory_bytes;
+  const std::size_t budget =
+      options_.solid_memory_budget ? options_.solid_memory_budget() : options_.solid_memory_bytes;
   std::vector<std::pair<sampling::PointKey, geometry::Solid>> dropped;
   {
     std::lock_guard<std::mutex> lock(mutex_);

@@ -13,8 +13,8 @@ namespace fabatlas::precompute {
 std::string Table3Row(const design::Design& design, const sampling::SamplingStatistics& s) {
   std::ostringstream out;
   out << design.name << "  |U|=" << design.exposed.size() << "  samples " << s.samples << "  CPU " << std::fixed
-      << std::setprecision(1) << s.evaluator_cpu_seconds << " s  valid " << std::setprecision(1) << s.valid_volume_percent
-      << "%  failures: ";
+      << std::setprecision(1) << s.evaluator_cpu_seconds << " s  valid " << std::setprecision(1)
+      << s.valid_volume_percent << "%  failures: ";
   if (s.failure_shares.empty()) out << "none";
   bool first = true;
   for (const auto& [type, share] : s.failure_shares) {
@@ -33,8 +33,10 @@ void WriteFormOutputs(const design::Design& design, const sampling::SamplingSumm
   std::error_code ec;
   std::filesystem::create_directories(out_dir, ec);
   if (ec) throw InputError(out_dir.string() + ": cannot create output directory: " + ec.message());
-  if (form_json) WriteFileAtomically(out_dir / "form.json", sampling::FormToJson(summary.form));
-  else std::filesystem::remove(out_dir / "form.json", ec);
+  if (form_json)
+    WriteFileAtomically(out_dir / "form.json", sampling::FormToJson(summary.form));
+  else
+    std::filesystem::remove(out_dir / "form.json", ec);
 
   const auto& s = summary.statistics;
   nlohmann::json stats{{"design", design.name},

@@ -25,7 +25,9 @@ std::vector<std::vector<double>> RandomValidPoints(const sampling::Form& form, i
     for (int d = 0; d < n; ++d) {
       const auto& dim = space.dimension(d);
       switch (dim.kind) {
-        case sampling::DimensionKind::kReal: u[d] = dim.lo + (dim.hi - dim.lo) * unit(rng); break;
+        case sampling::DimensionKind::kReal:
+          u[d] = dim.lo + (dim.hi - dim.lo) * unit(rng);
+          break;
         case sampling::DimensionKind::kInteger:
           u[d] = std::floor(dim.lo + (dim.hi - dim.lo + 1) * unit(rng));
           u[d] = std::min(u[d], dim.hi);

@@ -89,11 +89,13 @@ void WritePreviewTimesPng(const std::vector<PreviewTimesSeries>& series, const s
     img.VLine(cx + box / 2, q3, q1, c, 2);
     img.HLine(cx - box / 2, cx + box / 2, q2, 0x000000, 3);
     const int my = Y(mean);
-    for (int r = 0; r <= 6; ++r) img.HLine(cx - (6 - r), cx + (6 - r), my - r, 0xC0392B), img.HLine(cx - (6 - r), cx + (6 - r), my + r, 0xC0392B);
+    for (int r = 0; r <= 6; ++r)
+      img.HLine(cx - (6 - r), cx + (6 - r), my - r, 0xC0392B), img.HLine(cx - (6 - r), cx + (6 - r), my + r, 0xC0392B);
     font.DrawCentred(img, cx, bottom + 48, "n = " + std::to_string(v.size()) + ", mean " + Ms(mean), 0x333333, 14);
     font.DrawCentred(img, cx, bottom + 68, "median " + Ms(Quantile(v, 0.5)) + ", worst " + Ms(v.back()), 0x333333, 14);
   }
-  font.Draw(img, left, options.height - 14, "box: quartiles, bar: median, whiskers: fastest and worst, diamond: mean", 0x555555, 13);
+  font.Draw(img, left, options.height - 14, "box: quartiles, bar: median, whiskers: fastest and worst, diamond: mean",
+            0x555555, 13);
   img.WritePng(path);
 }
 

@@ -18,9 +18,12 @@ constexpr std::uint64_t kNoBudget = std::numeric_limits<std::uint64_t>::max();
 
 const char* ScoreName(cache::Score score) {
   switch (score) {
-    case cache::Score::kTimesCount: return "times_count";
-    case cache::Score::kPerByte: return "per_byte";
-    case cache::Score::kSavedPerByte: return "saved_per_byte";
+    case cache::Score::kTimesCount:
+      return "times_count";
+    case cache::Score::kPerByte:
+      return "per_byte";
+    case cache::Score::kSavedPerByte:
+      return "saved_per_byte";
   }
   return "?";
 }
@@ -46,14 +49,22 @@ v1::CachePlanOptions CachePlanOptionsOf(const cache::CacheOptions& o) {
 
 cache::CacheOptions CacheOptionsOf(const v1::CachePlanOptions& m) {
   cache::CacheOptions o;
-  if (m.strategy() == "naive") o.strategy = cache::Strategy::kNaive;
-  else if (m.strategy() == "opt_ave") o.strategy = cache::Strategy::kOptAve;
-  else if (m.strategy() == "opt_max") o.strategy = cache::Strategy::kOptMax;
-  else throw InputError("cache plan: strategy '" + m.strategy() + "' is not naive, opt_ave or opt_max");
-  if (m.score() == "times_count") o.score = cache::Score::kTimesCount;
-  else if (m.score() == "per_byte") o.score = cache::Score::kPerByte;
-  else if (m.score() == "saved_per_byte") o.score = cache::Score::kSavedPerByte;
-  else throw InputError("cache plan: score '" + m.score() + "' is not times_count, per_byte or saved_per_byte");
+  if (m.strategy() == "naive")
+    o.strategy = cache::Strategy::kNaive;
+  else if (m.strategy() == "opt_ave")
+    o.strategy = cache::Strategy::kOptAve;
+  else if (m.strategy() == "opt_max")
+    o.strategy = cache::Strategy::kOptMax;
+  else
+    throw InputError("cache plan: strategy '" + m.strategy() + "' is not naive, opt_ave or opt_max");
+  if (m.score() == "times_count")
+    o.score = cache::Score::kTimesCount;
+  else if (m.score() == "per_byte")
+    o.score = cache::Score::kPerByte;
+  else if (m.score() == "saved_per_byte")
+    o.score = cache::Score::kSavedPerByte;
+  else
+    throw InputError("cache plan: score '" + m.score() + "' is not times_count, per_byte or saved_per_byte");
   o.budget_bytes = m.budget_bytes() == 0 ? kNoBudget : m.budget_bytes();
   o.min_seconds = m.min_seconds();
   o.average_share = m.average_share();
@@ -76,7 +87,8 @@ v1::CachePlanReport RunCachePlan(const v1::CachePlanInput& input) {
   std::map<std::string, Merged> by_key;
   for (const auto& s : input.subtrees()) {
     Merged& m = by_key[s.key()];
-    if (m.first == nullptr) m.first = &s;
+    if (m.first == nullptr)
+      m.first = &s;
     else if (!std::equal(s.children().begin(), s.children().end(), m.first->children().begin(),
                          m.first->children().end()))
       throw InputError("cache graph: subtree " + s.key() + " is recorded with different children");
@@ -91,8 +103,11 @@ v1::CachePlanReport RunCachePlan(const v1::CachePlanInput& input) {
     for (const auto& c : m.first->children())
       if (auto it = by_key.find(c); it != by_key.end()) in += static_cast<std::uint64_t>(it->second.bytes);
     const auto out = static_cast<std::uint64_t>(m.bytes);
-    nodes.push_back({key, {m.first->children().begin(), m.first->children().end()},
-                     cache::ModelSubtreeSeconds(m.first->op(), out, in), out, m.stored});
+    nodes.push_back({key,
+                     {m.first->children().begin(), m.first->children().end()},
+                     cache::ModelSubtreeSeconds(m.first->op(), out, in),
+                     out,
+                     m.stored});
     op_of.emplace(key, m.first->op());
   }
   std::vector<cache::SampleTree> samples;
@@ -152,9 +167,8 @@ v1::CachePlanReport RunCachePlan(const v1::CachePlanInput& input) {
     eo.objective = cache::ExactObjective::kWorst;
     eo.budget_bytes = options.budget_bytes;
     eo.min_seconds = options.min_seconds;
-    eo.time_limit_seconds = input.options().exact_time_limit_seconds() > 0
-                                ? input.options().exact_time_limit_seconds()
-                                : 10.0;
+    eo.time_limit_seconds =
+        input.options().exact_time_limit_seconds() > 0 ? input.options().exact_time_limit_seconds() : 10.0;
     eo.max_variables = input.options().exact_max_variables();
     eo.start = plan.chosen.cache;
     const cache::ExactCacheSummary ex = cache::SolveExactCache(graph, eo);

@@ -55,8 +55,9 @@ void RouteGrpcLogs() {
       // Debug: the caller reports what failed (one line, or a log event).
       const log::Level level = log::Level::kDebug;
       if (!log::Enabled(level)) return;
-      log::Write(level, "grpc", {{"message", args->message ? args->message : ""},
-                                 {"source", std::string(args->file ? args->file : "") + ":" + std::to_string(args->line)}});
+      log::Write(level, "grpc",
+                 {{"message", args->message ? args->message : ""},
+                  {"source", std::string(args->file ? args->file : "") + ":" + std::to_string(args->line)}});
     });
   });
 }
@@ -87,8 +88,7 @@ std::shared_ptr<grpc::Channel> MakeChannel(const std::string& target, const Clie
   return grpc::CreateCustomChannel(target, credentials, args);
 }
 
-void Prepare(grpc::ClientContext& context, const ClientSecurity& security,
-             std::chrono::milliseconds timeout) {
+void Prepare(grpc::ClientContext& context, const ClientSecurity& security, std::chrono::milliseconds timeout) {
   context.set_deadline(std::chrono::system_clock::now() + timeout);
   if (!security.token.empty()) context.AddMetadata("authorization", "Bearer " + security.token);
 }

@@ -123,8 +123,7 @@ std::string EvaluationDigest(const v1::JobBundle& bundle) {
 
 MaterializedBundle Materialize(const v1::JobBundle& bundle, const fs::path& dir) {
   auto check = [](const std::string& name) {
-    if (!StaysInside(fs::path(name)))
-      throw InputError("job bundle: file name '" + name + "' leaves the job directory");
+    if (!StaysInside(fs::path(name))) throw InputError("job bundle: file name '" + name + "' leaves the job directory");
   };
   check(bundle.job_file_name());
   check(bundle.design_file_name());

@@ -54,7 +54,8 @@ std::string Decompress(std::string_view blob) {
   std::string out(static_cast<std::size_t>(size), '\0');
   const std::size_t n = ZSTD_decompressDCtx(Contexts().d.get(), out.data(), out.size(), blob.data(), blob.size());
   if (ZSTD_isError(n) || n != out.size())
-    throw InputError(std::string("solid blob: corrupt zstd frame: ") + (ZSTD_isError(n) ? ZSTD_getErrorName(n) : "short"));
+    throw InputError(std::string("solid blob: corrupt zstd frame: ") +
+                     (ZSTD_isError(n) ? ZSTD_getErrorName(n) : "short"));
   return out;
 }
 

@@ -53,8 +53,7 @@ sampling::SamplePoint PointOf(const v1::SamplePoint& point) {
   return p;
 }
 
-std::string TaskKey(const v1::TaskPayload& payload, const std::string& evaluation_digest,
-                    int subdivisions) {
+std::string TaskKey(const v1::TaskPayload& payload, const std::string& evaluation_digest, int subdivisions) {
   std::string text = "fabatlas.task/1\n";
   text += std::to_string(static_cast<int>(payload.kind())) + "\n";
   text += evaluation_digest + "\n" + std::to_string(subdivisions) + "\n" + kCodeVersion + "\n";

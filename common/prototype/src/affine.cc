@@ -21,18 +21,26 @@ class Parser {
 
  private:
   [[noreturn]] void Fail(const std::string& m) { throw InputError(where_ + ": expression '" + text_ + "': " + m); }
-  void Skip() { while (pos_ < text_.size() && std::isspace(static_cast<unsigned char>(text_[pos_]))) ++pos_; }
+  void Skip() {
+    while (pos_ < text_.size() && std::isspace(static_cast<unsigned char>(text_[pos_]))) ++pos_;
+  }
   bool Eat(char c) {
     Skip();
-    if (pos_ < text_.size() && text_[pos_] == c) { ++pos_; return true; }
+    if (pos_ < text_.size() && text_[pos_] == c) {
+      ++pos_;
+      return true;
+    }
     return false;
   }
   Affine Sum() {
     Affine f = Product();
     while (true) {
-      if (Eat('+')) f = f + Product();
-      else if (Eat('-')) f = f - Product();
-      else return f;
+      if (Eat('+'))
+        f = f + Product();
+      else if (Eat('-'))
+        f = f - Product();
+      else
+        return f;
     }
   }
   Affine Product() {
@@ -40,9 +48,12 @@ class Parser {
     while (true) {
       if (Eat('*')) {
         Affine g = Factor();
-        if (f.IsConst()) f = f.c * g;
-        else if (g.IsConst()) f = g.c * f;
-        else Fail("a product of two coordinates is not linear");
+        if (f.IsConst())
+          f = f.c * g;
+        else if (g.IsConst())
+          f = g.c * f;
+        else
+          Fail("a product of two coordinates is not linear");
       } else if (Eat('/')) {
         Affine g = Factor();
         if (!g.IsConst() || g.c == 0) Fail("division by a coordinate or by zero");
@@ -71,8 +82,8 @@ class Parser {
     }
     if (std::isalpha(static_cast<unsigned char>(c)) || c == '_') {
       std::size_t start = pos_;
-      while (pos_ < text_.size() && (std::isalnum(static_cast<unsigned char>(text_[pos_])) || text_[pos_] == '_' ||
-                                     text_[pos_] == '.'))
+      while (pos_ < text_.size() &&
+             (std::isalnum(static_cast<unsigned char>(text_[pos_])) || text_[pos_] == '_' || text_[pos_] == '.'))
         ++pos_;
       return resolve_(text_.substr(start, pos_ - start));
     }

@@ -17,10 +17,19 @@ struct Affine {
   std::map<int, double> a;
   double c = 0;
 
-  static Affine Var(int i) { Affine f; f.a[i] = 1; return f; }
-  static Affine Const(double v) { Affine f; f.c = v; return f; }
+  static Affine Var(int i) {
+    Affine f;
+    f.a[i] = 1;
+    return f;
+  }
+  static Affine Const(double v) {
+    Affine f;
+    f.c = v;
+    return f;
+  }
   bool IsConst() const {
-    for (const auto& [_, v] : a) if (v != 0) return false;
+    for (const auto& [_, v] : a)
+      if (v != 0) return false;
     return true;
   }
   double Eval(const Eigen::VectorXd& x) const {

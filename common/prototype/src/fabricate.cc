@@ -165,8 +165,10 @@ std::vector<FabricatedPiece> FabricatePieces(const Prototype& p, const SolveSumm
       Vec3 lo{c[0] - gap / 2, c[2] - gap / 2, c[4] - gap / 2}, hi{c[1] + gap / 2, c[3] + gap / 2, c[5] + gap / 2};
       if (!cav.open.empty()) {
         int ax = cav.open[0] - 'x';
-        if (cav.open[1] == '0') lo[ax] -= 2 * gap + 2 * h;
-        else hi[ax] += 2 * gap + 2 * h;
+        if (cav.open[1] == '0')
+          lo[ax] -= 2 * gap + 2 * h;
+        else
+          hi[ax] += 2 * gap + 2 * h;
       }
       solids[i] = Cut(solids[i], BoxAt(g, lo, hi));
     }
@@ -238,7 +240,8 @@ std::vector<FabricatedPiece> FabricatePieces(const Prototype& p, const SolveSumm
         solids[ci] = Add(solids[ci], CylinderAlong(g, j.axis, r, lo + gap / 2, hi - gap / 2, e));
         solids[pi] = Cut(solids[pi], CylinderAlong(g, j.axis, r + gap, lo - gap, hi + gap, e));
         for (double y0 : {lo, hi - yl}) {
-          Solid yoke = Cut(CylinderAlong(g, j.axis, ro, y0, y0 + yl, e), CylinderAlong(g, j.axis, r + gap, y0 - h, y0 + yl + h, e));
+          Solid yoke = Cut(CylinderAlong(g, j.axis, ro, y0, y0 + yl, e),
+                           CylinderAlong(g, j.axis, r + gap, y0 - h, y0 + yl + h, e));
           solids[ci] = Cut(solids[ci], CylinderAlong(g, j.axis, ro + gap, y0 - gap, y0 + yl + gap, e));
           solids[ci] = Add(solids[ci], CylinderAlong(g, j.axis, r, lo + gap / 2, hi - gap / 2, e));
           solids[pi] = Add(solids[pi], yoke);
@@ -284,7 +287,9 @@ std::vector<FabricatedPiece> FabricatePieces(const Prototype& p, const SolveSumm
       double P = cb[2 * n + (sigma > 0 ? 1 : 0)];
       double rp = std::max(2 * h, std::min(thin / 4, 4.0));
       double tl = std::max(4 * h, rp), R = rp + gap + std::max(rp, 2 * h);
-      auto along = [&](double a, double b) { return std::pair{std::min(P + sigma * a, P + sigma * b), std::max(P + sigma * a, P + sigma * b)}; };
+      auto along = [&](double a, double b) {
+        return std::pair{std::min(P + sigma * a, P + sigma * b), std::max(P + sigma * a, P + sigma * b)};
+      };
       Vec3 ua{ps->child_pivot[0], ps->child_pivot[1], ps->child_pivot[2]};
       Vec3 ub{ps->parent_pivot[0], ps->parent_pivot[1], ps->parent_pivot[2]};
       auto [p0, p1] = along(-2 * rp, 2 * gap + tl + tl);

@@ -72,7 +72,8 @@ class Reader {
   Cuboid ReadCuboid(const YAML::Node& n, const std::string& name) const {
     Cuboid c;
     c.name = name;
-    if (!n || !n.IsSequence() || n.size() != 6) Fail(n ? n : YAML::Node(), name + ": box must be [x0, x1, y0, y1, z0, z1]");
+    if (!n || !n.IsSequence() || n.size() != 6)
+      Fail(n ? n : YAML::Node(), name + ": box must be [x0, x1, y0, y1, z0, z1]");
     for (int i = 0; i < 6; ++i) c.box[i] = Number(n[i], name + " box");
     for (int i = 0; i < 3; ++i)
       if (c.box[2 * i + 1] <= c.box[2 * i]) Fail(n, name + ": box " + "xyz"[i] + "1 must exceed " + "xyz"[i] + "0");
@@ -81,8 +82,8 @@ class Reader {
 
   Prototype Read(const YAML::Node& root) {
     proto_.file = file_;
-    Keys(root, {"name", "description", "parameters", "fabrication", "parts", "joints", "configurations",
-                "relationships"},
+    Keys(root,
+         {"name", "description", "parameters", "fabrication", "parts", "joints", "configurations", "relationships"},
          "a prototype");
     proto_.name = root["name"] ? Str(root["name"], "name") : std::filesystem::path(file_).stem().string();
     if (const auto ps = root["parameters"]) {
@@ -128,7 +129,8 @@ class Reader {
             std::string on = Str(c.second["on"], "on");
             bool known = on == part.name;
             for (const Cuboid& q : part.pieces) known |= q.name == part.name + "." + on;
-            if (!known) Fail(c.second["on"], "piece " + piece.name + ": 'on' must be the part or an earlier piece of it");
+            if (!known)
+              Fail(c.second["on"], "piece " + piece.name + ": 'on' must be the part or an earlier piece of it");
             piece.on = on == part.name ? on : part.name + "." + on;
           }
           if (const auto h = c.second["hold"])
@@ -143,7 +145,8 @@ class Reader {
         for (const auto& c : cs) {
           Keys(c.second, {"box", "open", "hold"}, "cavity");
           if (!inner_names.insert(c.first.as<std::string>()).second)
-            Fail(c.first, "cavity '" + c.first.as<std::string>() + "' of " + part.name + " repeats a name or is a coordinate name");
+            Fail(c.first, "cavity '" + c.first.as<std::string>() + "' of " + part.name +
+                              " repeats a name or is a coordinate name");
           Cuboid cav = ReadCuboid(c.second["box"], part.name + "." + c.first.as<std::string>());
           if (const auto h = c.second["hold"])
             for (const std::string& s : StrList(h, "hold")) cav.held.push_back(CoordIndex(h, s));
@@ -181,11 +184,16 @@ class Reader {
       Keys(n, {"type", "child", "parent", "axis", "at", "slide_axis", "face", "pivot_child", "pivot_parent", "on"},
            "joint " + j.name);
       std::string type = Str(n["type"], "joint type");
-      if (type == "hinge") j.type = JointType::kHinge;
-      else if (type == "slide") j.type = JointType::kSlide;
-      else if (type == "sliding_hinge") j.type = JointType::kSlidingHinge;
-      else if (type == "double_pivot") j.type = JointType::kDoublePivot;
-      else Fail(n["type"], "joint type must be hinge, slide, sliding_hinge or double_pivot");
+      if (type == "hinge")
+        j.type = JointType::kHinge;
+      else if (type == "slide")
+        j.type = JointType::kSlide;
+      else if (type == "sliding_hinge")
+        j.type = JointType::kSlidingHinge;
+      else if (type == "double_pivot")
+        j.type = JointType::kDoublePivot;
+      else
+        Fail(n["type"], "joint type must be hinge, slide, sliding_hinge or double_pivot");
       j.child = Str(n["child"], "child");
       j.parent = Str(n["parent"], "parent");
       if (proto_.PartIndex(j.child) < 0) Fail(n["child"], "unknown part '" + j.child + "'");
@@ -194,9 +202,11 @@ class Reader {
       if (!children.insert(j.child).second) {
         // Several double pivots (e.g. left and right) may carry one part; the
         // first one's values place it, the others must agree (checked below).
-        auto first = std::find_if(proto_.joints.begin(), proto_.joints.end(), [&](const Joint& k) { return k.child == j.child; });
+        auto first = std::find_if(proto_.joints.begin(), proto_.joints.end(),
+                                  [&](const Joint& k) { return k.child == j.child; });
         if (first->type != JointType::kDoublePivot || j.type != JointType::kDoublePivot || first->parent != j.parent)
-          Fail(n["child"], "part '" + j.child + "' already has a parent joint (only double pivots to one parent may share a part)");
+          Fail(n["child"],
+               "part '" + j.child + "' already has a parent joint (only double pivots to one parent may share a part)");
       }
       if (j.type == JointType::kDoublePivot) {
         j.face = Str(n["face"], "face");
@@ -246,7 +256,8 @@ class Reader {
     for (const Joint& j : proto_.joints) {
       std::string p = j.parent;
       for (std::size_t step = 0; step <= proto_.joints.size(); ++step) {
-        auto it = std::find_if(proto_.joints.begin(), proto_.joints.end(), [&](const Joint& k) { return k.child == p; });
+        auto it =
+            std::find_if(proto_.joints.begin(), proto_.joints.end(), [&](const Joint& k) { return k.child == p; });
         if (it == proto_.joints.end()) break;
         if (step == proto_.joints.size()) throw InputError(j.where + ": joints form a cycle");
         p = it->parent;
@@ -263,12 +274,14 @@ class Reader {
       if (!kv.second.IsMap()) Fail(kv.second, "configuration " + c.name + " must be a map joint: value");
       for (const auto& jv : kv.second) {
         std::string jn = jv.first.as<std::string>();
-        auto it = std::find_if(proto_.joints.begin(), proto_.joints.end(), [&](const Joint& j) { return j.name == jn; });
+        auto it =
+            std::find_if(proto_.joints.begin(), proto_.joints.end(), [&](const Joint& j) { return j.name == jn; });
         if (it == proto_.joints.end()) Fail(jv.first, "unknown joint '" + jn + "'");
         c.values[jn] = ReadValue(*it, jv.second);
       }
       for (const Joint& j : proto_.joints) {
-        auto first = std::find_if(proto_.joints.begin(), proto_.joints.end(), [&](const Joint& k) { return k.child == j.child; });
+        auto first = std::find_if(proto_.joints.begin(), proto_.joints.end(),
+                                  [&](const Joint& k) { return k.child == j.child; });
         if (first->name == j.name) continue;
         auto a = c.values.find(first->name), b = c.values.find(j.name);
         bool same = (a == c.values.end()) == (b == c.values.end());
@@ -287,8 +300,10 @@ class Reader {
     JointValue v;
     auto slide = [&](const YAML::Node& s) {
       std::string t = Str(s, "slide");
-      if (t == "free") v.slide = "free";
-      else v.slide = t;
+      if (t == "free")
+        v.slide = "free";
+      else
+        v.slide = t;
     };
     switch (j.type) {
       case JointType::kHinge:
@@ -329,8 +344,9 @@ class Reader {
       ++index;
       Relationship r;
       r.where = Where(n);
-      Keys(n, {"type", "name", "in", "covering", "covered", "just", "inner", "outer", "axes", "pairs", "min_overlap",
-               "faces", "expression"},
+      Keys(n,
+           {"type", "name", "in", "covering", "covered", "just", "inner", "outer", "axes", "pairs", "min_overlap",
+            "faces", "expression"},
            "relationship");
       std::string type = Str(n["type"], "relationship type");
       r.name = n["name"] ? Str(n["name"], "name") : type + " #" + std::to_string(index);
@@ -353,8 +369,10 @@ class Reader {
         for (const auto& s : r.just) CoordIndex(n["just"], s);
         if (n["axes"]) {
           r.axes.clear();
-          for (const auto& s : StrList(n["axes"], "axes")) r.axes.push_back(s == "x" ? 0 : s == "y" ? 1 : s == "z" ? 2 : -1);
-          for (int a : r.axes) if (a < 0) Fail(n["axes"], "axes must be x, y or z");
+          for (const auto& s : StrList(n["axes"], "axes"))
+            r.axes.push_back(s == "x" ? 0 : s == "y" ? 1 : s == "z" ? 2 : -1);
+          for (int a : r.axes)
+            if (a < 0) Fail(n["axes"], "axes must be x, y or z");
         }
       } else if (type == "support") {
         r.type = RelationType::kSupport;

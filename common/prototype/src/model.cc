@@ -45,7 +45,8 @@ Model::Model(const Prototype& p) : proto(p) {
   for (const Configuration& c : p.configurations)
     for (const auto& [jn, v] : c.values) {
       const Joint& j = *std::find_if(p.joints.begin(), p.joints.end(), [&](const Joint& k) { return k.name == jn; });
-      const Joint& first = *std::find_if(p.joints.begin(), p.joints.end(), [&](const Joint& k) { return k.child == j.child; });
+      const Joint& first =
+          *std::find_if(p.joints.begin(), p.joints.end(), [&](const Joint& k) { return k.child == j.child; });
       if (first.name != j.name) continue;  // a second double pivot on the same part: the first one places it
       if ((j.type == JointType::kSlide || j.type == JointType::kSlidingHinge) && v.slide == "free") {
         free_names.push_back(jn + "@" + c.name + ".s");
@@ -120,7 +121,8 @@ Affine Model::Resolve(const std::string& name, const std::string& where) const {
 }
 
 Affine Model::ParseExpression(const std::string& text, const std::string& where) const {
-  return ParseAffine(text, [&](const std::string& n) { return Resolve(n, where); }, where);
+  return ParseAffine(
+      text, [&](const std::string& n) { return Resolve(n, where); }, where);
 }
 
 const Configuration& Model::Config(const std::string& name) const {
@@ -137,9 +139,7 @@ Pose Model::JointMotion(int ji, const Configuration& c, double s) const {
   if (set) v = it->second;
   Pose m;
   auto slide_value = [&]() -> Affine { return s * SlideValue(j, c); };
-  auto rotate_about = [&](const Affine3& p) {
-    m.t = Sub(p, Mul(m.R, p));
-  };
+  auto rotate_about = [&](const Affine3& p) { m.t = Sub(p, Mul(m.R, p)); };
   auto edge = [&]() {
     Affine3 p;
     int k = 0;
@@ -166,12 +166,14 @@ Pose Model::JointMotion(int ji, const Configuration& c, double s) const {
       m.R = AxisRotation(j.normal, s * v.angle);
       int cu = CuboidIndex(j.child, j.where);
       Affine3 centre;
-      for (int ax = 0; ax < 3; ++ax) centre[ax] = 0.5 * (Affine::Var(6 * cu + 2 * ax) + Affine::Var(6 * cu + 2 * ax + 1));
+      for (int ax = 0; ax < 3; ++ax)
+        centre[ax] = 0.5 * (Affine::Var(6 * cu + 2 * ax) + Affine::Var(6 * cu + 2 * ax + 1));
       rotate_about(centre);
       if (set)
         for (int ax = 0; ax < 3; ++ax) {
-          Affine o = (v.offset_free && ax != j.normal) ? Affine::Var(FreeIndex(j.name + "@" + c.name + "." + std::to_string(ax)))
-                                                      : Affine::Const(v.offset[ax]);
+          Affine o = (v.offset_free && ax != j.normal)
+                         ? Affine::Var(FreeIndex(j.name + "@" + c.name + "." + std::to_string(ax)))
+                         : Affine::Const(v.offset[ax]);
           m.t[ax] = m.t[ax] + s * o;
         }
       break;
@@ -220,7 +222,8 @@ Box Model::BoxIn(int cuboid, const Configuration& c, int frame_part) const {
 
 Face Model::FaceIn(const std::string& ref, const Configuration& c, const std::string& where) const {
   auto dot = ref.rfind('.');
-  if (dot == std::string::npos) throw InputError(where + ": '" + ref + "' is not a face (part.x0, part.cavity.y1, ...)");
+  if (dot == std::string::npos)
+    throw InputError(where + ": '" + ref + "' is not a face (part.x0, part.cavity.y1, ...)");
   int cu = CuboidIndex(ref.substr(0, dot), where);
   std::string k = ref.substr(dot + 1);
   int coord = -1;
@@ -292,12 +295,18 @@ struct Builder {
       int first = -1, last = -1;
       for (std::size_t i = 0; i < faces.size(); ++i) {
         if (!has_prev[i]) {
-          if (first < 0) first = static_cast<int>(i);
-          else Eq(faces[i].box.lo[u] - faces[first].box.lo[u], what + ": " + faces[i].name + " aligned with " + faces[first].name);
+          if (first < 0)
+            first = static_cast<int>(i);
+          else
+            Eq(faces[i].box.lo[u] - faces[first].box.lo[u],
+               what + ": " + faces[i].name + " aligned with " + faces[first].name);
         }
         if (!has_next[i]) {
-          if (last < 0) last = static_cast<int>(i);
-          else Eq(faces[i].box.hi[u] - faces[last].box.hi[u], what + ": " + faces[i].name + " aligned with " + faces[last].name);
+          if (last < 0)
+            last = static_cast<int>(i);
+          else
+            Eq(faces[i].box.hi[u] - faces[last].box.hi[u],
+               what + ": " + faces[i].name + " aligned with " + faces[last].name);
         }
       }
     }
@@ -325,7 +334,8 @@ struct Builder {
     for (const auto* set : {&fa, &fb})
       for (const Face& f : *set) {
         if (f.axis != n)
-          throw InputError(r.where + ": faces " + f.name + " and " + fb[0].name + " are not parallel in '" + c.name + "'");
+          throw InputError(r.where + ": faces " + f.name + " and " + fb[0].name + " are not parallel in '" + c.name +
+                           "'");
         if (&f != &fb[0]) Eq(f.plane - fb[0].plane, r.name + ": " + f.name + " in the plane of " + fb[0].name);
       }
     Pack(fa, n, r.name);
@@ -373,7 +383,8 @@ struct Builder {
         for (std::size_t i = 0; i < boxes.size(); ++i) {
           Affine g = side ? ob.hi[u] - boxes[i].hi[u] : boxes[i].lo[u] - ob.lo[u];
           Ge(g, r.name + ": " + names[i] + " " + sname + " inside " + r.b[0]);
-          double vi = V(side ? boxes[i].hi[u] : boxes[i].lo[u]), ve = V(side ? boxes[extreme].hi[u] : boxes[extreme].lo[u]);
+          double vi = V(side ? boxes[i].hi[u] : boxes[i].lo[u]),
+                 ve = V(side ? boxes[extreme].hi[u] : boxes[extreme].lo[u]);
           if (side ? vi > ve : vi < ve) extreme = i;
         }
         if (just) {
@@ -392,12 +403,21 @@ struct Builder {
         double best = -1e18;
         for (int u = 0; u < 3; ++u) {
           double s1 = V(boxes[j].lo[u]) - V(boxes[i].hi[u]), s2 = V(boxes[i].lo[u]) - V(boxes[j].hi[u]);
-          if (s1 > best) { best = s1; best_u = u; j_after = true; }
-          if (s2 > best) { best = s2; best_u = u; j_after = false; }
+          if (s1 > best) {
+            best = s1;
+            best_u = u;
+            j_after = true;
+          }
+          if (s2 > best) {
+            best = s2;
+            best_u = u;
+            j_after = false;
+          }
         }
         const Box& first = j_after ? boxes[i] : boxes[j];
         const Box& second = j_after ? boxes[j] : boxes[i];
-        Ge(second.lo[best_u] - first.hi[best_u], r.name + ": " + names[i] + " and " + names[j] + " apart along " + "xyz"[best_u]);
+        Ge(second.lo[best_u] - first.hi[best_u],
+           r.name + ": " + names[i] + " and " + names[j] + " apart along " + "xyz"[best_u]);
       }
   }
 
@@ -422,7 +442,10 @@ struct Builder {
     int first = -1;
     for (int p : supporting) {
       if (supported.count(p)) continue;
-      if (first < 0) { first = p; continue; }
+      if (first < 0) {
+        first = p;
+        continue;
+      }
       Eq(m.BoxIn(p, c).lo[2] - m.BoxIn(first, c).lo[2],
          r.name + ": " + m.proto.parts[p].name + " on the ground with " + m.proto.parts[first].name);
     }
@@ -431,7 +454,8 @@ struct Builder {
   void Flush(const Relationship& r) {
     const Configuration& c = m.Config(r.configuration);
     Face a = m.FaceIn(r.a[0], c, r.where), b = m.FaceIn(r.a[1], c, r.where);
-    if (a.axis != b.axis) throw InputError(r.where + ": flush faces " + r.a[0] + " and " + r.a[1] + " are not parallel");
+    if (a.axis != b.axis)
+      throw InputError(r.where + ": flush faces " + r.a[0] + " and " + r.a[1] + " are not parallel");
     Eq(a.plane - b.plane, r.name + ": " + r.a[0] + " flush with " + r.a[1]);
   }
 
@@ -441,9 +465,12 @@ struct Builder {
       auto at = e.find(op);
       if (at == std::string::npos) continue;
       Affine l = m.ParseExpression(e.substr(0, at), r.where), rr = m.ParseExpression(e.substr(at + 2), r.where);
-      if (std::string(op) == "==") Eq(l - rr, r.name + ": " + e);
-      else if (std::string(op) == ">=") Ge(l - rr, r.name + ": " + e);
-      else Ge(rr - l, r.name + ": " + e);
+      if (std::string(op) == "==")
+        Eq(l - rr, r.name + ": " + e);
+      else if (std::string(op) == ">=")
+        Ge(l - rr, r.name + ": " + e);
+      else
+        Ge(rr - l, r.name + ": " + e);
       return;
     }
     throw InputError(r.where + ": geometric constraint '" + e + "' needs ==, >= or <=");
@@ -465,8 +492,10 @@ void Model::Build(std::vector<LinearConstraint>& out, std::vector<std::string>& 
       for (int k = 0; k < 6; ++k) {
         Affine g = Affine::Var(6 * c + k) - Affine::Var(6 * p + k);
         bool open = cuboids[c]->open == kCoord[k];
-        if (open) b.Eq(g, cuboid_names[c] + " opens at " + kCoord[k]);
-        else b.Ge(k % 2 ? (-1.0) * g : g, cuboid_names[c] + " " + kCoord[k] + " inside " + part.name);
+        if (open)
+          b.Eq(g, cuboid_names[c] + " opens at " + kCoord[k]);
+        else
+          b.Ge(k % 2 ? (-1.0) * g : g, cuboid_names[c] + " " + kCoord[k] + " inside " + part.name);
       }
     }
   }
@@ -485,21 +514,32 @@ void Model::Build(std::vector<LinearConstraint>& out, std::vector<std::string>& 
     for (int ax = 0; ax < 3; ++ax) {
       double q0 = base[6 * c + 2 * ax], q1 = base[6 * c + 2 * ax + 1];
       double n0 = base[6 * nb + 2 * ax], n1 = base[6 * nb + 2 * ax + 1];
-      if (std::abs(q0 - n1) <= 0.5) { contact = ax; side = 0; }
-      else if (std::abs(q1 - n0) <= 0.5) { contact = ax; side = 1; }
-      else overlaps &= std::min(q1, n1) - std::max(q0, n0) > 0;
+      if (std::abs(q0 - n1) <= 0.5) {
+        contact = ax;
+        side = 0;
+      } else if (std::abs(q1 - n0) <= 0.5) {
+        contact = ax;
+        side = 1;
+      } else
+        overlaps &= std::min(q1, n1) - std::max(q0, n0) > 0;
     }
     if (contact < 0 && !overlaps)
       throw InputError(part.where + ": piece " + cuboid_names[c] + " neither touches nor overlaps " + cuboid_names[nb]);
     for (int ax = 0; ax < 3; ++ax) {
       std::string a(1, "xyz"[ax]);
       if (ax == contact) {
-        if (side == 0) b.Eq(var(c, 2 * ax) - var(nb, 2 * ax + 1), cuboid_names[c] + "." + a + "0 on " + cuboid_names[nb] + "." + a + "1");
-        else b.Eq(var(nb, 2 * ax) - var(c, 2 * ax + 1), cuboid_names[c] + "." + a + "1 on " + cuboid_names[nb] + "." + a + "0");
+        if (side == 0)
+          b.Eq(var(c, 2 * ax) - var(nb, 2 * ax + 1),
+               cuboid_names[c] + "." + a + "0 on " + cuboid_names[nb] + "." + a + "1");
+        else
+          b.Eq(var(nb, 2 * ax) - var(c, 2 * ax + 1),
+               cuboid_names[c] + "." + a + "1 on " + cuboid_names[nb] + "." + a + "0");
         continue;
       }
-      b.Ge(var(c, 2 * ax + 1) - var(nb, 2 * ax) - Affine::Const(part.min_size), cuboid_names[c] + " overlaps " + cuboid_names[nb] + " in " + a);
-      b.Ge(var(nb, 2 * ax + 1) - var(c, 2 * ax) - Affine::Const(part.min_size), cuboid_names[c] + " overlaps " + cuboid_names[nb] + " in " + a);
+      b.Ge(var(c, 2 * ax + 1) - var(nb, 2 * ax) - Affine::Const(part.min_size),
+           cuboid_names[c] + " overlaps " + cuboid_names[nb] + " in " + a);
+      b.Ge(var(nb, 2 * ax + 1) - var(c, 2 * ax) - Affine::Const(part.min_size),
+           cuboid_names[c] + " overlaps " + cuboid_names[nb] + " in " + a);
     }
     for (int k : cuboids[c]->align)
       b.Eq(var(c, k) - var(nb, k), cuboid_names[c] + "." + kCoord[k] + " aligned with " + cuboid_names[nb]);
@@ -553,11 +593,21 @@ void Model::Build(std::vector<LinearConstraint>& out, std::vector<std::string>& 
   for (const Relationship& r : proto.relationships) {
     b.Group(r.name + " (" + r.where + ")");
     switch (r.type) {
-      case RelationType::kCover: b.Cover(r); break;
-      case RelationType::kFit: b.Fit(r); break;
-      case RelationType::kSupport: b.Support(r); break;
-      case RelationType::kFlush: b.Flush(r); break;
-      case RelationType::kGeometric: b.Geometric(r); break;
+      case RelationType::kCover:
+        b.Cover(r);
+        break;
+      case RelationType::kFit:
+        b.Fit(r);
+        break;
+      case RelationType::kSupport:
+        b.Support(r);
+        break;
+      case RelationType::kFlush:
+        b.Flush(r);
+        break;
+      case RelationType::kGeometric:
+        b.Geometric(r);
+        break;
     }
   }
 }

@@ -29,9 +29,9 @@ struct Box {
 
 struct Face {
   std::string name;
-  int axis = 0;   // normal axis in the frame
-  Affine plane;   // coordinate of the plane along `axis`
-  Box box;        // lo[axis] = hi[axis] = plane
+  int axis = 0;  // normal axis in the frame
+  Affine plane;  // coordinate of the plane along `axis`
+  Box box;       // lo[axis] = hi[axis] = plane
 };
 
 // g == 0 (eq) or g >= 0.
@@ -52,11 +52,11 @@ class Model {
   // Parts first (cuboid i = part i), then cavities, then pieces.
   std::vector<std::string> cuboid_names;  // "part", "part.cavity" or "part.piece"
   std::vector<int> cuboid_part;
-  std::vector<bool> cuboid_solid;         // part or piece (not a cavity)
+  std::vector<bool> cuboid_solid;  // part or piece (not a cavity)
   std::vector<const Cuboid*> cuboids;
   int variables = 0;
-  Eigen::VectorXd base, weight;           // target and weight of the deviation energy
-  std::vector<std::string> free_names;    // "joint@config.k", variable = 6*cuboids + i
+  Eigen::VectorXd base, weight;         // target and weight of the deviation energy
+  std::vector<std::string> free_names;  // "joint@config.k", variable = 6*cuboids + i
 
   int CuboidIndex(const std::string& name, const std::string& where) const;
   // `name` is a part: its solid cuboids; a piece or cavity: itself.

@@ -42,8 +42,10 @@ Prototype RemovePart(const Prototype& p, const std::string& part) {
   std::set<std::string> gone_joints;
   out.joints.clear();
   for (const Joint& j : p.joints) {
-    if (gone.count(j.child)) gone_joints.insert(j.name);
-    else out.joints.push_back(j);
+    if (gone.count(j.child))
+      gone_joints.insert(j.name);
+    else
+      out.joints.push_back(j);
   }
   for (Configuration& c : out.configurations)
     for (const std::string& j : gone_joints) c.values.erase(j);
@@ -64,9 +66,10 @@ Prototype RemovePart(const Prototype& p, const std::string& part) {
         kept = !gone.count(Owner(r.b[0])) && keep(r.a);
         break;
       case RelationType::kSupport:
-        r.pairs.erase(std::remove_if(r.pairs.begin(), r.pairs.end(),
-                                     [&](const auto& pr) { return gone.count(Owner(pr.first)) || gone.count(Owner(pr.second)); }),
-                      r.pairs.end());
+        r.pairs.erase(
+            std::remove_if(r.pairs.begin(), r.pairs.end(),
+                           [&](const auto& pr) { return gone.count(Owner(pr.first)) || gone.count(Owner(pr.second)); }),
+            r.pairs.end());
         kept = !r.pairs.empty();
         break;
       case RelationType::kFlush:

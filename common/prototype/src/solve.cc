@@ -173,7 +173,9 @@ Outcome Run(const Nlp& nlp, const std::vector<bool>& active, bool feasibility_on
     o.num_threads = 1;
     ceres::Solver::Summary s;
     ceres::Solve(o, &problem, &s);
-    if (std::getenv("FABATLAS_PROTOTYPE_DEBUG")) std::fprintf(stderr, "outer %d mu %g: %s cost %g viol %g\n", outer, mu, s.BriefReport().c_str(), s.final_cost, max_violation());
+    if (std::getenv("FABATLAS_PROTOTYPE_DEBUG"))
+      std::fprintf(stderr, "outer %d mu %g: %s cost %g viol %g\n", outer, mu, s.BriefReport().c_str(), s.final_cost,
+                   max_violation());
     double v = max_violation();
     if (v < tolerance * 1e-2) break;
     if (feasibility_only) continue;
@@ -234,7 +236,7 @@ struct PivotGeometry {
   Eigen::Vector3d ua, ea, ub, eb;  // pivot points (base) and offset directions
   std::vector<Plane2> rel;         // child -> parent frame, per configuration (rel[0] = base)
   std::array<double, 6> box_a, box_b;
-  int u = 0, v = 1;                // in-plane axes
+  int u = 0, v = 1;  // in-plane axes
   double scale = 100;
 };
 
@@ -281,7 +283,7 @@ T Inset(const V3<T>& p, const std::array<double, 6>& box, int u, int v) {
 // L >= |cA - uA| + inset of uB in B; both: L >= |cA - uA| + |cB - uB|.
 struct MotionFunctor {
   const PivotGeometry* g;
-  int config;                  // L measured in this configuration
+  int config;  // L measured in this configuration
   bool has_a, has_b;
   Eigen::Vector3d corner_a, corner_b;
   template <typename T>
@@ -437,7 +439,8 @@ SolveSummary SolvePrototype(const Prototype& p, const SolveOptions& options) {
       std::string key;
       for (std::size_t c = 1; c < g.rel.size(); ++c) {
         s2.groups.push_back("position constraint of " + j.name + " base->" + config_names[c] + " (" + j.where + ")");
-        auto* f = new ceres::AutoDiffCostFunction<PositionFunctor, 1, 2>(new PositionFunctor{&g, 0, static_cast<int>(c)});
+        auto* f =
+            new ceres::AutoDiffCostFunction<PositionFunctor, 1, 2>(new PositionFunctor{&g, 0, static_cast<int>(c)});
         s2.cons.push_back({std::unique_ptr<ceres::CostFunction>(f), true, static_cast<int>(s2.groups.size()) - 1,
                            j.name + ": equal link length in base and " + config_names[c]});
         // Corners the link passes between base and c, at the current offsets.
@@ -447,15 +450,16 @@ SolveSummary SolvePrototype(const Prototype& p, const SolveOptions& options) {
         std::vector<Eigen::Vector3d> cb, ca;
         for (const auto& k : Corners(g.box_b, g.u, g.v, n))
           if ((k - xb).norm() > 1e-6 && InArc(Angle(k - xb, g.u, g.v), phi0, phi1)) cb.push_back(k);
-        Eigen::Vector3d y0 = g.rel[0].R.transpose() * (xb - g.rel[0].t), y1 = g.rel[c].R.transpose() * (xb - g.rel[c].t);
+        Eigen::Vector3d y0 = g.rel[0].R.transpose() * (xb - g.rel[0].t),
+                        y1 = g.rel[c].R.transpose() * (xb - g.rel[c].t);
         double psi0 = Angle(y0 - ua, g.u, g.v), psi1 = Angle(y1 - ua, g.u, g.v);
         for (const auto& k : Corners(g.box_a, g.u, g.v, n))
           if ((k - ua).norm() > 1e-6 && InArc(Angle(k - ua, g.u, g.v), psi0, psi1)) ca.push_back(k);
         if (cb.empty() && ca.empty()) continue;
         s2.groups.push_back("motion constraint of " + j.name + " base->" + config_names[c] + " (" + j.where + ")");
         auto add = [&](bool has_a, bool has_b, const Eigen::Vector3d& ka, const Eigen::Vector3d& kb) {
-          auto* mf = new ceres::AutoDiffCostFunction<MotionFunctor, 1, 2>(
-              new MotionFunctor{&g, 0, has_a, has_b, ka, kb});
+          auto* mf =
+              new ceres::AutoDiffCostFunction<MotionFunctor, 1, 2>(new MotionFunctor{&g, 0, has_a, has_b, ka, kb});
           s2.cons.push_back({std::unique_ptr<ceres::CostFunction>(mf), false, static_cast<int>(s2.groups.size()) - 1,
                              j.name + ": link clears the corners"});
           key += std::to_string(has_a) + std::to_string(has_b) + ";";

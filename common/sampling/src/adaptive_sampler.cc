@@ -23,10 +23,8 @@ struct SplitCandidate {
 
 class Sampler {
  public:
-  Sampler(const DesignSpace& space, SampleEvaluator& evaluator, Executor& executor,
-          const SamplingOptions& options)
-      : space_(space), evaluator_(evaluator), executor_(executor), options_(options),
-        n_(space.dimension_count()) {
+  Sampler(const DesignSpace& space, SampleEvaluator& evaluator, Executor& executor, const SamplingOptions& options)
+      : space_(space), evaluator_(evaluator), executor_(executor), options_(options), n_(space.dimension_count()) {
     form_.dimensions = space.dimensions();
     form_.subdivisions = space.subdivisions();
   }
@@ -91,8 +89,7 @@ class Sampler {
     const Stopwatch executor_time;
     std::vector<SampleOutcome> outcomes = executor_.RunSampleTasks(tasks, evaluator_, &timings);
     executor_seconds_ += executor_time.Seconds();
-    if (outcomes.size() != tasks.size())
-      throw std::runtime_error("executor returned a wrong number of sample results");
+    if (outcomes.size() != tasks.size()) throw std::runtime_error("executor returned a wrong number of sample results");
     for (size_t i = 0; i < tasks.size(); ++i) {
       const auto id = static_cast<std::int64_t>(form_.samples.size());
       form_.sample_ids.emplace(tasks[i].point.key, id);
@@ -115,9 +112,12 @@ class Sampler {
           if (form_.geometry_changes.count(e)) continue;
           const bool va = form_.samples[e.first].outcome.valid;
           const bool vb = form_.samples[e.second].outcome.valid;
-          if (!va && !vb) form_.geometry_changes[e] = 0.0;
-          else if (va != vb) form_.geometry_changes[e] = 1.0;
-          else needed.insert(e);
+          if (!va && !vb)
+            form_.geometry_changes[e] = 0.0;
+          else if (va != vb)
+            form_.geometry_changes[e] = 1.0;
+          else
+            needed.insert(e);
         }
     }
     if (needed.empty()) return;
@@ -132,8 +132,7 @@ class Sampler {
     const Stopwatch executor_time;
     auto results = executor_.RunGeometryChangeTasks(tasks, evaluator_, &timings);
     executor_seconds_ += executor_time.Seconds();
-    if (results.size() != tasks.size())
-      throw std::runtime_error("executor returned a wrong number of ΔG results");
+    if (results.size() != tasks.size()) throw std::runtime_error("executor returned a wrong number of ΔG results");
     for (size_t i = 0; i < tasks.size(); ++i) {
       const double dg = std::clamp(results[i].geometry_change, 0.0, 1.0);
       form_.geometry_changes[{tasks[i].sample_a, tasks[i].sample_b}] = dg;
@@ -163,18 +162,33 @@ class Sampler {
         }
         std::sort(s[d].begin(), s[d].end(), std::greater<double>());
       }
-      if (max_dg < options_.dg_threshold) { node.stop = LeafStop::kThreshold; continue; }
-      if (node.depth >= options_.max_depth) { node.stop = LeafStop::kMaxDepth; continue; }
+      if (max_dg < options_.dg_threshold) {
+        node.stop = LeafStop::kThreshold;
+        continue;
+      }
+      if (node.depth >= options_.max_depth) {
+        node.stop = LeafStop::kMaxDepth;
+        continue;
+      }
       std::vector<int> order(n_);
       for (int d = 0; d < n_; ++d) order[d] = d;
       std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return s[a] > s[b]; });
       int chosen = -1;
       for (int d : order) {
         if (s[d][0] < options_.dg_threshold) break;  // nothing left worth splitting
-        if (space_.can_split(d, node.lo[d], node.hi[d])) { chosen = d; break; }
+        if (space_.can_split(d, node.lo[d], node.hi[d])) {
+          chosen = d;
+          break;
+        }
       }
-      if (chosen < 0) { node.stop = LeafStop::kUnsplittable; continue; }
-      if (*budget_exhausted) { node.stop = LeafStop::kBudget; continue; }
+      if (chosen < 0) {
+        node.stop = LeafStop::kUnsplittable;
+        continue;
+      }
+      if (*budget_exhausted) {
+        node.stop = LeafStop::kBudget;
+        continue;
+      }
       candidates.push_back({f, chosen, max_dg, s[chosen]});
     }
 
@@ -190,7 +204,10 @@ class Sampler {
     for (size_t i : by_score) {
       const SplitCandidate& cand = candidates[i];
       FormNode& node = form_.trees[frontier[cand.frontier_index].tree].nodes[frontier[cand.frontier_index].node];
-      if (*budget_exhausted) { node.stop = LeafStop::kBudget; continue; }
+      if (*budget_exhausted) {
+        node.stop = LeafStop::kBudget;
+        continue;
+      }
       const std::int64_t mid = space_.split_key(cand.dimension, node.lo[cand.dimension], node.hi[cand.dimension]);
       std::vector<PointKey> fresh;
       for (size_t c = 0; c < (size_t{1} << n_); ++c) {
@@ -242,7 +259,10 @@ class Sampler {
     stats_.geometry_changes = static_cast<std::int64_t>(form_.geometry_changes.size());
     std::int64_t invalid = 0;
     for (const FormSample& s : form_.samples) {
-      if (s.outcome.valid) { ++stats_.valid_samples; continue; }
+      if (s.outcome.valid) {
+        ++stats_.valid_samples;
+        continue;
+      }
       ++invalid;
       stats_.failure_shares[s.outcome.failure_type] += 1.0;
     }
@@ -284,14 +304,13 @@ double ValidVolumePercent(const Form& form) {
   return 100.0 * valid / total;
 }
 
-SamplingSummary SampleDesignSpace(const DesignSpace& space, SampleEvaluator& evaluator,
-                                  Executor& executor, const SamplingOptions& options) {
+SamplingSummary SampleDesignSpace(const DesignSpace& space, SampleEvaluator& evaluator, Executor& executor,
+                                  const SamplingOptions& options) {
   if (options.max_depth < 0 || options.max_depth > 4 * kDyadicBits)
-    throw InputError("sampling: max_depth must be in [0, " + std::to_string(4 * kDyadicBits) +
-                     "], got " + std::to_string(options.max_depth));
+    throw InputError("sampling: max_depth must be in [0, " + std::to_string(4 * kDyadicBits) + "], got " +
+                     std::to_string(options.max_depth));
   if (!(options.dg_threshold >= 0.0 && options.dg_threshold <= 1.0))
-    throw InputError("sampling: dg_threshold must be in [0, 1], got " +
-                     std::to_string(options.dg_threshold));
+    throw InputError("sampling: dg_threshold must be in [0, 1], got " + std::to_string(options.dg_threshold));
   if (options.max_samples < 1)
     throw InputError("sampling: max_samples must be >= 1, got " + std::to_string(options.max_samples));
   return Sampler(space, evaluator, executor, options).Run();

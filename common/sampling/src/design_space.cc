@@ -10,9 +10,12 @@ namespace fabatlas::sampling {
 
 const char* DimensionKindName(DimensionKind kind) {
   switch (kind) {
-    case DimensionKind::kReal: return "real";
-    case DimensionKind::kInteger: return "integer";
-    case DimensionKind::kEnumerated: return "enumerated";
+    case DimensionKind::kReal:
+      return "real";
+    case DimensionKind::kInteger:
+      return "integer";
+    case DimensionKind::kEnumerated:
+      return "enumerated";
   }
   return "real";
 }
@@ -45,8 +48,7 @@ DesignSpace::DesignSpace(std::vector<Dimension> dimensions, int subdivisions)
     throw InputError("design space: " + std::to_string(dimensions_.size()) + " exposed parameters, at most " +
                      std::to_string(kMaxDimensions) + " are supported");
   if (subdivisions_ < 1 || subdivisions_ > 1000)
-    throw InputError("design space: subdivisions must be in [1, 1000], got " +
-                     std::to_string(subdivisions_));
+    throw InputError("design space: subdivisions must be in [1, 1000], got " + std::to_string(subdivisions_));
   std::set<std::string> names;
   for (auto& d : dimensions_) {
     const std::string where = "design space: parameter '" + d.name + "': ";
@@ -59,19 +61,16 @@ DesignSpace::DesignSpace(std::vector<Dimension> dimensions, int subdivisions)
         cell_counts_.push_back(subdivisions_);
         break;
       case DimensionKind::kInteger:
-        if (d.lo != std::floor(d.lo) || d.hi != std::floor(d.hi) || std::abs(d.lo) > 1e15 ||
-            std::abs(d.hi) > 1e15)
+        if (d.lo != std::floor(d.lo) || d.hi != std::floor(d.hi) || std::abs(d.lo) > 1e15 || std::abs(d.hi) > 1e15)
           throw InputError(where + "integer range bounds must be whole numbers");
         if (!(d.hi > d.lo)) throw InputError(where + "range must have hi > lo");
-        cell_counts_.push_back(
-            static_cast<int>(std::min<std::int64_t>(subdivisions_, DiscreteHi(d) - DiscreteLo(d))));
+        cell_counts_.push_back(static_cast<int>(std::min<std::int64_t>(subdivisions_, DiscreteHi(d) - DiscreteLo(d))));
         break;
       case DimensionKind::kEnumerated:
         if (d.values.size() < 2) throw InputError(where + "needs at least two values");
         d.lo = 0.0;
         d.hi = static_cast<double>(d.values.size() - 1);
-        cell_counts_.push_back(
-            static_cast<int>(std::min<std::int64_t>(subdivisions_, DiscreteHi(d) - DiscreteLo(d))));
+        cell_counts_.push_back(static_cast<int>(std::min<std::int64_t>(subdivisions_, DiscreteHi(d) - DiscreteLo(d))));
         break;
     }
   }
@@ -105,9 +104,7 @@ double DesignSpace::length(int d, std::int64_t a, std::int64_t b) const {
 
 bool DesignSpace::can_split(int, std::int64_t a, std::int64_t b) const { return b - a >= 2; }
 
-std::int64_t DesignSpace::split_key(int, std::int64_t a, std::int64_t b) const {
-  return a + (b - a) / 2;
-}
+std::int64_t DesignSpace::split_key(int, std::int64_t a, std::int64_t b) const { return a + (b - a) / 2; }
 
 double DesignSpace::key_coordinate(int d, double v) const {
   const Dimension& dim = dimensions_[d];

@@ -65,8 +65,7 @@ std::vector<SampleOutcome> ThreadPoolExecutor::RunSampleTasks(const std::vector<
 }
 
 std::vector<GeometryChangeResult> ThreadPoolExecutor::RunGeometryChangeTasks(
-    const std::vector<GeometryChangeTask>& tasks, SampleEvaluator& evaluator,
-    std::vector<TaskTiming>* timings) {
+    const std::vector<GeometryChangeTask>& tasks, SampleEvaluator& evaluator, std::vector<TaskTiming>* timings) {
   return RunTimed<GeometryChangeResult>(
       arena_->arena, tasks.size(),
       [&](size_t i, GeometryChangeResult& out) {

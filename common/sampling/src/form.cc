@@ -32,8 +32,7 @@ std::optional<LeafRef> LocateLeaf(const Form& form, const DesignSpace& space, co
   int tree = 0;
   for (int d = 0; d < n; ++d) {
     x[d] = space.key_coordinate(d, u[d]);
-    if (!(x[d] >= static_cast<double>(space.key_lo(d)) &&
-          x[d] <= static_cast<double>(space.key_hi(d))))
+    if (!(x[d] >= static_cast<double>(space.key_lo(d)) && x[d] <= static_cast<double>(space.key_hi(d))))
       return std::nullopt;
     int j = 0;
     while (j + 1 < space.cell_count(d) && x[d] >= static_cast<double>(space.grid_key(d, j + 1))) ++j;
@@ -43,8 +42,7 @@ std::optional<LeafRef> LocateLeaf(const Form& form, const DesignSpace& space, co
   int node = 0;
   while (t.nodes[node].split_dimension >= 0) {
     const FormNode& nd = t.nodes[node];
-    node = x[nd.split_dimension] >= static_cast<double>(nd.split_key) ? nd.children[1]
-                                                                      : nd.children[0];
+    node = x[nd.split_dimension] >= static_cast<double>(nd.split_key) ? nd.children[1] : nd.children[0];
   }
   return LeafRef{tree, node};
 }

@@ -9,21 +9,25 @@ namespace fabatlas::sampling {
 namespace {
 using nlohmann::json;
 
-
 const char* StopName(LeafStop s) {
   switch (s) {
-    case LeafStop::kNone: return "none";
-    case LeafStop::kThreshold: return "threshold";
-    case LeafStop::kMaxDepth: return "max_depth";
-    case LeafStop::kUnsplittable: return "unsplittable";
-    case LeafStop::kBudget: return "budget";
+    case LeafStop::kNone:
+      return "none";
+    case LeafStop::kThreshold:
+      return "threshold";
+    case LeafStop::kMaxDepth:
+      return "max_depth";
+    case LeafStop::kUnsplittable:
+      return "unsplittable";
+    case LeafStop::kBudget:
+      return "budget";
   }
   return "none";
 }
 
 LeafStop StopFromName(const std::string& s) {
-  for (LeafStop v : {LeafStop::kNone, LeafStop::kThreshold, LeafStop::kMaxDepth,
-                     LeafStop::kUnsplittable, LeafStop::kBudget})
+  for (LeafStop v :
+       {LeafStop::kNone, LeafStop::kThreshold, LeafStop::kMaxDepth, LeafStop::kUnsplittable, LeafStop::kBudget})
     if (s == StopName(v)) return v;
   throw std::runtime_error("unknown leaf stop '" + s + "'");
 }
@@ -42,8 +46,11 @@ std::string FormToJson(const Form& form, bool include_timings) {
   j["dimensions"] = std::move(dims);
   json samples = json::array();
   for (const FormSample& s : form.samples) {
-    json js{{"key", s.key}, {"u", s.u}, {"valid", s.outcome.valid},
-            {"failure", s.outcome.failure_type}, {"properties", s.outcome.properties}};
+    json js{{"key", s.key},
+            {"u", s.u},
+            {"valid", s.outcome.valid},
+            {"failure", s.outcome.failure_type},
+            {"properties", s.outcome.properties}};
     if (include_timings) js["cpu_seconds"] = s.outcome.cpu_seconds;
     samples.push_back(std::move(js));
   }
@@ -66,8 +73,7 @@ std::string FormToJson(const Form& form, bool include_timings) {
   }
   j["trees"] = std::move(trees);
   json changes = json::array();
-  for (const auto& [edge, dg] : form.geometry_changes)
-    changes.push_back(json::array({edge.first, edge.second, dg}));
+  for (const auto& [edge, dg] : form.geometry_changes) changes.push_back(json::array({edge.first, edge.second, dg}));
   j["geometry_changes"] = std::move(changes);
   return j.dump(1) + "\n";
 }
@@ -125,8 +131,7 @@ Form FormFromJson(const std::string& text, const std::string& source) {
         if (node.lo.size() != n || node.hi.size() != n) throw std::runtime_error("node of wrong dimension");
         if (node.split_dimension >= 0) {
           for (int c : node.children)
-            if (c <= 0 || c >= static_cast<int>(t.nodes.size()))
-              throw std::runtime_error("child index out of range");
+            if (c <= 0 || c >= static_cast<int>(t.nodes.size())) throw std::runtime_error("child index out of range");
         } else {
           CornerSampleIds(form, node);  // throws std::out_of_range if a corner has no sample
         }

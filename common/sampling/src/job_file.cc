@@ -23,8 +23,8 @@ std::string Scalar(const std::string& path, const YAML::Node& node, const std::s
   return node.Scalar();
 }
 
-long long Integer(const std::string& path, const YAML::Node& node, const std::string& what,
-                  long long lo, long long hi) {
+long long Integer(const std::string& path, const YAML::Node& node, const std::string& what, long long lo,
+                  long long hi) {
   const std::string s = Scalar(path, node, what);
   size_t used = 0;
   long long v = 0;
@@ -35,13 +35,11 @@ long long Integer(const std::string& path, const YAML::Node& node, const std::st
   }
   if (used == 0 || used != s.size()) Fail(path, node.Mark(), what + " must be an integer, got '" + s + "'");
   if (v < lo || v > hi)
-    Fail(path, node.Mark(),
-         what + " must be in [" + std::to_string(lo) + ", " + std::to_string(hi) + "], got " + s);
+    Fail(path, node.Mark(), what + " must be in [" + std::to_string(lo) + ", " + std::to_string(hi) + "], got " + s);
   return v;
 }
 
-double Real(const std::string& path, const YAML::Node& node, const std::string& what, double lo,
-            double hi) {
+double Real(const std::string& path, const YAML::Node& node, const std::string& what, double lo, double hi) {
   const std::string s = Scalar(path, node, what);
   size_t used = 0;
   double v = 0;
@@ -53,8 +51,7 @@ double Real(const std::string& path, const YAML::Node& node, const std::string& 
   if (used == 0 || used != s.size() || !std::isfinite(v))
     Fail(path, node.Mark(), what + " must be a number, got '" + s + "'");
   if (v < lo || v > hi)
-    Fail(path, node.Mark(), what + " must be in [" + std::to_string(lo) + ", " + std::to_string(hi) +
-                                "], got " + s);
+    Fail(path, node.Mark(), what + " must be in [" + std::to_string(lo) + ", " + std::to_string(hi) + "], got " + s);
   return v;
 }
 
@@ -78,9 +75,8 @@ JobFile ParseJobFile(const std::string& yaml_text, const std::string& path) {
       const std::string design = Scalar(path, value, "design");
       if (design.empty()) Fail(path, value.Mark(), "design must name a design file");
       const std::filesystem::path p(design);
-      job.design_path = p.is_absolute()
-                            ? p.lexically_normal().string()
-                            : (std::filesystem::path(path).parent_path() / p).lexically_normal().string();
+      job.design_path = p.is_absolute() ? p.lexically_normal().string()
+                                        : (std::filesystem::path(path).parent_path() / p).lexically_normal().string();
       have_design = true;
     } else if (key == "sampling") {
       if (!value.IsMap()) Fail(path, value.Mark(), "sampling must be a mapping");
@@ -97,14 +93,16 @@ JobFile ParseJobFile(const std::string& yaml_text, const std::string& path) {
           job.sampling.max_samples = Integer(path, sv, "sampling.max_samples", 1, 1000000000000LL);
         else
           Fail(path, s.first.Mark(),
-               "unknown key 'sampling." + skey +
-                   "' (expected subdivisions, max_depth, dg_threshold, max_samples)");
+               "unknown key 'sampling." + skey + "' (expected subdivisions, max_depth, dg_threshold, max_samples)");
       }
     } else if (key == "form_json") {
       const std::string v = Scalar(path, value, "form_json");
-      if (v == "true") job.form_json = true;
-      else if (v == "false") job.form_json = false;
-      else if (v != "auto") Fail(path, value.Mark(), "form_json must be true, false or auto, got '" + v + "'");
+      if (v == "true")
+        job.form_json = true;
+      else if (v == "false")
+        job.form_json = false;
+      else if (v != "auto")
+        Fail(path, value.Mark(), "form_json must be true, false or auto, got '" + v + "'");
     } else if (key == "threads") {
       job.threads = static_cast<int>(Integer(path, value, "threads", 1, 4096));
     } else if (key == "materials") {
@@ -124,8 +122,7 @@ JobFile ParseJobFile(const std::string& yaml_text, const std::string& path) {
           } else if (fkey == "price_per_kg") {
             material.price_per_kg = Real(path, f.second, "materials.price_per_kg", 0.0, 1e12);
           } else {
-            Fail(path, f.first.Mark(),
-                 "unknown key 'materials." + fkey + "' (expected name, density, price_per_kg)");
+            Fail(path, f.first.Mark(), "unknown key 'materials." + fkey + "' (expected name, density, price_per_kg)");
           }
         }
         if (!have_name) Fail(path, m.Mark(), "a material needs a non-empty name");
@@ -136,8 +133,7 @@ JobFile ParseJobFile(const std::string& yaml_text, const std::string& path) {
       }
     } else if (key == "cluster" || key == "cache") {
       if (key == "cache" && value.IsMap() && value["min_subtree_seconds"])
-        job.cache_min_subtree_seconds =
-            Real(path, value["min_subtree_seconds"], "cache.min_subtree_seconds", 0.0, 1e9);
+        job.cache_min_subtree_seconds = Real(path, value["min_subtree_seconds"], "cache.min_subtree_seconds", 0.0, 1e9);
       YAML::Emitter out;
       out << value;
       job.reserved_sections[key] = out.c_str();

@@ -47,8 +47,7 @@ std::string Format(double v) {
 unsigned ValidColour() { return 0x2E9E44; }
 
 unsigned FailureColour(const Form& form, const std::string& failure_type) {
-  static const unsigned kPalette[] = {0xC0392B, 0x2C5AA0, 0x8E44AD, 0xD68910,
-                                      0x6E2C00, 0xC2185B, 0x117A65, 0x555555};
+  static const unsigned kPalette[] = {0xC0392B, 0x2C5AA0, 0x8E44AD, 0xD68910, 0x6E2C00, 0xC2185B, 0x117A65, 0x555555};
   const auto types = FailureTypes(form);
   const std::string t = failure_type.empty() ? "invalid" : failure_type;
   const auto it = std::find(types.begin(), types.end(), t);

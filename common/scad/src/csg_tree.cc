@@ -178,10 +178,14 @@ class Parser {
  public:
   static std::string Canonical(const CsgValue& v) {
     switch (v.type) {
-      case CsgValue::Type::kUndef: return "undef";
-      case CsgValue::Type::kNumber: return FormatScadNumber(v.number);
-      case CsgValue::Type::kString: return QuoteScadString(v.text);
-      case CsgValue::Type::kBoolean: return v.boolean ? "true" : "false";
+      case CsgValue::Type::kUndef:
+        return "undef";
+      case CsgValue::Type::kNumber:
+        return FormatScadNumber(v.number);
+      case CsgValue::Type::kString:
+        return QuoteScadString(v.text);
+      case CsgValue::Type::kBoolean:
+        return v.boolean ? "true" : "false";
       case CsgValue::Type::kVector: {
         std::string out = "[";
         for (std::size_t k = 0; k < v.items.size(); ++k) out += (k ? "," : "") + Canonical(v.items[k]);
@@ -257,7 +261,8 @@ bool RunOpenScad(const std::filesystem::path& model, const std::filesystem::path
   int status = 0;
   waitpid(pid, &status, 0);
   int code = WIFEXITED(status) ? WEXITSTATUS(status) : 128;
-  if (code == 127) throw InputError(model.string() + ": the openscad program is not installed (apt-get install openscad)");
+  if (code == 127)
+    throw InputError(model.string() + ": the openscad program is not installed (apt-get install openscad)");
   std::string last;
   {
     std::ifstream in(log);

@@ -97,8 +97,10 @@ std::vector<std::string> SplitOutsideQuotes(const std::string& s, char sep) {
       continue;
     }
     if (c == '"') quoted = !quoted;
-    if (c == sep && !quoted) parts.emplace_back();
-    else parts.back() += c;
+    if (c == sep && !quoted)
+      parts.emplace_back();
+    else
+      parts.back() += c;
   }
   return parts;
 }
@@ -137,8 +139,10 @@ std::string Annotate(CustomizerParameter& p, const std::string& comment) {
   std::size_t close = std::string::npos;
   bool quoted = false;
   for (std::size_t i = 1; i < c.size(); ++i) {
-    if (c[i] == '\\' && quoted) ++i;
-    else if (c[i] == '"') quoted = !quoted;
+    if (c[i] == '\\' && quoted)
+      ++i;
+    else if (c[i] == '"')
+      quoted = !quoted;
     else if (c[i] == ']' && !quoted) {
       close = i;
       break;
@@ -192,7 +196,8 @@ std::string Annotate(CustomizerParameter& p, const std::string& comment) {
     return "dropdown '[" + inner + "]' on a value that is neither a number nor a string";
   bool found = false;
   for (const auto& o : p.options) {
-    if (o.value.type != p.value.type) return "dropdown '[" + inner + "]' mixes numbers and strings with the value " + p.value.Literal();
+    if (o.value.type != p.value.type)
+      return "dropdown '[" + inner + "]' mixes numbers and strings with the value " + p.value.Literal();
     found = found || SameValue(o.value, p.value);
   }
   if (!found) return "value " + p.value.Literal() + " is not one of the dropdown's values '[" + inner + "]'";
@@ -204,10 +209,13 @@ std::string Annotate(CustomizerParameter& p, const std::string& comment) {
 
 std::string ScadValue::Literal() const {
   switch (type) {
-    case Type::kNumber: return FormatScadNumber(number);
-    case Type::kString: return QuoteScadString(text);
+    case Type::kNumber:
+      return FormatScadNumber(number);
+    case Type::kString:
+      return QuoteScadString(text);
     case Type::kBoolean:
-    case Type::kVector: return text;
+    case Type::kVector:
+      return text;
   }
   return text;
 }
@@ -295,7 +303,7 @@ CustomizerModel ReadCustomizer(const std::string& text, const std::string& file)
       value.push_back(x);
     }
     if (brace || k >= t.size()) break;  // a '{' inside the expression ends the parameters too
-    i = k;  // the ';'
+    i = k;                              // the ';'
     statement_start = true;
     CustomizerParameter p;
     p.name = tok.text;

@@ -148,7 +148,8 @@ class Evaluator {
       }
     }
     Shape s;
-    if (x > 0 && y > 0 && !std::isinf(x) && !std::isinf(y)) s.loops.push_back(SquareLoop(x, y, n.Boolean("center", false)));
+    if (x > 0 && y > 0 && !std::isinf(x) && !std::isinf(y))
+      s.loops.push_back(SquareLoop(x, y, n.Boolean("center", false)));
     return s;
   }
 
@@ -175,8 +176,8 @@ class Evaluator {
       pts.push_back({p.items[0].number, p.items[1].number});
       nan.push_back(std::isnan(pts.back()[0]) || std::isnan(pts.back()[1]));
       if (nan.back())
-        Warn(w_, "WARNING: points[" + std::to_string(i) + "] = " + Echo(p) + " is not a number; the point is dropped, " +
-                     Where(n));
+        Warn(w_, "WARNING: points[" + std::to_string(i) + "] = " + Echo(p) +
+                     " is not a number; the point is dropped, " + Where(n));
     }
     auto keep = [&](std::size_t i, Loop& loop) {
       if (!nan[i]) loop.push_back(pts[i]);
@@ -199,8 +200,8 @@ class Evaluator {
           if (in_range) {
             keep(static_cast<std::size_t>(v), loop);
           } else {
-            Warn(w_, "WARNING: Point index " + Echo(path.items[j]) + " is out of bounds (from paths[" + std::to_string(k) +
-                         "][" + std::to_string(j) + "]), " + Where(n));
+            Warn(w_, "WARNING: Point index " + Echo(path.items[j]) + " is out of bounds (from paths[" +
+                         std::to_string(k) + "][" + std::to_string(j) + "]), " + Where(n));
           }
         }
         s.loops.push_back(std::move(loop));
@@ -219,7 +220,8 @@ class Evaluator {
     for (const CsgValue& row : m->items)
       for (const CsgValue& x : row.items)
         if (x.type == CsgValue::Type::kNumber && !std::isfinite(x.number)) {
-          Warn(w_, "WARNING: Transformation matrix contains Not-a-Number and/or Infinity - removing object., " + Where(n));
+          Warn(w_,
+               "WARNING: Transformation matrix contains Not-a-Number and/or Infinity - removing object., " + Where(n));
           return std::nullopt;
         }
     auto at = [&](int r, int c) { return m->items[r].items[c].number; };
@@ -338,21 +340,24 @@ class Evaluator {
   // A node whose outline only a callback can give (text, 2-D imports):
   // its loops filled even-odd, through Clipper like OpenSCAD's own.
   Shape Outline(const CsgNode& n) {
-    if (!o_.outline) throw NoNativeEquivalentError(Where(n) + ": no native 2-D evaluation of " + n.name + " (no outline)");
+    if (!o_.outline)
+      throw NoNativeEquivalentError(Where(n) + ": no native 2-D evaluation of " + n.name + " (no outline)");
     Shape s{o_.outline(n), false};
     return internal::Sanitize(s, w_);
   }
 
   Shape Import(const CsgNode& n) {
     const std::string ext = ImportExtension(n);
-    if (ext != ".dxf" && ext != ".svg") throw NoNativeEquivalentError(Where(n) + ": import of a 3-D file in a 2-D subtree");
+    if (ext != ".dxf" && ext != ".svg")
+      throw NoNativeEquivalentError(Where(n) + ": import of a 3-D file in a 2-D subtree");
     const std::string file = Arg(n, "file")->text;
     fs::path path = file;
     if (path.is_relative()) path = o_.model_dir / path;
     const fs::path dir = fs::weakly_canonical(o_.model_dir.empty() ? fs::current_path() : o_.model_dir);
     const fs::path resolved = fs::weakly_canonical(path);
     const auto [end, unused] = std::mismatch(dir.begin(), dir.end(), resolved.begin(), resolved.end());
-    if (end != dir.end()) throw InputError(Where(n) + ": import(\"" + file + "\") is outside the model's directory " + dir.string());
+    if (end != dir.end())
+      throw InputError(Where(n) + ": import(\"" + file + "\") is outside the model's directory " + dir.string());
     return Outline(n);
   }
 

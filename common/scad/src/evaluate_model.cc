@@ -25,9 +25,9 @@
 namespace fabatlas::scad {
 namespace {
 
+using internal::BadModel;
 using internal::CsgOut;
 using internal::ExprPtr;
-using internal::BadModel;
 using internal::NotNative;
 using internal::Parser;
 using internal::Scope;
@@ -123,7 +123,9 @@ ModelEvaluation EvaluateModel(const std::filesystem::path& model,
 
 std::string UnknownColourName(const std::string& text, const std::string& file) {
   const std::vector<SourceToken> t = LexSource(text).tokens;
-  auto symbol = [&](std::size_t i, const char* s) { return i < t.size() && t[i].kind == SourceToken::Kind::kSymbol && t[i].text == s; };
+  auto symbol = [&](std::size_t i, const char* s) {
+    return i < t.size() && t[i].kind == SourceToken::Kind::kSymbol && t[i].text == s;
+  };
   for (std::size_t i = 0; i + 2 < t.size(); ++i) {
     if (t[i].kind != SourceToken::Kind::kIdent || t[i].text != "color" || !symbol(i + 1, "(")) continue;
     std::size_t at = i + 2;

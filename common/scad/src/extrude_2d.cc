@@ -24,7 +24,8 @@ bool InsideEvenOdd(const std::vector<Loop>& loops, const Point2& p) {
     for (std::size_t i = 0, j = loop.size() - 1; i < loop.size(); j = i++) {
       const Point2& a = loop[i];
       const Point2& b = loop[j];
-      if ((a[1] > p[1]) != (b[1] > p[1]) && p[0] < (b[0] - a[0]) * (p[1] - a[1]) / (b[1] - a[1]) + a[0]) inside = !inside;
+      if ((a[1] > p[1]) != (b[1] > p[1]) && p[0] < (b[0] - a[0]) * (p[1] - a[1]) / (b[1] - a[1]) + a[0])
+        inside = !inside;
     }
   return inside;
 }
@@ -41,7 +42,8 @@ double Finite(const CsgNode& n, const std::string& key, double fallback) {
 
 }  // namespace
 
-mesh::TriangleMesh LinearExtrude(const CsgNode& n, const Evaluate2dOptions& options, std::vector<std::string>* warnings) {
+mesh::TriangleMesh LinearExtrude(const CsgNode& n, const Evaluate2dOptions& options,
+                                 std::vector<std::string>* warnings) {
   RefuseFile(n);
   // OpenSCAD's argument rules: height 100 unless a finite number, <= 0 an
   // empty solid; scale a number or [x, y], negative taken as 0; slices used
@@ -78,7 +80,8 @@ mesh::TriangleMesh LinearExtrude(const CsgNode& n, const Evaluate2dOptions& opti
   return LinearExtrudeMesh(region, height, center, twist, slices, scale);
 }
 
-mesh::TriangleMesh RotateExtrude(const CsgNode& n, const Evaluate2dOptions& options, std::vector<std::string>* warnings) {
+mesh::TriangleMesh RotateExtrude(const CsgNode& n, const Evaluate2dOptions& options,
+                                 std::vector<std::string>* warnings) {
   RefuseFile(n);
   double angle = Finite(n, "angle", 360);
   if (angle <= -360 || angle > 360) angle = 360;
@@ -93,9 +96,10 @@ mesh::TriangleMesh RotateExtrude(const CsgNode& n, const Evaluate2dOptions& opti
       max_x = std::max(max_x, p[0]);
       if (max_x - min_x > max_x && max_x - min_x > std::abs(min_x)) {
         char line[200];
-        std::snprintf(line, sizeof line,
-                      "ERROR: all points for rotate_extrude() must have the same X coordinate sign (range is %.2f -> %.2f)",
-                      min_x, max_x);
+        std::snprintf(
+            line, sizeof line,
+            "ERROR: all points for rotate_extrude() must have the same X coordinate sign (range is %.2f -> %.2f)",
+            min_x, max_x);
         if (warnings) warnings->push_back(line);
         return {};
       }

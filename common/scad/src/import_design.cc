@@ -103,18 +103,24 @@ double VoxelFor(const ImportOptions& o) {
 
 std::string TypeWords(const ScadValue& v) {
   switch (v.type) {
-    case ScadValue::Type::kString: return "a string (text box)";
-    case ScadValue::Type::kVector: return "a vector";
-    case ScadValue::Type::kBoolean: return "a checkbox";
-    default: return "a number";
+    case ScadValue::Type::kString:
+      return "a string (text box)";
+    case ScadValue::Type::kVector:
+      return "a vector";
+    case ScadValue::Type::kBoolean:
+      return "a checkbox";
+    default:
+      return "a number";
   }
 }
 
 std::string WidgetWords(const CustomizerParameter& p) {
   std::string w = p.widget == CustomizerParameter::Widget::kSlider
-                      ? "slider [" + FormatScadNumber(p.min) + ":" + (p.step > 0 ? FormatScadNumber(p.step) + ":" : "") + FormatScadNumber(p.max) + "]"
-                      : p.widget == CustomizerParameter::Widget::kDropdown ? "dropdown of " + std::to_string(p.options.size())
-                                                                            : TypeWords(p.value);
+                      ? "slider [" + FormatScadNumber(p.min) + ":" +
+                            (p.step > 0 ? FormatScadNumber(p.step) + ":" : "") + FormatScadNumber(p.max) + "]"
+                  : p.widget == CustomizerParameter::Widget::kDropdown
+                      ? "dropdown of " + std::to_string(p.options.size())
+                      : TypeWords(p.value);
   return w + (p.group.empty() ? "" : " in group '" + p.group + "'");
 }
 
@@ -129,7 +135,8 @@ struct Choice {
 // Which parameters are exposed (import_design.h, ImportScad): in file order.
 std::vector<Choice> ChooseExposed(const CustomizerModel& m, const std::string& file, const ImportOptions& o) {
   if (o.max_dims < 1 || o.max_dims > 16)
-    throw InputError(file + ": --max-dims " + std::to_string(o.max_dims) + " is outside 1..16 (the dimensions an artifact holds)");
+    throw InputError(file + ": --max-dims " + std::to_string(o.max_dims) +
+                     " is outside 1..16 (the dimensions an artifact holds)");
   std::map<std::string, const CustomizerParameter*> by_name;
   for (const auto& p : m.parameters) by_name[p.name] = &p;
   std::set<const CustomizerParameter*> chosen;
@@ -147,7 +154,8 @@ std::vector<Choice> ChooseExposed(const CustomizerModel& m, const std::string& f
       if (range != o.ranges.end()) {
         const ExposeRange& r = range->second;
         if (p->value.type != ScadValue::Type::kNumber)
-          throw InputError(at + ": the parameter is " + TypeWords(p->value) + " (" + p->value.Literal() + "), a range needs a number");
+          throw InputError(at + ": the parameter is " + TypeWords(p->value) + " (" + p->value.Literal() +
+                           "), a range needs a number");
         if (p->widget == CustomizerParameter::Widget::kDropdown)
           throw InputError(at + ": the parameter is a dropdown; name it without a range");
         if (p->value.number < r.lo || p->value.number > r.hi)
@@ -155,18 +163,20 @@ std::vector<Choice> ChooseExposed(const CustomizerModel& m, const std::string& f
                            FormatScadNumber(r.lo) + ":" + FormatScadNumber(r.hi));
         how[p] = "range " + FormatScadNumber(r.lo) + ":" + (r.step > 0 ? FormatScadNumber(r.step) + ":" : "") +
                  FormatScadNumber(r.hi) + " from --expose" +
-                 (p->widget == CustomizerParameter::Widget::kSlider ? " (replaces the model's " + WidgetWords(*p) + ")" : "");
+                 (p->widget == CustomizerParameter::Widget::kSlider ? " (replaces the model's " + WidgetWords(*p) + ")"
+                                                                    : "");
       } else {
         if (p->widget == CustomizerParameter::Widget::kNone && p->value.type != ScadValue::Type::kBoolean)
-          throw InputError(at + ": the parameter has no slider or dropdown annotation, so it has no range (give one: --expose " +
-                           name + "=lo:hi)");
+          throw InputError(
+              at + ": the parameter has no slider or dropdown annotation, so it has no range (give one: --expose " +
+              name + "=lo:hi)");
         how[p] = WidgetWords(*p) + ", named by --expose";
       }
       chosen.insert(p);
     }
     if (static_cast<int>(chosen.size()) > o.max_dims)
-      throw InputError(file + ": --expose names " + std::to_string(chosen.size()) + " parameters, more than --max-dims " +
-                       std::to_string(o.max_dims));
+      throw InputError(file + ": --expose names " + std::to_string(chosen.size()) +
+                       " parameters, more than --max-dims " + std::to_string(o.max_dims));
   } else {
     // Customizer groups (tabs) by first appearance, then file order.
     std::map<std::string, int> group_rank;
@@ -182,7 +192,8 @@ std::vector<Choice> ChooseExposed(const CustomizerModel& m, const std::string& f
     }
   }
   if (chosen.empty())
-    throw InputError(file + ": no Customizer parameter has a slider or dropdown annotation outside [Hidden]; "
+    throw InputError(file +
+                     ": no Customizer parameter has a slider or dropdown annotation outside [Hidden]; "
                      "name parameters with --expose NAME or give one a range with --expose NAME=lo:hi");
   std::vector<Choice> out;
   for (const auto& p : m.parameters) {
@@ -192,15 +203,23 @@ std::vector<Choice> ChooseExposed(const CustomizerModel& m, const std::string& f
     if (c.exposed) {
       c.line = "exposed " + p.name + ": " + how[&p];
     } else {
-      if (p.name[0] == '$') c.why = "a $-variable (OpenSCAD's special variables stay fixed)";
-      else if (p.hidden) c.why = "in [Hidden]";
-      else if (!o.expose.empty()) c.why = "not named by --expose (" + WidgetWords(p) + ")";
-      else if (p.widget != CustomizerParameter::Widget::kNone) c.why = "beyond --max-dims " + std::to_string(o.max_dims) + " (" + WidgetWords(p) + ")";
+      if (p.name[0] == '$')
+        c.why = "a $-variable (OpenSCAD's special variables stay fixed)";
+      else if (p.hidden)
+        c.why = "in [Hidden]";
+      else if (!o.expose.empty())
+        c.why = "not named by --expose (" + WidgetWords(p) + ")";
+      else if (p.widget != CustomizerParameter::Widget::kNone)
+        c.why = "beyond --max-dims " + std::to_string(o.max_dims) + " (" + WidgetWords(p) + ")";
       else if (p.value.type == ScadValue::Type::kNumber)
-        c.why = "no range: a number without a slider annotation" + std::string(p.group.empty() ? "" : " in group '" + p.group + "'") +
-                " (give one: --expose " + p.name + "=lo:hi)";
-      else if (p.value.type == ScadValue::Type::kBoolean) c.why = "a checkbox" + std::string(p.group.empty() ? "" : " in group '" + p.group + "'") + " (expose it: --expose " + p.name + ")";
-      else c.why = TypeWords(p.value) + ": not sampled";
+        c.why = "no range: a number without a slider annotation" +
+                std::string(p.group.empty() ? "" : " in group '" + p.group + "'") + " (give one: --expose " + p.name +
+                "=lo:hi)";
+      else if (p.value.type == ScadValue::Type::kBoolean)
+        c.why = "a checkbox" + std::string(p.group.empty() ? "" : " in group '" + p.group + "'") +
+                " (expose it: --expose " + p.name + ")";
+      else
+        c.why = TypeWords(p.value) + ": not sampled";
       c.line = "fixed " + p.name + " = " + p.value.Literal() + ": " + c.why;
     }
     out.push_back(std::move(c));
@@ -214,7 +233,8 @@ void AddExposeItem(const std::string& item, ImportOptions& options) {
   const std::size_t eq = item.find('=');
   const std::string name = item.substr(0, eq);
   if (name.empty()) throw InputError("--expose '" + item + "': no parameter name (expected NAME or NAME=lo:hi[:step])");
-  if (std::find(options.expose.begin(), options.expose.end(), name) == options.expose.end()) options.expose.push_back(name);
+  if (std::find(options.expose.begin(), options.expose.end(), name) == options.expose.end())
+    options.expose.push_back(name);
   if (eq == std::string::npos) return;
   std::vector<double> v;
   std::stringstream ss(item.substr(eq + 1));
@@ -228,10 +248,14 @@ void AddExposeItem(const std::string& item, ImportOptions& options) {
   }
   const std::string text = item.substr(eq + 1);
   if (!ok || v.size() < 2 || v.size() > 3 || text.back() == ':')
-    throw InputError("--expose " + item + ": malformed range '" + text + "' (expected NAME=lo:hi or NAME=lo:hi:step, numbers)");
+    throw InputError("--expose " + item + ": malformed range '" + text +
+                     "' (expected NAME=lo:hi or NAME=lo:hi:step, numbers)");
   ExposeRange r{v[0], v[1], v.size() == 3 ? v[2] : 0};
-  if (!(r.lo < r.hi)) throw InputError("--expose " + item + ": lo " + FormatScadNumber(r.lo) + " is not below hi " + FormatScadNumber(r.hi));
-  if (v.size() == 3 && !(r.step > 0)) throw InputError("--expose " + item + ": step " + FormatScadNumber(r.step) + " must be positive");
+  if (!(r.lo < r.hi))
+    throw InputError("--expose " + item + ": lo " + FormatScadNumber(r.lo) + " is not below hi " +
+                     FormatScadNumber(r.hi));
+  if (v.size() == 3 && !(r.step > 0))
+    throw InputError("--expose " + item + ": step " + FormatScadNumber(r.step) + " must be positive");
   options.ranges[name] = r;
 }
 
@@ -285,7 +309,8 @@ ImportSummary ImportScad(const std::filesystem::path& model, const ImportOptions
     y << "}";
     // fabatlas samples the whole range; OpenSCAD's slider step is noted only.
     if (e.step > 0 && e.type != "enum")
-      y << (options.ranges.count(p.name) ? "  # --expose step " : "  # OpenSCAD slider step ") << FormatScadNumber(e.step);
+      y << (options.ranges.count(p.name) ? "  # --expose step " : "  # OpenSCAD slider step ")
+        << FormatScadNumber(e.step);
     y << "\n";
   }
   // The rest stays at the model's values: shown read-only, never passed.
@@ -319,7 +344,8 @@ ImportSummary ImportScad(const std::filesystem::path& model, const ImportOptions
   }
   // Checks: the mesh OpenSCAD produces (polyhedra, subtrees it renders) must
   // be watertight; a wall of two 0.4 mm FDM extrusion lines; stands.
-  y << "checks:\n  - watertight\n  - {type: min_thickness, value: " << FormatScadNumber(kMinThickness) << "}\n  - stands\n";
+  y << "checks:\n  - watertight\n  - {type: min_thickness, value: " << FormatScadNumber(kMinThickness)
+    << "}\n  - stands\n";
   y << "properties: [volume, bbox]\n";
 
   // OpenSCAD's parameter sets beside the model become presets.
@@ -348,9 +374,8 @@ ImportSummary ImportScad(const std::filesystem::path& model, const ImportOptions
         if (e->type == "enum") {
           for (std::size_t i = 0; i < e->literals.size(); ++i) {
             double a = 0, b = 0;
-            bool same = e->literals[i] == written ||
-                        (!e->quoted[i] && std::sscanf(written.c_str(), "%lf", &a) == 1 &&
-                         std::sscanf(e->literals[i].c_str(), "%lf", &b) == 1 && a == b);
+            bool same = e->literals[i] == written || (!e->quoted[i] && std::sscanf(written.c_str(), "%lf", &a) == 1 &&
+                                                      std::sscanf(e->literals[i].c_str(), "%lf", &b) == 1 && a == b);
             if (same) {
               value = Yaml(e->labels[i]);
               break;
@@ -360,10 +385,15 @@ ImportSummary ImportScad(const std::filesystem::path& model, const ImportOptions
         } else {
           char* end = nullptr;
           double v = std::strtod(written.c_str(), &end);
-          if (end == written.c_str() || *end != 0 || !std::isfinite(v)) problem = name + "=" + written + " is not a number";
-          else if (v < e->min || v > e->max) problem = name + "=" + written + " lies outside [" + FormatScadNumber(e->min) + ", " + FormatScadNumber(e->max) + "]";
-          else if (e->type == "integer" && !Whole(v)) problem = name + "=" + written + " is not a whole number";
-          else value = FormatScadNumber(v);
+          if (end == written.c_str() || *end != 0 || !std::isfinite(v))
+            problem = name + "=" + written + " is not a number";
+          else if (v < e->min || v > e->max)
+            problem = name + "=" + written + " lies outside [" + FormatScadNumber(e->min) + ", " +
+                      FormatScadNumber(e->max) + "]";
+          else if (e->type == "integer" && !Whole(v))
+            problem = name + "=" + written + " is not a whole number";
+          else
+            value = FormatScadNumber(v);
         }
         if (!problem.empty()) break;
         values << (values.tellp() > 0 ? ", " : "") << name << ": " << value;
@@ -425,7 +455,8 @@ std::filesystem::path WriteImportedJob(const std::filesystem::path& model, const
     write(dir / (stem + ".scad"), ReadText(model));
   fs::path json = model;
   json.replace_extension(".json");
-  if (fs::is_regular_file(json, ec) && (!fs::exists(dir / (stem + ".json")) || !fs::equivalent(json, dir / (stem + ".json"))))
+  if (fs::is_regular_file(json, ec) &&
+      (!fs::exists(dir / (stem + ".json")) || !fs::equivalent(json, dir / (stem + ".json"))))
     write(dir / (stem + ".json"), ReadText(json));
   // What the model includes, uses and imports, where OpenSCAD finds it from
   // the copy (model_files.h).

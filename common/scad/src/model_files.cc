@@ -87,7 +87,7 @@ struct Scan {
 
   [[noreturn]] static void Refuse(const Named& n, const std::string& why) {
     const std::string shown = n.statement == "include" || n.statement == "use" ? n.statement + " <" + n.name + ">"
-                                                                                : n.statement + "(\"" + n.name + "\")";
+                                                                               : n.statement + "(\"" + n.name + "\")";
     throw InputError(n.file.string() + ":" + std::to_string(n.line) + ": " + shown + " " + why +
                      "; a job bundle carries only the files inside the model's directory, which is all a worker "
                      "reads");
@@ -106,7 +106,8 @@ struct Scan {
     std::error_code ec;
     for (const auto& [c, c_root] : candidates) {
       if (!fs::is_regular_file(c, ec)) continue;
-      if (!ResolvesInside(c, c_root)) Refuse(n, "is a link to " + fs::canonical(c, ec).string() + ", outside " + c_root.string());
+      if (!ResolvesInside(c, c_root))
+        Refuse(n, "is a link to " + fs::canonical(c, ec).string() + ", outside " + c_root.string());
       if (!seen.insert(relative).second) return;
       found.push_back({relative, c});
       if (library && c.extension() == ".scad") Visit(c, relative.parent_path(), c == dir / named ? root : c_root);

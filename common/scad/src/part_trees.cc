@@ -23,8 +23,10 @@ struct Region {
 // color(c)'s colour; unset when OpenSCAD could not parse it ([-1, -1, -1, 1]).
 Colour ColourOf(const CsgNode& n) {
   const CsgValue* c = nullptr;
-  if (auto it = n.args.find("c"); it != n.args.end()) c = &it->second;
-  else if (!n.positional.empty()) c = &n.positional[0];
+  if (auto it = n.args.find("c"); it != n.args.end())
+    c = &it->second;
+  else if (!n.positional.empty())
+    c = &n.positional[0];
   Colour out;
   if (!c || c->type != CsgValue::Type::kVector || c->items.size() < 3) return out;
   out.rgba = {0, 0, 0, 1};
@@ -100,7 +102,8 @@ std::vector<Region> Regions(const CsgNode& n, const Colour& around) {
     std::string rest;
     for (std::size_t i = 1; i < n.children.size(); ++i) rest += n.children[i].canonical;
     std::vector<Region> out;
-    for (Region& r : Regions(n.children[0], around)) out.push_back({r.colour, {Header(n) + "{" + Joined(r) + rest + "}"}});
+    for (Region& r : Regions(n.children[0], around))
+      out.push_back({r.colour, {Header(n) + "{" + Joined(r) + rest + "}"}});
     return out;
   }
   const Colour inner = FirstColour(n);

@@ -40,8 +40,10 @@ constexpr double kSqrt3Over2 = 0.86602540378443864676;
 
 void AddFan(TriangleMesh& m, const std::vector<int>& face, bool flip) {
   for (std::size_t k = 1; k + 1 < face.size(); ++k) {
-    if (flip) m.triangles.push_back({face[0], face[k + 1], face[k]});
-    else m.triangles.push_back({face[0], face[k], face[k + 1]});
+    if (flip)
+      m.triangles.push_back({face[0], face[k + 1], face[k]});
+    else
+      m.triangles.push_back({face[0], face[k], face[k + 1]});
   }
 }
 
@@ -59,8 +61,10 @@ void AddStripCap(TriangleMesh& m, const std::vector<int>& ring, bool flip) {
   const int n = static_cast<int>(ring.size());
   if (n < 3) return;
   auto add = [&](int a, int b, int c) {
-    if (flip) m.triangles.push_back({ring[a], ring[c], ring[b]});
-    else m.triangles.push_back({ring[a], ring[b], ring[c]});
+    if (flip)
+      m.triangles.push_back({ring[a], ring[c], ring[b]});
+    else
+      m.triangles.push_back({ring[a], ring[b], ring[c]});
   };
   add(0, 1, n - 1);
   for (int lo = 1, hi = n - 1; hi - lo > 1; ++lo, --hi) {
@@ -92,7 +96,7 @@ double Cross(const Point2& o, const Point2& a, const Point2& b) {
 // vertices inside it (a fan from the opposite vertex), so that every piece
 // of the segment is an edge of the triangles on both sides of it.
 void SplitAtTopVertices(TriangleMesh& m, const std::map<std::array<double, 3>, int>& top) {
-  std::map<int, double> along;  // top vertex -> its coordinate along the segment
+  std::map<int, double> along;                            // top vertex -> its coordinate along the segment
   for (const auto& [p, i] : top) along[i] = p[0] + p[1];  // one of x, y is 0
   std::vector<std::pair<double, int>> sorted;
   for (const auto& [i, t] : along) sorted.push_back({t, i});
@@ -141,10 +145,14 @@ double SinDegrees(double a) {
   if (!std::isfinite(a) || std::abs(a) >= 360.0 * 4503599627370496.0) return std::nan("");
   const Folded f = Fold(a);
   double v;
-  if (f.x == 30) v = 0.5;
-  else if (f.x == 45) v = std::numbers::sqrt2 / 2;
-  else if (f.x == 60) v = kSqrt3Over2;
-  else v = f.x < 45 ? std::sin(f.x * kDegree) : std::cos((90 - f.x) * kDegree);
+  if (f.x == 30)
+    v = 0.5;
+  else if (f.x == 45)
+    v = std::numbers::sqrt2 / 2;
+  else if (f.x == 60)
+    v = kSqrt3Over2;
+  else
+    v = f.x < 45 ? std::sin(f.x * kDegree) : std::cos((90 - f.x) * kDegree);
   return f.negative_sin ? -v : v;
 }
 
@@ -152,10 +160,14 @@ double CosDegrees(double a) {
   if (!std::isfinite(a) || std::abs(a) >= 360.0 * 4503599627370496.0) return std::nan("");
   const Folded f = Fold(a);
   double v;
-  if (f.x == 60) v = 0.5;
-  else if (f.x == 45) v = std::numbers::sqrt2 / 2;
-  else if (f.x == 30) v = kSqrt3Over2;
-  else v = f.x > 45 ? std::sin((90 - f.x) * kDegree) : std::cos(f.x * kDegree);
+  if (f.x == 60)
+    v = 0.5;
+  else if (f.x == 45)
+    v = std::numbers::sqrt2 / 2;
+  else if (f.x == 30)
+    v = kSqrt3Over2;
+  else
+    v = f.x > 45 ? std::sin((90 - f.x) * kDegree) : std::cos(f.x * kDegree);
   return f.negative_cos ? -v : v;
 }
 
@@ -257,7 +269,8 @@ bool QuadDiagonalIsZeroTwo(const std::vector<V3>& points, const std::vector<int>
   return zero_two;
 }
 
-TriangleMesh PolyhedronMesh(const std::vector<std::array<double, 3>>& points, const std::vector<std::vector<int>>& faces) {
+TriangleMesh PolyhedronMesh(const std::vector<std::array<double, 3>>& points,
+                            const std::vector<std::vector<int>>& faces) {
   TriangleMesh m;
   m.vertices = points;
   for (const auto& f : faces) {
@@ -275,8 +288,10 @@ TriangleMesh PolyhedronMesh(const std::vector<std::array<double, 3>>& points, co
       normal[2] += (a[0] - b[0]) * (a[1] + b[1]);
     }
     if (f.size() == 4 && std::set<int>(f.begin(), f.end()).size() == 4) {
-      if (QuadDiagonalIsZeroTwo(points, f, normal)) AddFan(m, f, false);
-      else AddFan(m, {f[1], f[2], f[3], f[0]}, false);
+      if (QuadDiagonalIsZeroTwo(points, f, normal))
+        AddFan(m, f, false);
+      else
+        AddFan(m, {f[1], f[2], f[3], f[0]}, false);
       continue;
     }
     int k = 0;
@@ -317,8 +332,9 @@ bool ApproximatelyConvex(const TriangleMesh& m) {
       const V3& n = normal[o];
       if (n[0] * (p[0] - q[0]) + n[1] * (p[1] - q[1]) + n[2] * (p[2] - q[2]) > 0) {  // folds inward
         const V3& w = normal[t];
-        const double cosine = (n[0] * w[0] + n[1] * w[1] + n[2] * w[2]) /
-                              std::sqrt((n[0] * n[0] + n[1] * n[1] + n[2] * n[2]) * (w[0] * w[0] + w[1] * w[1] + w[2] * w[2]));
+        const double cosine =
+            (n[0] * w[0] + n[1] * w[1] + n[2] * w[2]) /
+            std::sqrt((n[0] * n[0] + n[1] * n[1] + n[2] * n[2]) * (w[0] * w[0] + w[1] * w[1] + w[2] * w[2]));
         if (!(cosine >= threshold)) return false;
       }
     }
@@ -444,7 +460,7 @@ TriangleMesh LinearExtrudeMesh(const Region2& region, double height, bool center
       const bool invert = zero_top && s + 1 == slices;
       for (int i = 0; i < k; ++i) {
         const int p1 = s * n + loop[i], c1 = s * n + loop[(i + 1) % k];  // this layer: previous, current vertex
-        const int p2 = p1 + n, c2 = c1 + n;                                 // the layer above
+        const int p2 = p1 + n, c2 = c1 + n;                              // the layer above
         const int d = shorter(p1, c2, c1, p2);
         const bool start_up = (d == -1 || (d == 0 && tie_start_up)) != invert;
         if (start_up) {  // diagonal p1-c2
@@ -545,7 +561,8 @@ TriangleMesh RotateExtrudeMesh(const Region2& region, double angle, int fragment
     const auto& p = m.vertices[t[0]];
     const auto& q = m.vertices[t[1]];
     const auto& w = m.vertices[t[2]];
-    volume += p[0] * (q[1] * w[2] - q[2] * w[1]) - p[1] * (q[0] * w[2] - q[2] * w[0]) + p[2] * (q[0] * w[1] - q[1] * w[0]);
+    volume +=
+        p[0] * (q[1] * w[2] - q[2] * w[1]) - p[1] * (q[0] * w[2] - q[2] * w[0]) + p[2] * (q[0] * w[1] - q[1] * w[0]);
   }
   if (volume < 0)
     for (auto& t : m.triangles) std::swap(t[1], t[2]);

@@ -21,7 +21,8 @@ double SegmentDistance2(double px, double py, const Point2& a, const Point2& b) 
 void Compress(const std::vector<std::vector<std::uint32_t>>& buckets, std::vector<std::uint32_t>& start,
               std::vector<std::uint32_t>& items) {
   start.assign(buckets.size() + 1, 0);
-  for (std::size_t b = 0; b < buckets.size(); ++b) start[b + 1] = start[b] + static_cast<std::uint32_t>(buckets[b].size());
+  for (std::size_t b = 0; b < buckets.size(); ++b)
+    start[b + 1] = start[b] + static_cast<std::uint32_t>(buckets[b].size());
   items.clear();
   items.reserve(start.back());
   for (const auto& b : buckets) items.insert(items.end(), b.begin(), b.end());

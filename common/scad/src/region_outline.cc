@@ -76,8 +76,7 @@ Region2 ResolveRegion(const std::vector<Loop>& loops, const std::function<bool(c
       const bool turns = CGAL::orientation(K::Point_2(prev[0], prev[1]), K::Point_2(p[0], p[1]),
                                            K::Point_2(q[0], q[1])) != CGAL::COLLINEAR;
       const bool spike = (q[0] - p[0]) * (p[0] - prev[0]) + (q[1] - p[1]) * (p[1] - prev[1]) < 0;
-      if (turns || spike)
-        kept.push_back(loop[i]);
+      if (turns || spike) kept.push_back(loop[i]);
     }
     if (kept.size() >= 3) r.loops.push_back(std::move(kept));
   }

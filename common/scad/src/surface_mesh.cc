@@ -74,8 +74,10 @@ HeightMap DatHeights(const std::string& text, const std::string& name, std::vect
       if (at == std::string::npos) at = line.size();
     }
     // A row cut short by a bad value keeps what it read (OpenSCAD keeps it too).
-    if (!row.empty()) rows.push_back(std::move(row));
-    else if (stopped) break;
+    if (!row.empty())
+      rows.push_back(std::move(row));
+    else if (stopped)
+      break;
   }
   HeightMap map;
   map.rows = static_cast<int>(rows.size());

@@ -104,8 +104,8 @@ void CheckPart(const std::vector<MovingPart>& parts, int p) {
 
 }  // namespace
 
-ContactNormalSummary SpacetimeContactNormal(const std::vector<MovingPart>& parts, int a, int b, double t0,
-                                            double t1, const ContactNormalOptions& options) {
+ContactNormalSummary SpacetimeContactNormal(const std::vector<MovingPart>& parts, int a, int b, double t0, double t1,
+                                            const ContactNormalOptions& options) {
   CheckPart(parts, a);
   CheckPart(parts, b);
   if (a == b) throw InputError("contact normal: a part against itself");

@@ -79,8 +79,8 @@ Transform Transform::Compose(const Transform& o) const {
   Transform out;
   for (int r = 0; r < 3; ++r) {
     for (int c = 0; c < 3; ++c) {
-      out.rotation[r][c] = rotation[r][0] * o.rotation[0][c] + rotation[r][1] * o.rotation[1][c] +
-                           rotation[r][2] * o.rotation[2][c];
+      out.rotation[r][c] =
+          rotation[r][0] * o.rotation[0][c] + rotation[r][1] * o.rotation[1][c] + rotation[r][2] * o.rotation[2][c];
     }
   }
   const Vec3 t = Apply(o.translation);
@@ -103,13 +103,12 @@ Transform RigidMotion::At(double t) const {
     }
     f.rotation = ToMatrix(q);
   }
-  const double a = (1 - t) * (1 - t) * (1 - t), b = 3 * (1 - t) * (1 - t) * t, c = 3 * (1 - t) * t * t,
-               d = t * t * t;
+  const double a = (1 - t) * (1 - t) * (1 - t), b = 3 * (1 - t) * (1 - t) * t, c = 3 * (1 - t) * t * t, d = t * t * t;
   // f(x) = R (x - pivot) + pivot + T(t)
   for (int r = 0; r < 3; ++r) {
     const double rp = f.rotation[r][0] * pivot[0] + f.rotation[r][1] * pivot[1] + f.rotation[r][2] * pivot[2];
-    f.translation[r] = pivot[r] - rp + a * translation[0][r] + b * translation[1][r] + c * translation[2][r] +
-                       d * translation[3][r];
+    f.translation[r] =
+        pivot[r] - rp + a * translation[0][r] + b * translation[1][r] + c * translation[2][r] + d * translation[3][r];
   }
   return f;
 }

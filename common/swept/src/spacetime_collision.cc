@@ -253,8 +253,7 @@ CollisionReport DetectCollisions(const std::vector<MovingPart>& parts, const Spa
       for (std::size_t r = 0; r < boxes.size(); ++r)
         if (Overlap(boxes[q], boxes[r])) consider(q, r);
   }
-  report.broad_phase_seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - broad0).count();
+  report.broad_phase_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - broad0).count();
   // Exact test at candidate samples. Both parts in their body frames (built
   // on first use); B's triangles posed into A's frame by f_A^-1 f_B.
   std::map<int, BodyIndex> index;

@@ -148,7 +148,8 @@ mesh::TriangleMesh SweptDistanceField::Surface(double iso) const {
 
 std::vector<Transform> SampleMotion(const mesh::TriangleMesh& body, const RigidMotion& motion,
                                     const SweptVolumeOptions& options) {
-  return SamplePoses(body, [&motion](double t) { return motion.At(t); }, options);
+  return SamplePoses(
+      body, [&motion](double t) { return motion.At(t); }, options);
 }
 
 std::vector<Transform> SamplePoses(const mesh::TriangleMesh& body, const std::function<Transform(double)>& motion,
@@ -254,8 +255,8 @@ SweptDistanceField ComputeSweptDistance(const mesh::TriangleMesh& body, const st
         for (auto v = leaf->cbeginValueOn(); v; ++v) {
           const Coord c = v.getCoord();
           const Vec3 q = g.Apply({c.x() * h, c.y() * h, c.z() * h});
-          const float d = static_cast<float>(
-              openvdb::tools::BoxSampler::sample(acc, openvdb::Vec3R(q[0] / h, q[1] / h, q[2] / h)));
+          const float d =
+              static_cast<float>(openvdb::tools::BoxSampler::sample(acc, openvdb::Vec3R(q[0] / h, q[1] / h, q[2] / h)));
           const float cur = out->getValue(v.pos());
           if (d < cur) out->setValueOnly(v.pos(), std::max(d, static_cast<float>(-w)));
           ++n;
@@ -297,8 +298,8 @@ mesh::TriangleMesh SweptOffsetSurface(const mesh::TriangleMesh& body, const Rigi
   return ComputeSweptDistance(body, motion, options).Surface(options.offset);
 }
 
-geometry::Solid SweptOffsetSolid(const geometry::GridSpec& g, const mesh::TriangleMesh& body,
-                                 const RigidMotion& motion, const SweptVolumeOptions& options) {
+geometry::Solid SweptOffsetSolid(const geometry::GridSpec& g, const mesh::TriangleMesh& body, const RigidMotion& motion,
+                                 const SweptVolumeOptions& options) {
   return geometry::FromMesh(g, SweptOffsetSurface(body, motion, options));
 }
 

@@ -59,12 +59,12 @@ struct ArtifactStatistics {
 // The geometry cache as chosen by the cache task (Fab Forms Sec. 6, Fig. 14).
 // Sizes are in entries and bytes of level-set memory (SubtreeRecord::bytes).
 struct CacheSummary {
-  std::string strategy;               // "naive", "opt_ave", "opt_max" (cache::StrategyName); empty = no cache
-  std::int64_t budget_bytes = 0;      // memory budget from the job file (0 = none)
-  double threshold_seconds = 0.0;     // subtrees whose root took less were not stored
-  std::string cost_model;             // how entry costs were obtained (docs/cache.md)
-  std::int64_t top_entries = 0, top_bytes = 0;      // H_TOP: root geometry of every valid sample
-  std::int64_t opt_entries = 0, opt_bytes = 0;      // H_opt: the chosen cache
+  std::string strategy;                         // "naive", "opt_ave", "opt_max" (cache::StrategyName); empty = no cache
+  std::int64_t budget_bytes = 0;                // memory budget from the job file (0 = none)
+  double threshold_seconds = 0.0;               // subtrees whose root took less were not stored
+  std::string cost_model;                       // how entry costs were obtained (docs/cache.md)
+  std::int64_t top_entries = 0, top_bytes = 0;  // H_TOP: root geometry of every valid sample
+  std::int64_t opt_entries = 0, opt_bytes = 0;  // H_opt: the chosen cache
   std::int64_t rfree_entries = 0, rfree_bytes = 0;  // H_rfree: every non-redundant subtree
 };
 
@@ -98,17 +98,17 @@ struct CacheEntry {
   // optimiser; deterministic (the cost model of docs/cache.md), not a
   // measurement of this run.
   double cost_seconds = 0.0;
-  bool in_opt = true;    // member of the chosen cache H_opt (loaded by previews)
-  bool in_rfree = true;  // member of H_rfree (for measuring t_rfree, Fig. 14)
-  std::string grid;      // geometry::Solid::Serialize() bytes (exact level set)
-  std::string glb;       // the zero iso-surface as glTF 2.0 binary (mm, +Y up untouched)
+  bool in_opt = true;       // member of the chosen cache H_opt (loaded by previews)
+  bool in_rfree = true;     // member of H_rfree (for measuring t_rfree, Fig. 14)
+  std::string grid;         // geometry::Solid::Serialize() bytes (exact level set)
+  std::string glb;          // the zero iso-surface as glTF 2.0 binary (mm, +Y up untouched)
   std::string grid_sha256;  // SHA-256 hex of `grid`; filled in by WriteArtifact
 };
 
 // One point of a Fig. 13 curve: predicted preview time over all samples with
 // the first `entries` subtrees chosen by `strategy`.
 struct CacheCurvePoint {
-  std::string strategy;  // "naive", "opt_ave", "opt_max"
+  std::string strategy;   // "naive", "opt_ave", "opt_max"
   std::int64_t step = 0;  // position along the curve, from 0 (no cache)
   std::int64_t entries = 0;
   std::int64_t bytes = 0;
@@ -132,10 +132,10 @@ struct JobBundle {
 
 struct Artifact {
   Manifest manifest;
-  sampling::Form form;  // dimensions, k-d trees, samples, ΔG values
-  std::vector<CacheEntry> cache;                 // sorted by key on write
-  std::vector<CacheCurvePoint> cache_curves;     // sorted by (strategy, step) on write
-  std::vector<StartingPoint> starting_points;    // in the given order
+  sampling::Form form;                         // dimensions, k-d trees, samples, ΔG values
+  std::vector<CacheEntry> cache;               // sorted by key on write
+  std::vector<CacheCurvePoint> cache_curves;   // sorted by (strategy, step) on write
+  std::vector<StartingPoint> starting_points;  // in the given order
   JobBundle bundle;
   // Optional, for caches too large to hold in memory: WriteArtifact calls it
   // for every entry of `cache` whose grid is empty, just before writing its

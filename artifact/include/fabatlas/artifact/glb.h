@@ -37,11 +37,10 @@ struct GlbPart {
 };
 
 // The parts as one scene of one node per part (named after it, with
-// MeshToGlb's scale and rotation) holding its own mesh of one primitive, normals as SolidPreviewGlb gives them (`exact`:
-// split at 30-degree creases). A coloured part's primitive has a material
-// named "part NAME" whose baseColorFactor is its colour converted from sRGB
-// to linear (glTF 2.0 Sec. 3.9.2: baseColorFactor is linear), metallic 0,
-// roughness 0.6, alphaMode BLEND when alpha < 1. Deterministic.
+// MeshToGlb's scale and rotation) holding its own mesh of one primitive, normals as SolidPreviewGlb gives them
+// (`exact`: split at 30-degree creases). A coloured part's primitive has a material named "part NAME" whose
+// baseColorFactor is its colour converted from sRGB to linear (glTF 2.0 Sec. 3.9.2: baseColorFactor is linear),
+// metallic 0, roughness 0.6, alphaMode BLEND when alpha < 1. Deterministic.
 std::string PartsToGlb(const std::vector<GlbPart>& parts, bool exact);
 
 // Reads a GLB written by MeshToGlb (or any GLB whose first mesh primitive is

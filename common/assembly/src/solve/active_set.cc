@@ -26,8 +26,7 @@ std::vector<std::string> Solver::FallsApart() {
                                          : prog_.instances[c.part_b].name + "." + c.primitive_b;
     const auto& specs = Spec(static_cast<int>(b));
     for (size_t i = 0; i < specs.size(); ++i) {
-      const bool pinned =
-          std::find(pinned_.begin(), pinned_.end(), std::make_pair(int(b), int(i))) != pinned_.end();
+      const bool pinned = std::find(pinned_.begin(), pinned_.end(), std::make_pair(int(b), int(i))) != pinned_.end();
       if (specs[i].kind != ParamKind::kBoundedAndOpen || specs[i].held || (kin_.held[b][i] && !pinned)) continue;
       const SlideState* slide = FindSlide(static_cast<int>(b), static_cast<int>(i));
       if (slide && slide->angle_deg <= opt_.friction_angle_deg) continue;
@@ -111,7 +110,8 @@ std::vector<double> Solver::EnergyGradient() {
   std::vector<double> grad(blocks_.size() * internal::kParamBlock, 0.0);
   for (size_t b = 0; b < blocks_.size(); ++b)
     for (int i = 0; i < internal::kParamBlock; ++i)
-      for (size_t k = 0; k < r.size(); ++k) grad[internal::kParamBlock * b + i] += jac[b][k * internal::kParamBlock + i] * r[k];
+      for (size_t k = 0; k < r.size(); ++k)
+        grad[internal::kParamBlock * b + i] += jac[b][k * internal::kParamBlock + i] * r[k];
   return grad;
 }
 

@@ -145,9 +145,9 @@ void AssemblyCost::TreeJacobians(const Frames& frames, double** jacobians) const
       const bool first = (side == 0) == child_is_b;  // this side's frame is F1
       for (int i = 0; i < internal::kParamBlock; ++i) {
         if (!used_[b][i]) continue;
-        const Eigen::Matrix4d dchild = first ? Eigen::Matrix4d(pose[parent] * fr[b].d[i] * f2 * inv3)
-                                             : Eigen::Matrix4d(pose[parent] * m1 * f2 *
-                                                               RigidInverseDerivative(m3, fr[b].d[i]));
+        const Eigen::Matrix4d dchild =
+            first ? Eigen::Matrix4d(pose[parent] * fr[b].d[i] * f2 * inv3)
+                  : Eigen::Matrix4d(pose[parent] * m1 * f2 * RigidInverseDerivative(m3, fr[b].d[i]));
         SubtreeRows(t, dchild * inv_child, i, frames, jacobians[b]);
       }
     }

@@ -27,8 +27,8 @@ struct SpacingTerm {
 struct EnergyTerm {
   int part;
   Eigen::Vector3d com;
-  double scale;         // sqrt(m g / (1000 D))
-  double datum;         // −D (mm), see AssemblyResidual
+  double scale;  // sqrt(m g / (1000 D))
+  double datum;  // −D (mm), see AssemblyResidual
 };
 
 // All residuals of one phase as one cost over all parameter blocks.
@@ -39,7 +39,9 @@ struct AssemblyResidual {
   // Relaxation only: residual scale of the target term (0: none), see
   // SolveOptions::relaxation_target_weight.
   double relax_target_scale = 0;
-  bool HasTargetRows() const { return phase == Phase::kObjective || (phase == Phase::kRelaxation && relax_target_scale > 0); }
+  bool HasTargetRows() const {
+    return phase == Phase::kObjective || (phase == Phase::kRelaxation && relax_target_scale > 0);
+  }
   double TargetScale() const { return phase == Phase::kObjective ? 1.0 : relax_target_scale; }
   std::vector<SpacingTerm> spacing;
   std::vector<EnergyTerm> energy;
@@ -51,8 +53,8 @@ struct AssemblyResidual {
   double ClosingScale(size_t k) const { return closing_scale.empty() ? 1.0 : closing_scale[k]; }
 
   int NumResiduals() const {
-    return 12 * static_cast<int>(kin->closing.size()) + static_cast<int>(spacing.size()) +
-           (HasTargetRows() ? 12 : 0) + (phase == Phase::kRelaxation ? static_cast<int>(energy.size()) : 0);
+    return 12 * static_cast<int>(kin->closing.size()) + static_cast<int>(spacing.size()) + (HasTargetRows() ? 12 : 0) +
+           (phase == Phase::kRelaxation ? static_cast<int>(energy.size()) : 0);
   }
 
   template <typename T>

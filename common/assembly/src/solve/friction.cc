@@ -97,16 +97,16 @@ void Solver::EvaluateSlideLoads() {
     const int host = sl.block % 2 == 0 ? c.part_a : c.part_b;
     double xs[internal::kParamBlock];
     kin_.Effective<double>(sl.block, blocks_[sl.block].data(), xs);
-    const FrameDerivatives fd = ConnectorFrameDerivatives(
-        sl.block % 2 == 0 ? kin_.base_a[e] : kin_.base_b[e], p, xs, kin_.sym_axis[sl.block]);
+    const FrameDerivatives fd =
+        ConnectorFrameDerivatives(sl.block % 2 == 0 ? kin_.base_a[e] : kin_.base_b[e], p, xs, kin_.sym_axis[sl.block]);
     const Eigen::Vector3d dir = (pose[host].linear() * fd.d[sl.index].topRightCorner<3, 1>()).normalized();
     const Eigen::Vector3d f = SlideForce(e, force, closing_force);
     sl.normal = (f - f.dot(dir) * dir).norm();
     sl.angle_deg = std::atan2(sl.axial, sl.normal) * 180 / M_PI;
     if (std::getenv("FABATLAS_ASSEMBLY_DEBUG"))
-      std::fprintf(stderr, "slide %d.%d%s: axial %.6g (|F.a| %.6g), normal %.6g J/mm, %.2f deg, t = %g\n",
-                   sl.block, sl.index, sl.stuck ? " (held)" : "", sl.axial, std::abs(f.dot(dir)), sl.normal,
-                   sl.angle_deg, blocks_[sl.block][sl.index]);
+      std::fprintf(stderr, "slide %d.%d%s: axial %.6g (|F.a| %.6g), normal %.6g J/mm, %.2f deg, t = %g\n", sl.block,
+                   sl.index, sl.stuck ? " (held)" : "", sl.axial, std::abs(f.dot(dir)), sl.normal, sl.angle_deg,
+                   blocks_[sl.block][sl.index]);
   }
 }
 

@@ -84,6 +84,8 @@ struct Kinematics {
 // The value of a double or of a Jet (its real part).
 inline double Value(double x) { return x; }
 template <int N>
-double Value(const ceres::Jet<double, N>& x) { return x.a; }
+double Value(const ceres::Jet<double, N>& x) {
+  return x.a;
+}
 
 }  // namespace fabatlas::assembly::internal

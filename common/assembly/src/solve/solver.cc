@@ -43,8 +43,10 @@ Kinematics KinematicsOf(const Program& prog) {
   // The spanning tree is the program's attach steps (each places its new
   // part b from the placed part a); connect steps close cycles.
   for (int e = 0; e < m; ++e) {
-    if (prog.connections[e].closing) kin.closing.push_back(e);
-    else kin.tree.push_back({e, prog.connections[e].part_b});
+    if (prog.connections[e].closing)
+      kin.closing.push_back(e);
+    else
+      kin.tree.push_back({e, prog.connections[e].part_b});
   }
   return kin;
 }
@@ -99,7 +101,7 @@ Solver::Solver(const Program& prog, const SolveOptions& opt)
 ceres::Solver::Options Solver::OptionsOf(Phase phase, int max_iterations) const {
   ceres::Solver::Options o;
   o.linear_solver_type = ceres::DENSE_QR;
-  o.max_num_iterations = max_iterations > 0                ? max_iterations
+  o.max_num_iterations = max_iterations > 0            ? max_iterations
                          : phase == Phase::kRelaxation ? opt_.relaxation_max_iterations
                                                        : opt_.max_iterations;
   o.num_threads = 1;
@@ -119,8 +121,8 @@ ceres::Solver::Options Solver::OptionsOf(Phase phase, int max_iterations) const 
   return o;
 }
 
-ceres::Solver::Summary Solver::Run(Phase phase, double sigma, std::unique_ptr<ceres::Problem>* keep,
-                                   const Chain* chain, int max_iterations) {
+ceres::Solver::Summary Solver::Run(Phase phase, double sigma, std::unique_ptr<ceres::Problem>* keep, const Chain* chain,
+                                   int max_iterations) {
   auto problem = std::make_unique<ceres::Problem>();
   Build(*problem, phase, sigma, chain);
   ceres::Solver::Options o = OptionsOf(phase, max_iterations);
@@ -216,9 +218,12 @@ std::array<double, internal::kParamBlock> Solver::Units(int b) const {
   const Primitive& p = b % 2 == 0 ? prog_.PrimitiveA(c) : prog_.PrimitiveB(c);
   const auto& specs = Spec(b);
   for (size_t i = 0; i < specs.size(); ++i) {
-    if (specs[i].name == "t") u[i] = p.Shape("length");
-    else if (specs[i].name == "t1") u[i] = p.Shape("width");
-    else if (specs[i].name == "t2") u[i] = p.Shape("length");
+    if (specs[i].name == "t")
+      u[i] = p.Shape("length");
+    else if (specs[i].name == "t1")
+      u[i] = p.Shape("width");
+    else if (specs[i].name == "t2")
+      u[i] = p.Shape("length");
   }
   return u;
 }
@@ -265,7 +270,8 @@ void Solver::Build(ceres::Problem& problem, Phase phase, double sigma, const Cha
     // A clip clamps its partner: both sides of a clip connection are held
     // during relaxation, as are is_fixed connections (PARTS.md §1.10).
     const bool hold = phase == Phase::kRelaxation && c.held_in_relaxation;
-    if (hold) problem.SetParameterBlockConstant(s);
+    if (hold)
+      problem.SetParameterBlockConstant(s);
     else if (phase == Phase::kRelaxation && opt_.relaxation_anchor_stiffness > 0)
       problem.AddResidualBlock(new AnchorCost(anchor_[b], opt_.relaxation_anchor_stiffness, Units(b)), nullptr, s);
   }

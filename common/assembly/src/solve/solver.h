@@ -27,8 +27,8 @@ namespace fabatlas::assembly::internal {
 // One chain of the chain-by-chain initial guess (Solver::SetChainStart):
 // which connections' parameters move, and which cycles are closed.
 struct Chain {
-  std::vector<char> free;              // per connection
-  std::vector<double> closing_scale;   // per closing connection: 1 closed by this chain, 0 ignored
+  std::vector<char> free;             // per connection
+  std::vector<double> closing_scale;  // per closing connection: 1 closed by this chain, 0 ignored
 };
 
 // One slide along a rod, tube or edge that static friction acts on
@@ -114,11 +114,11 @@ class Solver {
   std::vector<SpacingTerm> spacing_;
   std::vector<EnergyTerm> energy_;
   TargetForm target_;
-  std::vector<Block> anchor_;                       // gauge anchor of the relaxation
-  std::vector<SlideState> slides_;                  // static friction along rods (StickSlides)
-  double relax_target_scale_ = 0;                   // SetRelaxationTargetWeight
-  std::vector<std::pair<int, int>> pinned_;         // active set: (block, index) held at a bound
-  static constexpr double kForceTolerance = 1e-9;   // J per unit
+  std::vector<Block> anchor_;                      // gauge anchor of the relaxation
+  std::vector<SlideState> slides_;                 // static friction along rods (StickSlides)
+  double relax_target_scale_ = 0;                  // SetRelaxationTargetWeight
+  std::vector<std::pair<int, int>> pinned_;        // active set: (block, index) held at a bound
+  static constexpr double kForceTolerance = 1e-9;  // J per unit
 };
 
 }  // namespace fabatlas::assembly::internal

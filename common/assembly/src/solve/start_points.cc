@@ -25,8 +25,9 @@ double Halton(int index, int base) {
 
 void Solver::SetStart(int k) {
   int dim = 0;
-  static const int kPrimes[] = {2, 3, 5, 7, 11, 13, 17, 19, 23, 29, 31, 37, 41, 43, 47, 53, 59, 61, 67, 71, 73,
-                                79, 83, 89, 97, 101, 103, 107, 109, 113, 127, 131, 137, 139, 149, 151, 157, 163};
+  static const int kPrimes[] = {2,   3,   5,   7,   11,  13,  17,  19,  23,  29,  31,  37, 41,
+                                43,  47,  53,  59,  61,  67,  71,  73,  79,  83,  89,  97, 101,
+                                103, 107, 109, 113, 127, 131, 137, 139, 149, 151, 157, 163};
   const int np = sizeof(kPrimes) / sizeof(int);
   for (size_t b = 0; b < blocks_.size(); ++b) {
     const auto& specs = Spec(static_cast<int>(b));
@@ -42,7 +43,7 @@ void Solver::SetStart(int k) {
       // reference starts from its defaults; long chains close only near them).
       const double u = k == 0 ? -1 : Halton(k, kPrimes[dim++ % np]);
       const double w = specs[i].max - specs[i].min;
-      s[i] = u < 0 ? specs[i].init
+      s[i] = u < 0        ? specs[i].init
              : k % 2 == 1 ? specs[i].min + u * w
                           : std::clamp(specs[i].init + (u - 0.5) * w / 4, specs[i].min, specs[i].max);
     }

@@ -14,16 +14,23 @@ TargetForm TargetForm::Of(const Program& prog) {
   f.t = prog.target_frame.position;
   f.r = EulerToRotation(prog.target_frame.euler_deg);
   switch (prog.TargetPrimitive().type) {
-    case PrimitiveType::kRing: f.ignore = 0; break;
-    case PrimitiveType::kTube: f.ignore = 1; break;
+    case PrimitiveType::kRing:
+      f.ignore = 0;
+      break;
+    case PrimitiveType::kTube:
+      f.ignore = 1;
+      break;
     case PrimitiveType::kRod:
-    case PrimitiveType::kHemisphere: f.ignore = 2; break;
+    case PrimitiveType::kHemisphere:
+      f.ignore = 2;
+      break;
     case PrimitiveType::kClip:
     case PrimitiveType::kSurface:
       f.has_twin = true;
       f.twin = EulerToRotation(Eigen::Vector3d(0, 0, 180)) * f.r;
       break;
-    default: break;
+    default:
+      break;
   }
   // Euler angles of the target (PARTS.md: b = −asin R31, a = atan2(R32, R33), c = atan2(R21, R11)).
   const double a = std::atan2(f.r(2, 1), f.r(2, 2)) * 180 / M_PI, c = std::atan2(f.r(1, 0), f.r(0, 0)) * 180 / M_PI;

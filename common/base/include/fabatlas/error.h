@@ -16,8 +16,7 @@ namespace fabatlas {
 
 class InputError : public std::runtime_error {
  public:
-  explicit InputError(const std::string& one_line_message)
-      : std::runtime_error(one_line_message) {}
+  explicit InputError(const std::string& one_line_message) : std::runtime_error(one_line_message) {}
 };
 
 // Input that is well formed but would exceed a resource limit (voxel counts

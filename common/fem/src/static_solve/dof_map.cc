@@ -89,13 +89,14 @@ DofMap NumberDofs(const HexMesh& mesh, const BoundaryConditions& bc) {
   }
   dofs.coefficient.assign(ndof, 1.0);
   for (const auto& l : bc.links) {
-    if (l.node < 0 || l.node >= nn || l.master < 0 || l.master >= nn || l.component < 0 ||
-        l.component > 2 || l.node == l.master || !std::isfinite(l.factor)) {
-      throw InputError("linked component: node " + std::to_string(l.node) + " master " +
-                       std::to_string(l.master) + " is invalid");
+    if (l.node < 0 || l.node >= nn || l.master < 0 || l.master >= nn || l.component < 0 || l.component > 2 ||
+        l.node == l.master || !std::isfinite(l.factor)) {
+      throw InputError("linked component: node " + std::to_string(l.node) + " master " + std::to_string(l.master) +
+                       " is invalid");
     }
     const std::size_t k = 3 * static_cast<std::size_t>(l.node) + l.component;
-    if (free_index[k] != 0) throw InputError("linked component: node " + std::to_string(l.node) + " is also prescribed or linked twice");
+    if (free_index[k] != 0)
+      throw InputError("linked component: node " + std::to_string(l.node) + " is also prescribed or linked twice");
     free_index[k] = -2;  // resolved below
   }
   // Free unknowns numbered node by node in nested-dissection order
@@ -105,7 +106,8 @@ DofMap NumberDofs(const HexMesh& mesh, const BoundaryConditions& bc) {
   int& num_free = dofs.num_free;
   for (int n : NestedDissectionOrder(mesh))
     for (int c = 0; c < 3; ++c)
-      if (free_index[3 * static_cast<std::size_t>(n) + c] == 0) free_index[3 * static_cast<std::size_t>(n) + c] = num_free++;
+      if (free_index[3 * static_cast<std::size_t>(n) + c] == 0)
+        free_index[3 * static_cast<std::size_t>(n) + c] = num_free++;
   for (const auto& l : bc.links) {
     const std::size_t k = 3 * static_cast<std::size_t>(l.node) + l.component;
     const std::size_t m = 3 * static_cast<std::size_t>(l.master) + l.component;
@@ -123,7 +125,8 @@ Eigen::VectorXd TotalLoad(const HexMesh& mesh, const BoundaryConditions& bc) {
   const int nn = static_cast<int>(mesh.nodes.size());
   Eigen::VectorXd f_total = Eigen::VectorXd::Zero(3 * static_cast<Eigen::Index>(nn));
   for (const auto& nf : bc.nodal_forces) {
-    if (nf.node < 0 || nf.node >= nn) throw InputError("nodal force: node " + std::to_string(nf.node) + " out of range");
+    if (nf.node < 0 || nf.node >= nn)
+      throw InputError("nodal force: node " + std::to_string(nf.node) + " out of range");
     for (int i = 0; i < 3; ++i) f_total[3 * nf.node + i] += nf.force[i];
   }
   for (const auto& t : bc.tractions) AddFaceTraction(mesh, t, &f_total);

@@ -20,12 +20,10 @@ std::vector<GaussPoint> PrecomputeGaussPoints(const HexMesh& mesh) {
     const double j0 = Jc.determinant();
     const Eigen::Matrix3d Jc_inv = j0 > 0 ? Eigen::Matrix3d(Jc.inverse()) : Eigen::Matrix3d::Zero();
     for (int g = 0; g < 8; ++g) {
-      const double xi[3] = {kNodeSign[g][0] * kGauss, kNodeSign[g][1] * kGauss,
-                            kNodeSign[g][2] * kGauss};
+      const double xi[3] = {kNodeSign[g][0] * kGauss, kNodeSign[g][1] * kGauss, kNodeSign[g][2] * kGauss};
       double dNdxi[8][3];
       for (int a = 0; a < 8; ++a) {
-        const double s[3] = {1 + kNodeSign[a][0] * xi[0], 1 + kNodeSign[a][1] * xi[1],
-                             1 + kNodeSign[a][2] * xi[2]};
+        const double s[3] = {1 + kNodeSign[a][0] * xi[0], 1 + kNodeSign[a][1] * xi[1], 1 + kNodeSign[a][2] * xi[2]};
         dNdxi[a][0] = 0.125 * kNodeSign[a][0] * s[1] * s[2];
         dNdxi[a][1] = 0.125 * kNodeSign[a][1] * s[0] * s[2];
         dNdxi[a][2] = 0.125 * kNodeSign[a][2] * s[0] * s[1];
@@ -37,8 +35,7 @@ std::vector<GaussPoint> PrecomputeGaussPoints(const HexMesh& mesh) {
       const double det = J0.determinant();
       if (!(det > 0)) {
         throw InputError("hex mesh: element " + std::to_string(e) +
-                         " is inverted or degenerate (det J = " + std::to_string(det) +
-                         "); check the node order");
+                         " is inverted or degenerate (det J = " + std::to_string(det) + "); check the node order");
       }
       const Eigen::Matrix3d Jinv = J0.inverse();
       GaussPoint& gp = gps[e * 8 + g];

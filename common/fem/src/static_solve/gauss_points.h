@@ -38,8 +38,8 @@ std::vector<GaussPoint> PrecomputeGaussPoints(const HexMesh& mesh);
 // element's 9 incompatible-mode amplitudes (alpha[3k + i]: component i of
 // mode k, mm), or is null for plain Q1.
 // (Inline: the element loops call it at every Gauss point.)
-inline Mat3 DeformationGradient(const GaussPoint& gp, const std::array<int, 8>& el,
-                                const Eigen::VectorXd& u, const double* alpha) {
+inline Mat3 DeformationGradient(const GaussPoint& gp, const std::array<int, 8>& el, const Eigen::VectorXd& u,
+                                const double* alpha) {
   Mat3 F{{{1, 0, 0}, {0, 1, 0}, {0, 0, 1}}};
   for (int a = 0; a < 8; ++a) {
     const double* ua = u.data() + 3 * static_cast<std::size_t>(el[a]);

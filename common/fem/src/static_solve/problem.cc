@@ -12,10 +12,15 @@
 
 namespace fabatlas::fem::internal {
 
-Problem::Problem(const HexMesh& mesh, const Material& mat, std::vector<GaussPoint> gps,
-                 std::vector<int> free_index, std::vector<double> coefficient, int num_free, bool incompatible)
-    : mesh_(mesh), mat_(mat), gps_(std::move(gps)), free_(std::move(free_index)),
-      coef_(std::move(coefficient)), num_free_(num_free), incompatible_(incompatible) {
+Problem::Problem(const HexMesh& mesh, const Material& mat, std::vector<GaussPoint> gps, std::vector<int> free_index,
+                 std::vector<double> coefficient, int num_free, bool incompatible)
+    : mesh_(mesh),
+      mat_(mat),
+      gps_(std::move(gps)),
+      free_(std::move(free_index)),
+      coef_(std::move(coefficient)),
+      num_free_(num_free),
+      incompatible_(incompatible) {
   BuildPattern();
   if (incompatible_) {
     const std::size_t ne = mesh_.elements.size();
@@ -43,7 +48,7 @@ double Problem::StrainEnergy(const Eigen::VectorXd& u, const Eigen::VectorXd& al
 }
 
 double Problem::Assemble(const Eigen::VectorXd& u, const Eigen::VectorXd& alpha, Eigen::VectorXd* f_int,
-                Eigen::VectorXd* f_cond, bool want_K) {
+                         Eigen::VectorXd* f_cond, bool want_K) {
   const std::size_t ne = mesh_.elements.size();
   f_int->setZero(u.size());
   if (want_K) {
@@ -56,16 +61,14 @@ double Problem::Assemble(const Eigen::VectorXd& u, const Eigen::VectorXd& alpha,
   fc_.resize(kBatch * 24);
   for (std::size_t b0 = 0; b0 < ne; b0 += kBatch) {
     const std::size_t b1 = std::min(ne, b0 + kBatch);
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(b0, b1, 64),
-                      [&](const tbb::blocked_range<std::size_t>& r) {
-                        for (std::size_t e = r.begin(); e < r.end(); ++e) {
-                          ElementKernel(e, u, alpha, &fe_[(e - b0) * 24], &fc_[(e - b0) * 24],
-                                        want_K ? &ke_[(e - b0) * 576] : nullptr);
-                        }
-                      });
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(b0, b1, 64), [&](const tbb::blocked_range<std::size_t>& r) {
+      for (std::size_t e = r.begin(); e < r.end(); ++e) {
+        ElementKernel(e, u, alpha, &fe_[(e - b0) * 24], &fc_[(e - b0) * 24], want_K ? &ke_[(e - b0) * 576] : nullptr);
+      }
+    });
     for (std::size_t e = b0; e < b1; ++e) {
-      Scatter(e, &fe_[(e - b0) * 24], want_K ? &fc_[(e - b0) * 24] : nullptr,
-              want_K ? &ke_[(e - b0) * 576] : nullptr, f_int, f_cond);
+      Scatter(e, &fe_[(e - b0) * 24], want_K ? &fc_[(e - b0) * 24] : nullptr, want_K ? &ke_[(e - b0) * 576] : nullptr,
+              f_int, f_cond);
     }
   }
   double fa2 = 0;
@@ -211,8 +214,8 @@ void Problem::Condense(std::size_t e, const double* f, const double* k33, double
   }
 }
 
-void Problem::Scatter(std::size_t e, const double* fe, const double* fc, const double* ke,
-                      Eigen::VectorXd* f_int, Eigen::VectorXd* f_cond) {
+void Problem::Scatter(std::size_t e, const double* fe, const double* fc, const double* ke, Eigen::VectorXd* f_int,
+                      Eigen::VectorXd* f_cond) {
   const auto& el = mesh_.elements[e];
   int g[24];
   double w[24];

@@ -28,8 +28,8 @@ class Problem {
  public:
   // free_index / coefficient: per mesh DOF, its unknown (< 0: prescribed)
   // and the factor it enters with (dof_map.h).
-  Problem(const HexMesh& mesh, const Material& mat, std::vector<GaussPoint> gps,
-          std::vector<int> free_index, std::vector<double> coefficient, int num_free, bool incompatible);
+  Problem(const HexMesh& mesh, const Material& mat, std::vector<GaussPoint> gps, std::vector<int> free_index,
+          std::vector<double> coefficient, int num_free, bool incompatible);
 
   int num_free() const { return num_free_; }
   // Number of incompatible-mode unknowns (9 per element, 0 for Q1).
@@ -59,8 +59,8 @@ class Problem {
   double MaxPrincipalStrain(const Eigen::VectorXd& u, const Eigen::VectorXd& alpha) const;
 
  private:
-  void ElementKernel(std::size_t e, const Eigen::VectorXd& u, const Eigen::VectorXd& alpha, double* fe,
-                     double* fc, double* ke);
+  void ElementKernel(std::size_t e, const Eigen::VectorXd& u, const Eigen::VectorXd& alpha, double* fe, double* fc,
+                     double* ke);
   void Condense(std::size_t e, const double* f, const double* k33, double* fc, double* ke);
   void Scatter(std::size_t e, const double* fe, const double* fc, const double* ke, Eigen::VectorXd* f_int,
                Eigen::VectorXd* f_cond);

@@ -40,8 +40,7 @@ void TangentSolve::Analyse(const SpMat& K) {
 #endif
 }
 
-bool TangentSolve::TrySolve(const SpMat& K, const Eigen::VectorXd& r, Eigen::VectorXd& d,
-                            StaticSolveSummary& summary) {
+bool TangentSolve::TrySolve(const SpMat& K, const Eigen::VectorXd& r, Eigen::VectorXd& d, StaticSolveSummary& summary) {
   ++summary.factorizations;
   if (direct_) {
     cholesky_.factorize(K);

@@ -34,8 +34,8 @@ class TangentSolve {
   // shifted until positive definite; `shift` is the shift used. Counts
   // factorisations, CG iterations and the time in summary. False when no
   // shift up to 1e6 x the mean diagonal works (then Failure() says why).
-  bool Solve(SpMat& K, const std::vector<int>& diagonal, int num_free, const Eigen::VectorXd& r,
-             Eigen::VectorXd& d, double& shift, StaticSolveSummary& summary);
+  bool Solve(SpMat& K, const std::vector<int>& diagonal, int num_free, const Eigen::VectorXd& r, Eigen::VectorXd& d,
+             double& shift, StaticSolveSummary& summary);
   // One line: why Solve failed.
   const char* Failure() const;
 

@@ -39,30 +39,58 @@ using BuiltinFunction = Value (*)(const FunctionCall&);
 
 // ---------------------------------------------------------------- numbers
 
-Value Sin(const FunctionCall& c) { return c.One([](double x) { return SinDegrees(x); }); }
-Value Cos(const FunctionCall& c) { return c.One([](double x) { return CosDegrees(x); }); }
-Value Tan(const FunctionCall& c) { return c.One([](double x) { return SinDegrees(x) / CosDegrees(x); }); }
-Value Asin(const FunctionCall& c) { return c.One([](double x) { return std::asin(x) * kDeg; }); }
-Value Acos(const FunctionCall& c) { return c.One([](double x) { return std::acos(x) * kDeg; }); }
-Value Atan(const FunctionCall& c) { return c.One([](double x) { return std::atan(x) * kDeg; }); }
+Value Sin(const FunctionCall& c) {
+  return c.One([](double x) { return SinDegrees(x); });
+}
+Value Cos(const FunctionCall& c) {
+  return c.One([](double x) { return CosDegrees(x); });
+}
+Value Tan(const FunctionCall& c) {
+  return c.One([](double x) { return SinDegrees(x) / CosDegrees(x); });
+}
+Value Asin(const FunctionCall& c) {
+  return c.One([](double x) { return std::asin(x) * kDeg; });
+}
+Value Acos(const FunctionCall& c) {
+  return c.One([](double x) { return std::acos(x) * kDeg; });
+}
+Value Atan(const FunctionCall& c) {
+  return c.One([](double x) { return std::atan(x) * kDeg; });
+}
 Value Atan2(const FunctionCall& c) {
   if (c.a.size() != 2) c.Decline();
   return Value::Number(std::atan2(c.Number(0), c.Number(1)) * kDeg);
 }
-Value Abs(const FunctionCall& c) { return c.One([](double x) { return std::abs(x); }); }
-Value Sign(const FunctionCall& c) { return c.One([](double x) { return x > 0 ? 1.0 : x < 0 ? -1.0 : 0.0; }); }
-Value Sqrt(const FunctionCall& c) { return c.One([](double x) { return std::sqrt(x); }); }
-Value Exp(const FunctionCall& c) { return c.One([](double x) { return std::exp(x); }); }
-Value Ln(const FunctionCall& c) { return c.One([](double x) { return std::log(x); }); }
+Value Abs(const FunctionCall& c) {
+  return c.One([](double x) { return std::abs(x); });
+}
+Value Sign(const FunctionCall& c) {
+  return c.One([](double x) { return x > 0 ? 1.0 : x < 0 ? -1.0 : 0.0; });
+}
+Value Sqrt(const FunctionCall& c) {
+  return c.One([](double x) { return std::sqrt(x); });
+}
+Value Exp(const FunctionCall& c) {
+  return c.One([](double x) { return std::exp(x); });
+}
+Value Ln(const FunctionCall& c) {
+  return c.One([](double x) { return std::log(x); });
+}
 // log(x): base 10; log(b, x): base b.
 Value Log(const FunctionCall& c) {
   if (c.a.size() == 1) return Value::Number(std::log10(c.Number(0)));
   if (c.a.size() == 2) return Value::Number(std::log(c.Number(1)) / std::log(c.Number(0)));
   c.Decline();
 }
-Value Floor(const FunctionCall& c) { return c.One([](double x) { return std::floor(x); }); }
-Value Ceil(const FunctionCall& c) { return c.One([](double x) { return std::ceil(x); }); }
-Value Round(const FunctionCall& c) { return c.One([](double x) { return std::round(x); }); }
+Value Floor(const FunctionCall& c) {
+  return c.One([](double x) { return std::floor(x); });
+}
+Value Ceil(const FunctionCall& c) {
+  return c.One([](double x) { return std::ceil(x); });
+}
+Value Round(const FunctionCall& c) {
+  return c.One([](double x) { return std::round(x); });
+}
 Value Pow(const FunctionCall& c) {
   if (c.a.size() != 2) c.Decline();
   return Value::Number(std::pow(c.Number(0), c.Number(1)));
@@ -113,8 +141,10 @@ Value Len(const FunctionCall& c) {
 Value Concat(const FunctionCall& c) {
   std::vector<Value> out;
   for (const Value& x : c.a) {
-    if (x.IsVector()) out.insert(out.end(), x.Items().begin(), x.Items().end());
-    else out.push_back(x);
+    if (x.IsVector())
+      out.insert(out.end(), x.Items().begin(), x.Items().end());
+    else
+      out.push_back(x);
     if (out.size() > 1'000'000) throw NotNative{c.line, "a vector of more than 1,000,000 values"};
   }
   return Value::Vector(std::move(out));
@@ -148,10 +178,14 @@ Value Lookup(const FunctionCall& c) {
 Value Str(const FunctionCall& c) {
   std::string out;
   for (const Value& x : c.a) {
-    if (x.kind == Value::Kind::kString) out += x.text;
-    else if (x.IsNumber() && std::isfinite(x.number)) out += ValueNum(x.number);
-    else if (x.kind == Value::Kind::kBool) out += x.boolean ? "true" : "false";
-    else throw NotNative{c.line, "str() of a vector, infinity or undef"};
+    if (x.kind == Value::Kind::kString)
+      out += x.text;
+    else if (x.IsNumber() && std::isfinite(x.number))
+      out += ValueNum(x.number);
+    else if (x.kind == Value::Kind::kBool)
+      out += x.boolean ? "true" : "false";
+    else
+      throw NotNative{c.line, "str() of a vector, infinity or undef"};
     if (out.size() > 10'000'000) throw NotNative{c.line, "a string of more than 10,000,000 characters"};
   }
   return Value::String(out);
@@ -189,12 +223,38 @@ bool AString(const Value& v) { return v.kind == Value::Kind::kString; }
 bool AList(const Value& v) { return v.IsVector(); }
 
 const std::map<std::string_view, BuiltinFunction> kFunctions = {
-    {"sin", Sin}, {"cos", Cos}, {"tan", Tan}, {"asin", Asin}, {"acos", Acos}, {"atan", Atan},
-    {"atan2", Atan2}, {"abs", Abs}, {"sign", Sign}, {"sqrt", Sqrt}, {"exp", Exp}, {"ln", Ln},
-    {"log", Log}, {"floor", Floor}, {"ceil", Ceil}, {"round", Round}, {"pow", Pow}, {"min", Min},
-    {"max", Max}, {"norm", Norm}, {"cross", Cross}, {"len", Len}, {"concat", Concat}, {"str", Str},
-    {"chr", Chr}, {"ord", Ord}, {"lookup", Lookup}, {"is_undef", IsA<Undefined>}, {"is_num", IsA<ANumber>},
-    {"is_bool", IsA<ABool>}, {"is_string", IsA<AString>}, {"is_list", IsA<AList>},
+    {"sin", Sin},
+    {"cos", Cos},
+    {"tan", Tan},
+    {"asin", Asin},
+    {"acos", Acos},
+    {"atan", Atan},
+    {"atan2", Atan2},
+    {"abs", Abs},
+    {"sign", Sign},
+    {"sqrt", Sqrt},
+    {"exp", Exp},
+    {"ln", Ln},
+    {"log", Log},
+    {"floor", Floor},
+    {"ceil", Ceil},
+    {"round", Round},
+    {"pow", Pow},
+    {"min", Min},
+    {"max", Max},
+    {"norm", Norm},
+    {"cross", Cross},
+    {"len", Len},
+    {"concat", Concat},
+    {"str", Str},
+    {"chr", Chr},
+    {"ord", Ord},
+    {"lookup", Lookup},
+    {"is_undef", IsA<Undefined>},
+    {"is_num", IsA<ANumber>},
+    {"is_bool", IsA<ABool>},
+    {"is_string", IsA<AString>},
+    {"is_list", IsA<AList>},
 };
 
 }  // namespace

@@ -125,12 +125,15 @@ void Cube(ModuleCall& m) {
   double size[3] = {1, 1, 1};
   if (ModuleCall::Given(args, "size")) {
     const Value& v = args["size"];
-    if (v.IsNumber()) size[0] = size[1] = size[2] = v.number;
-    else if (!AllNumbers(v) || v.Items().size() != 3) m.Decline("cube size not a number or 3 numbers");
-    else for (int k = 0; k < 3; ++k) size[k] = v.Items()[k].number;
+    if (v.IsNumber())
+      size[0] = size[1] = size[2] = v.number;
+    else if (!AllNumbers(v) || v.Items().size() != 3)
+      m.Decline("cube size not a number or 3 numbers");
+    else
+      for (int k = 0; k < 3; ++k) size[k] = v.Items()[k].number;
   }
-  m.Leaf("cube(size = [" + Num(size[0]) + ", " + Num(size[1]) + ", " + Num(size[2]) + "], center = " +
-         (m.Boolean(args, "center") ? "true" : "false") + ")");
+  m.Leaf("cube(size = [" + Num(size[0]) + ", " + Num(size[1]) + ", " + Num(size[2]) +
+         "], center = " + (m.Boolean(args, "center") ? "true" : "false") + ")");
 }
 
 // sphere() and circle().
@@ -160,12 +163,15 @@ void Square(ModuleCall& m) {
   double size[2] = {1, 1};
   if (ModuleCall::Given(args, "size")) {
     const Value& v = args["size"];
-    if (v.IsNumber()) size[0] = size[1] = v.number;
-    else if (!AllNumbers(v) || v.Items().size() != 2) m.Decline("square size not a number or 2 numbers");
-    else for (int k = 0; k < 2; ++k) size[k] = v.Items()[k].number;
+    if (v.IsNumber())
+      size[0] = size[1] = v.number;
+    else if (!AllNumbers(v) || v.Items().size() != 2)
+      m.Decline("square size not a number or 2 numbers");
+    else
+      for (int k = 0; k < 2; ++k) size[k] = v.Items()[k].number;
   }
-  m.Leaf("square(size = [" + Num(size[0]) + ", " + Num(size[1]) + "], center = " +
-         (m.Boolean(args, "center") ? "true" : "false") + ")");
+  m.Leaf("square(size = [" + Num(size[0]) + ", " + Num(size[1]) +
+         "], center = " + (m.Boolean(args, "center") ? "true" : "false") + ")");
 }
 
 void Polygon(ModuleCall& m) {
@@ -204,8 +210,8 @@ void Text(ModuleCall& m) {
   m.Leaf("text(text = " + Quote(text("text", ""), line) + ", size = " + Num(m.Number(args, "size", 10)) +
          ", spacing = " + Num(m.Number(args, "spacing", 1)) + ", font = " + Quote(text("font", ""), line) +
          ", direction = \"ltr\", language = \"en\", " + (Latin(text("text", "")) ? "script = \"Latn\", " : "") +
-         "halign = " + Quote(text("halign", "left"), line) +
-         ", valign = " + Quote(text("valign", "baseline"), line) + ", " + m.Fragments() + ")");
+         "halign = " + Quote(text("halign", "left"), line) + ", valign = " + Quote(text("valign", "baseline"), line) +
+         ", " + m.Fragments() + ")");
 }
 
 // ---------------------------------------------------------------- transformations
@@ -228,8 +234,10 @@ void Scale(ModuleCall& m) {
   auto args = m.Match({"v"});
   Matrix4 t;
   double v[3];
-  if (args["v"].IsNumber()) v[0] = v[1] = v[2] = args["v"].number;
-  else if (!Vec3(args["v"], v, 1)) m.Decline("scale by a non-vector");
+  if (args["v"].IsNumber())
+    v[0] = v[1] = v[2] = args["v"].number;
+  else if (!Vec3(args["v"], v, 1))
+    m.Decline("scale by a non-vector");
   for (int k = 0; k < 3; ++k) t.m[k][k] = v[k];
   m.Node(Matrix(t.m));
 }
@@ -312,8 +320,7 @@ void Color(ModuleCall& m) {
   if (c.kind == Value::Kind::kString) {
     // OpenSCAD warns "Unable to parse color" and draws the default colour;
     // the designer meant a colour, so it is the model's error here.
-    if (!ColourByName(c.text, rgba))
-      m.Refuse(UnknownColourText(c.text));
+    if (!ColourByName(c.text, rgba)) m.Refuse(UnknownColourText(c.text));
   } else {
     if (!AllNumbers(c) || c.Items().size() < 3 || c.Items().size() > 4) m.Decline("colour malformed");
     for (std::size_t k = 0; k < c.Items().size(); ++k) rgba[k] = c.Items()[k].number;
@@ -336,8 +343,8 @@ void Offset(ModuleCall& m) {
   if (ModuleCall::Given(args, "r") && !ModuleCall::Given(args, "delta")) {
     head = "offset(r = " + Num(m.Number(args, "r", 1));
   } else if (ModuleCall::Given(args, "delta") && !ModuleCall::Given(args, "r")) {
-    head = "offset(delta = " + Num(m.Number(args, "delta", 1)) + ", chamfer = " +
-           (m.Boolean(args, "chamfer") ? "true" : "false");
+    head = "offset(delta = " + Num(m.Number(args, "delta", 1)) +
+           ", chamfer = " + (m.Boolean(args, "chamfer") ? "true" : "false");
   } else {
     m.Decline("offset without exactly one of r and delta");
   }
@@ -363,14 +370,17 @@ void LinearExtrude(ModuleCall& m) {
   double scale[2] = {1, 1};
   if (ModuleCall::Given(args, "scale")) {
     const Value& v = args["scale"];
-    if (v.IsNumber()) scale[0] = scale[1] = v.number;
-    else if (!AllNumbers(v) || v.Items().size() != 2) m.Decline("linear_extrude scale malformed");
-    else scale[0] = v.Items()[0].number, scale[1] = v.Items()[1].number;
+    if (v.IsNumber())
+      scale[0] = scale[1] = v.number;
+    else if (!AllNumbers(v) || v.Items().size() != 2)
+      m.Decline("linear_extrude scale malformed");
+    else
+      scale[0] = v.Items()[0].number, scale[1] = v.Items()[1].number;
   }
   scale[0] = std::max(scale[0], 0.0);
   scale[1] = std::max(scale[1], 0.0);
-  std::string head = "linear_extrude(height = " + Num(height) + ", center = " +
-                     (m.Boolean(args, "center") ? "true" : "false") + ", convexity = " + Num(convexity);
+  std::string head = "linear_extrude(height = " + Num(height) +
+                     ", center = " + (m.Boolean(args, "center") ? "true" : "false") + ", convexity = " + Num(convexity);
   const double twist = m.Number(args, "twist", 0);
   if (twist != 0) head += ", twist = " + Num(twist);
   const bool has_slices = ModuleCall::Given(args, "slices");
@@ -390,18 +400,35 @@ void RotateExtrude(ModuleCall& m) {
 }
 
 const std::map<std::string_view, BuiltinModule> kModules = {
-    {"cube", Cube}, {"sphere", Round}, {"circle", Round}, {"cylinder", Cylinder}, {"square", Square},
-    {"polygon", Polygon}, {"polyhedron", Polyhedron}, {"text", Text}, {"translate", Translate},
-    {"scale", Scale}, {"mirror", Mirror}, {"rotate", Rotate}, {"multmatrix", Multmatrix}, {"color", Color},
-    {"union", Operation}, {"difference", Operation}, {"intersection", Operation}, {"hull", Operation},
-    {"group", Operation}, {"offset", Offset}, {"projection", Projection}, {"render", Render},
-    {"linear_extrude", LinearExtrude}, {"rotate_extrude", RotateExtrude},
+    {"cube", Cube},
+    {"sphere", Round},
+    {"circle", Round},
+    {"cylinder", Cylinder},
+    {"square", Square},
+    {"polygon", Polygon},
+    {"polyhedron", Polyhedron},
+    {"text", Text},
+    {"translate", Translate},
+    {"scale", Scale},
+    {"mirror", Mirror},
+    {"rotate", Rotate},
+    {"multmatrix", Multmatrix},
+    {"color", Color},
+    {"union", Operation},
+    {"difference", Operation},
+    {"intersection", Operation},
+    {"hull", Operation},
+    {"group", Operation},
+    {"offset", Offset},
+    {"projection", Projection},
+    {"render", Render},
+    {"linear_extrude", LinearExtrude},
+    {"rotate_extrude", RotateExtrude},
 };
 
 }  // namespace
 
-void CallBuiltinModule(Evaluator& evaluator, const Stmt& s, const Scope& scope, Scope& call,
-                       std::vector<CsgOut>& out) {
+void CallBuiltinModule(Evaluator& evaluator, const Stmt& s, const Scope& scope, Scope& call, std::vector<CsgOut>& out) {
   auto it = kModules.find(s.name);
   if (it == kModules.end()) throw NotNative{s.line, "module " + s.name + "()"};
   ModuleCall m(evaluator, s, scope, call, out);

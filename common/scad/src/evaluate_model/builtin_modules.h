@@ -17,7 +17,6 @@ namespace fabatlas::scad::internal {
 // appended to out. `call` is the scope of its children and receives its
 // $-arguments. Declines "module NAME()" for a module not in the table, and
 // what each module says for arguments it does not take.
-void CallBuiltinModule(Evaluator& evaluator, const Stmt& s, const Scope& scope, Scope& call,
-                       std::vector<CsgOut>& out);
+void CallBuiltinModule(Evaluator& evaluator, const Stmt& s, const Scope& scope, Scope& call, std::vector<CsgOut>& out);
 
 }  // namespace fabatlas::scad::internal

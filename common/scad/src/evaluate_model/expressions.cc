@@ -13,30 +13,44 @@ namespace fabatlas::scad::internal {
 Value Evaluator::Eval(const Expr& e, const Scope& scope) {
   Guard(e.line);
   switch (e.kind) {
-    case Expr::Kind::kNumber: return Value::Number(e.number);
-    case Expr::Kind::kString: return Value::String(e.text);
-    case Expr::Kind::kBool: return Value::Bool(e.boolean);
-    case Expr::Kind::kUndef: return Value();
-    case Expr::Kind::kIdent: return Identifier(e, scope);
-    case Expr::Kind::kRange: return Range(e, scope);
+    case Expr::Kind::kNumber:
+      return Value::Number(e.number);
+    case Expr::Kind::kString:
+      return Value::String(e.text);
+    case Expr::Kind::kBool:
+      return Value::Bool(e.boolean);
+    case Expr::Kind::kUndef:
+      return Value();
+    case Expr::Kind::kIdent:
+      return Identifier(e, scope);
+    case Expr::Kind::kRange:
+      return Range(e, scope);
     case Expr::Kind::kVector: {
       std::vector<Value> items;
       for (const ExprPtr& item : e.items) Element(*item, scope, items);
       return Value::Vector(std::move(items));
     }
-    case Expr::Kind::kUnary: return UnaryOp(e, scope);
-    case Expr::Kind::kBinary: return BinaryOp(e, scope);
+    case Expr::Kind::kUnary:
+      return UnaryOp(e, scope);
+    case Expr::Kind::kBinary:
+      return BinaryOp(e, scope);
     case Expr::Kind::kTernary:
       return Eval(*e.items[0], scope).Truthy() ? Eval(*e.items[1], scope) : Eval(*e.items[2], scope);
-    case Expr::Kind::kIndex: return Index(e, scope);
-    case Expr::Kind::kMember: return Member(e, scope);
-    case Expr::Kind::kLet: return LetExpression(e, scope);
-    case Expr::Kind::kCall: return Call(e, scope);
-    case Expr::Kind::kEcho: return Eval(*e.items[0], scope);
+    case Expr::Kind::kIndex:
+      return Index(e, scope);
+    case Expr::Kind::kMember:
+      return Member(e, scope);
+    case Expr::Kind::kLet:
+      return LetExpression(e, scope);
+    case Expr::Kind::kCall:
+      return Call(e, scope);
+    case Expr::Kind::kEcho:
+      return Eval(*e.items[0], scope);
     case Expr::Kind::kAssert:
       if (e.bindings.empty() || !Eval(*e.bindings[0].expr, scope).Truthy()) throw NotNative{e.line, "a failed assert"};
       return Eval(*e.items[0], scope);
-    default: throw NotNative{e.line, "a list comprehension element outside [ ]"};
+    default:
+      throw NotNative{e.line, "a list comprehension element outside [ ]"};
   }
 }
 
@@ -155,8 +169,10 @@ void Evaluator::Element(const Expr& e, const Scope& scope, std::vector<Value>& o
       return;
     }
     case Expr::Kind::kCompIf:
-      if (Eval(*e.items[0], scope).Truthy()) Element(*e.items[1], scope, out);
-      else if (e.items.size() > 2) Element(*e.items[2], scope, out);
+      if (Eval(*e.items[0], scope).Truthy())
+        Element(*e.items[1], scope, out);
+      else if (e.items.size() > 2)
+        Element(*e.items[2], scope, out);
       return;
     case Expr::Kind::kEach: {
       const Value v = Eval(*e.items[0], scope);
@@ -167,7 +183,8 @@ void Evaluator::Element(const Expr& e, const Scope& scope, std::vector<Value>& o
       }
       return;
     }
-    default: out.push_back(Eval(e, scope));
+    default:
+      out.push_back(Eval(e, scope));
   }
 }
 
@@ -240,9 +257,12 @@ void Evaluator::BindParameters(const std::vector<Binding>& params, const std::ve
   }
   for (const Binding& p : params) {
     auto it = given.find(p.name);
-    if (it != given.end()) inner.vars[p.name] = it->second;
-    else if (p.expr) inner.vars[p.name] = Eval(*p.expr, inner);
-    else inner.vars[p.name] = Value();
+    if (it != given.end())
+      inner.vars[p.name] = it->second;
+    else if (p.expr)
+      inner.vars[p.name] = Eval(*p.expr, inner);
+    else
+      inner.vars[p.name] = Value();
   }
 }
 

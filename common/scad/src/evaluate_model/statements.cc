@@ -16,8 +16,10 @@ void Evaluator::Run(const std::vector<StmtPtr>& body, Scope& scope, std::vector<
 
 void Evaluator::Define(const std::vector<StmtPtr>& body, Scope& scope) {
   for (const StmtPtr& s : body) {
-    if (s->kind == Stmt::Kind::kModuleDef) scope.modules[s->name] = s->module;
-    else if (s->kind == Stmt::Kind::kFunctionDef) scope.functions[s->name] = s->function;
+    if (s->kind == Stmt::Kind::kModuleDef)
+      scope.modules[s->name] = s->module;
+    else if (s->kind == Stmt::Kind::kFunctionDef)
+      scope.functions[s->name] = s->function;
   }
   for (const StmtPtr& s : body) {
     if (s->kind != Stmt::Kind::kAssign) continue;
@@ -45,13 +47,26 @@ void Evaluator::Instantiate(const Stmt& s, Scope& scope, std::vector<CsgOut>& ou
     case Stmt::Kind::kAssign:
     case Stmt::Kind::kModuleDef:
     case Stmt::Kind::kFunctionDef:
-    case Stmt::Kind::kDisabled: return;
-    case Stmt::Kind::kBlock: Block(s, scope, out); return;
-    case Stmt::Kind::kIf: If(s, scope, out); return;
-    case Stmt::Kind::kFor: For(s, scope, out); return;
-    case Stmt::Kind::kIntersectionFor: IntersectionFor(s, scope, out); return;
-    case Stmt::Kind::kLet: Let(s, scope, out); return;
-    case Stmt::Kind::kCall: CallModule(s, scope, out); return;
+    case Stmt::Kind::kDisabled:
+      return;
+    case Stmt::Kind::kBlock:
+      Block(s, scope, out);
+      return;
+    case Stmt::Kind::kIf:
+      If(s, scope, out);
+      return;
+    case Stmt::Kind::kFor:
+      For(s, scope, out);
+      return;
+    case Stmt::Kind::kIntersectionFor:
+      IntersectionFor(s, scope, out);
+      return;
+    case Stmt::Kind::kLet:
+      Let(s, scope, out);
+      return;
+    case Stmt::Kind::kCall:
+      CallModule(s, scope, out);
+      return;
   }
 }
 

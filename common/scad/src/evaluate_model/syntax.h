@@ -39,16 +39,33 @@ struct Binding {  // `name = expr` in argument lists, let, for; positional when 
 
 struct Expr {
   enum class Kind {
-    kNumber, kString, kBool, kUndef, kIdent, kVector, kRange, kUnary, kBinary, kTernary, kCall, kIndex,
-    kMember, kLet, kEcho, kAssert,
+    kNumber,
+    kString,
+    kBool,
+    kUndef,
+    kIdent,
+    kVector,
+    kRange,
+    kUnary,
+    kBinary,
+    kTernary,
+    kCall,
+    kIndex,
+    kMember,
+    kLet,
+    kEcho,
+    kAssert,
     // list comprehension elements (only inside kVector items)
-    kCompFor, kCompIf, kCompLet, kEach
+    kCompFor,
+    kCompIf,
+    kCompLet,
+    kEach
   } kind;
   int line = 0;
   double number = 0;
   bool boolean = false;
-  std::string text;             // identifier, string, operator, member or callee name
-  std::vector<ExprPtr> items;   // vector items; range begin, step, end; operands
+  std::string text;               // identifier, string, operator, member or callee name
+  std::vector<ExprPtr> items;     // vector items; range begin, step, end; operands
   std::vector<Binding> bindings;  // call arguments, let / for bindings
 };
 
@@ -74,14 +91,25 @@ struct FunctionDef {
 };
 
 struct Stmt {
-  enum class Kind { kAssign, kCall, kBlock, kIf, kFor, kIntersectionFor, kLet, kModuleDef, kFunctionDef, kDisabled } kind;
+  enum class Kind {
+    kAssign,
+    kCall,
+    kBlock,
+    kIf,
+    kFor,
+    kIntersectionFor,
+    kLet,
+    kModuleDef,
+    kFunctionDef,
+    kDisabled
+  } kind;
   int line = 0;
-  std::string name;               // assigned variable, called or defined module/function
-  std::string modifier;           // a call's "%" or "#"
-  ExprPtr expr;                   // assigned value, if condition
-  std::vector<Binding> bindings;  // call arguments, for / let bindings
-  std::vector<StmtPtr> children;  // call's children, block's statements, if's then-branch
-  std::vector<StmtPtr> otherwise; // if's else-branch
+  std::string name;                // assigned variable, called or defined module/function
+  std::string modifier;            // a call's "%" or "#"
+  ExprPtr expr;                    // assigned value, if condition
+  std::vector<Binding> bindings;   // call arguments, for / let bindings
+  std::vector<StmtPtr> children;   // call's children, block's statements, if's then-branch
+  std::vector<StmtPtr> otherwise;  // if's else-branch
   std::shared_ptr<const ModuleDef> module;
   std::shared_ptr<const FunctionDef> function;
 };

@@ -21,12 +21,18 @@ Value Value::Vector(std::vector<Value> v) {
 
 bool Value::Truthy() const {
   switch (kind) {
-    case Kind::kUndef: return false;
-    case Kind::kBool: return boolean;
-    case Kind::kNumber: return number != 0;
-    case Kind::kString: return !text.empty();
-    case Kind::kVector: return !items->empty();
-    case Kind::kRange: return true;
+    case Kind::kUndef:
+      return false;
+    case Kind::kBool:
+      return boolean;
+    case Kind::kNumber:
+      return number != 0;
+    case Kind::kString:
+      return !text.empty();
+    case Kind::kVector:
+      return !items->empty();
+    case Kind::kRange:
+      return true;
   }
   return false;
 }
@@ -34,10 +40,14 @@ bool Value::Truthy() const {
 bool Equal(const Value& a, const Value& b) {
   if (a.kind != b.kind) return false;
   switch (a.kind) {
-    case Value::Kind::kUndef: return true;
-    case Value::Kind::kBool: return a.boolean == b.boolean;
-    case Value::Kind::kNumber: return a.number == b.number;
-    case Value::Kind::kString: return a.text == b.text;
+    case Value::Kind::kUndef:
+      return true;
+    case Value::Kind::kBool:
+      return a.boolean == b.boolean;
+    case Value::Kind::kNumber:
+      return a.number == b.number;
+    case Value::Kind::kString:
+      return a.text == b.text;
     case Value::Kind::kRange:
       return a.range[0] == b.range[0] && a.range[1] == b.range[1] && a.range[2] == b.range[2];
     case Value::Kind::kVector:
@@ -171,12 +181,18 @@ double SinDegrees(double x) {
   }
   if (x > 90.0) x = 180.0 - x;
   double s;
-  if (x == 0) s = 0;
-  else if (x == 30.0) s = 0.5;
-  else if (x == 45.0) s = std::sqrt(0.5);
-  else if (x == 60.0) s = std::sqrt(3.0) / 2;
-  else if (x == 90.0) s = 1;
-  else s = std::sin(x * std::numbers::pi / 180.0);
+  if (x == 0)
+    s = 0;
+  else if (x == 30.0)
+    s = 0.5;
+  else if (x == 45.0)
+    s = std::sqrt(0.5);
+  else if (x == 60.0)
+    s = std::sqrt(3.0) / 2;
+  else if (x == 90.0)
+    s = 1;
+  else
+    s = std::sin(x * std::numbers::pi / 180.0);
   return negate ? -s : s;
 }
 

@@ -62,11 +62,16 @@ std::string Quote(const std::string& s, int line) {
 
 std::string Write(const Value& v, int line) {
   switch (v.kind) {
-    case Value::Kind::kUndef: return "undef";
-    case Value::Kind::kBool: return v.boolean ? "true" : "false";
-    case Value::Kind::kNumber: return ValueNum(v.number);
-    case Value::Kind::kString: return Quote(v.text, line);
-    case Value::Kind::kRange: throw NotNative{line, "a range as an argument"};
+    case Value::Kind::kUndef:
+      return "undef";
+    case Value::Kind::kBool:
+      return v.boolean ? "true" : "false";
+    case Value::Kind::kNumber:
+      return ValueNum(v.number);
+    case Value::Kind::kString:
+      return Quote(v.text, line);
+    case Value::Kind::kRange:
+      throw NotNative{line, "a range as an argument"};
     case Value::Kind::kVector: {
       std::string out = "[";
       for (std::size_t k = 0; k < v.items->size(); ++k) out += (k ? ", " : "") + Write((*v.items)[k], line);

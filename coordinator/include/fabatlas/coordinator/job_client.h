@@ -39,8 +39,7 @@ class JobClient {
   // job ends (e.g. the coordinator restarts), watches again with backoff
   // (200 ms doubling to 5 s) and fails only after nothing was heard for
   // reconnect_for; NOT_FOUND and refused credentials fail at once.
-  v1::JobStatus Watch(const std::string& job_id,
-                      const std::function<bool(const v1::JobStatus&)>& on_status,
+  v1::JobStatus Watch(const std::string& job_id, const std::function<bool(const v1::JobStatus&)>& on_status,
                       std::chrono::milliseconds reconnect_for = std::chrono::minutes(5));
   v1::JobStatus Cancel(const std::string& job_id);
   std::vector<v1::JobStatus> List();

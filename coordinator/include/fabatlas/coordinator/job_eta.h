@@ -47,7 +47,7 @@ namespace fabatlas::coordinator {
 
 // One batch the sampler handed to the cluster.
 struct EtaBatch {
-  bool samples = true;     // SampleTasks (S_d) or GeometryChangeTasks (G_d)
+  bool samples = true;  // SampleTasks (S_d) or GeometryChangeTasks (G_d)
   double tasks = 0;
   double cpu_seconds = 0;  // evaluator CPU seconds of its tasks once finished (replayed ones too); 0 = running
 };
@@ -66,8 +66,8 @@ struct JobEtaInput {
   // G_1, ...; a round whose batch had no task has none). Unless publishing,
   // the last one is running.
   std::vector<EtaBatch> batches;
-  double running_left = 0;    // tasks of the running batch not finished (queued + leased)
-  EtaProgress running_done;   // work the workers reported for the running batch (seconds_ago unused)
+  double running_left = 0;   // tasks of the running batch not finished (queued + leased)
+  EtaProgress running_done;  // work the workers reported for the running batch (seconds_ago unused)
   // The totals at points in time, oldest first: the first at the driver's
   // start (0, 0), one per delivery after it. Only the newest point at least
   // rate_window_seconds old and those after it matter.
@@ -105,12 +105,12 @@ struct JobEtaOptions {
 };
 
 struct JobEta {
-  bool known = false;  // false until a task's CPU and a rate are known
-  double seconds = 0;  // running batch + batches to come + publishing
-  double publish_seconds = 0;       // the publishing part of it
-  double predicted_samples = 0;     // samples when sampling ends
-  double work_cpu_seconds = 0;      // work left before publishing, CPU seconds
-  double rate = 0;                  // CPU seconds of work per wall second in the window
+  bool known = false;            // false until a task's CPU and a rate are known
+  double seconds = 0;            // running batch + batches to come + publishing
+  double publish_seconds = 0;    // the publishing part of it
+  double predicted_samples = 0;  // samples when sampling ends
+  double work_cpu_seconds = 0;   // work left before publishing, CPU seconds
+  double rate = 0;               // CPU seconds of work per wall second in the window
 };
 
 JobEta EstimateJobEta(const JobEtaInput& input, const JobEtaOptions& options = {});

@@ -55,8 +55,7 @@ class BlobStore {
   std::string PutFile(const std::filesystem::path& path);
   // Reads [offset, offset + max_bytes) of a finished blob (max_bytes < 0:
   // to the end). Throws InputError when the blob is missing.
-  std::string Read(const std::string& digest, std::int64_t offset = 0,
-                   std::int64_t max_bytes = -1) const;
+  std::string Read(const std::string& digest, std::int64_t offset = 0, std::int64_t max_bytes = -1) const;
   // Re-hashes a finished blob; false if missing or corrupt.
   bool Verify(const std::string& digest) const;
   // Every finished blob's digest, sorted.

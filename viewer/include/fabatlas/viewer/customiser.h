@@ -35,15 +35,15 @@ namespace fabatlas::viewer {
 
 // Everything the runtime needs from a computed job.
 struct CustomiserSource {
-  std::string name;                            // shown to users (the design's name)
+  std::string name;  // shown to users (the design's name)
   sampling::Form form;
-  std::optional<design::Design> design;        // needed for previews
-  std::vector<sampling::Material> materials;   // cost/weight table
-  std::vector<std::int64_t> starting_points;   // sample ids; empty: computed by cache::ChooseStartingPoints
+  std::optional<design::Design> design;       // needed for previews
+  std::vector<sampling::Material> materials;  // cost/weight table
+  std::vector<std::int64_t> starting_points;  // sample ids; empty: computed by cache::ChooseStartingPoints
   // Cached subtree geometry by cache key (design::SubtreeRecord::key), with
   // the root compute time t_i in seconds (Fab Forms Sec. 6).
   std::map<std::string, std::pair<geometry::Solid, double>> cache;
-  std::string cache_name = "none";             // e.g. "H_opt", "H_rfree", "none"
+  std::string cache_name = "none";  // e.g. "H_opt", "H_rfree", "none"
   // Where the artifact's job bundle was written for evaluation (removed with
   // the Customiser); empty when the design came from the file system.
   std::filesystem::path bundle_dir;
@@ -77,11 +77,11 @@ struct MaterialReadout {
 std::vector<MaterialReadout> MaterialReadouts(double volume_mm3, const std::vector<sampling::Material>& materials);
 
 struct PreviewResult {
-  std::int64_t sample = -1;     // -1: evaluated at a point (PreviewAt)
-  bool valid = false;           // the evaluation's verdict (constraints and geometry; checks skipped)
+  std::int64_t sample = -1;  // -1: evaluated at a point (PreviewAt)
+  bool valid = false;        // the evaluation's verdict (constraints and geometry; checks skipped)
   std::string failure;
   geometry::Solid solid;
-  double seconds = 0;           // wall time of EvaluateSample (constraints and tree; checks skipped)
+  double seconds = 0;  // wall time of EvaluateSample (constraints and tree; checks skipped)
   int subtrees = 0, cache_hits = 0;
   // An OpenSCAD model's bodies and colour regions (design::Part; empty for
   // other designs): the preview's glb shows them in their colours.
@@ -97,14 +97,14 @@ std::string PreviewGlbBytes(const PreviewResult& preview);
 // or u's snapped sample, and which.
 struct PointPreview {
   std::shared_ptr<const EncodedPreview> preview;  // the glTF sent
-  bool exact = false;           // true: evaluated at exactly u; false: the snapped sample's
-  std::int64_t sample = -1;     // u's snapped sample (the preview's when !exact)
-  std::vector<double> u;        // the point shown: u itself, or the snapped sample's
-  double seconds = 0;           // exact: this preview's wall time (evaluate, mesh, encode);
-                                // snapped: the sample's recorded evaluation time
-  double estimate_seconds = 0;  // what an exact preview was expected to take (ExactPreviewCost)
-  std::string fallback;         // why snapped though exact was asked: "budget" or "failed"; else empty
-  bool cache_hit = false;       // snapped: served from the preview cache
+  bool exact = false;                             // true: evaluated at exactly u; false: the snapped sample's
+  std::int64_t sample = -1;                       // u's snapped sample (the preview's when !exact)
+  std::vector<double> u;                          // the point shown: u itself, or the snapped sample's
+  double seconds = 0;                             // exact: this preview's wall time (evaluate, mesh, encode);
+                                                  // snapped: the sample's recorded evaluation time
+  double estimate_seconds = 0;                    // what an exact preview was expected to take (ExactPreviewCost)
+  std::string fallback;    // why snapped though exact was asked: "budget" or "failed"; else empty
+  bool cache_hit = false;  // snapped: served from the preview cache
 };
 
 class Customiser {

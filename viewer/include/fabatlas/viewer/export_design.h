@@ -30,13 +30,13 @@ struct ExportOptions {
 };
 
 struct ExportResult {
-  std::string bytes;           // the file's bytes
-  std::string file_name;       // "<design>-<name>=<value>_....<format>"
-  std::vector<double> u;       // the point evaluated (exactly the one asked for)
-  double voxel_size = 0;       // mm
+  std::string bytes;      // the file's bytes
+  std::string file_name;  // "<design>-<name>=<value>_....<format>"
+  std::vector<double> u;  // the point evaluated (exactly the one asked for)
+  double voxel_size = 0;  // mm
   std::int64_t triangles = 0;
-  double volume_mm3 = 0;       // of the closed mesh (divergence theorem)
-  double seconds = 0;          // evaluation, checks and meshing, wall time
+  double volume_mm3 = 0;            // of the closed mesh (divergence theorem)
+  double seconds = 0;               // evaluation, checks and meshing, wall time
   std::vector<std::string> checks;  // the checks passed at exactly u (constraints, geometry, the design's)
   // The design's parts at u (an OpenSCAD model's top-level bodies and colour
   // regions, docs/openscad.md "Parts and colours"; one, "body1", otherwise),
@@ -54,8 +54,10 @@ struct ExportResult {
 //   - a u inside it (the region interpolates between samples) where a check
 //     fails at exactly u, naming the first failed check and its reason.
 // Also refuses an unknown format, an unknown part (naming the parts) and a
-// mesh that is not closed (its border edge count), the whole's or a part's. Thread-safe; evaluates on the calling thread.
-ExportResult ExportDesign(const Customiser& customiser, const std::vector<double>& u, const ExportOptions& options = {});
+// mesh that is not closed (its border edge count), the whole's or a part's. Thread-safe; evaluates on the calling
+// thread.
+ExportResult ExportDesign(const Customiser& customiser, const std::vector<double>& u,
+                          const ExportOptions& options = {});
 
 // "radius=15,wall=6": parameter names in the form's order, enumerated values
 // by label, numbers with up to 6 significant digits (what `--at` reads).

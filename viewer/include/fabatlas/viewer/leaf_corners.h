@@ -44,7 +44,7 @@ class LeafCorners {
   std::size_t leaves() const { return per_leaf_ ? corners_.size() / per_leaf_ : 0; }
 
  private:
-  std::size_t per_leaf_ = 0;             // 2^n
+  std::size_t per_leaf_ = 0;  // 2^n
   std::size_t samples_ = 0;
   std::vector<std::size_t> first_node_;  // per tree, index of its node 0 in rows_
   std::vector<std::int32_t> rows_;       // per node: leaf row, -1 interior

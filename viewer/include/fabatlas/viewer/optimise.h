@@ -63,10 +63,10 @@ struct OptimiseOptions {
 };
 
 struct OptimiseResult {
-  bool found = false;            // false: no valid point (under the limits, on the hold)
-  std::vector<double> u;         // the answer, parameter values in the form's order
-  double objective = 0;          // Σ weight * value at u
-  std::vector<double> values;    // each term's value at u, in the order of `terms`
+  bool found = false;                   // false: no valid point (under the limits, on the hold)
+  std::vector<double> u;                // the answer, parameter values in the form's order
+  double objective = 0;                 // Σ weight * value at u
+  std::vector<double> values;           // each term's value at u, in the order of `terms`
   std::vector<std::string> properties;  // each term's canonical property name
   // The sample at u, or -1 when u is a slice corner inside a leaf edge or
   // face (held parameters) and `values` are interpolated from `corners`.

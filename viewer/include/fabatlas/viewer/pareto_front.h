@@ -13,8 +13,8 @@
 // the runtime knows properties by multilinear interpolation of the leaf's
 // corners, whose values lie in the convex hull of the corners' values, so
 // they can fall between front points (the front of samples is a staircase)
-// but never beyond its ends; the samples are what the page previews. Limits: pass the limited form (Customiser::LimitedForm).
-// Cost: O(valid samples log valid samples), single-threaded, thread-safe.
+// but never beyond its ends; the samples are what the page previews. Limits: pass the limited form
+// (Customiser::LimitedForm). Cost: O(valid samples log valid samples), single-threaded, thread-safe.
 #pragma once
 
 #include <cstdint>
@@ -43,9 +43,9 @@ struct ParetoPoint {
 };
 
 struct ParetoFront {
-  std::string a, b;                 // canonical property names of the axes
-  std::vector<ParetoPoint> points;  // best on axis a first (so worst on b first)
-  std::int64_t candidates = 0;      // valid samples recording both properties
+  std::string a, b;                    // canonical property names of the axes
+  std::vector<ParetoPoint> points;     // best on axis a first (so worst on b first)
+  std::int64_t candidates = 0;         // valid samples recording both properties
   std::vector<ParetoPoint> dominated;  // with keep_dominated: the other candidates, best on a first
 };
 
@@ -70,7 +70,6 @@ struct ParetoPlotOptions {
 // squares joined as a staircase in order) with axes, ticks and names, as
 // PNG through picture::Canvas; x is axis a, y axis b. Written atomically;
 // InputError when the front is empty or the file cannot be written.
-void WriteParetoPng(const ParetoFront& front, const std::filesystem::path& path,
-                    const ParetoPlotOptions& options = {});
+void WriteParetoPng(const ParetoFront& front, const std::filesystem::path& path, const ParetoPlotOptions& options = {});
 
 }  // namespace fabatlas::viewer

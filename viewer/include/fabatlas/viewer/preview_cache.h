@@ -19,7 +19,7 @@ namespace fabatlas::viewer {
 struct EncodedPreview {
   std::int64_t sample = -1;
   std::string glb;
-  double seconds = 0;   // evaluation time when it was computed
+  double seconds = 0;  // evaluation time when it was computed
   int subtrees = 0, cache_hits = 0;
 };
 

@@ -63,7 +63,7 @@ struct Quantity {
   int dimension = -1;  // >= 0: a parameter
   // weight:M / cost:M: the material, looked up once (else empty).
   std::vector<sampling::Material> material{};
-  bool cost = false;   // with a material: cost, else weight (g)
+  bool cost = false;  // with a material: cost, else weight (g)
 };
 // Throws InputError naming the quantity and listing the properties and
 // parameters when it is neither.

@@ -28,8 +28,8 @@ inline constexpr const char* kContentSecurityPolicy =
 
 struct ServeOptions {
   std::string host = "127.0.0.1";
-  int port = 8080;                   // 0: any free port (reported through on_listening)
-  std::filesystem::path web_dir;     // the built page (build/web); must hold index.html
+  int port = 8080;                // 0: any free port (reported through on_listening)
+  std::filesystem::path web_dir;  // the built page (build/web); must hold index.html
 };
 
 // The files of the built page by URL path ("/index.html", "/assets/x.js"),

@@ -12,9 +12,9 @@
 // under cache_dir. Slow subtrees are uploaded as blobs; valid samples' root
 // solids stay in memory and are uploaded only when another worker's ΔG task
 // asks for one (a third thread long-polls ShareSolids), and ΔG tasks fetch
-// the solids they lack from their holder (tasks.proto "Geometry blobs"). Reconnects with exponential backoff (200 ms doubling to
-// 5 s) when the coordinator goes away, and keeps reporting its in-flight
-// leases and unsent results, so a restarted coordinator accepts them.
+// the solids they lack from their holder (tasks.proto "Geometry blobs"). Reconnects with exponential backoff (200 ms
+// doubling to 5 s) when the coordinator goes away, and keeps reporting its in-flight leases and unsent results, so a
+// restarted coordinator accepts them.
 #pragma once
 
 #include <atomic>
@@ -27,19 +27,19 @@
 namespace fabatlas::worker {
 
 struct WorkerOptions {
-  std::string coordinator;             // HOST:PORT
+  std::string coordinator;  // HOST:PORT
   protocol::ClientSecurity security;
-  int slots = 1;                       // tasks run at once
+  int slots = 1;  // tasks run at once
   // Threads the evaluations may keep busy in total (TBB/OpenVDB inside a
   // task included); 0 = slots, i.e. each slot evaluates on its own thread
   // only, so a worker with N slots uses at most N cores for evaluation.
   int threads = 0;
-  std::filesystem::path cache_dir;     // job bundles; default: a temp dir
-  std::string worker_id;               // default: host-pid-start time
+  std::filesystem::path cache_dir;  // job bundles; default: a temp dir
+  std::string worker_id;            // default: host-pid-start time
   // Give up (InputError) when the coordinator has not answered once within
   // this time; after the first answer the worker retries forever.
   std::int64_t connect_timeout_ms = 30000;
-  std::int64_t poll_ms = 5000;         // long-poll wait when idle
+  std::int64_t poll_ms = 5000;  // long-poll wait when idle
   // Plaintext HTTP "HOST:PORT" serving /metrics (Prometheus text: tasks run
   // and failed by kind, their durations, solid and subtree cache bytes,
   // resident memory) and /healthz (200 working, 503 stopping); empty = off.

@@ -18,8 +18,8 @@ enum class RingSize { kXS, kS, kM, kL };
 const char* ToString(RingSize s);
 
 struct ClipLightsParams {
-  int pairs = 4;           // n in 1..4
-  double extension = 0;    // l in [0, 45.7] mm
+  int pairs = 4;         // n in 1..4
+  double extension = 0;  // l in [0, 45.7] mm
   RingSize ring = RingSize::kXS;
   // Attach the clip light to the hanger's bar with alignment flip (Rod_Clip
   // [0,0,0] instead of the published programs' [0,180,0]): the clip on the
@@ -43,8 +43,7 @@ struct ClipLightsResult {
 // Builds the program for `p` from the part library at `library_path` (the
 // library's Turnbuckle hooks, fitted on the closed turnbuckle, move out by l/2).
 // Throws InputError for parameters outside their ranges.
-Program BuildClipLights(const ClipLightsParams& p, const std::string& library_path,
-                        const std::string& mesh_dir = "");
+Program BuildClipLights(const ClipLightsParams& p, const std::string& library_path, const std::string& mesh_dir = "");
 
 // Builds, solves and checks one variation.
 ClipLightsResult EvaluateClipLights(const ClipLightsParams& p, const std::string& library_path,

@@ -27,13 +27,13 @@
 namespace fabatlas::assembly {
 
 struct ArcFit {
-  Eigen::Vector3d centre = Eigen::Vector3d::Zero();  // mm
-  Eigen::Vector3d normal = Eigen::Vector3d::UnitZ(); // unit; its largest-magnitude component is positive
-  double radius = 0;        // centre-arc radius, mm
-  double wire_radius = 0;   // mm
-  double span_deg = 360;    // angle the wire covers, counter-clockwise about `normal` from `start`
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero();   // mm
+  Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();  // unit; its largest-magnitude component is positive
+  double radius = 0;                                  // centre-arc radius, mm
+  double wire_radius = 0;                             // mm
+  double span_deg = 360;  // angle the wire covers, counter-clockwise about `normal` from `start`
   Eigen::Vector3d start = Eigen::Vector3d::UnitX();  // unit, in-plane direction from the centre to the span's start
-  int points = 0;           // vertices used in the final fit
+  int points = 0;                                    // vertices used in the final fit
 };
 
 struct AxisFit {

@@ -10,8 +10,8 @@
 namespace fabatlas::assembly {
 
 struct Frame {
-  Eigen::Vector3d position = Eigen::Vector3d::Zero();  // mm
-  Eigen::Vector3d euler_deg = Eigen::Vector3d::Zero(); // [a,b,c], degrees
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();   // mm
+  Eigen::Vector3d euler_deg = Eigen::Vector3d::Zero();  // [a,b,c], degrees
 };
 
 // R = Rz(c)·Ry(b)·Rx(a), angles in degrees.

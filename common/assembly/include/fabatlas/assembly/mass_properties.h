@@ -10,7 +10,7 @@
 namespace fabatlas::assembly {
 
 struct MassProperties {
-  double volume_mm3 = 0;                                   // signed-tetrahedra volume
+  double volume_mm3 = 0;                                     // signed-tetrahedra volume
   Eigen::Vector3d centre_of_mass = Eigen::Vector3d::Zero();  // mm, mesh frame
   Eigen::Vector3d bbox_min = Eigen::Vector3d::Zero();
   Eigen::Vector3d bbox_max = Eigen::Vector3d::Zero();

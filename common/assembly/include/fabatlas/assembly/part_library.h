@@ -26,12 +26,12 @@ struct ParamSpec {
   std::string name;
   double min = 0, max = 1;
   ParamKind kind = ParamKind::kBoundedAndClamped;
-  double init = 0.5;   // default value (PARTS.md §1), the solver's first start
+  double init = 0.5;  // default value (PARTS.md §1), the solver's first start
   // A BOUNDED_AND_OPEN parameter whose end is blocked by the part itself
   // (a rod running into a wider body): leaving through that end is not
   // falling apart.
   bool blocked_min = false, blocked_max = false;
-  bool held = false;   // held at `init` in every phase (a primitive's fixed base form, PARTS.md §2.3)
+  bool held = false;  // held at `init` in every phase (a primitive's fixed base form, PARTS.md §2.3)
 };
 
 // One annotated connector primitive on a part. Shape parameters are mm/degrees:
@@ -43,15 +43,15 @@ struct Primitive {
   std::string name;
   PrimitiveType type = PrimitiveType::kRod;
   std::map<std::string, double> shape;
-  Frame frame;         // base frame in the part frame
+  Frame frame;  // base frame in the part frame
   // Closed for connecting (the reference's is_open_for_connect = false): two
   // closed primitives cannot be joined (rings always are).
   bool closed = false;
   // Closed ends (is_open = false): bounded parameters are BOUNDED_AND_CLAMPED
   // instead of BOUNDED_AND_OPEN (PARTS.md §1.10).
   bool clamped = false;
-  bool flex = false;   // Flex variant: extra orientation DoF phi (hook/ring)
-  bool ctl = false;    // Ctl (centre-line) variant of rod, ring, tube: own frame formula
+  bool flex = false;  // Flex variant: extra orientation DoF phi (hook/ring)
+  bool ctl = false;   // Ctl (centre-line) variant of rod, ring, tube: own frame formula
   // Ends of the slide parameter (rod/tube/edge t, hook θ) blocked by the part's
   // own body ("min" / "max" / "both"), see ParamSpec; for rods, checked
   // against the part's mesh with MeasureRodEnds (rod_ends.h).
@@ -93,8 +93,8 @@ const char* ToString(PrimitiveType t);
 
 struct Part {
   std::string name;
-  std::string mesh;  // file name inside the mesh directory ("" = none)
-  double mass = 0;   // mesh volume (mm^3) × density 1 = grams at 1 g/cm^3
+  std::string mesh;                                          // file name inside the mesh directory ("" = none)
+  double mass = 0;                                           // mesh volume (mm^3) × density 1 = grams at 1 g/cm^3
   Eigen::Vector3d centre_of_mass = Eigen::Vector3d::Zero();  // mm, part frame
   std::vector<Primitive> primitives;
   const Primitive* Find(const std::string& primitive) const;  // nullptr if absent

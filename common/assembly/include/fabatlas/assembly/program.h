@@ -41,14 +41,14 @@ struct Connection {
   bool is_fixed = false;  // is_fixed_joint: both sides held under physics
   // Both sides held in the relaxation: is_fixed, or a clip connection (§1.10).
   bool held_in_relaxation = false;
-  std::string key;        // alignment key, e.g. "Rod_HookFlex"
+  std::string key;  // alignment key, e.g. "Rod_HookFlex"
   Eigen::Matrix3d align = Eigen::Matrix3d::Identity();
   // Each side's connection parameters: ranges, kinds, starting values and
   // held (base-form) values (PARTS.md §2.3, spread as §1 says when several
   // connections share a primitive).
   std::vector<ParamSpec> params_a, params_b;
   int symmetry_axis_a = -1;  // closing only: free rotation of side a (§2.4)
-  std::string where;      // "file:line:col" of the step
+  std::string where;         // "file:line:col" of the step
 };
 
 // The connections the reference gives a fixed base form on one side (PARTS.md
@@ -62,13 +62,13 @@ struct Program {
   PartLibrary library;
   std::vector<PartInstance> instances;  // [0] = environment (start_with)
   Frame environment_frame;
-  int target = -1;                      // end_with part instance
+  int target = -1;  // end_with part instance
   // end_with names a primitive: its world frame P·B should be the target
   // frame; else (-1) the part frame, with the symmetry of the part's first
   // primitive (PARTS.md §2.1).
   int target_primitive = -1;
   Frame target_frame;
-  bool target_match_rotation = true;  // end_with match_rotation (default true)
+  bool target_match_rotation = true;    // end_with match_rotation (default true)
   std::vector<Connection> connections;  // in program order
 
   const Part& PartOf(int instance) const { return library.parts.at(instances[instance].part); }
@@ -89,8 +89,8 @@ Program LoadProgram(const std::string& yaml_path, const std::string& mesh_dir = 
 
 // Same, from YAML text (for generated families); `name` is used in messages
 // and `library_path` is the part library to use.
-Program ParseProgram(const std::string& yaml_text, const std::string& name,
-                     const std::string& library_path, const std::string& mesh_dir = "");
+Program ParseProgram(const std::string& yaml_text, const std::string& name, const std::string& library_path,
+                     const std::string& mesh_dir = "");
 
 // The part library a program YAML names (`library:`, relative to the
 // program file), as a path. Throws InputError("file:line:col: message").

@@ -42,20 +42,20 @@
 namespace fabatlas::assembly {
 
 struct SolveOptions {
-  int restarts = 16;                    // starts of the feasibility solve (FabHacks uses T = 16)
+  int restarts = 16;  // starts of the feasibility solve (FabHacks uses T = 16)
   // Which start (0-based) is the chain-by-chain initial guess (FabHacks
   // Table 5 ★; SetChainStart in solve.cc) in programs with cycles; -1 never.
   int chain_start = 1;
   double feasibility_tolerance = 1e-6;  // C threshold, mm² (FabHacks: 1e-6)
   double penalty_start = 100;           // σ of step 1 (FabHacks: 100, doubling)
   int penalty_doublings = 5;
-  double relaxation_penalty = 1e4;      // σ_r of step 2 (EXAMPLES.md: 1e4)
-  double gravity = 9.8;                 // m/s²
-  double rotation_scale_mm = 20;        // closure: mm per unit of rotation-matrix difference
+  double relaxation_penalty = 1e4;  // σ_r of step 2 (EXAMPLES.md: 1e4)
+  double gravity = 9.8;             // m/s²
+  double rotation_scale_mm = 20;    // closure: mm per unit of rotation-matrix difference
   // Step 1 target: mm per radian of rotation error. The reference weighs
   // |Δpos|² (mm²) against |ΔEuler|² (deg²), i.e. 1° ≈ 1 mm (PARTS.md §2.1).
   double target_mm_per_rad = 180 / 3.14159265358979323846;
-  int max_iterations = 200;             // Ceres iterations per feasibility / objective solve
+  int max_iterations = 200;  // Ceres iterations per feasibility / objective solve
   // Step 2 (relaxation). Levenberg-Marquardt sees the gravity potential only
   // through its gradient (the least-squares form has no curvature along a
   // swing), so it converges linearly along hanging chains: it gets its own
@@ -91,9 +91,9 @@ struct SolveOptions {
   // changes the path and with it the equilibrium reached (not a tuning knob
   // for the examples; kept as an option for experiments).
   double relaxation_datum_mm = 1e5;
-  int stall_window = 10;                // iterations in the stall regression
-  double stall_slope = 1e-3;            // abort if log10(C) falls slower than this per iteration
-  bool relax = true;                    // run step 2
+  int stall_window = 10;      // iterations in the stall regression
+  double stall_slope = 1e-3;  // abort if log10(C) falls slower than this per iteration
+  bool relax = true;          // run step 2
   // A part resting on another (a surface on a surface, a roll on a rod) is
   // held by static friction in step 2 and slides off when its support tilts
   // beyond this angle: atan μ for μ = 0.36, the low end of wood, paper and
@@ -121,9 +121,9 @@ struct SolveOptions {
 
 struct SolveSummary {
   bool prechecks_passed = true;
-  bool feasible = false;       // cycles close: C < feasibility_tolerance
-  bool stable = false;         // relaxed, and nothing falls apart (falls_apart empty)
-  bool target_reached = false; // relaxed target within target_tolerance
+  bool feasible = false;           // cycles close: C < feasibility_tolerance
+  bool stable = false;             // relaxed, and nothing falls apart (falls_apart empty)
+  bool target_reached = false;     // relaxed target within target_tolerance
   double constraint_residual = 0;  // C after step 1 (mm²)
   double step1_target_error_mm = 0, step1_target_error_deg = 0;
   double final_target_error_mm = 0, final_target_error_deg = 0;  // after relaxation
@@ -142,7 +142,7 @@ struct SolveSummary {
     bool held = false;
   };
   std::vector<Slide> slides;
-  std::vector<std::string> messages;     // pre-check issues and solver notes
+  std::vector<std::string> messages;  // pre-check issues and solver notes
   int starts_tried = 0;
   // Step 2 as Ceres ended it: "CONVERGENCE", "NO_CONVERGENCE" (iteration cap),
   // ... ; empty if step 2 did not run.
@@ -162,7 +162,7 @@ struct SolveSummary {
   // Per instance (mm). Infeasible: `poses` are those of the start that came
   // closest to closing the cycles (tree connections hold), `step1_poses` empty.
   std::vector<Eigen::Isometry3d> step1_poses, poses;
-  std::vector<std::vector<double>> params;             // per connection: s_a then s_b
+  std::vector<std::vector<double>> params;  // per connection: s_a then s_b
 };
 
 // Pre-checks, then the two-step solve. Never throws for a loaded Program.

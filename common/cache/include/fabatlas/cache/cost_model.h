@@ -18,7 +18,6 @@ namespace fabatlas::cache {
 // (design op name, e.g. "union", "revolve") that produced `output_bytes` of
 // geometry from children totalling `input_bytes`. Pure, >= 0, deterministic
 // (no clocks, no state). Unknown ops use the default coefficients.
-double ModelSubtreeSeconds(std::string_view op, std::uint64_t output_bytes,
-                           std::uint64_t input_bytes);
+double ModelSubtreeSeconds(std::string_view op, std::uint64_t output_bytes, std::uint64_t input_bytes);
 
 }  // namespace fabatlas::cache

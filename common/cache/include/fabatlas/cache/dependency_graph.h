@@ -33,13 +33,13 @@ struct SampleTree {
 // The merged graph. Node ids are positions in ascending key order, so every
 // result built on ids is independent of the order the input came in.
 struct DependencyGraph {
-  std::vector<std::string> keys;            // node id -> key, ascending
-  std::vector<double> seconds;              // t_i: mean over the merged records
-  std::vector<std::uint64_t> bytes;         // largest over the merged records
-  std::vector<char> stored;                 // any merged record stored
-  std::vector<std::int64_t> child_begin;    // CSR: children of i are
-  std::vector<std::int32_t> child_ids;      //   child_ids[child_begin[i] .. child_begin[i+1])
-  std::vector<std::int32_t> sample_roots;   // sample index -> root node id
+  std::vector<std::string> keys;                // node id -> key, ascending
+  std::vector<double> seconds;                  // t_i: mean over the merged records
+  std::vector<std::uint64_t> bytes;             // largest over the merged records
+  std::vector<char> stored;                     // any merged record stored
+  std::vector<std::int64_t> child_begin;        // CSR: children of i are
+  std::vector<std::int32_t> child_ids;          //   child_ids[child_begin[i] .. child_begin[i+1])
+  std::vector<std::int32_t> sample_roots;       // sample index -> root node id
   std::vector<std::int32_t> topological_order;  // every parent before its children
 
   std::int64_t node_count() const { return static_cast<std::int64_t>(keys.size()); }
@@ -54,8 +54,7 @@ struct DependencyGraph {
 // naming the key when a child or root key has no record, a key is recorded
 // with different children, seconds are negative or not finite, or the graph
 // has a cycle.
-DependencyGraph BuildDependencyGraph(const std::vector<SubtreeNode>& nodes,
-                                     const std::vector<SampleTree>& samples);
+DependencyGraph BuildDependencyGraph(const std::vector<SubtreeNode>& nodes, const std::vector<SampleTree>& samples);
 
 // A cache H as a membership flag per node id (size node_count()).
 using CacheSet = std::vector<char>;

@@ -42,7 +42,7 @@ struct ExactCacheSummary {
   double objective = 0;  // the program's objective value (s)
   double bound = 0;      // best lower bound on the objective (s)
   std::int64_t variables = 0;
-  std::string message;   // why not solved / not optimal
+  std::string message;  // why not solved / not optimal
 };
 
 ExactCacheSummary SolveExactCache(const DependencyGraph& graph, const ExactCacheOptions& options = {});

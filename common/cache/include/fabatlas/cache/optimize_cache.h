@@ -32,8 +32,8 @@ const char* StrategyName(Strategy strategy);  // "naive", "opt_ave", "opt_max"
 
 // What the greedy strategies maximise when they choose a node.
 enum class Score {
-  kTimesCount,  // t·n_H(X), as Fab Forms Sec. 6.3 and Sec. 8 state it
-  kPerByte,     // t·n_H(X) / bytes(X)
+  kTimesCount,    // t·n_H(X), as Fab Forms Sec. 6.3 and Sec. 8 state it
+  kPerByte,       // t·n_H(X) / bytes(X)
   kSavedPerByte,  // n_H(X)·C_H(X) / bytes(X), C_H(X) = the time to compute X's
                   // subtree given H: the drop of Σ_r T_H(r) per byte of budget
 };
@@ -66,12 +66,12 @@ struct CurvePoint {
 
 struct CachePlan {
   Strategy strategy = Strategy::kOptMax;
-  CacheSet cache;                     // H, per node id
-  std::vector<std::int32_t> chosen;   // ids in H, ascending
-  CacheCost cost;                     // of H, recomputed exactly
-  std::vector<CurvePoint> curve;      // curve[0] = empty cache, then each step
-  std::int64_t steps = 0;             // nodes added (including later dropped)
-  std::int64_t dropped = 0;           // nodes dropped as redundant
+  CacheSet cache;                    // H, per node id
+  std::vector<std::int32_t> chosen;  // ids in H, ascending
+  CacheCost cost;                    // of H, recomputed exactly
+  std::vector<CurvePoint> curve;     // curve[0] = empty cache, then each step
+  std::int64_t steps = 0;            // nodes added (including later dropped)
+  std::int64_t dropped = 0;          // nodes dropped as redundant
 };
 
 CachePlan OptimizeCache(const DependencyGraph& graph, const CacheOptions& options = {});

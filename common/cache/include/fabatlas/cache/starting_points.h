@@ -21,8 +21,8 @@
 namespace fabatlas::cache {
 
 struct StartingPointOptions {
-  int count = 8;             // seeds; raised to the number of components
-  std::uint64_t seed = 1;    // random seed of the first pick
+  int count = 8;           // seeds; raised to the number of components
+  std::uint64_t seed = 1;  // random seed of the first pick
   // Segments with up to this many samples get the exact centroid (one
   // Dijkstra per sample). Larger ones start at the middle of a double sweep
   // (farthest from the seed, then farthest from that) and move to a
@@ -39,7 +39,6 @@ struct StartingPoint {
 };
 
 // In order of the seeds' picks. Empty when the form has no valid sample.
-std::vector<StartingPoint> ChooseStartingPoints(const sampling::Form& form,
-                                                const StartingPointOptions& options = {});
+std::vector<StartingPoint> ChooseStartingPoints(const sampling::Form& form, const StartingPointOptions& options = {});
 
 }  // namespace fabatlas::cache

@@ -32,7 +32,7 @@ struct ConstraintSolveSummary {
   bool satisfiable = false;
   // Every parameter's value, exposed (as given) and mutable (as solved).
   std::map<std::string, double> values;
-  double max_violation = 0;   // largest constraint violation at the solution
+  double max_violation = 0;      // largest constraint violation at the solution
   std::string worst_constraint;  // the text of the most violated constraint
   double seconds = 0;
   bool by_definitions = false;  // decided from the definitions, without Ceres

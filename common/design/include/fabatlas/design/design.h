@@ -27,11 +27,11 @@ enum class ParameterKind { kReal, kInteger, kEnumerated };
 struct ExposedParameter {
   std::string name;
   ParameterKind kind = ParameterKind::kReal;
-  double min = 0, max = 1;           // for enumerated: 0 .. labels.size()-1
-  double default_value = 0;          // the design's, else the middle of the range
-  std::vector<std::string> labels;   // enumerated only
-  std::string description;           // optional: shown to users (the customiser)
-  std::string group;                 // optional: the customiser groups parameters by it
+  double min = 0, max = 1;          // for enumerated: 0 .. labels.size()-1
+  double default_value = 0;         // the design's, else the middle of the range
+  std::vector<std::string> labels;  // enumerated only
+  std::string description;          // optional: shown to users (the customiser)
+  std::string group;                // optional: the customiser groups parameters by it
   SourcePlace place;
 };
 
@@ -80,17 +80,17 @@ struct Constraint {
 // options) is fixed by the operation's schema.
 struct Argument {
   enum class Kind { kScalar, kList, kMap } kind = Kind::kScalar;
-  std::string text;                 // scalar: expression or string
-  bool quoted = false;              // scalar written in quotes (a string, never a number)
-  std::vector<Argument> items;      // list items, or map values
-  std::vector<std::string> keys;    // map keys, parallel to items
+  std::string text;               // scalar: expression or string
+  bool quoted = false;            // scalar written in quotes (a string, never a number)
+  std::vector<Argument> items;    // list items, or map values
+  std::vector<std::string> keys;  // map keys, parallel to items
   SourcePlace place;
 };
 
 struct Node {
-  std::string op;                           // e.g. "sphere", "difference"
-  std::string name;                         // optional, for reports
-  std::map<std::string, Argument> args;     // op arguments
+  std::string op;                        // e.g. "sphere", "difference"
+  std::string name;                      // optional, for reports
+  std::map<std::string, Argument> args;  // op arguments
   std::vector<Node> children;
   SourcePlace place;
 };
@@ -99,7 +99,7 @@ struct Node {
 // Constraint satisfiability and geometry generation are always checked first.
 struct CheckSpec {
   std::string type;
-  std::string name;                         // defaults to type
+  std::string name;  // defaults to type
   std::map<std::string, Argument> args;
   SourcePlace place;
 };
@@ -139,24 +139,24 @@ struct DesignObject {
 };
 
 struct Design {
-  std::filesystem::path file;               // where it was loaded from
+  std::filesystem::path file;  // where it was loaded from
   std::string name;
-  double voxel_size = 0.5;                  // mm
+  double voxel_size = 0.5;  // mm
   std::vector<ExposedParameter> exposed;
   std::vector<MutableParameter> mutables;
   std::vector<Constraint> constraints;
   Node tree;
   std::vector<CheckSpec> checks;
-  std::vector<std::string> properties;      // volume, area, bbox
-  std::vector<Preset> presets;              // optional, in file order
-  std::vector<FixedParameter> fixed;        // optional, in file order (shown, not sampled)
+  std::vector<std::string> properties;  // volume, area, bbox
+  std::vector<Preset> presets;          // optional, in file order
+  std::vector<FixedParameter> fixed;    // optional, in file order (shown, not sampled)
   // Reconfigurables (optional; see ObjectMotion). Transitions are listed so
   // that each one's `from` state is the first state or the `to` of an earlier
   // transition (the state poses are propagated in that order).
   std::vector<DesignObject> objects;
   std::vector<std::string> states;
   std::vector<Transition> transitions;
-  std::string canonical_text;               // the file's bytes, for hashing
+  std::string canonical_text;  // the file's bytes, for hashing
 
   const ExposedParameter* FindExposed(const std::string& name) const;
   const DesignObject* FindObject(const std::string& name) const;

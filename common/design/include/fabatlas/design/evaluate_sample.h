@@ -31,18 +31,18 @@ inline constexpr const char* kTooMuchDeformation = "too_much_deformation";  // f
 // fem check: at this sample the fixed or loaded region selects nothing of the
 // solid (or the solid has no FEM voxel), so there is no load path to test.
 inline constexpr const char* kLoadCaseMissesSolid = "load_case_misses_solid";
-inline constexpr const char* kCollision = "collision";                         // collision_free check
-inline constexpr const char* kTooLittleClearance = "too_little_clearance";     // collision_free check
+inline constexpr const char* kCollision = "collision";                      // collision_free check
+inline constexpr const char* kTooLittleClearance = "too_little_clearance";  // collision_free check
 // collision_free check with `repair_with`: it collides, and automatic
 // resolution within those parameters (resolve_collisions.h) makes the design
 // valid.
 inline constexpr const char* kRepairable = "repairable";
-inline constexpr const char* kInfeasible = "infeasible";                       // assembly_feasible check
-inline constexpr const char* kFallsApart = "falls_apart";                      // assembly_stable check
-inline constexpr const char* kTargetMissed = "target_missed";                  // target_reached check
+inline constexpr const char* kInfeasible = "infeasible";       // assembly_feasible check
+inline constexpr const char* kFallsApart = "falls_apart";      // assembly_stable check
+inline constexpr const char* kTargetMissed = "target_missed";  // target_reached check
 
 struct CheckOutcome {
-  std::string name;     // check name (constraints, geometry, then the design's)
+  std::string name;  // check name (constraints, geometry, then the design's)
   bool passed = false;
   std::string failure;  // failure type when not passed
   std::string reason;   // human explanation, e.g. "centre of mass 3.2 mm outside the support polygon"
@@ -54,13 +54,13 @@ struct CheckOutcome {
 
 // One subtree root evaluated (or found in the cache) for this sample.
 struct SubtreeRecord {
-  std::string key;        // hex SHA-256 of (τ, ρ, voxel size): the cache key
-  std::string topology;   // hex SHA-256 of τ alone
-  std::string path;       // node position, e.g. "root/0/1"
+  std::string key;       // hex SHA-256 of (τ, ρ, voxel size): the cache key
+  std::string topology;  // hex SHA-256 of τ alone
+  std::string path;      // node position, e.g. "root/0/1"
   std::string op;
-  double seconds = 0;     // root compute time given its children (0 if cached)
+  double seconds = 0;  // root compute time given its children (0 if cached)
   bool from_cache = false;
-  std::size_t bytes = 0;  // memory of the resulting grid
+  std::size_t bytes = 0;              // memory of the resulting grid
   std::vector<std::string> children;  // keys of the child subtrees
 };
 
@@ -117,7 +117,7 @@ struct EvaluateOptions {
 struct SampleResult {
   Point u;
   bool valid = false;
-  std::string failure;        // empty when valid
+  std::string failure;  // empty when valid
   std::string failure_reason;
   std::vector<CheckOutcome> checks;
   std::map<std::string, double> properties;
@@ -126,7 +126,7 @@ struct SampleResult {
   // solid.ToMesh() as the checks read it, when EvaluateOptions::keep_surface
   // and a check extracted it; else null.
   std::shared_ptr<const mesh::TriangleMesh> surface;
-  std::vector<SubtreeRecord> subtrees;   // post-order, root last
+  std::vector<SubtreeRecord> subtrees;  // post-order, root last
   // The sample's log: what OpenSCAD would warn of (a 2D object among 3D
   // ones, an object left out) and each fallback of the mesh road (Nef
   // polyhedra, level sets), "MODEL.scad: where: what". Subtrees found in the

@@ -62,25 +62,25 @@ struct ResolutionOptions {
 struct IntervalNormal {
   std::string transition, object_a, object_b;  // object_b is the selected object; a's normal is the opposite
   double t_begin = 0, t_end = 0;
-  swept::SpatialBox where;                      // the check's box of the interval (world, mm)
-  swept::ContactNormalSummary normal;           // forces dropped (normal.forces empty)
+  swept::SpatialBox where;             // the check's box of the interval (world, mm)
+  swept::ContactNormalSummary normal;  // forces dropped (normal.forces empty)
 };
 
 // The hint for one colliding pair of objects, over all its intervals.
 struct PairHint {
   std::string object_a, object_b;
-  double energy = 0;                         // |I_S| of the pair over every transition, mm x (unit t)
-  std::map<std::string, double> descent;     // -dE/du_k per parameter (mm x unit t per parameter unit)
-  std::map<std::string, double> step;        // the edit the line search chose (parameter units); empty when none helps
-  double energy_after = 0;                   // energy of all pairs after the step
+  double energy = 0;                      // |I_S| of the pair over every transition, mm x (unit t)
+  std::map<std::string, double> descent;  // -dE/du_k per parameter (mm x unit t per parameter unit)
+  std::map<std::string, double> step;     // the edit the line search chose (parameter units); empty when none helps
+  double energy_after = 0;                // energy of all pairs after the step
 };
 
 struct HintSummary {
-  SampleResult sample;                   // the point with every check, as precompute evaluates it
-  std::vector<IntervalNormal> intervals; // the collision_free check's intervals, by transition then t_begin
-  std::vector<PairHint> pairs;           // by energy, largest first
-  double energy = 0;                     // all pairs
-  int evaluations = 0;                   // design evaluations run
+  SampleResult sample;                    // the point with every check, as precompute evaluates it
+  std::vector<IntervalNormal> intervals;  // the collision_free check's intervals, by transition then t_begin
+  std::vector<PairHint> pairs;            // by energy, largest first
+  double energy = 0;                      // all pairs
+  int evaluations = 0;                    // design evaluations run
 };
 
 // Throws InputError for a design without objects and transitions, an

@@ -32,15 +32,15 @@
 namespace fabatlas::design {
 
 struct ResolveStep {
-  std::string object_a, object_b;     // the pair resolved
+  std::string object_a, object_b;  // the pair resolved
   double energy_before = 0, energy_after = 0;
-  std::map<std::string, double> edit; // parameter changes of this step
+  std::map<std::string, double> edit;  // parameter changes of this step
 };
 
 struct ResolveSummary {
-  bool resolved = false;                // every check passes at `after`
+  bool resolved = false;  // every check passes at `after`
   Point before, after;
-  std::map<std::string, double> edit;   // after - before, the parameters that changed
+  std::map<std::string, double> edit;  // after - before, the parameters that changed
   // |edit| with each parameter over its range (0..sqrt(parameters)).
   double edit_size = 0;
   double energy_before = 0, energy_after = 0;

@@ -37,9 +37,9 @@ struct StateGraph {
   // True when the design has a collision_free check and it ran at this point
   // (it runs whenever constraints and geometry pass: every check runs).
   bool collisions_checked = false;
-  int time_steps = 0;                        // the check's time samples per transition
-  std::vector<std::string> object_names;     // Design::objects order
-  std::vector<mesh::TriangleMesh> objects;   // body frame (pose in the first state), mm, from the level sets
+  int time_steps = 0;                             // the check's time samples per transition
+  std::vector<std::string> object_names;          // Design::objects order
+  std::vector<mesh::TriangleMesh> objects;        // body frame (pose in the first state), mm, from the level sets
   std::vector<StateGraphTransition> transitions;  // Design::transitions order
 };
 

@@ -30,7 +30,7 @@ struct FemLoadCase {
   // faces whose four nodes all lie inside one of these boxes.
   std::vector<AxisBox> loaded_region;
   Vec3 total_force{0, 0, 0};  // N
-  Material material;           // MPa (see Material::FromYoungPoisson)
+  Material material;          // MPa (see Material::FromYoungPoisson)
 };
 
 struct FemCheckOptions {
@@ -56,11 +56,11 @@ struct FemCheckResult {
   bool empty_load_case = false;
   int num_elements = 0;
   int newton_iterations = 0;
-  double seconds = 0;            // wall time of the whole check
-  double assembly_seconds = 0;   // of which element assembly
+  double seconds = 0;               // wall time of the whole check
+  double assembly_seconds = 0;      // of which element assembly
   double linear_solve_seconds = 0;  // of which sparse factorisation + solves
   long long linear_iterations = 0;  // conjugate-gradient iterations (iterative solvers only)
-  std::string reason;           // one line when !passed, empty otherwise
+  std::string reason;               // one line when !passed, empty otherwise
 };
 
 // Meshes the solid (HexMeshFromVoxels), applies the load case and solves.
@@ -69,7 +69,6 @@ struct FemCheckResult {
 // or a loaded region that selects no boundary face fail the check with
 // empty_load_case set (see FemCheckResult). Throws InputError for a bad
 // voxel grid or material.
-FemCheckResult RunFemCheck(const VoxelSolid& solid, const FemLoadCase& load,
-                           const FemCheckOptions& options = {});
+FemCheckResult RunFemCheck(const VoxelSolid& solid, const FemLoadCase& load, const FemCheckOptions& options = {});
 
 }  // namespace fabatlas::fem

@@ -37,15 +37,14 @@ struct HexMesh {
 // [origin + (i,j,k)*voxel_size, origin + (i+1,j+1,k+1)*voxel_size] (mm), and
 // is material iff occupied[i + dims[0]*(j + dims[1]*k)] != 0.
 struct VoxelSolid {
-  Vec3 origin{0, 0, 0};          // min corner of voxel (0,0,0), mm
-  double voxel_size = 1.0;       // edge length, mm, > 0
+  Vec3 origin{0, 0, 0};     // min corner of voxel (0,0,0), mm
+  double voxel_size = 1.0;  // edge length, mm, > 0
   std::array<int, 3> dims{0, 0, 0};
   std::vector<uint8_t> occupied;  // size dims[0]*dims[1]*dims[2]
 
   std::size_t Index(int i, int j, int k) const {
     return static_cast<std::size_t>(i) +
-           static_cast<std::size_t>(dims[0]) *
-               (static_cast<std::size_t>(j) + static_cast<std::size_t>(dims[1]) * k);
+           static_cast<std::size_t>(dims[0]) * (static_cast<std::size_t>(j) + static_cast<std::size_t>(dims[1]) * k);
   }
 };
 
@@ -62,8 +61,7 @@ HexMesh HexMeshFromVoxels(const VoxelSolid& solid);
 // (i,j,k), 0<=i<=nu, 0<=j<=nv, 0<=k<=layers, has index
 // i + (nu+1)*(j + (nv+1)*k); edge c0-c1 is j = 0, edge c1-c2 is i = nu.
 // Used for plane-strain benchmarks such as Cook's membrane.
-HexMesh HexMeshFromQuadPatch(const std::array<Vec2, 4>& corners, int nu, int nv,
-                             double thickness, int layers = 1);
+HexMesh HexMeshFromQuadPatch(const std::array<Vec2, 4>& corners, int nu, int nv, double thickness, int layers = 1);
 
 // Quadrilateral faces that belong to exactly one element, with node order
 // giving an outward normal by the right-hand rule.

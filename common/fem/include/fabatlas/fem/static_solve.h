@@ -85,9 +85,9 @@ struct StaticSolveOptions {
   //   of docs/fem.md "Validation" is for this element).
   enum class Element { kIncompatibleModes, kQ1 };
   Element element = Element::kIncompatibleModes;
-  int load_steps = 4;               // equal load increments
-  int max_newton_iterations = 30;   // per load step (before a cutback)
-  int max_cutbacks = 4;             // a failing increment is halved this often
+  int load_steps = 4;              // equal load increments
+  int max_newton_iterations = 30;  // per load step (before a cutback)
+  int max_cutbacks = 4;            // a failing increment is halved this often
   // A step that converges within this many Newton iterations is quick; after
   // two quick steps in a row a cut-back increment doubles again (never above
   // 1 / load_steps).
@@ -107,9 +107,9 @@ struct StaticSolveOptions {
   // by more than step_tolerance * max |u| (the residual is then at its
   // floating-point floor, which can lie above relative_tolerance).
   double step_tolerance = 1e-10;
-  double armijo_c = 1e-4;           // sufficient decrease constant
+  double armijo_c = 1e-4;  // sufficient decrease constant
   int max_line_search_halvings = 30;
-  bool verbose = false;             // log Newton progress to stderr
+  bool verbose = false;  // log Newton progress to stderr
 
   // How each Newton system K d = -r is solved.
   //  kCholesky: sparse direct (CHOLMOD supernodal, else Eigen SimplicialLLT).
@@ -151,8 +151,7 @@ struct StaticSolveSummary {
 // range, inverted element, non-positive material) throws InputError;
 // non-convergence is reported in the summary (converged = false) with the last
 // accepted state, never thrown.
-StaticSolveSummary SolveStatic(const HexMesh& mesh, const Material& material,
-                               const BoundaryConditions& bc,
+StaticSolveSummary SolveStatic(const HexMesh& mesh, const Material& material, const BoundaryConditions& bc,
                                const StaticSolveOptions& options = {});
 
 }  // namespace fabatlas::fem

@@ -34,7 +34,7 @@ using fabatlas::Vec3;
 
 // Resolution of a level set: voxel edge length and narrow-band half width.
 struct GridSpec {
-  double voxel_size = 0.5;        // mm; must be > 0
+  double voxel_size = 0.5;         // mm; must be > 0
   double half_width_voxels = 3.0;  // narrow band on each side, in voxels (>= 2)
   // Upper bound on the number of active voxels any single operation may
   // create; exceeding it throws InputError (protects memory on bad input).
@@ -50,8 +50,8 @@ class Solid {
  public:
   Solid();  // the empty solid (no material)
 
-  bool empty() const;           // no interior voxel
-  double voxel_size() const;    // mm (0 for a default-constructed Solid)
+  bool empty() const;         // no interior voxel
+  double voxel_size() const;  // mm (0 for a default-constructed Solid)
 
   // Volume enclosed by the zero level set, mm^3 (smooth Heaviside over the
   // narrow band; exact to within about one voxel layer of the surface).
@@ -87,10 +87,10 @@ class Solid {
 
 // ---- Primitives (centred at the origin unless stated) ----------------------
 Solid Sphere(const GridSpec& g, double radius);
-Solid Box(const GridSpec& g, const Vec3& size);                 // edge lengths
+Solid Box(const GridSpec& g, const Vec3& size);                   // edge lengths
 Solid Cylinder(const GridSpec& g, double radius, double height);  // axis z
 Solid Cone(const GridSpec& g, double bottom_radius, double top_radius,
-           double height);                                        // axis z, z in [-h/2,h/2]
+           double height);                                                 // axis z, z in [-h/2,h/2]
 Solid Torus(const GridSpec& g, double major_radius, double minor_radius);  // in xy-plane
 Solid Capsule(const GridSpec& g, const Vec3& a, const Vec3& b, double radius);
 
@@ -172,11 +172,11 @@ double OpeningLossFraction(const Solid& s, double min_thickness);
 // is negative. Cell corners lie on integer multiples of cell_size, and the
 // cells cover the solid's bounding box.
 struct Occupancy {
-  Vec3 origin{0, 0, 0};              // min corner of cell (0,0,0), mm
-  double cell_size = 0;              // mm
-  std::array<int, 3> dims{0, 0, 0};  // all 0 for the empty solid
+  Vec3 origin{0, 0, 0};               // min corner of cell (0,0,0), mm
+  double cell_size = 0;               // mm
+  std::array<int, 3> dims{0, 0, 0};   // all 0 for the empty solid
   std::vector<unsigned char> inside;  // inside[i + dims[0]*(j + dims[1]*k)]: 1 or 0
-  std::size_t inside_count = 0;      // number of cells with inside == 1
+  std::size_t inside_count = 0;       // number of cells with inside == 1
 };
 // Throws InputError if cell_size is not finite and > 0, or if the covering
 // grid would have more than max_cells cells. Threading: TBB over z slices.

@@ -12,8 +12,8 @@
 namespace fabatlas::mesh {
 
 struct CreasedMesh {
-  TriangleMesh mesh;                             // the same triangles; vertices split at creases
-  std::vector<std::array<float, 3>> normals;     // unit normal per vertex of `mesh`
+  TriangleMesh mesh;                          // the same triangles; vertices split at creases
+  std::vector<std::array<float, 3>> normals;  // unit normal per vertex of `mesh`
 };
 
 // Around each vertex, faces are grouped greedily in triangle order: a face

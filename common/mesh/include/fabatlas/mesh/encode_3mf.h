@@ -22,7 +22,7 @@ std::string Encode3mf(const TriangleMesh& mesh);
 
 // One object of a package of several: a part of the design.
 struct Object3mf {
-  std::string name;              // the object's name (slicers list it); empty: none
+  std::string name;  // the object's name (slicers list it); empty: none
   const TriangleMesh* mesh = nullptr;
   bool coloured = false;         // false: no material
   std::array<double, 4> rgba{};  // sRGB red, green, blue, alpha in [0, 1]

@@ -29,9 +29,9 @@ enum class BooleanOp { kUnion, kDifference, kIntersection };
 struct BooleanSummary {
   int corefinements = 0;        // pairwise corefinements run
   int exact_corefinements = 0;  // of them, those the kernel with exact constructions had to redo
-  int disjoint = 0;       // operands settled by their bounding boxes alone (no intersection computed)
-  int nef = 0;            // operations that fell back to Nef polyhedra
-  std::string nef_why;    // why the first fallback was taken, "" when none
+  int disjoint = 0;             // operands settled by their bounding boxes alone (no intersection computed)
+  int nef = 0;                  // operations that fell back to Nef polyhedra
+  std::string nef_why;          // why the first fallback was taken, "" when none
 };
 
 // How a boolean may compute its result.

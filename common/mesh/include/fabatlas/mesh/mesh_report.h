@@ -26,21 +26,21 @@ struct MeshReport {
   bool self_intersecting = false;  // two non-adjacent triangles intersect
   bool outward = false;            // closed, consistently oriented, volume > 0
 
-  std::string closed_reason;             // e.g. "mesh has 12 border edges (not watertight)"
+  std::string closed_reason;  // e.g. "mesh has 12 border edges (not watertight)"
   std::string manifold_reason;
   std::string self_intersection_reason;
   std::string outward_reason;
 
   // Counts, after merging coincident vertices (see InspectMesh).
-  std::int64_t merged_vertices = 0;       // input vertices removed by the merge
-  std::int64_t degenerate_triangles = 0;  // repeated corner or collinear corners
-  std::int64_t border_edges = 0;          // edges with exactly one face
-  std::int64_t non_manifold_edges = 0;    // edges with three or more faces
-  std::int64_t non_manifold_vertices = 0; // vertices whose faces form several fans
-  std::int64_t inconsistent_edges = 0;    // two-face edges traversed the same way twice
-  std::int64_t intersecting_pairs = 0;    // capped at max_intersecting_pairs
+  std::int64_t merged_vertices = 0;        // input vertices removed by the merge
+  std::int64_t degenerate_triangles = 0;   // repeated corner or collinear corners
+  std::int64_t border_edges = 0;           // edges with exactly one face
+  std::int64_t non_manifold_edges = 0;     // edges with three or more faces
+  std::int64_t non_manifold_vertices = 0;  // vertices whose faces form several fans
+  std::int64_t inconsistent_edges = 0;     // two-face edges traversed the same way twice
+  std::int64_t intersecting_pairs = 0;     // capped at max_intersecting_pairs
   bool intersecting_pairs_capped = false;
-  std::int64_t components = 0;            // vertex-connected pieces
+  std::int64_t components = 0;  // vertex-connected pieces
 
   // Measures in millimetres.
   double volume = 0.0;  // signed, mm^3 (divergence theorem); meaningful when closed

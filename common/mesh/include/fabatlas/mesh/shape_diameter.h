@@ -58,7 +58,6 @@ struct ShapeDiameterSummary {
 // Rays are traced in float32 with Embree 3, a face's rays in packets of eight,
 // over a TBB parallel loop; results are deterministic. Throws fabatlas::InputError for invalid options or an
 // index out of range.
-ShapeDiameterSummary ShapeDiameter(const TriangleMesh& mesh,
-                                   const ShapeDiameterOptions& options = {});
+ShapeDiameterSummary ShapeDiameter(const TriangleMesh& mesh, const ShapeDiameterOptions& options = {});
 
 }  // namespace fabatlas::mesh

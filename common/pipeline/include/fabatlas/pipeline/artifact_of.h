@@ -26,8 +26,8 @@ v1::JobBundle ProtoBundle(const artifact::JobBundle& bundle);
 // hash, code version, sampling parameters, statistics), the form and the
 // bundle, and the starting points (AddStartingPoints). No cache: AddCache
 // adds it when the samples' subtrees are known.
-artifact::Artifact ArtifactOf(const v1::JobBundle& bundle, const std::string& design_name,
-                             const sampling::JobFile& job, const sampling::Form& form);
+artifact::Artifact ArtifactOf(const v1::JobBundle& bundle, const std::string& design_name, const sampling::JobFile& job,
+                              const sampling::Form& form);
 
 // Fab Forms Sec. 7.4 starting points of the artifact's form
 // (cache::ChooseStartingPoints).

@@ -26,8 +26,8 @@ struct CacheSubtree {
 };
 
 struct CacheAssembly {
-  std::vector<CacheSubtree> subtrees;      // any order, repeated keys allowed
-  std::vector<std::string> sample_roots;   // root subtree key of every valid sample, in sample-id order
+  std::vector<CacheSubtree> subtrees;     // any order, repeated keys allowed
+  std::vector<std::string> sample_roots;  // root subtree key of every valid sample, in sample-id order
   // Strategy, memory budget and threshold (docs/cache.md); record_curve is
   // forced on.
   cache::CacheOptions options;

@@ -29,9 +29,9 @@ namespace fabatlas::pipeline {
 
 // A job's inputs, loaded.
 struct Job {
-  v1::JobBundle bundle;      // its bytes: stored in the artifact, its evaluation digest is the design hash
-  sampling::JobFile file;    // the job file
-  design::Design design;     // the design it names
+  v1::JobBundle bundle;    // its bytes: stored in the artifact, its evaluation digest is the design hash
+  sampling::JobFile file;  // the job file
+  design::Design design;   // the design it names
 };
 
 // The job file at `path` (as the user typed it, for messages), its design and
@@ -50,10 +50,10 @@ struct RunOptions {
 
 struct RunSummary {
   sampling::SamplingSummary sampling;
-  bool form_json = false;        // form.json was written
-  std::string artifact_file;     // its name in out_dir (ArtifactFileName)
-  std::size_t swept_volumes = 0; // carve_swept nodes published
-  bool cache = false;            // a cache was planned
+  bool form_json = false;         // form.json was written
+  std::string artifact_file;      // its name in out_dir (ArtifactFileName)
+  std::size_t swept_volumes = 0;  // carve_swept nodes published
+  bool cache = false;             // a cache was planned
   CacheAssemblySummary cache_added;
   artifact::CacheSummary cache_manifest;  // the artifact's manifest.cache
   artifact::ArtifactWriteSummary written;

@@ -40,16 +40,16 @@ class FrozenSubtreeCache final : public design::SubtreeCache {
 // preview paid them (SubtreeRecord::seconds: the root's own time given its
 // children, in this warm process) and as the cache plan models them.
 struct OperationCost {
-  int subtrees = 0;              // subtrees computed (cache hits excluded)
-  double measured_seconds = 0;   // sum over them
-  double model_seconds = 0;      // sum of cache::ModelSubtreeSeconds over them
+  int subtrees = 0;             // subtrees computed (cache hits excluded)
+  double measured_seconds = 0;  // sum over them
+  double model_seconds = 0;     // sum of cache::ModelSubtreeSeconds over them
 };
 
 struct PreviewTimes {
   std::vector<double> seconds;  // wall seconds per point (constraint solve + geometry)
   double mean_seconds = 0.0;
   double worst_seconds = 0.0;
-  int failures = 0;             // points whose geometry failed (should be 0 in the valid region)
+  int failures = 0;  // points whose geometry failed (should be 0 in the valid region)
   // Per point, what the cache plan predicts this preview costs: the model
   // costs (cache::ModelSubtreeSeconds, as protocol::RunCachePlan costs a
   // key: its op, its bytes and its children's) of the subtrees the preview

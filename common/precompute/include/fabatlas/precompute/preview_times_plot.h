@@ -12,8 +12,8 @@
 namespace fabatlas::precompute {
 
 struct PreviewTimesSeries {
-  std::string name;              // e.g. "no cache", "H_opt", "H_rfree"
-  std::vector<double> seconds;   // one measured preview time per point
+  std::string name;             // e.g. "no cache", "H_opt", "H_rfree"
+  std::vector<double> seconds;  // one measured preview time per point
 };
 
 struct PreviewTimesPlotOptions {

@@ -16,10 +16,10 @@ inline constexpr int kMaxMessageBytes = 16 << 20;
 inline constexpr int kBlobChunkBytes = 1 << 20;
 
 struct ClientSecurity {
-  std::string token;       // bearer token sent on every call ("" = none)
-  std::string tls_ca;      // PEM file of the deployment CA; "" = plaintext
-  std::string tls_cert;    // optional client certificate (PEM file)
-  std::string tls_key;     // its private key (PEM file)
+  std::string token;     // bearer token sent on every call ("" = none)
+  std::string tls_ca;    // PEM file of the deployment CA; "" = plaintext
+  std::string tls_cert;  // optional client certificate (PEM file)
+  std::string tls_key;   // its private key (PEM file)
 };
 
 // True for 127.0.0.0/8, ::1 and localhost targets or listen addresses.
@@ -45,8 +45,7 @@ void RouteGrpcLogs();
 void HoldGrpcUntilExit();
 
 // Sets the deadline and the bearer token on a client call.
-void Prepare(grpc::ClientContext& context, const ClientSecurity& security,
-             std::chrono::milliseconds timeout);
+void Prepare(grpc::ClientContext& context, const ClientSecurity& security, std::chrono::milliseconds timeout);
 
 // Server side: OK when no token is configured or the call carries
 // "authorization: Bearer <token>"; otherwise UNAUTHENTICATED.

@@ -28,8 +28,7 @@ sampling::SamplePoint PointOf(const v1::SamplePoint& point);
 // kind as log lines and metric labels name it.
 std::string TaskKindName(int kind);
 
-std::string TaskKey(const v1::TaskPayload& payload, const std::string& evaluation_digest,
-                    int subdivisions);
+std::string TaskKey(const v1::TaskPayload& payload, const std::string& evaluation_digest, int subdivisions);
 
 v1::TaskResult SampleResultOf(const sampling::SampleOutcome& outcome);
 sampling::SampleOutcome SampleOutcomeOf(const v1::TaskResult& result);

@@ -24,8 +24,8 @@ struct FabricateSummary {
 };
 
 struct FabricatedPiece {
-  std::string name;        // a part's name (with its joint pieces), or "link:<joint>" for a double-pivot link
-  geometry::Solid solid;   // base configuration, world mm
+  std::string name;       // a part's name (with its joint pieces), or "link:<joint>" for a double-pivot link
+  geometry::Solid solid;  // base configuration, world mm
 };
 
 // The printable pieces one by one, parts in file order, then the links; for

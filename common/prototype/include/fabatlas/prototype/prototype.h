@@ -19,10 +19,10 @@
 namespace fabatlas::prototype {
 
 struct Cuboid {
-  std::string name;              // part name, "part.cavity" for a cavity, "part.piece" for a piece
-  std::array<double, 6> box{};   // x0 x1 y0 y1 z0 z1, base configuration
-  std::string open;              // cavity only: face ("y0", ...) that lies on the part's face
-  std::vector<int> held;         // piece or cavity: coordinates (0..5) held at their base value
+  std::string name;             // part name, "part.cavity" for a cavity, "part.piece" for a piece
+  std::array<double, 6> box{};  // x0 x1 y0 y1 z0 z1, base configuration
+  std::string open;             // cavity only: face ("y0", ...) that lies on the part's face
+  std::vector<int> held;        // piece or cavity: coordinates (0..5) held at their base value
   // Piece only (a further solid cuboid of the part, Koo et al. Sec. 3: "each
   // part consists of one or more axis-aligned connected cuboids"): the cuboid
   // it is connected to ("part" or "part.piece", default the part's first
@@ -33,12 +33,12 @@ struct Cuboid {
 
 struct Part {
   std::string name;
-  Cuboid cuboid;                     // the part's first cuboid (joints attach to it)
-  std::vector<Cuboid> pieces;        // further solid cuboids, connected to it, move with the part
-  std::vector<Cuboid> cavities;      // user cavities, move with the part
-  std::vector<int> held;             // coordinates (0..5) held at their base value (a user edit)
-  double min_size = 1.0;             // every extent >= this, mm
-  std::string where;                 // file:line:col
+  Cuboid cuboid;                 // the part's first cuboid (joints attach to it)
+  std::vector<Cuboid> pieces;    // further solid cuboids, connected to it, move with the part
+  std::vector<Cuboid> cavities;  // user cavities, move with the part
+  std::vector<int> held;         // coordinates (0..5) held at their base value (a user edit)
+  double min_size = 1.0;         // every extent >= this, mm
+  std::string where;             // file:line:col
 };
 
 enum class JointType { kHinge, kSlide, kSlidingHinge, kDoublePivot };
@@ -48,8 +48,8 @@ struct Joint {
   std::string name;
   JointType type = JointType::kHinge;
   std::string child, parent;
-  int axis = 2;                                // hinge / sliding hinge rotation axis; slide direction
-  int slide_axis = 0;                          // sliding hinge: translation direction
+  int axis = 2;        // hinge / sliding hinge rotation axis; slide direction
+  int slide_axis = 0;  // sliding hinge: translation direction
   // Slide: the child's and the parent's faces the rails run between
   // ("drawer.z0", "body.z1"); held coplanar, and the child stays on the parent
   // along the slide in every configuration. Empty: the child slides tightly
@@ -70,9 +70,9 @@ struct Joint {
 
 // A joint's pose in one configuration (Koo et al.: j(θ)).
 struct JointValue {
-  double angle = 0;          // degrees (hinge, sliding hinge, double pivot)
-  std::string slide = "0";   // mm, an expression over coordinates; "free" = solved for
-  double slide_guess = 0;    // free slide: the value it is kept near
+  double angle = 0;         // degrees (hinge, sliding hinge, double pivot)
+  std::string slide = "0";  // mm, an expression over coordinates; "free" = solved for
+  double slide_guess = 0;   // free slide: the value it is kept near
   // Double pivot: translation of the child (about its centre, after the
   // rotation); `offset_free` components are solved for and kept near `offset`.
   Vec3 offset{0, 0, 0};
@@ -90,18 +90,18 @@ struct Relationship {
   RelationType type = RelationType::kCover;
   std::string name;
   std::string configuration = "base";
-  std::vector<std::string> a, b;          // cover: covering/covered faces; fit: inner parts, {outer}; flush: 2 faces
+  std::vector<std::string> a, b;  // cover: covering/covered faces; fit: inner parts, {outer}; flush: 2 faces
   std::vector<std::pair<std::string, std::string>> pairs;  // support: (supporting face, supported face)
-  std::vector<std::string> just;          // cover: "true"; fit: sides that just fit ("x0", ...)
-  std::vector<int> axes{0, 1, 2};         // fit: axes that are constrained ("fit partially inside")
-  double min_overlap = 1.0;               // support: faces overlap by at least this, mm
-  std::string expression;                 // geometric: "lhs == rhs" / "<=" / ">="
+  std::vector<std::string> just;                           // cover: "true"; fit: sides that just fit ("x0", ...)
+  std::vector<int> axes{0, 1, 2};                          // fit: axes that are constrained ("fit partially inside")
+  double min_overlap = 1.0;                                // support: faces overlap by at least this, mm
+  std::string expression;                                  // geometric: "lhs == rhs" / "<=" / ">="
   std::string where;
 };
 
 struct Fabrication {
-  double voxel = 0.5;   // level-set voxel, mm
-  double gap = 1.0;     // print gap between touching parts and around moving joint pieces, mm
+  double voxel = 0.5;  // level-set voxel, mm
+  double gap = 1.0;    // print gap between touching parts and around moving joint pieces, mm
 };
 
 struct Prototype {

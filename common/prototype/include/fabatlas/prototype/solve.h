@@ -16,16 +16,16 @@
 namespace fabatlas::prototype {
 
 struct SolveOptions {
-  double tolerance = 1e-4;     // largest constraint violation accepted, mm
+  double tolerance = 1e-4;        // largest constraint violation accepted, mm
   bool explain_conflicts = true;  // run the deletion filter when unsatisfiable
 };
 
 struct PivotSolution {
   std::string joint;
-  double a = 0, b = 0;                       // pivot offsets along the long axes, mm
+  double a = 0, b = 0;                 // pivot offsets along the long axes, mm
   Vec3 child_pivot{}, parent_pivot{};  // base configuration, world mm
-  double link_length = 0;                    // mm
-  double link_length_bound = 0;              // motion constraint lower bound, mm (0 if none)
+  double link_length = 0;              // mm
+  double link_length_bound = 0;        // motion constraint lower bound, mm (0 if none)
 };
 
 struct SolveSummary {
@@ -35,15 +35,15 @@ struct SolveSummary {
   // "name (file:line:col)", and the low-level constraints they violate.
   std::vector<std::string> conflicts;
   std::vector<std::string> violated;  // low-level constraints left violated within that set
-  std::string Explain() const;  // one line
-  double max_violation = 0;     // mm, at the returned solution
+  std::string Explain() const;        // one line
+  double max_violation = 0;           // mm, at the returned solution
 
   std::map<std::string, std::array<double, 6>> cuboids;  // solved boxes: parts, "part.piece" and "part.cavity"
   std::map<std::string, double> free_values;             // solved free joint values "joint@config.k"
   std::vector<PivotSolution> pivots;
-  double deviation = 0;          // sqrt(sum (B - B_base)^2), mm
+  double deviation = 0;  // sqrt(sum (B - B_base)^2), mm
   int variables = 0, constraints = 0;
-  double seconds = 0;            // both stages
+  double seconds = 0;  // both stages
 };
 
 SolveSummary SolvePrototype(const Prototype& p, const SolveOptions& options = {});

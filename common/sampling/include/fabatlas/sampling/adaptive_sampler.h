@@ -36,8 +36,8 @@
 namespace fabatlas::sampling {
 
 struct SamplingOptions {
-  int max_depth = 6;               // splits below a bootstrap cell
-  double dg_threshold = 0.1;       // stop when max ΔG in a leaf < this
+  int max_depth = 6;                  // splits below a bootstrap cell
+  double dg_threshold = 0.1;          // stop when max ΔG in a leaf < this
   std::int64_t max_samples = 100000;  // global budget (bootstrap always done)
 };
 
@@ -45,8 +45,8 @@ struct SamplingOptions {
 struct SamplingStatistics {
   std::int64_t samples = 0;
   std::int64_t valid_samples = 0;
-  std::int64_t geometry_changes = 0;         // ΔG values stored
-  std::int64_t geometry_change_calls = 0;    // of which computed by the evaluator
+  std::int64_t geometry_changes = 0;       // ΔG values stored
+  std::int64_t geometry_change_calls = 0;  // of which computed by the evaluator
   std::int64_t leaves = 0;
   std::map<LeafStop, std::int64_t> leaf_stops;
   // Sum of thread CPU time in EvaluateSample and GeometryChange calls.
@@ -72,8 +72,8 @@ struct SamplingSummary {
 
 // Throws fabatlas::InputError for options out of range (max_depth < 0 or
 // > 4 * kDyadicBits, dg_threshold outside [0, 1], max_samples < 1).
-SamplingSummary SampleDesignSpace(const DesignSpace& space, SampleEvaluator& evaluator,
-                                  Executor& executor, const SamplingOptions& options);
+SamplingSummary SampleDesignSpace(const DesignSpace& space, SampleEvaluator& evaluator, Executor& executor,
+                                  const SamplingOptions& options);
 
 // Valid-volume % of a form (as in SamplingStatistics).
 double ValidVolumePercent(const Form& form);

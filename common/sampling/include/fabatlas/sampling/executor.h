@@ -45,12 +45,11 @@ class Executor {
  public:
   virtual ~Executor() = default;
   // Runs every task; results[i] belongs to tasks[i]; timings[i] likewise.
-  virtual std::vector<SampleOutcome> RunSampleTasks(
-      const std::vector<SampleTask>& tasks, SampleEvaluator& evaluator,
-      std::vector<TaskTiming>* timings) = 0;
-  virtual std::vector<GeometryChangeResult> RunGeometryChangeTasks(
-      const std::vector<GeometryChangeTask>& tasks, SampleEvaluator& evaluator,
-      std::vector<TaskTiming>* timings) = 0;
+  virtual std::vector<SampleOutcome> RunSampleTasks(const std::vector<SampleTask>& tasks, SampleEvaluator& evaluator,
+                                                    std::vector<TaskTiming>* timings) = 0;
+  virtual std::vector<GeometryChangeResult> RunGeometryChangeTasks(const std::vector<GeometryChangeTask>& tasks,
+                                                                   SampleEvaluator& evaluator,
+                                                                   std::vector<TaskTiming>* timings) = 0;
 };
 
 // Runs tasks on `threads` threads of a private TBB task arena (threads >= 1),
@@ -65,12 +64,11 @@ class ThreadPoolExecutor : public Executor {
   ThreadPoolExecutor& operator=(const ThreadPoolExecutor&) = delete;
   int threads() const { return threads_; }
 
-  std::vector<SampleOutcome> RunSampleTasks(const std::vector<SampleTask>& tasks,
-                                            SampleEvaluator& evaluator,
+  std::vector<SampleOutcome> RunSampleTasks(const std::vector<SampleTask>& tasks, SampleEvaluator& evaluator,
                                             std::vector<TaskTiming>* timings) override;
-  std::vector<GeometryChangeResult> RunGeometryChangeTasks(
-      const std::vector<GeometryChangeTask>& tasks, SampleEvaluator& evaluator,
-      std::vector<TaskTiming>* timings) override;
+  std::vector<GeometryChangeResult> RunGeometryChangeTasks(const std::vector<GeometryChangeTask>& tasks,
+                                                           SampleEvaluator& evaluator,
+                                                           std::vector<TaskTiming>* timings) override;
 
  private:
   int threads_;

@@ -28,12 +28,12 @@ struct FormSample {
 
 // Why a leaf was not split further.
 enum class LeafStop {
-  kNone,           // interior node
-  kThreshold,      // max ΔG over the leaf's edges < dg_threshold
-  kMaxDepth,       // depth == max_depth
-  kUnsplittable,   // every direction at or above the threshold is at its
-                   // finest resolution (adjacent discrete values)
-  kBudget,         // the global sample budget ran out
+  kNone,          // interior node
+  kThreshold,     // max ΔG over the leaf's edges < dg_threshold
+  kMaxDepth,      // depth == max_depth
+  kUnsplittable,  // every direction at or above the threshold is at its
+                  // finest resolution (adjacent discrete values)
+  kBudget,        // the global sample budget ran out
 };
 
 struct FormNode {
@@ -41,7 +41,7 @@ struct FormNode {
   int depth = 0;                     // splits from the bootstrap cell
   int split_dimension = -1;          // -1 for a leaf
   std::int64_t split_key = 0;
-  int children[2] = {-1, -1};        // indices into FormTree::nodes (lo, hi side)
+  int children[2] = {-1, -1};  // indices into FormTree::nodes (lo, hi side)
   LeafStop stop = LeafStop::kNone;
 };
 

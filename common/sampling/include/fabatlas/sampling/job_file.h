@@ -35,8 +35,8 @@ struct Material {
 };
 
 struct JobFile {
-  std::string path;          // the job file as given
-  std::string design_path;   // resolved against the job file's directory
+  std::string path;         // the job file as given
+  std::string design_path;  // resolved against the job file's directory
   int subdivisions = 5;
   SamplingOptions sampling;
   int threads = 1;

@@ -14,17 +14,17 @@ namespace fabatlas::scad {
 struct CsgValue {
   enum class Type { kUndef, kNumber, kString, kBoolean, kVector } type = Type::kUndef;
   double number = 0;
-  std::string text;              // kString
-  bool boolean = false;          // kBoolean
-  std::vector<CsgValue> items;   // kVector
+  std::string text;             // kString
+  bool boolean = false;         // kBoolean
+  std::vector<CsgValue> items;  // kVector
 };
 
 struct CsgNode {
-  std::string name;                        // cube, multmatrix, group, text, ...
-  std::map<std::string, CsgValue> args;    // named arguments
-  std::vector<CsgValue> positional;        // unnamed arguments (rare in .csg)
+  std::string name;                      // cube, multmatrix, group, text, ...
+  std::map<std::string, CsgValue> args;  // named arguments
+  std::vector<CsgValue> positional;      // unnamed arguments (rare in .csg)
   std::vector<CsgNode> children;
-  int line = 0;                            // 1-based line in the .csg text
+  int line = 0;  // 1-based line in the .csg text
   // The node in canonical OpenSCAD syntax (no whitespace, numbers in
   // shortest round-trip form): equal text means equal geometry, and it is a
   // valid OpenSCAD program on its own.

@@ -32,8 +32,8 @@ namespace fabatlas::scad {
 // A value as OpenSCAD writes it.
 struct ScadValue {
   enum class Type { kNumber, kString, kBoolean, kVector } type = Type::kNumber;
-  double number = 0;     // kNumber
-  std::string text;      // kString (unescaped), kBoolean ("true"/"false"), kVector (source text)
+  double number = 0;  // kNumber
+  std::string text;   // kString (unescaped), kBoolean ("true"/"false"), kVector (source text)
   // The value as an OpenSCAD literal (strings quoted and escaped).
   std::string Literal() const;
 };

@@ -58,7 +58,7 @@ struct ModelEvaluation {
   // The model is wrong whatever evaluates it, "MODEL.scad:LINE: what" (a
   // color() with an unknown name); also in `declined`. Report it, exit 2.
   std::string bad_input;
-  double seconds = 0;      // wall time of reading, parsing and evaluating
+  double seconds = 0;  // wall time of reading, parsing and evaluating
 };
 
 // Evaluates `model` with the top-level assignments of `overrides` (name,

@@ -46,15 +46,15 @@ struct ImportOptions {
 };
 
 struct ImportSummary {
-  std::string design_yaml;  // the design file's text
-  std::string job_yaml;     // a job file beside it naming design_file_name
+  std::string design_yaml;            // the design file's text
+  std::string job_yaml;               // a job file beside it naming design_file_name
   std::vector<std::string> warnings;  // "FILE:LINE: ..." malformed annotations, presets not kept
   std::vector<std::string> exposed;   // parameter names, in file order
   std::vector<std::string> fixed;     // parameters kept at the model's values
   // One line per parameter, in file order: "exposed NAME: ..." or "fixed NAME
   // = VALUE: why" (what import-scad prints).
   std::vector<std::string> decisions;
-  int presets = 0;                    // parameter sets kept as presets
+  int presets = 0;  // parameter sets kept as presets
 };
 
 // Adds one `--expose` item to `options`: `name` or `name=lo:hi[:step]` (numbers

@@ -37,7 +37,7 @@ class Statement {
   // statements), uses that one and on destruction resets it, clears its
   // bindings and calls `release` instead.
   Statement(sqlite3* db, const std::string& sql, Fail fail, sqlite3_stmt* prepared = nullptr,
-                  std::function<void()> release = {})
+            std::function<void()> release = {})
       : db_(db), stmt_(prepared), fail_(std::move(fail)), release_(std::move(release)) {
     if (!stmt_ && sqlite3_prepare_v2(db_, sql.c_str(), -1, &stmt_, nullptr) != SQLITE_OK) Failed("prepare");
     if (!prepared) release_ = nullptr;

@@ -33,7 +33,6 @@ mesh::TriangleMesh CarveSweptVolume(const mesh::TriangleMesh& a, const RigidMoti
 // Exact collision test at discrete times: true if the closed meshes A (static)
 // and B placed by any of `poses_b` (A's frame <- B's frame) share a point,
 // counting containment (CGAL Polygon_mesh_processing::do_intersect).
-bool CollidesAtAnyPose(const mesh::TriangleMesh& a, const mesh::TriangleMesh& b,
-                       const std::vector<Transform>& poses_b);
+bool CollidesAtAnyPose(const mesh::TriangleMesh& a, const mesh::TriangleMesh& b, const std::vector<Transform>& poses_b);
 
 }  // namespace fabatlas::swept

@@ -53,30 +53,30 @@ struct ContactNormalOptions {
 // relative to a (world frame at t).
 struct ContourForce {
   double t = 0;
-  Vec3 point{0, 0, 0};   // the segment's midpoint, mm
-  Vec3 force{0, 0, 0};   // l dt (N_a - N_b)/|N_a - N_b|, mm (x unit t)
+  Vec3 point{0, 0, 0};                        // the segment's midpoint, mm
+  Vec3 force{0, 0, 0};                        // l dt (N_a - N_b)/|N_a - N_b|, mm (x unit t)
   Vec3 normal_a{0, 0, 0}, normal_b{0, 0, 0};  // outward unit normals of the two triangles
 };
 
 struct ContactNormalSummary {
-  double energy = 0;                    // |I_S| of Eq. 1, mm x (unit t)
-  Vec3 spacetime_normal{0, 0, 0};       // Eq. 2 for a translation of b relative to a, unit (zero if no contour)
-  Vec3 spacetime_gradient{0, 0, 0};     // the same before normalising (the sum of the forces)
+  double energy = 0;                 // |I_S| of Eq. 1, mm x (unit t)
+  Vec3 spacetime_normal{0, 0, 0};    // Eq. 2 for a translation of b relative to a, unit (zero if no contour)
+  Vec3 spacetime_gradient{0, 0, 0};  // the same before normalising (the sum of the forces)
   // The translation control points P0..P3 of b's motion (rigid_motion.h):
   // Eq. 3 with dT/dP_k = B_k(t) (Bernstein weights), i.e. the forces summed
   // with those weights. A keyframe hint in mm (x unit t).
   std::array<Vec3, 4> control_point_gradient{};
-  bool has_first_contact = false;       // false when the parts touch from t = 0
+  bool has_first_contact = false;  // false when the parts touch from t = 0
   double first_contact_t = 0;
-  Vec3 first_contact_normal{0, 0, 0};   // unit, from a towards b just before first contact (Sec. 6.1)
-  int contour_samples = 0;              // samples with a non-empty contour
-  std::vector<ContourForce> forces;     // every segment of every sample
+  Vec3 first_contact_normal{0, 0, 0};  // unit, from a towards b just before first contact (Sec. 6.1)
+  int contour_samples = 0;             // samples with a non-empty contour
+  std::vector<ContourForce> forces;    // every segment of every sample
 };
 
 // Parts a and b (a != b) of `parts` over [t0, t1] (0 <= t0 <= t1 <= 1).
 // Throws InputError for bad indices, open or empty meshes, time_steps < 2
 // or a bad span.
-ContactNormalSummary SpacetimeContactNormal(const std::vector<MovingPart>& parts, int a, int b, double t0,
-                                            double t1, const ContactNormalOptions& options = {});
+ContactNormalSummary SpacetimeContactNormal(const std::vector<MovingPart>& parts, int a, int b, double t0, double t1,
+                                            const ContactNormalOptions& options = {});
 
 }  // namespace fabatlas::swept

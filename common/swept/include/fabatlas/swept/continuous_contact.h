@@ -28,9 +28,9 @@ struct ContactSearchOptions {
 };
 
 struct ContactSearch {
-  bool contact = false;  // the parts come within tolerance between the two times
-  double t = 0;          // the first such time from `from` towards `to`
-  int steps = 0;         // distance queries run
+  bool contact = false;     // the parts come within tolerance between the two times
+  double t = 0;             // the first such time from `from` towards `to`
+  int steps = 0;            // distance queries run
   bool step_limit = false;  // stopped by max_steps (contact is then true)
 };
 

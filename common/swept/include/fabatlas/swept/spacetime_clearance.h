@@ -34,8 +34,8 @@ struct ClearanceOptions {
 
 struct ClearanceReport {
   double min_clearance = std::numeric_limits<double>::infinity();  // mm
-  double t = 0;                 // sample where it is reached
-  int part_a = -1, part_b = -1;  // the pair (part_a < part_b), -1 if fewer than two parts
+  double t = 0;                                                    // sample where it is reached
+  int part_a = -1, part_b = -1;             // the pair (part_a < part_b), -1 if fewer than two parts
   Vec3 point_a{0, 0, 0}, point_b{0, 0, 0};  // closest points, world coordinates at t
   std::size_t pair_samples_tested = 0;      // (pair, sample) combinations not pruned
   std::size_t vertex_queries = 0;           // closest-point queries run

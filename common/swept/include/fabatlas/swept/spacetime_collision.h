@@ -68,8 +68,8 @@ struct CollisionInterval {
   // First and last colliding sample; for a collision found only between
   // two samples, its first and last contact time (within the tolerance).
   double t_begin = 0, t_end = 0;
-  int part_a = 0, part_b = 0;     // indices into the parts, part_a < part_b
-  SpatialBox where;               // union over the samples of the two parts' AABB intersection
+  int part_a = 0, part_b = 0;  // indices into the parts, part_a < part_b
+  SpatialBox where;            // union over the samples of the two parts' AABB intersection
 };
 
 struct CollisionReport {

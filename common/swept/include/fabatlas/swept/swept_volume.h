@@ -56,8 +56,8 @@ struct SweptVolumeOptions {
 };
 
 struct SweptVolumeSummary {
-  int time_steps = 0;               // samples actually used
-  double band_half_width = 0;       // mm
+  int time_steps = 0;                // samples actually used
+  double band_half_width = 0;        // mm
   std::size_t body_band_voxels = 0;  // voxels of B's band mapped per step
   std::uint64_t voxel_updates = 0;   // level-set samples taken over all steps
   std::size_t active_voxels = 0;     // in the result grid
@@ -101,20 +101,17 @@ class SweptDistanceField {
 // result would exceed options.max_active_voxels. The band is widened to cover
 // the largest displacement between consecutive poses.
 SweptDistanceField ComputeSweptDistance(const mesh::TriangleMesh& body, const std::vector<Transform>& poses,
-                                        const SweptVolumeOptions& options = {},
-                                        SweptVolumeSummary* summary = nullptr);
+                                        const SweptVolumeOptions& options = {}, SweptVolumeSummary* summary = nullptr);
 
 // Same under a motion, with the number of samples chosen from
 // options.time_steps and options.max_step_displacement.
 SweptDistanceField ComputeSweptDistance(const mesh::TriangleMesh& body, const RigidMotion& motion,
-                                        const SweptVolumeOptions& options = {},
-                                        SweptVolumeSummary* summary = nullptr);
+                                        const SweptVolumeOptions& options = {}, SweptVolumeSummary* summary = nullptr);
 
 // Same for a body given as a Solid: its zero iso-surface (Solid::ToMesh) is
 // swept. Throws InputError for an empty Solid.
 SweptDistanceField ComputeSweptDistance(const geometry::Solid& body, const RigidMotion& motion,
-                                        const SweptVolumeOptions& options = {},
-                                        SweptVolumeSummary* summary = nullptr);
+                                        const SweptVolumeOptions& options = {}, SweptVolumeSummary* summary = nullptr);
 
 // The time samples ComputeSweptDistance(body, motion, ...) uses.
 std::vector<Transform> SampleMotion(const mesh::TriangleMesh& body, const RigidMotion& motion,
@@ -133,7 +130,7 @@ mesh::TriangleMesh SweptOffsetSurface(const mesh::TriangleMesh& body, const Rigi
 
 // The same surface as a geometry::Solid on grid `g` (via geometry::FromMesh),
 // for CSG with other Solids.
-geometry::Solid SweptOffsetSolid(const geometry::GridSpec& g, const mesh::TriangleMesh& body,
-                                 const RigidMotion& motion, const SweptVolumeOptions& options = {});
+geometry::Solid SweptOffsetSolid(const geometry::GridSpec& g, const mesh::TriangleMesh& body, const RigidMotion& motion,
+                                 const SweptVolumeOptions& options = {});
 
 }  // namespace fabatlas::swept

@@ -25,8 +25,10 @@ class SmallFileSystem {
   SmallFileSystem(const std::filesystem::path& dir, int mib) : dir_(dir) {
     std::filesystem::create_directories(dir_);
     const std::string options = "size=" + std::to_string(mib) + "m";
-    if (::mount("tmpfs", dir_.c_str(), "tmpfs", 0, options.c_str()) == 0) mounted_ = true;
-    else error_ = dir_.string() + ": mount tmpfs: " + std::strerror(errno);
+    if (::mount("tmpfs", dir_.c_str(), "tmpfs", 0, options.c_str()) == 0)
+      mounted_ = true;
+    else
+      error_ = dir_.string() + ": mount tmpfs: " + std::strerror(errno);
   }
   // Unmounts (lazily, so an open file of a dying process cannot block it).
   ~SmallFileSystem() {
