@@ -118,6 +118,8 @@ TEST(ScadNative, LanguageFormsAreOpenScadsExport) {
       "text(str(\"6! = \", 720, \" \", 0.5));\n"
       "intersection_for(i = [0 : 2]) rotate([0, 0, i * 30]) cube(10, center = true);\n"
       "intersection_for(n = [1 : 6]) { rotate([0, 0, n * 60]) translate([5, 0, 0]) sphere(r = 12); }\n",
+      // child(), deprecated but evaluated by OpenSCAD 2021.01: the first child, not a group; child(i), out of range
+      "module m() { child(); translate([5, 0, 0]) child(1); child(7); }\nm() { cube(1); sphere(1); }\n",
       // binary operators: each precedence level against the next, left associativity
       "p = 1 + 2 * 3 - 8 / 4 % 3;\nq = p < 6 == false || p >= 5 && !(p != 5);\nr = 2 * 3 % 4 - 1 - 1;\n"
       "s = false && true || true;\nt = 1 < 2 == 2 > 1 != false;\n"

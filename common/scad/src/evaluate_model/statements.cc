@@ -160,7 +160,7 @@ void Evaluator::CallModule(const Stmt& s, Scope& scope, std::vector<CsgOut>& out
     }
     return;
   }
-  if (s.name == "children") {
+  if (s.name == "children" || (s.name == "child" && !scope.Module(s.name))) {
     ChildrenCall(s, scope, out);
     return;
   }
@@ -201,7 +201,9 @@ void Evaluator::UserModule(const Stmt& s, const ModuleDef& m, Scope& scope, std:
 }
 
 // children() (all, as a group()) or children(i) of the module body the
-// call is in; nothing at top level.
+// call is in; nothing at top level. child() and child(i), deprecated in
+// OpenSCAD 2021.01 but still evaluated by it (MCAD's involute_gears.scad
+// calls child(0)), are children(0) and children(i).
 void Evaluator::ChildrenCall(const Stmt& s, Scope& scope, std::vector<CsgOut>& out) {
   const Scope* body = scope.Body();
   if (!body) return;  // top level: no children
@@ -217,15 +219,16 @@ void Evaluator::ChildrenCall(const Stmt& s, Scope& scope, std::vector<CsgOut>& o
   written.lexical = body->children_scope;
   written.dynamic = &scope;
   Define(*body->children, written);
-  if (s.bindings.empty()) {
+  if (s.bindings.empty() && s.name == "children") {
     CsgOut group{"group()", {}};
     for (const Stmt* c : instantiations) Instantiate(*c, written, group.children);
     out.push_back(std::move(group));
     return;
   }
-  if (s.bindings.size() != 1 || !s.bindings[0].name.empty()) throw NotNative{s.line, "children() with these arguments"};
-  const Value i = Eval(*s.bindings[0].expr, scope);
-  if (!i.IsNumber()) throw NotNative{s.line, "children() of a vector or range"};
+  if (s.bindings.size() > 1 || (s.bindings.size() == 1 && !s.bindings[0].name.empty()))
+    throw NotNative{s.line, s.name + "() with these arguments"};
+  const Value i = s.bindings.empty() ? Value::Number(0) : Eval(*s.bindings[0].expr, scope);
+  if (!i.IsNumber()) throw NotNative{s.line, s.name + "() of a vector or range"};
   const double k = std::floor(i.number);
   if (!(k >= 0 && k < static_cast<double>(instantiations.size()))) return;
   Instantiate(*instantiations[static_cast<std::size_t>(k)], written, out);
