@@ -113,7 +113,7 @@ Solid FromMesh(const GridSpec& g, const mesh::TriangleMesh& m);
 // mesh road of OpenSCAD models (docs/openscad.md). Volume, CenterOfMass and
 // BoundingBox are the mesh's own (divergence theorem, exact up to rounding),
 // ToMesh returns the mesh, MemoryBytes counts the mesh, and DeltaG of two
-// mesh solids intersects the meshes exactly. Every other operation (level-set
+// mesh solids integrates the meshes along columns. Every other operation (level-set
 // CSG, offsets, occupancy, opening) reads the level set on `g`, built from the
 // mesh by FromMesh the first time one asks (once per solid, thread-safe).
 // An empty mesh is the empty solid. Throws InputError on a missing vertex or
@@ -153,10 +153,10 @@ Solid PolarArray(const Solid& s, int count, double total_angle_deg);
 
 // ---- Measures -----------------------------------------------------------------
 // Volumetric change of Fab Forms Eq. 2: |A xor B| / |A union B|, in [0,1].
-// Both empty -> 0. One empty, other not -> 1. Two mesh solids: from their
-// exact volumes and the volume of their exact intersection (mesh::ExactBoolean),
-// |A xor B| = |A| + |B| - 2|A n B|; otherwise (or when the exact intersection
-// cannot be computed) from level-set CSG.
+// Both empty -> 0. One empty, other not -> 1. Two mesh solids: |A|, |B|, |A n B|
+// integrated along vertical columns one voxel apart (mesh::IntegrateColumnOverlap),
+// |A xor B| = |A| + |B| - 2|A n B|, |A u B| = |A| + |B| - |A n B|; otherwise
+// from level-set CSG.
 double DeltaG(const Solid& a, const Solid& b);
 
 // Minimum-feature test by morphological opening (OpenVDB erosion then
