@@ -20,6 +20,101 @@ std::string SolidPreviewGlb(const mesh::TriangleMesh& surface, bool exact) {
   return MeshToGlb(creased.mesh, &creased.normals);
 }
 
+namespace {
+
+// Buffer 0 of a mesh's glTF model: its positions as floats, its triangles'
+// indices as uint32, then `normals` when given; *lo and *hi take the
+// positions' bounds (as floats). Throws InputError for an index out of range.
+tinygltf::Buffer MeshBuffer(const mesh::TriangleMesh& m, const std::vector<std::array<float, 3>>* normals,
+                            std::vector<double>* lo_out, std::vector<double>* hi_out) {
+  tinygltf::Buffer buffer;
+  const std::size_t position_bytes = m.vertices.size() * 3 * sizeof(float);
+  const std::size_t index_bytes = m.triangles.size() * 3 * sizeof(std::uint32_t);
+  const std::size_t normal_bytes = normals ? position_bytes : 0;
+  buffer.data.resize(position_bytes + index_bytes + normal_bytes);
+  std::vector<double>& lo = *lo_out;
+  std::vector<double>& hi = *hi_out;
+  unsigned char* out = buffer.data.data();
+  for (const auto& v : m.vertices)
+    for (int k = 0; k < 3; ++k) {
+      const float f = static_cast<float>(v[k]);
+      lo[k] = std::min(lo[k], static_cast<double>(f));
+      hi[k] = std::max(hi[k], static_cast<double>(f));
+      std::memcpy(out, &f, sizeof f);
+      out += sizeof f;
+    }
+  for (const auto& t : m.triangles)
+    for (int k = 0; k < 3; ++k) {
+      if (t[k] < 0 || static_cast<std::size_t>(t[k]) >= m.vertices.size())
+        throw InputError("glb: triangle index " + std::to_string(t[k]) + " out of range");
+      const auto i = static_cast<std::uint32_t>(t[k]);
+      std::memcpy(out, &i, sizeof i);
+      out += sizeof i;
+    }
+  if (normals) std::memcpy(out, normals->data(), normal_bytes);
+  return buffer;
+}
+
+// The views, accessors and triangle mesh (mesh 0) of MeshBuffer's buffer in
+// `model`, with a NORMAL attribute when `normals` is given; lo and hi the
+// positions' bounds.
+void DescribeMesh(tinygltf::Model& model, const mesh::TriangleMesh& m, const std::vector<std::array<float, 3>>* normals,
+                  const std::vector<double>& lo, const std::vector<double>& hi) {
+  const std::size_t position_bytes = m.vertices.size() * 3 * sizeof(float);
+  const std::size_t index_bytes = m.triangles.size() * 3 * sizeof(std::uint32_t);
+  const std::size_t normal_bytes = normals ? position_bytes : 0;
+  tinygltf::BufferView positions;
+  positions.buffer = 0;
+  positions.byteOffset = 0;
+  positions.byteLength = position_bytes;
+  positions.target = TINYGLTF_TARGET_ARRAY_BUFFER;
+  tinygltf::BufferView indices;
+  indices.buffer = 0;
+  indices.byteOffset = position_bytes;
+  indices.byteLength = index_bytes;
+  indices.target = TINYGLTF_TARGET_ELEMENT_ARRAY_BUFFER;
+  model.bufferViews = {positions, indices};
+
+  tinygltf::Accessor position_accessor;
+  position_accessor.bufferView = 0;
+  position_accessor.componentType = TINYGLTF_COMPONENT_TYPE_FLOAT;
+  position_accessor.count = m.vertices.size();
+  position_accessor.type = TINYGLTF_TYPE_VEC3;
+  position_accessor.minValues = lo;
+  position_accessor.maxValues = hi;
+  tinygltf::Accessor index_accessor;
+  index_accessor.bufferView = 1;
+  index_accessor.componentType = TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT;
+  index_accessor.count = m.triangles.size() * 3;
+  index_accessor.type = TINYGLTF_TYPE_SCALAR;
+  model.accessors = {position_accessor, index_accessor};
+  if (normals) {
+    tinygltf::BufferView normal_view;
+    normal_view.buffer = 0;
+    normal_view.byteOffset = position_bytes + index_bytes;
+    normal_view.byteLength = normal_bytes;
+    normal_view.target = TINYGLTF_TARGET_ARRAY_BUFFER;
+    model.bufferViews.push_back(normal_view);
+    tinygltf::Accessor normal_accessor;
+    normal_accessor.bufferView = 2;
+    normal_accessor.componentType = TINYGLTF_COMPONENT_TYPE_FLOAT;
+    normal_accessor.count = m.vertices.size();
+    normal_accessor.type = TINYGLTF_TYPE_VEC3;
+    model.accessors.push_back(normal_accessor);
+  }
+
+  tinygltf::Primitive primitive;
+  primitive.attributes["POSITION"] = 0;
+  if (normals) primitive.attributes["NORMAL"] = 2;
+  primitive.indices = 1;
+  primitive.mode = TINYGLTF_MODE_TRIANGLES;
+  tinygltf::Mesh mesh;
+  mesh.primitives.push_back(std::move(primitive));
+  model.meshes.push_back(std::move(mesh));
+}
+
+}  // namespace
+
 std::string MeshToGlb(const mesh::TriangleMesh& m, const std::vector<std::array<float, 3>>* normals) {
   if (normals && normals->size() != m.vertices.size()) throw InputError("glb: one normal per vertex expected");
   tinygltf::Model model;
@@ -35,80 +130,9 @@ std::string MeshToGlb(const mesh::TriangleMesh& m, const std::vector<std::array<
   node.scale = {1e-3, 1e-3, 1e-3};
   node.rotation = {-std::sqrt(0.5), 0.0, 0.0, std::sqrt(0.5)};
   if (!m.empty()) {
-    tinygltf::Buffer buffer;
-    const std::size_t position_bytes = m.vertices.size() * 3 * sizeof(float);
-    const std::size_t index_bytes = m.triangles.size() * 3 * sizeof(std::uint32_t);
-    const std::size_t normal_bytes = normals ? position_bytes : 0;
-    buffer.data.resize(position_bytes + index_bytes + normal_bytes);
     std::vector<double> lo(3, std::numeric_limits<double>::infinity()), hi(3, -std::numeric_limits<double>::infinity());
-    unsigned char* out = buffer.data.data();
-    for (const auto& v : m.vertices)
-      for (int k = 0; k < 3; ++k) {
-        const float f = static_cast<float>(v[k]);
-        lo[k] = std::min(lo[k], static_cast<double>(f));
-        hi[k] = std::max(hi[k], static_cast<double>(f));
-        std::memcpy(out, &f, sizeof f);
-        out += sizeof f;
-      }
-    for (const auto& t : m.triangles)
-      for (int k = 0; k < 3; ++k) {
-        if (t[k] < 0 || static_cast<std::size_t>(t[k]) >= m.vertices.size())
-          throw InputError("glb: triangle index " + std::to_string(t[k]) + " out of range");
-        const auto i = static_cast<std::uint32_t>(t[k]);
-        std::memcpy(out, &i, sizeof i);
-        out += sizeof i;
-      }
-    if (normals) std::memcpy(out, normals->data(), normal_bytes);
-    model.buffers.push_back(std::move(buffer));
-
-    tinygltf::BufferView positions;
-    positions.buffer = 0;
-    positions.byteOffset = 0;
-    positions.byteLength = position_bytes;
-    positions.target = TINYGLTF_TARGET_ARRAY_BUFFER;
-    tinygltf::BufferView indices;
-    indices.buffer = 0;
-    indices.byteOffset = position_bytes;
-    indices.byteLength = index_bytes;
-    indices.target = TINYGLTF_TARGET_ELEMENT_ARRAY_BUFFER;
-    model.bufferViews = {positions, indices};
-
-    tinygltf::Accessor position_accessor;
-    position_accessor.bufferView = 0;
-    position_accessor.componentType = TINYGLTF_COMPONENT_TYPE_FLOAT;
-    position_accessor.count = m.vertices.size();
-    position_accessor.type = TINYGLTF_TYPE_VEC3;
-    position_accessor.minValues = lo;
-    position_accessor.maxValues = hi;
-    tinygltf::Accessor index_accessor;
-    index_accessor.bufferView = 1;
-    index_accessor.componentType = TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT;
-    index_accessor.count = m.triangles.size() * 3;
-    index_accessor.type = TINYGLTF_TYPE_SCALAR;
-    model.accessors = {position_accessor, index_accessor};
-    if (normals) {
-      tinygltf::BufferView normal_view;
-      normal_view.buffer = 0;
-      normal_view.byteOffset = position_bytes + index_bytes;
-      normal_view.byteLength = normal_bytes;
-      normal_view.target = TINYGLTF_TARGET_ARRAY_BUFFER;
-      model.bufferViews.push_back(normal_view);
-      tinygltf::Accessor normal_accessor;
-      normal_accessor.bufferView = 2;
-      normal_accessor.componentType = TINYGLTF_COMPONENT_TYPE_FLOAT;
-      normal_accessor.count = m.vertices.size();
-      normal_accessor.type = TINYGLTF_TYPE_VEC3;
-      model.accessors.push_back(normal_accessor);
-    }
-
-    tinygltf::Primitive primitive;
-    primitive.attributes["POSITION"] = 0;
-    if (normals) primitive.attributes["NORMAL"] = 2;
-    primitive.indices = 1;
-    primitive.mode = TINYGLTF_MODE_TRIANGLES;
-    tinygltf::Mesh mesh;
-    mesh.primitives.push_back(std::move(primitive));
-    model.meshes.push_back(std::move(mesh));
+    model.buffers.push_back(MeshBuffer(m, normals, &lo, &hi));
+    DescribeMesh(model, m, normals, lo, hi);
     node.mesh = 0;
   }
   model.nodes.push_back(node);
