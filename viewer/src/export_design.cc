@@ -108,7 +108,12 @@ PartChoice ChoosePart(const Customiser& c, const std::vector<double>& u, const E
   PartChoice choice;
   std::string names;
   for (const auto& p : parts) {
-    out.parts.push_back(p.name + (p.coloured ? " " + scad::HexColour(p.rgba) : ""));
+    std::string shown = p.name;  // "name" or "name #rrggbb"
+    if (p.coloured) {
+      shown += ' ';
+      shown += scad::HexColour(p.rgba);
+    }
+    out.parts.push_back(shown);
     names += (names.empty() ? "" : ", ") + p.name;
     if (p.name == options.part) choice.chosen = &p;
     choice.coloured = choice.coloured || p.coloured;

@@ -249,7 +249,8 @@ bool Worker::RunLeasesHere() {
 }
 
 void Worker::SyncLoop() {
-  SyncRetry retry{.started = Clock::now()};
+  SyncRetry retry;
+  retry.started = Clock::now();
   bool patient = false;  // wait for a result (or a while) before the next Sync
   while (true) {
     bool leaving = false;
