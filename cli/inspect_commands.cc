@@ -98,14 +98,160 @@ std::string TimesText(const std::optional<precompute::PreviewTimes>& t) {
          Seconds(t->predicted_mean_seconds) + " worst " + Seconds(t->predicted_worst_seconds) + ")";
 }
 
+// Table 3's row: design, |U|, samples, CPU time, valid volume and failure shares.
+std::string Table3Text(const artifact::Artifact& art, const std::optional<double>& cpu) {
+  const artifact::Manifest& m = art.manifest;
+  const auto& s = m.statistics;
+  std::ostringstream table3;
+  table3 << m.design_name << "  |U|=" << art.form.dimensions.size() << "  samples " << s.samples << "  CPU "
+         << (cpu ? Seconds(*cpu) : std::string("n/a")) << "  valid " << std::fixed << std::setprecision(1)
+         << s.valid_volume_percent << "%  failures: ";
+  if (s.failure_shares.empty()) table3 << "none";
+  bool first = true;
+  for (const auto& [type, share] : s.failure_shares) {
+    table3 << (first ? "" : ", ") << std::setprecision(0) << 100 * share << "% " << type;
+    first = false;
+  }
+  return table3.str();
+}
+
+// Fig. 14's measurements: the points previewed and the preview times with no
+// cache, with H_opt and with H_rfree (each absent when not measured).
+struct PreviewMeasurements {
+  std::vector<std::vector<double>> points;
+  std::optional<precompute::PreviewTimes> none, opt, rfree;
+};
+
+// Fig. 14: preview times at random valid points.
+// Random points of the valid region, each snapped exactly as the
+// customiser snaps a preview (viewer::SnapToValidSample, ΔG-weighted,
+// Fab Forms Sec. 7.3).
+PreviewMeasurements MeasurePreviews(const fs::path& path, const artifact::Artifact& art, const design::Design& design,
+                                    const InspectArgs& a) {
+  const artifact::Manifest& m = art.manifest;
+  PreviewMeasurements p;
+  const sampling::DesignSpace space = art.form.space();
+  for (const auto& u : precompute::RandomValidPoints(art.form, a.points, a.seed))
+    if (auto snapped = viewer::SnapToValidSample(art.form, space, u))
+      p.points.push_back(art.form.samples[static_cast<std::size_t>(snapped->sample)].u);
+  if (p.points.empty()) return p;
+  p.none = precompute::MeasurePreviewTimes(design, p.points, nullptr);
+  // One cache in memory at a time (H_opt, then H_rfree), and only when
+  // the artifact stores every entry of it (H_rfree's entries beyond H_opt
+  // are stored only with `cache: {store_rfree: true}`, docs/artifact.md).
+  auto measure = [&](bool artifact::CacheEntry::*member,
+                     std::int64_t entries) -> std::optional<precompute::PreviewTimes> {
+    std::int64_t stored = 0;
+    for (const auto& e : art.cache) stored += e.*member;
+    if (stored != entries) return std::nullopt;
+    precompute::FrozenSubtreeCache cache;
+    artifact::ReadCacheGeometry(
+        path, [&](const artifact::CacheEntry& e) { return e.*member; },
+        [&](artifact::CacheEntry& e) { cache.Add(e.key, geometry::Solid::Deserialize(e.grid)); });
+    return precompute::MeasurePreviewTimes(design, p.points, &cache);
+  };
+  if (!m.cache.strategy.empty() && !art.cache.empty()) {
+    p.opt = measure(&artifact::CacheEntry::in_opt, m.cache.opt_entries);
+    p.rfree = measure(&artifact::CacheEntry::in_rfree, m.cache.rfree_entries);
+  }
+  return p;
+}
+
+// Fig. 14 as box plots of the measured times; the PNG's path, or "" when
+// nothing was measured.
+std::string WriteFig14(const fs::path& path, const artifact::Manifest& m, const PreviewMeasurements& p,
+                       const InspectArgs& a) {
+  if (!p.none) return "";
+  const fs::path out = a.fig14_png.empty() ? fs::path(path).replace_extension(".fig14.png") : fs::path(a.fig14_png);
+  std::vector<precompute::PreviewTimesSeries> series = {{"no cache", p.none->seconds}};
+  if (p.opt) series.push_back({"H_opt", p.opt->seconds});
+  if (p.rfree) series.push_back({"H_rfree", p.rfree->seconds});
+  precompute::WritePreviewTimesPng(
+      series, out, {.title = m.design_name + ": preview time at " + std::to_string(p.points.size()) + " valid points"});
+  return out.string();
+}
+
+// Fig. 13; the PNG's path, or "" when the artifact has no cache curves.
+std::string WriteFig13(const fs::path& path, const artifact::Artifact& art, const InspectArgs& a) {
+  if (art.cache_curves.empty()) return "";
+  fs::path out = a.png.empty() ? fs::path(path).replace_extension(".fig13.png") : fs::path(a.png);
+  precompute::WriteCacheCurvesPng(art.cache_curves, out, {.title = art.manifest.design_name});
+  return out.string();
+}
+
+// Everything inspect reports of one artifact.
+struct InspectReport {
+  fs::path path;
+  const artifact::Manifest& m;
+  std::optional<double> cpu;
+  std::string table3;
+  PreviewMeasurements previews;
+  std::string fig13_png, fig14_png;
+};
+
+void PrintJson(const InspectReport& r, const InspectArgs& a) {
+  const artifact::Manifest& m = r.m;
+  const auto& s = m.statistics;
+  const bool has_cache = !m.cache.strategy.empty();
+  json j;
+  j["artifact"] = r.path.string();
+  j["schema_version"] = m.schema_version;
+  j["design"] = m.design_name;
+  j["design_hash"] = m.design_hash;
+  j["code_version"] = m.code_version;
+  j["table3"] = {{"samples", s.samples},
+                 {"valid_samples", s.valid_samples},
+                 {"cpu_seconds", r.cpu ? json(*r.cpu) : json(nullptr)},
+                 {"valid_volume_percent", s.valid_volume_percent},
+                 {"failure_shares", s.failure_shares}};
+  auto size = [&](std::int64_t entries, std::int64_t bytes) {
+    return has_cache ? json{{"entries", entries}, {"bytes", bytes}} : json(nullptr);
+  };
+  j["fig14"] = {{"cache_strategy", m.cache.strategy},
+                {"h_top", size(m.cache.top_entries, m.cache.top_bytes)},
+                {"h_opt", size(m.cache.opt_entries, m.cache.opt_bytes)},
+                {"h_rfree", size(m.cache.rfree_entries, m.cache.rfree_bytes)},
+                {"points", r.previews.points.size()},
+                {"seed", a.seed},
+                {"t_nocache", TimesJson(r.previews.none)},
+                {"t_opt", TimesJson(r.previews.opt)},
+                {"t_rfree", TimesJson(r.previews.rfree)}};
+  j["fig13_png"] = r.fig13_png.empty() ? json(nullptr) : json(r.fig13_png);
+  j["fig14_png"] = r.fig14_png.empty() ? json(nullptr) : json(r.fig14_png);
+  std::cout << j.dump(2) << "\n";
+}
+
+void PrintText(const InspectReport& r) {
+  const artifact::Manifest& m = r.m;
+  std::cout << "artifact " << r.path.string() << "  schema v" << m.schema_version << "  design " << m.design_name
+            << "  hash " << m.design_hash.substr(0, 16) << "  code " << m.code_version << "\n";
+  std::cout << "Table 3: " << r.table3 << "\n";
+  std::cout << "Fig. 14: ";
+  if (!m.cache.strategy.empty())
+    std::cout << "H_TOP " << MiB(m.cache.top_bytes) << "  H_opt " << MiB(m.cache.opt_bytes) << "  H_rfree "
+              << MiB(m.cache.rfree_bytes) << " (" << m.cache.strategy << ")";
+  else
+    std::cout << "no geometry cache in the artifact";
+  std::cout << "\n         preview over " << r.previews.points.size() << " random valid points: no cache "
+            << TimesText(r.previews.none) << "  H_opt " << TimesText(r.previews.opt) << "  H_rfree "
+            << TimesText(r.previews.rfree) << (r.fig14_png.empty() ? "" : "; box plots: " + r.fig14_png) << "\n";
+  std::cout << "Fig. 13: " << (r.fig13_png.empty() ? "no cache curves in the artifact" : "wrote " + r.fig13_png)
+            << "\n";
+}
+
+// The parameter schema only: /api/params's answer, one implementation.
+void PrintParams(const fs::path& path) {
+  const viewer::Customiser c(viewer::LoadArtifact(path, viewer::CacheChoice::kNone));
+  const viewer::ApiResponse r = viewer::HandleApiRequest(c, "/api/params", {});
+  if (r.status != 200) throw InputError(path.string() + ": " + r.body);
+  std::cout << json::parse(r.body).dump(2) << "\n";
+}
+
 void Inspect(const InspectArgs& a, int& exit_code) {
   const fs::path path = ArtifactPath(a.artifact);  // the file, or the run directory holding it (as serve)
   if (a.points < 0) throw InputError("inspect: --points must be >= 0");
-  if (a.params) {  // the parameter schema only: /api/params's answer, one implementation
-    const viewer::Customiser c(viewer::LoadArtifact(path, viewer::CacheChoice::kNone));
-    const viewer::ApiResponse r = viewer::HandleApiRequest(c, "/api/params", {});
-    if (r.status != 200) throw InputError(path.string() + ": " + r.body);
-    std::cout << json::parse(r.body).dump(2) << "\n";
+  if (a.params) {
+    PrintParams(path);
     exit_code = 0;
     return;
   }
@@ -117,9 +263,9 @@ void Inspect(const InspectArgs& a, int& exit_code) {
   // Metadata only: the cache's geometry is read set by set below, so the
   // memory holds the form and one preview cache, not the whole file.
   const artifact::Artifact art = artifact::ReadArtifact(path, {.load_geometry = false});
-  const artifact::Manifest& m = art.manifest;
 
-  // The design, from the artifact's own bundle.
+  // The design, from the artifact's own bundle (its files stay on disk until
+  // the report is printed).
   const fs::path scratch = fs::temp_directory_path() / ("fabatlas-inspect-" + std::to_string(::getpid()));
   struct Cleanup {
     fs::path dir;
@@ -134,115 +280,15 @@ void Inspect(const InspectArgs& a, int& exit_code) {
     throw InputError(path.string() + ": the bundled design has " + std::to_string(design.exposed.size()) +
                      " exposed parameters, the form " + std::to_string(art.form.dimensions.size()));
 
-  // Table 3.
-  const auto cpu = RunCpuSeconds(path);
-  const auto& s = m.statistics;
-  std::ostringstream table3;
-  table3 << m.design_name << "  |U|=" << art.form.dimensions.size() << "  samples " << s.samples << "  CPU "
-         << (cpu ? Seconds(*cpu) : std::string("n/a")) << "  valid " << std::fixed << std::setprecision(1)
-         << s.valid_volume_percent << "%  failures: ";
-  if (s.failure_shares.empty()) table3 << "none";
-  bool first = true;
-  for (const auto& [type, share] : s.failure_shares) {
-    table3 << (first ? "" : ", ") << std::setprecision(0) << 100 * share << "% " << type;
-    first = false;
-  }
-
-  // Fig. 14: preview times at random valid points.
-  // Random points of the valid region, each snapped exactly as the
-  // customiser snaps a preview (viewer::SnapToValidSample, ΔG-weighted,
-  // Fab Forms Sec. 7.3).
-  std::vector<std::vector<double>> points;
-  const sampling::DesignSpace space = art.form.space();
-  for (const auto& u : precompute::RandomValidPoints(art.form, a.points, a.seed))
-    if (auto snapped = viewer::SnapToValidSample(art.form, space, u))
-      points.push_back(art.form.samples[static_cast<std::size_t>(snapped->sample)].u);
-  std::optional<precompute::PreviewTimes> t_none, t_opt, t_rfree;
-  if (!points.empty()) {
-    t_none = precompute::MeasurePreviewTimes(design, points, nullptr);
-    // One cache in memory at a time (H_opt, then H_rfree), and only when
-    // the artifact stores every entry of it (H_rfree's entries beyond H_opt
-    // are stored only with `cache: {store_rfree: true}`, docs/artifact.md).
-    auto measure = [&](bool artifact::CacheEntry::*member,
-                       std::int64_t entries) -> std::optional<precompute::PreviewTimes> {
-      std::int64_t stored = 0;
-      for (const auto& e : art.cache) stored += e.*member;
-      if (stored != entries) return std::nullopt;
-      precompute::FrozenSubtreeCache cache;
-      artifact::ReadCacheGeometry(
-          path, [&](const artifact::CacheEntry& e) { return e.*member; },
-          [&](artifact::CacheEntry& e) { cache.Add(e.key, geometry::Solid::Deserialize(e.grid)); });
-      return precompute::MeasurePreviewTimes(design, points, &cache);
-    };
-    if (!m.cache.strategy.empty() && !art.cache.empty()) {
-      t_opt = measure(&artifact::CacheEntry::in_opt, m.cache.opt_entries);
-      t_rfree = measure(&artifact::CacheEntry::in_rfree, m.cache.rfree_entries);
-    }
-  }
-
-  // Fig. 14 as box plots of the measured times.
-  std::string fig14_png;
-  if (t_none) {
-    const fs::path out = a.fig14_png.empty() ? fs::path(path).replace_extension(".fig14.png") : fs::path(a.fig14_png);
-    std::vector<precompute::PreviewTimesSeries> series = {{"no cache", t_none->seconds}};
-    if (t_opt) series.push_back({"H_opt", t_opt->seconds});
-    if (t_rfree) series.push_back({"H_rfree", t_rfree->seconds});
-    precompute::WritePreviewTimesPng(
-        series, out, {.title = m.design_name + ": preview time at " + std::to_string(points.size()) + " valid points"});
-    fig14_png = out.string();
-  }
-
-  // Fig. 13.
-  std::string png;
-  if (!art.cache_curves.empty()) {
-    fs::path out = a.png.empty() ? fs::path(path).replace_extension(".fig13.png") : fs::path(a.png);
-    precompute::WriteCacheCurvesPng(art.cache_curves, out, {.title = m.design_name});
-    png = out.string();
-  }
-
-  const bool has_cache = !m.cache.strategy.empty();
-  if (a.json) {
-    json j;
-    j["artifact"] = path.string();
-    j["schema_version"] = m.schema_version;
-    j["design"] = m.design_name;
-    j["design_hash"] = m.design_hash;
-    j["code_version"] = m.code_version;
-    j["table3"] = {{"samples", s.samples},
-                   {"valid_samples", s.valid_samples},
-                   {"cpu_seconds", cpu ? json(*cpu) : json(nullptr)},
-                   {"valid_volume_percent", s.valid_volume_percent},
-                   {"failure_shares", s.failure_shares}};
-    auto size = [&](std::int64_t entries, std::int64_t bytes) {
-      return has_cache ? json{{"entries", entries}, {"bytes", bytes}} : json(nullptr);
-    };
-    j["fig14"] = {{"cache_strategy", m.cache.strategy},
-                  {"h_top", size(m.cache.top_entries, m.cache.top_bytes)},
-                  {"h_opt", size(m.cache.opt_entries, m.cache.opt_bytes)},
-                  {"h_rfree", size(m.cache.rfree_entries, m.cache.rfree_bytes)},
-                  {"points", points.size()},
-                  {"seed", a.seed},
-                  {"t_nocache", TimesJson(t_none)},
-                  {"t_opt", TimesJson(t_opt)},
-                  {"t_rfree", TimesJson(t_rfree)}};
-    j["fig13_png"] = png.empty() ? json(nullptr) : json(png);
-    j["fig14_png"] = fig14_png.empty() ? json(nullptr) : json(fig14_png);
-    std::cout << j.dump(2) << "\n";
-  } else {
-    std::cout << "artifact " << path.string() << "  schema v" << m.schema_version << "  design " << m.design_name
-              << "  hash " << m.design_hash.substr(0, 16) << "  code " << m.code_version << "\n";
-    std::cout << "Table 3: " << table3.str() << "\n";
-    std::cout << "Fig. 14: ";
-    if (has_cache)
-      std::cout << "H_TOP " << MiB(m.cache.top_bytes) << "  H_opt " << MiB(m.cache.opt_bytes) << "  H_rfree "
-                << MiB(m.cache.rfree_bytes) << " (" << m.cache.strategy << ")";
-    else
-      std::cout << "no geometry cache in the artifact";
-    std::cout << "\n         preview over " << points.size() << " random valid points: no cache " << TimesText(t_none)
-              << "  H_opt " << TimesText(t_opt) << "  H_rfree " << TimesText(t_rfree)
-              << (fig14_png.empty() ? "" : "; box plots: " + fig14_png) << "\n";
-    std::cout << "Fig. 13: " << (png.empty() ? "no cache curves in the artifact" : "wrote " + png) << "\n";
-  }
+  InspectReport report{.path = path, .m = art.manifest, .cpu = RunCpuSeconds(path)};
+  report.table3 = Table3Text(art, report.cpu);
+  report.previews = MeasurePreviews(path, art, design, a);
+  report.fig14_png = WriteFig14(path, art.manifest, report.previews, a);
+  report.fig13_png = WriteFig13(path, art, a);
+  if (a.json)
+    PrintJson(report, a);
+  else
+    PrintText(report);
   exit_code = 0;
 }
 

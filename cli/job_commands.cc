@@ -212,11 +212,47 @@ int Run(const ClusterArgs& a) {
   }
 }
 
-}  // namespace
+// fabatlas submit: an OpenSCAD model is imported into a temporary directory
+// first; the bundle carries its files, so the directory goes once submitted.
+void Submit(const ClusterArgs& a) {
+  bool created = false;
+  auto client = ClientOf(a);
+  std::string job = a.job;
+  fs::path staging;
+  if (IsScadModel(job)) {
+    char tmpl[] = "/tmp/fabatlas-import-XXXXXX";
+    if (!::mkdtemp(tmpl)) throw ResourceError("submit: cannot create a temporary directory");
+    staging = tmpl;
+    job = JobOrModel(job, staging.string());
+  }
+  std::string id;
+  try {
+    id = client.Submit(job, &created);
+  } catch (...) {
+    if (!staging.empty()) fs::remove_all(staging);
+    throw;
+  }
+  if (!staging.empty()) fs::remove_all(staging);
+  if (a.json)
+    PrintJson({{"job_id", id}, {"created", created}});
+  else
+    std::cout << id << (created ? "" : " (already submitted)") << "\n";
+}
 
-void AddJobCommands(CLI::App& app, int& exit_code) {
-  auto a = std::make_shared<ClusterArgs>();
+// fabatlas jobs: every job's status line, or {"jobs": [status, ...]}.
+void ListJobs(const ClusterArgs& a) {
+  auto list = ClientOf(a).List();
+  if (a.json) {
+    nlohmann::json out = nlohmann::json::array();
+    for (const auto& s : list) out.push_back(StatusJson(s));
+    PrintJson({{"jobs", out}});
+    return;
+  }
+  for (const auto& s : list) std::cout << coordinator::ProgressLine(s) << "\n";
+}
 
+// run and submit: a job computed here, or sent to a coordinator.
+void AddRunAndSubmit(CLI::App& app, const std::shared_ptr<ClusterArgs>& a, int& exit_code) {
   auto* run = app.add_subcommand(
       "run", "compute a job's form on this machine: a coordinator in this process and N worker processes");
   run->add_option("job", a->job, "job file (YAML, docs/job-format.md) or OpenSCAD model (.scad)")->required();
@@ -234,33 +270,11 @@ void AddJobCommands(CLI::App& app, int& exit_code) {
   submit->add_option("job", a->job, "job file (YAML, docs/job-format.md) or OpenSCAD model (.scad)")->required();
   submit->add_flag("--json", a->json, "print {\"job_id\", \"created\"} as JSON");
   AddConnectionOptions(submit, *a);
-  submit->callback([a] {
-    bool created = false;
-    auto client = ClientOf(*a);
-    // An OpenSCAD model is imported into a temporary directory; the bundle
-    // carries its files, so the directory goes once submitted.
-    std::string job = a->job;
-    fs::path staging;
-    if (IsScadModel(job)) {
-      char tmpl[] = "/tmp/fabatlas-import-XXXXXX";
-      if (!::mkdtemp(tmpl)) throw ResourceError("submit: cannot create a temporary directory");
-      staging = tmpl;
-      job = JobOrModel(job, staging.string());
-    }
-    std::string id;
-    try {
-      id = client.Submit(job, &created);
-    } catch (...) {
-      if (!staging.empty()) fs::remove_all(staging);
-      throw;
-    }
-    if (!staging.empty()) fs::remove_all(staging);
-    if (a->json)
-      PrintJson({{"job_id", id}, {"created", created}});
-    else
-      std::cout << id << (created ? "" : " (already submitted)") << "\n";
-  });
+  submit->callback([a] { Submit(*a); });
+}
 
+// status, watch, cancel, fetch and jobs: a coordinator's jobs.
+void AddJobFollowing(CLI::App& app, const std::shared_ptr<ClusterArgs>& a, int& exit_code) {
   auto* status = app.add_subcommand(
       "status", "show a job's progress: samples, valid %, tasks, tasks/s, ETA, failures, why it is stalled");
   status->add_option("job_id", a->job, "job id (from submit or jobs)")->required();
@@ -301,16 +315,15 @@ void AddJobCommands(CLI::App& app, int& exit_code) {
   auto* jobs = app.add_subcommand("jobs", "list the coordinator's jobs with their progress");
   jobs->add_flag("--json", a->json, "print {\"jobs\": [status, ...]} as JSON");
   AddConnectionOptions(jobs, *a);
-  jobs->callback([a] {
-    auto list = ClientOf(*a).List();
-    if (a->json) {
-      nlohmann::json out = nlohmann::json::array();
-      for (const auto& s : list) out.push_back(StatusJson(s));
-      PrintJson({{"jobs", out}});
-      return;
-    }
-    for (const auto& s : list) std::cout << coordinator::ProgressLine(s) << "\n";
-  });
+  jobs->callback([a] { ListJobs(*a); });
+}
+
+}  // namespace
+
+void AddJobCommands(CLI::App& app, int& exit_code) {
+  auto a = std::make_shared<ClusterArgs>();
+  AddRunAndSubmit(app, a, exit_code);
+  AddJobFollowing(app, a, exit_code);
 }
 
 }  // namespace fabatlas::cli

@@ -23,25 +23,11 @@ namespace fabatlas::coordinator {
 namespace {
 // gRPC threads kept polling for calls when idle (gRPC's default: 2).
 constexpr int kIdlePollers = 16;
-}  // namespace
 
-grpc::Status Invalid(const std::string& message) { return grpc::Status(grpc::StatusCode::INVALID_ARGUMENT, message); }
-
-grpc::Status FromException(const std::exception& e) {
-  if (dynamic_cast<const ResourceError*>(&e)) return grpc::Status(grpc::StatusCode::RESOURCE_EXHAUSTED, e.what());
-  if (dynamic_cast<const InputError*>(&e)) return grpc::Status(grpc::StatusCode::INVALID_ARGUMENT, e.what());
-  return grpc::Status(grpc::StatusCode::INTERNAL, e.what());
-}
-
-Coordinator::Coordinator(CoordinatorOptions options) : impl_(std::make_unique<Impl>(std::move(options))) {}
-
-Coordinator::~Coordinator() { Shutdown(); }
-
-void Coordinator::Start() {
-  Impl& m = *impl_;
-  const auto& o = m.options;
-  if (o.state_dir.empty()) throw InputError("coordinator: a state directory is required (--state-dir)");
-  std::shared_ptr<grpc::ServerCredentials> credentials;
+// The gRPC port's credentials: TLS when a certificate and key are given
+// (client certificates required with a client CA), else plaintext, which
+// only a loopback address gets unless the network is allowed explicitly.
+std::shared_ptr<grpc::ServerCredentials> ServerCredentials(const CoordinatorOptions& o) {
   if (!o.tls_cert.empty() || !o.tls_key.empty()) {
     if (o.tls_cert.empty() || o.tls_key.empty())
       throw InputError("coordinator: TLS needs both a certificate (--tls-cert) and a key (--tls-key)");
@@ -51,13 +37,19 @@ void Coordinator::Start() {
     if (!o.tls_client_ca.empty()) ssl.pem_root_certs = protocol::ReadPemFile(o.tls_client_ca, "client CA");
     ssl.pem_key_cert_pairs.push_back(
         {protocol::ReadPemFile(o.tls_key, "TLS key"), protocol::ReadPemFile(o.tls_cert, "TLS certificate")});
-    credentials = grpc::SslServerCredentials(ssl);
-  } else {
-    if (!protocol::IsLoopback(o.listen) && !o.allow_insecure_network)
-      throw InputError("coordinator: refusing plaintext on non-loopback address " + o.listen +
-                       " (give --tls-cert/--tls-key, see ops/tls/make-certs.sh)");
-    credentials = grpc::InsecureServerCredentials();
+    return grpc::SslServerCredentials(ssl);
   }
+  if (!protocol::IsLoopback(o.listen) && !o.allow_insecure_network)
+    throw InputError("coordinator: refusing plaintext on non-loopback address " + o.listen +
+                     " (give --tls-cert/--tls-key, see ops/tls/make-certs.sh)");
+  return grpc::InsecureServerCredentials();
+}
+
+// The state directory, locked: the job store and the blob store, with every
+// lease given one lease period of grace and no worker affinity (which
+// workers are alive is not known yet).
+void OpenState(Coordinator::Impl& m) {
+  const auto& o = m.options;
   // One coordinator per state directory: a second one exits naming the first.
   m.state_lock = std::make_unique<DirectoryLock>(o.state_dir, "state directory");
   storage::JobStoreOptions store_options;
@@ -66,8 +58,13 @@ void Coordinator::Start() {
   m.store = std::make_unique<storage::JobStore>(o.state_dir / "state.db", store_options);
   m.blobs = std::make_unique<storage::BlobStore>(o.state_dir / "blobs");
   m.store->ExtendAllLeases(NowMs() + o.lease_ms);
-  m.store->ClearAffinity();  // which workers are alive is not known yet
+  m.store->ClearAffinity();
+}
 
+// The gRPC server with the job, worker and blob services, listening and
+// reported serving to health checks.
+void StartServer(Coordinator::Impl& m, const std::shared_ptr<grpc::ServerCredentials>& credentials) {
+  const auto& o = m.options;
   protocol::HoldGrpcUntilExit();
   protocol::RouteGrpcLogs();
   grpc::EnableDefaultHealthCheckService(true);
@@ -92,33 +89,60 @@ void Coordinator::Start() {
   m.server = builder.BuildAndStart();
   if (!m.server || m.port == 0) throw InputError("coordinator: cannot listen on " + o.listen);
   m.server->GetHealthCheckService()->SetServingStatus(true);
+}
+
+// /healthz and /metrics on --metrics HOST:PORT, plaintext, on a thread of
+// their own.
+void StartMetrics(Coordinator::Impl& m) {
+  const auto& o = m.options;
+  auto colon = o.metrics_listen.rfind(':');
+  if (colon == std::string::npos) throw InputError("coordinator: --metrics wants HOST:PORT, got " + o.metrics_listen);
+  std::string host = o.metrics_listen.substr(0, colon);
+  int port = std::atoi(o.metrics_listen.c_str() + colon + 1);
+  m.metrics = std::make_unique<httplib::Server>();
+  // Plaintext health for probes that cannot speak the gRPC port's TLS
+  // (Kubernetes httpGet): 200 while serving, 503 while draining.
+  m.metrics->Get("/healthz", [&m](const httplib::Request&, httplib::Response& res) {
+    const bool serving = !m.draining && !m.stopping;
+    res.status = serving ? 200 : 503;
+    res.set_content(serving ? "serving\n" : "draining\n", "text/plain");
+  });
+  m.metrics->Get("/metrics", [&m](const httplib::Request&, httplib::Response& res) {
+    try {
+      res.set_content(m.Metrics(), "text/plain; version=0.0.4");
+    } catch (const std::exception& e) {
+      res.status = 500;
+      res.set_content(e.what(), "text/plain");
+    }
+  });
+  if (!m.metrics->bind_to_port(host, port)) throw InputError("coordinator: cannot listen on " + o.metrics_listen);
+  m.metrics_thread = std::thread([&m] { m.metrics->listen_after_bind(); });
+}
+
+}  // namespace
+
+grpc::Status Invalid(const std::string& message) { return grpc::Status(grpc::StatusCode::INVALID_ARGUMENT, message); }
+
+grpc::Status FromException(const std::exception& e) {
+  if (dynamic_cast<const ResourceError*>(&e)) return grpc::Status(grpc::StatusCode::RESOURCE_EXHAUSTED, e.what());
+  if (dynamic_cast<const InputError*>(&e)) return grpc::Status(grpc::StatusCode::INVALID_ARGUMENT, e.what());
+  return grpc::Status(grpc::StatusCode::INTERNAL, e.what());
+}
+
+Coordinator::Coordinator(CoordinatorOptions options) : impl_(std::make_unique<Impl>(std::move(options))) {}
+
+Coordinator::~Coordinator() { Shutdown(); }
+
+void Coordinator::Start() {
+  Impl& m = *impl_;
+  const auto& o = m.options;
+  if (o.state_dir.empty()) throw InputError("coordinator: a state directory is required (--state-dir)");
+  const std::shared_ptr<grpc::ServerCredentials> credentials = ServerCredentials(o);
+  OpenState(m);
+  StartServer(m, credentials);
   m.started = true;
   m.sweeper = std::thread([&m] { m.Sweep(); });
-
-  if (!o.metrics_listen.empty()) {
-    auto colon = o.metrics_listen.rfind(':');
-    if (colon == std::string::npos) throw InputError("coordinator: --metrics wants HOST:PORT, got " + o.metrics_listen);
-    std::string host = o.metrics_listen.substr(0, colon);
-    int port = std::atoi(o.metrics_listen.c_str() + colon + 1);
-    m.metrics = std::make_unique<httplib::Server>();
-    // Plaintext health for probes that cannot speak the gRPC port's TLS
-    // (Kubernetes httpGet): 200 while serving, 503 while draining.
-    m.metrics->Get("/healthz", [&m](const httplib::Request&, httplib::Response& res) {
-      const bool serving = !m.draining && !m.stopping;
-      res.status = serving ? 200 : 503;
-      res.set_content(serving ? "serving\n" : "draining\n", "text/plain");
-    });
-    m.metrics->Get("/metrics", [&m](const httplib::Request&, httplib::Response& res) {
-      try {
-        res.set_content(m.Metrics(), "text/plain; version=0.0.4");
-      } catch (const std::exception& e) {
-        res.status = 500;
-        res.set_content(e.what(), "text/plain");
-      }
-    });
-    if (!m.metrics->bind_to_port(host, port)) throw InputError("coordinator: cannot listen on " + o.metrics_listen);
-    m.metrics_thread = std::thread([&m] { m.metrics->listen_after_bind(); });
-  }
+  if (!o.metrics_listen.empty()) StartMetrics(m);
   std::int64_t resumed = 0, in_grace = m.store->ActiveLeases();
   for (const auto& job : m.store->Jobs())
     if (job.state == storage::JobState::kRunning) {

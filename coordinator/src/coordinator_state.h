@@ -268,6 +268,21 @@ struct Coordinator::Impl {
 
   std::string Metrics();
 
+  // A store checkpoint, then the restart of the drivers a failed state
+  // write stopped (Sweep, every second).
+  void CheckpointAndRestartDrivers();
+
+  // Expires the leases past their deadlines (none while state writes fail:
+  // expiry_held remembers that, and the leases get a period of grace after)
+  // and delivers the tasks that were quarantined.
+  std::vector<storage::ExpiredLease> ExpireOverdueLeases(std::int64_t now, bool& expiry_held);
+
+  // Forgets the workers silent for a lease period: their affinity, and the
+  // solids asked of them (answered "not held").
+  void ForgetSilentWorkers(std::int64_t now);
+
+  // The sweeper thread, every 100 ms until stopping: the steps above, blob
+  // collection every 10 s, and a wake-up of the drivers after retries.
   void Sweep();
 };
 

@@ -92,6 +92,90 @@ void Coordinator::Impl::CollectBlobs(const std::string& reason) {
                                   {"kept_bytes", c.bytes_kept}});
 }
 
+void Coordinator::Impl::CheckpointAndRestartDrivers() {
+  // A checkpoint copies every WAL frame since the last one that
+  // completed, all or nothing (SQLite, "Write-Ahead Logging"): on a
+  // disk that fails one write in n, a backlog past n frames never
+  // completes. Its failure must not hold up what follows: the stopped
+  // drivers' restarts and the lease sweep (they once waited for a
+  // checkpoint to succeed, and a fault on every 25th store write
+  // starved the job).
+  try {
+    store->Checkpoint();
+    StateWriteSucceeded();
+  } catch (const ResourceError& e) {
+    StateWriteFailed("checkpoint", e.what());
+  }
+  std::set<std::string> restart;
+  {
+    std::lock_guard lock(drivers_mu);
+    restart.swap(restart_drivers);
+  }
+  for (const auto& id : restart) StartDriver(id);
+}
+
+std::vector<storage::ExpiredLease> Coordinator::Impl::ExpireOverdueLeases(std::int64_t now, bool& expiry_held) {
+  // While the store cannot be written no lease expires: a worker's
+  // heartbeats and reports fail with the coordinator's own writes, so a
+  // lease past its deadline says nothing of its worker (expiring it
+  // fenced results on their way, and with a fault on every 25th store
+  // write the same tasks were leased again and again). One lease period
+  // after the last failed write, the leases get one period of grace, as
+  // after a restart, then expire as usual: a worker that died meanwhile
+  // is noticed then.
+  std::int64_t last_failure_ms = 0;
+  {
+    std::lock_guard lock(stall_mu);
+    last_failure_ms = stall_last_ms;
+  }
+  const bool hold = last_failure_ms > 0 && now - last_failure_ms < options.lease_ms;
+  if (hold) {
+    expiry_held = true;
+  } else if (expiry_held) {
+    store->ExtendAllLeases(now + options.lease_ms);
+    expiry_held = false;
+  }
+  std::vector<storage::ExpiredLease> expired;
+  if (!hold) expired = store->ExpireLeases(now, options.retry_backoff_ms, options.quarantine_after, QuarantineBytes);
+  for (const auto& e : expired) {
+    log::Warn("lease_expired", {{"task", e.task_key},
+                                {"job", e.job_id},
+                                {"worker", e.worker_id},
+                                {"attempt", e.attempt},
+                                {"expiries", e.expiries}});
+    if (!e.quarantined) continue;
+    log::Error("task_quarantined", {{"task", e.task_key}, {"job", e.job_id}, {"expiries", e.expiries}});
+    if (auto task = store->FindTask(e.task_key)) Deliver(e.task_key, task->result);
+  }
+  return expired;
+}
+
+void Coordinator::Impl::ForgetSilentWorkers(std::int64_t now) {
+  std::vector<std::string> silent;
+  {
+    std::lock_guard lock(workers_mu);
+    for (auto it = workers_seen.begin(); it != workers_seen.end();)
+      if (it->second.last_ms < now - options.lease_ms) {
+        log::Warn("worker_lost", {{"worker", it->first}, {"silent_ms", now - it->second.last_ms}});
+        silent.push_back(it->first);
+        it = workers_seen.erase(it);
+      } else {
+        ++it;
+      }
+  }
+  for (const auto& id : silent)
+    if (store->ForgetAffinity(id) > 0) SignalWork();
+  if (silent.empty()) return;
+  // Requests a silent holder will never answer: answered "not held".
+  std::lock_guard lock(share_mu);
+  for (const auto& id : silent) {
+    for (const auto& ref : share_wanted[id]) shares[SolidKey(ref)].answered = true;
+    share_wanted.erase(id);
+    share_polled.erase(id);
+  }
+  share_cv.notify_all();
+}
+
 void Coordinator::Impl::Sweep() {
   std::int64_t last_checkpoint_ms = NowMs(), last_collect_ms = 0;
   bool expiry_held = false;  // leases were kept past their deadlines while writes failed
@@ -101,84 +185,11 @@ void Coordinator::Impl::Sweep() {
       std::int64_t now = NowMs();
       if (now - last_checkpoint_ms >= 1000) {
         last_checkpoint_ms = now;
-        // A checkpoint copies every WAL frame since the last one that
-        // completed, all or nothing (SQLite, "Write-Ahead Logging"): on a
-        // disk that fails one write in n, a backlog past n frames never
-        // completes. Its failure must not hold up what follows: the stopped
-        // drivers' restarts and the lease sweep (they once waited for a
-        // checkpoint to succeed, and a fault on every 25th store write
-        // starved the job).
-        try {
-          store->Checkpoint();
-          StateWriteSucceeded();
-        } catch (const ResourceError& e) {
-          StateWriteFailed("checkpoint", e.what());
-        }
-        std::set<std::string> restart;
-        {
-          std::lock_guard lock(drivers_mu);
-          restart.swap(restart_drivers);
-        }
-        for (const auto& id : restart) StartDriver(id);
+        CheckpointAndRestartDrivers();
       }
-      // While the store cannot be written no lease expires: a worker's
-      // heartbeats and reports fail with the coordinator's own writes, so a
-      // lease past its deadline says nothing of its worker (expiring it
-      // fenced results on their way, and with a fault on every 25th store
-      // write the same tasks were leased again and again). One lease period
-      // after the last failed write, the leases get one period of grace, as
-      // after a restart, then expire as usual: a worker that died meanwhile
-      // is noticed then.
-      std::int64_t last_failure_ms = 0;
-      {
-        std::lock_guard lock(stall_mu);
-        last_failure_ms = stall_last_ms;
-      }
-      const bool hold = last_failure_ms > 0 && now - last_failure_ms < options.lease_ms;
-      if (hold) {
-        expiry_held = true;
-      } else if (expiry_held) {
-        store->ExtendAllLeases(now + options.lease_ms);
-        expiry_held = false;
-      }
-      std::vector<storage::ExpiredLease> expired;
-      if (!hold)
-        expired = store->ExpireLeases(now, options.retry_backoff_ms, options.quarantine_after, QuarantineBytes);
-      for (const auto& e : expired) {
-        log::Warn("lease_expired", {{"task", e.task_key},
-                                    {"job", e.job_id},
-                                    {"worker", e.worker_id},
-                                    {"attempt", e.attempt},
-                                    {"expiries", e.expiries}});
-        if (!e.quarantined) continue;
-        log::Error("task_quarantined", {{"task", e.task_key}, {"job", e.job_id}, {"expiries", e.expiries}});
-        if (auto task = store->FindTask(e.task_key)) Deliver(e.task_key, task->result);
-      }
+      const std::vector<storage::ExpiredLease> expired = ExpireOverdueLeases(now, expiry_held);
       if (!expired.empty()) last_retry_ms = now;
-      std::vector<std::string> silent;
-      {
-        std::lock_guard lock(workers_mu);
-        for (auto it = workers_seen.begin(); it != workers_seen.end();)
-          if (it->second.last_ms < now - options.lease_ms) {
-            log::Warn("worker_lost", {{"worker", it->first}, {"silent_ms", now - it->second.last_ms}});
-            silent.push_back(it->first);
-            it = workers_seen.erase(it);
-          } else {
-            ++it;
-          }
-      }
-      for (const auto& id : silent)
-        if (store->ForgetAffinity(id) > 0) SignalWork();
-      if (!silent.empty()) {
-        // Requests a silent holder will never answer: answered "not held".
-        std::lock_guard lock(share_mu);
-        for (const auto& id : silent) {
-          for (const auto& ref : share_wanted[id]) shares[SolidKey(ref)].answered = true;
-          share_wanted.erase(id);
-          share_polled.erase(id);
-        }
-        share_cv.notify_all();
-      }
+      ForgetSilentWorkers(now);
       if (now - last_collect_ms >= 10000) {
         CollectBlobs("periodic");
         last_collect_ms = now;

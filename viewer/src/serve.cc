@@ -24,52 +24,34 @@ std::string ContentType(const std::filesystem::path& p) {
   return "application/octet-stream";
 }
 
-}  // namespace
-
-std::map<std::string, std::string> ReadWebFiles(const std::filesystem::path& web_dir) {
-  if (!std::filesystem::is_regular_file(web_dir / "index.html"))
-    throw InputError(web_dir.string() + ": no index.html (build the page: `ninja -C build fabatlas_web`)");
-  std::map<std::string, std::string> files;
-  for (const auto& entry : std::filesystem::recursive_directory_iterator(web_dir)) {
-    if (!entry.is_regular_file()) continue;
-    std::ifstream in(entry.path(), std::ios::binary);
-    std::ostringstream bytes;
-    bytes << in.rdbuf();
-    files["/" + std::filesystem::relative(entry.path(), web_dir).generic_string()] = bytes.str();
+// An API answer as the HTTP response, never cached; a shared body (a cached
+// preview) is sent from its bytes without copying them.
+void SendApiResponse(const ApiResponse& r, httplib::Response& res) {
+  res.status = r.status;
+  for (const auto& [k, v] : r.headers) res.set_header(k, v);
+  res.set_header("Cache-Control", "no-store");
+  if (r.shared_body) {
+    auto body = r.shared_body;
+    res.set_content_provider(body->size(), r.content_type.c_str(),
+                             [body](std::size_t offset, std::size_t length, httplib::DataSink& sink) {
+                               return sink.write(body->data() + offset, length);
+                             });
+  } else {
+    res.set_content(r.body, r.content_type);
   }
-  files["/"] = files.at("/index.html");
-  return files;
 }
 
-void Serve(const Customiser& customiser, const ServeOptions& options, const std::atomic<bool>& stop,
-           const std::function<void(int port)>& on_listening) {
-  const std::map<std::string, std::string> files = ReadWebFiles(options.web_dir);
-  httplib::Server server;
+// The routes: the API (GET, and POST for the queries that also take a JSON
+// body), the page's own files by exact path, 405 for any other method.
+void AddRoutes(httplib::Server& server, const Customiser& customiser, const std::map<std::string, std::string>& files) {
   server.Get(R"(/api/.*)", [&](const httplib::Request& req, httplib::Response& res) {
     std::map<std::string, std::string> query;
     for (const auto& [k, v] : req.params) query[k] = v;
-    const ApiResponse r = HandleApiRequest(customiser, req.path, query);
-    res.status = r.status;
-    for (const auto& [k, v] : r.headers) res.set_header(k, v);
-    res.set_header("Cache-Control", "no-store");
-    if (r.shared_body) {
-      // Sent from the shared bytes (a cached preview) without copying them.
-      auto body = r.shared_body;
-      res.set_content_provider(body->size(), r.content_type.c_str(),
-                               [body](std::size_t offset, std::size_t length, httplib::DataSink& sink) {
-                                 return sink.write(body->data() + offset, length);
-                               });
-    } else {
-      res.set_content(r.body, r.content_type);
-    }
+    SendApiResponse(HandleApiRequest(customiser, req.path, query), res);
   });
   // The queries that also take a JSON body (http_api.h, HandleApiPost).
   server.Post(R"(/api/(optimise|pareto))", [&](const httplib::Request& req, httplib::Response& res) {
-    const ApiResponse r = HandleApiPost(customiser, req.path, req.body);
-    res.status = r.status;
-    for (const auto& [k, v] : r.headers) res.set_header(k, v);
-    res.set_header("Cache-Control", "no-store");
-    res.set_content(r.body, r.content_type);
+    SendApiResponse(HandleApiPost(customiser, req.path, req.body), res);
   });
   // Everything else: only the page's own files, looked up by exact path.
   server.Get(R"(.*)", [&](const httplib::Request& req, httplib::Response& res) {
@@ -92,7 +74,11 @@ void Serve(const Customiser& customiser, const ServeOptions& options, const std:
   server.Put(R"(.*)", not_allowed);
   server.Delete(R"(.*)", not_allowed);
   server.Patch(R"(.*)", not_allowed);
-  // On every response, the page's files, the API's answers and errors alike.
+}
+
+// What every response carries (the page's files, the API's answers and
+// errors alike), and the listening socket's options.
+void SetServerPolicy(httplib::Server& server) {
   server.set_post_routing_handler([](const httplib::Request&, httplib::Response& res) {
     res.set_header("Content-Security-Policy", kContentSecurityPolicy);
     res.set_header("X-Content-Type-Options", "nosniff");
@@ -107,6 +93,31 @@ void Serve(const Customiser& customiser, const ServeOptions& options, const std:
     int yes = 1;
     setsockopt(sock, SOL_SOCKET, SO_REUSEADDR, reinterpret_cast<const void*>(&yes), sizeof(yes));
   });
+}
+
+}  // namespace
+
+std::map<std::string, std::string> ReadWebFiles(const std::filesystem::path& web_dir) {
+  if (!std::filesystem::is_regular_file(web_dir / "index.html"))
+    throw InputError(web_dir.string() + ": no index.html (build the page: `ninja -C build fabatlas_web`)");
+  std::map<std::string, std::string> files;
+  for (const auto& entry : std::filesystem::recursive_directory_iterator(web_dir)) {
+    if (!entry.is_regular_file()) continue;
+    std::ifstream in(entry.path(), std::ios::binary);
+    std::ostringstream bytes;
+    bytes << in.rdbuf();
+    files["/" + std::filesystem::relative(entry.path(), web_dir).generic_string()] = bytes.str();
+  }
+  files["/"] = files.at("/index.html");
+  return files;
+}
+
+void Serve(const Customiser& customiser, const ServeOptions& options, const std::atomic<bool>& stop,
+           const std::function<void(int port)>& on_listening) {
+  const std::map<std::string, std::string> files = ReadWebFiles(options.web_dir);
+  httplib::Server server;
+  AddRoutes(server, customiser, files);
+  SetServerPolicy(server);
   int port = options.port;
   if (port == 0) {
     port = server.bind_to_any_port(options.host);

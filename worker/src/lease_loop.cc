@@ -167,41 +167,94 @@ void Worker::EndSync(std::unique_lock<std::mutex>& lock) {
   if (wake) done_cv_.notify_one();
 }
 
+v1::SyncRequest Worker::AwaitSyncTurn(bool patient, bool* leaving) {
+  std::unique_lock lock(mu_);
+  while (true) {
+    // Nothing new: wait for a result (or briefly for free slots to be
+    // worth asking for more work again). Also right after new leases
+    // filled every slot: asking again at once could only extend
+    // leases, which the heartbeat thread does.
+    if (patient && !slots_.empty() && !in_flight_.empty()) {
+      bool full = static_cast<int>(queue_.size()) + running_ >= o_.slots;
+      // (Nothing left running: a slot thread reported the last task
+      // and its long poll brought nothing; poll again now.)
+      done_cv_.wait_for(lock, std::chrono::milliseconds(full ? 1000 : 200),
+                        [&] { return !done_.empty() || stop_ || syncing_ || in_flight_.empty(); });
+    }
+    if (stop_ && running_ > 0) done_cv_.wait_for(lock, std::chrono::milliseconds(200), [&] { return !done_.empty(); });
+    if (!syncing_) break;
+    // A slot thread is reporting the worker's last task and waits for
+    // work itself (ReportLastTask); after it, wait for results again.
+    sync_loop_waits_ = true;
+    done_cv_.wait(lock, [&] { return !syncing_; });
+    sync_loop_waits_ = false;
+    patient = true;
+  }
+  syncing_ = true;
+  return NextSyncRequest(leaving);
+}
+
+bool Worker::BackOffAfterFailedSync(const grpc::Status& status, SyncRetry& retry) {
+  if (status.error_code() == grpc::StatusCode::UNAUTHENTICATED ||
+      status.error_code() == grpc::StatusCode::PERMISSION_DENIED)
+    throw InputError("coordinator " + o_.coordinator + " refused this worker: " + status.error_message());
+  const auto now = Clock::now();
+  if (!retry.failing_since) retry.failing_since = now;
+  auto ms = [&](Clock::time_point since) {
+    return std::chrono::duration_cast<std::chrono::milliseconds>(now - since).count();
+  };
+  if (!connected_ && ms(retry.started) > o_.connect_timeout_ms)
+    throw InputError("cannot reach coordinator " + o_.coordinator + ": " + status.error_message());
+  // Leaving and nobody has listened for a while. (Measured from the
+  // first failure, not from the start: a Sync that WatchStop cancelled
+  // carried results, and they go out again on the next one.)
+  if (stop_ && ms(*retry.failing_since) > o_.connect_timeout_ms) return false;
+  if (stop_ && status.error_code() != grpc::StatusCode::CANCELLED) {
+    // Stopping and the coordinator does not answer: what is left (its
+    // unreported results, unstarted leases) is recomputed after the
+    // leases expire, so waiting for a coordinator that may never come
+    // back gains nothing (systemd and Kubernetes would SIGKILL).
+    std::lock_guard lock(mu_);
+    log::Warn("worker_leaving_unreported", {{"worker", o_.worker_id},
+                                            {"coordinator", o_.coordinator},
+                                            {"error", status.error_message()},
+                                            {"results", done_.size()},
+                                            {"leases", in_flight_.size()}});
+    return false;
+  }
+  if (!stop_)
+    log::Warn("worker_reconnecting", {{"worker", o_.worker_id},
+                                      {"coordinator", o_.coordinator},
+                                      {"error", status.error_message()},
+                                      {"backoff_ms", retry.backoff_ms}});
+  std::this_thread::sleep_for(std::chrono::milliseconds(stop_ ? 200 : retry.backoff_ms));
+  retry.backoff_ms = std::min<std::int64_t>(retry.backoff_ms * 2, 5000);
+  return true;
+}
+
+bool Worker::RunLeasesHere() {
+  std::optional<v1::Lease> lease = TakeLease();
+  if (!lease) return false;
+  RunLease(*lease);
+  while (true) {
+    {
+      std::lock_guard lock(mu_);
+      if (!short_tasks_ || done_.size() >= kResultsPerSync || held_seconds_ >= kShortTaskSeconds) break;
+    }
+    std::optional<v1::Lease> next = TakeLease();
+    if (!next) break;
+    RunLease(*next);
+  }
+  return true;
+}
+
 void Worker::SyncLoop() {
-  auto started = Clock::now();
-  std::optional<Clock::time_point> failing_since;  // the first failed Sync since the last answer
-  std::int64_t backoff_ms = 200;
+  SyncRetry retry;
+  retry.started = Clock::now();
   bool patient = false;  // wait for a result (or a while) before the next Sync
   while (true) {
-    v1::SyncRequest req;
     bool leaving = false;
-    {
-      std::unique_lock lock(mu_);
-      while (true) {
-        // Nothing new: wait for a result (or briefly for free slots to be
-        // worth asking for more work again). Also right after new leases
-        // filled every slot: asking again at once could only extend
-        // leases, which the heartbeat thread does.
-        if (patient && !slots_.empty() && !in_flight_.empty()) {
-          bool full = static_cast<int>(queue_.size()) + running_ >= o_.slots;
-          // (Nothing left running: a slot thread reported the last task
-          // and its long poll brought nothing; poll again now.)
-          done_cv_.wait_for(lock, std::chrono::milliseconds(full ? 1000 : 200),
-                            [&] { return !done_.empty() || stop_ || syncing_ || in_flight_.empty(); });
-        }
-        if (stop_ && running_ > 0)
-          done_cv_.wait_for(lock, std::chrono::milliseconds(200), [&] { return !done_.empty(); });
-        if (!syncing_) break;
-        // A slot thread is reporting the worker's last task and waits for
-        // work itself (ReportLastTask); after it, wait for results again.
-        sync_loop_waits_ = true;
-        done_cv_.wait(lock, [&] { return !syncing_; });
-        sync_loop_waits_ = false;
-        patient = true;
-      }
-      syncing_ = true;
-      req = NextSyncRequest(&leaving);
-    }
+    v1::SyncRequest req = AwaitSyncTurn(patient, &leaving);
     v1::SyncResponse resp;
     grpc::Status status = CallSync(req, &resp);
     if (!status.ok()) {
@@ -209,49 +262,16 @@ void Worker::SyncLoop() {
         std::unique_lock lock(mu_);
         EndSync(lock);
       }
-      if (status.error_code() == grpc::StatusCode::UNAUTHENTICATED ||
-          status.error_code() == grpc::StatusCode::PERMISSION_DENIED)
-        throw InputError("coordinator " + o_.coordinator + " refused this worker: " + status.error_message());
-      const auto now = Clock::now();
-      if (!failing_since) failing_since = now;
-      auto ms = [&](Clock::time_point since) {
-        return std::chrono::duration_cast<std::chrono::milliseconds>(now - since).count();
-      };
-      if (!connected_ && ms(started) > o_.connect_timeout_ms)
-        throw InputError("cannot reach coordinator " + o_.coordinator + ": " + status.error_message());
-      // Leaving and nobody has listened for a while. (Measured from the
-      // first failure, not from the start: a Sync that WatchStop cancelled
-      // carried results, and they go out again on the next one.)
-      if (stop_ && ms(*failing_since) > o_.connect_timeout_ms) return;
-      if (stop_ && status.error_code() != grpc::StatusCode::CANCELLED) {
-        // Stopping and the coordinator does not answer: what is left (its
-        // unreported results, unstarted leases) is recomputed after the
-        // leases expire, so waiting for a coordinator that may never come
-        // back gains nothing (systemd and Kubernetes would SIGKILL).
-        std::lock_guard lock(mu_);
-        log::Warn("worker_leaving_unreported", {{"worker", o_.worker_id},
-                                                {"coordinator", o_.coordinator},
-                                                {"error", status.error_message()},
-                                                {"results", done_.size()},
-                                                {"leases", in_flight_.size()}});
-        return;
-      }
-      if (!stop_)
-        log::Warn("worker_reconnecting", {{"worker", o_.worker_id},
-                                          {"coordinator", o_.coordinator},
-                                          {"error", status.error_message()},
-                                          {"backoff_ms", backoff_ms}});
-      std::this_thread::sleep_for(std::chrono::milliseconds(stop_ ? 200 : backoff_ms));
-      backoff_ms = std::min<std::int64_t>(backoff_ms * 2, 5000);
+      if (!BackOffAfterFailedSync(status, retry)) return;
       patient = false;
       continue;
     }
-    const bool reconnected = backoff_ms > 200;  // a Sync failed before this one
-    backoff_ms = 200;
-    failing_since.reset();
+    const bool reconnected = retry.backoff_ms > 200;  // a Sync failed before this one
+    retry.backoff_ms = 200;
+    retry.failing_since.reset();
     {
       std::unique_lock lock(mu_);
-      if (!connected_) started = Clock::now();
+      if (!connected_) retry.started = Clock::now();
       if (!connected_ || reconnected)
         log::Info("worker_connected", {{"worker", o_.worker_id}, {"coordinator", o_.coordinator}, {"slots", o_.slots}});
       connected_ = true;
@@ -270,17 +290,7 @@ void Worker::SyncLoop() {
       // than about kShortTaskSeconds of work (a longer task reports at
       // once: its result is not held back, nor the leases behind it from
       // others).
-      if (std::optional<v1::Lease> lease = TakeLease()) {
-        RunLease(*lease);
-        while (true) {
-          {
-            std::lock_guard lock(mu_);
-            if (!short_tasks_ || done_.size() >= kResultsPerSync || held_seconds_ >= kShortTaskSeconds) break;
-          }
-          std::optional<v1::Lease> next = TakeLease();
-          if (!next) break;
-          RunLease(*next);
-        }
+      if (RunLeasesHere()) {
         patient = false;
         continue;
       }

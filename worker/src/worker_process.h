@@ -97,6 +97,30 @@ class Worker {
   // Ends a Sync: wakes the sync loop if it waits for one a slot thread made.
   void EndSync(std::unique_lock<std::mutex>& lock);
 
+  // The sync loop's backoff between failed Syncs.
+  struct SyncRetry {
+    std::chrono::steady_clock::time_point started;                       // connect_timeout_ms counts from here
+    std::optional<std::chrono::steady_clock::time_point> failing_since;  // the first failed Sync since the last answer
+    std::int64_t backoff_ms = 200;
+  };
+
+  // Waits, under mu_, until the next Sync is due (when `patient`: for a
+  // result or a while; always: for a slot thread's own Sync to end), then
+  // marks a Sync under way and builds it (NextSyncRequest).
+  v1::SyncRequest AwaitSyncTurn(bool patient, bool* leaving);
+
+  // After a failed Sync (mu_ not held): throws when the coordinator refused
+  // this worker or was not reached within connect_timeout_ms; false when a
+  // stopping worker gives up on reporting; else sleeps the backoff and
+  // doubles it (at most 5 s).
+  bool BackOffAfterFailedSync(const grpc::Status& status, SyncRetry& retry);
+
+  // A 1-slot worker runs the next lease on the sync loop's own thread, and
+  // the short ones queued behind it; false when none was queued.
+  bool RunLeasesHere();
+
+  // Syncs with the coordinator until the worker leaves: reports results,
+  // takes leases, reconnects with backoff.
   void SyncLoop();
 
   // Called by a slot thread after its task: when that was the worker's last

@@ -7,6 +7,7 @@
 #include <limits>
 #include <map>
 #include <mutex>
+#include <optional>
 #include <sstream>
 
 #include <tbb/task_group.h>
@@ -219,27 +220,20 @@ fem::AxisBox FemBox(CheckContext& c, const CheckSpec& spec, const std::string& n
   return box;
 }
 
-// Static Neo-Hookean FEM on voxel hexahedra (Fab Forms Sec. 8, the sandal's
-// deformation check; method in docs/fem.md): the solid is resampled at the
-// check's own `voxel` (mm), nodes in `fixed` are clamped, `force` (N, total)
-// is spread over the boundary faces inside `loaded`, and the check passes iff
-// the solve converges and max |u| <= max_displacement (and the largest
-// principal Green-Lagrange strain <= max_strain if given). The reason states
-// max displacement and strain whether or not the check passes.
-CheckOutcome Fem(const CheckSpec& spec, CheckContext& c) {
-  const std::string where = spec.place.str() + ": check '" + spec.name + "'";
-  const double voxel = c.Number(spec, "voxel", 0);
-  if (!std::isfinite(voxel) || voxel <= 0) throw InputError(where + ": 'voxel' must be > 0 mm");
-  const double youngs = c.Number(spec, "youngs_modulus", 0);
-  const double poisson = c.Number(spec, "poisson", 0.3);
-  const double limit = c.Number(spec, "max_displacement", 0);
-  if (!std::isfinite(limit) || limit <= 0) throw InputError(where + ": 'max_displacement' must be > 0 mm");
-
+// Where the FEM check clamps and loads the solid: `fixed`, `loaded` and
+// `force` (N, total).
+fem::FemLoadCase FemLoadCaseOf(CheckContext& c, const CheckSpec& spec) {
   fem::FemLoadCase load;
   load.fixed_region.push_back(FemBox(c, spec, "fixed"));
   load.loaded_region.push_back(FemBox(c, spec, "loaded"));
   const Argument& force = spec.args.at("force");
   for (int k = 0; k < 3; ++k) load.total_force[k] = EvaluateItem(c, spec, force.items[k]);
+  return load;
+}
+
+// The FEM check's limits and element: `max_displacement` (already read as
+// `limit`), `max_strain` (0: none) and `element`.
+fem::FemCheckOptions FemOptionsOf(CheckContext& c, const CheckSpec& spec, double limit) {
   fem::FemCheckOptions options;
   options.max_displacement = limit;
   // `element`: incompatible_modes (default, does not lock in bending) or q1
@@ -252,14 +246,13 @@ CheckOutcome Fem(const CheckSpec& spec, CheckContext& c) {
                        "': 'element' must be incompatible_modes or q1, got '" + it->second.text + "'");
   }
   options.max_strain = c.Number(spec, "max_strain", 0.0);
+  return options;
+}
 
+// The sample's solid resampled at the FEM `voxel` (mm); an InputError naming
+// `where` when that gives more than kMaxFemElements elements.
+fem::VoxelSolid FemVoxels(CheckContext& c, double voxel, const std::string& where) {
   geometry::Occupancy occupancy;
-  fem::FemCheckResult result;
-  try {
-    load.material = fem::Material::FromYoungPoisson(youngs, poisson);
-  } catch (const InputError& e) {
-    throw InputError(where + ": " + e.what());
-  }
   try {
     occupancy = geometry::SampleOccupancy(c.solid(), voxel, 8 * kMaxFemElements);
   } catch (const InputError& e) {
@@ -276,11 +269,12 @@ CheckOutcome Fem(const CheckSpec& spec, CheckContext& c) {
   voxels.voxel_size = occupancy.cell_size;
   voxels.dims = occupancy.dims;
   voxels.occupied = std::move(occupancy.inside);
-  try {
-    result = fem::RunFemCheck(voxels, load, options);
-  } catch (const InputError& e) {
-    throw InputError(where + ": " + e.what());
-  }
+  return voxels;
+}
+
+// The FEM check's outcome: its reason states max displacement and strain
+// against their limits whether or not it passes.
+CheckOutcome FemOutcome(const fem::FemCheckResult& result, double voxel, double limit, double max_strain) {
   CheckOutcome o;
   if (result.empty_load_case) {
     // Depends on the sample's geometry (e.g. a heel height that puts the
@@ -302,9 +296,9 @@ CheckOutcome Fem(const CheckSpec& spec, CheckContext& c) {
   reason << "max displacement " << result.max_displacement << " mm"
          << (result.max_displacement > limit ? " exceeds " : " (limit ") << limit << " mm"
          << (result.max_displacement > limit ? "" : ")") << ", max strain " << result.max_strain;
-  if (options.max_strain > 0)
-    reason << (result.max_strain > options.max_strain ? " exceeds " : " (limit ") << options.max_strain
-           << (result.max_strain > options.max_strain ? "" : ")");
+  if (max_strain > 0)
+    reason << (result.max_strain > max_strain ? " exceeds " : " (limit ") << max_strain
+           << (result.max_strain > max_strain ? "" : ")");
   reason << ", " << result.num_elements << " elements of " << voxel << " mm";
   o.reason = reason.str();
   o.measures["fem_max_displacement"] = result.max_displacement;
@@ -312,88 +306,116 @@ CheckOutcome Fem(const CheckSpec& spec, CheckContext& c) {
   return o;
 }
 
-// Reconfigurables, section 5: every transition of the state graph is collision-free.
-// For each transition, every object moves by its resolved motion; collision
-// intervals are found by swept::DetectCollisions (spacetime proxies in a
-// bounding volume hierarchy, exact tests at the samples) and reported first
-// by when (time span), then where (objects and box). The minimum clearance
-// over all transitions (swept::MinimumClearance; 0 when something collides)
-// is the measure `min_clearance`; with `clearance` > 0 the check also fails
-// when objects come closer than that.
-CheckOutcome CollisionFree(const CheckSpec& spec, CheckContext& c) {
+// Static Neo-Hookean FEM on voxel hexahedra (Fab Forms Sec. 8, the sandal's
+// deformation check; method in docs/fem.md): the solid is resampled at the
+// check's own `voxel` (mm), nodes in `fixed` are clamped, `force` (N, total)
+// is spread over the boundary faces inside `loaded`, and the check passes iff
+// the solve converges and max |u| <= max_displacement (and the largest
+// principal Green-Lagrange strain <= max_strain if given). The reason states
+// max displacement and strain whether or not the check passes.
+CheckOutcome Fem(const CheckSpec& spec, CheckContext& c) {
   const std::string where = spec.place.str() + ": check '" + spec.name + "'";
-  const double steps = c.Number(spec, "time_steps", 101);
-  if (!(steps >= 2 && steps <= 100000) || steps != std::round(steps))
-    throw InputError(where + ": 'time_steps' must be a whole number in [2, 100000]");
-  const double required = c.Number(spec, "clearance", 0);
-  if (!std::isfinite(required) || required < 0) throw InputError(where + ": 'clearance' must be >= 0 mm");
-  const auto& objects = c.design().objects;
-  CheckOutcome o;
-  std::vector<mesh::TriangleMesh> meshes;
+  const double voxel = c.Number(spec, "voxel", 0);
+  if (!std::isfinite(voxel) || voxel <= 0) throw InputError(where + ": 'voxel' must be > 0 mm");
+  const double youngs = c.Number(spec, "youngs_modulus", 0);
+  const double poisson = c.Number(spec, "poisson", 0.3);
+  const double limit = c.Number(spec, "max_displacement", 0);
+  if (!std::isfinite(limit) || limit <= 0) throw InputError(where + ": 'max_displacement' must be > 0 mm");
+  fem::FemLoadCase load = FemLoadCaseOf(c, spec);
+  const fem::FemCheckOptions options = FemOptionsOf(c, spec, limit);
   try {
-    for (const auto& object : objects) {
-      geometry::Solid solid = c.object_solid(object.name);
-      if (solid.empty()) throw SampleFailure(kNoGeometry, "object '" + object.name + "' has no material");
-      meshes.push_back(solid.ToMesh());
-    }
-  } catch (const SampleFailure& e) {
-    o.failure = kNoGeometry;
-    o.reason = e.what();
-    return o;
+    load.material = fem::Material::FromYoungPoisson(youngs, poisson);
+  } catch (const InputError& e) {
+    throw InputError(where + ": " + e.what());
   }
-  if (c.state_graph) {
-    c.state_graph->collisions_checked = true;
-    c.state_graph->time_steps = static_cast<int>(steps);
-    c.state_graph->objects = meshes;
-    c.state_graph->transitions.clear();
+  const fem::VoxelSolid voxels = FemVoxels(c, voxel, where);
+  fem::FemCheckResult result;
+  try {
+    result = fem::RunFemCheck(voxels, load, options);
+  } catch (const InputError& e) {
+    throw InputError(where + ": " + e.what());
   }
-  struct Hit {
-    std::string transition;
-    swept::CollisionInterval interval;
-  };
-  std::vector<Hit> hits;
+  return FemOutcome(result, voxel, limit, options.max_strain);
+}
+
+// A collision interval found on one transition.
+struct CollisionHit {
+  std::string transition;
+  swept::CollisionInterval interval;
+};
+
+// What sweeping every transition found: its collision intervals, and the
+// minimum clearance (0 when something collides, infinite with fewer than two
+// objects) with where it is ("transition T: 'a' and 'b' at t = ...").
+struct TransitionSweeps {
+  std::vector<CollisionHit> hits;
   double clearance = std::numeric_limits<double>::infinity();
   std::string closest;
-  for (const ResolvedTransition& t : c.transitions()) {
-    std::vector<swept::MovingPart> parts;
-    for (std::size_t i = 0; i < objects.size(); ++i) parts.push_back({meshes[i], t.motions[i]});
-    swept::SpacetimeOptions so;
-    so.time_steps = static_cast<int>(steps);
-    swept::CollisionReport report;
-    try {
-      report = swept::DetectCollisions(parts, so);
-    } catch (const InputError& e) {
-      // Level-set meshes are closed; a non-manifold one comes from a feature
-      // thinner than a voxel.
-      o.failure = kNotWatertight;
-      o.reason = std::string("cannot test collisions: ") + e.what();
-      return o;
-    }
-    for (const auto& i : report.intervals) hits.push_back({t.name, i});
-    if (c.state_graph) {
-      const std::size_t k = c.state_graph->transitions.size();
-      const Transition& edge = c.design().transitions.at(k);
-      c.state_graph->transitions.push_back({t.name, edge.from, edge.to, t.motions, report.intervals});
-    }
-    if (!report.collision_free()) {
-      clearance = 0;
-      continue;
-    }
-    swept::ClearanceOptions co;
-    co.time_steps = static_cast<int>(steps);
-    const swept::ClearanceReport cr = swept::MinimumClearance(parts, co);
-    if (cr.min_clearance < clearance) {
-      clearance = cr.min_clearance;
-      std::ostringstream m;
-      m.precision(4);
-      m << "transition " << t.name << ": '" << objects[cr.part_a].name << "' and '" << objects[cr.part_b].name
-        << "' at t = " << cr.t;
-      closest = m.str();
-    }
+};
+
+// Every object's solid as a mesh; a SampleFailure when one has no material.
+std::vector<mesh::TriangleMesh> ObjectMeshes(CheckContext& c) {
+  std::vector<mesh::TriangleMesh> meshes;
+  for (const auto& object : c.design().objects) {
+    geometry::Solid solid = c.object_solid(object.name);
+    if (solid.empty()) throw SampleFailure(kNoGeometry, "object '" + object.name + "' has no material");
+    meshes.push_back(solid.ToMesh());
   }
-  // When first (time span, then transition order), then where.
-  std::stable_sort(hits.begin(), hits.end(),
-                   [](const Hit& a, const Hit& b) { return a.interval.t_begin < b.interval.t_begin; });
+  return meshes;
+}
+
+// Sweeps transition t (collisions, then the clearance when there are none)
+// into s, and records it in the state graph when one is asked for. The
+// reason the collisions cannot be tested, or nullopt.
+std::optional<std::string> SweepTransition(CheckContext& c, const ResolvedTransition& t,
+                                           const std::vector<mesh::TriangleMesh>& meshes, int steps,
+                                           TransitionSweeps& s) {
+  const auto& objects = c.design().objects;
+  std::vector<swept::MovingPart> parts;
+  for (std::size_t i = 0; i < objects.size(); ++i) parts.push_back({meshes[i], t.motions[i]});
+  swept::SpacetimeOptions so;
+  so.time_steps = steps;
+  swept::CollisionReport report;
+  try {
+    report = swept::DetectCollisions(parts, so);
+  } catch (const InputError& e) {
+    // Level-set meshes are closed; a non-manifold one comes from a feature
+    // thinner than a voxel.
+    return std::string("cannot test collisions: ") + e.what();
+  }
+  for (const auto& i : report.intervals) s.hits.push_back({t.name, i});
+  if (c.state_graph) {
+    const std::size_t k = c.state_graph->transitions.size();
+    const Transition& edge = c.design().transitions.at(k);
+    c.state_graph->transitions.push_back({t.name, edge.from, edge.to, t.motions, report.intervals});
+  }
+  if (!report.collision_free()) {
+    s.clearance = 0;
+    return std::nullopt;
+  }
+  swept::ClearanceOptions co;
+  co.time_steps = steps;
+  const swept::ClearanceReport cr = swept::MinimumClearance(parts, co);
+  if (cr.min_clearance < s.clearance) {
+    s.clearance = cr.min_clearance;
+    std::ostringstream m;
+    m.precision(4);
+    m << "transition " << t.name << ": '" << objects[cr.part_a].name << "' and '" << objects[cr.part_b].name
+      << "' at t = " << cr.t;
+    s.closest = m.str();
+  }
+  return std::nullopt;
+}
+
+// The collision check's outcome from its sweeps: the first three collision
+// intervals by when (time span, then transition order), then where; or the
+// clearance against the `required` one.
+CheckOutcome CollisionOutcome(TransitionSweeps& s, const std::vector<DesignObject>& objects, double required) {
+  auto& hits = s.hits;
+  std::stable_sort(hits.begin(), hits.end(), [](const CollisionHit& a, const CollisionHit& b) {
+    return a.interval.t_begin < b.interval.t_begin;
+  });
+  CheckOutcome o;
   std::ostringstream reason;
   reason.precision(4);
   if (!hits.empty()) {
@@ -413,19 +435,59 @@ CheckOutcome CollisionFree(const CheckSpec& spec, CheckContext& c) {
     o.measures["collision_t_begin"] = hits[0].interval.t_begin;
     o.measures["collision_t_end"] = hits[0].interval.t_end;
   } else {
-    if (std::isfinite(clearance))
-      reason << "min clearance " << clearance << " mm (" << closest << ")";
+    if (std::isfinite(s.clearance))
+      reason << "min clearance " << s.clearance << " mm (" << s.closest << ")";
     else
       reason << "no two objects (clearance unbounded)";
-    if (clearance < required) {
+    if (s.clearance < required) {
       o.failure = kTooLittleClearance;
       reason << " is below " << required << " mm";
     }
   }
   o.passed = o.failure.empty();
   o.reason = reason.str();
-  if (std::isfinite(clearance)) o.measures["min_clearance"] = clearance;
+  if (std::isfinite(s.clearance)) o.measures["min_clearance"] = s.clearance;
   return o;
+}
+
+// Reconfigurables, section 5: every transition of the state graph is collision-free.
+// For each transition, every object moves by its resolved motion; collision
+// intervals are found by swept::DetectCollisions (spacetime proxies in a
+// bounding volume hierarchy, exact tests at the samples) and reported first
+// by when (time span), then where (objects and box). The minimum clearance
+// over all transitions (swept::MinimumClearance; 0 when something collides)
+// is the measure `min_clearance`; with `clearance` > 0 the check also fails
+// when objects come closer than that.
+CheckOutcome CollisionFree(const CheckSpec& spec, CheckContext& c) {
+  const std::string where = spec.place.str() + ": check '" + spec.name + "'";
+  const double steps = c.Number(spec, "time_steps", 101);
+  if (!(steps >= 2 && steps <= 100000) || steps != std::round(steps))
+    throw InputError(where + ": 'time_steps' must be a whole number in [2, 100000]");
+  const double required = c.Number(spec, "clearance", 0);
+  if (!std::isfinite(required) || required < 0) throw InputError(where + ": 'clearance' must be >= 0 mm");
+  CheckOutcome o;
+  std::vector<mesh::TriangleMesh> meshes;
+  try {
+    meshes = ObjectMeshes(c);
+  } catch (const SampleFailure& e) {
+    o.failure = kNoGeometry;
+    o.reason = e.what();
+    return o;
+  }
+  if (c.state_graph) {
+    c.state_graph->collisions_checked = true;
+    c.state_graph->time_steps = static_cast<int>(steps);
+    c.state_graph->objects = meshes;
+    c.state_graph->transitions.clear();
+  }
+  TransitionSweeps sweeps;
+  for (const ResolvedTransition& t : c.transitions())
+    if (auto untestable = SweepTransition(c, t, meshes, static_cast<int>(steps), sweeps)) {
+      o.failure = kNotWatertight;
+      o.reason = *untestable;
+      return o;
+    }
+  return CollisionOutcome(sweeps, c.design().objects, required);
 }
 
 // Assemblies (FabHacks, 4.3): the cycles close (pre-checks pass and C below

@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <functional>
 #include <optional>
 
@@ -119,139 +120,201 @@ double Violation(Relation relation, double diff) {
   return std::abs(diff);
 }
 
+// An equality constraint "v = expr" that defines the mutable variable v from
+// expr, which does not read v.
+struct Definition {
+  std::size_t constraint, defined;
+  const Expression* value;
+  std::vector<std::size_t> reads;  // variables the value reads
+};
+
+// What the definitions followed from a point say about it.
+struct DefinitionVerdict {
+  bool all_known = true;        // every mutable variable was defined
+  bool inside = true;           // every defined one lies within its bounds
+  bool holds = true;            // every decidable constraint holds within tolerance
+  bool unsat = false;           // a bound or constraint is missed by more than the error bound allows
+  std::vector<bool> decidable;  // constraint k reads only defined variables
+};
+
+std::string Trimmed(const std::string& t) {
+  const auto a = t.find_first_not_of(" \t"), b = t.find_last_not_of(" \t");
+  return a == std::string::npos ? std::string() : t.substr(a, b - a + 1);
+}
+
+// Deciding a point by definitions (constraint_solve.h): the constraints read
+// in the point's scope, the definitions among them, and the values x and
+// first-order error bounds e of the mutable variables defined so far.
+class DefinitionSolve {
+ public:
+  DefinitionSolve(const Design& d, const Point& u)
+      : d_(d), n_(d.mutables.size()), m_(d.constraints.size()), scope_(ParameterNames(d)), reads_(m_) {
+    for (const auto& [name, value] : u) scope_.Set(name, value);
+    for (std::size_t i = 0; i < n_; ++i) variable_[d.mutables[i].name] = i;
+    lhs_.reserve(m_);  // definitions point into lhs_ and rhs_
+    rhs_.reserve(m_);
+    for (std::size_t k = 0; k < m_; ++k) ReadConstraint(k);
+    x_.assign(n_, 0.0);
+    e_.assign(n_, 0.0);
+    known_.assign(n_, false);
+    defining_.assign(m_, false);
+  }
+  DefinitionSolve(const DefinitionSolve&) = delete;
+  DefinitionSolve& operator=(const DefinitionSolve&) = delete;
+
+  // Follows the definitions from the exposed values, each as soon as the
+  // variables it reads are known; false when a value or its error bound is
+  // not finite.
+  bool FollowDefinitions(double tolerance) {
+    for (bool progress = true; progress;) {
+      progress = false;
+      for (const Definition& def : definitions_) {
+        if (known_[def.defined] || defining_[def.constraint]) continue;
+        bool ready = true;
+        for (std::size_t j : def.reads) ready = ready && known_[j];
+        if (!ready) continue;
+        const double value = def.value->Evaluate();
+        if (!std::isfinite(value)) return false;
+        x_[def.defined] = value;
+        scope_.Set(d_.mutables[def.defined].name, value);
+        e_[def.defined] = tolerance + Spread([&] { return def.value->Evaluate(); }, def.reads);
+        if (!std::isfinite(e_[def.defined])) return false;
+        known_[def.defined] = defining_[def.constraint] = true;
+        progress = true;
+      }
+    }
+    return true;
+  }
+
+  // The bounds and constraints checked at the defined values; nullopt when
+  // a constraint's violation is not finite.
+  std::optional<DefinitionVerdict> Judge(const ConstraintSolveOptions& options) {
+    DefinitionVerdict v;
+    for (std::size_t i = 0; i < n_; ++i) {
+      if (!known_[i]) {
+        v.all_known = false;
+        continue;
+      }
+      const double excess = std::max({d_.mutables[i].min - x_[i], x_[i] - d_.mutables[i].max, 0.0});
+      v.inside = v.inside && excess == 0;
+      v.unsat = v.unsat || excess > options.definition_safety * e_[i];
+    }
+    v.decidable.assign(m_, false);
+    for (std::size_t k = 0; k < m_; ++k) {
+      bool ready = true;
+      for (std::size_t j : reads_[k]) ready = ready && known_[j];
+      if (!ready) continue;
+      v.decidable[k] = true;
+      const double miss = Violation(d_.constraints[k].relation, Difference(k));
+      if (!std::isfinite(miss)) return std::nullopt;
+      v.holds = v.holds && miss <= options.tolerance;
+      if (defining_[k] || miss <= options.tolerance) continue;
+      const double allowed = options.tolerance + Spread([&] { return Difference(k); }, reads_[k]);
+      v.unsat = v.unsat || miss > options.definition_safety * allowed;
+    }
+    return v;
+  }
+
+  // The decision: the defined values (u's exposed ones beside them); when
+  // unsatisfiable, the worst violation with the values clamped into their
+  // bounds (undefined ones at their defaults).
+  ConstraintSolveSummary Summary(const Point& u, const DefinitionVerdict& v) {
+    ConstraintSolveSummary s;
+    s.by_definitions = true;
+    for (const auto& [name, value] : u) s.values[name] = value;
+    if (v.unsat) {
+      for (std::size_t i = 0; i < n_; ++i) {
+        x_[i] = known_[i] ? std::clamp(x_[i], d_.mutables[i].min, d_.mutables[i].max) : d_.mutables[i].default_value;
+        scope_.Set(d_.mutables[i].name, x_[i]);
+      }
+      for (std::size_t k = 0; k < m_; ++k) {
+        if (!v.decidable[k]) continue;
+        const double miss = Violation(d_.constraints[k].relation, Difference(k));
+        if (miss > s.max_violation) {
+          s.max_violation = miss;
+          s.worst_constraint = d_.constraints[k].text;
+        }
+      }
+    }
+    s.satisfiable = !v.unsat;
+    for (std::size_t i = 0; i < n_; ++i) s.values[d_.mutables[i].name] = x_[i];
+    return s;
+  }
+
+ private:
+  std::vector<std::size_t> VariablesOf(const Expression& e) const {
+    std::vector<std::size_t> out;
+    for (const std::string& name : e.Names())
+      if (auto it = variable_.find(name); it != variable_.end()) out.push_back(it->second);
+    return out;
+  }
+
+  // Both sides of constraint k, the variables they read, and the
+  // definitions an equality gives.
+  void ReadConstraint(std::size_t k) {
+    const Constraint& c = d_.constraints[k];
+    lhs_.emplace_back(c.lhs, scope_, c.place);
+    rhs_.emplace_back(c.rhs, scope_, c.place);
+    const auto l = VariablesOf(lhs_[k]), r = VariablesOf(rhs_[k]);
+    reads_[k] = l;
+    reads_[k].insert(reads_[k].end(), r.begin(), r.end());
+    if (c.relation != Relation::kEqual) return;
+    AddDefinition(k, c.lhs, &rhs_[k], r);
+    AddDefinition(k, c.rhs, &lhs_[k], l);
+  }
+
+  // When `side` is a variable's name alone and `other` does not read it,
+  // constraint k defines that variable as `other`.
+  void AddDefinition(std::size_t k, const std::string& side, const Expression* other,
+                     const std::vector<std::size_t>& other_reads) {
+    auto it = variable_.find(Trimmed(side));
+    if (it == variable_.end()) return;
+    for (std::size_t j : other_reads)
+      if (j == it->second) return;
+    definitions_.push_back({k, it->second, other, other_reads});
+  }
+
+  // lhs - rhs of constraint k at the scope's current values.
+  double Difference(std::size_t k) const { return lhs_[k].Evaluate() - rhs_[k].Evaluate(); }
+
+  // The first-order bound on how far `f` moves when the variables it reads
+  // move by their e_j: sum_j |df/dx_j| e_j (central differences).
+  double Spread(const std::function<double()>& f, const std::vector<std::size_t>& of) {
+    double sum = 0;
+    for (std::size_t j : of) {
+      const double h = 1e-6 * std::max(1.0, std::abs(x_[j]));
+      const std::string& name = d_.mutables[j].name;
+      scope_.Set(name, x_[j] + h);
+      const double up = f();
+      scope_.Set(name, x_[j] - h);
+      const double down = f();
+      scope_.Set(name, x_[j]);
+      sum += std::abs(up - down) / (2 * h) * e_[j];
+    }
+    return sum;
+  }
+
+  const Design& d_;
+  const std::size_t n_, m_;  // mutable variables, constraints
+  Scope scope_;
+  std::map<std::string, std::size_t> variable_;  // mutable variable index by name
+  std::vector<Expression> lhs_, rhs_;
+  std::vector<std::vector<std::size_t>> reads_;  // variables read by either side of constraint k
+  std::vector<Definition> definitions_;
+  std::vector<double> x_, e_;
+  std::vector<bool> known_, defining_;  // variable i defined; constraint k used as its definition
+};
+
 // The decision of SolveConstraints from definitions (constraint_solve.h), or
 // nullopt when they leave the point undecided.
 std::optional<ConstraintSolveSummary> SolveByDefinitions(const Design& d, const Point& u,
                                                          const ConstraintSolveOptions& options) {
-  const std::size_t n = d.mutables.size(), m = d.constraints.size();
-  Scope scope(ParameterNames(d));
-  for (const auto& [name, value] : u) scope.Set(name, value);
-  std::map<std::string, std::size_t> variable;
-  for (std::size_t i = 0; i < n; ++i) variable[d.mutables[i].name] = i;
-
-  std::vector<Expression> lhs, rhs;
-  std::vector<std::vector<std::size_t>> reads(m);  // variables read by either side of constraint k
-  struct Definition {
-    std::size_t constraint, defined;
-    const Expression* value;
-    std::vector<std::size_t> reads;  // variables the value reads
-  };
-  std::vector<Definition> definitions;
-  lhs.reserve(m);
-  rhs.reserve(m);
-  auto variables_of = [&](const Expression& e) {
-    std::vector<std::size_t> out;
-    for (const std::string& name : e.Names())
-      if (auto it = variable.find(name); it != variable.end()) out.push_back(it->second);
-    return out;
-  };
-  auto trim = [](const std::string& t) {
-    const auto a = t.find_first_not_of(" \t"), b = t.find_last_not_of(" \t");
-    return a == std::string::npos ? std::string() : t.substr(a, b - a + 1);
-  };
-  for (std::size_t k = 0; k < m; ++k) {
-    const Constraint& c = d.constraints[k];
-    lhs.emplace_back(c.lhs, scope, c.place);
-    rhs.emplace_back(c.rhs, scope, c.place);
-    const auto l = variables_of(lhs[k]), r = variables_of(rhs[k]);
-    reads[k] = l;
-    reads[k].insert(reads[k].end(), r.begin(), r.end());
-    if (c.relation != Relation::kEqual) continue;
-    auto side = [&](const std::string& text, const Expression* other, const std::vector<std::size_t>& other_reads) {
-      auto it = variable.find(trim(text));
-      if (it == variable.end()) return;
-      for (std::size_t j : other_reads)
-        if (j == it->second) return;
-      definitions.push_back({k, it->second, other, other_reads});
-    };
-    side(c.lhs, &rhs[k], r);
-    side(c.rhs, &lhs[k], l);
-  }
-
-  // The first-order bound on how far `f` moves when the variables it reads
-  // move by their e_j: sum_j |df/dx_j| e_j (central differences).
-  std::vector<double> x(n, 0.0), e(n, 0.0);
-  std::vector<bool> known(n, false), defining(m, false);
-  auto spread = [&](const std::function<double()>& f, const std::vector<std::size_t>& of) {
-    double sum = 0;
-    for (std::size_t j : of) {
-      const double h = 1e-6 * std::max(1.0, std::abs(x[j]));
-      const std::string& name = d.mutables[j].name;
-      scope.Set(name, x[j] + h);
-      const double up = f();
-      scope.Set(name, x[j] - h);
-      const double down = f();
-      scope.Set(name, x[j]);
-      sum += std::abs(up - down) / (2 * h) * e[j];
-    }
-    return sum;
-  };
-
-  // Follow the definitions from the exposed values.
-  for (bool progress = true; progress;) {
-    progress = false;
-    for (const Definition& def : definitions) {
-      if (known[def.defined] || defining[def.constraint]) continue;
-      bool ready = true;
-      for (std::size_t j : def.reads) ready = ready && known[j];
-      if (!ready) continue;
-      const double value = def.value->Evaluate();
-      if (!std::isfinite(value)) return std::nullopt;
-      x[def.defined] = value;
-      scope.Set(d.mutables[def.defined].name, value);
-      e[def.defined] = options.tolerance + spread([&] { return def.value->Evaluate(); }, def.reads);
-      if (!std::isfinite(e[def.defined])) return std::nullopt;
-      known[def.defined] = defining[def.constraint] = true;
-      progress = true;
-    }
-  }
-
-  bool all_known = true, inside = true, holds = true, unsat = false;
-  for (std::size_t i = 0; i < n; ++i) {
-    if (!known[i]) {
-      all_known = false;
-      continue;
-    }
-    const double excess = std::max({d.mutables[i].min - x[i], x[i] - d.mutables[i].max, 0.0});
-    inside = inside && excess == 0;
-    unsat = unsat || excess > options.definition_safety * e[i];
-  }
-  std::vector<bool> decidable(m, false);
-  for (std::size_t k = 0; k < m; ++k) {
-    bool ready = true;
-    for (std::size_t j : reads[k]) ready = ready && known[j];
-    if (!ready) continue;
-    decidable[k] = true;
-    const Relation relation = d.constraints[k].relation;
-    const double miss = Violation(relation, lhs[k].Evaluate() - rhs[k].Evaluate());
-    if (!std::isfinite(miss)) return std::nullopt;
-    holds = holds && miss <= options.tolerance;
-    if (defining[k] || miss <= options.tolerance) continue;
-    const double allowed = options.tolerance + spread([&] { return lhs[k].Evaluate() - rhs[k].Evaluate(); }, reads[k]);
-    unsat = unsat || miss > options.definition_safety * allowed;
-  }
-
-  ConstraintSolveSummary s;
-  s.by_definitions = true;
-  for (const auto& [name, value] : u) s.values[name] = value;
-  if (!unsat && !(all_known && inside && holds)) return std::nullopt;
-  if (unsat) {  // report the violations with x* clamped into the bounds
-    for (std::size_t i = 0; i < n; ++i) {
-      x[i] = known[i] ? std::clamp(x[i], d.mutables[i].min, d.mutables[i].max) : d.mutables[i].default_value;
-      scope.Set(d.mutables[i].name, x[i]);
-    }
-    for (std::size_t k = 0; k < m; ++k) {
-      if (!decidable[k]) continue;
-      const double miss = Violation(d.constraints[k].relation, lhs[k].Evaluate() - rhs[k].Evaluate());
-      if (miss > s.max_violation) {
-        s.max_violation = miss;
-        s.worst_constraint = d.constraints[k].text;
-      }
-    }
-  }
-  s.satisfiable = !unsat;
-  for (std::size_t i = 0; i < n; ++i) s.values[d.mutables[i].name] = x[i];
-  return s;
+  DefinitionSolve solve(d, u);
+  if (!solve.FollowDefinitions(options.tolerance)) return std::nullopt;
+  const std::optional<DefinitionVerdict> v = solve.Judge(options);
+  if (!v) return std::nullopt;
+  if (!v->unsat && !(v->all_known && v->inside && v->holds)) return std::nullopt;
+  return solve.Summary(u, *v);
 }
 
 }  // namespace

@@ -234,14 +234,15 @@ Point Moved(const Point& u, const std::map<std::string, double>& direction, doub
   return out;
 }
 
-LineSearch GoldenSectionSearch(const Design& design, const ContactState& at,
-                               const std::map<std::string, double>& descent, const std::vector<Freedom>& free,
-                               const ResolutionOptions& options, int time_steps, SubtreeCache* cache) {
-  LineSearch ls;
-  ls.u = at.u;
-  ls.state = at;
-  // Steepest descent in coordinates scaled to each range: s_k = u_k / range_k,
-  // dE/ds_k = range_k dE/du_k; components pushing out of a bound are dropped.
+namespace {
+
+// The line searched (into `direction`, per unit step): steepest descent in
+// coordinates scaled to each range, s_k = u_k / range_k, dE/ds_k = range_k
+// dE/du_k, unit length in s, components pushing out of a bound dropped.
+// Returns the step that reaches the first bound; 0, with `direction` left
+// empty, when no component descends.
+double DescentLine(const ContactState& at, const std::map<std::string, double>& descent,
+                   const std::vector<Freedom>& free, std::map<std::string, double>& direction) {
   std::map<std::string, double> scaled;
   double norm = 0;
   for (const Freedom& f : free) {
@@ -253,17 +254,29 @@ LineSearch GoldenSectionSearch(const Design& design, const ContactState& at,
     norm += g * g;
   }
   norm = std::sqrt(norm);
-  if (!(norm > 0)) return ls;
+  if (!(norm > 0)) return 0;
   // Unit steps in scaled coordinates; the step that reaches the first bound.
   double reach = std::numeric_limits<double>::infinity();
   for (const Freedom& f : free) {
     const double d = scaled[f.name] / norm;
     const double range = f.max - f.min;
-    ls.direction[f.name] = d * range;
+    direction[f.name] = d * range;
     const double v = at.u.at(f.name);
     if (d > 0) reach = std::min(reach, (f.max - v) / range / d);
     if (d < 0) reach = std::min(reach, (f.min - v) / range / d);
   }
+  return reach;
+}
+
+}  // namespace
+
+LineSearch GoldenSectionSearch(const Design& design, const ContactState& at,
+                               const std::map<std::string, double>& descent, const std::vector<Freedom>& free,
+                               const ResolutionOptions& options, int time_steps, SubtreeCache* cache) {
+  LineSearch ls;
+  ls.u = at.u;
+  ls.state = at;
+  const double reach = DescentLine(at, descent, free, ls.direction);
   if (!(reach > 0) || !std::isfinite(reach)) return ls;
 
   struct Sample {
