@@ -98,16 +98,10 @@ std::pair<std::int64_t, double> Spread(const ValidGraph& g, int v, const std::ve
   }
   return {unreached, sum};
 }
-}  // namespace
 
-std::vector<StartingPoint> ChooseStartingPoints(const sampling::Form& form, const StartingPointOptions& options) {
-  std::vector<StartingPoint> out;
-  ValidGraph g = BuildValidGraph(form);
+// Connected components of g, numbered by their lowest sample id.
+std::vector<int> Components(const ValidGraph& g) {
   const int n = static_cast<int>(g.ids.size());
-  if (n == 0) return out;
-  auto everywhere = [](int) { return true; };
-
-  // Connected components, numbered by their lowest sample id.
   std::vector<int> component(static_cast<std::size_t>(n), -1);
   int components = 0;
   for (int s = 0; s < n; ++s) {
@@ -125,18 +119,26 @@ std::vector<StartingPoint> ChooseStartingPoints(const sampling::Form& form, cons
     }
     ++components;
   }
+  return component;
+}
 
-  // Randomised farthest-point sampling.
+// Randomised farthest-point sampling on g (at least one node) from a random
+// first seed: options.count seeds (at least one, more when components remain
+// unreached), fewer when every node is a seed. *owner: each node's nearest
+// seed (index into the result).
+std::vector<int> FarthestPointSeeds(const ValidGraph& g, const StartingPointOptions& options, std::vector<int>* owner) {
+  const int n = static_cast<int>(g.ids.size());
+  auto everywhere = [](int) { return true; };
   std::mt19937_64 rng(options.seed);
   std::vector<double> dist(static_cast<std::size_t>(n), kInf);
-  std::vector<int> owner(static_cast<std::size_t>(n), -1);
+  owner->assign(static_cast<std::size_t>(n), -1);
   std::vector<int> seeds;
   const int wanted = std::max(options.count, 1);
   int next = static_cast<int>(rng() % static_cast<std::uint64_t>(n));
   while (true) {
     int owner_id = static_cast<int>(seeds.size());
     seeds.push_back(next);
-    Dijkstra(g, next, dist, everywhere, &owner, owner_id);
+    Dijkstra(g, next, dist, everywhere, owner, owner_id);
     // The farthest sample from all seeds (unreached components first).
     int far = -1;
     for (int v = 0; v < n; ++v)
@@ -149,6 +151,87 @@ std::vector<StartingPoint> ChooseStartingPoints(const sampling::Form& form, cons
     if (static_cast<int>(seeds.size()) >= wanted || far_dist <= 0) break;
     next = far;
   }
+  return seeds;
+}
+
+using SpreadValue = std::pair<std::int64_t, double>;  // (members not reached, sum of distances)
+
+bool Better(SpreadValue a, SpreadValue b) { return a.first < b.first || (a.first == b.first && a.second < b.second); }
+
+// The exact graph centroid of segment m (seed `seed`): the member of least
+// spread, the lowest on ties, the seed when none beats it.
+int ExactCentroid(const ValidGraph& g, int seed, const std::vector<int>& m, const std::function<bool(int)>& in_segment,
+                  std::vector<double>& scratch) {
+  int best = seed;
+  auto best_spread = Spread(g, best, m, in_segment, scratch);
+  for (int v : m) {
+    auto sp = Spread(g, v, m, in_segment, scratch);
+    if (Better(sp, best_spread) || (sp == best_spread && v < best)) {
+      best = v;
+      best_spread = sp;
+    }
+  }
+  return best;
+}
+
+// An approximate graph centroid of segment m (seed `seed`) by double sweep:
+// the middle of a long shortest path, then descent to a neighbour of less
+// spread while there is one.
+int SweptCentroid(const ValidGraph& g, int seed, const std::vector<int>& m, const std::function<bool(int)>& in_segment,
+                  std::vector<double>& scratch) {
+  const int n = static_cast<int>(g.ids.size());
+  auto farthest = [&](int from, std::vector<double>& d) {
+    for (int v : m) d[static_cast<std::size_t>(v)] = kInf;
+    Dijkstra(g, from, d, in_segment);
+    int far = from;
+    for (int v : m)
+      if (d[static_cast<std::size_t>(v)] != kInf && d[static_cast<std::size_t>(v)] > d[static_cast<std::size_t>(far)])
+        far = v;
+    return far;
+  };
+  std::vector<double> da(static_cast<std::size_t>(n), kInf), db(static_cast<std::size_t>(n), kInf);
+  int a = farthest(seed, da);
+  int b = farthest(a, da);
+  farthest(b, db);
+  double length = da[static_cast<std::size_t>(b)];
+  int mid = a;
+  double mid_score = kInf;
+  for (int v : m) {
+    double x = da[static_cast<std::size_t>(v)], y = db[static_cast<std::size_t>(v)];
+    if (x == kInf || y == kInf) continue;
+    double score = std::abs(x - length / 2) + std::abs(y - length / 2);
+    if (score < mid_score) {
+      mid = v;
+      mid_score = score;
+    }
+  }
+  int best = mid;
+  auto best_spread = Spread(g, best, m, in_segment, scratch);
+  for (bool moved = true; moved;) {
+    moved = false;
+    for (auto [w, _] : g.adj[static_cast<std::size_t>(best)]) {
+      if (!in_segment(w)) continue;
+      auto sp = Spread(g, w, m, in_segment, scratch);
+      if (Better(sp, best_spread)) {
+        best = w;
+        best_spread = sp;
+        moved = true;
+        break;
+      }
+    }
+  }
+  return best;
+}
+}  // namespace
+
+std::vector<StartingPoint> ChooseStartingPoints(const sampling::Form& form, const StartingPointOptions& options) {
+  std::vector<StartingPoint> out;
+  ValidGraph g = BuildValidGraph(form);
+  const int n = static_cast<int>(g.ids.size());
+  if (n == 0) return out;
+  const std::vector<int> component = Components(g);
+  std::vector<int> owner;
+  const std::vector<int> seeds = FarthestPointSeeds(g, options, &owner);
 
   // Graph centroid of each segment.
   std::vector<std::vector<int>> members(seeds.size());
@@ -158,63 +241,9 @@ std::vector<StartingPoint> ChooseStartingPoints(const sampling::Form& form, cons
     const std::vector<int>& m = members[s];
     const int id = static_cast<int>(s);
     auto in_segment = [&](int v) { return owner[static_cast<std::size_t>(v)] == id; };
-    auto better = [](std::pair<std::int64_t, double> a, std::pair<std::int64_t, double> b) {
-      return a.first < b.first || (a.first == b.first && a.second < b.second);
-    };
-    int best = seeds[s];
-    auto best_spread = Spread(g, best, m, in_segment, scratch);
-    if (static_cast<std::int64_t>(m.size()) <= options.max_exact_centroid) {
-      for (int v : m) {
-        auto sp = Spread(g, v, m, in_segment, scratch);
-        if (better(sp, best_spread) || (sp == best_spread && v < best)) {
-          best = v;
-          best_spread = sp;
-        }
-      }
-    } else {
-      // Double sweep: the middle of a long shortest path, then descent.
-      auto farthest = [&](int from, std::vector<double>& d) {
-        for (int v : m) d[static_cast<std::size_t>(v)] = kInf;
-        Dijkstra(g, from, d, in_segment);
-        int far = from;
-        for (int v : m)
-          if (d[static_cast<std::size_t>(v)] != kInf &&
-              d[static_cast<std::size_t>(v)] > d[static_cast<std::size_t>(far)])
-            far = v;
-        return far;
-      };
-      std::vector<double> da(static_cast<std::size_t>(n), kInf), db(static_cast<std::size_t>(n), kInf);
-      int a = farthest(seeds[s], da);
-      int b = farthest(a, da);
-      farthest(b, db);
-      double length = da[static_cast<std::size_t>(b)];
-      int mid = a;
-      double mid_score = kInf;
-      for (int v : m) {
-        double x = da[static_cast<std::size_t>(v)], y = db[static_cast<std::size_t>(v)];
-        if (x == kInf || y == kInf) continue;
-        double score = std::abs(x - length / 2) + std::abs(y - length / 2);
-        if (score < mid_score) {
-          mid = v;
-          mid_score = score;
-        }
-      }
-      best = mid;
-      best_spread = Spread(g, best, m, in_segment, scratch);
-      for (bool moved = true; moved;) {
-        moved = false;
-        for (auto [w, _] : g.adj[static_cast<std::size_t>(best)]) {
-          if (!in_segment(w)) continue;
-          auto sp = Spread(g, w, m, in_segment, scratch);
-          if (better(sp, best_spread)) {
-            best = w;
-            best_spread = sp;
-            moved = true;
-            break;
-          }
-        }
-      }
-    }
+    const int best = static_cast<std::int64_t>(m.size()) <= options.max_exact_centroid
+                         ? ExactCentroid(g, seeds[s], m, in_segment, scratch)
+                         : SweptCentroid(g, seeds[s], m, in_segment, scratch);
     StartingPoint p;
     p.sample_id = g.ids[static_cast<std::size_t>(best)];
     p.u = form.samples[static_cast<std::size_t>(p.sample_id)].u;

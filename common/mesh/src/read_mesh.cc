@@ -433,14 +433,40 @@ class PlyBody {
   std::size_t pos_ = 0;
 };
 
-TriangleMesh ReadPly(const std::filesystem::path& path, std::string_view data) {
+// A PLY header's format (0 ascii, 1 little endian, 2 big endian), its
+// elements and where the body starts in the file's bytes.
+struct PlyHeader {
+  int format = -1;
+  std::vector<PlyElement> elements;
+  std::size_t body_start = 0;
+};
+
+// A 'property' header line's tokens (`where`: "line N: ").
+PlyProperty ReadPlyProperty(const std::filesystem::path& path, const std::string& where,
+                            const std::vector<std::string_view>& tok) {
+  PlyProperty p;
+  if (tok.size() == 5 && tok[1] == "list") {
+    p.is_list = true;
+    if (!ParsePlyType(std::string(tok[2]), &p.count_type) || !ParsePlyType(std::string(tok[3]), &p.type)) {
+      Fail(path, where + "unknown PLY type");
+    }
+    p.name = std::string(tok[4]);
+  } else if (tok.size() == 3) {
+    if (!ParsePlyType(std::string(tok[1]), &p.type))
+      Fail(path, where + "unknown PLY type '" + std::string(tok[1].substr(0, 40)) + "'");
+    p.name = std::string(tok[2]);
+  } else {
+    Fail(path, where + "bad property line");
+  }
+  return p;
+}
+
+PlyHeader ReadPlyHeader(const std::filesystem::path& path, std::string_view data) {
   Lines lines(data);
   std::string_view line;
   if (!lines.Next(&line) || Tokens(line).empty() || Tokens(line)[0] != "ply") Fail(path, "missing 'ply' magic line");
-  int format = -1;
-  std::vector<PlyElement> elements;
+  PlyHeader header;
   bool header_done = false;
-  std::size_t body_start = 0;
   std::size_t consumed = line.size() + 1;
   while (lines.Next(&line)) {
     consumed += line.size() + 1;
@@ -449,111 +475,114 @@ TriangleMesh ReadPly(const std::filesystem::path& path, std::string_view data) {
     if (tok.empty()) continue;
     if (tok[0] == "end_header") {
       header_done = true;
-      body_start = std::min(consumed, data.size());
+      header.body_start = std::min(consumed, data.size());
       break;
     } else if (tok[0] == "format") {
       if (tok.size() < 2) Fail(path, where + "bad format line");
       if (tok[1] == "ascii")
-        format = 0;
+        header.format = 0;
       else if (tok[1] == "binary_little_endian")
-        format = 1;
+        header.format = 1;
       else if (tok[1] == "binary_big_endian")
-        format = 2;
+        header.format = 2;
       else
         Fail(path, where + "unknown PLY format '" + std::string(tok[1].substr(0, 40)) + "'");
     } else if (tok[0] == "element") {
       long long n = 0;
       if (tok.size() != 3 || !ParseInt(tok[2], &n) || n < 0) Fail(path, where + "expected 'element name count'");
-      elements.push_back({std::string(tok[1]), n, {}});
+      header.elements.push_back({std::string(tok[1]), n, {}});
     } else if (tok[0] == "property") {
-      if (elements.empty()) Fail(path, where + "property before any element");
-      PlyProperty p;
-      if (tok.size() == 5 && tok[1] == "list") {
-        p.is_list = true;
-        if (!ParsePlyType(std::string(tok[2]), &p.count_type) || !ParsePlyType(std::string(tok[3]), &p.type)) {
-          Fail(path, where + "unknown PLY type");
-        }
-        p.name = std::string(tok[4]);
-      } else if (tok.size() == 3) {
-        if (!ParsePlyType(std::string(tok[1]), &p.type))
-          Fail(path, where + "unknown PLY type '" + std::string(tok[1].substr(0, 40)) + "'");
-        p.name = std::string(tok[2]);
-      } else {
-        Fail(path, where + "bad property line");
-      }
-      elements.back().properties.push_back(p);
+      if (header.elements.empty()) Fail(path, where + "property before any element");
+      header.elements.back().properties.push_back(ReadPlyProperty(path, where, tok));
     } else if (tok[0] == "comment" || tok[0] == "obj_info") {
     } else {
       Fail(path, where + "unexpected PLY header line");
     }
   }
   if (!header_done) Fail(path, "truncated PLY header (no end_header)");
-  if (format < 0) Fail(path, "PLY header has no format line");
+  if (header.format < 0) Fail(path, "PLY header has no format line");
+  return header;
+}
 
-  TriangleMesh mesh;
-  PlyBody body(path, data.substr(body_start), format);
-  std::vector<long long> corners;
-  long long vertex_count = -1;
-  for (const PlyElement& e : elements) {
-    const bool is_vertex = e.name == "vertex";
-    const bool is_face = e.name == "face";
-    // Each element needs at least one byte (binary) or character (ascii) per property.
-    if (!e.properties.empty() && static_cast<unsigned long long>(e.count) > body.remaining()) {
-      Fail(path, "truncated PLY: element '" + e.name + "' announces " + std::to_string(e.count) + " items");
+// Face i's vertex index list (n >= 3 entries of type prop.type) from body,
+// added to mesh as a polygon; `corners` is scratch.
+void ReadPlyFace(const std::filesystem::path& path, const PlyProperty& prop, long long i, long long n,
+                 long long vertex_count, PlyBody& body, std::vector<long long>& corners, TriangleMesh* mesh) {
+  if (n < 3) Fail(path, "PLY face " + std::to_string(i) + " has fewer than 3 vertices");
+  corners.clear();
+  for (long long j = 0; j < n; ++j) {
+    const double v = body.Read(prop.type);
+    if (!(v >= 0 && v < static_cast<double>(vertex_count)) || v != std::floor(v)) {
+      Fail(path, "PLY face " + std::to_string(i) + ": index " + std::to_string(v) + " out of range (" +
+                     std::to_string(vertex_count) + " vertices)");
     }
-    int ix = -1, iy = -1, iz = -1, ilist = -1;
+    corners.push_back(static_cast<long long>(v));
+  }
+  AddPolygon(corners, mesh);
+}
+
+// Element e's items from body: a vertex element's x, y, z into
+// mesh->vertices (setting *vertex_count), a face element's polygons into
+// mesh->triangles; other elements and properties skipped.
+void ReadPlyElement(const std::filesystem::path& path, const PlyElement& e, PlyBody& body, long long* vertex_count,
+                    std::vector<long long>& corners, TriangleMesh* mesh) {
+  const bool is_vertex = e.name == "vertex";
+  const bool is_face = e.name == "face";
+  // Each element needs at least one byte (binary) or character (ascii) per property.
+  if (!e.properties.empty() && static_cast<unsigned long long>(e.count) > body.remaining()) {
+    Fail(path, "truncated PLY: element '" + e.name + "' announces " + std::to_string(e.count) + " items");
+  }
+  int ix = -1, iy = -1, iz = -1, ilist = -1;
+  for (std::size_t k = 0; k < e.properties.size(); ++k) {
+    const auto& n = e.properties[k].name;
+    if (n == "x") ix = static_cast<int>(k);
+    if (n == "y") iy = static_cast<int>(k);
+    if (n == "z") iz = static_cast<int>(k);
+    if (e.properties[k].is_list && (n == "vertex_indices" || n == "vertex_index")) ilist = static_cast<int>(k);
+  }
+  if (is_vertex) {
+    if (ix < 0 || iy < 0 || iz < 0) Fail(path, "PLY vertex element lacks x, y or z");
+    *vertex_count = e.count;
+    mesh->vertices.reserve(e.count);
+  }
+  if (is_face) {
+    if (ilist < 0) Fail(path, "PLY face element lacks a vertex_indices list");
+    if (*vertex_count < 0) Fail(path, "PLY face element before vertex element");
+  }
+  for (long long i = 0; i < e.count; ++i) {
+    std::array<double, 3> p{};
     for (std::size_t k = 0; k < e.properties.size(); ++k) {
-      const auto& n = e.properties[k].name;
-      if (n == "x") ix = static_cast<int>(k);
-      if (n == "y") iy = static_cast<int>(k);
-      if (n == "z") iz = static_cast<int>(k);
-      if (e.properties[k].is_list && (n == "vertex_indices" || n == "vertex_index")) ilist = static_cast<int>(k);
-    }
-    if (is_vertex) {
-      if (ix < 0 || iy < 0 || iz < 0) Fail(path, "PLY vertex element lacks x, y or z");
-      vertex_count = e.count;
-      mesh.vertices.reserve(e.count);
-    }
-    if (is_face) {
-      if (ilist < 0) Fail(path, "PLY face element lacks a vertex_indices list");
-      if (vertex_count < 0) Fail(path, "PLY face element before vertex element");
-    }
-    for (long long i = 0; i < e.count; ++i) {
-      std::array<double, 3> p{};
-      for (std::size_t k = 0; k < e.properties.size(); ++k) {
-        const PlyProperty& prop = e.properties[k];
-        if (prop.is_list) {
-          const double cnt = body.Read(prop.count_type);
-          if (!(cnt >= 0) || cnt > 1e6 || cnt != std::floor(cnt))
-            Fail(path, "bad PLY list length in element '" + e.name + "'");
-          const long long n = static_cast<long long>(cnt);
-          if (is_face && static_cast<int>(k) == ilist) {
-            if (n < 3) Fail(path, "PLY face " + std::to_string(i) + " has fewer than 3 vertices");
-            corners.clear();
-            for (long long j = 0; j < n; ++j) {
-              const double v = body.Read(prop.type);
-              if (!(v >= 0 && v < static_cast<double>(vertex_count)) || v != std::floor(v)) {
-                Fail(path, "PLY face " + std::to_string(i) + ": index " + std::to_string(v) + " out of range (" +
-                               std::to_string(vertex_count) + " vertices)");
-              }
-              corners.push_back(static_cast<long long>(v));
-            }
-            AddPolygon(corners, &mesh);
-          } else {
-            for (long long j = 0; j < n; ++j) body.Read(prop.type);
-          }
+      const PlyProperty& prop = e.properties[k];
+      if (prop.is_list) {
+        const double cnt = body.Read(prop.count_type);
+        if (!(cnt >= 0) || cnt > 1e6 || cnt != std::floor(cnt))
+          Fail(path, "bad PLY list length in element '" + e.name + "'");
+        const long long n = static_cast<long long>(cnt);
+        if (is_face && static_cast<int>(k) == ilist) {
+          ReadPlyFace(path, prop, i, n, *vertex_count, body, corners, mesh);
         } else {
-          const double v = body.Read(prop.type);
-          if (is_vertex) {
-            if (static_cast<int>(k) == ix) p[0] = v;
-            if (static_cast<int>(k) == iy) p[1] = v;
-            if (static_cast<int>(k) == iz) p[2] = v;
-          }
+          for (long long j = 0; j < n; ++j) body.Read(prop.type);
+        }
+      } else {
+        const double v = body.Read(prop.type);
+        if (is_vertex) {
+          if (static_cast<int>(k) == ix) p[0] = v;
+          if (static_cast<int>(k) == iy) p[1] = v;
+          if (static_cast<int>(k) == iz) p[2] = v;
         }
       }
-      if (is_vertex) mesh.vertices.push_back(p);
     }
+    if (is_vertex) mesh->vertices.push_back(p);
   }
+}
+
+TriangleMesh ReadPly(const std::filesystem::path& path, std::string_view data) {
+  const PlyHeader header = ReadPlyHeader(path, data);
+  TriangleMesh mesh;
+  PlyBody body(path, data.substr(header.body_start), header.format);
+  std::vector<long long> corners;
+  long long vertex_count = -1;
+  for (const PlyElement& e : header.elements) ReadPlyElement(path, e, body, &vertex_count, corners, &mesh);
   if (vertex_count < 0) Fail(path, "PLY has no vertex element");
   return mesh;
 }

@@ -75,9 +75,9 @@ double WeightedMedian(std::vector<std::pair<double, double>>& values) {
   return values.back().first;
 }
 
-}  // namespace
-
-ShapeDiameterSummary ShapeDiameter(const TriangleMesh& mesh, const ShapeDiameterOptions& options) {
+// Throws InputError for options out of range or a triangle's vertex index
+// outside `mesh.vertices`.
+void CheckInput(const TriangleMesh& mesh, const ShapeDiameterOptions& options) {
   if (options.rays < 1 || options.rays > 10000) {
     throw InputError("shape diameter: rays must be in [1, 10000], got " + std::to_string(options.rays));
   }
@@ -96,26 +96,31 @@ ShapeDiameterSummary ShapeDiameter(const TriangleMesh& mesh, const ShapeDiameter
         throw InputError("shape diameter: triangle " + std::to_string(t) + " has vertex index " + std::to_string(v) +
                          " out of range");
       }
+}
 
+// The measured faces (every stride-th): unit outward normal (zero for a
+// degenerate face), area (mm^2) and centroid (mm), entry i for face i * stride;
+// and the diagonal of the bounding box of all faces' corners (mm).
+struct MeasuredFaces {
+  std::size_t stride = 1;
+  std::vector<Vec> normal, centroid;
+  std::vector<double> area;
+  double diagonal = 0;
+};
+
+// MeasuredFaces of `mesh` (at least one triangle) over face ranges in
+// parallel (min and max: the same for any schedule).
+MeasuredFaces MeasureFaces(const TriangleMesh& mesh, std::size_t stride) {
   const std::size_t nf = mesh.triangles.size();
-  const double nan = std::numeric_limits<double>::quiet_NaN();
-  ShapeDiameterSummary summary;
-  summary.per_face.assign(nf, nan);
-  summary.min = summary.percentile_5 = summary.median = summary.area_fraction_below = nan;
-  if (nf == 0) return summary;
-
-  // The measured faces: every stride-th.
-  const std::size_t stride =
-      options.max_faces > 0 && nf > static_cast<std::size_t>(options.max_faces)
-          ? (nf + static_cast<std::size_t>(options.max_faces) - 1) / static_cast<std::size_t>(options.max_faces)
-          : 1;
-
-  // The measured faces' normals, areas and centroids in double, and the
-  // bounds of all faces' corners; over face ranges in parallel (min and max:
-  // the same for any schedule).
   const std::size_t measured_faces = (nf + stride - 1) / stride;
-  std::vector<Vec> normal(measured_faces), centroid(measured_faces);  // of face i * stride
-  std::vector<double> area(measured_faces);
+  MeasuredFaces faces;
+  faces.stride = stride;
+  faces.normal.resize(measured_faces);
+  faces.centroid.resize(measured_faces);
+  faces.area.resize(measured_faces);
+  std::vector<Vec>& normal = faces.normal;
+  std::vector<Vec>& centroid = faces.centroid;
+  std::vector<double>& area = faces.area;
   using Bounds = std::pair<Vec, Vec>;
   constexpr double inf = std::numeric_limits<double>::infinity();
   const Bounds bounds = tbb::parallel_reduce(
@@ -151,28 +156,34 @@ ShapeDiameterSummary ShapeDiameter(const TriangleMesh& mesh, const ShapeDiameter
       });
   const Vec& lo = bounds.first;
   const Vec& hi = bounds.second;
-  const double diagonal = Norm(Sub(hi, lo));
-  // Rays start on the face; hits closer than this are the face itself or its
-  // float32 rounding (1e-6 of the model size, well below any printable feature).
-  const float t_near = static_cast<float>(1e-6 * diagonal);
+  faces.diagonal = Norm(Sub(hi, lo));
+  return faces;
+}
 
-  EmbreeScene embree;
-  embree.device = Device();
-  embree.scene = rtcNewScene(embree.device);
-  // The triangles as Embree quads: two consecutive triangles (a, b, c),
-  // (a, d, b) that share their edge a-b, as Solid::ToMesh writes each quad of
-  // the level-set extraction, are the quad (c, a, d, b), which Embree
-  // intersects as the triangles (c, a, b) and (d, b, a): the same two
-  // triangles, in a tree of half as many primitives (the tray's 83k
-  // triangles: build 4.1 -> 1.4 ms, rays 10% faster; hit distances equal to
-  // a few float roundings). Any other triangle is the quad (a, b, c, c),
-  // whose second triangle (c, c, b) is empty.
+// The triangles as Embree quads: two consecutive triangles (a, b, c),
+// (a, d, b) that share their edge a-b, as Solid::ToMesh writes each quad of
+// the level-set extraction, are the quad (c, a, d, b), which Embree
+// intersects as the triangles (c, a, b) and (d, b, a): the same two
+// triangles, in a tree of half as many primitives (the tray's 83k
+// triangles: build 4.1 -> 1.4 ms, rays 10% faster; hit distances equal to
+// a few float roundings). Any other triangle is the quad (a, b, c, c),
+// whose second triangle (c, c, b) is empty.
+struct QuadPairing {
   // first[q]: the quad's first triangle; its second is first[q] + 1 when
   // paired[q].
-  // quad_of[i]: the quad holding measured face i * stride.
   std::vector<std::uint32_t> first;
   std::vector<char> paired;
-  std::vector<std::uint32_t> quad_of(measured_faces);
+  // quad_of[i]: the quad holding measured face i * stride.
+  std::vector<std::uint32_t> quad_of;
+};
+
+QuadPairing PairTriangles(const TriangleMesh& mesh, std::size_t stride, std::size_t measured_faces) {
+  const std::size_t nf = mesh.triangles.size();
+  QuadPairing quads;
+  std::vector<std::uint32_t>& first = quads.first;
+  std::vector<char>& paired = quads.paired;
+  std::vector<std::uint32_t>& quad_of = quads.quad_of;
+  quad_of.resize(measured_faces);
   first.reserve(nf);
   paired.reserve(nf);
   for (std::size_t f = 0; f < nf;) {
@@ -185,8 +196,17 @@ ShapeDiameterSummary ShapeDiameter(const TriangleMesh& mesh, const ShapeDiameter
     paired.push_back(pair ? 1 : 0);
     f += pair ? 2 : 1;
   }
+  return quads;
+}
+
+// Builds embree->scene (on embree->device) from the mesh's vertices in
+// float32 and `quads`, at build quality `quality`.
+void BuildScene(const TriangleMesh& mesh, const QuadPairing& quads, RTCBuildQuality quality, EmbreeScene* embree) {
+  const std::vector<std::uint32_t>& first = quads.first;
+  const std::vector<char>& paired = quads.paired;
+  embree->scene = rtcNewScene(embree->device);
   const std::size_t nq = first.size();
-  RTCGeometry geometry = rtcNewGeometry(embree.device, RTC_GEOMETRY_TYPE_QUAD);
+  RTCGeometry geometry = rtcNewGeometry(embree->device, RTC_GEOMETRY_TYPE_QUAD);
   auto* vb = static_cast<float*>(rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
                                                          3 * sizeof(float), mesh.vertices.size()));
   auto* ib = static_cast<unsigned*>(
@@ -209,6 +229,225 @@ ShapeDiameterSummary ShapeDiameter(const TriangleMesh& mesh, const ShapeDiameter
       for (int k = 0; k < 4; ++k) ib[4 * q + k] = static_cast<unsigned>(quad[k]);
     }
   });
+  rtcSetSceneBuildQuality(embree->scene, quality);
+  rtcSetGeometryBuildQuality(geometry, quality);
+  rtcCommitGeometry(geometry);
+  rtcAttachGeometry(embree->scene, geometry);
+  rtcReleaseGeometry(geometry);
+  rtcCommitScene(embree->scene);
+}
+
+// Fixed ray pattern in the cone frame: polar angle uniform in (0, cone/2),
+// azimuth by the golden angle. Weight 1/theta (Shapira et al. 2008).
+// Entries (sin th cos ph, sin th sin ph, cos th, weight).
+std::vector<std::array<double, 4>> RayPattern(const ShapeDiameterOptions& options) {
+  const int n_rays = options.rays;
+  const double half = 0.5 * options.cone_angle_degrees * std::numbers::pi / 180.0;
+  const double golden = std::numbers::pi * (3.0 - std::sqrt(5.0));
+  std::vector<std::array<double, 4>> pattern(n_rays);
+  for (int i = 0; i < n_rays; ++i) {
+    const double theta = half * (i + 0.5) / n_rays;
+    const double phi = golden * i;
+    pattern[i] = {std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi), std::cos(theta), 1.0 / theta};
+  }
+  return pattern;
+}
+
+// What every face's rays share: the scene, the quads, the measured faces,
+// the ray pattern, the near limit of hits (mm) and the wall test's cosine.
+struct RayCast {
+  RTCScene scene = nullptr;
+  const QuadPairing* quads = nullptr;
+  const MeasuredFaces* faces = nullptr;
+  const std::vector<std::array<double, 4>>* pattern = nullptr;
+  float t_near = 0;
+  double min_opposition = 0;
+};
+
+// Fills packet with eight rays from measured face i's centroid, rays k0 ..
+// k0 + 7 of the pattern around `axis` (lanes past the last ray invalid), and
+// their directions in double in dir.
+void FillPacket(const RayCast& cast, std::size_t i, const Vec& axis, const Vec& t, const Vec& b, int k0, int valid[8],
+                RTCRayHit8* packet, std::array<Vec, 8>* dir) {
+  const std::vector<std::array<double, 4>>& pattern = *cast.pattern;
+  const std::vector<Vec>& centroid = cast.faces->centroid;
+  const int n_rays = static_cast<int>(pattern.size());
+  for (int l = 0; l < 8; ++l) {
+    const int k = std::min(k0 + l, n_rays - 1);
+    valid[l] = k0 + l < n_rays ? -1 : 0;
+    const auto& r = pattern[k];
+    (*dir)[l] = {r[0] * t[0] + r[1] * b[0] + r[2] * axis[0], r[0] * t[1] + r[1] * b[1] + r[2] * axis[1],
+                 r[0] * t[2] + r[1] * b[2] + r[2] * axis[2]};
+    packet->ray.org_x[l] = static_cast<float>(centroid[i][0]);
+    packet->ray.org_y[l] = static_cast<float>(centroid[i][1]);
+    packet->ray.org_z[l] = static_cast<float>(centroid[i][2]);
+    packet->ray.dir_x[l] = static_cast<float>((*dir)[l][0]);
+    packet->ray.dir_y[l] = static_cast<float>((*dir)[l][1]);
+    packet->ray.dir_z[l] = static_cast<float>((*dir)[l][2]);
+    packet->ray.tnear[l] = cast.t_near;
+    packet->ray.tfar[l] = std::numeric_limits<float>::infinity();
+    packet->ray.time[l] = 0;
+    packet->ray.mask[l] = 0xFFFFFFFFu;
+    packet->ray.id[l] = 0;
+    packet->ray.flags[l] = 0;
+    packet->hit.geomID[l] = RTC_INVALID_GEOMETRY_ID;
+    packet->hit.primID[l] = RTC_INVALID_GEOMETRY_ID;
+    packet->hit.instID[0][l] = RTC_INVALID_GEOMETRY_ID;
+  }
+}
+
+// Whether lane l's hit in `packet`, a ray along dir from measured face i, is
+// a wall's far side (and not the face itself).
+bool HitsWall(const RayCast& cast, std::size_t i, const RTCRayHit8& packet, int l, const Vec& dir) {
+  const QuadPairing& quads = *cast.quads;
+  const std::size_t f = i * cast.faces->stride;
+  const Vec& normal = cast.faces->normal[i];
+  const double min_opposition = cast.min_opposition;
+  // The face itself: its own quad, and in it the triangle hit (a
+  // quad's second when u + v > 1, Embree's quad parametrisation).
+  // Only a hit on its own quad reads first and paired (a cache miss
+  // per ray otherwise).
+  const unsigned q = packet.hit.primID[l];
+  if (q == quads.quad_of[i] && quads.first[q] + (quads.paired[q] && packet.hit.u[l] + packet.hit.v[l] > 1 ? 1 : 0) == f)
+    return false;
+  // The hit face's unit normal from Embree's geometric normal (the
+  // counter-clockwise one, as ours; rounded to float, equal to the
+  // double one to 1e-9 in cosine on the tray): reading ours would be
+  // a cache miss per ray into an array of every face's.
+  const Vec ng = {packet.hit.Ng_x[l], packet.hit.Ng_y[l], packet.hit.Ng_z[l]};
+  const double ng_length = Norm(ng);
+  if (!(ng_length > 0)) return false;
+  // Valid only on the inner side of a wall: the hit face's outward
+  // normal points along the ray (dot(ng, dir) / |ng| > 0) ...
+  // ... and only on the far side of a wall: the hit face turns back
+  // towards this one (normals more than 180 - wall_angle degrees
+  // apart, dot(ng, n) / |ng| <= -min_opposition). A neighbouring
+  // face across a convex edge (a cube's, 90 degrees) is no wall:
+  // near such an edge its short rays would outvote the opposite
+  // face's in the median and the outlier test.
+  // Both on the unnormalised normal where it decides them by more
+  // than 1e-9 of |ng| (rounding moves these dot products by ~1e-15
+  // of it), else on the normalised one: the same decisions as
+  // normalising always, without three divisions per hit.
+  const double along = Dot(ng, dir), turned = Dot(ng, normal) + min_opposition * ng_length;
+  const double margin = 1e-9 * ng_length;
+  if (std::abs(along) > margin && std::abs(turned) > margin) {
+    if (along <= 0 || turned > 0) return false;
+  } else {
+    const Vec hit_normal = {ng[0] / ng_length, ng[1] / ng_length, ng[2] / ng_length};
+    if (Dot(hit_normal, dir) <= 0) return false;
+    if (Dot(hit_normal, normal) > -min_opposition) return false;
+  }
+  return true;
+}
+
+// The valid hits of measured face i's rays, as (length mm, weight), in ray
+// order, into *hits (cleared first).
+void CastFaceRays(const RayCast& cast, std::size_t i, RTCIntersectContext* context,
+                  std::vector<std::pair<double, double>>* hits) {
+  const std::vector<std::array<double, 4>>& pattern = *cast.pattern;
+  const int n_rays = static_cast<int>(pattern.size());
+  const Vec& normal = cast.faces->normal[i];
+  const Vec axis = {-normal[0], -normal[1], -normal[2]};
+  Vec t, b;
+  Basis(axis, &t, &b);
+  hits->clear();
+  // The face's rays in packets of eight (one ray per lane of Embree's
+  // AVX2 packet traversal, rtcIntersect8): they share an origin and
+  // spread over a cone, so a packet walks the tree together, and each
+  // lane's hit is the one rtcIntersect1 finds: per-face values bit for
+  // bit the same on the tray, sign.scad and candleStand.scad (every face),
+  // in 14-22% less time (docs/benchmarks.md "OpenSCAD"; a try before
+  // the AVX2 cap, on AVX-512 kernels, moved some hit lengths).
+  for (int k0 = 0; k0 < n_rays; k0 += 8) {
+    alignas(32) int valid[8];
+    alignas(32) RTCRayHit8 packet;
+    std::array<Vec, 8> dir;
+    FillPacket(cast, i, axis, t, b, k0, valid, &packet, &dir);
+    rtcInitIntersectContext(context);
+    rtcIntersect8(valid, cast.scene, context, &packet);
+    for (int l = 0; l < 8 && k0 + l < n_rays; ++l) {
+      if (packet.hit.geomID[l] == RTC_INVALID_GEOMETRY_ID) continue;
+      if (!HitsWall(cast, i, packet, l, dir[l])) continue;
+      hits->push_back({static_cast<double>(packet.ray.tfar[l]), pattern[k0 + l][3]});
+    }
+  }
+}
+
+// Outlier removal: drops from *hits (length, weight) the lengths further than
+// one standard deviation from their median; `lengths` is scratch.
+void DropOutliers(std::vector<std::pair<double, double>>* hits, std::vector<double>* lengths) {
+  lengths->clear();
+  for (const auto& h : *hits) lengths->push_back(h.first);
+  std::sort(lengths->begin(), lengths->end());
+  const std::size_t m = lengths->size();
+  const double median = m % 2 ? (*lengths)[m / 2] : 0.5 * ((*lengths)[m / 2 - 1] + (*lengths)[m / 2]);
+  double mean = 0;
+  for (double l : *lengths) mean += l;
+  mean /= m;
+  double var = 0;
+  for (double l : *lengths) var += (l - mean) * (l - mean);
+  const double sigma = std::sqrt(var / m);
+  std::erase_if(*hits, [&](const auto& h) { return std::abs(h.first - median) > sigma; });
+}
+
+// Area-weighted statistics over the measured faces with a value: counts
+// faces_without_value and sets min, percentile_5, median (mm) and
+// area_fraction_below in *summary (left NaN when no face has a value).
+void AreaStatistics(const MeasuredFaces& faces, double thin_threshold, ShapeDiameterSummary* summary) {
+  const std::size_t nf = summary->per_face.size();
+  const std::size_t stride = faces.stride;
+  const std::vector<double>& area = faces.area;
+  std::vector<std::pair<double, double>> valued;  // (value, area)
+  double total = 0, below = 0;
+  for (std::size_t f = 0; f < nf; f += stride) {
+    if (std::isnan(summary->per_face[f])) {
+      ++summary->faces_without_value;
+      continue;
+    }
+    valued.push_back({summary->per_face[f], area[f / stride]});
+    total += area[f / stride];
+    if (summary->per_face[f] < thin_threshold) below += area[f / stride];
+  }
+  if (valued.empty() || !(total > 0)) return;
+  std::sort(valued.begin(), valued.end());
+  summary->min = valued.front().first;
+  auto quantile = [&](double q) {
+    double acc = 0;
+    for (const auto& v : valued) {
+      acc += v.second;
+      if (acc >= q * total) return v.first;
+    }
+    return valued.back().first;
+  };
+  summary->percentile_5 = quantile(0.05);
+  summary->median = quantile(0.5);
+  summary->area_fraction_below = below / total;
+}
+
+}  // namespace
+
+ShapeDiameterSummary ShapeDiameter(const TriangleMesh& mesh, const ShapeDiameterOptions& options) {
+  CheckInput(mesh, options);
+  const std::size_t nf = mesh.triangles.size();
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  ShapeDiameterSummary summary;
+  summary.per_face.assign(nf, nan);
+  summary.min = summary.percentile_5 = summary.median = summary.area_fraction_below = nan;
+  if (nf == 0) return summary;
+
+  // The measured faces: every stride-th.
+  const std::size_t stride =
+      options.max_faces > 0 && nf > static_cast<std::size_t>(options.max_faces)
+          ? (nf + static_cast<std::size_t>(options.max_faces) - 1) / static_cast<std::size_t>(options.max_faces)
+          : 1;
+  const MeasuredFaces faces = MeasureFaces(mesh, stride);
+  const std::size_t measured_faces = faces.area.size();
+  // Rays start on the face; hits closer than this are the face itself or its
+  // float32 rounding (1e-6 of the model size, well below any printable feature).
+  const float t_near = static_cast<float>(1e-6 * faces.diagonal);
+
+  const QuadPairing quads = PairTriangles(mesh, stride, measured_faces);
   // The tree's build quality by the work it serves: with fewer than 8 rays
   // per triangle (a stride sample of a large mesh: 4,000 faces x 30 rays
   // against the tray's 83k triangles) Embree's quick Morton build (LOW) costs
@@ -219,159 +458,36 @@ ShapeDiameterSummary ShapeDiameter(const TriangleMesh& mesh, const ShapeDiameter
                                    : nf;
   const RTCBuildQuality quality =
       measured * static_cast<std::size_t>(options.rays) < 8 * nf ? RTC_BUILD_QUALITY_LOW : RTC_BUILD_QUALITY_MEDIUM;
-  rtcSetSceneBuildQuality(embree.scene, quality);
-  rtcSetGeometryBuildQuality(geometry, quality);
-  rtcCommitGeometry(geometry);
-  rtcAttachGeometry(embree.scene, geometry);
-  rtcReleaseGeometry(geometry);
-  rtcCommitScene(embree.scene);
+  EmbreeScene embree;
+  embree.device = Device();
+  BuildScene(mesh, quads, quality, &embree);
 
-  // Fixed ray pattern in the cone frame: polar angle uniform in (0, cone/2),
-  // azimuth by the golden angle. Weight 1/theta (Shapira et al. 2008).
-  const double min_opposition = std::cos(options.wall_angle_degrees * std::numbers::pi / 180.0);
-  const int n_rays = options.rays;
-  const double half = 0.5 * options.cone_angle_degrees * std::numbers::pi / 180.0;
-  const double golden = std::numbers::pi * (3.0 - std::sqrt(5.0));
-  std::vector<std::array<double, 4>> pattern(n_rays);  // (sin th cos ph, sin th sin ph, cos th, weight)
-  for (int i = 0; i < n_rays; ++i) {
-    const double theta = half * (i + 0.5) / n_rays;
-    const double phi = golden * i;
-    pattern[i] = {std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi), std::cos(theta), 1.0 / theta};
-  }
+  const std::vector<std::array<double, 4>> pattern = RayPattern(options);
+  RayCast cast;
+  cast.scene = embree.scene;
+  cast.quads = &quads;
+  cast.faces = &faces;
+  cast.pattern = &pattern;
+  cast.t_near = t_near;
+  cast.min_opposition = std::cos(options.wall_angle_degrees * std::numbers::pi / 180.0);
 
   summary.faces_measured = static_cast<std::int64_t>(measured_faces);
-  tbb::parallel_for(
-      tbb::blocked_range<std::size_t>(0, measured_faces), [&](const tbb::blocked_range<std::size_t>& range) {
-        std::vector<std::pair<double, double>> hits;  // (length, weight)
-        std::vector<double> lengths;
-        RTCIntersectContext context;
-        for (std::size_t i = range.begin(); i != range.end(); ++i) {
-          const std::size_t f = i * stride;
-          if (area[i] <= 0) continue;
-          const Vec axis = {-normal[i][0], -normal[i][1], -normal[i][2]};
-          Vec t, b;
-          Basis(axis, &t, &b);
-          hits.clear();
-          // The face's rays in packets of eight (one ray per lane of Embree's
-          // AVX2 packet traversal, rtcIntersect8): they share an origin and
-          // spread over a cone, so a packet walks the tree together, and each
-          // lane's hit is the one rtcIntersect1 finds: per-face values bit for
-          // bit the same on the tray, sign.scad and candleStand.scad (every face),
-          // in 14-22% less time (docs/benchmarks.md "OpenSCAD"; a try before
-          // the AVX2 cap, on AVX-512 kernels, moved some hit lengths).
-          for (int k0 = 0; k0 < n_rays; k0 += 8) {
-            alignas(32) int valid[8];
-            alignas(32) RTCRayHit8 packet;
-            std::array<Vec, 8> dir;
-            for (int l = 0; l < 8; ++l) {
-              const int k = std::min(k0 + l, n_rays - 1);
-              valid[l] = k0 + l < n_rays ? -1 : 0;
-              const auto& r = pattern[k];
-              dir[l] = {r[0] * t[0] + r[1] * b[0] + r[2] * axis[0], r[0] * t[1] + r[1] * b[1] + r[2] * axis[1],
-                        r[0] * t[2] + r[1] * b[2] + r[2] * axis[2]};
-              packet.ray.org_x[l] = static_cast<float>(centroid[i][0]);
-              packet.ray.org_y[l] = static_cast<float>(centroid[i][1]);
-              packet.ray.org_z[l] = static_cast<float>(centroid[i][2]);
-              packet.ray.dir_x[l] = static_cast<float>(dir[l][0]);
-              packet.ray.dir_y[l] = static_cast<float>(dir[l][1]);
-              packet.ray.dir_z[l] = static_cast<float>(dir[l][2]);
-              packet.ray.tnear[l] = t_near;
-              packet.ray.tfar[l] = std::numeric_limits<float>::infinity();
-              packet.ray.time[l] = 0;
-              packet.ray.mask[l] = 0xFFFFFFFFu;
-              packet.ray.id[l] = 0;
-              packet.ray.flags[l] = 0;
-              packet.hit.geomID[l] = RTC_INVALID_GEOMETRY_ID;
-              packet.hit.primID[l] = RTC_INVALID_GEOMETRY_ID;
-              packet.hit.instID[0][l] = RTC_INVALID_GEOMETRY_ID;
-            }
-            rtcInitIntersectContext(&context);
-            rtcIntersect8(valid, embree.scene, &context, &packet);
-            for (int l = 0; l < 8 && k0 + l < n_rays; ++l) {
-              if (packet.hit.geomID[l] == RTC_INVALID_GEOMETRY_ID) continue;
-              // The face itself: its own quad, and in it the triangle hit (a
-              // quad's second when u + v > 1, Embree's quad parametrisation).
-              // Only a hit on its own quad reads first and paired (a cache miss
-              // per ray otherwise).
-              const unsigned q = packet.hit.primID[l];
-              if (q == quad_of[i] && first[q] + (paired[q] && packet.hit.u[l] + packet.hit.v[l] > 1 ? 1 : 0) == f)
-                continue;
-              // The hit face's unit normal from Embree's geometric normal (the
-              // counter-clockwise one, as ours; rounded to float, equal to the
-              // double one to 1e-9 in cosine on the tray): reading ours would be
-              // a cache miss per ray into an array of every face's.
-              const Vec ng = {packet.hit.Ng_x[l], packet.hit.Ng_y[l], packet.hit.Ng_z[l]};
-              const double ng_length = Norm(ng);
-              if (!(ng_length > 0)) continue;
-              // Valid only on the inner side of a wall: the hit face's outward
-              // normal points along the ray (dot(ng, dir) / |ng| > 0) ...
-              // ... and only on the far side of a wall: the hit face turns back
-              // towards this one (normals more than 180 - wall_angle degrees
-              // apart, dot(ng, n) / |ng| <= -min_opposition). A neighbouring
-              // face across a convex edge (a cube's, 90 degrees) is no wall:
-              // near such an edge its short rays would outvote the opposite
-              // face's in the median and the outlier test.
-              // Both on the unnormalised normal where it decides them by more
-              // than 1e-9 of |ng| (rounding moves these dot products by ~1e-15
-              // of it), else on the normalised one: the same decisions as
-              // normalising always, without three divisions per hit.
-              const double along = Dot(ng, dir[l]), turned = Dot(ng, normal[i]) + min_opposition * ng_length;
-              const double margin = 1e-9 * ng_length;
-              if (std::abs(along) > margin && std::abs(turned) > margin) {
-                if (along <= 0 || turned > 0) continue;
-              } else {
-                const Vec hit_normal = {ng[0] / ng_length, ng[1] / ng_length, ng[2] / ng_length};
-                if (Dot(hit_normal, dir[l]) <= 0) continue;
-                if (Dot(hit_normal, normal[i]) > -min_opposition) continue;
-              }
-              hits.push_back({static_cast<double>(packet.ray.tfar[l]), pattern[k0 + l][3]});
-            }
-          }
-          if (hits.empty()) continue;
-          // Outlier removal: keep lengths within one standard deviation of the median.
-          lengths.clear();
-          for (const auto& h : hits) lengths.push_back(h.first);
-          std::sort(lengths.begin(), lengths.end());
-          const std::size_t m = lengths.size();
-          const double median = m % 2 ? lengths[m / 2] : 0.5 * (lengths[m / 2 - 1] + lengths[m / 2]);
-          double mean = 0;
-          for (double l : lengths) mean += l;
-          mean /= m;
-          double var = 0;
-          for (double l : lengths) var += (l - mean) * (l - mean);
-          const double sigma = std::sqrt(var / m);
-          std::erase_if(hits, [&](const auto& h) { return std::abs(h.first - median) > sigma; });
-          if (hits.empty()) continue;  // cannot happen: some length is within sigma of the median
-          summary.per_face[f] = WeightedMedian(hits);
-        }
-      });
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, measured_faces),
+                    [&](const tbb::blocked_range<std::size_t>& range) {
+                      std::vector<std::pair<double, double>> hits;  // (length, weight)
+                      std::vector<double> lengths;
+                      RTCIntersectContext context;
+                      for (std::size_t i = range.begin(); i != range.end(); ++i) {
+                        if (faces.area[i] <= 0) continue;
+                        CastFaceRays(cast, i, &context, &hits);
+                        if (hits.empty()) continue;
+                        DropOutliers(&hits, &lengths);
+                        if (hits.empty()) continue;  // cannot happen: some length is within sigma of the median
+                        summary.per_face[i * stride] = WeightedMedian(hits);
+                      }
+                    });
 
-  // Area-weighted statistics over faces with a value.
-  std::vector<std::pair<double, double>> valued;  // (value, area)
-  double total = 0, below = 0;
-  for (std::size_t f = 0; f < nf; f += stride) {
-    if (std::isnan(summary.per_face[f])) {
-      ++summary.faces_without_value;
-      continue;
-    }
-    valued.push_back({summary.per_face[f], area[f / stride]});
-    total += area[f / stride];
-    if (summary.per_face[f] < options.thin_threshold) below += area[f / stride];
-  }
-  if (valued.empty() || !(total > 0)) return summary;
-  std::sort(valued.begin(), valued.end());
-  summary.min = valued.front().first;
-  auto quantile = [&](double q) {
-    double acc = 0;
-    for (const auto& v : valued) {
-      acc += v.second;
-      if (acc >= q * total) return v.first;
-    }
-    return valued.back().first;
-  };
-  summary.percentile_5 = quantile(0.05);
-  summary.median = quantile(0.5);
-  summary.area_fraction_below = below / total;
+  AreaStatistics(faces, options.thin_threshold, &summary);
   return summary;
 }
 

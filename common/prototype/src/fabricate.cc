@@ -117,36 +117,46 @@ void SlideRails(const Prototype& p, const internal::Model& model, const SolveSum
   parent = Cut(parent, rail_box(s0, s1, wc - bw - gap, wc + bw + gap, ds - gap, ds + hf + gap));
 }
 
-}  // namespace
+// What every fabrication step reads: the prototype, its model, the solution
+// and its variable vector x, the grid, the gap and the voxel size (mm).
+struct FabricationInputs {
+  const Prototype& p;
+  const internal::Model& model;
+  const SolveSummary& sol;
+  const Eigen::VectorXd& x;
+  const geometry::GridSpec& g;
+  double gap, h;
+  std::array<double, 6> box_of(const std::string& name) const { return sol.cuboids.at(name); }
+};
 
-std::vector<FabricatedPiece> FabricatePieces(const Prototype& p, const SolveSummary& sol, const geometry::GridSpec& g,
-                                             FabricateSummary* summary) {
-  auto start = std::chrono::steady_clock::now();
-  if (!sol.satisfiable) throw InputError(p.file + ": cannot fabricate: " + sol.Explain());
-  internal::Model model(p);
+// The model's variable vector at the solution: the cuboids' bounds, then the
+// free values.
+Eigen::VectorXd SolutionVector(const internal::Model& model, const SolveSummary& sol) {
   Eigen::VectorXd x(model.variables);
   for (std::size_t c = 0; c < model.cuboids.size(); ++c)
     for (int k = 0; k < 6; ++k) x[6 * c + k] = sol.cuboids.at(model.cuboid_names[c])[k];
   for (std::size_t i = 0; i < model.free_names.size(); ++i)
     x[6 * model.cuboids.size() + i] = sol.free_values.at(model.free_names[i]);
-  const double gap = p.fabrication.gap, h = g.voxel_size;
-  FabricateSummary fs;
-  const std::size_t np = p.parts.size();
-  std::vector<Solid> solids(np);
-  auto box_of = [&](const std::string& name) { return sol.cuboids.at(name); };
+  return x;
+}
 
-  // Parts shrunk by gap/2 on every face, so touching faces end up a gap apart;
-  // a piece joins the cuboid it is on through a bridge over their contact
-  // (the shrunk boxes of a face contact are a gap apart too); cavities grown
-  // by gap/2 and pushed through their open face.
+// Parts shrunk by gap/2 on every face, so touching faces end up a gap apart;
+// a piece joins the cuboid it is on through a bridge over their contact
+// (the shrunk boxes of a face contact are a gap apart too); cavities grown
+// by gap/2 and pushed through their open face. One solid per part.
+std::vector<Solid> PartSolids(const FabricationInputs& f) {
+  const internal::Model& model = f.model;
+  const geometry::GridSpec& g = f.g;
+  const double gap = f.gap, h = f.h;
+  std::vector<Solid> solids(f.p.parts.size());
   for (std::size_t c = 0; c < model.cuboids.size(); ++c) {
     if (!model.cuboid_solid[c]) continue;
     const int i = model.cuboid_part[c];
-    auto b = box_of(model.cuboid_names[c]);
+    auto b = f.box_of(model.cuboid_names[c]);
     solids[i] = Add(solids[i], BoxAt(g, {b[0] + gap / 2, b[2] + gap / 2, b[4] + gap / 2},
                                      {b[1] - gap / 2, b[3] - gap / 2, b[5] - gap / 2}));
     if (static_cast<int>(c) == i) continue;
-    auto n = box_of(model.cuboids[c]->on);
+    auto n = f.box_of(model.cuboids[c]->on);
     Vec3 lo, hi;
     for (int a = 0; a < 3; ++a) {
       lo[a] = std::max(b[2 * a], n[2 * a]) + gap / 2;
@@ -159,9 +169,9 @@ std::vector<FabricatedPiece> FabricatePieces(const Prototype& p, const SolveSumm
     }
     solids[i] = Add(solids[i], BoxAt(g, lo, hi));
   }
-  for (std::size_t i = 0; i < np; ++i) {
-    for (const Cuboid& cav : p.parts[i].cavities) {
-      auto c = box_of(cav.name);
+  for (std::size_t i = 0; i < solids.size(); ++i) {
+    for (const Cuboid& cav : f.p.parts[i].cavities) {
+      auto c = f.box_of(cav.name);
       Vec3 lo{c[0] - gap / 2, c[2] - gap / 2, c[4] - gap / 2}, hi{c[1] + gap / 2, c[3] + gap / 2, c[5] + gap / 2};
       if (!cav.open.empty()) {
         int ax = cav.open[0] - 'x';
@@ -173,11 +183,16 @@ std::vector<FabricatedPiece> FabricatePieces(const Prototype& p, const SolveSumm
       solids[i] = Cut(solids[i], BoxAt(g, lo, hi));
     }
   }
+  return solids;
+}
 
-  // Cavities by swept volume: each inner part moves from the base to the
-  // fitting configuration relative to the outer part; the sweep, offset by
-  // gap/2, is subtracted from the outer part.
-  for (const Relationship& r : p.relationships) {
+// Cavities by swept volume: each inner part moves from the base to the
+// fitting configuration relative to the outer part; the sweep, offset by
+// gap/2, is subtracted from the outer part. Counts fs->swept_cavities.
+void CutSweptCavities(const FabricationInputs& f, std::vector<Solid>* solids, FabricateSummary* fs) {
+  const internal::Model& model = f.model;
+  const Eigen::VectorXd& x = f.x;
+  for (const Relationship& r : f.p.relationships) {
     if (r.type != RelationType::kFit) continue;
     int oc = model.CuboidIndex(r.b[0], r.where);
     if (!model.cuboid_solid[oc]) continue;  // into a user cavity: already hollow
@@ -205,114 +220,157 @@ std::vector<FabricatedPiece> FabricatePieces(const Prototype& p, const SolveSumm
         }
         return tr;
       };
-      mesh::TriangleMesh body = BoxMesh(box_of(model.cuboid_names[ci]));
+      mesh::TriangleMesh body = BoxMesh(f.box_of(model.cuboid_names[ci]));
       swept::SweptVolumeOptions so;
-      so.voxel_size = h;
-      so.offset = gap / 2;
+      so.voxel_size = f.h;
+      so.offset = f.gap / 2;
       so.time_steps = 2;
-      so.max_step_displacement = 2 * h;
+      so.max_step_displacement = 2 * f.h;
       std::vector<swept::Transform> poses = swept::SamplePoses(body, pose, so);
       swept::SweptDistanceField field = swept::ComputeSweptDistance(body, poses, so);
-      mesh::TriangleMesh surface = field.Surface(gap / 2);
+      mesh::TriangleMesh surface = field.Surface(f.gap / 2);
       if (surface.empty()) continue;
-      solids[outer] = Cut(solids[outer], geometry::FromMesh(g, surface));
-      ++fs.swept_cavities;
+      (*solids)[outer] = Cut((*solids)[outer], geometry::FromMesh(f.g, surface));
+      ++fs->swept_cavities;
     }
   }
+}
+
+// The thinnest side (mm) of joint j's child and parent cuboids.
+double ThinnestSide(const FabricationInputs& f, const Joint& j) {
+  auto cb = f.box_of(j.child), pb = f.box_of(j.parent);
+  double thin = 1e9;
+  for (int a = 0; a < 3; ++a) thin = std::min({thin, cb[2 * a + 1] - cb[2 * a], pb[2 * a + 1] - pb[2 * a]});
+  return thin;
+}
+
+// Hinge or sliding hinge j: a pin on the edge, radius half the thinnest
+// part's thickness (Sec. 7), on the child `child`, running in a hole of the
+// parent `parent`: through two yokes of the parent (hinge), or with its ends
+// in slots of the parent along the slide vector over the range of slide
+// values used (sliding hinge). Counts fs->joint_pieces.
+void AddHinge(const FabricationInputs& f, const Joint& j, Solid& child, Solid& parent, FabricateSummary* fs) {
+  const geometry::GridSpec& g = f.g;
+  const double gap = f.gap, h = f.h;
+  auto cb = f.box_of(j.child);
+  double r = std::max(ThinnestSide(f, j) / 2, 2 * h);
+  Vec3 e{0, 0, 0};
+  int k = 0;
+  for (int a = 0; a < 3; ++a)
+    if (a != j.axis) e[a] = f.model.Resolve(j.at[k++][0], j.where).Eval(f.x);
+  double lo = cb[2 * j.axis], hi = cb[2 * j.axis + 1], len = hi - lo;
+  if (j.type == JointType::kHinge) {
+    double ro = r + gap + std::max(r / 2, 2 * h), yl = len / 5;
+    child = Add(child, CylinderAlong(g, j.axis, r, lo + gap / 2, hi - gap / 2, e));
+    parent = Cut(parent, CylinderAlong(g, j.axis, r + gap, lo - gap, hi + gap, e));
+    for (double y0 : {lo, hi - yl}) {
+      Solid yoke =
+          Cut(CylinderAlong(g, j.axis, ro, y0, y0 + yl, e), CylinderAlong(g, j.axis, r + gap, y0 - h, y0 + yl + h, e));
+      child = Cut(child, CylinderAlong(g, j.axis, ro + gap, y0 - gap, y0 + yl + gap, e));
+      child = Add(child, CylinderAlong(g, j.axis, r, lo + gap / 2, hi - gap / 2, e));
+      parent = Add(parent, yoke);
+      fs->joint_pieces += 1;
+    }
+    // The pin runs through the yokes' holes only: cut it back where the yoke sits.
+    fs->joint_pieces += 1;
+    return;
+  }
+  // Sliding hinge: a longer pin whose ends run in slots of the parent
+  // along the slide vector over the range of slide values used.
+  double ext = r + gap;
+  child = Add(child, CylinderAlong(g, j.axis, r, lo - ext, hi + ext, e));
+  parent = Cut(parent, CylinderAlong(g, j.axis, r + gap, lo - ext - gap, hi + ext + gap, e));
+  double dmin = 0, dmax = 0;
+  for (const Configuration& c : f.p.configurations) {
+    auto it = c.values.find(j.name);
+    if (it == c.values.end()) continue;
+    double d = it->second.slide == "free" ? f.sol.free_values.at(j.name + "@" + c.name + ".s")
+                                          : f.model.ParseExpression(it->second.slide, j.where).Eval(f.x);
+    dmin = std::min(dmin, d);
+    dmax = std::max(dmax, d);
+  }
+  int s = j.slide_axis, w = 3 - j.axis - s;
+  for (int end = 0; end < 2; ++end) {
+    Vec3 slo, shi;
+    slo[j.axis] = end ? hi - gap : lo - ext - gap;
+    shi[j.axis] = end ? hi + ext + gap : lo + gap;
+    slo[s] = e[s] - r - gap + dmin;
+    shi[s] = e[s] + r + gap + dmax;
+    slo[w] = e[w] - r - gap;
+    shi[w] = e[w] + r + gap;
+    parent = Cut(parent, BoxAt(g, slo, shi));
+  }
+  fs->joint_pieces += 1;
+}
+
+// Double pivot j with solved pivots ps: a pivot pin and cap on the child
+// and on the parent, and the free link between them (returned). Counts
+// fs->joint_pieces.
+Solid AddDoublePivot(const FabricationInputs& f, const Joint& j, const PivotSolution& ps, Solid& child, Solid& parent,
+                     FabricateSummary* fs) {
+  const geometry::GridSpec& g = f.g;
+  const double gap = f.gap, h = f.h;
+  auto cb = f.box_of(j.child);
+  const double thin = ThinnestSide(f, j);
+  int n = j.normal;
+  double sigma = j.face.back() == '1' ? 1 : -1;
+  double P = cb[2 * n + (sigma > 0 ? 1 : 0)];
+  double rp = std::max(2 * h, std::min(thin / 4, 4.0));
+  double tl = std::max(4 * h, rp), R = rp + gap + std::max(rp, 2 * h);
+  auto along = [&](double a, double b) {
+    return std::pair{std::min(P + sigma * a, P + sigma * b), std::max(P + sigma * a, P + sigma * b)};
+  };
+  Vec3 ua{ps.child_pivot[0], ps.child_pivot[1], ps.child_pivot[2]};
+  Vec3 ub{ps.parent_pivot[0], ps.parent_pivot[1], ps.parent_pivot[2]};
+  auto [p0, p1] = along(-2 * rp, 2 * gap + tl + tl);
+  auto [c0, c1] = along(2 * gap + tl, 2 * gap + 2 * tl);
+  auto [l0, l1] = along(gap, gap + tl);
+  for (auto [part, u] : {std::pair{&child, ua}, std::pair{&parent, ub}}) {
+    *part = Add(*part, CylinderAlong(g, n, rp, p0, p1, u));
+    *part = Add(*part, CylinderAlong(g, n, R - h, c0, c1, u));
+    fs->joint_pieces += 2;
+  }
+  Vec3 a = ua, b = ub;
+  a[n] = b[n] = (l0 + l1) / 2;
+  Vec3 slo{-1e4, -1e4, -1e4}, shi{1e4, 1e4, 1e4};
+  slo[n] = l0;
+  shi[n] = l1;
+  Vec3 bl{std::min(a[0], b[0]) - R, std::min(a[1], b[1]) - R, std::min(a[2], b[2]) - R};
+  Vec3 bh{std::max(a[0], b[0]) + R, std::max(a[1], b[1]) + R, std::max(a[2], b[2]) + R};
+  bl[n] = l0;
+  bh[n] = l1;
+  Solid link = geometry::Intersection(geometry::Capsule(g, a, b, R), BoxAt(g, bl, bh));
+  for (const Vec3& u : {ua, ub}) link = Cut(link, CylinderAlong(g, n, rp + gap, l0 - h, l1 + h, u));
+  fs->joint_pieces += 1;
+  return link;
+}
+
+}  // namespace
+
+std::vector<FabricatedPiece> FabricatePieces(const Prototype& p, const SolveSummary& sol, const geometry::GridSpec& g,
+                                             FabricateSummary* summary) {
+  auto start = std::chrono::steady_clock::now();
+  if (!sol.satisfiable) throw InputError(p.file + ": cannot fabricate: " + sol.Explain());
+  internal::Model model(p);
+  const Eigen::VectorXd x = SolutionVector(model, sol);
+  const FabricationInputs f{p, model, sol, x, g, p.fabrication.gap, g.voxel_size};
+  FabricateSummary fs;
+  const std::size_t np = p.parts.size();
+  std::vector<Solid> solids = PartSolids(f);
+  CutSweptCavities(f, &solids, &fs);
 
   // Joint geometry.
   std::vector<std::pair<std::string, Solid>> extra;  // free pieces (links), by joint
   for (const Joint& j : p.joints) {
     int ci = p.PartIndex(j.child), pi = p.PartIndex(j.parent);
-    auto cb = box_of(j.child), pb = box_of(j.parent);
-    double thin = 1e9;
-    for (int a = 0; a < 3; ++a) thin = std::min({thin, cb[2 * a + 1] - cb[2 * a], pb[2 * a + 1] - pb[2 * a]});
     if (j.type == JointType::kHinge || j.type == JointType::kSlidingHinge) {
-      // Pin on the edge, radius half the thinnest part's thickness (Sec. 7).
-      double r = std::max(thin / 2, 2 * h);
-      Vec3 e{0, 0, 0};
-      int k = 0;
-      for (int a = 0; a < 3; ++a)
-        if (a != j.axis) e[a] = model.Resolve(j.at[k++][0], j.where).Eval(x);
-      double lo = cb[2 * j.axis], hi = cb[2 * j.axis + 1], len = hi - lo;
-      if (j.type == JointType::kHinge) {
-        double ro = r + gap + std::max(r / 2, 2 * h), yl = len / 5;
-        solids[ci] = Add(solids[ci], CylinderAlong(g, j.axis, r, lo + gap / 2, hi - gap / 2, e));
-        solids[pi] = Cut(solids[pi], CylinderAlong(g, j.axis, r + gap, lo - gap, hi + gap, e));
-        for (double y0 : {lo, hi - yl}) {
-          Solid yoke = Cut(CylinderAlong(g, j.axis, ro, y0, y0 + yl, e),
-                           CylinderAlong(g, j.axis, r + gap, y0 - h, y0 + yl + h, e));
-          solids[ci] = Cut(solids[ci], CylinderAlong(g, j.axis, ro + gap, y0 - gap, y0 + yl + gap, e));
-          solids[ci] = Add(solids[ci], CylinderAlong(g, j.axis, r, lo + gap / 2, hi - gap / 2, e));
-          solids[pi] = Add(solids[pi], yoke);
-          fs.joint_pieces += 1;
-        }
-        // The pin runs through the yokes' holes only: cut it back where the yoke sits.
-        fs.joint_pieces += 1;
-      } else {
-        // Sliding hinge: a longer pin whose ends run in slots of the parent
-        // along the slide vector over the range of slide values used.
-        double ext = r + gap;
-        solids[ci] = Add(solids[ci], CylinderAlong(g, j.axis, r, lo - ext, hi + ext, e));
-        solids[pi] = Cut(solids[pi], CylinderAlong(g, j.axis, r + gap, lo - ext - gap, hi + ext + gap, e));
-        double dmin = 0, dmax = 0;
-        for (const Configuration& c : p.configurations) {
-          auto it = c.values.find(j.name);
-          if (it == c.values.end()) continue;
-          double d = it->second.slide == "free" ? sol.free_values.at(j.name + "@" + c.name + ".s")
-                                                : model.ParseExpression(it->second.slide, j.where).Eval(x);
-          dmin = std::min(dmin, d);
-          dmax = std::max(dmax, d);
-        }
-        int s = j.slide_axis, w = 3 - j.axis - s;
-        for (int end = 0; end < 2; ++end) {
-          Vec3 slo, shi;
-          slo[j.axis] = end ? hi - gap : lo - ext - gap;
-          shi[j.axis] = end ? hi + ext + gap : lo + gap;
-          slo[s] = e[s] - r - gap + dmin;
-          shi[s] = e[s] + r + gap + dmax;
-          slo[w] = e[w] - r - gap;
-          shi[w] = e[w] + r + gap;
-          solids[pi] = Cut(solids[pi], BoxAt(g, slo, shi));
-        }
-        fs.joint_pieces += 1;
-      }
+      AddHinge(f, j, solids[ci], solids[pi], &fs);
     } else if (j.type == JointType::kDoublePivot) {
       const PivotSolution* ps = nullptr;
       for (const auto& q : sol.pivots)
         if (q.joint == j.name) ps = &q;
       if (!ps) continue;
-      int n = j.normal;
-      double sigma = j.face.back() == '1' ? 1 : -1;
-      double P = cb[2 * n + (sigma > 0 ? 1 : 0)];
-      double rp = std::max(2 * h, std::min(thin / 4, 4.0));
-      double tl = std::max(4 * h, rp), R = rp + gap + std::max(rp, 2 * h);
-      auto along = [&](double a, double b) {
-        return std::pair{std::min(P + sigma * a, P + sigma * b), std::max(P + sigma * a, P + sigma * b)};
-      };
-      Vec3 ua{ps->child_pivot[0], ps->child_pivot[1], ps->child_pivot[2]};
-      Vec3 ub{ps->parent_pivot[0], ps->parent_pivot[1], ps->parent_pivot[2]};
-      auto [p0, p1] = along(-2 * rp, 2 * gap + tl + tl);
-      auto [c0, c1] = along(2 * gap + tl, 2 * gap + 2 * tl);
-      auto [l0, l1] = along(gap, gap + tl);
-      for (auto [part, u] : {std::pair{ci, ua}, std::pair{pi, ub}}) {
-        solids[part] = Add(solids[part], CylinderAlong(g, n, rp, p0, p1, u));
-        solids[part] = Add(solids[part], CylinderAlong(g, n, R - h, c0, c1, u));
-        fs.joint_pieces += 2;
-      }
-      Vec3 a = ua, b = ub;
-      a[n] = b[n] = (l0 + l1) / 2;
-      Vec3 slo{-1e4, -1e4, -1e4}, shi{1e4, 1e4, 1e4};
-      slo[n] = l0;
-      shi[n] = l1;
-      Vec3 bl{std::min(a[0], b[0]) - R, std::min(a[1], b[1]) - R, std::min(a[2], b[2]) - R};
-      Vec3 bh{std::max(a[0], b[0]) + R, std::max(a[1], b[1]) + R, std::max(a[2], b[2]) + R};
-      bl[n] = l0;
-      bh[n] = l1;
-      Solid link = geometry::Intersection(geometry::Capsule(g, a, b, R), BoxAt(g, bl, bh));
-      for (const Vec3& u : {ua, ub}) link = Cut(link, CylinderAlong(g, n, rp + gap, l0 - h, l1 + h, u));
-      extra.push_back({j.name, link});
-      fs.joint_pieces += 1;
+      extra.push_back({j.name, AddDoublePivot(f, j, *ps, solids[ci], solids[pi], &fs)});
     }
     if (j.type == JointType::kSlide && !j.on.empty()) {
       SlideRails(p, model, sol, x, j, g, solids[ci], solids[pi]);

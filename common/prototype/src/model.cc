@@ -475,45 +475,43 @@ struct Builder {
     }
     throw InputError(r.where + ": geometric constraint '" + e + "' needs ==, >= or <=");
   }
-};
 
-}  // namespace
-
-void Model::Build(std::vector<LinearConstraint>& out, std::vector<std::string>& groups) const {
-  Builder b{*this, out, groups};
-  for (std::size_t c = 0; c < cuboids.size(); ++c) {
-    const Part& part = proto.parts[cuboid_part[c]];
-    b.Group("sizes of " + cuboid_names[c] + " (" + part.where + ")");
+  // Cuboid c's sizes at least its part's min_size; a cavity inside its part,
+  // its open face on the part's face.
+  void Sizes(std::size_t c) {
+    const Part& part = m.proto.parts[m.cuboid_part[c]];
+    Group("sizes of " + m.cuboid_names[c] + " (" + part.where + ")");
     for (int ax = 0; ax < 3; ++ax)
-      b.Ge(Affine::Var(6 * c + 2 * ax + 1) - Affine::Var(6 * c + 2 * ax) - Affine::Const(part.min_size),
-           cuboid_names[c] + " " + "xyz"[ax] + " extent >= " + std::to_string(part.min_size));
-    if (!cuboid_solid[c]) {  // a cavity: inside its part, open face on the part's face
-      int p = cuboid_part[c];
+      Ge(Affine::Var(6 * c + 2 * ax + 1) - Affine::Var(6 * c + 2 * ax) - Affine::Const(part.min_size),
+         m.cuboid_names[c] + " " + "xyz"[ax] + " extent >= " + std::to_string(part.min_size));
+    if (!m.cuboid_solid[c]) {  // a cavity: inside its part, open face on the part's face
+      int p = m.cuboid_part[c];
       for (int k = 0; k < 6; ++k) {
         Affine g = Affine::Var(6 * c + k) - Affine::Var(6 * p + k);
-        bool open = cuboids[c]->open == kCoord[k];
+        bool open = m.cuboids[c]->open == kCoord[k];
         if (open)
-          b.Eq(g, cuboid_names[c] + " opens at " + kCoord[k]);
+          Eq(g, m.cuboid_names[c] + " opens at " + kCoord[k]);
         else
-          b.Ge(k % 2 ? (-1.0) * g : g, cuboid_names[c] + " " + kCoord[k] + " inside " + part.name);
+          Ge(k % 2 ? (-1.0) * g : g, m.cuboid_names[c] + " " + kCoord[k] + " inside " + part.name);
       }
     }
   }
-  // Pieces stay connected to the cuboid they are on: a face contact of the
+
+  // Piece c stays connected to the cuboid it is on: a face contact of the
   // user's arrangement (within 0.5 mm) stays a contact and the two overlap
   // by >= min_size across it; cuboids that overlap keep overlapping by
   // >= min_size on every axis. `align` coordinates stay equal.
-  for (std::size_t c = 0; c < cuboids.size(); ++c) {
-    if (!cuboid_solid[c] || static_cast<int>(c) == cuboid_part[c]) continue;
-    const Part& part = proto.parts[cuboid_part[c]];
-    int nb = CuboidIndex(cuboids[c]->on, part.where);
-    b.Group("connection of " + cuboid_names[c] + " to " + cuboid_names[nb] + " (" + part.where + ")");
+  void Connection(std::size_t c) {
+    const Part& part = m.proto.parts[m.cuboid_part[c]];
+    const std::vector<std::string>& names = m.cuboid_names;
+    int nb = m.CuboidIndex(m.cuboids[c]->on, part.where);
+    Group("connection of " + names[c] + " to " + names[nb] + " (" + part.where + ")");
     auto var = [&](int cu, int k) { return Affine::Var(6 * cu + k); };
     int contact = -1, side = 0;
     bool overlaps = true;
     for (int ax = 0; ax < 3; ++ax) {
-      double q0 = base[6 * c + 2 * ax], q1 = base[6 * c + 2 * ax + 1];
-      double n0 = base[6 * nb + 2 * ax], n1 = base[6 * nb + 2 * ax + 1];
+      double q0 = m.base[6 * c + 2 * ax], q1 = m.base[6 * c + 2 * ax + 1];
+      double n0 = m.base[6 * nb + 2 * ax], n1 = m.base[6 * nb + 2 * ax + 1];
       if (std::abs(q0 - n1) <= 0.5) {
         contact = ax;
         side = 0;
@@ -524,92 +522,110 @@ void Model::Build(std::vector<LinearConstraint>& out, std::vector<std::string>& 
         overlaps &= std::min(q1, n1) - std::max(q0, n0) > 0;
     }
     if (contact < 0 && !overlaps)
-      throw InputError(part.where + ": piece " + cuboid_names[c] + " neither touches nor overlaps " + cuboid_names[nb]);
+      throw InputError(part.where + ": piece " + names[c] + " neither touches nor overlaps " + names[nb]);
     for (int ax = 0; ax < 3; ++ax) {
       std::string a(1, "xyz"[ax]);
       if (ax == contact) {
         if (side == 0)
-          b.Eq(var(c, 2 * ax) - var(nb, 2 * ax + 1),
-               cuboid_names[c] + "." + a + "0 on " + cuboid_names[nb] + "." + a + "1");
+          Eq(var(c, 2 * ax) - var(nb, 2 * ax + 1), names[c] + "." + a + "0 on " + names[nb] + "." + a + "1");
         else
-          b.Eq(var(nb, 2 * ax) - var(c, 2 * ax + 1),
-               cuboid_names[c] + "." + a + "1 on " + cuboid_names[nb] + "." + a + "0");
+          Eq(var(nb, 2 * ax) - var(c, 2 * ax + 1), names[c] + "." + a + "1 on " + names[nb] + "." + a + "0");
         continue;
       }
-      b.Ge(var(c, 2 * ax + 1) - var(nb, 2 * ax) - Affine::Const(part.min_size),
-           cuboid_names[c] + " overlaps " + cuboid_names[nb] + " in " + a);
-      b.Ge(var(nb, 2 * ax + 1) - var(c, 2 * ax) - Affine::Const(part.min_size),
-           cuboid_names[c] + " overlaps " + cuboid_names[nb] + " in " + a);
+      Ge(var(c, 2 * ax + 1) - var(nb, 2 * ax) - Affine::Const(part.min_size),
+         names[c] + " overlaps " + names[nb] + " in " + a);
+      Ge(var(nb, 2 * ax + 1) - var(c, 2 * ax) - Affine::Const(part.min_size),
+         names[c] + " overlaps " + names[nb] + " in " + a);
     }
-    for (int k : cuboids[c]->align)
-      b.Eq(var(c, k) - var(nb, k), cuboid_names[c] + "." + kCoord[k] + " aligned with " + cuboid_names[nb]);
+    for (int k : m.cuboids[c]->align)
+      Eq(var(c, k) - var(nb, k), names[c] + "." + kCoord[k] + " aligned with " + names[nb]);
   }
-  for (std::size_t c = 0; c < cuboids.size(); ++c) {
-    const Part& part = proto.parts[cuboid_part[c]];
-    const std::vector<int>& held = static_cast<int>(c) == cuboid_part[c] ? part.held : cuboids[c]->held;
-    if (held.empty()) continue;
-    b.Group("held coordinates of " + cuboid_names[c] + " (" + part.where + ")");
+
+  // Cuboid c's held coordinates stay at their given values.
+  void Held(std::size_t c) {
+    const Part& part = m.proto.parts[m.cuboid_part[c]];
+    const std::vector<int>& held = static_cast<int>(c) == m.cuboid_part[c] ? part.held : m.cuboids[c]->held;
+    if (held.empty()) return;
+    Group("held coordinates of " + m.cuboid_names[c] + " (" + part.where + ")");
     for (int k : held)
-      b.Eq(Affine::Var(6 * c + k) - Affine::Const(cuboids[c]->box[k]),
-           cuboid_names[c] + "." + kCoord[k] + " held at " + std::to_string(cuboids[c]->box[k]));
+      Eq(Affine::Var(6 * c + k) - Affine::Const(m.cuboids[c]->box[k]),
+         m.cuboid_names[c] + "." + kCoord[k] + " held at " + std::to_string(m.cuboids[c]->box[k]));
   }
-  for (const Joint& j : proto.joints) {
+
+  // Joint j's attachment: a double pivot's faces coplanar, a slide's rail
+  // faces on each other, the references a joint's position names equal.
+  void Attachment(const Joint& j) {
+    const Prototype& proto = m.proto;
     if (j.type == JointType::kDoublePivot) {
       // The pivots sit on two coplanar faces (Sec. 3), one per part.
       int k = 0;
       while (kCoord[k] != j.face) ++k;
       int c = proto.PartIndex(j.child), pa = proto.PartIndex(j.parent);
-      b.Group("attachment of joint " + j.name + " (" + j.where + ")");
-      b.Eq(Affine::Var(6 * c + k) - Affine::Var(6 * pa + k),
-           j.name + ": " + j.child + "." + j.face + " coplanar with " + j.parent + "." + j.face);
-      continue;
+      Group("attachment of joint " + j.name + " (" + j.where + ")");
+      Eq(Affine::Var(6 * c + k) - Affine::Var(6 * pa + k),
+         j.name + ": " + j.child + "." + j.face + " coplanar with " + j.parent + "." + j.face);
+      return;
     }
     if (j.type == JointType::kSlide && !j.on.empty()) {
       // Rails (Koo et al. Sec. 7): the two faces coplanar, and in every
       // configuration the child still overlaps the parent along the slide
       // by >= its min_size, so the rail stays in its groove.
-      b.Group("attachment of joint " + j.name + " (" + j.where + ")");
-      b.Eq(Resolve(j.on[0], j.where) - Resolve(j.on[1], j.where), j.name + ": " + j.on[0] + " on " + j.on[1]);
+      Group("attachment of joint " + j.name + " (" + j.where + ")");
+      Eq(m.Resolve(j.on[0], j.where) - m.Resolve(j.on[1], j.where), j.name + ": " + j.on[0] + " on " + j.on[1]);
       int c = proto.PartIndex(j.child), pa = proto.PartIndex(j.parent);
-      double m = proto.parts[c].min_size;
+      double ms = proto.parts[c].min_size;
       for (const Configuration& conf : proto.configurations) {
-        Affine d = SlideValue(j, conf);
+        Affine d = m.SlideValue(j, conf);
         int s = j.axis;
-        b.Ge(Affine::Var(6 * c + 2 * s + 1) + d - Affine::Var(6 * pa + 2 * s) - Affine::Const(m),
-             j.name + ": " + j.child + " on " + j.parent + " in '" + conf.name + "' (" + "xyz"[s] + "0)");
-        b.Ge(Affine::Var(6 * pa + 2 * s + 1) - Affine::Var(6 * c + 2 * s) - d - Affine::Const(m),
-             j.name + ": " + j.child + " on " + j.parent + " in '" + conf.name + "' (" + "xyz"[s] + "1)");
+        Ge(Affine::Var(6 * c + 2 * s + 1) + d - Affine::Var(6 * pa + 2 * s) - Affine::Const(ms),
+           j.name + ": " + j.child + " on " + j.parent + " in '" + conf.name + "' (" + "xyz"[s] + "0)");
+        Ge(Affine::Var(6 * pa + 2 * s + 1) - Affine::Var(6 * c + 2 * s) - d - Affine::Const(ms),
+           j.name + ": " + j.child + " on " + j.parent + " in '" + conf.name + "' (" + "xyz"[s] + "1)");
       }
-      continue;
+      return;
     }
     bool any = false;
     for (const auto& refs : j.at) any |= refs.size() > 1;
-    if (!any) continue;
-    b.Group("attachment of joint " + j.name + " (" + j.where + ")");
+    if (!any) return;
+    Group("attachment of joint " + j.name + " (" + j.where + ")");
     for (const auto& refs : j.at)
       for (std::size_t i = 1; i < refs.size(); ++i)
-        b.Eq(Resolve(refs[i], j.where) - Resolve(refs[0], j.where), j.name + ": " + refs[0] + " = " + refs[i]);
+        Eq(m.Resolve(refs[i], j.where) - m.Resolve(refs[0], j.where), j.name + ": " + refs[0] + " = " + refs[i]);
   }
-  for (const Relationship& r : proto.relationships) {
-    b.Group(r.name + " (" + r.where + ")");
+
+  // Relationship r's constraints, by its type.
+  void Relation(const Relationship& r) {
+    Group(r.name + " (" + r.where + ")");
     switch (r.type) {
       case RelationType::kCover:
-        b.Cover(r);
+        Cover(r);
         break;
       case RelationType::kFit:
-        b.Fit(r);
+        Fit(r);
         break;
       case RelationType::kSupport:
-        b.Support(r);
+        Support(r);
         break;
       case RelationType::kFlush:
-        b.Flush(r);
+        Flush(r);
         break;
       case RelationType::kGeometric:
-        b.Geometric(r);
+        Geometric(r);
         break;
     }
   }
+};
+
+}  // namespace
+
+void Model::Build(std::vector<LinearConstraint>& out, std::vector<std::string>& groups) const {
+  Builder b{*this, out, groups};
+  for (std::size_t c = 0; c < cuboids.size(); ++c) b.Sizes(c);
+  for (std::size_t c = 0; c < cuboids.size(); ++c)
+    if (cuboid_solid[c] && static_cast<int>(c) != cuboid_part[c]) b.Connection(c);
+  for (std::size_t c = 0; c < cuboids.size(); ++c) b.Held(c);
+  for (const Joint& j : proto.joints) b.Attachment(j);
+  for (const Relationship& r : proto.relationships) b.Relation(r);
 }
 
 }  // namespace fabatlas::prototype::internal

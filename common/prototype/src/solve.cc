@@ -322,6 +322,164 @@ std::vector<Eigen::Vector3d> Corners(const std::array<double, 6>& box, int u, in
   return out;
 }
 
+// A point on a box's face and the unit direction of the face's longer
+// in-plane side (the pivot's offset direction): the face's normal axis n,
+// side 0 (low) or 1 (high), in-plane axes u and v, frac the point's
+// fractions along them. Returns the longer axis.
+int PivotOnFace(const std::array<double, 6>& box, const std::array<double, 2>& frac, int n, int side, int u, int v,
+                Eigen::Vector3d& point, Eigen::Vector3d& dir) {
+  point[n] = box[2 * n + side];
+  point[u] = box[2 * u] + frac[0] * (box[2 * u + 1] - box[2 * u]);
+  point[v] = box[2 * v] + frac[1] * (box[2 * v + 1] - box[2 * v]);
+  dir.setZero();
+  int longest = (box[2 * u + 1] - box[2 * u]) >= (box[2 * v + 1] - box[2 * v]) ? u : v;
+  dir[longest] = 1;
+  return longest;
+}
+
+// Double pivot j's geometry with the cuboids fixed at x: the pivots on the
+// joint's face of child and parent, their offset axes (*la, *lb), and the
+// child -> parent transform in the base and each configuration that sets j
+// (their names in *config_names).
+PivotGeometry PivotFrames(const Prototype& p, const internal::Model& model, const Joint& j, const Eigen::VectorXd& x,
+                          SolveSummary& summary, std::vector<std::string>* config_names, int* la, int* lb) {
+  PivotGeometry g;
+  int ca = p.PartIndex(j.child), cb = p.PartIndex(j.parent);
+  g.box_a = summary.cuboids[j.child];
+  g.box_b = summary.cuboids[j.parent];
+  int n = j.normal;
+  g.u = n == 0 ? 1 : 0;
+  g.v = n == 2 ? 1 : 2;
+  int side = j.face.back() == '1' ? 1 : 0;
+  *la = PivotOnFace(g.box_a, j.pivot_child, n, side, g.u, g.v, g.ua, g.ea);
+  *lb = PivotOnFace(g.box_b, j.pivot_parent, n, side, g.u, g.v, g.ub, g.eb);
+  g.scale = std::max(1.0, std::max(g.box_a[2 * *la + 1] - g.box_a[2 * *la], g.box_b[2 * *lb + 1] - g.box_b[2 * *lb]));
+  for (const Configuration& c : p.configurations) {
+    if (c.name != "base" && !c.values.count(j.name)) continue;
+    internal::Pose pa = model.PoseOf(ca, c), pb = model.PoseOf(cb, c);
+    Plane2 r;
+    r.R = pb.R.transpose() * pa.R;
+    Eigen::Vector3d ta, tb;
+    for (int k = 0; k < 3; ++k) {
+      ta[k] = pa.t[k].Eval(x);
+      tb[k] = pb.t[k].Eval(x);
+    }
+    r.t = pb.R.transpose() * (ta - tb);
+    g.rel.push_back(r);
+    config_names->push_back(c.name);
+  }
+  return g;
+}
+
+// Adds to s2 the constraints of a pivot's offsets ab for configuration c:
+// the link keeps its base length, and clears the corners it passes between
+// base and c at the current offsets. Returns the corner cases added (a key
+// that changes when the set of passed corners does).
+std::string AddPivotConstraints(const PivotGeometry& g, const Joint& j, const std::string& config_name, std::size_t c,
+                                const Eigen::Vector2d& ab, Nlp& s2) {
+  const int n = j.normal;
+  std::string key;
+  s2.groups.push_back("position constraint of " + j.name + " base->" + config_name + " (" + j.where + ")");
+  auto* f = new ceres::AutoDiffCostFunction<PositionFunctor, 1, 2>(new PositionFunctor{&g, 0, static_cast<int>(c)});
+  s2.cons.push_back({std::unique_ptr<ceres::CostFunction>(f), true, static_cast<int>(s2.groups.size()) - 1,
+                     j.name + ": equal link length in base and " + config_name});
+  // Corners the link passes between base and c, at the current offsets.
+  Eigen::Vector3d ua = g.ua + ab[0] * g.ea, xb = g.ub + ab[1] * g.eb;
+  Eigen::Vector3d x0 = g.rel[0].R * ua + g.rel[0].t, x1 = g.rel[c].R * ua + g.rel[c].t;
+  double phi0 = Angle(x0 - xb, g.u, g.v), phi1 = Angle(x1 - xb, g.u, g.v);
+  std::vector<Eigen::Vector3d> cb, ca;
+  for (const auto& k : Corners(g.box_b, g.u, g.v, n))
+    if ((k - xb).norm() > 1e-6 && InArc(Angle(k - xb, g.u, g.v), phi0, phi1)) cb.push_back(k);
+  Eigen::Vector3d y0 = g.rel[0].R.transpose() * (xb - g.rel[0].t), y1 = g.rel[c].R.transpose() * (xb - g.rel[c].t);
+  double psi0 = Angle(y0 - ua, g.u, g.v), psi1 = Angle(y1 - ua, g.u, g.v);
+  for (const auto& k : Corners(g.box_a, g.u, g.v, n))
+    if ((k - ua).norm() > 1e-6 && InArc(Angle(k - ua, g.u, g.v), psi0, psi1)) ca.push_back(k);
+  if (cb.empty() && ca.empty()) return key;
+  s2.groups.push_back("motion constraint of " + j.name + " base->" + config_name + " (" + j.where + ")");
+  auto add = [&](bool has_a, bool has_b, const Eigen::Vector3d& ka, const Eigen::Vector3d& kb) {
+    auto* mf = new ceres::AutoDiffCostFunction<MotionFunctor, 1, 2>(new MotionFunctor{&g, 0, has_a, has_b, ka, kb});
+    s2.cons.push_back({std::unique_ptr<ceres::CostFunction>(mf), false, static_cast<int>(s2.groups.size()) - 1,
+                       j.name + ": link clears the corners"});
+    key += std::to_string(has_a) + std::to_string(has_b) + ";";
+  };
+  if (!ca.empty() && !cb.empty()) {
+    for (const auto& ka : ca)
+      for (const auto& kb : cb) add(true, true, ka, kb);
+  } else if (!cb.empty()) {
+    for (const auto& kb : cb) add(false, true, Eigen::Vector3d::Zero(), kb);
+  } else {
+    for (const auto& ka : ca) add(true, false, ka, Eigen::Vector3d::Zero());
+  }
+  return key;
+}
+
+// Stage 2 for double pivot j with the cuboids fixed at x: its offsets a, b
+// along the pivots' faces, in up to three rounds of re-listing the corners
+// the link passes. Appends the PivotSolution to summary.pivots and returns
+// true; on conflicting constraints records them in summary and returns false.
+bool SolvePivot(const Prototype& p, const internal::Model& model, const Joint& j, const Eigen::VectorXd& x,
+                const SolveOptions& options, SolveSummary& summary) {
+  std::vector<std::string> config_names;
+  int la = 0, lb = 0;
+  const PivotGeometry g = PivotFrames(p, model, j, x, summary, &config_names, &la, &lb);
+  Nlp s2;
+  s2.n = 2;
+  s2.target = Eigen::Vector2d::Zero();
+  s2.weight = Eigen::Vector2d::Ones();
+  double ma = std::min(5.0, 0.1 * (g.box_a[2 * la + 1] - g.box_a[2 * la]));
+  double mb = std::min(5.0, 0.1 * (g.box_b[2 * lb + 1] - g.box_b[2 * lb]));
+  s2.lower = Eigen::Vector2d(g.box_a[2 * la] + ma - g.ua[la], g.box_b[2 * lb] + mb - g.ub[lb]);
+  s2.upper = Eigen::Vector2d(g.box_a[2 * la + 1] - ma - g.ua[la], g.box_b[2 * lb + 1] - mb - g.ub[lb]);
+  std::vector<Eigen::VectorXd> starts = {Eigen::Vector2d::Zero()};
+  for (int k = 0; k < 4; ++k)
+    starts.push_back(Eigen::Vector2d(k & 1 ? s2.upper[0] : s2.lower[0], k & 2 ? s2.upper[1] : s2.lower[1]));
+  for (auto& s : starts) s = s.cwiseMax(s2.lower).cwiseMin(s2.upper);
+
+  PivotSolution ps;
+  ps.joint = j.name;
+  Eigen::Vector2d ab = starts[0];
+  std::string corners_key;
+  for (int round = 0; round < 3; ++round) {
+    s2.cons.clear();
+    s2.groups.clear();
+    std::string key;
+    for (std::size_t c = 1; c < g.rel.size(); ++c) key += AddPivotConstraints(g, j, config_names[c], c, ab, s2);
+    std::vector<bool> act(s2.groups.size(), true);
+    Outcome f = Feasibility(s2, act, starts, options.tolerance);
+    if (f.violation > options.tolerance) {
+      if (options.explain_conflicts) Explain(s2, starts, options.tolerance, summary);
+      summary.conflicts.push_back("pivot ranges of " + j.name + " (pivots stay on their faces)");
+      summary.max_violation = f.violation;
+      return false;
+    }
+    Outcome o = Run(s2, act, false, f.x, options.tolerance);
+    if (o.violation > options.tolerance) o = f;
+    ab = o.x;
+    // Motion bound reported at the solution.
+    ps.link_length_bound = 0;
+    for (const Con& c : s2.cons)
+      if (!c.eq) {
+        Eigen::Vector3d ua = g.ua + ab[0] * g.ea, xb = g.ub + ab[1] * g.eb;
+        double L = (g.rel[0].R * ua + g.rel[0].t - xb).norm();
+        ps.link_length_bound = std::max(ps.link_length_bound, L - G(c, o.x));
+      }
+    if (key == corners_key) break;
+    corners_key = key;
+  }
+  ps.a = ab[0];
+  ps.b = ab[1];
+  Eigen::Vector3d ua = g.ua + ab[0] * g.ea, xb = g.ub + ab[1] * g.eb;
+  Eigen::Vector3d xa = g.rel[0].R * ua + g.rel[0].t;
+  // Parent frame == world for a root parent; map both through the parent's base pose (identity).
+  for (int k = 0; k < 3; ++k) {
+    ps.child_pivot[k] = xa[k];
+    ps.parent_pivot[k] = xb[k];
+  }
+  ps.link_length = (xa - xb).norm();
+  summary.pivots.push_back(ps);
+  return true;
+}
+
 }  // namespace
 
 std::string SolveSummary::Explain() const {
@@ -379,134 +537,10 @@ SolveSummary SolvePrototype(const Prototype& p, const SolveOptions& options) {
   // Stage 2: each double pivot's offsets a, b with B fixed.
   for (const Joint& j : p.joints) {
     if (j.type != JointType::kDoublePivot) continue;
-    PivotGeometry g;
-    int ca = p.PartIndex(j.child), cb = p.PartIndex(j.parent);
-    g.box_a = summary.cuboids[j.child];
-    g.box_b = summary.cuboids[j.parent];
-    int n = j.normal;
-    g.u = n == 0 ? 1 : 0;
-    g.v = n == 2 ? 1 : 2;
-    int side = j.face.back() == '1' ? 1 : 0;
-    auto pivot = [&](const std::array<double, 6>& box, const std::array<double, 2>& frac, Eigen::Vector3d& point,
-                     Eigen::Vector3d& dir) {
-      point[n] = box[2 * n + side];
-      point[g.u] = box[2 * g.u] + frac[0] * (box[2 * g.u + 1] - box[2 * g.u]);
-      point[g.v] = box[2 * g.v] + frac[1] * (box[2 * g.v + 1] - box[2 * g.v]);
-      dir.setZero();
-      int longest = (box[2 * g.u + 1] - box[2 * g.u]) >= (box[2 * g.v + 1] - box[2 * g.v]) ? g.u : g.v;
-      dir[longest] = 1;
-      return longest;
-    };
-    int la = pivot(g.box_a, j.pivot_child, g.ua, g.ea);
-    int lb = pivot(g.box_b, j.pivot_parent, g.ub, g.eb);
-    g.scale = std::max(1.0, std::max(g.box_a[2 * la + 1] - g.box_a[2 * la], g.box_b[2 * lb + 1] - g.box_b[2 * lb]));
-    std::vector<std::string> config_names;
-    for (const Configuration& c : p.configurations) {
-      if (c.name != "base" && !c.values.count(j.name)) continue;
-      internal::Pose pa = model.PoseOf(ca, c), pb = model.PoseOf(cb, c);
-      Plane2 r;
-      r.R = pb.R.transpose() * pa.R;
-      Eigen::Vector3d ta, tb;
-      for (int k = 0; k < 3; ++k) {
-        ta[k] = pa.t[k].Eval(x);
-        tb[k] = pb.t[k].Eval(x);
-      }
-      r.t = pb.R.transpose() * (ta - tb);
-      g.rel.push_back(r);
-      config_names.push_back(c.name);
+    if (!SolvePivot(p, model, j, x, options, summary)) {
+      summary.seconds = std::chrono::duration<double>(Clock::now() - start).count();
+      return summary;
     }
-    Nlp s2;
-    s2.n = 2;
-    s2.target = Eigen::Vector2d::Zero();
-    s2.weight = Eigen::Vector2d::Ones();
-    double ma = std::min(5.0, 0.1 * (g.box_a[2 * la + 1] - g.box_a[2 * la]));
-    double mb = std::min(5.0, 0.1 * (g.box_b[2 * lb + 1] - g.box_b[2 * lb]));
-    s2.lower = Eigen::Vector2d(g.box_a[2 * la] + ma - g.ua[la], g.box_b[2 * lb] + mb - g.ub[lb]);
-    s2.upper = Eigen::Vector2d(g.box_a[2 * la + 1] - ma - g.ua[la], g.box_b[2 * lb + 1] - mb - g.ub[lb]);
-    std::vector<Eigen::VectorXd> starts = {Eigen::Vector2d::Zero()};
-    for (int k = 0; k < 4; ++k)
-      starts.push_back(Eigen::Vector2d(k & 1 ? s2.upper[0] : s2.lower[0], k & 2 ? s2.upper[1] : s2.lower[1]));
-    for (auto& s : starts) s = s.cwiseMax(s2.lower).cwiseMin(s2.upper);
-
-    PivotSolution ps;
-    ps.joint = j.name;
-    Eigen::Vector2d ab = starts[0];
-    std::string corners_key;
-    std::vector<std::unique_ptr<PivotGeometry>> keep;
-    for (int round = 0; round < 3; ++round) {
-      s2.cons.clear();
-      s2.groups.clear();
-      std::string key;
-      for (std::size_t c = 1; c < g.rel.size(); ++c) {
-        s2.groups.push_back("position constraint of " + j.name + " base->" + config_names[c] + " (" + j.where + ")");
-        auto* f =
-            new ceres::AutoDiffCostFunction<PositionFunctor, 1, 2>(new PositionFunctor{&g, 0, static_cast<int>(c)});
-        s2.cons.push_back({std::unique_ptr<ceres::CostFunction>(f), true, static_cast<int>(s2.groups.size()) - 1,
-                           j.name + ": equal link length in base and " + config_names[c]});
-        // Corners the link passes between base and c, at the current offsets.
-        Eigen::Vector3d ua = g.ua + ab[0] * g.ea, xb = g.ub + ab[1] * g.eb;
-        Eigen::Vector3d x0 = g.rel[0].R * ua + g.rel[0].t, x1 = g.rel[c].R * ua + g.rel[c].t;
-        double phi0 = Angle(x0 - xb, g.u, g.v), phi1 = Angle(x1 - xb, g.u, g.v);
-        std::vector<Eigen::Vector3d> cb, ca;
-        for (const auto& k : Corners(g.box_b, g.u, g.v, n))
-          if ((k - xb).norm() > 1e-6 && InArc(Angle(k - xb, g.u, g.v), phi0, phi1)) cb.push_back(k);
-        Eigen::Vector3d y0 = g.rel[0].R.transpose() * (xb - g.rel[0].t),
-                        y1 = g.rel[c].R.transpose() * (xb - g.rel[c].t);
-        double psi0 = Angle(y0 - ua, g.u, g.v), psi1 = Angle(y1 - ua, g.u, g.v);
-        for (const auto& k : Corners(g.box_a, g.u, g.v, n))
-          if ((k - ua).norm() > 1e-6 && InArc(Angle(k - ua, g.u, g.v), psi0, psi1)) ca.push_back(k);
-        if (cb.empty() && ca.empty()) continue;
-        s2.groups.push_back("motion constraint of " + j.name + " base->" + config_names[c] + " (" + j.where + ")");
-        auto add = [&](bool has_a, bool has_b, const Eigen::Vector3d& ka, const Eigen::Vector3d& kb) {
-          auto* mf =
-              new ceres::AutoDiffCostFunction<MotionFunctor, 1, 2>(new MotionFunctor{&g, 0, has_a, has_b, ka, kb});
-          s2.cons.push_back({std::unique_ptr<ceres::CostFunction>(mf), false, static_cast<int>(s2.groups.size()) - 1,
-                             j.name + ": link clears the corners"});
-          key += std::to_string(has_a) + std::to_string(has_b) + ";";
-        };
-        if (!ca.empty() && !cb.empty()) {
-          for (const auto& ka : ca)
-            for (const auto& kb : cb) add(true, true, ka, kb);
-        } else if (!cb.empty()) {
-          for (const auto& kb : cb) add(false, true, Eigen::Vector3d::Zero(), kb);
-        } else {
-          for (const auto& ka : ca) add(true, false, ka, Eigen::Vector3d::Zero());
-        }
-      }
-      std::vector<bool> act(s2.groups.size(), true);
-      Outcome f = Feasibility(s2, act, starts, options.tolerance);
-      if (f.violation > options.tolerance) {
-        if (options.explain_conflicts) Explain(s2, starts, options.tolerance, summary);
-        summary.conflicts.push_back("pivot ranges of " + j.name + " (pivots stay on their faces)");
-        summary.max_violation = f.violation;
-        summary.seconds = std::chrono::duration<double>(Clock::now() - start).count();
-        return summary;
-      }
-      Outcome o = Run(s2, act, false, f.x, options.tolerance);
-      if (o.violation > options.tolerance) o = f;
-      ab = o.x;
-      // Motion bound reported at the solution.
-      ps.link_length_bound = 0;
-      for (const Con& c : s2.cons)
-        if (!c.eq) {
-          Eigen::Vector3d ua = g.ua + ab[0] * g.ea, xb = g.ub + ab[1] * g.eb;
-          double L = (g.rel[0].R * ua + g.rel[0].t - xb).norm();
-          ps.link_length_bound = std::max(ps.link_length_bound, L - G(c, o.x));
-        }
-      if (key == corners_key) break;
-      corners_key = key;
-    }
-    ps.a = ab[0];
-    ps.b = ab[1];
-    Eigen::Vector3d ua = g.ua + ab[0] * g.ea, xb = g.ub + ab[1] * g.eb;
-    Eigen::Vector3d xa = g.rel[0].R * ua + g.rel[0].t;
-    // Parent frame == world for a root parent; map both through the parent's base pose (identity).
-    for (int k = 0; k < 3; ++k) {
-      ps.child_pivot[k] = xa[k];
-      ps.parent_pivot[k] = xb[k];
-    }
-    ps.link_length = (xa - xb).norm();
-    summary.pivots.push_back(ps);
   }
   summary.satisfiable = true;
   summary.seconds = std::chrono::duration<double>(Clock::now() - start).count();

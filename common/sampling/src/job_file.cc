@@ -55,6 +55,52 @@ double Real(const std::string& path, const YAML::Node& node, const std::string& 
   return v;
 }
 
+// The 'sampling' mapping into job.
+void ReadSampling(const std::string& path, const YAML::Node& value, JobFile& job) {
+  if (!value.IsMap()) Fail(path, value.Mark(), "sampling must be a mapping");
+  for (const auto& s : value) {
+    const std::string skey = s.first.as<std::string>();
+    const YAML::Node& sv = s.second;
+    if (skey == "subdivisions")
+      job.subdivisions = static_cast<int>(Integer(path, sv, "sampling.subdivisions", 1, 1000));
+    else if (skey == "max_depth")
+      job.sampling.max_depth = static_cast<int>(Integer(path, sv, "sampling.max_depth", 0, 4 * kDyadicBits));
+    else if (skey == "dg_threshold")
+      job.sampling.dg_threshold = Real(path, sv, "sampling.dg_threshold", 0.0, 1.0);
+    else if (skey == "max_samples")
+      job.sampling.max_samples = Integer(path, sv, "sampling.max_samples", 1, 1000000000000LL);
+    else
+      Fail(path, s.first.Mark(),
+           "unknown key 'sampling." + skey + "' (expected subdivisions, max_depth, dg_threshold, max_samples)");
+  }
+}
+
+// One entry m of the 'materials' list, a new name among job.materials.
+Material ReadMaterial(const std::string& path, const YAML::Node& m, const JobFile& job) {
+  if (!m.IsMap()) Fail(path, m.Mark(), "a material must be a mapping {name, density, price_per_kg}");
+  Material material;
+  bool have_name = false, have_density = false;
+  for (const auto& f : m) {
+    const std::string fkey = f.first.as<std::string>();
+    if (fkey == "name") {
+      material.name = Scalar(path, f.second, "materials.name");
+      have_name = !material.name.empty();
+    } else if (fkey == "density") {
+      material.density_g_per_cm3 = Real(path, f.second, "materials.density", 1e-6, 1e6);
+      have_density = true;
+    } else if (fkey == "price_per_kg") {
+      material.price_per_kg = Real(path, f.second, "materials.price_per_kg", 0.0, 1e12);
+    } else {
+      Fail(path, f.first.Mark(), "unknown key 'materials." + fkey + "' (expected name, density, price_per_kg)");
+    }
+  }
+  if (!have_name) Fail(path, m.Mark(), "a material needs a non-empty name");
+  if (!have_density) Fail(path, m.Mark(), "material '" + material.name + "' needs a density (g/cm^3)");
+  for (const Material& other : job.materials)
+    if (other.name == material.name) Fail(path, m.Mark(), "duplicate material '" + material.name + "'");
+  return material;
+}
+
 }  // namespace
 
 JobFile ParseJobFile(const std::string& yaml_text, const std::string& path) {
@@ -79,22 +125,7 @@ JobFile ParseJobFile(const std::string& yaml_text, const std::string& path) {
                                         : (std::filesystem::path(path).parent_path() / p).lexically_normal().string();
       have_design = true;
     } else if (key == "sampling") {
-      if (!value.IsMap()) Fail(path, value.Mark(), "sampling must be a mapping");
-      for (const auto& s : value) {
-        const std::string skey = s.first.as<std::string>();
-        const YAML::Node& sv = s.second;
-        if (skey == "subdivisions")
-          job.subdivisions = static_cast<int>(Integer(path, sv, "sampling.subdivisions", 1, 1000));
-        else if (skey == "max_depth")
-          job.sampling.max_depth = static_cast<int>(Integer(path, sv, "sampling.max_depth", 0, 4 * kDyadicBits));
-        else if (skey == "dg_threshold")
-          job.sampling.dg_threshold = Real(path, sv, "sampling.dg_threshold", 0.0, 1.0);
-        else if (skey == "max_samples")
-          job.sampling.max_samples = Integer(path, sv, "sampling.max_samples", 1, 1000000000000LL);
-        else
-          Fail(path, s.first.Mark(),
-               "unknown key 'sampling." + skey + "' (expected subdivisions, max_depth, dg_threshold, max_samples)");
-      }
+      ReadSampling(path, value, job);
     } else if (key == "form_json") {
       const std::string v = Scalar(path, value, "form_json");
       if (v == "true")
@@ -107,30 +138,7 @@ JobFile ParseJobFile(const std::string& yaml_text, const std::string& path) {
       job.threads = static_cast<int>(Integer(path, value, "threads", 1, 4096));
     } else if (key == "materials") {
       if (!value.IsSequence()) Fail(path, value.Mark(), "materials must be a list of {name, density, price_per_kg}");
-      for (const auto& m : value) {
-        if (!m.IsMap()) Fail(path, m.Mark(), "a material must be a mapping {name, density, price_per_kg}");
-        Material material;
-        bool have_name = false, have_density = false;
-        for (const auto& f : m) {
-          const std::string fkey = f.first.as<std::string>();
-          if (fkey == "name") {
-            material.name = Scalar(path, f.second, "materials.name");
-            have_name = !material.name.empty();
-          } else if (fkey == "density") {
-            material.density_g_per_cm3 = Real(path, f.second, "materials.density", 1e-6, 1e6);
-            have_density = true;
-          } else if (fkey == "price_per_kg") {
-            material.price_per_kg = Real(path, f.second, "materials.price_per_kg", 0.0, 1e12);
-          } else {
-            Fail(path, f.first.Mark(), "unknown key 'materials." + fkey + "' (expected name, density, price_per_kg)");
-          }
-        }
-        if (!have_name) Fail(path, m.Mark(), "a material needs a non-empty name");
-        if (!have_density) Fail(path, m.Mark(), "material '" + material.name + "' needs a density (g/cm^3)");
-        for (const Material& other : job.materials)
-          if (other.name == material.name) Fail(path, m.Mark(), "duplicate material '" + material.name + "'");
-        job.materials.push_back(material);
-      }
+      for (const auto& m : value) job.materials.push_back(ReadMaterial(path, m, job));
     } else if (key == "cluster" || key == "cache") {
       if (key == "cache" && value.IsMap() && value["min_subtree_seconds"])
         job.cache_min_subtree_seconds = Real(path, value["min_subtree_seconds"], "cache.min_subtree_seconds", 0.0, 1e9);

@@ -55,8 +55,12 @@ unsigned FailureColour(const Form& form, const std::string& failure_type) {
   return kPalette[std::min<size_t>(i, 7)];
 }
 
-ValidityMapLayout WriteValidityMap(const Form& form, const ValidityMapOptions& options, const std::string& path) {
-  const DesignSpace space = form.space();
+namespace {
+
+// The fixed values of every dimension but the plotted two: options.fixed, or
+// each range's middle (rounded down on a discrete dimension). Throws
+// InputError for a bad dimension choice, count or value.
+std::vector<double> FixedValues(const DesignSpace& space, const ValidityMapOptions& options) {
   const int n = space.dimension_count();
   const int xd = options.x_dimension, yd = options.y_dimension;
   if (xd < 0 || yd < 0 || xd >= n || yd >= n || xd == yd)
@@ -76,77 +80,98 @@ ValidityMapLayout WriteValidityMap(const Form& form, const ValidityMapOptions& o
     if (d != xd && d != yd && !(fixed[d] >= space.dimension(d).lo && fixed[d] <= space.dimension(d).hi))
       throw InputError("validity map: fixed value " + Format(fixed[d]) + " of '" + space.dimension(d).name +
                        "' is outside its range");
+  return fixed;
+}
 
-  const int P = std::max(64, options.plot_pixels);
-  const int left = 80, top = 20, bottom = 60, gap = 30;
-  const auto types = FailureTypes(form);
-  int legend_w = 0;
-  for (const auto& t : types) legend_w = std::max(legend_w, TextWidth("mixed " + t));
-  legend_w = std::max(legend_w, TextWidth("invalid sample")) + 22 + 8;
-  const int W = left + P + gap + legend_w;
-  const int H = std::max(top + P + bottom, top + static_cast<int>(types.size() + 6) * 2 * kCharH);
-  picture::Canvas img(W, H);
+// The picture's plot: the form, its space, the plotted dimensions, the
+// plot's side P and its top-left corner on the canvas (pixels).
+struct Plot {
+  const Form& form;
+  const DesignSpace& space;
+  int xd, yd, P, left, top;
+};
 
-  const Dimension& dx = space.dimension(xd);
-  const Dimension& dy = space.dimension(yd);
+// A leaf's colour: valid when all its corner samples are; else the colour of
+// its most frequent failure type, blended towards white when some corner is
+// valid.
+unsigned LeafColour(const Form& form, const FormNode& node) {
+  std::map<std::string, int> counts;
+  int invalid = 0, total = 0;
+  for (std::int64_t s : CornerSampleIds(form, node)) {
+    ++total;
+    if (form.samples[s].outcome.valid) continue;
+    ++invalid;
+    ++counts[form.samples[s].outcome.failure_type];
+  }
+  unsigned c = ValidColour();
+  if (invalid > 0) {
+    std::string top_type;
+    int best = -1;
+    for (const auto& [t, k] : counts)
+      if (k > best) best = k, top_type = t;
+    c = FailureColour(form, top_type);
+    if (invalid < total) c = Blend(c, 0.55);
+  }
+  return c;
+}
+
+// Paints each plot pixel in the colour of the leaf its centre falls in (the
+// other dimensions at `fixed`); returns each pixel's leaf id (tree << 32 |
+// node, -1 for none), row by row, and the leaves hit in *leaves_hit.
+std::vector<long long> PaintLeaves(const Plot& plot, const std::vector<double>& fixed, picture::Canvas& img,
+                                   std::set<long long>* leaves_hit) {
+  const int P = plot.P, xd = plot.xd, yd = plot.yd;
+  const Dimension& dx = plot.space.dimension(xd);
+  const Dimension& dy = plot.space.dimension(yd);
   auto ux = [&](double px) { return dx.lo + px / P * (dx.hi - dx.lo); };
   auto uy = [&](double py) { return dy.hi - py / P * (dy.hi - dy.lo); };
-
-  // Leaf colours.
   std::vector<long long> leaf_id(static_cast<size_t>(P) * P, -1);
   std::map<long long, unsigned> leaf_colour;
-  std::set<long long> leaves_hit;
   std::vector<double> u = fixed;
   for (int py = 0; py < P; ++py)
     for (int px = 0; px < P; ++px) {
       u[xd] = ux(px + 0.5);
       u[yd] = uy(py + 0.5);
-      const auto leaf = LocateLeaf(form, space, u);
+      const auto leaf = LocateLeaf(plot.form, plot.space, u);
       if (!leaf) continue;
       const long long id = (static_cast<long long>(leaf->tree) << 32) | leaf->node;
       leaf_id[static_cast<size_t>(py) * P + px] = id;
       auto it = leaf_colour.find(id);
       if (it == leaf_colour.end()) {
-        const FormNode& node = form.trees[leaf->tree].nodes[leaf->node];
-        std::map<std::string, int> counts;
-        int invalid = 0, total = 0;
-        for (std::int64_t s : CornerSampleIds(form, node)) {
-          ++total;
-          if (form.samples[s].outcome.valid) continue;
-          ++invalid;
-          ++counts[form.samples[s].outcome.failure_type];
-        }
-        unsigned c = ValidColour();
-        if (invalid > 0) {
-          std::string top_type;
-          int best = -1;
-          for (const auto& [t, k] : counts)
-            if (k > best) best = k, top_type = t;
-          c = FailureColour(form, top_type);
-          if (invalid < total) c = Blend(c, 0.55);
-        }
-        it = leaf_colour.emplace(id, c).first;
-        leaves_hit.insert(id);
+        it = leaf_colour.emplace(id, LeafColour(plot.form, plot.form.trees[leaf->tree].nodes[leaf->node])).first;
+        leaves_hit->insert(id);
       }
-      img.Set(left + px, top + py, it->second);
+      img.Set(plot.left + px, plot.top + py, it->second);
     }
-  // Leaf boundaries.
+  return leaf_id;
+}
+
+// Grey pixels where the leaf changes from the pixel to the left or above.
+void DrawLeafBoundaries(const Plot& plot, const std::vector<long long>& leaf_id, picture::Canvas& img) {
+  const int P = plot.P;
   for (int py = 0; py < P; ++py)
     for (int px = 0; px < P; ++px) {
       const long long id = leaf_id[static_cast<size_t>(py) * P + px];
       const bool edge = (px > 0 && leaf_id[static_cast<size_t>(py) * P + px - 1] != id) ||
                         (py > 0 && leaf_id[static_cast<size_t>(py - 1) * P + px] != id);
-      if (edge) img.Set(left + px, top + py, 0x7F7F7F);
+      if (edge) img.Set(plot.left + px, plot.top + py, 0x7F7F7F);
     }
-  // Corner dots: a projected corner is valid when every corner of the leaf
-  // projecting onto it is valid.
+}
+
+// Corner dots: a projected corner is valid when every corner of the leaf
+// projecting onto it is valid (white dot), else black.
+void DrawCornerDots(const Plot& plot, const std::set<long long>& leaves_hit, picture::Canvas& img) {
+  const Form& form = plot.form;
+  const int P = plot.P, xd = plot.xd, yd = plot.yd;
+  const Dimension& dx = plot.space.dimension(xd);
+  const Dimension& dy = plot.space.dimension(yd);
   std::map<std::pair<int, int>, bool> dots;
   for (long long id : leaves_hit) {
     const FormNode& node = form.trees[id >> 32].nodes[id & 0xffffffff];
     const auto ids = CornerSampleIds(form, node);
     for (size_t c = 0; c < ids.size(); ++c) {
-      const double vx = space.value(xd, (c >> xd) & 1 ? node.hi[xd] : node.lo[xd]);
-      const double vy = space.value(yd, (c >> yd) & 1 ? node.hi[yd] : node.lo[yd]);
+      const double vx = plot.space.value(xd, (c >> xd) & 1 ? node.hi[xd] : node.lo[xd]);
+      const double vy = plot.space.value(yd, (c >> yd) & 1 ? node.hi[yd] : node.lo[yd]);
       const int px = static_cast<int>(std::lround((vx - dx.lo) / (dx.hi - dx.lo) * P));
       const int py = static_cast<int>(std::lround((dy.hi - vy) / (dy.hi - dy.lo) * P));
       auto [it, inserted] = dots.emplace(std::make_pair(px, py), true);
@@ -154,11 +179,19 @@ ValidityMapLayout WriteValidityMap(const Form& form, const ValidityMapOptions& o
     }
   }
   for (const auto& [p, valid] : dots) {
-    const int cx = left + p.first, cy = top + p.second;
+    const int cx = plot.left + p.first, cy = plot.top + p.second;
     img.Rect(cx - 2, cy - 2, cx + 3, cy + 3, 0x000000);
     if (valid) img.Rect(cx - 1, cy - 1, cx + 2, cy + 2, 0xFFFFFF);
   }
-  // Frame and axes.
+}
+
+// The plot's frame, ticks at about ten grid keys per axis with their values
+// (or enumerated names), and the axis names.
+void DrawAxes(const Plot& plot, picture::Canvas& img) {
+  const DesignSpace& space = plot.space;
+  const int P = plot.P, xd = plot.xd, yd = plot.yd, left = plot.left, top = plot.top;
+  const Dimension& dx = space.dimension(xd);
+  const Dimension& dy = space.dimension(yd);
   for (int i = -1; i <= P; ++i) {
     img.Set(left + i, top - 1, 0), img.Set(left + i, top + P, 0);
     img.Set(left - 1, top + i, 0), img.Set(left + P, top + i, 0);
@@ -190,9 +223,10 @@ ValidityMapLayout WriteValidityMap(const Form& form, const ValidityMapOptions& o
   }
   img.Text(left + P / 2 - TextWidth(dx.name) / 2, top + P + 9 + 2 * kCharH, dx.name, 0, kScale);
   img.Text(4, 2, dy.name, 0, kScale);  // y axis name, top left
-  // Legend.
-  const int lx = left + P + gap;
-  int ly = top;
+}
+
+// The legend from (lx, ly): a swatch per leaf colour, then the two dots.
+void DrawLegend(const Form& form, const std::vector<std::string>& types, int lx, int ly, picture::Canvas& img) {
   auto swatch = [&](unsigned c, const std::string& text) {
     img.Rect(lx, ly, lx + 16, ly + 12, 0);
     img.Rect(lx + 1, ly + 1, lx + 15, ly + 11, c);
@@ -207,6 +241,32 @@ ValidityMapLayout WriteValidityMap(const Form& form, const ValidityMapOptions& o
   ly += 2 * kCharH;
   img.Rect(lx + 5, ly + 2, lx + 11, ly + 8, 0);
   img.Text(lx + 22, ly + 1, "invalid sample", 0, kScale);
+}
+
+}  // namespace
+
+ValidityMapLayout WriteValidityMap(const Form& form, const ValidityMapOptions& options, const std::string& path) {
+  const DesignSpace space = form.space();
+  const std::vector<double> fixed = FixedValues(space, options);
+
+  const int P = std::max(64, options.plot_pixels);
+  const int left = 80, top = 20, bottom = 60, gap = 30;
+  const auto types = FailureTypes(form);
+  int legend_w = 0;
+  for (const auto& t : types) legend_w = std::max(legend_w, TextWidth("mixed " + t));
+  legend_w = std::max(legend_w, TextWidth("invalid sample")) + 22 + 8;
+  const int W = left + P + gap + legend_w;
+  const int H = std::max(top + P + bottom, top + static_cast<int>(types.size() + 6) * 2 * kCharH);
+  picture::Canvas img(W, H);
+  const Plot plot{form, space, options.x_dimension, options.y_dimension, P, left, top};
+
+  // Leaf colours, boundaries and corner dots.
+  std::set<long long> leaves_hit;
+  const std::vector<long long> leaf_id = PaintLeaves(plot, fixed, img, &leaves_hit);
+  DrawLeafBoundaries(plot, leaf_id, img);
+  DrawCornerDots(plot, leaves_hit, img);
+  DrawAxes(plot, img);
+  DrawLegend(form, types, left + P + gap, top, img);
   img.WritePng(path);
   return ValidityMapLayout{W, H, left, top, P};
 }

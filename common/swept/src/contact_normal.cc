@@ -102,6 +102,98 @@ void CheckPart(const std::vector<MovingPart>& parts, int p) {
         throw InputError("contact normal: part " + std::to_string(p) + ": a triangle refers to a missing vertex");
 }
 
+// The samples of the span [t0, t1]: the regular ones (i / (n - 1)) inside,
+// and its ends.
+std::vector<double> SpanTimes(double t0, double t1, int n) {
+  std::vector<double> times{t0};
+  for (int i = static_cast<int>(std::ceil(t0 * (n - 1))); i <= static_cast<int>(std::floor(t1 * (n - 1))); ++i) {
+    const double t = static_cast<double>(i) / (n - 1);
+    if (t > times.back()) times.push_back(t);
+  }
+  if (t1 > times.back()) times.push_back(t1);
+  return times;
+}
+
+Vec3 ToVec3(const Point& p) { return {p.x(), p.y(), p.z()}; }
+
+// The contour segments where triangle tb of part b (in a's body frame)
+// crosses a's triangles `hits` at time t: one ContourForce each, appended to
+// s->forces (world frame by fa, weighted by dt), their lengths (mm) added
+// one by one to *length.
+void AddContourForces(const Triangle& tb, const std::vector<Tree::Primitive_id>& hits, const Transform& fa, double t,
+                      double dt, double* length, ContactNormalSummary* s) {
+  const Vec3 nb = UnitNormal({tb[0].x(), tb[0].y(), tb[0].z()}, {tb[1].x(), tb[1].y(), tb[1].z()},
+                             {tb[2].x(), tb[2].y(), tb[2].z()});
+  const std::array<Vec3, 3> vb{Vec3{tb[0].x(), tb[0].y(), tb[0].z()}, Vec3{tb[1].x(), tb[1].y(), tb[1].z()},
+                               Vec3{tb[2].x(), tb[2].y(), tb[2].z()}};
+  for (const auto& id : hits) {
+    const Triangle& tri_a = *id;
+    const std::array<Vec3, 3> va{ToVec3(tri_a[0]), ToVec3(tri_a[1]), ToVec3(tri_a[2])};
+    const Vec3 na = UnitNormal(va[0], va[1], va[2]);
+    if (Norm(na) == 0 || Norm(nb) == 0) continue;
+    Vec3 p, q;
+    if (!CrossingSegment(va, na, vb, nb, p, q)) continue;
+    const double l = Norm(Sub(q, p));
+    const Vec3 bisector = Sub(na, nb);
+    const double bl = Norm(bisector);
+    if (!(l > 0) || !(bl > 1e-12)) continue;  // equal normals: tangent, no side to leave by
+    *length += l;
+    // Segments at t0 and t1 are weighted by dt too: the span's ends
+    // stand for the sample steps they lie in.
+    ContourForce f;
+    f.t = t;
+    f.point = fa.Apply(Scale(Add(p, q), 0.5));
+    f.force = Rotate(fa, Scale(bisector, l * dt / bl));
+    f.normal_a = Rotate(fa, na);
+    f.normal_b = Rotate(fa, nb);
+    s->forces.push_back(f);
+  }
+}
+
+// The forces' sum (spacetime gradient), its direction (spacetime normal) and
+// their Bernstein-weighted sums per cubic control point.
+void SumForces(ContactNormalSummary* s) {
+  for (const ContourForce& f : s->forces) {
+    const double u = f.t, v = 1 - f.t;
+    const double bern[4] = {v * v * v, 3 * v * v * u, 3 * v * u * u, u * u * u};
+    for (int k = 0; k < 3; ++k) {
+      s->spacetime_gradient[k] += f.force[k];
+      for (int c = 0; c < 4; ++c) s->control_point_gradient[c][k] += bern[c] * f.force[k];
+    }
+  }
+  const double g = Norm(s->spacetime_gradient);
+  if (g > 0) s->spacetime_normal = Scale(s->spacetime_gradient, 1 / g);
+}
+
+// Sec. 6.1: the spatial normal at first contact of parts a and b, searched
+// from the sample before t0 (the parts are apart there unless they touch
+// from the start) to t1.
+void FindFirstContact(const std::vector<MovingPart>& parts, int a, int b, double t0, double t1, double dt,
+                      const ContactNormalOptions& options, ContactNormalSummary* s) {
+  const std::vector<MovingPart> pair{parts[a], parts[b]};
+  const ContinuousContact contact(pair);
+  double extent = 0;
+  for (const auto* m : {&parts[a].mesh, &parts[b].mesh}) {
+    const SpatialBox bb = PosedBox(*m, Transform{});
+    for (int k = 0; k < 3; ++k) extent = std::max(extent, bb.max[k] - bb.min[k]);
+  }
+  ContactSearchOptions co;
+  co.tolerance = options.contact_tolerance * std::max(extent, 1e-9);
+  const double from = std::max(0.0, t0 - dt);
+  if (contact.Distance(0, 1, from) > co.tolerance) {
+    const ContactSearch c = contact.Advance(0, 1, from, t1, co);
+    if (c.contact) {
+      const ContinuousContact::Closest near = contact.Nearest(0, 1, c.t);
+      const Vec3 d = Sub(near.point_b, near.point_a);
+      if (near.distance > 0 && Norm(d) > 0) {
+        s->has_first_contact = true;
+        s->first_contact_t = c.t;
+        s->first_contact_normal = Scale(d, 1 / Norm(d));
+      }
+    }
+  }
+}
+
 }  // namespace
 
 ContactNormalSummary SpacetimeContactNormal(const std::vector<MovingPart>& parts, int a, int b, double t0, double t1,
@@ -128,18 +220,10 @@ ContactNormalSummary SpacetimeContactNormal(const std::vector<MovingPart>& parts
   const Tree tree(ta.cbegin(), ta.cend());
   const CGAL::Bbox_3 box_a = tree.bbox();
 
-  // The samples of the span: the regular ones inside, and its ends.
-  std::vector<double> times{t0};
-  for (int i = static_cast<int>(std::ceil(t0 * (n - 1))); i <= static_cast<int>(std::floor(t1 * (n - 1))); ++i) {
-    const double t = static_cast<double>(i) / (n - 1);
-    if (t > times.back()) times.push_back(t);
-  }
-  if (t1 > times.back()) times.push_back(t1);
-
   ContactNormalSummary s;
   std::vector<Point> posed(mb.vertices.size());
   std::vector<Tree::Primitive_id> hits;
-  for (const double t : times) {
+  for (const double t : SpanTimes(t0, t1, n)) {
     const Transform fa = parts[a].motion.At(t);
     const Transform into = fa.Inverse().Compose(parts[b].motion.At(t));
     for (std::size_t v = 0; v < posed.size(); ++v) {
@@ -153,75 +237,13 @@ ContactNormalSummary SpacetimeContactNormal(const std::vector<MovingPart>& parts
       hits.clear();
       tree.all_intersected_primitives(tb, std::back_inserter(hits));
       if (hits.empty()) continue;
-      const Vec3 nb = UnitNormal({tb[0].x(), tb[0].y(), tb[0].z()}, {tb[1].x(), tb[1].y(), tb[1].z()},
-                                 {tb[2].x(), tb[2].y(), tb[2].z()});
-      const std::array<Vec3, 3> vb{Vec3{tb[0].x(), tb[0].y(), tb[0].z()}, Vec3{tb[1].x(), tb[1].y(), tb[1].z()},
-                                   Vec3{tb[2].x(), tb[2].y(), tb[2].z()}};
-      for (const auto& id : hits) {
-        const Triangle& tri_a = *id;
-        const std::array<Vec3, 3> va{Vec3{tri_a[0].x(), tri_a[0].y(), tri_a[0].z()},
-                                     Vec3{tri_a[1].x(), tri_a[1].y(), tri_a[1].z()},
-                                     Vec3{tri_a[2].x(), tri_a[2].y(), tri_a[2].z()}};
-        const Vec3 na = UnitNormal(va[0], va[1], va[2]);
-        if (Norm(na) == 0 || Norm(nb) == 0) continue;
-        Vec3 p, q;
-        if (!CrossingSegment(va, na, vb, nb, p, q)) continue;
-        const double l = Norm(Sub(q, p));
-        const Vec3 bisector = Sub(na, nb);
-        const double bl = Norm(bisector);
-        if (!(l > 0) || !(bl > 1e-12)) continue;  // equal normals: tangent, no side to leave by
-        length += l;
-        // Segments at t0 and t1 are weighted by dt too: the span's ends
-        // stand for the sample steps they lie in.
-        ContourForce f;
-        f.t = t;
-        f.point = fa.Apply(Scale(Add(p, q), 0.5));
-        f.force = Rotate(fa, Scale(bisector, l * dt / bl));
-        f.normal_a = Rotate(fa, na);
-        f.normal_b = Rotate(fa, nb);
-        s.forces.push_back(f);
-      }
+      AddContourForces(tb, hits, fa, t, dt, &length, &s);
     }
     if (length > 0) ++s.contour_samples;
     s.energy += length * dt;
   }
-  for (const ContourForce& f : s.forces) {
-    const double u = f.t, v = 1 - f.t;
-    const double bern[4] = {v * v * v, 3 * v * v * u, 3 * v * u * u, u * u * u};
-    for (int k = 0; k < 3; ++k) {
-      s.spacetime_gradient[k] += f.force[k];
-      for (int c = 0; c < 4; ++c) s.control_point_gradient[c][k] += bern[c] * f.force[k];
-    }
-  }
-  const double g = Norm(s.spacetime_gradient);
-  if (g > 0) s.spacetime_normal = Scale(s.spacetime_gradient, 1 / g);
-
-  // Sec. 6.1: the spatial normal at first contact, searched from the sample
-  // before t0 (the parts are apart there unless they touch from the start).
-  if (options.first_contact) {
-    const std::vector<MovingPart> pair{parts[a], parts[b]};
-    const ContinuousContact contact(pair);
-    double extent = 0;
-    for (const auto* m : {&ma, &mb}) {
-      const SpatialBox bb = PosedBox(*m, Transform{});
-      for (int k = 0; k < 3; ++k) extent = std::max(extent, bb.max[k] - bb.min[k]);
-    }
-    ContactSearchOptions co;
-    co.tolerance = options.contact_tolerance * std::max(extent, 1e-9);
-    const double from = std::max(0.0, t0 - dt);
-    if (contact.Distance(0, 1, from) > co.tolerance) {
-      const ContactSearch c = contact.Advance(0, 1, from, t1, co);
-      if (c.contact) {
-        const ContinuousContact::Closest near = contact.Nearest(0, 1, c.t);
-        const Vec3 d = Sub(near.point_b, near.point_a);
-        if (near.distance > 0 && Norm(d) > 0) {
-          s.has_first_contact = true;
-          s.first_contact_t = c.t;
-          s.first_contact_normal = Scale(d, 1 / Norm(d));
-        }
-      }
-    }
-  }
+  SumForces(&s);
+  if (options.first_contact) FindFirstContact(parts, a, b, t0, t1, dt, options, &s);
   return s;
 }
 

@@ -50,50 +50,43 @@ double PointBoxDistance(const Vec3& p, const SpatialBox& b) {
   return std::sqrt(s);
 }
 
-}  // namespace
-
-ClearanceReport MinimumClearance(const std::vector<MovingPart>& parts, const ClearanceOptions& options) {
-  if (options.time_steps < 2) throw InputError("clearance: time_steps must be >= 2");
-  const int n = options.time_steps;
-  const std::size_t np = parts.size();
-  std::vector<Body> bodies(np);
-  for (std::size_t p = 0; p < np; ++p) {
-    const auto& m = parts[p].mesh;
-    const std::string where = "clearance: part " + std::to_string(p);
-    if (m.vertices.empty() || m.triangles.empty()) throw InputError(where + ": mesh has no triangles");
-    const auto nv = static_cast<std::int64_t>(m.vertices.size());
-    for (const auto& t : m.triangles) {
-      for (int k = 0; k < 3; ++k)
-        if (t[k] < 0 || t[k] >= nv) throw InputError(where + ": a triangle refers to a missing vertex");
-      const auto &a = m.vertices[t[0]], &b = m.vertices[t[1]], &c = m.vertices[t[2]];
-      Triangle tri(K::Point_3(a[0], a[1], a[2]), K::Point_3(b[0], b[1], b[2]), K::Point_3(c[0], c[1], c[2]));
-      if (!tri.is_degenerate()) bodies[p].triangles.push_back(tri);
-    }
-    for (const auto& v : m.vertices)
-      for (double x : v)
-        if (!std::isfinite(x)) throw InputError(where + ": non-finite vertex coordinate");
-    if (bodies[p].triangles.empty()) throw InputError(where + ": every triangle is degenerate");
-    bodies[p].tree = std::make_unique<Tree>(bodies[p].triangles.begin(), bodies[p].triangles.end());
-    bodies[p].tree->accelerate_distance_queries();
-    bodies[p].box = PosedBox(m, Transform{});
+// Part p's body, built in place (the tree holds iterators into the
+// triangles): its non-degenerate triangles in its body frame, their tree
+// (accelerated for distance queries) and its box. Throws InputError naming
+// the part for an empty or bad mesh.
+void BuildBody(const mesh::TriangleMesh& m, std::size_t p, Body& body) {
+  const std::string where = "clearance: part " + std::to_string(p);
+  if (m.vertices.empty() || m.triangles.empty()) throw InputError(where + ": mesh has no triangles");
+  const auto nv = static_cast<std::int64_t>(m.vertices.size());
+  for (const auto& t : m.triangles) {
+    for (int k = 0; k < 3; ++k)
+      if (t[k] < 0 || t[k] >= nv) throw InputError(where + ": a triangle refers to a missing vertex");
+    const auto &a = m.vertices[t[0]], &b = m.vertices[t[1]], &c = m.vertices[t[2]];
+    Triangle tri(K::Point_3(a[0], a[1], a[2]), K::Point_3(b[0], b[1], b[2]), K::Point_3(c[0], c[1], c[2]));
+    if (!tri.is_degenerate()) body.triangles.push_back(tri);
   }
+  for (const auto& v : m.vertices)
+    for (double x : v)
+      if (!std::isfinite(x)) throw InputError(where + ": non-finite vertex coordinate");
+  if (body.triangles.empty()) throw InputError(where + ": every triangle is degenerate");
+  body.tree = std::make_unique<Tree>(body.triangles.begin(), body.triangles.end());
+  body.tree->accelerate_distance_queries();
+  body.box = PosedBox(m, Transform{});
+}
 
-  // Poses and world boxes at every sample.
-  std::vector<std::vector<Transform>> pose(np);
-  std::vector<std::vector<SpatialBox>> box(np);
-  for (std::size_t p = 0; p < np; ++p)
-    for (int i = 0; i < n; ++i) {
-      pose[p].push_back(parts[p].motion.At(static_cast<double>(i) / (n - 1)));
-      box[p].push_back(PosedBox(parts[p].mesh, pose[p].back()));
-    }
+// A (pair, sample) work item and the distance of the pair's world boxes at
+// that sample (mm), a lower bound of its clearance.
+struct Item {
+  double lower_bound;
+  int a, b, i;
+};
 
-  // (pair, sample) work items, nearest bounding boxes first so that the
-  // best distance shrinks early and prunes the rest.
-  struct Item {
-    double lower_bound;
-    int a, b, i;
-  };
-  // A pair of parts that both hold one pose is measured at the first sample.
+// The (pair, sample) work items, nearest bounding boxes first so that the
+// best distance shrinks early and prunes the rest. A pair of parts that both
+// hold one pose is measured at the first sample.
+std::vector<Item> WorkItems(const std::vector<std::vector<Transform>>& pose,
+                            const std::vector<std::vector<SpatialBox>>& box, int n) {
+  const std::size_t np = pose.size();
   std::vector<bool> still(np, true);
   for (std::size_t p = 0; p < np; ++p)
     for (int i = 1; i < n && still[p]; ++i)
@@ -106,32 +99,57 @@ ClearanceReport MinimumClearance(const std::vector<MovingPart>& parts, const Cle
   std::sort(items.begin(), items.end(), [](const Item& x, const Item& y) {
     return std::tie(x.lower_bound, x.i, x.a, x.b) < std::tie(y.lower_bound, y.i, y.a, y.b);
   });
+  return items;
+}
+
+// The closest vertex of `from` found by Nearest: (distance, vertex in
+// `from`'s body frame, closest point in `to`'s body frame).
+struct Near {
+  double distance;
+  Vec3 from_point, to_point;
+  std::size_t queries;
+  bool found;  // a vertex came at least as close as the best on entry
+};
+
+// Closest vertex of `from` (posed into `to`'s body frame by into_to) to the
+// triangles of `to`, given the current best (mm); vertices whose distance to
+// `to`'s box exceeds the best so far are skipped.
+Near Nearest(const mesh::TriangleMesh& from, const Transform& into_to, const Body& to, double best) {
+  Near out{best, {0, 0, 0}, {0, 0, 0}, 0, false};
+  for (const auto& v : from.vertices) {
+    const Vec3 q = into_to.Apply(v);
+    if (PointBoxDistance(q, to.box) > out.distance) continue;
+    ++out.queries;
+    const K::Point_3 c = to.tree->closest_point(K::Point_3(q[0], q[1], q[2]));
+    const double d = std::sqrt(CGAL::squared_distance(c, K::Point_3(q[0], q[1], q[2])));
+    if (d < out.distance || (d == out.distance && !out.found)) out = {d, v, {c.x(), c.y(), c.z()}, out.queries, true};
+  }
+  return out;
+}
+
+}  // namespace
+
+ClearanceReport MinimumClearance(const std::vector<MovingPart>& parts, const ClearanceOptions& options) {
+  if (options.time_steps < 2) throw InputError("clearance: time_steps must be >= 2");
+  const int n = options.time_steps;
+  const std::size_t np = parts.size();
+  std::vector<Body> bodies(np);
+  for (std::size_t p = 0; p < np; ++p) BuildBody(parts[p].mesh, p, bodies[p]);
+
+  // Poses and world boxes at every sample.
+  std::vector<std::vector<Transform>> pose(np);
+  std::vector<std::vector<SpatialBox>> box(np);
+  for (std::size_t p = 0; p < np; ++p)
+    for (int i = 0; i < n; ++i) {
+      pose[p].push_back(parts[p].motion.At(static_cast<double>(i) / (n - 1)));
+      box[p].push_back(PosedBox(parts[p].mesh, pose[p].back()));
+    }
+  const std::vector<Item> items = WorkItems(pose, box, n);
 
   ClearanceReport report;
   report.min_clearance = options.max_distance;
   std::mutex mutex;
   int best_i = -1;  // sample of the reported pair
-  // Closest vertex of `from` (posed into `to`'s body frame by into_to) to the
-  // triangles of `to`, given the current best; returns (distance, vertex in
-  // `from`'s body frame, closest point in `to`'s body frame).
-  struct Near {
-    double distance;
-    Vec3 from_point, to_point;
-    std::size_t queries;
-    bool found;  // a vertex came at least as close as the best on entry
-  };
-  auto nearest = [&](const mesh::TriangleMesh& from, const Transform& into_to, const Body& to, double best) {
-    Near out{best, {0, 0, 0}, {0, 0, 0}, 0, false};
-    for (const auto& v : from.vertices) {
-      const Vec3 q = into_to.Apply(v);
-      if (PointBoxDistance(q, to.box) > out.distance) continue;
-      ++out.queries;
-      const K::Point_3 c = to.tree->closest_point(K::Point_3(q[0], q[1], q[2]));
-      const double d = std::sqrt(CGAL::squared_distance(c, K::Point_3(q[0], q[1], q[2])));
-      if (d < out.distance || (d == out.distance && !out.found)) out = {d, v, {c.x(), c.y(), c.z()}, out.queries, true};
-    }
-    return out;
-  };
   tbb::parallel_for(std::size_t{0}, items.size(), [&](std::size_t k) {
     const Item& it = items[k];
     double best;
@@ -143,8 +161,8 @@ ClearanceReport MinimumClearance(const std::vector<MovingPart>& parts, const Cle
     }
     const Transform& fa = pose[it.a][it.i];
     const Transform& fb = pose[it.b][it.i];
-    const Near ab = nearest(parts[it.a].mesh, fb.Inverse().Compose(fa), bodies[it.b], best);
-    const Near ba = nearest(parts[it.b].mesh, fa.Inverse().Compose(fb), bodies[it.a], std::min(best, ab.distance));
+    const Near ab = Nearest(parts[it.a].mesh, fb.Inverse().Compose(fa), bodies[it.b], best);
+    const Near ba = Nearest(parts[it.b].mesh, fa.Inverse().Compose(fb), bodies[it.a], std::min(best, ab.distance));
     std::lock_guard lock(mutex);
     report.vertex_queries += ab.queries + ba.queries;
     const bool from_b = ba.found && (!ab.found || ba.distance < ab.distance);

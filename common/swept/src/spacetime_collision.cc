@@ -175,31 +175,44 @@ SpatialBox PosedBox(const mesh::TriangleMesh& m, const Transform& f) {
   return b;
 }
 
-CollisionReport DetectCollisions(const std::vector<MovingPart>& parts, const SpacetimeOptions& options) {
-  if (options.time_steps < 2) throw InputError("collision: time_steps must be >= 2");
-  const int n = options.time_steps;
-  const std::size_t np = parts.size();
-  for (std::size_t p = 0; p < np; ++p) CheckPart(parts[p].mesh, p);
+namespace {
 
-  // Poses and world AABBs at every sample.
-  std::vector<std::vector<Transform>> pose(np);
-  std::vector<std::vector<SpatialBox>> aabb(np);
+// The parts' poses and world AABBs at samples i = 0 .. n - 1 (time i / (n -
+// 1)), and the largest side of any of those boxes (mm).
+struct SampledMotion {
+  std::vector<std::vector<Transform>> pose;
+  std::vector<std::vector<SpatialBox>> aabb;
   double extent = 0;
+};
+
+SampledMotion SampleMotion(const std::vector<MovingPart>& parts, int n) {
+  const std::size_t np = parts.size();
+  SampledMotion out;
+  out.pose.resize(np);
+  out.aabb.resize(np);
   for (std::size_t p = 0; p < np; ++p) {
     for (int i = 0; i < n; ++i) {
       const Transform f = parts[p].motion.At(static_cast<double>(i) / (n - 1));
       const SpatialBox b = PosedBox(parts[p].mesh, f);
-      for (int k = 0; k < 3; ++k) extent = std::max(extent, b.max[k] - b.min[k]);
-      pose[p].push_back(f);
-      aabb[p].push_back(b);
+      for (int k = 0; k < 3; ++k) out.extent = std::max(out.extent, b.max[k] - b.min[k]);
+      out.pose[p].push_back(f);
+      out.aabb[p].push_back(b);
     }
   }
-  // Spacetime proxies, time scaled to the spatial extent so the split axis
-  // choice treats time like space.
-  const double tscale = std::max(extent, 1e-9);
+  return out;
+}
+
+// Spacetime proxies: a 4D box per part and interval between samples, time
+// scaled by tscale (mm) so the split axis choice treats time like space;
+// owner[q]: (part, interval) of boxes[q].
+struct Proxies {
   std::vector<Box4> boxes;
-  std::vector<std::pair<int, int>> owner;  // (part, interval)
-  for (std::size_t p = 0; p < np; ++p) {
+  std::vector<std::pair<int, int>> owner;
+};
+
+Proxies BuildProxies(const std::vector<std::vector<SpatialBox>>& aabb, int n, double tscale) {
+  Proxies out;
+  for (std::size_t p = 0; p < aabb.size(); ++p) {
     for (int i = 0; i + 1 < n; ++i) {
       Box4 b;
       for (int k = 0; k < 3; ++k) {
@@ -208,27 +221,37 @@ CollisionReport DetectCollisions(const std::vector<MovingPart>& parts, const Spa
       }
       b[0][3] = tscale * i / (n - 1);
       b[1][3] = tscale * (i + 1) / (n - 1);
-      boxes.push_back(b);
-      owner.emplace_back(static_cast<int>(p), i);
+      out.boxes.push_back(b);
+      out.owner.emplace_back(static_cast<int>(p), i);
     }
   }
-  CollisionReport report;
-  report.proxies = boxes.size();
+  return out;
+}
 
-  // Parts that hold one pose throughout: a pair of them is tested once, at
-  // the first sample, and a collision spans the whole transition.
+// Parts that hold one pose throughout: a pair of them is tested once, at
+// the first sample, and a collision spans the whole transition.
+std::vector<bool> StillParts(const std::vector<std::vector<Transform>>& pose, int n) {
+  const std::size_t np = pose.size();
   std::vector<bool> still(np, true);
   for (std::size_t p = 0; p < np; ++p)
     for (int i = 1; i < n && still[p]; ++i)
       still[p] = pose[p][i].rotation == pose[p][0].rotation && pose[p][i].translation == pose[p][0].translation;
+  return still;
+}
 
-  // Candidate (pair, sample) from overlapping proxies of different parts in the same interval.
+// Candidate (part a, part b, sample), a < b, from overlapping proxies of
+// different parts in the same interval, by the broad phase `broad_phase`;
+// counts candidate_pairs and broad_phase_seconds into *report.
+std::set<std::tuple<int, int, int>> FindCandidates(const Proxies& proxies, const std::vector<bool>& still,
+                                                   SpacetimeOptions::BroadPhase broad_phase, CollisionReport* report) {
+  const std::vector<Box4>& boxes = proxies.boxes;
+  const std::vector<std::pair<int, int>>& owner = proxies.owner;
   std::set<std::tuple<int, int, int>> candidates;  // (a, b, sample)
   auto consider = [&](std::size_t q, std::size_t r) {
     const auto [pa, ia] = owner[q];
     const auto [pb, ib] = owner[r];
     if (pa >= pb || ia != ib) return;  // each pair once; same time interval
-    ++report.candidate_pairs;
+    ++report->candidate_pairs;
     if (still[pa] && still[pb]) {
       candidates.emplace(pa, pb, 0);
       return;
@@ -237,10 +260,10 @@ CollisionReport DetectCollisions(const std::vector<MovingPart>& parts, const Spa
     candidates.emplace(pa, pb, ia + 1);
   };
   const auto broad0 = std::chrono::steady_clock::now();
-  if (options.broad_phase == SpacetimeOptions::BroadPhase::kHierarchy) {
+  if (broad_phase == SpacetimeOptions::BroadPhase::kHierarchy) {
     const BoxTree<4> tree(boxes);
     for (std::size_t q = 0; q < boxes.size(); ++q) VisitOverlaps(tree, boxes[q], [&](int r) { consider(q, r); });
-  } else if (options.broad_phase == SpacetimeOptions::BroadPhase::kEmbree) {
+  } else if (broad_phase == SpacetimeOptions::BroadPhase::kEmbree) {
     std::vector<int> interval;
     for (const auto& o : owner) interval.push_back(o.second);
     for (const auto& [q, r] : EmbreeOverlaps(boxes, interval)) {
@@ -253,58 +276,81 @@ CollisionReport DetectCollisions(const std::vector<MovingPart>& parts, const Spa
       for (std::size_t r = 0; r < boxes.size(); ++r)
         if (Overlap(boxes[q], boxes[r])) consider(q, r);
   }
-  report.broad_phase_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - broad0).count();
-  // Exact test at candidate samples. Both parts in their body frames (built
-  // on first use); B's triangles posed into A's frame by f_A^-1 f_B.
-  std::map<int, BodyIndex> index;
-  auto body = [&](int p) -> const BodyIndex& {
-    auto it = index.find(p);
-    if (it != index.end()) return it->second;
-    BodyIndex& b = index[p];
-    b.surface = Posed(parts[p].mesh, Transform{}, p);
+  report->broad_phase_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - broad0).count();
+  return candidates;
+}
+
+// The parts in their body frames, each built on first use.
+class BodyIndexes {
+ public:
+  explicit BodyIndexes(const std::vector<MovingPart>& parts) : parts_(parts) {}
+  const BodyIndex& Of(int p) {
+    auto it = index_.find(p);
+    if (it != index_.end()) return it->second;
+    BodyIndex& b = index_[p];
+    b.surface = Posed(parts_[p].mesh, Transform{}, p);
     b.faces = std::make_unique<FaceTree>(faces(b.surface).first, faces(b.surface).second, b.surface);
     b.inside = std::make_unique<Inside>(b.surface);
     return b;
-  };
-  // Surfaces touching or crossing, or one part inside the other (the
-  // bounded-side semantics of PMP::do_intersect).
-  auto collide = [&](int a, int b, int i) {
-    const BodyIndex& ia = body(a);
-    const BodyIndex& ib = body(b);
-    // Pose the smaller part's triangles into the larger part's frame.
-    const bool a_small = parts[a].mesh.triangles.size() <= parts[b].mesh.triangles.size();
-    const int small = a_small ? a : b, large = a_small ? b : a;
-    const BodyIndex& il = a_small ? ib : ia;
-    const Transform into = pose[large][i].Inverse().Compose(pose[small][i]);
-    const auto& m = parts[small].mesh;
-    std::vector<Point> q(m.vertices.size());
-    for (std::size_t v = 0; v < q.size(); ++v) {
-      const Vec3 x = into.Apply(m.vertices[v]);
-      q[v] = Point(x[0], x[1], x[2]);
-    }
-    const CGAL::Bbox_3 box = il.faces->bbox();
-    for (const auto& t : m.triangles) {
-      const Kernel::Triangle_3 tri(q[t[0]], q[t[1]], q[t[2]]);
-      if (!CGAL::do_overlap(tri.bbox(), box)) continue;
-      if (tri.is_degenerate()) continue;
-      if (il.faces->do_intersect(tri)) return true;
-    }
-    // No surface contact: one contains the other, or they are apart.
-    if ((*il.inside)(q[0]) != CGAL::ON_UNBOUNDED_SIDE) return true;
-    const BodyIndex& is = a_small ? ia : ib;
-    const Vec3 y = into.Inverse().Apply(parts[large].mesh.vertices[0]);
-    return (*is.inside)(Point(y[0], y[1], y[2])) != CGAL::ON_UNBOUNDED_SIDE;
-  };
-  std::map<std::pair<int, int>, std::vector<int>> hits;  // pair -> colliding samples, ascending
+  }
+
+ private:
+  const std::vector<MovingPart>& parts_;
+  std::map<int, BodyIndex> index_;
+};
+
+// Whether parts a and b collide at sample i: surfaces touching or crossing,
+// or one part inside the other (the bounded-side semantics of
+// PMP::do_intersect). Both parts in their body frames; the smaller part's
+// triangles posed into the larger part's frame by f_large^-1 f_small.
+bool CollideAt(const std::vector<MovingPart>& parts, const std::vector<std::vector<Transform>>& pose,
+               BodyIndexes* index, int a, int b, int i) {
+  const BodyIndex& ia = index->Of(a);
+  const BodyIndex& ib = index->Of(b);
+  // Pose the smaller part's triangles into the larger part's frame.
+  const bool a_small = parts[a].mesh.triangles.size() <= parts[b].mesh.triangles.size();
+  const int small = a_small ? a : b, large = a_small ? b : a;
+  const BodyIndex& il = a_small ? ib : ia;
+  const Transform into = pose[large][i].Inverse().Compose(pose[small][i]);
+  const auto& m = parts[small].mesh;
+  std::vector<Point> q(m.vertices.size());
+  for (std::size_t v = 0; v < q.size(); ++v) {
+    const Vec3 x = into.Apply(m.vertices[v]);
+    q[v] = Point(x[0], x[1], x[2]);
+  }
+  const CGAL::Bbox_3 box = il.faces->bbox();
+  for (const auto& t : m.triangles) {
+    const Kernel::Triangle_3 tri(q[t[0]], q[t[1]], q[t[2]]);
+    if (!CGAL::do_overlap(tri.bbox(), box)) continue;
+    if (tri.is_degenerate()) continue;
+    if (il.faces->do_intersect(tri)) return true;
+  }
+  // No surface contact: one contains the other, or they are apart.
+  if ((*il.inside)(q[0]) != CGAL::ON_UNBOUNDED_SIDE) return true;
+  const BodyIndex& is = a_small ? ia : ib;
+  const Vec3 y = into.Inverse().Apply(parts[large].mesh.vertices[0]);
+  return (*is.inside)(Point(y[0], y[1], y[2])) != CGAL::ON_UNBOUNDED_SIDE;
+}
+
+using SampleHits = std::map<std::pair<int, int>, std::vector<int>>;  // pair -> colliding samples, ascending
+
+// The exact test at the candidate samples whose world AABBs meet (counted in
+// report->exact_tests); a pair of still parts that collides does so at every
+// sample.
+SampleHits TestCandidates(const std::vector<MovingPart>& parts, const SampledMotion& motion,
+                          const std::vector<bool>& still, const std::set<std::tuple<int, int, int>>& candidates, int n,
+                          CollisionReport* report) {
+  BodyIndexes index(parts);
+  SampleHits hits;
   for (const auto& [a, b, i] : candidates) {
-    const SpatialBox& ba = aabb[a][i];
-    const SpatialBox& bb = aabb[b][i];
+    const SpatialBox& ba = motion.aabb[a][i];
+    const SpatialBox& bb = motion.aabb[b][i];
     bool apart = false;
     for (int k = 0; k < 3; ++k) apart |= ba.min[k] > bb.max[k] || bb.min[k] > ba.max[k];
     if (apart) continue;
-    ++report.exact_tests;
+    ++report->exact_tests;
     // A part wholly inside another collides too.
-    if (collide(a, b, i)) {
+    if (CollideAt(parts, motion.pose, &index, a, b, i)) {
       if (still[a] && still[b]) {
         for (int j = 0; j < n; ++j) hits[{a, b}].push_back(j);
       } else {
@@ -312,73 +358,93 @@ CollisionReport DetectCollisions(const std::vector<MovingPart>& parts, const Spa
       }
     }
   }
-  // Between samples: (pair, step) whose boxes, grown by each part's travel
-  // bound over one step, meet while neither end sample collides.
-  if (options.continuous && np > 1) {
-    const ContinuousContact contact(parts);
-    ContactSearchOptions co;
-    co.tolerance = options.contact_tolerance * tscale;
-    const double dt = 1.0 / (n - 1);
-    auto grown = [&](std::size_t p, int i) {
-      const double r = contact.SpeedBound(static_cast<int>(p)) * dt;
-      SpatialBox b;
-      for (int k = 0; k < 3; ++k) {
-        // Each end sample's box grown by the travel bound contains the part
-        // throughout the step; so does their intersection.
-        b.min[k] = std::max(aabb[p][i].min[k], aabb[p][i + 1].min[k]) - r;
-        b.max[k] = std::min(aabb[p][i].max[k], aabb[p][i + 1].max[k]) + r;
-      }
-      return b;
-    };
-    for (std::size_t a = 0; a < np; ++a)
-      for (std::size_t b = a + 1; b < np; ++b) {
-        if (still[a] && still[b]) continue;
-        const auto hit_it = hits.find({static_cast<int>(a), static_cast<int>(b)});
-        auto collides_at = [&](int i) {
-          return hit_it != hits.end() && std::binary_search(hit_it->second.begin(), hit_it->second.end(), i);
-        };
-        for (int i = 0; i + 1 < n; ++i) {
-          if (collides_at(i) || collides_at(i + 1)) continue;  // the sampled interval covers this step
-          const SpatialBox ga = grown(a, i), gb = grown(b, i);
-          bool apart = false;
-          for (int k = 0; k < 3; ++k) apart |= ga.min[k] > gb.max[k] || gb.min[k] > ga.max[k];
-          if (apart) continue;
-          ++report.continuous_searches;
-          const double t0 = i * dt, t1 = (i + 1) * dt;
-          const ContactSearch first = contact.Advance(static_cast<int>(a), static_cast<int>(b), t0, t1, co);
-          report.distance_queries += first.steps;
-          if (!first.contact) continue;
-          const ContactSearch last = contact.Advance(static_cast<int>(a), static_cast<int>(b), t1, first.t, co);
-          report.distance_queries += last.steps;
-          CollisionInterval c;
-          c.part_a = static_cast<int>(a);
-          c.part_b = static_cast<int>(b);
-          c.t_begin = first.t;
-          c.t_end = last.contact ? last.t : first.t;
-          c.where = {{1e300, 1e300, 1e300}, {-1e300, -1e300, -1e300}};
-          for (double t : {c.t_begin, c.t_end}) {
-            SpatialBox box[2];
-            for (int q = 0; q < 2; ++q) {
-              const std::size_t p = q ? b : a;
-              const Transform f = parts[p].motion.At(t);
-              box[q] = {{1e300, 1e300, 1e300}, {-1e300, -1e300, -1e300}};
-              for (const auto& v : parts[p].mesh.vertices) {
-                const Vec3 x = f.Apply(v);
-                for (int k = 0; k < 3; ++k)
-                  box[q].min[k] = std::min(box[q].min[k], x[k]), box[q].max[k] = std::max(box[q].max[k], x[k]);
-              }
-            }
-            for (int k = 0; k < 3; ++k) {
-              c.where.min[k] = std::min(c.where.min[k], std::max(box[0].min[k], box[1].min[k]));
-              c.where.max[k] = std::max(c.where.max[k], std::min(box[0].max[k], box[1].max[k]));
-            }
-          }
-          report.intervals.push_back(c);
-        }
-      }
-  }
+  return hits;
+}
 
-  // Runs of consecutive samples -> intervals (when), with their box (where).
+// The box where parts a and b may meet over [t_begin, t_end]: the union,
+// over both times, of the intersection of their posed world AABBs.
+SpatialBox ContactBox(const std::vector<MovingPart>& parts, std::size_t a, std::size_t b, double t_begin,
+                      double t_end) {
+  SpatialBox where = {{1e300, 1e300, 1e300}, {-1e300, -1e300, -1e300}};
+  for (double t : {t_begin, t_end}) {
+    SpatialBox box[2];
+    for (int q = 0; q < 2; ++q) {
+      const std::size_t p = q ? b : a;
+      const Transform f = parts[p].motion.At(t);
+      box[q] = {{1e300, 1e300, 1e300}, {-1e300, -1e300, -1e300}};
+      for (const auto& v : parts[p].mesh.vertices) {
+        const Vec3 x = f.Apply(v);
+        for (int k = 0; k < 3; ++k)
+          box[q].min[k] = std::min(box[q].min[k], x[k]), box[q].max[k] = std::max(box[q].max[k], x[k]);
+      }
+    }
+    for (int k = 0; k < 3; ++k) {
+      where.min[k] = std::min(where.min[k], std::max(box[0].min[k], box[1].min[k]));
+      where.max[k] = std::max(where.max[k], std::min(box[0].max[k], box[1].max[k]));
+    }
+  }
+  return where;
+}
+
+// Between samples: (pair, step) whose boxes, grown by each part's travel
+// bound over one step, meet while neither end sample collides; the contact
+// found by conservative advancement is appended to report->intervals.
+void SearchBetweenSamples(const std::vector<MovingPart>& parts, const SampledMotion& motion,
+                          const std::vector<bool>& still, const SampleHits& hits, const SpacetimeOptions& options,
+                          double tscale, CollisionReport* report) {
+  const int n = options.time_steps;
+  const std::size_t np = parts.size();
+  const std::vector<std::vector<SpatialBox>>& aabb = motion.aabb;
+  const ContinuousContact contact(parts);
+  ContactSearchOptions co;
+  co.tolerance = options.contact_tolerance * tscale;
+  const double dt = 1.0 / (n - 1);
+  auto grown = [&](std::size_t p, int i) {
+    const double r = contact.SpeedBound(static_cast<int>(p)) * dt;
+    SpatialBox b;
+    for (int k = 0; k < 3; ++k) {
+      // Each end sample's box grown by the travel bound contains the part
+      // throughout the step; so does their intersection.
+      b.min[k] = std::max(aabb[p][i].min[k], aabb[p][i + 1].min[k]) - r;
+      b.max[k] = std::min(aabb[p][i].max[k], aabb[p][i + 1].max[k]) + r;
+    }
+    return b;
+  };
+  for (std::size_t a = 0; a < np; ++a)
+    for (std::size_t b = a + 1; b < np; ++b) {
+      if (still[a] && still[b]) continue;
+      const auto hit_it = hits.find({static_cast<int>(a), static_cast<int>(b)});
+      auto collides_at = [&](int i) {
+        return hit_it != hits.end() && std::binary_search(hit_it->second.begin(), hit_it->second.end(), i);
+      };
+      for (int i = 0; i + 1 < n; ++i) {
+        if (collides_at(i) || collides_at(i + 1)) continue;  // the sampled interval covers this step
+        const SpatialBox ga = grown(a, i), gb = grown(b, i);
+        bool apart = false;
+        for (int k = 0; k < 3; ++k) apart |= ga.min[k] > gb.max[k] || gb.min[k] > ga.max[k];
+        if (apart) continue;
+        ++report->continuous_searches;
+        const double t0 = i * dt, t1 = (i + 1) * dt;
+        const ContactSearch first = contact.Advance(static_cast<int>(a), static_cast<int>(b), t0, t1, co);
+        report->distance_queries += first.steps;
+        if (!first.contact) continue;
+        const ContactSearch last = contact.Advance(static_cast<int>(a), static_cast<int>(b), t1, first.t, co);
+        report->distance_queries += last.steps;
+        CollisionInterval c;
+        c.part_a = static_cast<int>(a);
+        c.part_b = static_cast<int>(b);
+        c.t_begin = first.t;
+        c.t_end = last.contact ? last.t : first.t;
+        c.where = ContactBox(parts, a, b, c.t_begin, c.t_end);
+        report->intervals.push_back(c);
+      }
+    }
+}
+
+// Runs of consecutive colliding samples -> intervals (when), with their box
+// (where), appended to *intervals.
+void AppendSampledIntervals(const SampleHits& hits, const std::vector<std::vector<SpatialBox>>& aabb, int n,
+                            std::vector<CollisionInterval>* intervals) {
   for (const auto& [pair, samples] : hits) {
     std::size_t s = 0;
     while (s < samples.size()) {
@@ -398,10 +464,35 @@ CollisionReport DetectCollisions(const std::vector<MovingPart>& parts, const Spa
           c.where.max[k] = std::max(c.where.max[k], std::min(ba.max[k], bb.max[k]));
         }
       }
-      report.intervals.push_back(c);
+      intervals->push_back(c);
       s = e + 1;
     }
   }
+}
+
+}  // namespace
+
+CollisionReport DetectCollisions(const std::vector<MovingPart>& parts, const SpacetimeOptions& options) {
+  if (options.time_steps < 2) throw InputError("collision: time_steps must be >= 2");
+  const int n = options.time_steps;
+  const std::size_t np = parts.size();
+  for (std::size_t p = 0; p < np; ++p) CheckPart(parts[p].mesh, p);
+
+  // Poses and world AABBs at every sample.
+  const SampledMotion motion = SampleMotion(parts, n);
+  // Spacetime proxies, time scaled to the spatial extent so the split axis
+  // choice treats time like space.
+  const double tscale = std::max(motion.extent, 1e-9);
+  const Proxies proxies = BuildProxies(motion.aabb, n, tscale);
+  CollisionReport report;
+  report.proxies = proxies.boxes.size();
+
+  const std::vector<bool> still = StillParts(motion.pose, n);
+  const std::set<std::tuple<int, int, int>> candidates = FindCandidates(proxies, still, options.broad_phase, &report);
+  // Exact test at candidate samples.
+  const SampleHits hits = TestCandidates(parts, motion, still, candidates, n, &report);
+  if (options.continuous && np > 1) SearchBetweenSamples(parts, motion, still, hits, options, tscale, &report);
+  AppendSampledIntervals(hits, motion.aabb, n, &report.intervals);
   std::sort(report.intervals.begin(), report.intervals.end(), [](const auto& x, const auto& y) {
     return std::tie(x.t_begin, x.part_a, x.part_b) < std::tie(y.t_begin, y.part_a, y.part_b);
   });

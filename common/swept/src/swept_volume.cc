@@ -175,6 +175,78 @@ std::vector<Transform> SamplePoses(const mesh::TriangleMesh& body, const std::fu
   return poses;
 }
 
+namespace {
+
+// The body's level set on `lattice` (voxel size h, mm), wide enough that
+// every body voxel within w + h of the surface carries a true distance.
+FloatGrid::Ptr BodyLevelSet(const mesh::TriangleMesh& body, const openvdb::math::Transform& lattice, double w,
+                            double h) {
+  std::vector<openvdb::Vec3s> points;
+  points.reserve(body.vertices.size());
+  for (const auto& v : body.vertices) points.emplace_back(float(v[0]), float(v[1]), float(v[2]));
+  std::vector<openvdb::Vec3I> tris;
+  tris.reserve(body.triangles.size());
+  for (const auto& t : body.triangles) tris.emplace_back(t[0], t[1], t[2]);
+  FloatGrid::Ptr body_sdf =
+      openvdb::tools::meshToLevelSet<FloatGrid>(lattice, points, tris, static_cast<float>(w / h + 2.0));
+  if (body_sdf->activeVoxelCount() == 0) throw InputError("swept volume: body mesh encloses no voxel");
+  return body_sdf;
+}
+
+// Touched world voxels of one pose f: the body's band centres `band` under
+// f, rounded to the lattice (voxel size h), then dilated by one voxel in the
+// 26-neighbourhood (covers every lattice point within one voxel per axis of
+// a mapped band centre). In parallel over the band; the union is the same
+// for any schedule.
+MaskGrid::Ptr TouchedVoxels(const std::vector<Vec3>& band, const Transform& f, double h) {
+  tbb::combinable<MaskGrid::Ptr> local([] { return MaskGrid::create(false); });
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, band.size(), 4096), [&](const auto& r) {
+    auto& mask = local.local();
+    auto acc = mask->getAccessor();
+    for (std::size_t i = r.begin(); i != r.end(); ++i) {
+      const Vec3 p = f.Apply(band[i]);
+      acc.setValueOn(Coord(static_cast<int>(std::lround(p[0] / h)), static_cast<int>(std::lround(p[1] / h)),
+                           static_cast<int>(std::lround(p[2] / h))));
+    }
+  });
+  MaskGrid::Ptr touched = MaskGrid::create(false);
+  local.combine_each([&](const MaskGrid::Ptr& m) { touched->tree().topologyUnion(m->tree()); });
+  openvdb::tools::dilateActiveValues(touched->tree(), 1, openvdb::tools::NN_FACE_EDGE_VERTEX,
+                                     openvdb::tools::IGNORE_TILES);
+  touched->tree().voxelizeActiveTiles();
+  return touched;
+}
+
+// Each touched voxel of `result` takes min(current, d_B(g p)), clamped below
+// at -w (g: world to body frame). Leaves of the mask and the result share
+// origins, so each leaf is one thread's. Returns the voxels updated.
+std::uint64_t LowerToBodyDistance(const MaskGrid& touched, const FloatGrid& body_sdf, const Transform& g, double h,
+                                  double w, FloatGrid& result) {
+  std::atomic<std::uint64_t> updates{0};
+  openvdb::tree::LeafManager<const openvdb::MaskTree> leaves(touched.tree());
+  tbb::parallel_for(leaves.leafRange(), [&](const auto& range) {
+    auto acc = body_sdf.getConstAccessor();
+    std::uint64_t n = 0;
+    for (auto leaf = range.begin(); leaf; ++leaf) {
+      auto* out = result.tree().probeLeaf(leaf->origin());
+      if (out == nullptr) continue;  // cannot happen after topologyUnion
+      for (auto v = leaf->cbeginValueOn(); v; ++v) {
+        const Coord c = v.getCoord();
+        const Vec3 q = g.Apply({c.x() * h, c.y() * h, c.z() * h});
+        const float d =
+            static_cast<float>(openvdb::tools::BoxSampler::sample(acc, openvdb::Vec3R(q[0] / h, q[1] / h, q[2] / h)));
+        const float cur = out->getValue(v.pos());
+        if (d < cur) out->setValueOnly(v.pos(), std::max(d, static_cast<float>(-w)));
+        ++n;
+      }
+    }
+    updates += n;
+  });
+  return updates.load();
+}
+
+}  // namespace
+
 SweptDistanceField ComputeSweptDistance(const mesh::TriangleMesh& body, const std::vector<Transform>& poses,
                                         const SweptVolumeOptions& options, SweptVolumeSummary* summary) {
   CheckOptions(options);
@@ -190,18 +262,9 @@ SweptDistanceField ComputeSweptDistance(const mesh::TriangleMesh& body, const st
   for (std::size_t i = 1; i < poses.size(); ++i) step = std::max(step, PoseDistance(corners, poses[i - 1], poses[i]));
   const double w = std::max({options.half_width_voxels * h, options.offset + 2 * h, step + 2 * h});
 
-  // B's level set, once, wide enough that every body voxel within w + h of the
-  // surface carries a true distance.
-  std::vector<openvdb::Vec3s> points;
-  points.reserve(body.vertices.size());
-  for (const auto& v : body.vertices) points.emplace_back(float(v[0]), float(v[1]), float(v[2]));
-  std::vector<openvdb::Vec3I> tris;
-  tris.reserve(body.triangles.size());
-  for (const auto& t : body.triangles) tris.emplace_back(t[0], t[1], t[2]);
+  // B's level set, once.
   const auto lattice = Lattice(h);
-  FloatGrid::Ptr body_sdf =
-      openvdb::tools::meshToLevelSet<FloatGrid>(*lattice, points, tris, static_cast<float>(w / h + 2.0));
-  if (body_sdf->activeVoxelCount() == 0) throw InputError("swept volume: body mesh encloses no voxel");
+  FloatGrid::Ptr body_sdf = BodyLevelSet(body, *lattice, w, h);
 
   // Centres (mm, body frame) of B's band voxels with |d| < w + h.
   std::vector<Vec3> band;
@@ -215,55 +278,18 @@ SweptDistanceField ComputeSweptDistance(const mesh::TriangleMesh& body, const st
   FloatGrid::Ptr result = FloatGrid::create(static_cast<float>(w));
   result->setTransform(lattice->copy());
   result->setGridClass(openvdb::GRID_LEVEL_SET);
-  std::atomic<std::uint64_t> updates{0};
-
+  std::uint64_t updates = 0;
   for (const Transform& f : poses) {
     const Transform g = f.Inverse();
-    // 1. Touched world voxels: B's band under f, rounded, then dilated by one
-    //    voxel in the 26-neighbourhood (covers every lattice point within
-    //    one voxel per axis of a mapped band centre).
-    tbb::combinable<MaskGrid::Ptr> local([] { return MaskGrid::create(false); });
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, band.size(), 4096), [&](const auto& r) {
-      auto& mask = local.local();
-      auto acc = mask->getAccessor();
-      for (std::size_t i = r.begin(); i != r.end(); ++i) {
-        const Vec3 p = f.Apply(band[i]);
-        acc.setValueOn(Coord(static_cast<int>(std::lround(p[0] / h)), static_cast<int>(std::lround(p[1] / h)),
-                             static_cast<int>(std::lround(p[2] / h))));
-      }
-    });
-    MaskGrid::Ptr touched = MaskGrid::create(false);
-    local.combine_each([&](const MaskGrid::Ptr& m) { touched->tree().topologyUnion(m->tree()); });
-    openvdb::tools::dilateActiveValues(touched->tree(), 1, openvdb::tools::NN_FACE_EDGE_VERTEX,
-                                       openvdb::tools::IGNORE_TILES);
-    touched->tree().voxelizeActiveTiles();
+    // 1. Touched world voxels.
+    MaskGrid::Ptr touched = TouchedVoxels(band, f, h);
     result->tree().topologyUnion(touched->tree());
     if (static_cast<std::size_t>(result->tree().activeLeafVoxelCount()) > options.max_active_voxels) {
       throw ResourceError("swept volume: more than " + std::to_string(options.max_active_voxels) +
                           " active voxels; use a larger voxel_size");
     }
-
-    // 2. Each touched voxel takes min(current, d_B(f^-1 p)). Leaves of the
-    //    mask and the result share origins, so each leaf is one thread's.
-    openvdb::tree::LeafManager<const openvdb::MaskTree> leaves(touched->tree());
-    tbb::parallel_for(leaves.leafRange(), [&](const auto& range) {
-      auto acc = body_sdf->getConstAccessor();
-      std::uint64_t n = 0;
-      for (auto leaf = range.begin(); leaf; ++leaf) {
-        auto* out = result->tree().probeLeaf(leaf->origin());
-        if (out == nullptr) continue;  // cannot happen after topologyUnion
-        for (auto v = leaf->cbeginValueOn(); v; ++v) {
-          const Coord c = v.getCoord();
-          const Vec3 q = g.Apply({c.x() * h, c.y() * h, c.z() * h});
-          const float d =
-              static_cast<float>(openvdb::tools::BoxSampler::sample(acc, openvdb::Vec3R(q[0] / h, q[1] / h, q[2] / h)));
-          const float cur = out->getValue(v.pos());
-          if (d < cur) out->setValueOnly(v.pos(), std::max(d, static_cast<float>(-w)));
-          ++n;
-        }
-      }
-      updates += n;
-    });
+    // 2. Each touched voxel takes min(current, d_B(f^-1 p)).
+    updates += LowerToBodyDistance(*touched, *body_sdf, g, h, w, *result);
   }
   // Inactive voxels inside the swept volume get -w (sign from the band).
   openvdb::tools::signedFloodFill(result->tree());
@@ -272,7 +298,7 @@ SweptDistanceField ComputeSweptDistance(const mesh::TriangleMesh& body, const st
     summary->time_steps = static_cast<int>(poses.size());
     summary->band_half_width = w;
     summary->body_band_voxels = band.size();
-    summary->voxel_updates = updates.load();
+    summary->voxel_updates = updates;
     summary->active_voxels = static_cast<std::size_t>(result->activeVoxelCount());
   }
   auto impl = std::make_shared<SweptDistanceField::Impl>();
