@@ -423,9 +423,11 @@ Design ParseDesign(const std::string& text, const std::filesystem::path& path) {
   }
 
   std::set<std::string> names;
-  if (!root["parameters"] || !root["parameters"].IsMap() || root["parameters"].size() == 0)
+  // `parameters: {}` exposes nothing: the design is one sample (a model
+  // imported without Customizer annotations, docs/design-format.md).
+  if (!root["parameters"] || !root["parameters"].IsMap())
     r.Fail(root["parameters"] ? root["parameters"] : root,
-           "design needs a 'parameters' map with at least one exposed parameter");
+           "design needs a 'parameters' map of exposed parameters ('parameters: {}' for none: one sample)");
   for (auto it = root["parameters"].begin(); it != root["parameters"].end(); ++it) {
     ExposedParameter p;
     p.name = it->first.Scalar();

@@ -191,10 +191,6 @@ std::vector<Choice> ChooseExposed(const CustomizerModel& m, const std::string& f
       how[eligible[i]] = WidgetWords(*eligible[i]) + ", within --max-dims " + std::to_string(o.max_dims);
     }
   }
-  if (chosen.empty())
-    throw InputError(file +
-                     ": no Customizer parameter has a slider or dropdown annotation outside [Hidden]; "
-                     "name parameters with --expose NAME or give one a range with --expose NAME=lo:hi");
   std::vector<Choice> out;
   for (const auto& p : m.parameters) {
     Choice c;
@@ -292,7 +288,8 @@ ImportSummary ImportScad(const std::filesystem::path& model, const ImportOptions
     y << "  # the model's largest edge at its defaults, " << FormatScadNumber(std::round(options.model_size * 10) / 10)
       << " mm, / 150, within [5/8, 3/4] of min_thickness";
   y << "\n";
-  y << "parameters:\n";
+  // No exposed parameter: the model at its own values, one sample.
+  y << (exposures.empty() ? "parameters: {}  # none exposed: one sample, the model at its values\n" : "parameters:\n");
   for (const auto& e : exposures) {
     const CustomizerParameter& p = *e.p;
     y << "  " << p.name << ": {type: " << e.type;
@@ -324,10 +321,13 @@ ImportSummary ImportScad(const std::filesystem::path& model, const ImportOptions
     if (!c.p->description.empty()) y << ", description: " << Yaml(c.p->description);
     y << ", why: " << Yaml(c.why) << "}\n";
   }
-  y << "tree:\n  op: openscad\n  file: " << Yaml(reference) << "\n  set: {";
-  for (std::size_t i = 0; i < exposures.size(); ++i)
-    y << (i ? ", " : "") << exposures[i].p->name << ": " << exposures[i].p->name;
-  y << "}\n";
+  y << "tree:\n  op: openscad\n  file: " << Yaml(reference) << "\n";
+  if (!exposures.empty()) {
+    y << "  set: {";
+    for (std::size_t i = 0; i < exposures.size(); ++i)
+      y << (i ? ", " : "") << exposures[i].p->name << ": " << exposures[i].p->name;
+    y << "}\n";
+  }
   bool any_enum = false;
   for (const auto& e : exposures) any_enum = any_enum || e.type == "enum";
   if (any_enum) {
