@@ -9,6 +9,7 @@
 #include <cstdlib>
 #include <cmath>
 #include <fstream>
+#include <map>
 #include <numbers>
 
 #include "fabatlas/design/design.h"
@@ -557,6 +558,39 @@ TEST(ScadCsgBounds, HoldsOpenScadsRenderOfAnMcadModel) {
     ours = std::max(ours, b.hi[k] - b.lo[k]);
   }
   EXPECT_LE(ours, 1.1 * theirs) << ours << " mm against OpenSCAD's " << theirs << " mm";
+}
+
+}  // namespace
+
+namespace {
+
+// Debian's openscad-mcad, imported without options: no part has a
+// Customizer annotation, so each imports as a one-sample design whose
+// numbers are fixed at the library's values (trochoids.scad's as written in
+// it), and the design file parses.
+TEST(Import, McadPartsWithoutOptionsAreOneSampleDesigns) {
+  const std::filesystem::path dir = "/usr/share/openscad/libraries/MCAD";
+  if (!std::filesystem::exists(dir / "stepper.scad")) GTEST_SKIP() << "openscad-mcad not installed";
+  int models = 0, with_numbers = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(dir)) {
+    if (entry.path().extension() != ".scad") continue;
+    const fabatlas::scad::ImportSummary s = fabatlas::scad::ImportScad(entry.path(), {});
+    EXPECT_TRUE(s.exposed.empty()) << entry.path();
+    const fabatlas::design::Design d =
+        fabatlas::design::ParseDesign(s.design_yaml, entry.path().parent_path() / "imported.yaml");
+    EXPECT_TRUE(d.exposed.empty()) << entry.path();
+    ++models;
+    with_numbers += !d.fixed.empty();
+  }
+  EXPECT_GE(models, 30);
+  EXPECT_GE(with_numbers, 8);  // bearing, hardware, lego_compatibility, stepper, trochoids, units, ...
+  const fabatlas::scad::ImportSummary trochoids = fabatlas::scad::ImportScad(dir / "trochoids.scad", {});
+  const fabatlas::design::Design d = fabatlas::design::ParseDesign(trochoids.design_yaml, dir / "trochoids.yaml");
+  std::map<std::string, std::string> fixed;
+  for (const auto& f : d.fixed) fixed[f.name] = f.value;
+  EXPECT_EQ(fixed,
+            (std::map<std::string, std::string>{{"thickness", "2"}, {"R", "4"}, {"r", "1"}, {"d", "1"}, {"n", "60"}}));
+  // ($fn = 30 is a $-variable, not listed; alpha = 360 * $t an expression.)
 }
 
 }  // namespace
