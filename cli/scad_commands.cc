@@ -12,6 +12,7 @@
 #include "fabatlas/design/evaluate_sample.h"
 #include "fabatlas/error.h"
 #include "fabatlas/scad/import_design.h"
+#include "fabatlas/scad/model_bounds.h"
 
 namespace fabatlas::cli {
 
@@ -30,12 +31,15 @@ void PrintWarnings(const scad::ImportSummary& s) {
   for (const auto& w : s.warnings) std::cerr << "fabatlas: warning: " << w << "\n";
 }
 
-// The largest bounding-box edge (mm) of the model at its defaults, from a
-// coarse native evaluation (geometry only, voxel 1 mm, then 0.25 mm for
-// models smaller than a few voxels); 0 when neither gives geometry. The
-// import picks its voxel size from it (docs/openscad.md, "Voxel size").
+// The largest bounding-box edge (mm) of the model at its defaults: from its
+// CSG tree without booleans (model_bounds.h), else from a coarse native
+// evaluation (geometry only, voxel 1 mm, then 0.25 mm for models smaller than
+// a few voxels); 0 when none gives geometry. The import picks its voxel size
+// from it (docs/openscad.md, "Voxel size").
 double MeasureModelSize(const std::string& model, const scad::ImportOptions& options) {
   fs::path path = model;
+  if (const scad::CsgBox b = scad::ModelBounds(path); b.known && !b.empty)
+    return std::max({b.hi[0] - b.lo[0], b.hi[1] - b.lo[1], b.hi[2] - b.lo[2]});
   for (double voxel : {1.0, 0.25}) {
     scad::ImportOptions probe = options;
     probe.voxel_size = voxel;
@@ -85,6 +89,7 @@ void ImportScadCommand(const ImportArgs& a) {
   write(job, s.job_yaml);
   std::cout << "wrote " << a.out << " (" << s.exposed.size() << " exposed:";
   for (const auto& n : s.exposed) std::cout << " " << n;
+  if (s.exposed.empty()) std::cout << " none, one sample";
   std::cout << "; " << s.fixed.size() << " fixed; " << s.presets << " presets) and " << job.string() << "\n";
 }
 

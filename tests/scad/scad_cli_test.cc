@@ -192,4 +192,32 @@ TEST(ScadCli, ImportAnyModelWithRangesAndABudget) {
   }
 }
 
+// A model without any Customizer annotation, as most published before the
+// Customizer (openscad-testing-data's union-coincident-test.scad: two
+// crossed bars, one plain number `e`): import-scad exposes nothing and keeps
+// the number fixed, the design is one sample, and it evaluates to OpenSCAD
+// 2021.01's own render of the model.
+TEST(ScadCli, AModelWithoutAnnotationsIsOneSample) {
+  const std::filesystem::path model = "/usr/share/openscad/testdata/scad/3D/features/union-coincident-test.scad";
+  if (!std::filesystem::exists(model) || std::system("command -v openscad >/dev/null 2>&1") != 0)
+    GTEST_SKIP() << "openscad or openscad-testing-data not installed";
+  auto dir = fabatlas::testing::FreshTempDir("scad-cli-plain");
+  std::filesystem::copy_file(model, dir / "u.scad");
+  CommandRun r = Fabatlas("import-scad u.scad --out u.yaml", dir);
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.out.find("fixed e = 0: no range: a number without a slider annotation"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("(0 exposed: none, one sample; 1 fixed; 0 presets)"), std::string::npos) << r.out;
+
+  CommandRun e = Fabatlas("eval u.yaml --json", dir);
+  ASSERT_EQ(e.status, 0) << e.err;
+  const auto j = nlohmann::json::parse(e.out);
+  EXPECT_TRUE(j["valid"].get<bool>()) << e.out;
+  const double ours = j["properties"]["volume"].get<double>();
+  const std::string stl = (dir / "peer.stl").string();
+  const std::string cmd = "cd '" + dir.string() + "' && openscad --quiet -o " + stl + " u.scad 2>/dev/null";
+  ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+  const double peer = std::abs(fabatlas::mesh::EnclosedVolume(fabatlas::mesh::ReadMesh(stl)));
+  EXPECT_NEAR(ours, peer, 0.01 * peer) << "fabatlas " << ours << " mm^3, OpenSCAD " << peer << " mm^3";
+}
+
 }  // namespace

@@ -5,8 +5,11 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
+#include <cstdlib>
 #include <cmath>
 #include <fstream>
+#include <map>
 #include <numbers>
 
 #include "fabatlas/design/design.h"
@@ -247,8 +250,15 @@ TEST(Import, ExposeAndItsErrors) {
   }
   o.expose = {"nope"};
   EXPECT_THROW(fabatlas::scad::ImportScad(dir / "m.scad", o), fabatlas::InputError);
+  // No annotation: nothing exposed, a one-sample design with the numbers fixed.
   std::ofstream(dir / "none.scad") << "a = 1;\ncube(a);\n";
-  EXPECT_THROW(fabatlas::scad::ImportScad(dir / "none.scad", {}), fabatlas::InputError);
+  fabatlas::scad::ImportSummary none = fabatlas::scad::ImportScad(dir / "none.scad", {});
+  EXPECT_TRUE(none.exposed.empty());
+  EXPECT_EQ(none.fixed, (std::vector<std::string>{"a"}));
+  fabatlas::design::Design dn = fabatlas::design::ParseDesign(none.design_yaml, dir / "none.yaml");
+  EXPECT_TRUE(dn.exposed.empty());
+  ASSERT_EQ(dn.fixed.size(), 1u);
+  EXPECT_EQ(dn.fixed[0].value, "1");
 }
 
 // A model of 18 Customizer parameters written to the manual's rules
@@ -460,6 +470,127 @@ TEST(ScadCsgTree, CommentsAndStringsFollowOpenScadsLexicalRules) {
   } catch (const fabatlas::InputError& e) {
     EXPECT_STREQ(e.what(), "m.csg:3: unterminated string");
   }
+}
+
+}  // namespace
+
+#include "fabatlas/mesh/read_mesh.h"
+#include "fabatlas/scad/csg_bounds.h"
+#include "fabatlas/scad/model_bounds.h"
+
+namespace {
+
+using fabatlas::scad::CsgBounds;
+using fabatlas::scad::ParseCsg;
+
+std::array<double, 6> Box(const std::string& csg) {
+  const fabatlas::scad::CsgBox b = CsgBounds(ParseCsg(csg, "m.csg"));
+  EXPECT_TRUE(b.known) << b.unknown;
+  EXPECT_FALSE(b.empty);
+  return {b.lo[0], b.lo[1], b.lo[2], b.hi[0], b.hi[1], b.hi[2]};
+}
+
+// Boxes read from the CSG tree without booleans (csg_bounds.h), against
+// boxes worked out by hand from the primitives' definitions (OpenSCAD User
+// Manual: cube, cylinder, linear_extrude, multmatrix).
+TEST(ScadCsgBounds, BoxesOfPrimitivesTransformsAndBooleans) {
+  using B = std::array<double, 6>;
+  const std::string moved =
+      "multmatrix([[1, 0, 0, 10], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]]) {\n"
+      "cube(size = [2, 3, 4], center = false);\n}\n";
+  // A union: the boxes' union, a centred cube with a moved one.
+  EXPECT_EQ(Box(moved + "cube(size = [5, 5, 5], center = true);\n"), (B{-2.5, -2.5, -2.5, 12, 3, 4}));
+  // A difference: its first operand's box, whatever it cuts away.
+  EXPECT_EQ(Box("difference() {\n" + moved + "sphere($fn = 0, $fa = 12, $fs = 2, r = 100);\n}\n"),
+            (B{10, 0, 0, 12, 3, 4}));
+  // An intersection: the overlap; of disjoint boxes, nothing.
+  EXPECT_EQ(Box("intersection() {\ncube(size = [11, 11, 11], center = false);\n" + moved + "}\n"),
+            (B{10, 0, 0, 11, 3, 4}));
+  EXPECT_TRUE(
+      CsgBounds(ParseCsg("intersection() {\ncube(size = [1, 1, 1], center = false);\n" + moved + "}\n", "m.csg"))
+          .empty);
+  // A quarter turn about z: (x, y) -> (-y, x).
+  EXPECT_EQ(Box("multmatrix([[0, -1, 0, 0], [1, 0, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]]) {\n"
+                "cube(size = [2, 3, 4], center = false);\n}\n"),
+            (B{-3, 0, 0, 0, 2, 4}));
+  // A cone and a centred extrusion of a polygon; 2-D shapes alone are no solid.
+  EXPECT_EQ(Box("cylinder($fn = 0, $fa = 12, $fs = 2, h = 6, r1 = 1, r2 = 3, center = false);\n"),
+            (B{-3, -3, 0, 3, 3, 6}));
+  EXPECT_EQ(Box("linear_extrude(height = 4, center = true, convexity = 1, scale = [1, 1]) {\n"
+                "polygon(points = [[0, 0], [5, 1], [2, 7]], paths = undef, convexity = 1);\n}\n"),
+            (B{0, 0, -2, 5, 7, 2}));
+  EXPECT_TRUE(CsgBounds(ParseCsg("square(size = [2, 2], center = false);\n", "m.csg")).empty);
+  // Text's extent is not in its arguments: unknown, naming the line.
+  const fabatlas::scad::CsgBox text = CsgBounds(ParseCsg(
+      "cube(size = [1, 1, 1], center = false);\nlinear_extrude(height = 1) {\ntext(text = \"A\", size = 10);\n}\n",
+      "m.csg"));
+  EXPECT_FALSE(text.known);
+  EXPECT_EQ(text.unknown, "3: text");
+}
+
+// A model nobody on the team wrote (MCAD's trochoids demo: cylinders, a
+// twisted extrusion, polygons from functions, colours): the box from its CSG
+// tree holds OpenSCAD 2021.01's own STL and is at most 10% longer on its
+// largest edge (the twisted extrusion is bounded by the circle it sweeps:
+// 24.9 mm against OpenSCAD's 23.2 mm).
+TEST(ScadCsgBounds, HoldsOpenScadsRenderOfAnMcadModel) {
+  const std::filesystem::path model = "/usr/share/openscad/libraries/MCAD/trochoids.scad";
+  if (!std::filesystem::exists(model) || std::system("openscad --version >/dev/null 2>&1") != 0)
+    GTEST_SKIP() << "openscad or openscad-mcad not installed";
+  const auto dir = fabatlas::testing::FreshTempDir("scad-bounds");
+  const std::string stl = (dir / "t.stl").string();
+  ASSERT_EQ(std::system(("openscad --quiet -o " + stl + " " + model.string() + " 2>/dev/null").c_str()), 0);
+  const fabatlas::mesh::TriangleMesh mesh = fabatlas::mesh::ReadMesh(stl);
+  ASSERT_FALSE(mesh.vertices.empty());
+  std::array<double, 3> lo = mesh.vertices[0], hi = mesh.vertices[0];
+  for (const auto& v : mesh.vertices)
+    for (int k = 0; k < 3; ++k) {
+      lo[k] = std::min(lo[k], v[k]);
+      hi[k] = std::max(hi[k], v[k]);
+    }
+  const fabatlas::scad::CsgBox b = fabatlas::scad::ModelBounds(model);
+  ASSERT_TRUE(b.known) << b.unknown;
+  double theirs = 0, ours = 0;
+  for (int k = 0; k < 3; ++k) {
+    EXPECT_LE(b.lo[k], lo[k] + 1e-3) << k;
+    EXPECT_GE(b.hi[k], hi[k] - 1e-3) << k;
+    theirs = std::max(theirs, hi[k] - lo[k]);
+    ours = std::max(ours, b.hi[k] - b.lo[k]);
+  }
+  EXPECT_LE(ours, 1.1 * theirs) << ours << " mm against OpenSCAD's " << theirs << " mm";
+}
+
+}  // namespace
+
+namespace {
+
+// Debian's openscad-mcad, imported without options: no part has a
+// Customizer annotation, so each imports as a one-sample design whose
+// numbers are fixed at the library's values (trochoids.scad's as written in
+// it), and the design file parses.
+TEST(Import, McadPartsWithoutOptionsAreOneSampleDesigns) {
+  const std::filesystem::path dir = "/usr/share/openscad/libraries/MCAD";
+  if (!std::filesystem::exists(dir / "stepper.scad")) GTEST_SKIP() << "openscad-mcad not installed";
+  int models = 0, with_numbers = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(dir)) {
+    if (entry.path().extension() != ".scad") continue;
+    const fabatlas::scad::ImportSummary s = fabatlas::scad::ImportScad(entry.path(), {});
+    EXPECT_TRUE(s.exposed.empty()) << entry.path();
+    const fabatlas::design::Design d =
+        fabatlas::design::ParseDesign(s.design_yaml, entry.path().parent_path() / "imported.yaml");
+    EXPECT_TRUE(d.exposed.empty()) << entry.path();
+    ++models;
+    with_numbers += !d.fixed.empty();
+  }
+  EXPECT_GE(models, 30);
+  EXPECT_GE(with_numbers, 8);  // bearing, hardware, lego_compatibility, stepper, trochoids, units, ...
+  const fabatlas::scad::ImportSummary trochoids = fabatlas::scad::ImportScad(dir / "trochoids.scad", {});
+  const fabatlas::design::Design d = fabatlas::design::ParseDesign(trochoids.design_yaml, dir / "trochoids.yaml");
+  std::map<std::string, std::string> fixed;
+  for (const auto& f : d.fixed) fixed[f.name] = f.value;
+  EXPECT_EQ(fixed,
+            (std::map<std::string, std::string>{{"thickness", "2"}, {"R", "4"}, {"r", "1"}, {"d", "1"}, {"n", "60"}}));
+  // ($fn = 30 is a $-variable, not listed; alpha = 360 * $t an expression.)
 }
 
 }  // namespace

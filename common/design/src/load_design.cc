@@ -250,91 +250,106 @@ void LintTuples(const Argument& a, std::size_t n, const std::string& what, Scope
   }
 }
 
+// The objects of a reconfigurable: name -> tree.
+void ReadObjects(const Reader& r, const YAML::Node& root, Design& d, Scope& scope, const std::filesystem::path& dir) {
+  if (!root["objects"]) return;
+  std::set<std::string> object_names;
+  const YAML::Node objects = root["objects"];
+  if (!objects.IsMap() || objects.size() == 0) r.Fail(objects, "'objects' must be a map of name: tree node");
+  for (auto it = objects.begin(); it != objects.end(); ++it) {
+    DesignObject o;
+    o.name = it->first.Scalar();
+    o.place = r.At(it->first);
+    if (!object_names.insert(o.name).second) r.Fail(it->first, "object '" + o.name + "' is declared twice");
+    o.tree = ReadNode(r, it->second, scope, dir, 1);
+    d.objects.push_back(std::move(o));
+  }
+}
+
+void ReadStates(const Reader& r, const YAML::Node& root, Design& d) {
+  if (!root["states"]) return;
+  std::set<std::string> states;
+  const YAML::Node list = root["states"];
+  if (!list.IsSequence() || list.size() == 0) r.Fail(list, "'states' must be a list of state names");
+  for (const auto& s : list) {
+    std::string name = r.String(s, "state");
+    if (!states.insert(name).second) r.Fail(s, "state '" + name + "' is listed twice");
+    d.states.push_back(name);
+  }
+}
+
+// One object's motion on a transition: translation, rotation, pivot.
+ObjectMotion ReadMotion(const Reader& r, const YAML::Node& key, const YAML::Node& spec, const Design& d, Scope& scope) {
+  ObjectMotion m;
+  m.object = key.Scalar();
+  m.place = r.At(key);
+  if (!d.FindObject(m.object)) r.Fail(key, "unknown object '" + m.object + "'");
+  if (!spec.IsMap()) r.Fail(spec, "the motion of '" + m.object + "' must be a map");
+  r.OnlyKeys(spec, {"translation", "rotation", "pivot"}, "motion of '" + m.object + "'");
+  if (spec["translation"]) {
+    m.translation = r.ToArgument(spec["translation"]);
+    m.has_translation = true;
+    LintTuples(m.translation, 3, "'translation'", scope);
+    std::size_t n = m.translation.items.size();
+    if (n != 2 && n != 4)
+      r.Fail(spec["translation"], "'translation' needs 2 points (a line) or 4 Bezier control points");
+  }
+  if (spec["rotation"]) {
+    m.rotation = r.ToArgument(spec["rotation"]);
+    m.has_rotation = true;
+    LintTuples(m.rotation, 4, "'rotation' keys [axis x, axis y, axis z, degrees]", scope);
+    if (m.rotation.items.empty()) r.Fail(spec["rotation"], "'rotation' needs at least one key");
+  }
+  if (spec["pivot"]) {
+    m.pivot = r.ToArgument(spec["pivot"]);
+    m.has_pivot = true;
+    Argument wrapped;
+    wrapped.kind = Argument::Kind::kList;
+    wrapped.items = {m.pivot};
+    LintTuples(wrapped, 3, "'pivot'", scope);
+  }
+  return m;
+}
+
+// Transitions between states, each from the first state or one reached before.
+void ReadTransitions(const Reader& r, const YAML::Node& root, Design& d, Scope& scope) {
+  if (!root["transitions"]) return;
+  const YAML::Node list = root["transitions"];
+  if (!list.IsSequence()) r.Fail(list, "'transitions' must be a list");
+  if (d.states.empty()) r.Fail(list, "transitions need a 'states' list");
+  const std::set<std::string> states(d.states.begin(), d.states.end());
+  std::set<std::string> reached = {d.states.front()}, names;
+  for (const auto& y : list) {
+    if (!y.IsMap()) r.Fail(y, "a transition is a map with from, to and motions");
+    r.OnlyKeys(y, {"name", "from", "to", "motions"}, "transition");
+    Transition t;
+    t.place = r.At(y);
+    if (!y["from"] || !y["to"]) r.Fail(y, "a transition needs 'from' and 'to'");
+    t.from = r.String(y["from"], "from");
+    t.to = r.String(y["to"], "to");
+    if (!states.count(t.from)) r.Fail(y["from"], "unknown state '" + t.from + "'");
+    if (!states.count(t.to)) r.Fail(y["to"], "unknown state '" + t.to + "'");
+    if (!reached.count(t.from))
+      r.Fail(y["from"], "state '" + t.from + "' is not the first state nor reached by an earlier transition");
+    reached.insert(t.to);
+    t.name = y["name"] ? r.String(y["name"], "name") : t.from + "->" + t.to;
+    if (!names.insert(t.name).second) r.Fail(y, "transition '" + t.name + "' is declared twice");
+    if (y["motions"]) {
+      const YAML::Node motions = y["motions"];
+      if (!motions.IsMap()) r.Fail(motions, "'motions' must be a map of object: motion");
+      for (auto it = motions.begin(); it != motions.end(); ++it)
+        t.motions.push_back(ReadMotion(r, it->first, it->second, d, scope));
+    }
+    d.transitions.push_back(std::move(t));
+  }
+}
+
 // The objects, states and transitions of a reconfigurable (Reconfigurables).
 void ReadReconfigurable(const Reader& r, const YAML::Node& root, Design& d, Scope& scope,
                         const std::filesystem::path& dir) {
-  std::set<std::string> object_names;
-  if (root["objects"]) {
-    const YAML::Node objects = root["objects"];
-    if (!objects.IsMap() || objects.size() == 0) r.Fail(objects, "'objects' must be a map of name: tree node");
-    for (auto it = objects.begin(); it != objects.end(); ++it) {
-      DesignObject o;
-      o.name = it->first.Scalar();
-      o.place = r.At(it->first);
-      if (!object_names.insert(o.name).second) r.Fail(it->first, "object '" + o.name + "' is declared twice");
-      o.tree = ReadNode(r, it->second, scope, dir, 1);
-      d.objects.push_back(std::move(o));
-    }
-  }
-  std::set<std::string> states;
-  if (root["states"]) {
-    const YAML::Node list = root["states"];
-    if (!list.IsSequence() || list.size() == 0) r.Fail(list, "'states' must be a list of state names");
-    for (const auto& s : list) {
-      std::string name = r.String(s, "state");
-      if (!states.insert(name).second) r.Fail(s, "state '" + name + "' is listed twice");
-      d.states.push_back(name);
-    }
-  }
-  if (root["transitions"]) {
-    const YAML::Node list = root["transitions"];
-    if (!list.IsSequence()) r.Fail(list, "'transitions' must be a list");
-    if (d.states.empty()) r.Fail(list, "transitions need a 'states' list");
-    std::set<std::string> reached = {d.states.front()}, names;
-    for (const auto& y : list) {
-      if (!y.IsMap()) r.Fail(y, "a transition is a map with from, to and motions");
-      r.OnlyKeys(y, {"name", "from", "to", "motions"}, "transition");
-      Transition t;
-      t.place = r.At(y);
-      if (!y["from"] || !y["to"]) r.Fail(y, "a transition needs 'from' and 'to'");
-      t.from = r.String(y["from"], "from");
-      t.to = r.String(y["to"], "to");
-      if (!states.count(t.from)) r.Fail(y["from"], "unknown state '" + t.from + "'");
-      if (!states.count(t.to)) r.Fail(y["to"], "unknown state '" + t.to + "'");
-      if (!reached.count(t.from))
-        r.Fail(y["from"], "state '" + t.from + "' is not the first state nor reached by an earlier transition");
-      reached.insert(t.to);
-      t.name = y["name"] ? r.String(y["name"], "name") : t.from + "->" + t.to;
-      if (!names.insert(t.name).second) r.Fail(y, "transition '" + t.name + "' is declared twice");
-      if (y["motions"]) {
-        const YAML::Node motions = y["motions"];
-        if (!motions.IsMap()) r.Fail(motions, "'motions' must be a map of object: motion");
-        for (auto it = motions.begin(); it != motions.end(); ++it) {
-          ObjectMotion m;
-          m.object = it->first.Scalar();
-          m.place = r.At(it->first);
-          if (!object_names.count(m.object)) r.Fail(it->first, "unknown object '" + m.object + "'");
-          const YAML::Node spec = it->second;
-          if (!spec.IsMap()) r.Fail(spec, "the motion of '" + m.object + "' must be a map");
-          r.OnlyKeys(spec, {"translation", "rotation", "pivot"}, "motion of '" + m.object + "'");
-          if (spec["translation"]) {
-            m.translation = r.ToArgument(spec["translation"]);
-            m.has_translation = true;
-            LintTuples(m.translation, 3, "'translation'", scope);
-            std::size_t n = m.translation.items.size();
-            if (n != 2 && n != 4)
-              r.Fail(spec["translation"], "'translation' needs 2 points (a line) or 4 Bezier control points");
-          }
-          if (spec["rotation"]) {
-            m.rotation = r.ToArgument(spec["rotation"]);
-            m.has_rotation = true;
-            LintTuples(m.rotation, 4, "'rotation' keys [axis x, axis y, axis z, degrees]", scope);
-            if (m.rotation.items.empty()) r.Fail(spec["rotation"], "'rotation' needs at least one key");
-          }
-          if (spec["pivot"]) {
-            m.pivot = r.ToArgument(spec["pivot"]);
-            m.has_pivot = true;
-            Argument wrapped;
-            wrapped.kind = Argument::Kind::kList;
-            wrapped.items = {m.pivot};
-            LintTuples(wrapped, 3, "'pivot'", scope);
-          }
-          t.motions.push_back(std::move(m));
-        }
-      }
-      d.transitions.push_back(std::move(t));
-    }
-  }
+  ReadObjects(r, root, d, scope, dir);
+  ReadStates(r, root, d);
+  ReadTransitions(r, root, d, scope);
 }
 
 // Every `object` and `carve_swept` node names a declared object and
@@ -397,6 +412,258 @@ Design LoadDesign(const std::filesystem::path& path) {
   return ParseDesign(buffer.str(), path);
 }
 
+namespace {
+
+// One exposed parameter: real or integer (min, max, default) or enum (values).
+ExposedParameter ReadExposedParameter(const Reader& r, const YAML::Node& key, const YAML::Node& spec) {
+  ExposedParameter p;
+  p.name = key.Scalar();
+  p.place = r.At(key);
+  if (!spec.IsMap()) r.Fail(spec, "parameter '" + p.name + "' must be a map with type, min, max");
+  r.OnlyKeys(spec, {"type", "min", "max", "default", "values", "description", "group"}, "parameter '" + p.name + "'");
+  if (spec["description"]) p.description = r.String(spec["description"], "description");
+  if (spec["group"]) p.group = r.String(spec["group"], "group");
+  std::string type = spec["type"] ? r.String(spec["type"], "type") : "real";
+  if (type == "real" || type == "integer") {
+    p.kind = type == "real" ? ParameterKind::kReal : ParameterKind::kInteger;
+    if (!spec["min"] || !spec["max"]) r.Fail(spec, "parameter '" + p.name + "' needs min and max");
+    p.min = r.Number(spec["min"], "min");
+    p.max = r.Number(spec["max"], "max");
+    if (p.min > p.max) r.Fail(spec["min"], "parameter '" + p.name + "' has min > max");
+    if (p.kind == ParameterKind::kInteger && (p.min != std::floor(p.min) || p.max != std::floor(p.max)))
+      r.Fail(spec, "integer parameter '" + p.name + "' needs whole-number min and max");
+    p.default_value = spec["default"] ? r.Number(spec["default"], "default") : 0.5 * (p.min + p.max);
+    if (p.kind == ParameterKind::kInteger) p.default_value = std::round(p.default_value);
+    if (p.default_value < p.min || p.default_value > p.max)
+      r.Fail(spec["default"], "default of '" + p.name + "' is outside [min, max]");
+  } else if (type == "enum") {
+    p.kind = ParameterKind::kEnumerated;
+    if (!spec["values"] || !spec["values"].IsSequence() || spec["values"].size() == 0)
+      r.Fail(spec, "enum parameter '" + p.name + "' needs a non-empty 'values' list");
+    for (const auto& v : spec["values"]) p.labels.push_back(r.String(v, "enum value"));
+    p.min = 0;
+    p.max = static_cast<double>(p.labels.size() - 1);
+    p.default_value = 0;
+    if (spec["default"]) {
+      std::string def = r.String(spec["default"], "default");
+      auto f = std::find(p.labels.begin(), p.labels.end(), def);
+      if (f == p.labels.end())
+        r.Fail(spec["default"], "default '" + def + "' is not one of the values of '" + p.name + "'");
+      p.default_value = static_cast<double>(f - p.labels.begin());
+    }
+  } else {
+    r.Fail(spec["type"], "unknown parameter type '" + type + "' (expected real, integer or enum)");
+  }
+  return p;
+}
+
+void ReadExposed(const Reader& r, const YAML::Node& root, Design& d, std::set<std::string>& names) {
+  // `parameters: {}` exposes nothing: the design is one sample (a model
+  // imported without Customizer annotations, docs/design-format.md).
+  if (!root["parameters"] || !root["parameters"].IsMap())
+    r.Fail(root["parameters"] ? root["parameters"] : root,
+           "design needs a 'parameters' map of exposed parameters ('parameters: {}' for none: one sample)");
+  for (auto it = root["parameters"].begin(); it != root["parameters"].end(); ++it) {
+    CheckUnique(r, names, it->first.Scalar(), it->first);
+    d.exposed.push_back(ReadExposedParameter(r, it->first, it->second));
+  }
+}
+
+// Mutable parameters, solved for: min, max, default.
+void ReadVariables(const Reader& r, const YAML::Node& root, Design& d, std::set<std::string>& names) {
+  if (!root["variables"]) return;
+  if (!root["variables"].IsMap()) r.Fail(root["variables"], "'variables' must be a map");
+  for (auto it = root["variables"].begin(); it != root["variables"].end(); ++it) {
+    MutableParameter m;
+    m.name = it->first.Scalar();
+    m.place = r.At(it->first);
+    CheckUnique(r, names, m.name, it->first);
+    const YAML::Node spec = it->second;  // a copy: the iterator yields temporaries
+    if (!spec.IsMap()) r.Fail(spec, "variable '" + m.name + "' must be a map with min, max, default");
+    r.OnlyKeys(spec, {"min", "max", "default"}, "variable '" + m.name + "'");
+    if (spec["min"]) m.min = r.Number(spec["min"], "min");
+    if (spec["max"]) m.max = r.Number(spec["max"], "max");
+    if (m.min > m.max) r.Fail(spec["min"], "variable '" + m.name + "' has min > max");
+    m.default_value = spec["default"]
+                          ? r.Number(spec["default"], "default")
+                          : (spec["min"] && spec["max"] ? 0.5 * (m.min + m.max) : std::clamp(0.0, m.min, m.max));
+    if (m.default_value < m.min || m.default_value > m.max)
+      r.Fail(spec["default"], "default of '" + m.name + "' is outside [min, max]");
+    d.mutables.push_back(m);
+  }
+}
+
+// Constraints: `lhs REL rhs` with exactly one of ==, <=, >=.
+void ReadConstraints(const Reader& r, const YAML::Node& root, Design& d, Scope& scope) {
+  if (!root["constraints"]) return;
+  if (!root["constraints"].IsSequence()) r.Fail(root["constraints"], "'constraints' must be a list of relations");
+  for (const auto& c : root["constraints"]) {
+    Constraint k;
+    k.text = r.String(c, "constraint");
+    k.place = r.At(c);
+    struct Op {
+      const char* token;
+      Relation rel;
+      bool swap;
+    };
+    const Op ops[] = {
+        {"==", Relation::kEqual, false}, {"<=", Relation::kLessEqual, false}, {">=", Relation::kGreaterEqual, false}};
+    bool found = false;
+    for (const auto& op : ops) {
+      auto pos = k.text.find(op.token);
+      if (pos == std::string::npos) continue;
+      if (found || k.text.find(op.token, pos + 2) != std::string::npos)
+        r.Fail(c, "constraint '" + k.text + "' must hold exactly one of ==, <=, >=");
+      found = true;
+      k.lhs = k.text.substr(0, pos);
+      k.rhs = k.text.substr(pos + 2);
+      k.relation = op.rel;
+    }
+    if (!found) r.Fail(c, "constraint '" + k.text + "' needs one of ==, <=, >=");
+    Expression(k.lhs, scope, k.place);
+    Expression(k.rhs, scope, k.place);
+    d.constraints.push_back(k);
+  }
+}
+
+// A check's `repair_with`: exposed real parameters, "a, b".
+void LintRepairWith(const Reader& r, const YAML::Node& c, const CheckSpec& check, const Design& d) {
+  std::string names = check.args.at("repair_with").text + ",", name;
+  for (const char ch : names) {
+    if (ch != ',' && ch != ' ') {
+      name += ch;
+      continue;
+    }
+    if (name.empty()) continue;
+    const ExposedParameter* p = d.FindExposed(name);
+    if (!p || p->kind != ParameterKind::kReal)
+      r.Fail(c["repair_with"], "repair_with: '" + name + "' is not an exposed real parameter");
+    name.clear();
+  }
+}
+
+// One check: a type name, or a map with type, name and the type's arguments.
+CheckSpec ReadCheck(const Reader& r, const YAML::Node& c, const Design& d, Scope& scope,
+                    const std::filesystem::path& dir) {
+  CheckSpec check;
+  check.place = r.At(c);
+  if (c.IsScalar()) {
+    check.type = c.Scalar();
+  } else if (c.IsMap()) {
+    if (!c["type"]) r.Fail(c, "a check needs a 'type'");
+    check.type = r.String(c["type"], "type");
+    for (auto it = c.begin(); it != c.end(); ++it) {
+      std::string key = it->first.Scalar();
+      if (key == "type") continue;
+      if (key == "name")
+        check.name = r.String(it->second, "name");
+      else
+        check.args[key] = r.ToArgument(it->second);
+    }
+  } else {
+    r.Fail(c, "a check is a type name or a map with 'type'");
+  }
+  const auto& schemas = CheckSchemas();
+  auto it = schemas.find(check.type);
+  if (it == schemas.end()) r.Fail(c, "unknown check type '" + check.type + "'");
+  if (check.name.empty()) check.name = check.type;
+  LintArgs(check.args, it->second, check.place, "check '" + check.type + "'", scope, dir);
+  if (check.type == "assembly_feasible" || check.type == "assembly_stable" || check.type == "target_reached") {
+    std::function<bool(const Node&)> has = [&](const Node& n) {
+      if (n.op == "assembly") return true;
+      for (const auto& k : n.children)
+        if (has(k)) return true;
+      return false;
+    };
+    if (!has(d.tree)) r.Fail(c, "check '" + check.type + "' needs an 'assembly' node in the tree");
+  }
+  // Automatic resolution's degrees of freedom: exposed real parameters.
+  if (check.args.count("repair_with")) LintRepairWith(r, c, check, d);
+  return check;
+}
+
+void ReadChecks(const Reader& r, const YAML::Node& root, Design& d, Scope& scope, const std::filesystem::path& dir) {
+  if (!root["checks"]) return;
+  if (!root["checks"].IsSequence()) r.Fail(root["checks"], "'checks' must be a list");
+  for (const auto& c : root["checks"]) d.checks.push_back(ReadCheck(r, c, d, scope, dir));
+}
+
+void ReadProperties(const Reader& r, const YAML::Node& root, Design& d) {
+  if (!root["properties"]) {
+    d.properties = {"volume"};
+    return;
+  }
+  if (!root["properties"].IsSequence()) r.Fail(root["properties"], "'properties' must be a list");
+  for (const auto& p : root["properties"]) {
+    std::string name = r.String(p, "property");
+    const auto& known = PropertyNames();
+    if (std::find(known.begin(), known.end(), name) == known.end())
+      r.Fail(p, "unknown property '" + name + "' (expected volume, area or bbox)");
+    d.properties.push_back(name);
+  }
+}
+
+// One preset's value of an exposed parameter; enum values by label.
+double PresetValue(const Reader& r, const YAML::Node& key, const YAML::Node& value, const Design& d,
+                   const std::string& preset) {
+  const std::string name = key.Scalar();
+  const ExposedParameter* p = d.FindExposed(name);
+  if (!p) r.Fail(key, "preset '" + preset + "': '" + name + "' is not an exposed parameter");
+  if (p->kind == ParameterKind::kEnumerated) {
+    const std::string label = r.String(value, "preset value");
+    auto f = std::find(p->labels.begin(), p->labels.end(), label);
+    if (f == p->labels.end())
+      r.Fail(value, "preset '" + preset + "': '" + label + "' is not one of the values of '" + name + "'");
+    return static_cast<double>(f - p->labels.begin());
+  }
+  const double x = r.Number(value, "preset value");
+  if (x < p->min || x > p->max) r.Fail(value, "preset '" + preset + "': " + name + " is outside [min, max]");
+  if (p->kind == ParameterKind::kInteger && x != std::round(x))
+    r.Fail(value, "preset '" + preset + "': " + name + " takes whole numbers");
+  return x;
+}
+
+// presets: {name: {parameter: value, ...}}; the rest at their defaults.
+void ReadPresets(const Reader& r, const YAML::Node& root, Design& d) {
+  if (!root["presets"]) return;
+  if (!root["presets"].IsMap()) r.Fail(root["presets"], "'presets' must be a map of name: {parameter: value}");
+  for (auto it = root["presets"].begin(); it != root["presets"].end(); ++it) {
+    Preset preset;
+    preset.name = it->first.Scalar();
+    preset.place = r.At(it->first);
+    const YAML::Node values = it->second;  // a copy: the iterator yields temporaries
+    if (!values.IsMap()) r.Fail(values, "preset '" + preset.name + "' must be a map of parameter: value");
+    for (const auto& p : d.exposed) preset.values[p.name] = p.default_value;
+    for (auto v = values.begin(); v != values.end(); ++v)
+      preset.values[v->first.Scalar()] = PresetValue(r, v->first, v->second, d, preset.name);
+    d.presets.push_back(std::move(preset));
+  }
+}
+
+// fixed: {name: {value, description, group, why}}: shown, never sampled.
+void ReadFixed(const Reader& r, const YAML::Node& root, Design& d, std::set<std::string>& names) {
+  if (!root["fixed"]) return;
+  if (!root["fixed"].IsMap()) r.Fail(root["fixed"], "'fixed' must be a map of name: {value, description, group, why}");
+  for (auto it = root["fixed"].begin(); it != root["fixed"].end(); ++it) {
+    FixedParameter f;
+    f.name = it->first.Scalar();
+    f.place = r.At(it->first);
+    // The model's names (OpenSCAD's rules, not the expressions'): unique.
+    if (f.name.empty() || !names.insert(f.name).second)
+      r.Fail(it->first, "parameter '" + f.name + "' is declared twice");
+    const YAML::Node spec = it->second;  // a copy: the iterator yields temporaries
+    if (!spec.IsMap() || !spec["value"]) r.Fail(spec, "fixed parameter '" + f.name + "' must be a map with a value");
+    r.OnlyKeys(spec, {"value", "description", "group", "why"}, "fixed parameter '" + f.name + "'");
+    f.value = r.String(spec["value"], "value");
+    if (spec["description"]) f.description = r.String(spec["description"], "description");
+    if (spec["group"]) f.group = r.String(spec["group"], "group");
+    if (spec["why"]) f.why = r.String(spec["why"], "why");
+    d.fixed.push_back(std::move(f));
+  }
+}
+
+}  // namespace
+
 Design ParseDesign(const std::string& text, const std::filesystem::path& path) {
   const std::string file = path.string();
   Design d;
@@ -423,234 +690,18 @@ Design ParseDesign(const std::string& text, const std::filesystem::path& path) {
   }
 
   std::set<std::string> names;
-  if (!root["parameters"] || !root["parameters"].IsMap() || root["parameters"].size() == 0)
-    r.Fail(root["parameters"] ? root["parameters"] : root,
-           "design needs a 'parameters' map with at least one exposed parameter");
-  for (auto it = root["parameters"].begin(); it != root["parameters"].end(); ++it) {
-    ExposedParameter p;
-    p.name = it->first.Scalar();
-    p.place = r.At(it->first);
-    CheckUnique(r, names, p.name, it->first);
-    const YAML::Node spec = it->second;  // a copy: the iterator yields temporaries
-    if (!spec.IsMap()) r.Fail(spec, "parameter '" + p.name + "' must be a map with type, min, max");
-    r.OnlyKeys(spec, {"type", "min", "max", "default", "values", "description", "group"}, "parameter '" + p.name + "'");
-    if (spec["description"]) p.description = r.String(spec["description"], "description");
-    if (spec["group"]) p.group = r.String(spec["group"], "group");
-    std::string type = spec["type"] ? r.String(spec["type"], "type") : "real";
-    if (type == "real" || type == "integer") {
-      p.kind = type == "real" ? ParameterKind::kReal : ParameterKind::kInteger;
-      if (!spec["min"] || !spec["max"]) r.Fail(spec, "parameter '" + p.name + "' needs min and max");
-      p.min = r.Number(spec["min"], "min");
-      p.max = r.Number(spec["max"], "max");
-      if (p.min > p.max) r.Fail(spec["min"], "parameter '" + p.name + "' has min > max");
-      if (p.kind == ParameterKind::kInteger && (p.min != std::floor(p.min) || p.max != std::floor(p.max)))
-        r.Fail(spec, "integer parameter '" + p.name + "' needs whole-number min and max");
-      p.default_value = spec["default"] ? r.Number(spec["default"], "default") : 0.5 * (p.min + p.max);
-      if (p.kind == ParameterKind::kInteger) p.default_value = std::round(p.default_value);
-      if (p.default_value < p.min || p.default_value > p.max)
-        r.Fail(spec["default"], "default of '" + p.name + "' is outside [min, max]");
-    } else if (type == "enum") {
-      p.kind = ParameterKind::kEnumerated;
-      if (!spec["values"] || !spec["values"].IsSequence() || spec["values"].size() == 0)
-        r.Fail(spec, "enum parameter '" + p.name + "' needs a non-empty 'values' list");
-      for (const auto& v : spec["values"]) p.labels.push_back(r.String(v, "enum value"));
-      p.min = 0;
-      p.max = static_cast<double>(p.labels.size() - 1);
-      p.default_value = 0;
-      if (spec["default"]) {
-        std::string def = r.String(spec["default"], "default");
-        auto f = std::find(p.labels.begin(), p.labels.end(), def);
-        if (f == p.labels.end())
-          r.Fail(spec["default"], "default '" + def + "' is not one of the values of '" + p.name + "'");
-        p.default_value = static_cast<double>(f - p.labels.begin());
-      }
-    } else {
-      r.Fail(spec["type"], "unknown parameter type '" + type + "' (expected real, integer or enum)");
-    }
-    d.exposed.push_back(p);
-  }
-
-  if (root["variables"]) {
-    if (!root["variables"].IsMap()) r.Fail(root["variables"], "'variables' must be a map");
-    for (auto it = root["variables"].begin(); it != root["variables"].end(); ++it) {
-      MutableParameter m;
-      m.name = it->first.Scalar();
-      m.place = r.At(it->first);
-      CheckUnique(r, names, m.name, it->first);
-      const YAML::Node spec = it->second;  // a copy: the iterator yields temporaries
-      if (!spec.IsMap()) r.Fail(spec, "variable '" + m.name + "' must be a map with min, max, default");
-      r.OnlyKeys(spec, {"min", "max", "default"}, "variable '" + m.name + "'");
-      if (spec["min"]) m.min = r.Number(spec["min"], "min");
-      if (spec["max"]) m.max = r.Number(spec["max"], "max");
-      if (m.min > m.max) r.Fail(spec["min"], "variable '" + m.name + "' has min > max");
-      m.default_value = spec["default"]
-                            ? r.Number(spec["default"], "default")
-                            : (spec["min"] && spec["max"] ? 0.5 * (m.min + m.max) : std::clamp(0.0, m.min, m.max));
-      if (m.default_value < m.min || m.default_value > m.max)
-        r.Fail(spec["default"], "default of '" + m.name + "' is outside [min, max]");
-      d.mutables.push_back(m);
-    }
-  }
-
+  ReadExposed(r, root, d, names);
+  ReadVariables(r, root, d, names);
   Scope scope(ParameterNames(d));
-  if (root["constraints"]) {
-    if (!root["constraints"].IsSequence()) r.Fail(root["constraints"], "'constraints' must be a list of relations");
-    for (const auto& c : root["constraints"]) {
-      Constraint k;
-      k.text = r.String(c, "constraint");
-      k.place = r.At(c);
-      struct Op {
-        const char* token;
-        Relation rel;
-        bool swap;
-      };
-      const Op ops[] = {
-          {"==", Relation::kEqual, false}, {"<=", Relation::kLessEqual, false}, {">=", Relation::kGreaterEqual, false}};
-      bool found = false;
-      for (const auto& op : ops) {
-        auto pos = k.text.find(op.token);
-        if (pos == std::string::npos) continue;
-        if (found || k.text.find(op.token, pos + 2) != std::string::npos)
-          r.Fail(c, "constraint '" + k.text + "' must hold exactly one of ==, <=, >=");
-        found = true;
-        k.lhs = k.text.substr(0, pos);
-        k.rhs = k.text.substr(pos + 2);
-        k.relation = op.rel;
-      }
-      if (!found) r.Fail(c, "constraint '" + k.text + "' needs one of ==, <=, >=");
-      Expression(k.lhs, scope, k.place);
-      Expression(k.rhs, scope, k.place);
-      d.constraints.push_back(k);
-    }
-  }
-
+  ReadConstraints(r, root, d, scope);
   ReadReconfigurable(r, root, d, scope, path.parent_path());
   if (!root["tree"]) r.Fail(root, "design has no 'tree'");
   d.tree = ReadNode(r, root["tree"], scope, path.parent_path(), 0);
   LintReferences(d);
-
-  if (root["checks"]) {
-    if (!root["checks"].IsSequence()) r.Fail(root["checks"], "'checks' must be a list");
-    const auto& schemas = CheckSchemas();
-    for (const auto& c : root["checks"]) {
-      CheckSpec check;
-      check.place = r.At(c);
-      if (c.IsScalar()) {
-        check.type = c.Scalar();
-      } else if (c.IsMap()) {
-        if (!c["type"]) r.Fail(c, "a check needs a 'type'");
-        check.type = r.String(c["type"], "type");
-        for (auto it = c.begin(); it != c.end(); ++it) {
-          std::string key = it->first.Scalar();
-          if (key == "type") continue;
-          if (key == "name")
-            check.name = r.String(it->second, "name");
-          else
-            check.args[key] = r.ToArgument(it->second);
-        }
-      } else {
-        r.Fail(c, "a check is a type name or a map with 'type'");
-      }
-      auto it = schemas.find(check.type);
-      if (it == schemas.end()) r.Fail(c, "unknown check type '" + check.type + "'");
-      if (check.name.empty()) check.name = check.type;
-      LintArgs(check.args, it->second, check.place, "check '" + check.type + "'", scope, path.parent_path());
-      if (check.type == "assembly_feasible" || check.type == "assembly_stable" || check.type == "target_reached") {
-        std::function<bool(const Node&)> has = [&](const Node& n) {
-          if (n.op == "assembly") return true;
-          for (const auto& k : n.children)
-            if (has(k)) return true;
-          return false;
-        };
-        if (!has(d.tree)) r.Fail(c, "check '" + check.type + "' needs an 'assembly' node in the tree");
-      }
-      if (check.args.count("repair_with")) {
-        // Automatic resolution's degrees of freedom: exposed real parameters.
-        std::string names = check.args.at("repair_with").text + ",", name;
-        for (const char ch : names) {
-          if (ch != ',' && ch != ' ') {
-            name += ch;
-            continue;
-          }
-          if (name.empty()) continue;
-          const ExposedParameter* p = d.FindExposed(name);
-          if (!p || p->kind != ParameterKind::kReal)
-            r.Fail(c["repair_with"], "repair_with: '" + name + "' is not an exposed real parameter");
-          name.clear();
-        }
-      }
-      d.checks.push_back(check);
-    }
-  }
-
-  if (root["properties"]) {
-    if (!root["properties"].IsSequence()) r.Fail(root["properties"], "'properties' must be a list");
-    for (const auto& p : root["properties"]) {
-      std::string name = r.String(p, "property");
-      const auto& known = PropertyNames();
-      if (std::find(known.begin(), known.end(), name) == known.end())
-        r.Fail(p, "unknown property '" + name + "' (expected volume, area or bbox)");
-      d.properties.push_back(name);
-    }
-  } else {
-    d.properties = {"volume"};
-  }
-
-  // presets: {name: {parameter: value, ...}}; enum values by label.
-  if (root["presets"]) {
-    if (!root["presets"].IsMap()) r.Fail(root["presets"], "'presets' must be a map of name: {parameter: value}");
-    for (auto it = root["presets"].begin(); it != root["presets"].end(); ++it) {
-      Preset preset;
-      preset.name = it->first.Scalar();
-      preset.place = r.At(it->first);
-      const YAML::Node values = it->second;  // a copy: the iterator yields temporaries
-      if (!values.IsMap()) r.Fail(values, "preset '" + preset.name + "' must be a map of parameter: value");
-      for (const auto& p : d.exposed) preset.values[p.name] = p.default_value;
-      for (auto v = values.begin(); v != values.end(); ++v) {
-        const std::string name = v->first.Scalar();
-        const ExposedParameter* p = d.FindExposed(name);
-        if (!p) r.Fail(v->first, "preset '" + preset.name + "': '" + name + "' is not an exposed parameter");
-        double x = 0;
-        if (p->kind == ParameterKind::kEnumerated) {
-          const std::string label = r.String(v->second, "preset value");
-          auto f = std::find(p->labels.begin(), p->labels.end(), label);
-          if (f == p->labels.end())
-            r.Fail(v->second,
-                   "preset '" + preset.name + "': '" + label + "' is not one of the values of '" + name + "'");
-          x = static_cast<double>(f - p->labels.begin());
-        } else {
-          x = r.Number(v->second, "preset value");
-          if (x < p->min || x > p->max)
-            r.Fail(v->second, "preset '" + preset.name + "': " + name + " is outside [min, max]");
-          if (p->kind == ParameterKind::kInteger && x != std::round(x))
-            r.Fail(v->second, "preset '" + preset.name + "': " + name + " takes whole numbers");
-        }
-        preset.values[name] = x;
-      }
-      d.presets.push_back(std::move(preset));
-    }
-  }
-  // fixed: {name: {value, description, group, why}}: shown, never sampled.
-  if (root["fixed"]) {
-    if (!root["fixed"].IsMap())
-      r.Fail(root["fixed"], "'fixed' must be a map of name: {value, description, group, why}");
-    for (auto it = root["fixed"].begin(); it != root["fixed"].end(); ++it) {
-      FixedParameter f;
-      f.name = it->first.Scalar();
-      f.place = r.At(it->first);
-      // The model's names (OpenSCAD's rules, not the expressions'): unique.
-      if (f.name.empty() || !names.insert(f.name).second)
-        r.Fail(it->first, "parameter '" + f.name + "' is declared twice");
-      const YAML::Node spec = it->second;  // a copy: the iterator yields temporaries
-      if (!spec.IsMap() || !spec["value"]) r.Fail(spec, "fixed parameter '" + f.name + "' must be a map with a value");
-      r.OnlyKeys(spec, {"value", "description", "group", "why"}, "fixed parameter '" + f.name + "'");
-      f.value = r.String(spec["value"], "value");
-      if (spec["description"]) f.description = r.String(spec["description"], "description");
-      if (spec["group"]) f.group = r.String(spec["group"], "group");
-      if (spec["why"]) f.why = r.String(spec["why"], "why");
-      d.fixed.push_back(std::move(f));
-    }
-  }
+  ReadChecks(r, root, d, scope, path.parent_path());
+  ReadProperties(r, root, d);
+  ReadPresets(r, root, d);
+  ReadFixed(r, root, d, names);
   return d;
 }
 

@@ -43,7 +43,6 @@ std::int64_t DiscreteHi(const Dimension& d) {
 
 DesignSpace::DesignSpace(std::vector<Dimension> dimensions, int subdivisions)
     : dimensions_(std::move(dimensions)), subdivisions_(subdivisions) {
-  if (dimensions_.empty()) throw InputError("design space: no exposed parameters");
   if (dimensions_.size() > static_cast<std::size_t>(kMaxDimensions))
     throw InputError("design space: " + std::to_string(dimensions_.size()) + " exposed parameters, at most " +
                      std::to_string(kMaxDimensions) + " are supported");

@@ -252,6 +252,65 @@ std::string FormatScadNumber(double v) {
   return buf;
 }
 
+namespace {
+
+bool IsComment(const Token& t) { return t.kind == Token::Kind::kLineComment || t.kind == Token::Kind::kBlockComment; }
+
+// The tokens of an assignment's value after its '=' at `eq`, up to the ';' at
+// bracket depth 0 (comments skipped); `*end` is the ';' (or t.size()),
+// `*brace` whether a '{' came first (it ends the parameters).
+std::vector<Token> ValueTokens(const std::vector<Token>& t, std::size_t eq, std::size_t* end, bool* brace) {
+  std::vector<Token> value;
+  std::size_t k = eq + 1;
+  int depth = 0;
+  *brace = false;
+  for (; k < t.size(); ++k) {
+    const Token& x = t[k];
+    if (IsComment(x)) continue;
+    if (x.kind == Token::Kind::kSymbol) {
+      if (x.text == "{") *brace = true;
+      if (x.text == "[" || x.text == "(") ++depth;
+      if (x.text == "]" || x.text == ")") --depth;
+      if (x.text == ";" && depth <= 0) break;
+    }
+    value.push_back(x);
+  }
+  *end = k;
+  return value;
+}
+
+// The annotation: the first line comment after the ';' at `semicolon` on its
+// line. A malformed one keeps the parameter fixed, with a warning.
+void ReadAnnotation(const std::vector<Token>& t, std::size_t semicolon, const std::string& file, CustomizerParameter& p,
+                    std::vector<std::string>& warnings) {
+  const int end_line = t[semicolon].line;
+  for (std::size_t m = semicolon + 1; m < t.size() && t[m].line == end_line; ++m) {
+    if (t[m].kind == Token::Kind::kLineComment) {
+      std::string problem = Annotate(p, t[m].text);
+      if (!problem.empty()) {
+        p.widget = CustomizerParameter::Widget::kNone;
+        p.options.clear();
+        warnings.push_back(file + ":" + std::to_string(end_line) + ": parameter '" + p.name + "': " + problem +
+                           "; kept fixed at " + p.value.Literal());
+      }
+      return;
+    }
+    if (t[m].kind != Token::Kind::kBlockComment) return;
+  }
+}
+
+// A later assignment of the same name replaces the earlier (OpenSCAD's rule).
+void Keep(CustomizerModel& model, CustomizerParameter p) {
+  for (auto& earlier : model.parameters)
+    if (earlier.name == p.name) {
+      earlier = p;
+      return;
+    }
+  model.parameters.push_back(std::move(p));
+}
+
+}  // namespace
+
 CustomizerModel ReadCustomizer(const std::string& text, const std::string& file) {
   CustomizerModel model;
   std::vector<std::string> lines;
@@ -266,7 +325,7 @@ CustomizerModel ReadCustomizer(const std::string& text, const std::string& file)
   bool statement_start = true;
   for (std::size_t i = 0; i < t.size(); ++i) {
     const Token& tok = t[i];
-    if (tok.kind == Token::Kind::kBlockComment) {
+    if (tok.kind == Token::Kind::kBlockComment) {  // /* [Group] */
       std::string body = Trim(tok.text);
       if (body.size() >= 2 && body.front() == '[' && body.back() == ']') {
         group = Trim(body.substr(1, body.size() - 2));
@@ -285,23 +344,11 @@ CustomizerModel ReadCustomizer(const std::string& text, const std::string& file)
     if (!at_start || tok.kind != Token::Kind::kIdent) continue;
     // name = <tokens> ; at bracket depth 0, comments skipped.
     std::size_t eq = i + 1;
-    while (eq < t.size() && (t[eq].kind == Token::Kind::kLineComment || t[eq].kind == Token::Kind::kBlockComment)) ++eq;
+    while (eq < t.size() && IsComment(t[eq])) ++eq;
     if (eq >= t.size() || t[eq].kind != Token::Kind::kSymbol || t[eq].text != "=") continue;
-    std::vector<Token> value;
-    std::size_t k = eq + 1;
-    int depth = 0;
+    std::size_t k = 0;
     bool brace = false;
-    for (; k < t.size(); ++k) {
-      const Token& x = t[k];
-      if (x.kind == Token::Kind::kLineComment || x.kind == Token::Kind::kBlockComment) continue;
-      if (x.kind == Token::Kind::kSymbol) {
-        if (x.text == "{") brace = true;
-        if (x.text == "[" || x.text == "(") ++depth;
-        if (x.text == "]" || x.text == ")") --depth;
-        if (x.text == ";" && depth <= 0) break;
-      }
-      value.push_back(x);
-    }
+    const std::vector<Token> value = ValueTokens(t, eq, &k, &brace);
     if (brace || k >= t.size()) break;  // a '{' inside the expression ends the parameters too
     i = k;                              // the ';'
     statement_start = true;
@@ -315,28 +362,8 @@ CustomizerModel ReadCustomizer(const std::string& text, const std::string& file)
       const std::string& above = lines[p.line - 2];
       if (above.rfind("//", 0) == 0) p.description = Trim(above.substr(2));
     }
-    // The annotation: the first line comment after the ';' on its line.
-    const int end_line = t[k].line;
-    for (std::size_t m = k + 1; m < t.size() && t[m].line == end_line; ++m) {
-      if (t[m].kind == Token::Kind::kLineComment) {
-        std::string problem = Annotate(p, t[m].text);
-        if (!problem.empty()) {
-          p.widget = CustomizerParameter::Widget::kNone;
-          p.options.clear();
-          model.warnings.push_back(file + ":" + std::to_string(end_line) + ": parameter '" + p.name + "': " + problem +
-                                   "; kept fixed at " + p.value.Literal());
-        }
-        break;
-      }
-      if (t[m].kind != Token::Kind::kBlockComment) break;
-    }
-    bool replaced = false;
-    for (auto& earlier : model.parameters)
-      if (earlier.name == p.name) {
-        earlier = p;
-        replaced = true;
-      }
-    if (!replaced) model.parameters.push_back(std::move(p));
+    ReadAnnotation(t, k, file, p, model.warnings);
+    Keep(model, std::move(p));
   }
   return model;
 }

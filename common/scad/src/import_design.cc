@@ -132,94 +132,98 @@ struct Choice {
   std::string line;  // "exposed NAME: ..." / "fixed NAME = VALUE: WHY"
 };
 
+// How each exposed parameter is exposed, in words.
+using Chosen = std::map<const CustomizerParameter*, std::string>;
+
+// The parameters `--expose` names, checked against the model.
+Chosen ChosenByName(const CustomizerModel& m, const std::string& file, const ImportOptions& o) {
+  std::map<std::string, const CustomizerParameter*> by_name;
+  for (const auto& p : m.parameters) by_name[p.name] = &p;
+  Chosen how;
+  for (const auto& name : o.expose) {
+    auto it = by_name.find(name);
+    if (it == by_name.end())
+      throw InputError(file + ": --expose " + name + ": the model has no Customizer parameter '" + name +
+                       "' (a top-level literal assignment before the first '{')");
+    const CustomizerParameter* p = it->second;
+    const std::string at = file + ":" + std::to_string(p->line) + ": --expose " + name;
+    if (name[0] == '$') throw InputError(at + ": $-variables stay fixed");
+    auto range = o.ranges.find(name);
+    if (range != o.ranges.end()) {
+      const ExposeRange& r = range->second;
+      if (p->value.type != ScadValue::Type::kNumber)
+        throw InputError(at + ": the parameter is " + TypeWords(p->value) + " (" + p->value.Literal() +
+                         "), a range needs a number");
+      if (p->widget == CustomizerParameter::Widget::kDropdown)
+        throw InputError(at + ": the parameter is a dropdown; name it without a range");
+      if (p->value.number < r.lo || p->value.number > r.hi)
+        throw InputError(at + ": the model's value " + FormatScadNumber(p->value.number) + " lies outside " +
+                         FormatScadNumber(r.lo) + ":" + FormatScadNumber(r.hi));
+      how[p] =
+          "range " + FormatScadNumber(r.lo) + ":" + (r.step > 0 ? FormatScadNumber(r.step) + ":" : "") +
+          FormatScadNumber(r.hi) + " from --expose" +
+          (p->widget == CustomizerParameter::Widget::kSlider ? " (replaces the model's " + WidgetWords(*p) + ")" : "");
+    } else {
+      if (p->widget == CustomizerParameter::Widget::kNone && p->value.type != ScadValue::Type::kBoolean)
+        throw InputError(
+            at + ": the parameter has no slider or dropdown annotation, so it has no range (give one: --expose " +
+            name + "=lo:hi)");
+      how[p] = WidgetWords(*p) + ", named by --expose";
+    }
+  }
+  if (static_cast<int>(how.size()) > o.max_dims)
+    throw InputError(file + ": --expose names " + std::to_string(how.size()) + " parameters, more than --max-dims " +
+                     std::to_string(o.max_dims));
+  return how;
+}
+
+// The automatic choice: sliders and dropdowns outside [Hidden], Customizer
+// groups (tabs) by first appearance, then file order, up to max_dims.
+Chosen ChosenAutomatically(const CustomizerModel& m, const ImportOptions& o) {
+  std::map<std::string, int> group_rank;
+  for (const auto& p : m.parameters) group_rank.emplace(p.group, static_cast<int>(group_rank.size()));
+  std::vector<const CustomizerParameter*> eligible;
+  for (const auto& p : m.parameters)
+    if (!p.hidden && p.widget != CustomizerParameter::Widget::kNone && p.name[0] != '$') eligible.push_back(&p);
+  std::stable_sort(eligible.begin(), eligible.end(),
+                   [&](auto* a, auto* b) { return group_rank.at(a->group) < group_rank.at(b->group); });
+  Chosen how;
+  for (std::size_t i = 0; i < eligible.size() && static_cast<int>(i) < o.max_dims; ++i)
+    how[eligible[i]] = WidgetWords(*eligible[i]) + ", within --max-dims " + std::to_string(o.max_dims);
+  return how;
+}
+
+// Why a parameter not exposed stays fixed, in words.
+std::string WhyFixed(const CustomizerParameter& p, const ImportOptions& o) {
+  const std::string in_group = p.group.empty() ? "" : " in group '" + p.group + "'";
+  if (p.name[0] == '$') return "a $-variable (OpenSCAD's special variables stay fixed)";
+  if (p.hidden) return "in [Hidden]";
+  if (!o.expose.empty()) return "not named by --expose (" + WidgetWords(p) + ")";
+  if (p.widget != CustomizerParameter::Widget::kNone)
+    return "beyond --max-dims " + std::to_string(o.max_dims) + " (" + WidgetWords(p) + ")";
+  if (p.value.type == ScadValue::Type::kNumber)
+    return "no range: a number without a slider annotation" + in_group + " (give one: --expose " + p.name + "=lo:hi)";
+  if (p.value.type == ScadValue::Type::kBoolean)
+    return "a checkbox" + in_group + " (expose it: --expose " + p.name + ")";
+  return TypeWords(p.value) + ": not sampled";
+}
+
 // Which parameters are exposed (import_design.h, ImportScad): in file order.
 std::vector<Choice> ChooseExposed(const CustomizerModel& m, const std::string& file, const ImportOptions& o) {
   if (o.max_dims < 1 || o.max_dims > 16)
     throw InputError(file + ": --max-dims " + std::to_string(o.max_dims) +
                      " is outside 1..16 (the dimensions an artifact holds)");
-  std::map<std::string, const CustomizerParameter*> by_name;
-  for (const auto& p : m.parameters) by_name[p.name] = &p;
-  std::set<const CustomizerParameter*> chosen;
-  std::map<const CustomizerParameter*, std::string> how;  // exposed: how, in words
-  if (!o.expose.empty()) {
-    for (const auto& name : o.expose) {
-      auto it = by_name.find(name);
-      if (it == by_name.end())
-        throw InputError(file + ": --expose " + name + ": the model has no Customizer parameter '" + name +
-                         "' (a top-level literal assignment before the first '{')");
-      const CustomizerParameter* p = it->second;
-      const std::string at = file + ":" + std::to_string(p->line) + ": --expose " + name;
-      if (name[0] == '$') throw InputError(at + ": $-variables stay fixed");
-      auto range = o.ranges.find(name);
-      if (range != o.ranges.end()) {
-        const ExposeRange& r = range->second;
-        if (p->value.type != ScadValue::Type::kNumber)
-          throw InputError(at + ": the parameter is " + TypeWords(p->value) + " (" + p->value.Literal() +
-                           "), a range needs a number");
-        if (p->widget == CustomizerParameter::Widget::kDropdown)
-          throw InputError(at + ": the parameter is a dropdown; name it without a range");
-        if (p->value.number < r.lo || p->value.number > r.hi)
-          throw InputError(at + ": the model's value " + FormatScadNumber(p->value.number) + " lies outside " +
-                           FormatScadNumber(r.lo) + ":" + FormatScadNumber(r.hi));
-        how[p] = "range " + FormatScadNumber(r.lo) + ":" + (r.step > 0 ? FormatScadNumber(r.step) + ":" : "") +
-                 FormatScadNumber(r.hi) + " from --expose" +
-                 (p->widget == CustomizerParameter::Widget::kSlider ? " (replaces the model's " + WidgetWords(*p) + ")"
-                                                                    : "");
-      } else {
-        if (p->widget == CustomizerParameter::Widget::kNone && p->value.type != ScadValue::Type::kBoolean)
-          throw InputError(
-              at + ": the parameter has no slider or dropdown annotation, so it has no range (give one: --expose " +
-              name + "=lo:hi)");
-        how[p] = WidgetWords(*p) + ", named by --expose";
-      }
-      chosen.insert(p);
-    }
-    if (static_cast<int>(chosen.size()) > o.max_dims)
-      throw InputError(file + ": --expose names " + std::to_string(chosen.size()) +
-                       " parameters, more than --max-dims " + std::to_string(o.max_dims));
-  } else {
-    // Customizer groups (tabs) by first appearance, then file order.
-    std::map<std::string, int> group_rank;
-    for (const auto& p : m.parameters) group_rank.emplace(p.group, static_cast<int>(group_rank.size()));
-    std::vector<const CustomizerParameter*> eligible;
-    for (const auto& p : m.parameters)
-      if (!p.hidden && p.widget != CustomizerParameter::Widget::kNone && p.name[0] != '$') eligible.push_back(&p);
-    std::stable_sort(eligible.begin(), eligible.end(),
-                     [&](auto* a, auto* b) { return group_rank.at(a->group) < group_rank.at(b->group); });
-    for (std::size_t i = 0; i < eligible.size() && static_cast<int>(i) < o.max_dims; ++i) {
-      chosen.insert(eligible[i]);
-      how[eligible[i]] = WidgetWords(*eligible[i]) + ", within --max-dims " + std::to_string(o.max_dims);
-    }
-  }
-  if (chosen.empty())
-    throw InputError(file +
-                     ": no Customizer parameter has a slider or dropdown annotation outside [Hidden]; "
-                     "name parameters with --expose NAME or give one a range with --expose NAME=lo:hi");
+  const Chosen how = o.expose.empty() ? ChosenAutomatically(m, o) : ChosenByName(m, file, o);
   std::vector<Choice> out;
   for (const auto& p : m.parameters) {
     Choice c;
     c.p = &p;
-    c.exposed = chosen.count(&p) > 0;
+    auto it = how.find(&p);
+    c.exposed = it != how.end();
     if (c.exposed) {
-      c.line = "exposed " + p.name + ": " + how[&p];
+      c.line = "exposed " + p.name + ": " + it->second;
     } else {
-      if (p.name[0] == '$')
-        c.why = "a $-variable (OpenSCAD's special variables stay fixed)";
-      else if (p.hidden)
-        c.why = "in [Hidden]";
-      else if (!o.expose.empty())
-        c.why = "not named by --expose (" + WidgetWords(p) + ")";
-      else if (p.widget != CustomizerParameter::Widget::kNone)
-        c.why = "beyond --max-dims " + std::to_string(o.max_dims) + " (" + WidgetWords(p) + ")";
-      else if (p.value.type == ScadValue::Type::kNumber)
-        c.why = "no range: a number without a slider annotation" +
-                std::string(p.group.empty() ? "" : " in group '" + p.group + "'") + " (give one: --expose " + p.name +
-                "=lo:hi)";
-      else if (p.value.type == ScadValue::Type::kBoolean)
-        c.why = "a checkbox" + std::string(p.group.empty() ? "" : " in group '" + p.group + "'") +
-                " (expose it: --expose " + p.name + ")";
-      else
-        c.why = TypeWords(p.value) + ": not sampled";
+      c.why = WhyFixed(p, o);
       c.line = "fixed " + p.name + " = " + p.value.Literal() + ": " + c.why;
     }
     out.push_back(std::move(c));
@@ -259,40 +263,24 @@ void AddExposeItem(const std::string& item, ImportOptions& options) {
   options.ranges[name] = r;
 }
 
-ImportSummary ImportScad(const std::filesystem::path& model, const ImportOptions& options) {
-  const std::string text = ReadText(model);
-  CustomizerModel m = ReadCustomizer(text, model.string());
-  ImportSummary s;
-  s.warnings = m.warnings;
+namespace {
 
-  std::map<std::string, const CustomizerParameter*> by_name;
-  for (const auto& p : m.parameters) by_name[p.name] = &p;
-  const std::vector<Choice> choices = ChooseExposed(m, model.string(), options);
-  std::vector<const CustomizerParameter*> chosen;
-  std::vector<Exposure> exposures;
-  for (const Choice& c : choices) {
-    s.decisions.push_back(c.line);
-    if (!c.exposed) {
-      s.fixed.push_back(c.p->name);
-      continue;
-    }
-    chosen.push_back(c.p);
-    auto range = options.ranges.find(c.p->name);
-    exposures.push_back(ExposureOf(*c.p, range == options.ranges.end() ? nullptr : &range->second));
-  }
-
-  const std::string stem = model.stem().string();
-  const std::string reference = options.model_reference.empty() ? model.filename().string() : options.model_reference;
-  std::ostringstream y;
+// The design's head: name and voxel size (with where the size came from).
+void WriteHead(std::ostream& y, const std::filesystem::path& model, const ImportOptions& options) {
   y << "# Imported from the OpenSCAD Customizer model " << model.filename().string()
     << " by `fabatlas import-scad` (docs/openscad.md).\n";
-  y << "name: " << Yaml(stem) << "\n";
+  y << "name: " << Yaml(model.stem().string()) << "\n";
   y << "voxel_size: " << FormatScadNumber(VoxelFor(options));
   if (options.voxel_size <= 0 && options.model_size > 0)
     y << "  # the model's largest edge at its defaults, " << FormatScadNumber(std::round(options.model_size * 10) / 10)
       << " mm, / 150, within [5/8, 3/4] of min_thickness";
   y << "\n";
-  y << "parameters:\n";
+}
+
+// `parameters:`, the exposed ones in file order; `{}` when none.
+void WriteExposed(std::ostream& y, const std::vector<Exposure>& exposures, const ImportOptions& options) {
+  // No exposed parameter: the model at its own values, one sample.
+  y << (exposures.empty() ? "parameters: {}  # none exposed: one sample, the model at its values\n" : "parameters:\n");
   for (const auto& e : exposures) {
     const CustomizerParameter& p = *e.p;
     y << "  " << p.name << ": {type: " << e.type;
@@ -313,7 +301,10 @@ ImportSummary ImportScad(const std::filesystem::path& model, const ImportOptions
         << FormatScadNumber(e.step);
     y << "\n";
   }
-  // The rest stays at the model's values: shown read-only, never passed.
+}
+
+// `fixed:`, the rest at the model's values: shown read-only, never passed.
+void WriteFixed(std::ostream& y, const std::vector<Choice>& choices) {
   bool any_fixed = false;
   for (const Choice& c : choices) {
     if (c.exposed || c.p->name[0] == '$' || c.p->hidden) continue;  // [Hidden]: the model's author hid them
@@ -324,10 +315,17 @@ ImportSummary ImportScad(const std::filesystem::path& model, const ImportOptions
     if (!c.p->description.empty()) y << ", description: " << Yaml(c.p->description);
     y << ", why: " << Yaml(c.why) << "}\n";
   }
-  y << "tree:\n  op: openscad\n  file: " << Yaml(reference) << "\n  set: {";
-  for (std::size_t i = 0; i < exposures.size(); ++i)
-    y << (i ? ", " : "") << exposures[i].p->name << ": " << exposures[i].p->name;
-  y << "}\n";
+}
+
+// The tree (one `openscad` node passing the exposed values), checks, properties.
+void WriteTree(std::ostream& y, const std::string& reference, const std::vector<Exposure>& exposures) {
+  y << "tree:\n  op: openscad\n  file: " << Yaml(reference) << "\n";
+  if (!exposures.empty()) {
+    y << "  set: {";
+    for (std::size_t i = 0; i < exposures.size(); ++i)
+      y << (i ? ", " : "") << exposures[i].p->name << ": " << exposures[i].p->name;
+    y << "}\n";
+  }
   bool any_enum = false;
   for (const auto& e : exposures) any_enum = any_enum || e.type == "enum";
   if (any_enum) {
@@ -347,75 +345,92 @@ ImportSummary ImportScad(const std::filesystem::path& model, const ImportOptions
   y << "checks:\n  - watertight\n  - {type: min_thickness, value: " << FormatScadNumber(kMinThickness)
     << "}\n  - stands\n";
   y << "properties: [volume, bbox]\n";
+}
 
-  // OpenSCAD's parameter sets beside the model become presets.
+// A parameter set's value `written` for the exposed parameter `e`, as the
+// design's preset writes it; empty with `problem` saying why when it does not fit.
+std::string PresetValue(const Exposure& e, const std::string& name, const std::string& written, std::string* problem) {
+  if (e.type == "enum") {
+    for (std::size_t i = 0; i < e.literals.size(); ++i) {
+      double a = 0, b = 0;
+      bool same = e.literals[i] == written || (!e.quoted[i] && std::sscanf(written.c_str(), "%lf", &a) == 1 &&
+                                               std::sscanf(e.literals[i].c_str(), "%lf", &b) == 1 && a == b);
+      if (same) return Yaml(e.labels[i]);
+    }
+    *problem = name + "=" + written + " is not one of its dropdown values";
+    return "";
+  }
+  char* end = nullptr;
+  double v = std::strtod(written.c_str(), &end);
+  if (end == written.c_str() || *end != 0 || !std::isfinite(v))
+    *problem = name + "=" + written + " is not a number";
+  else if (v < e.min || v > e.max)
+    *problem =
+        name + "=" + written + " lies outside [" + FormatScadNumber(e.min) + ", " + FormatScadNumber(e.max) + "]";
+  else if (e.type == "integer" && !Whole(v))
+    *problem = name + "=" + written + " is not a whole number";
+  else
+    return FormatScadNumber(v);
+  return "";
+}
+
+// One parameter set as a preset line "  NAME: {...}"; empty (and a warning
+// in `s`) when a value does not fit.
+std::string PresetOf(const ParameterSet& set, const std::vector<Exposure>& exposures,
+                     const std::map<std::string, const CustomizerParameter*>& by_name, const std::string& json,
+                     ImportSummary& s) {
+  std::ostringstream values;
+  std::vector<std::string> ignored;
+  std::string problem;
+  for (const auto& [name, written] : set.values) {
+    auto e = std::find_if(exposures.begin(), exposures.end(), [&](const Exposure& x) { return x.p->name == name; });
+    if (e == exposures.end()) {
+      auto it = by_name.find(name);
+      if (it != by_name.end()) {
+        const ScadValue& v = it->second->value;
+        std::string model_text = v.type == ScadValue::Type::kString ? v.text : v.Literal();
+        if (model_text != written) ignored.push_back(name);
+      }
+      continue;
+    }
+    const std::string value = PresetValue(*e, name, written, &problem);
+    if (!problem.empty()) break;
+    values << (values.tellp() > 0 ? ", " : "") << name << ": " << value;
+  }
+  if (!problem.empty()) {
+    s.warnings.push_back(json + ": parameter set '" + set.name + "' not kept as a preset: " + problem);
+    return "";
+  }
+  if (!ignored.empty()) {
+    std::string list;
+    for (const auto& n : ignored) list += (list.empty() ? "" : ", ") + n;
+    s.warnings.push_back(json + ": parameter set '" + set.name + "' also sets fixed parameters (" + list +
+                         "); its preset keeps the model's values for them (expose them with --expose)");
+  }
+  return "  " + Yaml(set.name) + ": {" + values.str() + "}\n";
+}
+
+// OpenSCAD's parameter sets beside the model (MODEL.json) as `presets:`.
+void WritePresets(std::ostream& y, const std::filesystem::path& model, const std::vector<Exposure>& exposures,
+                  const CustomizerModel& m, ImportSummary& s) {
   std::filesystem::path json = model;
   json.replace_extension(".json");
   std::error_code ec;
-  if (std::filesystem::is_regular_file(json, ec)) {
-    std::vector<ParameterSet> sets = ReadParameterSets(ReadText(json), json.string());
-    std::ostringstream presets;
-    for (const auto& set : sets) {
-      std::ostringstream values;
-      std::vector<std::string> ignored;
-      std::string problem;
-      for (const auto& [name, written] : set.values) {
-        auto e = std::find_if(exposures.begin(), exposures.end(), [&](const Exposure& x) { return x.p->name == name; });
-        if (e == exposures.end()) {
-          auto it = by_name.find(name);
-          if (it != by_name.end()) {
-            const ScadValue& v = it->second->value;
-            std::string model_text = v.type == ScadValue::Type::kString ? v.text : v.Literal();
-            if (model_text != written) ignored.push_back(name);
-          }
-          continue;
-        }
-        std::string value;
-        if (e->type == "enum") {
-          for (std::size_t i = 0; i < e->literals.size(); ++i) {
-            double a = 0, b = 0;
-            bool same = e->literals[i] == written || (!e->quoted[i] && std::sscanf(written.c_str(), "%lf", &a) == 1 &&
-                                                      std::sscanf(e->literals[i].c_str(), "%lf", &b) == 1 && a == b);
-            if (same) {
-              value = Yaml(e->labels[i]);
-              break;
-            }
-          }
-          if (value.empty()) problem = name + "=" + written + " is not one of its dropdown values";
-        } else {
-          char* end = nullptr;
-          double v = std::strtod(written.c_str(), &end);
-          if (end == written.c_str() || *end != 0 || !std::isfinite(v))
-            problem = name + "=" + written + " is not a number";
-          else if (v < e->min || v > e->max)
-            problem = name + "=" + written + " lies outside [" + FormatScadNumber(e->min) + ", " +
-                      FormatScadNumber(e->max) + "]";
-          else if (e->type == "integer" && !Whole(v))
-            problem = name + "=" + written + " is not a whole number";
-          else
-            value = FormatScadNumber(v);
-        }
-        if (!problem.empty()) break;
-        values << (values.tellp() > 0 ? ", " : "") << name << ": " << value;
-      }
-      if (!problem.empty()) {
-        s.warnings.push_back(json.string() + ": parameter set '" + set.name + "' not kept as a preset: " + problem);
-        continue;
-      }
-      if (!ignored.empty()) {
-        std::string list;
-        for (const auto& n : ignored) list += (list.empty() ? "" : ", ") + n;
-        s.warnings.push_back(json.string() + ": parameter set '" + set.name + "' also sets fixed parameters (" + list +
-                             "); its preset keeps the model's values for them (expose them with --expose)");
-      }
-      presets << "  " << Yaml(set.name) << ": {" << values.str() << "}\n";
-      ++s.presets;
-    }
-    if (s.presets > 0) y << "presets:\n" << presets.str();
+  if (!std::filesystem::is_regular_file(json, ec)) return;
+  std::map<std::string, const CustomizerParameter*> by_name;
+  for (const auto& p : m.parameters) by_name[p.name] = &p;
+  std::ostringstream presets;
+  for (const auto& set : ReadParameterSets(ReadText(json), json.string())) {
+    const std::string line = PresetOf(set, exposures, by_name, json.string(), s);
+    if (line.empty()) continue;
+    presets << line;
+    ++s.presets;
   }
-  s.design_yaml = y.str();
-  for (const auto& e : exposures) s.exposed.push_back(e.p->name);
+  if (s.presets > 0) y << "presets:\n" << presets.str();
+}
 
+// The job beside the design.
+std::string JobYaml(const ImportOptions& options) {
   std::ostringstream job;
   job << "# A precompute job for " << options.design_file_name << " (docs/job-format.md).\n";
   job << "design: " << Yaml(options.design_file_name) << "\n";
@@ -428,7 +443,36 @@ ImportSummary ImportScad(const std::filesystem::path& model, const ImportOptions
   job << "  - {name: PLA, density: 1.24, price_per_kg: 20}\n";
   job << "  - {name: PETG, density: 1.27, price_per_kg: 25}\n";
   job << "  - {name: resin, density: 1.12, price_per_kg: 60}\n";
-  s.job_yaml = job.str();
+  return job.str();
+}
+
+}  // namespace
+
+ImportSummary ImportScad(const std::filesystem::path& model, const ImportOptions& options) {
+  const CustomizerModel m = ReadCustomizer(ReadText(model), model.string());
+  ImportSummary s;
+  s.warnings = m.warnings;
+  const std::vector<Choice> choices = ChooseExposed(m, model.string(), options);
+  std::vector<Exposure> exposures;
+  for (const Choice& c : choices) {
+    s.decisions.push_back(c.line);
+    if (!c.exposed) {
+      s.fixed.push_back(c.p->name);
+      continue;
+    }
+    auto range = options.ranges.find(c.p->name);
+    exposures.push_back(ExposureOf(*c.p, range == options.ranges.end() ? nullptr : &range->second));
+    s.exposed.push_back(c.p->name);
+  }
+  const std::string reference = options.model_reference.empty() ? model.filename().string() : options.model_reference;
+  std::ostringstream y;
+  WriteHead(y, model, options);
+  WriteExposed(y, exposures, options);
+  WriteFixed(y, choices);
+  WriteTree(y, reference, exposures);
+  WritePresets(y, model, exposures, m, s);
+  s.design_yaml = y.str();
+  s.job_yaml = JobYaml(options);
   return s;
 }
 

@@ -50,8 +50,10 @@ inline constexpr int kDyadicBits = 40;
 // The design space plus its bootstrap grid. Immutable after construction.
 class DesignSpace {
  public:
-  // Throws fabatlas::InputError (one line naming the dimension) for an empty
-  // dimension list, more than kMaxDimensions dimensions, hi <= lo, non-integer bounds of an
+  // No dimension is a space of one point (a design with nothing exposed: one
+  // bootstrap cell, one sample, the empty key).
+  // Throws fabatlas::InputError (one line naming the dimension) for more than
+  // kMaxDimensions dimensions, hi <= lo, non-integer bounds of an
   // integer dimension, fewer than two enumerated values, duplicate names, or
   // subdivisions < 1.
   // `subdivisions`: bootstrap cells per dimension (Fab Forms suggests 5-7);

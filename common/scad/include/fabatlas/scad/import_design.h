@@ -69,6 +69,9 @@ void AddExposeItem(const std::string& item, ImportOptions& options);
 // Customizer groups (tabs, by first appearance in the file; parameters before
 // any group first) and within a group in file order, up to `max_dims`; every
 // other parameter stays fixed at the model's value, and `decisions` says why.
+// A model with nothing to expose (no annotation, as most models written before
+// the Customizer) imports with `parameters: {}`: a one-sample design, the
+// model at its own values, every number listed under `fixed`.
 // The job beside the design plans the geometry cache (OPT-MAX under the
 // default budget) and carries the example jobs' materials (PLA, PETG, resin).
 //
@@ -76,8 +79,8 @@ void AddExposeItem(const std::string& item, ImportOptions& options);
 // parameter when it is about one) for an unreadable model, a --expose name the
 // model does not have, a name without a range (neither a widget nor a range
 // given), a range on a parameter that is not a number, a range that does not
-// hold the model's value, more names than max_dims, max_dims outside 1..16,
-// or no parameter to expose.
+// hold the model's value, more names than max_dims, or max_dims outside
+// 1..16.
 ImportSummary ImportScad(const std::filesystem::path& model, const ImportOptions& options);
 
 }  // namespace fabatlas::scad
