@@ -44,6 +44,10 @@
       over the same points, beside fabatlas's in-process mean. Also the
       run's process wall and the CPU of its processes (coordinator, worker;
       start-up, ΔG tasks included). --keep DIR keeps the imports and runs.
+      A job's ΔG tasks cost more than its samples (docs/openscad.md, "The
+      speed goal as a job runs"): at the default budgets the sign and
+      candleStand jobs take 20 minutes or more on a loaded machine; a run
+      stopped early keeps its finished samples' figures in its store.
   bench/scad/scad_bench.py coverage [--timeout 120]   every example Debian's
       openscad ships: does `import-scad` take it (and why not), is it
       evaluated fully natively or with subtrees OpenSCAD rendered, the volume
