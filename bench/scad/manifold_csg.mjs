@@ -48,7 +48,11 @@
 // Timing: the evaluation from the CSG text to the final mesh (parse,
 // primitives, booleans, getMesh), in process, WASM start-up and OpenSCAD's
 // export and outlines excluded; one warm-up, then the median of --repeats
-// (at least 5). Prints volume (mm^3), triangles and milliseconds.
+// (at least 5). Prints volume (mm^3), triangles and milliseconds; --json
+// also the median CPU milliseconds of the process over the same span
+// (process.cpuUsage: user + system; with --single-threaded the evaluation's
+// thread is the process's only busy one), the figure to set beside another
+// program's thread CPU on a loaded machine.
 import Module from 'manifold-3d';
 import {execFileSync} from 'node:child_process';
 import fs from 'node:fs';
@@ -749,19 +753,24 @@ async function main() {
   wasm.setup();
   const ev = new Evaluator(wasm, outlines, dir);
   const run = () => {
+    const c = process.cpuUsage();
     const t = process.hrtime.bigint();
     const m = ev.union3(parseCsg(text, csgFile).children);
     const mesh = m.getMesh();
     const ms = Number(process.hrtime.bigint() - t) / 1e6;
-    return {ms, m, mesh};
+    const cpu = process.cpuUsage(c);
+    return {ms, cpuMs: (cpu.user + cpu.system) / 1e3, m, mesh};
   };
-  const times = [];
+  const times = [], cpuTimes = [];
   let last;
   try {
     for (let k = 0; k <= repeats; ++k) {
       if (last) ev.release();
       last = run();
-      if (k > 0) times.push(last.ms);  // the first is the warm-up
+      if (k > 0) {  // the first is the warm-up
+        times.push(last.ms);
+        cpuTimes.push(last.cpuMs);
+      }
     }
   } catch (e) {
     out.error = String(e.message ?? e);
@@ -770,15 +779,18 @@ async function main() {
     process.exit(3);
   }
   if (process.env.MANIFOLD_CSG_DEBUG) console.error(times.map((x) => x.toFixed(1)).join(" "));
-  times.sort((x, y) => x - y);
-  const median = times.length % 2 ? times[(times.length - 1) / 2] : (times[times.length / 2 - 1] + times[times.length / 2]) / 2;
+  const medianOf = (xs) => {
+    const v = [...xs].sort((x, y) => x - y);
+    return v.length % 2 ? v[(v.length - 1) / 2] : (v[v.length / 2 - 1] + v[v.length / 2]) / 2;
+  };
+  const median = medianOf(times);
   if (last.m.status() !== 'NoError') {
     out.error = `Manifold's result: ${last.m.status()}`;
     console.log(json ? JSON.stringify(out) : `${model}: Manifold failed: ${out.error}`);
     process.exit(3);
   }
   Object.assign(out, {volume: last.m.volume(), triangles: last.m.numTri(), ms_median: median, ms: times,
-});
+                      cpu_ms_median: medianOf(cpuTimes), cpu_ms: cpuTimes});
   if (stl) writeStl(last.mesh, stl);
   ev.release();
   if (json) console.log(JSON.stringify(out));
