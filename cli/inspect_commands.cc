@@ -280,7 +280,7 @@ void Inspect(const InspectArgs& a, int& exit_code) {
     throw InputError(path.string() + ": the bundled design has " + std::to_string(design.exposed.size()) +
                      " exposed parameters, the form " + std::to_string(art.form.dimensions.size()));
 
-  InspectReport report{.path = path, .m = art.manifest, .cpu = RunCpuSeconds(path)};
+  InspectReport report{path, art.manifest, RunCpuSeconds(path), {}, {}, {}, {}};
   report.table3 = Table3Text(art, report.cpu);
   report.previews = MeasurePreviews(path, art, design, a);
   report.fig14_png = WriteFig14(path, art.manifest, report.previews, a);

@@ -40,7 +40,8 @@ class CaptureCache final : public design::SubtreeCache {
 
 sampling::PointKey ParsePointKey(const std::string& text) {
   auto key = sampling::ParsePointKeyText(text);
-  if (!key || key->empty()) throw std::runtime_error("the job store holds a malformed point key '" + text + "'");
+  // A design with nothing exposed has one sample, whose key is empty.
+  if (!key) throw std::runtime_error("the job store holds a malformed point key '" + text + "'");
   return *key;
 }
 

@@ -165,6 +165,21 @@ TEST(Customizer, MalformedAnnotationsAreWarningsNamingTheLine) {
   EXPECT_EQ(Find(m, "g").widget, W::kSlider);
 }
 
+// `use <file>` and `include <file>` end at their '>' without a ';': the
+// parameter after one is a parameter (MCAD wrappers start with `use`).
+TEST(Customizer, ParametersAfterUseAndIncludeAreRead) {
+  const char* text =
+      "use <MCAD/involute_gears.scad>\n/* [Gear] */\n// Number of teeth\nteeth = 17; // [8:40]\n"
+      "include <MCAD/units.scad>\nsize = 3; // [1:5]\ncube([teeth, size, 1]);\n";
+  CustomizerModel m = fabatlas::scad::ReadCustomizer(text, "gear.scad");
+  EXPECT_TRUE(m.warnings.empty());
+  ASSERT_EQ(m.parameters.size(), 2u);
+  EXPECT_EQ(Find(m, "teeth").widget, W::kSlider);
+  EXPECT_EQ(Find(m, "teeth").group, "Gear");
+  EXPECT_EQ(Find(m, "teeth").description, "Number of teeth");
+  EXPECT_EQ(Find(m, "size").widget, W::kSlider);
+}
+
 TEST(Customizer, QuotingForOpenScad) {
   EXPECT_EQ(fabatlas::scad::QuoteScadString("square"), "\"square\"");
   EXPECT_EQ(fabatlas::scad::QuoteScadString("say \"hi\" \\o/"), "\"say \\\"hi\\\" \\\\o/\"");

@@ -342,6 +342,12 @@ CustomizerModel ReadCustomizer(const std::string& text, const std::string& file)
     bool at_start = statement_start;
     statement_start = false;
     if (!at_start || tok.kind != Token::Kind::kIdent) continue;
+    if ((tok.text == "use" || tok.text == "include") && i + 1 < t.size() && t[i + 1].text == "<") {
+      // `use <file>` and `include <file>` end without a ';' at their '>'.
+      while (i < t.size() && !(t[i].kind == Token::Kind::kSymbol && t[i].text == ">")) ++i;
+      statement_start = true;
+      continue;
+    }
     // name = <tokens> ; at bracket depth 0, comments skipped.
     std::size_t eq = i + 1;
     while (eq < t.size() && IsComment(t[eq])) ++eq;
