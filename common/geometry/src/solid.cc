@@ -139,6 +139,57 @@ struct Measures {
   Box3 box;         // mm; all zero when nothing is inside
 };
 
+// One leaf's share of ComputeMeasures: the moments at both smoothing widths
+// and the box of its inside voxels.
+struct LeafMeasures {
+  std::array<Moments, 2> m;
+  static constexpr double inf = std::numeric_limits<double>::infinity();
+  Box3 box{{inf, inf, inf}, {-inf, -inf, -inf}};
+};
+
+// What every leaf's measures read: the voxel size (mm), the distance beyond
+// which a value is the background (mm), the two smoothing widths (mm) and
+// whether the first is half the second.
+struct Smoothing {
+  double vs, deep, eps1, eps2;
+  bool halves;
+};
+
+LeafMeasures MeasureLeaf(const LeafT& leaf, const Smoothing& w) {
+  const double vs = w.vs, deep = w.deep, eps1 = w.eps1, eps2 = w.eps2;
+  const bool halves = w.halves;
+  LeafMeasures m;
+  const float* values = leaf.buffer().data();
+  const openvdb::Coord origin = leaf.origin();
+  // Offset order of the leaf (x major, then y, then z), as its iterators.
+  for (int x = 0, n = 0; x < 8; ++x)
+    for (int y = 0; y < 8; ++y)
+      for (int z = 0; z < 8; ++z, ++n) {
+        const double phi = values[n];
+        if (phi >= eps2) continue;
+        const openvdb::Coord c = origin.offsetBy(x, y, z);
+        // sin(pi x / eps2) and cos(pi x / eps2) once; sin(pi x / eps1)
+        // = 2 sin cos when eps1 = eps2 / 2 (sin 2a = 2 sin a cos a).
+        double sine2 = 0, sine1 = 0;
+        if (phi > -eps2) {
+          const double a = std::numbers::pi * -phi / eps2;
+          const double s = std::sin(a);
+          sine2 = s;
+          if (std::abs(phi) < eps1) sine1 = halves ? 2 * s * std::cos(a) : std::sin(std::numbers::pi * -phi / eps1);
+        }
+        m.m[0].Add(InsideWeight(phi, eps1, sine1), c);
+        m.m[1].Add(InsideWeight(phi, eps2, sine2), c);
+        if (phi >= 0) continue;
+        const double r = phi > -deep ? -phi : 0.0;
+        const double p[3] = {c.x() * vs, c.y() * vs, c.z() * vs};
+        for (int k = 0; k < 3; ++k) {
+          m.box.min[k] = std::min(m.box.min[k], p[k] - r);
+          m.box.max[k] = std::max(m.box.max[k], p[k] + r);
+        }
+      }
+  return m;
+}
+
 // Zeroth and first moments of the interior indicator, in voxel units, and the
 // interior's bounding box.
 //
@@ -164,47 +215,13 @@ Measures ComputeMeasures(const FloatGrid& grid, double half_width_voxels) {
   const double e1 = 1.0, e2 = std::min(2.0, half_width_voxels);  // voxels
   const double eps1 = e1 * vs, eps2 = e2 * vs;                   // mm
   const bool halves = e2 == 2 * e1;                              // one sin and cos serve both widths
+  const Smoothing widths{vs, deep, eps1, eps2, halves};
   constexpr double inf = std::numeric_limits<double>::infinity();
-  struct LeafMeasures {
-    std::array<Moments, 2> m;
-    Box3 box{{inf, inf, inf}, {-inf, -inf, -inf}};
-  };
   std::vector<const LeafT*> leaves;
   tree.getNodes(leaves);
   std::vector<LeafMeasures> per_leaf(leaves.size());
   tbb::parallel_for(tbb::blocked_range<size_t>(0, leaves.size()), [&](const tbb::blocked_range<size_t>& r) {
-    for (size_t i = r.begin(); i != r.end(); ++i) {
-      LeafMeasures m;
-      const float* values = leaves[i]->buffer().data();
-      const openvdb::Coord origin = leaves[i]->origin();
-      // Offset order of the leaf (x major, then y, then z), as its iterators.
-      for (int x = 0, n = 0; x < 8; ++x)
-        for (int y = 0; y < 8; ++y)
-          for (int z = 0; z < 8; ++z, ++n) {
-            const double phi = values[n];
-            if (phi >= eps2) continue;
-            const openvdb::Coord c = origin.offsetBy(x, y, z);
-            // sin(pi x / eps2) and cos(pi x / eps2) once; sin(pi x / eps1)
-            // = 2 sin cos when eps1 = eps2 / 2 (sin 2a = 2 sin a cos a).
-            double sine2 = 0, sine1 = 0;
-            if (phi > -eps2) {
-              const double a = std::numbers::pi * -phi / eps2;
-              const double s = std::sin(a);
-              sine2 = s;
-              if (std::abs(phi) < eps1) sine1 = halves ? 2 * s * std::cos(a) : std::sin(std::numbers::pi * -phi / eps1);
-            }
-            m.m[0].Add(InsideWeight(phi, eps1, sine1), c);
-            m.m[1].Add(InsideWeight(phi, eps2, sine2), c);
-            if (phi >= 0) continue;
-            const double r = phi > -deep ? -phi : 0.0;
-            const double p[3] = {c.x() * vs, c.y() * vs, c.z() * vs};
-            for (int k = 0; k < 3; ++k) {
-              m.box.min[k] = std::min(m.box.min[k], p[k] - r);
-              m.box.max[k] = std::max(m.box.max[k], p[k] + r);
-            }
-          }
-      per_leaf[i] = m;
-    }
+    for (size_t i = r.begin(); i != r.end(); ++i) per_leaf[i] = MeasureLeaf(*leaves[i], widths);
   });
   std::array<Moments, 2> sum;
   Box3 box{{inf, inf, inf}, {-inf, -inf, -inf}};

@@ -52,6 +52,90 @@ struct Exact {
 
 Nef NefOf(const Exact& e);
 
+using Edge = std::pair<std::size_t, std::size_t>;  // vertex indices, lower first
+
+// Corners (face * 3 + position) of a triangle soup, joined in groups when
+// two faces meet at that vertex across an edge; each group of joined
+// corners keeps one copy of its vertex.
+class CornerGroups {
+ public:
+  explicit CornerGroups(const std::vector<std::vector<std::size_t>>& faces) : faces_(faces), parent_(faces.size() * 3) {
+    std::iota(parent_.begin(), parent_.end(), 0);
+  }
+  std::size_t Find(std::size_t i) {
+    while (parent_[i] != i) i = parent_[i] = parent_[parent_[i]];
+    return i;
+  }
+  // Joins faces f and g at both ends of their common edge.
+  void Join(const Edge& edge, std::size_t f, std::size_t g) {
+    parent_[Find(Corner(g, edge.first))] = Find(Corner(f, edge.first));
+    parent_[Find(Corner(g, edge.second))] = Find(Corner(f, edge.second));
+  }
+
+ private:
+  std::size_t Corner(std::size_t f, std::size_t v) const {
+    return f * 3 + static_cast<std::size_t>(std::find(faces_[f].begin(), faces_[f].end(), v) - faces_[f].begin());
+  }
+  const std::vector<std::vector<std::size_t>>& faces_;
+  std::vector<std::size_t> parent_;
+};
+
+using Vec = std::array<double, 3>;
+
+Vec Cross(const Vec& u, const Vec& v) {
+  return Vec{u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
+}
+double Dot(const Vec& u, const Vec& v) { return u[0] * v[0] + u[1] * v[1] + u[2] * v[2]; }
+
+// The triangles `list` (an even number, more than two) around an edge sorted
+// by angle around it, each joined in `groups` with its neighbour across the
+// material between them. False when some triangle gets no partner or more
+// than one.
+bool PairSheetsAroundEdge(const std::vector<Point>& points, const std::vector<std::vector<std::size_t>>& faces,
+                          const Edge& edge, const std::vector<std::size_t>& list, CornerGroups& groups) {
+  auto vec = [&](std::size_t from, std::size_t to) {
+    const Point &p = points[from], &q = points[to];
+    return Vec{CGAL::to_double(q.x() - p.x()), CGAL::to_double(q.y() - p.y()), CGAL::to_double(q.z() - p.z())};
+  };
+  const auto d = vec(edge.first, edge.second);
+  const double len = std::sqrt(Dot(d, d));
+  // A frame around the edge: e1 any unit vector across it, e2 = d x e1.
+  Vec e1 = std::abs(d[0]) < 0.9 * len ? Vec{1, 0, 0} : Vec{0, 1, 0};
+  const double along = Dot(e1, d) / (len * len);
+  for (int k = 0; k < 3; ++k) e1[k] -= along * d[k];
+  auto e2 = Cross(d, e1);
+  for (double& c : e2) c /= len;
+  struct Sheet {
+    double angle;
+    std::size_t face;
+    Vec normal;
+  };
+  std::vector<Sheet> sheets;
+  for (std::size_t f : list) {
+    std::size_t w = faces[f][0];
+    for (std::size_t v : faces[f])
+      if (v != edge.first && v != edge.second) w = v;
+    const auto r = vec(edge.first, w);
+    sheets.push_back(
+        {std::atan2(Dot(r, e2), Dot(r, e1)), f, Cross(vec(faces[f][0], faces[f][1]), vec(faces[f][0], faces[f][2]))});
+  }
+  std::sort(sheets.begin(), sheets.end(), [](const Sheet& a, const Sheet& b) { return a.angle < b.angle; });
+  std::vector<int> partners(sheets.size(), 0);
+  for (std::size_t k = 0; k < sheets.size(); ++k) {
+    const std::size_t next = (k + 1) % sheets.size();
+    double mid = 0.5 * (sheets[k].angle + sheets[next].angle);
+    if (next == 0) mid += std::numbers::pi;  // the wedge across the angle's cut
+    Vec m{};
+    for (int c = 0; c < 3; ++c) m[c] = std::cos(mid) * e1[c] + std::sin(mid) * e2[c];
+    if (Dot(sheets[k].normal, m) < 0) {  // material between sheet k and the next
+      groups.Join(edge, sheets[k].face, sheets[next].face);
+      ++partners[k];
+      ++partners[next];
+    }
+  }
+  return std::none_of(partners.begin(), partners.end(), [](int n) { return n != 1; });
+}
+
 // Solids meeting along an edge (two cubes sharing only an edge, as Nef
 // results and OpenSCAD's STL have them) leave that edge with four or more
 // triangles. Each such edge's triangles are sorted around it and each is
@@ -61,84 +145,22 @@ Nef NefOf(const Exact& e);
 // 2-manifold shells that touch along the shared edges. False when no edge
 // has more than two triangles, or the triangles around one cannot be paired.
 bool SplitShellsAtSharedEdges(std::vector<Point>& points, std::vector<std::vector<std::size_t>>& faces) {
-  std::map<std::pair<std::size_t, std::size_t>, std::vector<std::size_t>> around;  // undirected edge -> faces
+  std::map<Edge, std::vector<std::size_t>> around;  // undirected edge -> faces
   for (std::size_t f = 0; f < faces.size(); ++f)
     for (int j = 0; j < 3; ++j) {
       const std::size_t a = faces[f][j], b = faces[f][(j + 1) % 3];
       around[{std::min(a, b), std::max(a, b)}].push_back(f);
     }
-  // Corners (face * 3 + position) joined when two faces meet at that
-  // vertex across an edge; each group of joined corners keeps one copy.
-  std::vector<std::size_t> parent(faces.size() * 3);
-  std::iota(parent.begin(), parent.end(), 0);
-  auto find = [&](std::size_t i) {
-    while (parent[i] != i) i = parent[i] = parent[parent[i]];
-    return i;
-  };
-  auto corner = [&](std::size_t f, std::size_t v) {
-    return f * 3 + static_cast<std::size_t>(std::find(faces[f].begin(), faces[f].end(), v) - faces[f].begin());
-  };
-  auto join = [&](const std::pair<std::size_t, std::size_t>& edge, std::size_t f, std::size_t g) {
-    parent[find(corner(g, edge.first))] = find(corner(f, edge.first));
-    parent[find(corner(g, edge.second))] = find(corner(f, edge.second));
-  };
-  auto vec = [&](std::size_t from, std::size_t to) {
-    const Point &p = points[from], &q = points[to];
-    return std::array<double, 3>{CGAL::to_double(q.x() - p.x()), CGAL::to_double(q.y() - p.y()),
-                                 CGAL::to_double(q.z() - p.z())};
-  };
-  auto cross = [](const std::array<double, 3>& u, const std::array<double, 3>& v) {
-    return std::array<double, 3>{u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
-  };
-  auto dot = [](const std::array<double, 3>& u, const std::array<double, 3>& v) {
-    return u[0] * v[0] + u[1] * v[1] + u[2] * v[2];
-  };
+  CornerGroups groups(faces);
   bool shared = false;
   for (const auto& [edge, list] : around) {
     if (list.size() <= 2) {
-      if (list.size() == 2) join(edge, list[0], list[1]);
+      if (list.size() == 2) groups.Join(edge, list[0], list[1]);
       continue;
     }
     if (list.size() % 2) return false;
     shared = true;
-    const auto d = vec(edge.first, edge.second);
-    const double len = std::sqrt(dot(d, d));
-    // A frame around the edge: e1 any unit vector across it, e2 = d x e1.
-    std::array<double, 3> e1 =
-        std::abs(d[0]) < 0.9 * len ? std::array<double, 3>{1, 0, 0} : std::array<double, 3>{0, 1, 0};
-    const double along = dot(e1, d) / (len * len);
-    for (int k = 0; k < 3; ++k) e1[k] -= along * d[k];
-    auto e2 = cross(d, e1);
-    for (double& c : e2) c /= len;
-    struct Sheet {
-      double angle;
-      std::size_t face;
-      std::array<double, 3> normal;
-    };
-    std::vector<Sheet> sheets;
-    for (std::size_t f : list) {
-      std::size_t w = faces[f][0];
-      for (std::size_t v : faces[f])
-        if (v != edge.first && v != edge.second) w = v;
-      const auto r = vec(edge.first, w);
-      sheets.push_back(
-          {std::atan2(dot(r, e2), dot(r, e1)), f, cross(vec(faces[f][0], faces[f][1]), vec(faces[f][0], faces[f][2]))});
-    }
-    std::sort(sheets.begin(), sheets.end(), [](const Sheet& a, const Sheet& b) { return a.angle < b.angle; });
-    std::vector<int> partners(sheets.size(), 0);
-    for (std::size_t k = 0; k < sheets.size(); ++k) {
-      const std::size_t next = (k + 1) % sheets.size();
-      double mid = 0.5 * (sheets[k].angle + sheets[next].angle);
-      if (next == 0) mid += std::numbers::pi;  // the wedge across the angle's cut
-      std::array<double, 3> m{};
-      for (int c = 0; c < 3; ++c) m[c] = std::cos(mid) * e1[c] + std::sin(mid) * e2[c];
-      if (dot(sheets[k].normal, m) < 0) {  // material between sheet k and the next
-        join(edge, sheets[k].face, sheets[next].face);
-        ++partners[k];
-        ++partners[next];
-      }
-    }
-    if (std::any_of(partners.begin(), partners.end(), [](int n) { return n != 1; })) return false;
+    if (!PairSheetsAroundEdge(points, faces, edge, list, groups)) return false;
   }
   if (!shared) return false;
   std::map<std::size_t, std::size_t> copy;  // corner group -> new point
@@ -146,7 +168,7 @@ bool SplitShellsAtSharedEdges(std::vector<Point>& points, std::vector<std::vecto
   std::vector<std::vector<std::size_t>> split = faces;
   for (std::size_t f = 0; f < faces.size(); ++f)
     for (int j = 0; j < 3; ++j) {
-      auto [it, added] = copy.try_emplace(find(f * 3 + j), copies.size());
+      auto [it, added] = copy.try_emplace(groups.Find(f * 3 + j), copies.size());
       if (added) copies.push_back(points[faces[f][j]]);
       split[f][j] = it->second;
     }
@@ -507,6 +529,87 @@ TriangleMesh ExactBoolean(BooleanOp op, const std::vector<TriangleMesh>& operand
 }
 
 namespace {
+// The union of the operands `in`: operands apart from all others join the
+// result as they are; each group of touching ones is united (UnionOfTouching).
+TriangleMesh UnionAll(std::vector<Exact>& in, const BooleanOptions& options, BooleanSummary& summary) {
+  TriangleMesh out;
+  std::vector<Exact> present;
+  std::vector<std::size_t> present_index;  // each one's index among the operands
+  for (std::size_t i = 0; i < in.size(); ++i)
+    if (!in[i].empty) {
+      present.push_back(std::move(in[i]));
+      present_index.push_back(i);
+    }
+  // Operands apart from all others join the result as they are.
+  for (const auto& group : TouchingGroups(present)) {
+    summary.disjoint += group.size() == 1 && present.size() > 1;
+    std::vector<Exact> pieces;
+    std::vector<std::size_t> pieces_index;
+    for (std::size_t k : group) {
+      pieces.push_back(std::move(present[k]));
+      pieces_index.push_back(present_index[k]);
+    }
+    for (const Exact& piece : UnionOfTouching(std::move(pieces), pieces_index, options, summary))
+      AppendExact(piece, out);
+  }
+  return out;
+}
+
+// The operands taken away (`away`, their operand indices `away_index`),
+// joined into one when every piece of their union is a surface mesh (apart
+// pieces side by side in one mesh); left as they are otherwise.
+void JoinSubtrahends(std::vector<Exact>& away, std::vector<std::size_t>& away_index, const BooleanOptions& options,
+                     BooleanSummary& summary) {
+  std::vector<Exact> pieces;
+  for (const auto& group : TouchingGroups(away)) {
+    std::vector<Exact> members;
+    std::vector<std::size_t> members_index;
+    for (std::size_t k : group) {
+      members.push_back(away[k]);
+      members_index.push_back(away_index[k]);
+    }
+    for (Exact& piece : UnionOfTouching(std::move(members), members_index, options, summary))
+      pieces.push_back(std::move(piece));
+  }
+  if (std::none_of(pieces.begin(), pieces.end(), [](const Exact& e) { return e.nef.has_value(); })) {
+    Exact joined = std::move(pieces[0]);
+    for (std::size_t k = 1; k < pieces.size(); ++k) {
+      joined.mesh += pieces[k].mesh;
+      joined.box += pieces[k].box;
+    }
+    away.clear();
+    away.push_back(std::move(joined));
+    away_index.resize(1);
+  }
+}
+
+// in[0] minus the other operands (in[0] not empty).
+// a - b1 - b2 - ... = a - (b1 | b2 | ...): the operands taken away are
+// joined first (apart ones cost nothing) and taken away at once, so the
+// first operand is corefined once, not once per operand (camera-tests of
+// OpenSCAD's corpus, a sphere minus three crossing cylinders: 8-10x
+// less time). Where a piece of their union is a Nef polyhedron, one
+// operand at a time.
+TriangleMesh DifferenceAll(std::vector<Exact>& in, const BooleanOptions& options, BooleanSummary& summary) {
+  TriangleMesh out;
+  Exact acc = std::move(in[0]);
+  std::vector<Exact> away;
+  std::vector<std::size_t> away_index;
+  for (std::size_t i = 1; i < in.size(); ++i) {
+    if (in[i].empty || !Meet(acc.box, in[i].box)) {
+      ++summary.disjoint;
+      continue;  // nothing to take away
+    }
+    away.push_back(std::move(in[i]));
+    away_index.push_back(i);
+  }
+  if (away.size() > 1) JoinSubtrahends(away, away_index, options, summary);
+  for (std::size_t k = 0; k < away.size() && !acc.empty; ++k)
+    acc = Apply(BooleanOp::kDifference, acc, away[k], away_index[k], options, summary);
+  AppendExact(acc, out);
+  return out;
+}
+
 TriangleMesh UnorderedBoolean(BooleanOp op, const std::vector<TriangleMesh>& operands, BooleanSummary* summary_out,
                               const BooleanOptions& options) {
   BooleanSummary local;
@@ -516,74 +619,9 @@ TriangleMesh UnorderedBoolean(BooleanOp op, const std::vector<TriangleMesh>& ope
   for (std::size_t i = 0; i < operands.size(); ++i) in.push_back(ToExact(operands[i], i, options));
   TriangleMesh out;
   if (in.empty()) return out;
-  if (op == BooleanOp::kUnion) {
-    std::vector<Exact> present;
-    std::vector<std::size_t> present_index;  // each one's index among the operands
-    for (std::size_t i = 0; i < in.size(); ++i)
-      if (!in[i].empty) {
-        present.push_back(std::move(in[i]));
-        present_index.push_back(i);
-      }
-    // Operands apart from all others join the result as they are.
-    for (const auto& group : TouchingGroups(present)) {
-      summary.disjoint += group.size() == 1 && present.size() > 1;
-      std::vector<Exact> pieces;
-      std::vector<std::size_t> pieces_index;
-      for (std::size_t k : group) {
-        pieces.push_back(std::move(present[k]));
-        pieces_index.push_back(present_index[k]);
-      }
-      for (const Exact& piece : UnionOfTouching(std::move(pieces), pieces_index, options, summary))
-        AppendExact(piece, out);
-    }
-    return out;
-  }
+  if (op == BooleanOp::kUnion) return UnionAll(in, options, summary);
+  if (op == BooleanOp::kDifference && !in[0].empty) return DifferenceAll(in, options, summary);
   Exact acc = std::move(in[0]);
-  if (op == BooleanOp::kDifference && !acc.empty) {
-    // a - b1 - b2 - ... = a - (b1 | b2 | ...): the operands taken away are
-    // joined first (apart ones cost nothing) and taken away at once, so the
-    // first operand is corefined once, not once per operand (camera-tests of
-    // OpenSCAD's corpus, a sphere minus three crossing cylinders: 8-10x
-    // less time). Where a piece of their union is a Nef polyhedron, one
-    // operand at a time.
-    std::vector<Exact> away;
-    std::vector<std::size_t> away_index;
-    for (std::size_t i = 1; i < in.size(); ++i) {
-      if (in[i].empty || !Meet(acc.box, in[i].box)) {
-        ++summary.disjoint;
-        continue;  // nothing to take away
-      }
-      away.push_back(std::move(in[i]));
-      away_index.push_back(i);
-    }
-    if (away.size() > 1) {
-      std::vector<Exact> pieces;
-      for (const auto& group : TouchingGroups(away)) {
-        std::vector<Exact> members;
-        std::vector<std::size_t> members_index;
-        for (std::size_t k : group) {
-          members.push_back(away[k]);
-          members_index.push_back(away_index[k]);
-        }
-        for (Exact& piece : UnionOfTouching(std::move(members), members_index, options, summary))
-          pieces.push_back(std::move(piece));
-      }
-      if (std::none_of(pieces.begin(), pieces.end(), [](const Exact& e) { return e.nef.has_value(); })) {
-        Exact joined = std::move(pieces[0]);
-        for (std::size_t k = 1; k < pieces.size(); ++k) {
-          joined.mesh += pieces[k].mesh;
-          joined.box += pieces[k].box;
-        }
-        away.clear();
-        away.push_back(std::move(joined));
-        away_index.resize(1);
-      }
-    }
-    for (std::size_t k = 0; k < away.size() && !acc.empty; ++k)
-      acc = Apply(op, acc, away[k], away_index[k], options, summary);
-    AppendExact(acc, out);
-    return out;
-  }
   for (std::size_t i = 1; i < in.size() && !acc.empty; ++i) {
     if (in[i].empty || !Meet(acc.box, in[i].box)) {
       ++summary.disjoint;

@@ -72,13 +72,15 @@ cache::CacheOptions CacheOptionsOf(const v1::CachePlanOptions& m) {
   return o;
 }
 
-v1::CachePlanReport RunCachePlan(const v1::CachePlanInput& input) {
-  // One graph node per key, costed once (docs/cache.md "Determinism"): a
-  // key's records all carry the same op and children, so its model cost is
-  // a function of the key, and how many records a path reports (one per
-  // sample in process, one per key from the cluster's store, more after
-  // retries) must not change a bit of it. Merging k equal costs as a mean
-  // would: (t + t + t) / 3 is not always t.
+namespace {
+
+// The input's dependency graph, one node per key, costed once (docs/cache.md
+// "Determinism"): a key's records all carry the same op and children, so
+// its model cost is a function of the key, and how many records a path
+// reports (one per sample in process, one per key from the cluster's store,
+// more after retries) must not change a bit of it. Merging k equal costs as
+// a mean would: (t + t + t) / 3 is not always t. *op_of: each key's op.
+cache::DependencyGraph GraphOf(const v1::CachePlanInput& input, std::map<std::string, std::string>* op_of) {
   struct Merged {
     const v1::CachePlanSubtree* first = nullptr;
     std::int64_t bytes = 0;
@@ -95,7 +97,6 @@ v1::CachePlanReport RunCachePlan(const v1::CachePlanInput& input) {
     m.bytes = std::max(m.bytes, s.bytes());
     m.stored = m.stored || s.stored();
   }
-  std::map<std::string, std::string> op_of;
   std::vector<cache::SubtreeNode> nodes;
   nodes.reserve(by_key.size());
   for (const auto& [key, m] : by_key) {
@@ -108,12 +109,84 @@ v1::CachePlanReport RunCachePlan(const v1::CachePlanInput& input) {
                      cache::ModelSubtreeSeconds(m.first->op(), out, in),
                      out,
                      m.stored});
-    op_of.emplace(key, m.first->op());
+    op_of->emplace(key, m.first->op());
   }
   std::vector<cache::SampleTree> samples;
   samples.reserve(static_cast<std::size_t>(input.sample_roots_size()));
   for (const auto& r : input.sample_roots()) samples.push_back({r});
-  const cache::DependencyGraph graph = cache::BuildDependencyGraph(nodes, samples);
+  return cache::BuildDependencyGraph(nodes, samples);
+}
+
+// An entry per node in the chosen plan or the budget-free OPT-MAX plan.
+void AddEntries(const cache::DependencyGraph& graph, const cache::CacheSet& opt, const cache::CacheSet& rfree,
+                std::map<std::string, std::string>& op_of, v1::CachePlanReport* report) {
+  for (std::int32_t id = 0; id < static_cast<std::int32_t>(graph.node_count()); ++id) {
+    const bool in_opt = opt[id] != 0, in_rfree = rfree[id] != 0;
+    if (!in_opt && !in_rfree) continue;
+    v1::CachePlanEntry* e = report->add_entries();
+    e->set_key(graph.keys[id]);
+    e->set_op(op_of[graph.keys[id]]);
+    for (std::int64_t c = graph.child_begin[id]; c < graph.child_begin[id + 1]; ++c)
+      e->add_children(graph.keys[graph.child_ids[c]]);
+    e->set_bytes(static_cast<std::int64_t>(graph.bytes[id]));
+    e->set_cost_seconds(graph.seconds[id]);
+    e->set_in_opt(in_opt);
+    e->set_in_rfree(in_rfree);
+  }
+}
+
+// Each strategy's cost curve under `options` (its own strategy replaced).
+void AddCurves(const cache::DependencyGraph& graph, const cache::CacheOptions& options, v1::CachePlanReport* report) {
+  for (auto strategy : {cache::Strategy::kNaive, cache::Strategy::kOptAve, cache::Strategy::kOptMax}) {
+    cache::CacheOptions o = options;
+    o.strategy = strategy;
+    const cache::CachePlan p = cache::OptimizeCache(graph, o);
+    v1::CachePlanCurve* curve = report->add_curves();
+    curve->set_strategy(cache::StrategyName(strategy));
+    for (const auto& point : p.curve) {
+      v1::CachePlanCost* c = curve->add_points();
+      c->set_mean_seconds(point.mean_seconds);
+      c->set_worst_seconds(point.worst_seconds);
+      c->set_bytes(point.bytes);
+      c->set_entries(point.entries);
+    }
+  }
+}
+
+// The exact worst-case program (SolveExactCache) started from the chosen
+// plan, within the input's variable and time limits, into *exact.
+void SolveExact(const v1::CachePlanInput& input, const cache::DependencyGraph& graph,
+                const cache::CacheOptions& options, const cache::CacheReport& plan, v1::CachePlanExact* exact) {
+  if (input.options().exact_max_variables() <= 0) {
+    exact->set_message("not attempted (exact_max_variables = 0)");
+    return;
+  }
+  cache::ExactCacheOptions eo;
+  eo.objective = cache::ExactObjective::kWorst;
+  eo.budget_bytes = options.budget_bytes;
+  eo.min_seconds = options.min_seconds;
+  eo.time_limit_seconds =
+      input.options().exact_time_limit_seconds() > 0 ? input.options().exact_time_limit_seconds() : 10.0;
+  eo.max_variables = input.options().exact_max_variables();
+  eo.start = plan.chosen.cache;
+  const cache::ExactCacheSummary ex = cache::SolveExactCache(graph, eo);
+  exact->set_solved(ex.solved);
+  exact->set_optimal(ex.optimal);
+  exact->set_variables(ex.variables);
+  exact->set_message(ex.message);
+  if (ex.solved) {
+    exact->set_worst_seconds(ex.cost.worst_seconds);
+    exact->set_bound_seconds(ex.bound);
+    const double worst = plan.chosen.cost.worst_seconds;
+    exact->set_gap(ex.cost.worst_seconds > 0 ? (worst - ex.cost.worst_seconds) / ex.cost.worst_seconds : 0.0);
+  }
+}
+
+}  // namespace
+
+v1::CachePlanReport RunCachePlan(const v1::CachePlanInput& input) {
+  std::map<std::string, std::string> op_of;
+  const cache::DependencyGraph graph = GraphOf(input, &op_of);
 
   const cache::CacheOptions options = CacheOptionsOf(input.options());
   const cache::CacheReport plan = cache::PlanCache(graph, options);
@@ -129,60 +202,9 @@ v1::CachePlanReport RunCachePlan(const v1::CachePlanInput& input) {
   Fill(plan.top, report.mutable_top());
   Fill(plan.chosen.cost, report.mutable_opt());
   Fill(rfree.cost, report.mutable_rfree());
-
-  for (std::int32_t id = 0; id < static_cast<std::int32_t>(graph.node_count()); ++id) {
-    const bool in_opt = plan.chosen.cache[id] != 0, in_rfree = rfree.cache[id] != 0;
-    if (!in_opt && !in_rfree) continue;
-    v1::CachePlanEntry* e = report.add_entries();
-    e->set_key(graph.keys[id]);
-    e->set_op(op_of[graph.keys[id]]);
-    for (std::int64_t c = graph.child_begin[id]; c < graph.child_begin[id + 1]; ++c)
-      e->add_children(graph.keys[graph.child_ids[c]]);
-    e->set_bytes(static_cast<std::int64_t>(graph.bytes[id]));
-    e->set_cost_seconds(graph.seconds[id]);
-    e->set_in_opt(in_opt);
-    e->set_in_rfree(in_rfree);
-  }
-
-  for (auto strategy : {cache::Strategy::kNaive, cache::Strategy::kOptAve, cache::Strategy::kOptMax}) {
-    cache::CacheOptions o = options;
-    o.strategy = strategy;
-    const cache::CachePlan p = cache::OptimizeCache(graph, o);
-    v1::CachePlanCurve* curve = report.add_curves();
-    curve->set_strategy(cache::StrategyName(strategy));
-    for (const auto& point : p.curve) {
-      v1::CachePlanCost* c = curve->add_points();
-      c->set_mean_seconds(point.mean_seconds);
-      c->set_worst_seconds(point.worst_seconds);
-      c->set_bytes(point.bytes);
-      c->set_entries(point.entries);
-    }
-  }
-
-  v1::CachePlanExact* exact = report.mutable_exact();
-  if (input.options().exact_max_variables() <= 0) {
-    exact->set_message("not attempted (exact_max_variables = 0)");
-  } else {
-    cache::ExactCacheOptions eo;
-    eo.objective = cache::ExactObjective::kWorst;
-    eo.budget_bytes = options.budget_bytes;
-    eo.min_seconds = options.min_seconds;
-    eo.time_limit_seconds =
-        input.options().exact_time_limit_seconds() > 0 ? input.options().exact_time_limit_seconds() : 10.0;
-    eo.max_variables = input.options().exact_max_variables();
-    eo.start = plan.chosen.cache;
-    const cache::ExactCacheSummary ex = cache::SolveExactCache(graph, eo);
-    exact->set_solved(ex.solved);
-    exact->set_optimal(ex.optimal);
-    exact->set_variables(ex.variables);
-    exact->set_message(ex.message);
-    if (ex.solved) {
-      exact->set_worst_seconds(ex.cost.worst_seconds);
-      exact->set_bound_seconds(ex.bound);
-      const double worst = plan.chosen.cost.worst_seconds;
-      exact->set_gap(ex.cost.worst_seconds > 0 ? (worst - ex.cost.worst_seconds) / ex.cost.worst_seconds : 0.0);
-    }
-  }
+  AddEntries(graph, plan.chosen.cache, rfree.cache, op_of, &report);
+  AddCurves(graph, options, &report);
+  SolveExact(input, graph, options, plan, report.mutable_exact());
   return report;
 }
 
