@@ -371,10 +371,11 @@ Artifact Read(Db& db, int version, const ArtifactReadOptions& options) {
   form.subdivisions = a.manifest.subdivisions;
   ReadDimensions(db, form);
   const int n = static_cast<int>(form.dimensions.size());
+  const int min_dimensions = version == 1 ? 1 : 0;
   const int max_dimensions = version == 1 ? 6 : sampling::kMaxDimensions;
-  if (n < 1 || n > max_dimensions)
-    throw Corrupt("the form has " + std::to_string(n) + " dimensions (1 to " + std::to_string(max_dimensions) +
-                  " expected)");
+  if (n < min_dimensions || n > max_dimensions)
+    throw Corrupt("the form has " + std::to_string(n) + " dimensions (" + std::to_string(min_dimensions) + " to " +
+                  std::to_string(max_dimensions) + " expected)");
   ReadSamples(db, n, form);
   ReadSampleProperties(db, form);
   ReadTrees(db, n, form);

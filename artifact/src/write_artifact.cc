@@ -227,8 +227,9 @@ void InsertBundleFiles(Db& db, const Artifact& a) {
 
 void InsertContent(Db& db, const Artifact& a, ArtifactWriteSummary& summary) {
   const int n = static_cast<int>(a.form.dimensions.size());
-  if (n < 1 || n > sampling::kMaxDimensions)
-    throw InputError("artifact: a form needs 1 to " + std::to_string(sampling::kMaxDimensions) +
+  // A form of no dimensions is one sample: a model with nothing exposed.
+  if (n < 0 || n > sampling::kMaxDimensions)
+    throw InputError("artifact: a form needs 0 to " + std::to_string(sampling::kMaxDimensions) +
                      " dimensions, this one has " + std::to_string(n));
   InsertDimensions(db, a);
   InsertTrees(db, a);

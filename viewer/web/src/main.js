@@ -32,16 +32,22 @@ async function main() {
   const start = state.form.starting_points[0];
   state.u = readUrl(start ? start.u.slice() : state.form.dimensions.map((d) => d.default ?? (d.lo + d.hi) / 2));
   buildSliders();
-  buildMapControls();
   buildDownloads();
-  buildPresets();
-  buildLimits();
-  trade.build();
+  // A form of no dimensions (a model with nothing exposed) is one design:
+  // no presets, limits, map, trade-offs or starting points to move between.
+  const space = state.form.dimensions.length > 0;
+  for (const panel of document.querySelectorAll('.space-only')) panel.hidden = !space;
+  if (space) {
+    buildMapControls();
+    buildPresets();
+    buildLimits();
+    trade.build();
+  }
   initView();
   buildTransitions();
   await update();
   state.ready = true;
-  buildStarts().catch(showError);
+  if (space) buildStarts().catch(showError);
 }
 
 main().catch(showError);

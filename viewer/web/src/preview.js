@@ -117,10 +117,11 @@ export async function loadPreview(u, sample, exact = false) {
 
 // "exact point" or "nearest sample (values)", from the preview's headers.
 function showPreviewKind(kind, shown, fallback) {
-  const u = (shown ?? '').split(',').map(Number);
+  const u = shown ? shown.split(',').map(Number) : [];
   const values = u.map((v, d) => `${state.form.dimensions[d]?.name} ${formatValue(d, v)}`).join(', ');
   const label = $('preview-kind');
-  label.textContent = kind === 'exact' ? 'exact point' : `nearest sample (${values})`;
+  label.textContent = state.form.dimensions.length === 0 ? 'the model (nothing to customise)'
+    : kind === 'exact' ? 'exact point' : `nearest sample (${values})`;
   label.title = kind === 'exact' ? 'the design evaluated at exactly these values; validity is the form\'s'
     : fallback === 'budget' ? 'an exact preview would take longer than the server\'s budget'
     : fallback === 'failed' ? 'the design could not be evaluated at exactly these values'

@@ -35,7 +35,8 @@ export async function update() {
   state.properties = properties;
   drawTracks();
   drawReadout(properties);
-  await Promise.all([loadPreview(u, properties.sample, true), drawMap(), trade.afterUpdate()]);
+  const space = state.form.dimensions.length > 0;
+  await Promise.all([loadPreview(u, properties.sample, true), space && drawMap(), space && trade.afterUpdate()]);
 }
 
 function drawReadout(p) {
