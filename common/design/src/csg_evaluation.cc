@@ -3,9 +3,12 @@
 // road.
 #include "csg_evaluation.h"
 
+#include <algorithm>
+#include <cctype>
 #include <utility>
 
 #include "fabatlas/error.h"
+#include "fabatlas/mesh/read_mesh.h"
 #include "fabatlas/scad/customizer.h"
 #include "fabatlas/scad/evaluate_2d.h"
 #include "fabatlas/sha256.h"
@@ -189,6 +192,25 @@ void CsgEvaluation::Outside(const std::string& what, const std::string& key, con
 
 void CsgEvaluation::Warn(const std::string& text) {
   if (c_.warnings) c_.warnings->push_back(model_.filename().string() + ": " + text);
+}
+
+std::optional<std::filesystem::path> CsgEvaluation::ImportedMeshFile(const CsgNode& n) const {
+  auto f = n.args.find("file");
+  if (f == n.args.end() || f->second.type != CsgValue::Type::kString) throw NoNativeEquivalent{"import"};
+  std::filesystem::path file = f->second.text;
+  std::string ext = file.extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char ch) { return std::tolower(ch); });
+  if (ext == ".dxf" || ext == ".svg") return std::nullopt;
+  if (ext != ".stl" && ext != ".off" && ext != ".obj" && ext != ".3mf" && ext != ".amf")
+    throw NoNativeEquivalent{"import of " + ext};
+  if (file.is_relative()) file = model_.parent_path() / file;
+  return file;
+}
+
+mesh::TriangleMesh CsgEvaluation::ReadImportedMesh(const CsgNode& n, const std::filesystem::path& file) {
+  mesh::TriangleMesh mm = mesh::ReadMesh(file);
+  Outside(file.string() + " (imported by " + model_.filename().string() + ")", Sha256Hex(n.canonical), mm);
+  return mm;
 }
 
 Solid CsgEvaluation::Minus(const Solid& a, const std::vector<Solid>& others) {

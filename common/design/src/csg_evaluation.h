@@ -112,6 +112,16 @@ class CsgEvaluation {
   // A warning of the model, in the log (OpenScadNodeContext::warnings).
   void Warn(const std::string& text);
 
+  // The mesh file an `import` node names (STL, OFF, OBJ, 3MF or AMF),
+  // relative paths resolved against the model's directory; nullopt for a
+  // 2D file (DXF, SVG). Throws NoNativeEquivalent for a node without a file
+  // or a format no road reads.
+  std::optional<std::filesystem::path> ImportedMeshFile(const CsgNode& n) const;
+
+  // Reads that file (mesh::ReadMesh) and records it as a mesh from outside
+  // (Outside). Throws InputError when it cannot be read.
+  mesh::TriangleMesh ReadImportedMesh(const CsgNode& n, const std::filesystem::path& file);
+
   // ---- The level-set road's leaves (csg_level_set_leaves.cc) ----
 
   Solid FromMesh(mesh::TriangleMesh m, const Affine& a);

@@ -5,7 +5,6 @@
 
 #include <algorithm>
 #include <atomic>
-#include <cctype>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -13,7 +12,6 @@
 #include "fabatlas/error.h"
 #include "fabatlas/geometry/convex_mesh_distance.h"
 #include "fabatlas/mesh/exact_boolean.h"
-#include "fabatlas/mesh/read_mesh.h"
 #include "fabatlas/scad/primitive_mesh.h"
 #include "fabatlas/scad/region_outline.h"
 #include "fabatlas/sha256.h"
@@ -215,21 +213,14 @@ CsgEvaluation::Result CsgEvaluation::LinearExtruded(const CsgNode& n, const Affi
 }
 
 CsgEvaluation::Result CsgEvaluation::Imported(const CsgNode& n, const Affine& m) {
-  auto f = n.args.find("file");
-  if (f == n.args.end() || f->second.type != CsgValue::Type::kString) throw NoNativeEquivalent{"import"};
-  fs::path file = f->second.text;
-  std::string ext = file.extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char ch) { return std::tolower(ch); });
-  if (ext != ".stl" && ext != ".off" && ext != ".obj" && ext != ".3mf" && ext != ".amf")
-    throw NoNativeEquivalent{"import of " + ext};
-  if (file.is_relative()) file = model_.parent_path() / file;
+  const std::optional<fs::path> file = ImportedMeshFile(n);
+  if (!file) throw NoNativeEquivalent{"import of a 2D file among 3D objects"};
   mesh::TriangleMesh mm;
   try {
-    mm = mesh::ReadMesh(file);
+    mm = ReadImportedMesh(n, *file);
   } catch (const InputError& e) {
     throw SampleFailure(kNoGeometry, e.what());
   }
-  Outside(file.string() + " (imported by " + model_.filename().string() + ")", Sha256Hex(n.canonical), mm);
   return {FromMesh(std::move(mm), m), nullptr, ""};
 }
 

@@ -5,13 +5,11 @@
 #include "csg_evaluation.h"
 
 #include <algorithm>
-#include <cctype>
 #include <cmath>
 
 #include "fabatlas/error.h"
 #include "fabatlas/mesh/enclosed_volume.h"
 #include "fabatlas/mesh/exact_boolean.h"
-#include "fabatlas/mesh/read_mesh.h"
 #include "fabatlas/scad/evaluate_2d.h"
 #include "fabatlas/scad/primitive_mesh.h"
 #include "fabatlas/scad/surface_mesh.h"
@@ -209,23 +207,15 @@ Solid CsgEvaluation::MeshExtruded(const CsgNode& n, const Affine& m) {
 }
 
 Solid CsgEvaluation::MeshImported(const CsgNode& n, const Affine& m) {
-  auto f = n.args.find("file");
-  if (f == n.args.end() || f->second.type != CsgValue::Type::kString) throw NoNativeEquivalent{"import"};
-  fs::path file = f->second.text;
-  std::string ext = file.extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char ch) { return std::tolower(ch); });
-  if (ext == ".dxf" || ext == ".svg") return Solid();  // 2D: OpenSCAD ignores it among 3D objects
-  if (ext != ".stl" && ext != ".off" && ext != ".obj" && ext != ".3mf" && ext != ".amf")
-    throw NoNativeEquivalent{"import of " + ext};
-  if (file.is_relative()) file = model_.parent_path() / file;
+  const std::optional<fs::path> file = ImportedMeshFile(n);
+  if (!file) return Solid();  // 2D: OpenSCAD ignores it among 3D objects
   mesh::TriangleMesh mm;
   try {
-    mm = mesh::ReadMesh(file);
+    mm = ReadImportedMesh(n, *file);
   } catch (const InputError& e) {
     Warn("import (CSG line " + std::to_string(n.line) + "): " + e.what() + "; left out, as OpenSCAD leaves it out");
     return Solid();
   }
-  Outside(file.string() + " (imported by " + model_.filename().string() + ")", Sha256Hex(n.canonical), mm);
   return MeshOf(Outward(std::move(mm)), m);
 }
 
