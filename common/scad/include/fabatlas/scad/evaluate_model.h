@@ -58,6 +58,9 @@ struct ModelEvaluation {
   // The model is wrong whatever evaluates it, "MODEL.scad:LINE: what" (a
   // color() with an unknown name); also in `declined`. Report it, exit 2.
   std::string bad_input;
+  // "FILE:LINE: include <x>: not found ...; skipped, as OpenSCAD does": each
+  // included or used file OpenSCAD too would skip with a warning.
+  std::vector<std::string> warnings;
   double seconds = 0;  // wall time of reading, parsing and evaluating
 };
 
