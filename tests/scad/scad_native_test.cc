@@ -16,6 +16,8 @@
 #include <vector>
 
 #include "fabatlas/design/evaluate_sample.h"
+#include "fabatlas/mesh/enclosed_volume.h"
+#include "fabatlas/mesh/read_mesh.h"
 #include "fabatlas/scad/csg_tree.h"
 #include "fabatlas/scad/evaluate_model.h"
 #include "fabatlas/testing/paths.h"
@@ -235,6 +237,34 @@ TEST(ScadNative, IncludedAndUsedFilesAreOpenScadsExport) {
     EXPECT_EQ(own.csg, OpenScadCsg(f.path(), {}, dir)) << f.path();
   }
   EXPECT_GE(taken, 31);
+}
+
+// The README's spur gear (`use <MCAD/involute_gears.scad>`) through the
+// openscad node: its sample needs no OpenSCAD (it evaluates with OpenSCAD
+// off the PATH), and its volume is OpenSCAD's own STL's.
+TEST(ScadNative, TheSpurGearSampleRunsNoOpenScad) {
+  const fs::path dir = fabatlas::testing::FreshTempDir("scad-native-gear");
+  fs::copy_file(fabatlas::testing::SourceDir() / "configs/scad/spur_gear.scad", dir / "spur_gear.scad");
+  std::ofstream(dir / "d.yaml") << "name: d\nvoxel_size: 0.5\n"
+                                << "parameters: {teeth: {type: integer, min: 8, max: 40, default: 17}}\n"
+                                << "tree: {op: openscad, file: spur_gear.scad, set: {teeth: teeth}}\n"
+                                << "properties: [volume]\n";
+  scad::OpenScadRun run;
+  ASSERT_TRUE(scad::RunOpenScad(dir / "spur_gear.scad", dir / "peer.stl", {{"teeth", "11"}}, &run)) << run.log_tail;
+  const double theirs = std::abs(fabatlas::mesh::EnclosedVolume(fabatlas::mesh::ReadMesh(dir / "peer.stl")));
+  const std::string path = std::getenv("PATH") ? std::getenv("PATH") : "";
+  setenv("PATH", (dir / "no-programs-here").c_str(), 1);
+  design::SampleResult r;
+  try {
+    const design::Design d = design::LoadDesign(dir / "d.yaml");
+    r = design::EvaluateSample(d, design::ParsePoint(d, "teeth=11", "--at"), {});
+  } catch (const std::exception& e) {
+    ADD_FAILURE() << e.what();
+  }
+  setenv("PATH", path.c_str(), 1);
+  ASSERT_TRUE(r.valid) << r.failure << ": " << r.failure_reason;
+  EXPECT_NEAR(r.solid.Volume(), theirs, 1e-4 * theirs);
+  for (const auto& record : r.subtrees) EXPECT_EQ(record.op.rfind("csg-openscad", 0), std::string::npos) << record.op;
 }
 
 // A place in an included or used file is named by that file, and a file
