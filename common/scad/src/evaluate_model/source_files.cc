@@ -149,7 +149,8 @@ Parsed Load(const fs::path& path) {
 Parsed Parse(const std::string& text, const std::string& path) {
   auto file = std::make_shared<SourceFile>();
   file->path = path;
-  const fs::path dir = fs::absolute(fs::path(path)).parent_path();
+  std::error_code ec;
+  const fs::path dir = fs::absolute(fs::path(path), ec).parent_path();
   bool cycle = false;
   std::set<std::string> used;
   auto directive = [&](bool include, const std::string& name, int line, std::vector<StmtPtr>& out) {
@@ -215,7 +216,8 @@ fs::path FindSourceFile(const fs::path& dir, const std::string& name) {
 }
 
 std::shared_ptr<const SourceFile> ParseModel(const std::string& text, const std::string& file) {
-  including = {fs::absolute(fs::path(file)).lexically_normal().string()};
+  std::error_code ec;
+  including = {fs::absolute(fs::path(file), ec).lexically_normal().string()};
   try {
     Parsed parsed = Parse(text, file);
     including.clear();
