@@ -185,6 +185,11 @@ TEST(ScadNative, IncludedAndUsedFilesAreOpenScadsExport) {
       "translate([20, 0]) hexagon_tube(10, 8, 2);\ntranslate([40, 0]) torus(10, 6);\n",
       // assign(), deprecated but evaluated by OpenSCAD 2021.01 (involute_gears.scad uses it)
       "x = 5;\nassign(a = 2, b = x, x = 1) { cube(a); sphere(b); }\nassign(a = 1) cube(a);\nassign(a = 1);\n",
+      // bare { } blocks: their statements are the enclosing scope's (assignments, definitions, children)
+      "{ a = 2; cube(a); module q() sphere(3); }\nb = a + 1;\ncube(b);\nq();\n"
+      "module m() { echo($children); children(1); }\nm() { { cube(5); sphere(6); } cylinder(7); }\n"
+      "module n() { x = 1; { x = 4; y = 2; } cube([x, y, 1]); }\nn();\nif (true) { { z = 3; } cube(z); }\n",
+      "use <MCAD/involute_gears.scad>\ntest_meshing_double_helix();\n",
   };
   int k = 0;
   for (const char* program : programs) {

@@ -63,8 +63,10 @@ std::string Parser::Ident() {
 
 // ---------------------------------------------------------------- statements
 
-// The next statement appended to out, or an include's statements, or
-// nothing for a use.
+// The next statement appended to out: an include's statements, nothing for
+// a use, a bare `{ }` block's statements (OpenSCAD 2021.01 adds them to the
+// enclosing scope: its assignments and definitions are the scope's, its
+// instantiations count as the scope's children).
 void Parser::Statements(std::vector<StmtPtr>& out) {
   if (Peek().kind == Tok::kSymbol && (Peek().text == "include" || Peek().text == "use")) {
     const bool include = Peek().text == "include";
@@ -75,7 +77,12 @@ void Parser::Statements(std::vector<StmtPtr>& out) {
     directive_(include, name, line, out);
     return;
   }
-  out.push_back(Statement());
+  StmtPtr s = Statement();
+  if (s->kind == Stmt::Kind::kBlock) {  // a bare { }: its statements belong to the enclosing scope, as in OpenSCAD
+    out.insert(out.end(), s->children.begin(), s->children.end());
+    return;
+  }
+  out.push_back(std::move(s));
 }
 
 // The child of a module instantiation, if, for, let or module definition:
