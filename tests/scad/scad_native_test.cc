@@ -213,6 +213,12 @@ TEST(ScadNative, IncludedAndUsedFilesAreOpenScadsExport) {
                                      << "size = 6;\nmodule pm(a) { a = a + 2; cube(a); }\npm(1);\n";
   ExpectSameAsOpenScad(dir / "scopes.scad", {}, dir);
   ExpectSameAsOpenScad(dir / "scopes.scad", {{"size", "2"}, {"v", "1"}}, dir);
+  // A model including itself through a link to its own directory: OpenSCAD
+  // includes it once (the link resolved, the second time is a cycle).
+  fs::create_directories(dir / "loop");
+  fs::create_directory_symlink(".", dir / "loop/again");
+  std::ofstream(dir / "loop/self.scad") << "cube(1);\ninclude <again/self.scad>\n";
+  ExpectSameAsOpenScad(dir / "loop/self.scad", {}, dir);
   const fs::path misc = "/usr/share/openscad/testdata/scad/misc";
   for (const char* model :
        {"include-tests.scad", "include-recursive-test.scad", "include-overwrite-main.scad", "sub2/useuse.scad"})

@@ -161,7 +161,12 @@ Parsed Parse(const std::string& text, const std::string& path) {
                                ", in OPENSCADPATH or OpenSCAD's library directories); skipped, as OpenSCAD does");
       return;
     }
-    const std::string normal = found.lexically_normal().string();
+    // The file as OpenSCAD names it once found: links resolved, so a file
+    // included through a link to its own directory is the same file (a
+    // cycle), and what it includes is found beside the link's target.
+    std::error_code ec;
+    const fs::path real = fs::weakly_canonical(found, ec);
+    const std::string normal = ec ? found.lexically_normal().string() : real.string();
     if (!include) {
       if (used.insert(normal).second) file->uses.push_back(normal);
       return;
@@ -172,10 +177,13 @@ Parsed Parse(const std::string& text, const std::string& path) {
         cycle = true;
         return;
       }
+    // Distinct names of one file (through a link to its own directory) would
+    // nest without end: bounded, as the evaluator bounds recursion.
+    if (including.size() >= 64) throw NotNative{line, "includes nested more than 64 files deep"};
     including.push_back(normal);
     Parsed inner;
     try {
-      inner = Load(found);
+      inner = Load(normal);
     } catch (...) {
       including.pop_back();
       throw;
@@ -216,8 +224,7 @@ fs::path FindSourceFile(const fs::path& dir, const std::string& name) {
 }
 
 std::shared_ptr<const SourceFile> ParseModel(const std::string& text, const std::string& file) {
-  std::error_code ec;
-  including = {fs::absolute(fs::path(file), ec).lexically_normal().string()};
+  including.clear();  // OpenSCAD lets a file include itself once: the model is not among the files being included
   try {
     Parsed parsed = Parse(text, file);
     including.clear();
@@ -231,7 +238,7 @@ std::shared_ptr<const SourceFile> ParseModel(const std::string& text, const std:
 
 std::shared_ptr<const SourceFile> UsedFile(const std::string& path) {
   const std::vector<std::string> outer = std::move(including);
-  including = {path};
+  including.clear();
   try {
     Parsed parsed = Load(path);
     including = outer;

@@ -4,7 +4,9 @@
 // "Libraries"):
 //  - `include <f>` puts f's statements where it stands (its assignments,
 //    definitions and instantiations); a file already being included (a
-//    cycle) or one not found is skipped with a warning, as OpenSCAD does;
+//    cycle; the model itself is not among them, so a model including itself
+//    has its statements twice, as in OpenSCAD) or one not found is skipped
+//    with a warning, as OpenSCAD does; files are named with links resolved;
 //  - `use <f>`, anywhere in a file (or in a file it includes), makes f's own
 //    top-level modules and functions visible in the whole file; the file is
 //    read when a name is first looked up in it (evaluator.h), so cycles of
