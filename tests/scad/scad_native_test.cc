@@ -213,6 +213,24 @@ TEST(ScadNative, IncludedAndUsedFilesAreOpenScadsExport) {
                                      << "size = 6;\nmodule pm(a) { a = a + 2; cube(a); }\npm(1);\n";
   ExpectSameAsOpenScad(dir / "scopes.scad", {}, dir);
   ExpectSameAsOpenScad(dir / "scopes.scad", {{"size", "2"}, {"v", "1"}}, dir);
+  // Where a used file is found: beside the model first, then in OPENSCADPATH.
+  fs::create_directories(dir / "path_lib");
+  fs::create_directories(dir / "beside");
+  fs::create_directories(dir / "elsewhere");
+  std::ofstream(dir / "path_lib/p.scad") << "module p() cube(3);\n";
+  std::ofstream(dir / "beside/p.scad") << "module p() sphere(2);\n";
+  for (const char* d : {"beside", "elsewhere"}) std::ofstream(dir / d / "model.scad") << "use <p.scad>\np();\n";
+  const char* was = std::getenv("OPENSCADPATH");
+  const std::string before = was ? was : "";
+  setenv("OPENSCADPATH", (dir / "path_lib").c_str(), 1);
+  ExpectSameAsOpenScad(dir / "beside/model.scad", {}, dir);
+  ExpectSameAsOpenScad(dir / "elsewhere/model.scad", {}, dir);
+  EXPECT_NE(scad::EvaluateModel(dir / "beside/model.scad", {}).csg.find("sphere("), std::string::npos);
+  EXPECT_NE(scad::EvaluateModel(dir / "elsewhere/model.scad", {}).csg.find("cube("), std::string::npos);
+  if (was)
+    setenv("OPENSCADPATH", before.c_str(), 1);
+  else
+    unsetenv("OPENSCADPATH");
   // A model including itself through a link to its own directory: OpenSCAD
   // includes it once (the link resolved, the second time is a cycle).
   fs::create_directories(dir / "loop");

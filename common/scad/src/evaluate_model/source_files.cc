@@ -217,8 +217,7 @@ fs::path FindSourceFile(const fs::path& dir, const std::string& name) {
   const fs::path named(name);
   if (named.is_absolute()) return IsFile(named) ? named.lexically_normal() : fs::path();
   if (IsFile(dir / named)) return (dir / named).lexically_normal();
-  static const std::vector<fs::path> libraries = LibraryDirectories();
-  for (const fs::path& d : libraries)
+  for (const fs::path& d : LibraryDirectories())  // this process's OPENSCADPATH now, as OpenSCAD reads it at its start
     if (IsFile(d / named)) return (d / named).lexically_normal();
   return {};
 }
