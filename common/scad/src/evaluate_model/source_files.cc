@@ -100,7 +100,10 @@ std::vector<fs::path> LibraryDirectories() {
     std::stringstream list(path);
     std::string d;
     while (std::getline(list, d, ':'))
-      if (!d.empty()) dirs.push_back(fs::absolute(d));
+      if (!d.empty()) {
+        std::error_code ec;
+        dirs.push_back(fs::absolute(d, ec));
+      }
   }
   if (const char* home = std::getenv("HOME")) dirs.push_back(fs::path(home) / ".local/share/OpenSCAD/libraries");
   dirs.push_back("/usr/share/openscad/libraries");
@@ -164,9 +167,9 @@ Parsed Parse(const std::string& text, const std::string& path) {
     // The file as OpenSCAD names it once found: links resolved, so a file
     // included through a link to its own directory is the same file (a
     // cycle), and what it includes is found beside the link's target.
-    std::error_code ec;
-    const fs::path real = fs::weakly_canonical(found, ec);
-    const std::string normal = ec ? found.lexically_normal().string() : real.string();
+    std::error_code unresolved;
+    const fs::path real = fs::weakly_canonical(found, unresolved);
+    const std::string normal = unresolved ? found.lexically_normal().string() : real.string();
     if (!include) {
       if (used.insert(normal).second) file->uses.push_back(normal);
       return;
@@ -177,8 +180,7 @@ Parsed Parse(const std::string& text, const std::string& path) {
         cycle = true;
         return;
       }
-    // Distinct names of one file (through a link to its own directory) would
-    // nest without end: bounded, as the evaluator bounds recursion.
+    // A chain of distinct files: bounded, as the evaluator bounds recursion.
     if (including.size() >= 64) throw NotNative{line, "includes nested more than 64 files deep"};
     including.push_back(normal);
     Parsed inner;
