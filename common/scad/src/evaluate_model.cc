@@ -19,6 +19,7 @@
 #include "evaluate_model/evaluator.h"
 #include "evaluate_model/parser.h"
 #include "evaluate_model/scope.h"
+#include "evaluate_model/source_files.h"
 #include "evaluate_model/syntax.h"
 #include "evaluate_model/value.h"
 
@@ -35,30 +36,15 @@ using internal::Stmt;
 using internal::StmtPtr;
 using internal::Value;
 
-// -D name=value: the top-level assignment's value replaced (OpenSCAD
-// appends the assignment; the last value wins at the first's place), or
-// a new assignment at the end.
-void Override(std::vector<StmtPtr>& program, const std::string& name, const std::string& literal) {
-  ExprPtr value;
+// The value of -D name=literal.
+ExprPtr OverrideValue(const std::string& name, const std::string& literal) {
   try {
-    value = Parser(internal::Lex(literal)).OneExpression();
+    return Parser(internal::Lex(literal)).OneExpression();
   } catch (NotNative& e) {
     e.line = 0;
     e.what = "the value of -D " + name + "=" + literal + ": " + e.what;
     throw;
   }
-  for (StmtPtr& s : program) {
-    if (s->kind != Stmt::Kind::kAssign || s->name != name) continue;
-    auto copy = std::make_shared<Stmt>(*s);
-    copy->expr = value;
-    s = copy;
-    return;
-  }
-  auto s = std::make_shared<Stmt>();
-  s->kind = Stmt::Kind::kAssign;
-  s->name = name;
-  s->expr = value;
-  program.push_back(s);
 }
 
 // The scope above the model's: the special variables' defaults and PI.
@@ -82,24 +68,31 @@ ModelEvaluation EvaluateModelText(const std::string& text, const std::string& fi
   ModelEvaluation result;
   Value::values_built = 0;
   try {
-    Parser parser(internal::Lex(text));
-    std::vector<StmtPtr> program = parser.Program();
-    for (const auto& [name, literal] : overrides) Override(program, name, literal);
+    const std::shared_ptr<const internal::SourceFile> model = internal::ParseModel(text, file);
+    result.warnings = model->warnings;
+    std::vector<StmtPtr> program = model->statements;
+    std::vector<std::pair<std::string, ExprPtr>> values;
+    for (const auto& [name, literal] : overrides) {
+      values.emplace_back(name, OverrideValue(name, literal));
+      internal::Override(program, name, values.back().second);
+    }
     const Scope builtins = BuiltinScope();
     Scope top;
     top.lexical = top.dynamic = &builtins;
+    top.uses = &model->uses;
     std::vector<CsgOut> roots;
-    internal::Evaluator().Run(program, top, roots);
+    internal::Evaluator(&builtins, std::move(values)).Run(program, top, roots);
     for (const CsgOut& r : roots) internal::Print(r, 0, result.csg);
     result.csg += "\n";  // OpenSCAD ends its export with an empty line
     result.evaluated = true;
   } catch (const BadModel& e) {
     result.csg.clear();
-    result.bad_input = file + ":" + std::to_string(e.line) + ": " + e.what;
+    result.bad_input = (e.file.empty() ? file : e.file) + ":" + std::to_string(e.line) + ": " + e.what;
     result.declined = result.bad_input;
   } catch (const NotNative& e) {
     result.csg.clear();
-    result.declined = file + (e.line > 0 ? ":" + std::to_string(e.line) : std::string()) + ": " + e.what;
+    result.declined =
+        (e.file.empty() ? file : e.file) + (e.line > 0 ? ":" + std::to_string(e.line) : std::string()) + ": " + e.what;
   }
   result.seconds = watch.Seconds();
   return result;

@@ -86,12 +86,12 @@ class ModuleCall {
   // $fn, $fa, $fs of the children's scope, as OpenSCAD writes them.
   std::string Fragments() const { return internal::Fragments(call_); }
 
-  // Argument `name` as a boolean, false when not given.
-  bool Boolean(const Arguments& args, const char* name) const {
+  // Argument `name` as a boolean: false when not given or not a boolean
+  // (OpenSCAD 2021.01 takes `center`, `cut` and `chamfer` only as booleans:
+  // `center = 1` or `center = [0, 0]` is false, as MCAD's nutHole passes it).
+  static bool Boolean(const Arguments& args, const char* name) {
     auto it = args.find(name);
-    if (it == args.end() || it->second.kind == Value::Kind::kUndef) return false;
-    if (it->second.kind != Value::Kind::kBool) Decline(std::string("'") + name + "' not a boolean");
-    return it->second.boolean;
+    return it != args.end() && it->second.kind == Value::Kind::kBool && it->second.boolean;
   }
   // Whether argument `name` was given (and is not undef).
   static bool Given(const Arguments& args, const char* name) {

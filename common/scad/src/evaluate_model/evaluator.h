@@ -10,11 +10,15 @@
 #include <cstddef>
 #include <cstdint>
 #include <map>
+#include <memory>
+#include <set>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "csg_node.h"
 #include "scope.h"
+#include "source_files.h"
 #include "syntax.h"
 #include "value.h"
 
@@ -26,9 +30,30 @@ namespace fabatlas::scad::internal {
 // or module.
 constexpr std::ptrdiff_t kStackBudget = 1024 * 1024;
 
+// -D name=value (OpenSCAD's command line) applied to a file's top-level
+// statements: the value replaces the assignment of `name` at its place, or
+// is assigned after the last statement. OpenSCAD 2021.01 applies it so to the
+// model and to every file it uses (`-D v=1` changes a used file's `v = 3`,
+// and a used file's modules see `-D zz=5` though it assigns no zz).
+void Override(std::vector<StmtPtr>& program, const std::string& name, const ExprPtr& value);
+
+// Where a module or function is defined, as seen from a scope: a scope
+// along the lexical chain, or a used file (its top-level scope is made for
+// the call, evaluator.h's CallScopes).
+struct Definition {
+  const Scope* scope = nullptr;
+  const SourceFile* used = nullptr;
+};
+
 class Evaluator {
  public:
-  Evaluator() : stack_base_(reinterpret_cast<std::uintptr_t>(__builtin_frame_address(0))) {}
+  // `builtins`: the scope above every file's (the special variables'
+  // defaults); a used file's top-level scope hangs below it.
+  // `overrides`: the -D values (Override), applied to the used files too.
+  Evaluator(const Scope* builtins, std::vector<std::pair<std::string, ExprPtr>> overrides)
+      : builtins_(builtins),
+        overrides_(std::move(overrides)),
+        stack_base_(reinterpret_cast<std::uintptr_t>(__builtin_frame_address(0))) {}
 
   // Called at every expression and statement: bounds the stack and the work
   // (20 million steps, a second or two; exponential recursion such as
@@ -69,7 +94,20 @@ class Evaluator {
   std::vector<Value> Iterate(const Value& v, int line);
   void Element(const Expr& e, const Scope& scope, std::vector<Value>& out);
   Value Call(const Expr& e, const Scope& scope);
-  const Scope* DefinitionScope(const std::string& name, const Scope& scope, bool module);
+  // The module (module true) or function `name` seen from `scope`: along
+  // the lexical chain each scope's own, and at a file's scope after its own
+  // those of the files it uses, in the order used; null when none.
+  std::shared_ptr<const ModuleDef> FindModule(const std::string& name, const Scope& scope, Definition* where);
+  std::shared_ptr<const FunctionDef> FindFunction(const std::string& name, const Scope& scope, Definition* where);
+  const SourceFile* Used(const std::string& path);
+  // The lexical and dynamic parents of a call's scope `inner` for a
+  // definition found at `where`, called from `caller`. A used file's
+  // definitions see its top-level assignments, evaluated as OpenSCAD
+  // evaluates them at each call (under the caller's $-variables; done once
+  // and kept when they read none), and its top-level $-variables shadow the
+  // caller's. `hold` keeps what is made for the call alive.
+  void CallScopes(const Definition& where, const Scope& caller, Scope& inner,
+                  std::vector<std::unique_ptr<Scope>>& hold);
   void BindParameters(const std::vector<Binding>& params, const std::vector<Binding>& args, const Scope& caller,
                       Scope& inner, int line);
 
@@ -94,16 +132,24 @@ class Evaluator {
 
   // Statements (statements.cc).
   void Instantiate(const Stmt& s, Scope& scope, std::vector<CsgOut>& out);
+  void InstantiateHere(const Stmt& s, Scope& scope, std::vector<CsgOut>& out);
   void Modified(const Stmt& s, Scope& scope, std::vector<CsgOut>& out);
   void Block(const Stmt& s, Scope& scope, std::vector<CsgOut>& out);
   void If(const Stmt& s, Scope& scope, std::vector<CsgOut>& out);
   void For(const Stmt& s, Scope& scope, std::vector<CsgOut>& out);
   void IntersectionFor(const Stmt& s, Scope& scope, std::vector<CsgOut>& out);
   void Let(const Stmt& s, Scope& scope, std::vector<CsgOut>& out);
+  void Assign(const Stmt& s, Scope& scope, std::vector<CsgOut>& out);
   void CallModule(const Stmt& s, Scope& scope, std::vector<CsgOut>& out);
-  void UserModule(const Stmt& s, const ModuleDef& m, Scope& scope, std::vector<CsgOut>& out);
+  void UserModule(const Stmt& s, const ModuleDef& m, const Definition& where, Scope& scope, std::vector<CsgOut>& out);
   void ChildrenCall(const Stmt& s, Scope& scope, std::vector<CsgOut>& out);
 
+  const Scope* builtins_;
+  std::vector<std::pair<std::string, ExprPtr>> overrides_;
+  std::map<std::string, std::shared_ptr<const SourceFile>> used_files_;
+  std::map<const SourceFile*, std::unique_ptr<Scope>> used_scopes_;  // top-level scopes reading no $-variable
+  std::set<const SourceFile*> used_dynamic_;                         // top-level scopes made per call
+  std::set<const SourceFile*> used_building_;
   int depth_ = 0;
   long iterations_ = 0;
   long steps_ = 0;

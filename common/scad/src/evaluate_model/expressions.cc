@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <type_traits>
 
 #include "builtin_functions.h"
 #include "evaluator.h"
@@ -209,13 +210,23 @@ std::map<std::string, Value> Evaluator::Match(const std::vector<Binding>& args, 
 
 // A user function or a built-in one.
 Value Evaluator::Call(const Expr& e, const Scope& scope) {
-  if (auto f = scope.Function(e.text)) {
+  Definition where;
+  if (auto f = FindFunction(e.text, scope, &where)) {
     if (++depth_ > 10000) throw NotNative{e.line, "recursion deeper than 10,000 calls"};
+    std::vector<std::unique_ptr<Scope>> hold;
     Scope inner;
-    inner.dynamic = &scope;
-    inner.lexical = DefinitionScope(e.text, scope, /*module=*/false);
+    CallScopes(where, scope, inner, hold);
     BindParameters(f->params, e.bindings, scope, inner, e.line);
-    Value v = Eval(*f->body, inner);
+    Value v;
+    try {
+      v = Eval(*f->body, inner);
+    } catch (NotNative& x) {
+      if (x.file.empty() && f->file) x.file = *f->file;
+      throw;
+    } catch (BadModel& x) {
+      if (x.file.empty() && f->file) x.file = *f->file;
+      throw;
+    }
     --depth_;
     return v;
   }
@@ -227,12 +238,126 @@ Value Evaluator::Call(const Expr& e, const Scope& scope) {
   return CallBuiltinFunction(e.text, a, e.line);
 }
 
-// The scope a function or module was defined in: the first scope along the
-// lexical chain that defines it.
-const Scope* Evaluator::DefinitionScope(const std::string& name, const Scope& scope, bool module) {
-  for (const Scope* s = &scope; s; s = s->lexical)
-    if (module ? s->modules.count(name) : s->functions.count(name)) return s;
+namespace {
+
+template <typename Def>
+std::shared_ptr<const Def> Own(const Scope& s, const std::string& name) {
+  if constexpr (std::is_same_v<Def, ModuleDef>) {
+    auto it = s.modules.find(name);
+    return it == s.modules.end() ? nullptr : it->second;
+  } else {
+    auto it = s.functions.find(name);
+    return it == s.functions.end() ? nullptr : it->second;
+  }
+}
+
+template <typename Def>
+std::shared_ptr<const Def> Own(const SourceFile& f, const std::string& name) {
+  if constexpr (std::is_same_v<Def, ModuleDef>) {
+    auto it = f.modules.find(name);
+    return it == f.modules.end() ? nullptr : it->second;
+  } else {
+    auto it = f.functions.find(name);
+    return it == f.functions.end() ? nullptr : it->second;
+  }
+}
+
+}  // namespace
+
+const SourceFile* Evaluator::Used(const std::string& path) {
+  auto it = used_files_.find(path);
+  if (it == used_files_.end()) it = used_files_.emplace(path, UsedFile(path)).first;
+  return it->second.get();
+}
+
+std::shared_ptr<const ModuleDef> Evaluator::FindModule(const std::string& name, const Scope& scope, Definition* where) {
+  for (const Scope* s = &scope; s; s = s->lexical) {
+    if (auto m = Own<ModuleDef>(*s, name)) {
+      if (where) *where = {s, nullptr};
+      return m;
+    }
+    if (s->uses)
+      for (const std::string& path : *s->uses) {
+        const SourceFile* used = Used(path);
+        if (auto m = Own<ModuleDef>(*used, name)) {
+          if (where) *where = {nullptr, used};
+          return m;
+        }
+      }
+  }
   return nullptr;
+}
+
+std::shared_ptr<const FunctionDef> Evaluator::FindFunction(const std::string& name, const Scope& scope,
+                                                           Definition* where) {
+  for (const Scope* s = &scope; s; s = s->lexical) {
+    if (auto f = Own<FunctionDef>(*s, name)) {
+      if (where) *where = {s, nullptr};
+      return f;
+    }
+    if (s->uses)
+      for (const std::string& path : *s->uses) {
+        const SourceFile* used = Used(path);
+        if (auto f = Own<FunctionDef>(*used, name)) {
+          if (where) *where = {nullptr, used};
+          return f;
+        }
+      }
+  }
+  return nullptr;
+}
+
+void Evaluator::CallScopes(const Definition& where, const Scope& caller, Scope& inner,
+                           std::vector<std::unique_ptr<Scope>>& hold) {
+  inner.dynamic = &caller;
+  if (!where.used) {
+    inner.lexical = where.scope;
+    return;
+  }
+  const SourceFile* used = where.used;
+  // The used file's top-level scope under `dynamic` (null: no $-variable
+  // but its own can be read).
+  auto make = [&](const Scope* dynamic) {
+    if (!used_building_.insert(used).second)
+      throw NotNative{0, "its top-level assignments call into themselves through another file", used->path};
+    auto top = std::make_unique<Scope>();
+    top->lexical = builtins_;
+    top->dynamic = dynamic;
+    top->uses = &used->uses;
+    const int depth = depth_;
+    try {
+      std::vector<StmtPtr> statements = used->statements;
+      for (const auto& [name, value] : overrides_) Override(statements, name, value);
+      Define(statements, *top);
+    } catch (...) {
+      used_building_.erase(used);
+      depth_ = depth;
+      throw;
+    }
+    used_building_.erase(used);
+    return top;
+  };
+  if (!used_scopes_.count(used) && !used_dynamic_.count(used)) {
+    try {
+      used_scopes_[used] = make(nullptr);
+    } catch (const NotNative&) {
+      used_dynamic_.insert(used);  // reads the caller's $-variables (or declines again below)
+    }
+  }
+  if (used_dynamic_.count(used)) {
+    hold.push_back(make(&caller));
+    inner.lexical = inner.dynamic = hold.back().get();
+    return;
+  }
+  const Scope* top = used_scopes_[used].get();
+  inner.lexical = top;
+  auto shim = std::make_unique<Scope>();  // the file's own $-variables above the caller's
+  for (const auto& [name, value] : top->vars)
+    if (name[0] == '$') shim->vars[name] = value;
+  if (shim->vars.empty()) return;
+  shim->dynamic = &caller;
+  inner.dynamic = shim.get();
+  hold.push_back(std::move(shim));
 }
 
 // A user function's or module's parameters bound in `inner`: the arguments

@@ -1,6 +1,8 @@
 // The parser of parser.h: statements, then expressions.
 #include "parser.h"
 
+#include <map>
+
 namespace fabatlas::scad::internal {
 
 std::vector<Token> Lex(const std::string& src) {
@@ -9,9 +11,37 @@ std::vector<Token> Lex(const std::string& src) {
   return std::move(lexed.tokens);
 }
 
+namespace {
+
+// OpenSCAD's rule for a variable assigned again in the same scope (it
+// warns): the last value, evaluated at the first assignment's place; the
+// later assignments are dropped.
+void MergeReassignments(std::vector<StmtPtr>& body) {
+  std::map<std::string, std::size_t> first;
+  std::vector<StmtPtr> kept;
+  for (const StmtPtr& s : body) {
+    if (s->kind != Stmt::Kind::kAssign) {
+      kept.push_back(s);
+      continue;
+    }
+    auto [it, added] = first.emplace(s->name, kept.size());
+    if (added) {
+      kept.push_back(s);
+      continue;
+    }
+    auto merged = std::make_shared<Stmt>(*kept[it->second]);
+    merged->expr = s->expr;
+    kept[it->second] = merged;
+  }
+  if (kept.size() != body.size()) body = std::move(kept);
+}
+
+}  // namespace
+
 std::vector<StmtPtr> Parser::Program() {
   std::vector<StmtPtr> out;
-  while (Peek().kind != Tok::kEnd) out.push_back(Statement());
+  while (Peek().kind != Tok::kEnd) Statements(out);
+  MergeReassignments(out);
   return out;
 }
 
@@ -33,6 +63,28 @@ std::string Parser::Ident() {
 
 // ---------------------------------------------------------------- statements
 
+// The next statement appended to out: an include's statements, nothing for
+// a use, a bare `{ }` block's statements (OpenSCAD 2021.01 adds them to the
+// enclosing scope: its assignments and definitions are the scope's, its
+// instantiations count as the scope's children).
+void Parser::Statements(std::vector<StmtPtr>& out) {
+  if (Peek().kind == Tok::kSymbol && (Peek().text == "include" || Peek().text == "use")) {
+    const bool include = Peek().text == "include";
+    const int line = Peek().line;
+    if (!directive_) Fail(Peek().text + " <...>");
+    const std::string name = Peek(1).text;
+    i_ += 2;
+    directive_(include, name, line, out);
+    return;
+  }
+  StmtPtr s = Statement();
+  if (s->kind == Stmt::Kind::kBlock) {  // a bare { }: its statements belong to the enclosing scope, as in OpenSCAD
+    out.insert(out.end(), s->children.begin(), s->children.end());
+    return;
+  }
+  out.push_back(std::move(s));
+}
+
 // The child of a module instantiation, if, for, let or module definition:
 // nothing, one statement, or the statements of a `{ }` block.
 std::vector<StmtPtr> Parser::ChildStatement() {
@@ -48,6 +100,7 @@ std::vector<StmtPtr> Parser::ChildStatement() {
 StmtPtr Parser::Statement() {
   auto s = std::make_shared<Stmt>();
   s->line = Peek().line;
+  s->file = file_;
   if (Is(";") || Is("{")) return Block(s);
   if (Is("*")) {  // disabled: parsed, never instantiated
     ++i_;
@@ -71,9 +124,10 @@ StmtPtr Parser::Block(std::shared_ptr<Stmt> s) {
   ++i_;
   while (!Is("}")) {
     if (Peek().kind == Tok::kEnd) Fail("unclosed '{'");
-    s->children.push_back(Statement());
+    Statements(s->children);
   }
   ++i_;
+  MergeReassignments(s->children);
   return s;
 }
 
@@ -95,7 +149,6 @@ StmtPtr Parser::Modified() {
 // intersection_for, an assignment or a module instantiation.
 StmtPtr Parser::Keyword(std::shared_ptr<Stmt> s) {
   const std::string word = Peek().text;
-  if (word == "include" || word == "use") Fail(word + " <...>");
   if (word == "module" || word == "function") return Definition(s);
   if (word == "if") return IfStatement(s);
   if (word == "for" || word == "let" || word == "intersection_for") {
@@ -136,6 +189,7 @@ StmtPtr Parser::Definition(std::shared_ptr<Stmt> s) {
   }
   auto f = std::make_shared<FunctionDef>();
   f->params = std::move(params);
+  f->file = file_;
   Expect("=");
   f->body = Expression();
   Expect(";");

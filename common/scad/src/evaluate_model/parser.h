@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cstddef>
+#include <functional>
 #include <memory>
 #include <string>
 #include <utility>
@@ -19,10 +20,19 @@ namespace fabatlas::scad::internal {
 // declines at the first place lexing does not read as OpenSCAD does.
 std::vector<Token> Lex(const std::string& src);
 
-// A recursive-descent parser over one model's tokens.
+// What `include <name>` (include true) or `use <name>` at `line` does: adds
+// the included statements to `out` (source_files.h).
+using Directive = std::function<void(bool include, const std::string& name, int line, std::vector<StmtPtr>& out)>;
+
+// A recursive-descent parser over one file's tokens. An `include <...>` or
+// `use <...>` reaches the parser as the symbol "include" or "use" and the
+// name as a string (source_files.cc lexes them); without `directive` it
+// declines them.
 class Parser {
  public:
-  explicit Parser(std::vector<Token> tokens) : t_(std::move(tokens)) {}
+  explicit Parser(std::vector<Token> tokens, Directive directive = nullptr,
+                  std::shared_ptr<const std::string> file = nullptr)
+      : t_(std::move(tokens)), directive_(std::move(directive)), file_(std::move(file)) {}
 
   // The statements of a whole model.
   std::vector<StmtPtr> Program();
@@ -38,6 +48,7 @@ class Parser {
   std::string Ident();
 
   // Statements.
+  void Statements(std::vector<StmtPtr>& out);
   std::vector<StmtPtr> ChildStatement();
   StmtPtr Statement();
   StmtPtr Block(std::shared_ptr<Stmt> s);
@@ -64,6 +75,8 @@ class Parser {
 
   std::vector<Token> t_;
   std::size_t i_ = 0;
+  Directive directive_;
+  std::shared_ptr<const std::string> file_;
 };
 
 }  // namespace fabatlas::scad::internal

@@ -25,6 +25,9 @@ struct Scope {
   bool module_body = false;
   const std::vector<StmtPtr>* children = nullptr;
   const Scope* children_scope = nullptr;
+  // A file's top-level scope: the files it uses (source_files.h), whose
+  // top-level modules and functions it sees after its own.
+  const std::vector<std::string>* uses = nullptr;
 
   // The variable `name` ($-variables dynamically, the others lexically), or
   // nullptr.
@@ -33,20 +36,6 @@ struct Scope {
     for (const Scope* s = this; s; s = special ? s->dynamic : s->lexical) {
       auto it = s->vars.find(name);
       if (it != s->vars.end()) return &it->second;
-    }
-    return nullptr;
-  }
-  std::shared_ptr<const ModuleDef> Module(const std::string& name) const {
-    for (const Scope* s = this; s; s = s->lexical) {
-      auto it = s->modules.find(name);
-      if (it != s->modules.end()) return it->second;
-    }
-    return nullptr;
-  }
-  std::shared_ptr<const FunctionDef> Function(const std::string& name) const {
-    for (const Scope* s = this; s; s = s->lexical) {
-      auto it = s->functions.find(name);
-      if (it != s->functions.end()) return it->second;
     }
     return nullptr;
   }

@@ -9,10 +9,36 @@
 
 namespace fabatlas::scad::internal {
 
+void Override(std::vector<StmtPtr>& program, const std::string& name, const ExprPtr& value) {
+  for (StmtPtr& s : program) {
+    if (s->kind != Stmt::Kind::kAssign || s->name != name) continue;
+    auto copy = std::make_shared<Stmt>(*s);
+    copy->expr = value;
+    s = copy;
+    return;
+  }
+  auto s = std::make_shared<Stmt>();
+  s->kind = Stmt::Kind::kAssign;
+  s->name = name;
+  s->expr = value;
+  program.push_back(s);
+}
+
 void Evaluator::Run(const std::vector<StmtPtr>& body, Scope& scope, std::vector<CsgOut>& out) {
   Define(body, scope);
   for (const StmtPtr& s : body) Instantiate(*s, scope, out);
 }
+
+namespace {
+
+// Tags an exception from statement `s` with the file `s` is written in,
+// unless a place deeper down already did.
+template <typename Error>
+void TagFile(Error& e, const Stmt& s) {
+  if (e.file.empty() && s.file) e.file = *s.file;
+}
+
+}  // namespace
 
 void Evaluator::Define(const std::vector<StmtPtr>& body, Scope& scope) {
   for (const StmtPtr& s : body) {
@@ -23,8 +49,19 @@ void Evaluator::Define(const std::vector<StmtPtr>& body, Scope& scope) {
   }
   for (const StmtPtr& s : body) {
     if (s->kind != Stmt::Kind::kAssign) continue;
-    if (scope.vars.count(s->name)) throw NotNative{s->line, "'" + s->name + "' assigned twice in one scope"};
-    scope.vars[s->name] = Eval(*s->expr, scope);
+    try {
+      // A module body's assignment to one of its parameters (MCAD's gear()
+      // does `circular_pitch = (circular_pitch != false ? ...)`) reads the
+      // argument and replaces it, as in OpenSCAD (the parser already merged
+      // assignments repeated in one scope, parser.cc).
+      scope.vars[s->name] = Eval(*s->expr, scope);
+    } catch (NotNative& e) {
+      TagFile(e, *s);
+      throw;
+    } catch (BadModel& e) {
+      TagFile(e, *s);
+      throw;
+    }
   }
 }
 
@@ -38,6 +75,18 @@ std::vector<CsgOut> Evaluator::Children(const Stmt& s, const Scope& call) {
 
 // The nodes of one statement appended to out.
 void Evaluator::Instantiate(const Stmt& s, Scope& scope, std::vector<CsgOut>& out) {
+  try {
+    InstantiateHere(s, scope, out);
+  } catch (NotNative& e) {
+    TagFile(e, s);
+    throw;
+  } catch (BadModel& e) {
+    TagFile(e, s);
+    throw;
+  }
+}
+
+void Evaluator::InstantiateHere(const Stmt& s, Scope& scope, std::vector<CsgOut>& out) {
   Guard(s.line);
   if (!s.modifier.empty()) {
     Modified(s, scope, out);
@@ -136,6 +185,21 @@ void Evaluator::Let(const Stmt& s, Scope& scope, std::vector<CsgOut>& out) {
   out.push_back(std::move(group));
 }
 
+// assign(a = x, b = y) children: the named arguments, each evaluated in the
+// caller's scope (not seeing each other, unlike let), bound for the children,
+// which become a group().
+void Evaluator::Assign(const Stmt& s, Scope& scope, std::vector<CsgOut>& out) {
+  Scope bound;
+  bound.lexical = bound.dynamic = &scope;
+  for (const Binding& b : s.bindings)
+    if (!b.name.empty()) bound.vars[b.name] = Eval(*b.expr, scope);
+  CsgOut group{"group()", {}};
+  Scope inner;
+  inner.lexical = inner.dynamic = &bound;
+  Run(s.children, inner, group.children);
+  out.push_back(std::move(group));
+}
+
 namespace {
 
 // Whether a child statement counts for $children and children(i) (OpenSCAD
@@ -160,16 +224,22 @@ void Evaluator::CallModule(const Stmt& s, Scope& scope, std::vector<CsgOut>& out
     }
     return;
   }
-  if (s.name == "children" || (s.name == "child" && !scope.Module(s.name))) {
+  Definition where;
+  const std::shared_ptr<const ModuleDef> m = s.name == "children" ? nullptr : FindModule(s.name, scope, &where);
+  if (s.name == "children" || (s.name == "child" && !m)) {
     ChildrenCall(s, scope, out);
     return;
   }
-  if (auto m = scope.Module(s.name)) {
-    UserModule(s, *m, scope, out);
+  if (m) {
+    UserModule(s, *m, where, scope, out);
     return;
   }
   Scope call;
   call.lexical = call.dynamic = &scope;
+  if (s.name == "assign") {  // deprecated, evaluated by OpenSCAD 2021.01 (MCAD's involute_gears.scad)
+    Assign(s, scope, out);
+    return;
+  }
   if (s.name == "assert") {
     std::map<std::string, Value> specials;
     auto args = Match(s.bindings, {"condition", "message"}, scope, s.line, &specials);
@@ -182,11 +252,12 @@ void Evaluator::CallModule(const Stmt& s, Scope& scope, std::vector<CsgOut>& out
 
 // A user module's body as a group(), its parameters bound and its children
 // kept for children().
-void Evaluator::UserModule(const Stmt& s, const ModuleDef& m, Scope& scope, std::vector<CsgOut>& out) {
+void Evaluator::UserModule(const Stmt& s, const ModuleDef& m, const Definition& where, Scope& scope,
+                           std::vector<CsgOut>& out) {
   if (++depth_ > 10000) throw NotNative{s.line, "recursion deeper than 10,000 calls"};
+  std::vector<std::unique_ptr<Scope>> hold;
   Scope body;
-  body.lexical = DefinitionScope(s.name, scope, /*module=*/true);
-  body.dynamic = &scope;
+  CallScopes(where, scope, body, hold);
   body.module_body = true;
   body.children = &s.children;
   body.children_scope = &scope;

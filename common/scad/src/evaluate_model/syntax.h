@@ -13,10 +13,12 @@
 namespace fabatlas::scad::internal {
 
 // Thrown for anything the evaluator does not implement; the caller asks
-// OpenSCAD instead. `line` is the model's source line (0: none).
+// OpenSCAD instead. `line` is the source line (0: none) in `file` (empty: the
+// model itself; else an included or used file).
 struct NotNative {
   int line;
   std::string what;
+  std::string file = {};
 };
 
 // The model is wrong whatever evaluates it (an unknown colour name): bad
@@ -24,6 +26,7 @@ struct NotNative {
 struct BadModel {
   int line;
   std::string what;
+  std::string file = {};  // as NotNative's
 };
 
 using Token = SourceToken;
@@ -88,6 +91,7 @@ struct ModuleDef {
 struct FunctionDef {
   std::vector<Binding> params;
   ExprPtr body;
+  std::shared_ptr<const std::string> file;  // the file it is written in (messages)
 };
 
 struct Stmt {
@@ -112,6 +116,7 @@ struct Stmt {
   std::vector<StmtPtr> otherwise;  // if's else-branch
   std::shared_ptr<const ModuleDef> module;
   std::shared_ptr<const FunctionDef> function;
+  std::shared_ptr<const std::string> file;  // the file it is written in (messages); null: -D
 };
 
 }  // namespace fabatlas::scad::internal

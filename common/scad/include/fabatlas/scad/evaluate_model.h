@@ -16,7 +16,14 @@
 //    dynamically, the others lexically; `for`, `if`/`else`, `let` statements,
 //    `intersection_for` when each iteration makes one node;
 //    `*` (disabled) statements, `%` and `#` modifiers; `echo` and `assert`
-//    as statements and in expressions; names starting with digits;
+//    as statements and in expressions; names starting with digits; a
+//    variable assigned again in one scope (the last value at the first
+//    place), a module body reassigning a parameter, `assign()`;
+//  - `include <file>` and `use <file>` as OpenSCAD reads them
+//    (evaluate_model/source_files.h: found beside the naming file, then in
+//    OPENSCADPATH and OpenSCAD's library directories; a used file's modules
+//    and functions see its own top-level assignments; -D values reach used
+//    files too; each library file parsed once per process);
 //  - built-in functions: trigonometry in degrees (exact at multiples of 30
 //    and 45 as OpenSCAD's), abs, sign, sqrt, pow, exp, ln, log, floor, ceil,
 //    round, min, max, norm, cross (2D and 3D), len, concat, str, chr, ord,
@@ -26,12 +33,13 @@
 //    color (a vector, an SVG colour name or #hex), union, difference,
 //    intersection, hull, group, render, offset, projection, linear_extrude,
 //    rotate_extrude.
-// Declined (the caller falls back to OpenSCAD's own export): include/use,
-// import, surface, minkowski, resize, the `!` modifier,
+// Declined (the caller falls back to OpenSCAD's own export): a file included
+// or used that fabatlas cannot parse (naming that file's line), import,
+// surface, minkowski, resize, the `!` modifier,
 // function literals, rands/search/version and other built-ins not above,
 // `\x`/`\u` escapes and non-ASCII text, any operation on undef or of
-// mismatched types (OpenSCAD warns and goes on with undef), a variable
-// assigned twice in one scope, recursion deeper than 10,000 calls or than
+// mismatched types (OpenSCAD warns and goes on with undef), recursion deeper
+// than 10,000 calls or than
 // 1 MiB of stack (about 250 levels of a recursive function and as many of a
 // module), loops of more than 1,000,000 iterations, more than 20 million
 // evaluation steps, vectors of more than a million values, more than two
@@ -58,12 +66,16 @@ struct ModelEvaluation {
   // The model is wrong whatever evaluates it, "MODEL.scad:LINE: what" (a
   // color() with an unknown name); also in `declined`. Report it, exit 2.
   std::string bad_input;
+  // "FILE:LINE: include <x>: not found ...; skipped, as OpenSCAD does": each
+  // included or used file OpenSCAD too would skip with a warning.
+  std::vector<std::string> warnings;
   double seconds = 0;  // wall time of reading, parsing and evaluating
 };
 
 // Evaluates `model` with the top-level assignments of `overrides` (name,
 // OpenSCAD literal, as `-D name=literal` passes them) replaced or added.
-// Never throws for any model text; thread-safe (no shared state).
+// Never throws for any model text; thread-safe (the only shared state is the
+// per-process cache of parsed library files, under a lock).
 ModelEvaluation EvaluateModel(const std::filesystem::path& model,
                               const std::vector<std::pair<std::string, std::string>>& overrides);
 
