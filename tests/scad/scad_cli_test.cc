@@ -220,4 +220,34 @@ TEST(ScadCli, AModelWithoutAnnotationsIsOneSample) {
   EXPECT_NEAR(ours, peer, 0.01 * peer) << "fabatlas " << ours << " mm^3, OpenSCAD " << peer << " mm^3";
 }
 
+// An include OpenSCAD cannot open is skipped with a warning, and the sample
+// says so: openscad-testing-data's misc/include-tests.scad names four files
+// that do not exist (one of them from a file it includes); the sample's
+// warnings name exactly the files OpenSCAD 2021.01 warns it cannot open.
+TEST(ScadCli, SkippedIncludesAreTheSampleWarningsOpenScadGives) {
+  const std::filesystem::path model = "/usr/share/openscad/testdata/scad/misc/include-tests.scad";
+  if (!std::filesystem::exists(model) || std::system("command -v openscad >/dev/null 2>&1") != 0)
+    GTEST_SKIP() << "openscad or openscad-testing-data not installed";
+  auto dir = fabatlas::testing::FreshTempDir("scad-cli-include-warnings");
+  CommandRun e = Fabatlas("eval '" + model.string() + "' --json", dir);
+  ASSERT_EQ(e.status, 0) << e.err;
+  const auto j = nlohmann::json::parse(e.out);
+  std::set<std::string> ours;
+  for (const auto& w : j["warnings"]) {
+    const std::string text = w.get<std::string>();
+    const auto open = text.find(": include <"), close = text.find(">: not found");
+    if (open != std::string::npos && close != std::string::npos) ours.insert(text.substr(open + 11, close - open - 11));
+  }
+  const std::string log = (dir / "openscad.log").string();
+  const std::string cmd = "openscad -o '" + (dir / "peer.stl").string() + "' '" + model.string() + "' 2>'" + log + "'";
+  ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+  std::set<std::string> peer;
+  std::ifstream in(log);
+  const std::string marker = "WARNING: Can't open include file '";
+  for (std::string line; std::getline(in, line);)
+    if (line.rfind(marker, 0) == 0) peer.insert(line.substr(marker.size(), line.rfind("'") - marker.size()));
+  EXPECT_EQ(peer.size(), 4u);
+  EXPECT_EQ(ours, peer);
+}
+
 }  // namespace

@@ -90,13 +90,15 @@ void RunOpenScadOn(const Node& node, const fs::path& model, const fs::path& out,
 // into *csg, from fabatlas's own evaluation of the model where it
 // implements the model's language (evaluate_model.h), else OpenSCAD's
 // export (written to `out`); without, OpenSCAD's STL render in `out`.
-// Returns the export's wall time in seconds.
+// What OpenSCAD would warn of while reading the model (an include it skips)
+// goes to *warnings when given. Returns the export's wall time in seconds.
 double ExportModel(const Node& node, const fs::path& model, const Overrides& overrides, bool native,
-                   const fs::path& out, std::string* csg) {
+                   const fs::path& out, std::string* csg, std::vector<std::string>* warnings) {
   scad::ModelEvaluation own;
   if (native) own = scad::EvaluateModel(model, overrides);
   if (!own.bad_input.empty()) throw DesignFault(own.bad_input);
   if (own.evaluated) {
+    if (warnings) warnings->insert(warnings->end(), own.warnings.begin(), own.warnings.end());
     *csg = std::move(own.csg);
     return own.seconds;
   }
@@ -190,7 +192,7 @@ OpenScadNodeResult EvaluateOpenScadNode(const Node& node, const ResolvedArgs& ar
   const fs::path out = work.path / (native ? "model.csg" : "model.stl");
   OpenScadNodeResult result;
   std::string text;
-  result.export_seconds = ExportModel(node, model, overrides, native, out, &text);
+  result.export_seconds = ExportModel(node, model, overrides, native, out, &text, context.warnings);
   if (!native) {
     result.solid = RenderedModel(node, args, model, out, context);
     return result;
