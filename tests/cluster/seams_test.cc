@@ -10,16 +10,20 @@
 #include <fstream>
 #include <future>
 #include <map>
+#include <set>
 #include <string>
 
 #include "fabatlas/error.h"
 #include "fabatlas/protocol/job_bundle.h"
+#include "fabatlas/geometry/solid.h"
+#include "fabatlas/protocol/solid_blob.h"
 #include "fabatlas/sampling/sample_evaluator.h"
 #include "fabatlas/sha256.h"
 #include "fabatlas/testing/paths.h"
 #include "job_cache.h"
 #include "remote_executor.h"
 #include "solid_shelf.h"
+#include "subtree_uploads.h"
 
 namespace fabatlas {
 namespace {
@@ -60,18 +64,21 @@ TEST(SolidShelf, DropsTheLeastRecentlyUsedOverBudget) {
 }
 
 // A job as a worker loads it from its bundle: the design evaluates, and with
-// the job file's min_subtree_seconds at 0 every subtree the evaluator
-// computes is uploaded once and recorded under its key (tasks.proto
-// "Geometry blobs"); a second evaluation of the same point computes nothing
-// new and uploads nothing.
-TEST(LoadJobContext, EvaluatesAndUploadsEverySubtreeOnce) {
+// the job file's min_subtree_seconds at 0 a subtree's geometry is uploaded
+// at its key's second use on the worker, once (tasks.proto "Geometry
+// blobs"): the first evaluation of a point uploads nothing (each key used
+// once), the second (every key a cache hit) uploads each key's level set,
+// the third nothing more.
+TEST(LoadJobContext, UploadsASubtreeAtItsSecondUseOnly) {
   const fs::path dir = fs::temp_directory_path() / ("fabatlas_seams_" + std::to_string(::getpid()));
   fs::remove_all(dir);
   const v1::JobBundle bundle = protocol::MakeJobBundle(testing::SourceDir() / "tests/cluster/data/tube_cache.yaml");
   std::map<std::string, std::string> uploaded;
+  int uploads = 0;
   auto ctx = worker::LoadJobContext(bundle, dir, 256, [&](const std::string& bytes) {
     const std::string digest = Sha256Hex(bytes);
     uploaded[digest] = bytes;
+    ++uploads;
     return digest;
   });
   ASSERT_TRUE(ctx->evaluator);
@@ -80,14 +87,60 @@ TEST(LoadJobContext, EvaluatesAndUploadsEverySubtreeOnce) {
   point.key = {0, 0};
   point.u.clear();
   for (const auto& p : ctx->evaluator->design().exposed) point.u.push_back(p.default_value);
-  const design::SampleResult r = ctx->evaluator->Evaluate(point);
-  ASSERT_FALSE(r.subtrees.empty());
-  EXPECT_EQ(ctx->subtree_blobs.size(), r.subtrees.size());
-  EXPECT_EQ(uploaded.size(), r.subtrees.size());
-  for (const auto& s : r.subtrees) EXPECT_EQ(ctx->subtree_blobs.count(s.key), 1u) << s.key;
-  ctx->evaluator->Evaluate(point);
-  EXPECT_EQ(uploaded.size(), r.subtrees.size());
+  const design::SampleResult first = ctx->evaluator->Evaluate(point);
+  ASSERT_FALSE(first.subtrees.empty());
+  std::set<std::string> keys;
+  for (const auto& s : first.subtrees) {
+    EXPECT_FALSE(s.from_cache) << s.key;
+    keys.insert(s.key);
+  }
+  ASSERT_EQ(keys.size(), first.subtrees.size());  // each key used once
+  worker::UploadReusedSubtrees(*ctx, first.subtrees);
+  EXPECT_EQ(uploads, 0);
+  for (const auto& key : keys) EXPECT_EQ(ctx->subtree_uploads.DigestOf(key), "") << key;
+
+  const design::SampleResult second = ctx->evaluator->Evaluate(point);
+  worker::UploadReusedSubtrees(*ctx, second.subtrees);
+  EXPECT_EQ(uploads, static_cast<int>(keys.size()));
+  EXPECT_EQ(ctx->subtree_uploads.uploaded(), keys.size());
+  for (const auto& key : keys) {
+    const std::string digest = ctx->subtree_uploads.DigestOf(key);
+    ASSERT_TRUE(uploaded.count(digest)) << key;
+    EXPECT_GT(protocol::SolidOfBlob(uploaded[digest]).MemoryBytes(), 0u) << key;
+  }
+  EXPECT_EQ(ctx->subtree_uploads.waiting_bytes(), 0u);
+
+  worker::UploadReusedSubtrees(*ctx, ctx->evaluator->Evaluate(point).subtrees);
+  EXPECT_EQ(uploads, static_cast<int>(keys.size()));
   fs::remove_all(dir);
+}
+
+// Geometry waits for its key's second use within a budget, oldest dropped
+// first: a key dropped before its second use is not uploaded then, and is
+// once it is computed again and used again.
+TEST(SubtreeUploads, WaitsForTheSecondUseWithinABudget) {
+  const geometry::GridSpec grid;
+  const geometry::Solid a = geometry::Sphere(grid, 2.0), b = geometry::Sphere(grid, 3.0);
+  worker::SubtreeUploads uploads;
+  uploads.SetBudget(a.MemoryBytes() + b.MemoryBytes() / 2);
+  uploads.Computed("a", a);
+  uploads.Computed("b", b);  // over budget: "a", the oldest, is dropped
+  EXPECT_EQ(uploads.waiting_bytes(), b.MemoryBytes());
+  EXPECT_TRUE(uploads.Used({"a", "b"}).empty());  // first uses
+  auto reused = uploads.Used({"a", "b", "b"});
+  ASSERT_EQ(reused.size(), 1u);
+  EXPECT_EQ(reused[0].first, "b");
+  uploads.Uploaded("b", "digest-b");
+  uploads.Computed("b", b);  // uploaded: does not wait again
+  EXPECT_EQ(uploads.waiting_bytes(), 0u);
+  EXPECT_TRUE(uploads.Used({"b"}).empty());
+  uploads.Computed("a", a);  // computed again after the drop
+  reused = uploads.Used({"a"});
+  ASSERT_EQ(reused.size(), 1u);
+  uploads.Uploaded("a", "");  // a failed upload records nothing
+  EXPECT_EQ(uploads.DigestOf("a"), "");
+  EXPECT_EQ(uploads.DigestOf("b"), "digest-b");
+  EXPECT_EQ(uploads.uploaded(), 1u);
 }
 
 // Bundle confinement on the worker (issue 31): a bundle that did not come

@@ -23,6 +23,8 @@ std::shared_ptr<JobContext> LoadJobContext(const v1::JobBundle& bundle, const st
   options.min_subtree_seconds = ctx->min_subtree_seconds;
   options.confine_model_files = true;  // the bundle is all an evaluation reads
   ctx->shelf.SetBudget(budget / 16 * 5);
+  ctx->subtree_uploads.SetBudget(budget / 16);
+  ctx->upload = std::move(upload);
   JobContext* job = ctx.get();
   options.solid_memory_budget = [job, geometry, level_sets_at_least] {
     // job->evaluator is set before the first evaluation remembers a solid.
@@ -32,21 +34,24 @@ std::shared_ptr<JobContext> LoadJobContext(const v1::JobBundle& bundle, const st
   options.on_solid_dropped = [job](const sampling::PointKey& key, const geometry::Solid& solid) {
     if (!job->shelf.Holds(key)) job->shelf.Put(key, protocol::SolidBlobOf(solid));
   };
-  options.on_subtree_computed = [job, upload = std::move(upload)](const std::string& key, const geometry::Solid& solid,
-                                                                  double seconds) {
+  options.on_subtree_computed = [job](const std::string& key, const geometry::Solid& solid, double seconds) {
     {
       std::lock_guard lock(job->mu);
       job->last_seconds[key] = seconds;
-      if (seconds < job->min_subtree_seconds || job->subtree_blobs.count(key)) return;
     }
-    std::string digest = upload(protocol::SolidBlobOf(solid));
-    if (digest.empty()) return;
-    std::lock_guard lock(job->mu);
-    job->subtree_blobs.emplace(key, digest);
+    if (seconds >= job->min_subtree_seconds) job->subtree_uploads.Computed(key, solid);
   };
   ctx->evaluator =
       std::make_unique<precompute::DesignSampleEvaluator>(design::LoadDesign(files.design_file), std::move(options));
   return ctx;
+}
+
+void UploadReusedSubtrees(JobContext& ctx, const std::vector<design::SubtreeRecord>& records) {
+  std::vector<std::string> keys;
+  keys.reserve(records.size());
+  for (const design::SubtreeRecord& rec : records) keys.push_back(rec.key);
+  for (auto& [key, solid] : ctx.subtree_uploads.Used(keys))
+    ctx.subtree_uploads.Uploaded(key, ctx.upload(protocol::SolidBlobOf(solid)));
 }
 
 std::optional<std::string> HeldSolidBlob(JobContext& ctx, const sampling::PointKey& key) {

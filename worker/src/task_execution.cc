@@ -142,6 +142,7 @@ v1::TaskResult Worker::PlanCache(const v1::CachePlanTask& task) {
 
 v1::TaskResult Worker::EvaluateSample(JobContext& ctx, const sampling::SamplePoint& point) {
   design::SampleResult r = ctx.evaluator->Evaluate(point);
+  UploadReusedSubtrees(ctx, r.subtrees);
   sampling::SampleOutcome outcome;
   outcome.valid = r.valid;
   outcome.failure_type = r.failure;
@@ -166,7 +167,7 @@ v1::TaskResult Worker::EvaluateSample(JobContext& ctx, const sampling::SamplePoi
     out->set_from_cache(rec.from_cache);
     out->set_bytes(static_cast<std::int64_t>(rec.bytes));
     for (const auto& child : rec.children) out->add_children(child);
-    if (auto it = ctx.subtree_blobs.find(rec.key); it != ctx.subtree_blobs.end()) out->set_blob_digest(it->second);
+    out->set_blob_digest(ctx.subtree_uploads.DigestOf(rec.key));
   }
   return result;
 }

@@ -9,7 +9,8 @@
 // leases from a separate thread (docs/protocol.md).
 //
 // Jobs are fetched once per job bundle digest from BlobService and unpacked
-// under cache_dir. Slow subtrees are uploaded as blobs; valid samples' root
+// under cache_dir. Slow subtrees are uploaded as blobs at their key's second
+// use on this worker; valid samples' root
 // solids stay in memory and are uploaded only when another worker's ΔG task
 // asks for one (a third thread long-polls ShareSolids), and ΔG tasks fetch
 // the solids they lack from their holder (tasks.proto "Geometry blobs"). Reconnects with exponential backoff (200 ms
@@ -46,7 +47,9 @@ struct WorkerOptions {
   std::string metrics_listen;
   // Resident memory budget of the whole worker process, MiB (>= 256): half
   // of it holds geometry: the subtree cache (at most 1/8; subtrees whose
-  // root took at least the job's cache.min_subtree_seconds) and root solids
+  // root took at least the job's cache.min_subtree_seconds; the same wait
+  // for their key's second use to be uploaded, sharing the cache's memory,
+  // at most 1/16 beyond it) and root solids
   // for ΔG and for sharing, older ones compressed (zstd, at most 5/16; a
   // solid is compressed only when it leaves the level sets) and the latest
   // as level sets (at least 1/16 of the budget, and whatever the subtree
