@@ -1,30 +1,50 @@
 #!/usr/bin/env bash
-# Installs everything fabatlas needs to build, test and run on Debian bookworm.
+# Installs what fabatlas needs on Debian bookworm. `install-deps.sh demo`:
+# only what ops/demo.sh builds and runs (the compilers and libraries of the
+# programs, OpenSCAD and MCAD for the spur gear, Node.js for the customiser
+# page); without an argument, that and everything the test suite and the
+# benchmarks need too (ops/test.sh, .ci/run).
 # Idempotent: packages already present are not fetched again, and the package
 # index is refreshed at most once per call (only when something is missing).
 set -euo pipefail
 
-APT_PACKAGES=(
-  build-essential cmake ninja-build ccache pkg-config clang libclang-rt-14-dev
+set_name="${1:-all}"
+case "$set_name" in
+  demo | all) ;;
+  *)
+    echo "install-deps: unknown package set '$set_name' (demo or all)" >&2
+    exit 2
+    ;;
+esac
+
+# What the demo builds (every library CMake configures) and runs.
+DEMO_PACKAGES=(
+  build-essential cmake ninja-build pkg-config
   libopenvdb-dev libboost-iostreams-dev libtbb-dev libblosc-dev
   libcgal-dev libgmp-dev libmpfr-dev libpolyclipping-dev
   libopenmesh-dev libembree-dev
   libceres-dev libeigen3-dev libsuitesparse-dev
   libgrpc++-dev protobuf-compiler-grpc libprotobuf-dev protobuf-compiler
-  libsqlite3-dev sqlite3
+  libsqlite3-dev
   libyaml-cpp-dev libmuparser-dev nlohmann-json3-dev libcli11-dev libspdlog-dev
   libcpp-httplib-dev libtinygltf-dev libstb-dev libpng-dev libzstd-dev libssl-dev libexpat1-dev
+  libglpk-dev libfcl-dev
+  # the spur gear: OpenSCAD exports its geometry, MCAD holds its involute gear
+  openscad openscad-mcad
+  fonts-dejavu-core
+)
+# What only the tests and benchmarks need.
+TEST_PACKAGES=(
+  ccache clang libclang-rt-14-dev
   libgtest-dev libgmock-dev libbenchmark-dev
-  openscad
+  sqlite3
   # real OpenSCAD models nobody on the team wrote: the corpus of the mesh road's
   # coverage tests and benchmark (docs/openscad.md)
-  openscad-testing-data openscad-mcad
+  openscad-testing-data
   chromium
-  fonts-dejavu-core
-  libglpk-dev
-  # peers and operators' tools: CalculiX (FEM side by side), FCL (continuous
-  # collisions), Slurm + munge (the slurm test), Dask (task-throughput peer)
-  calculix-ccx libfcl-dev
+  # peers and operators' tools: CalculiX (FEM side by side), Slurm + munge
+  # (the slurm test), Dask (task-throughput peer)
+  calculix-ccx
   munge slurmctld slurmd slurm-client
   python3-distributed
   # tests: certificates made by the TLS test, the journal syncs --fsync-commits makes
@@ -37,6 +57,8 @@ APT_PACKAGES=(
   # models' parts (tests/scad/slice_parts_test.py)
   prusa-slicer
 )
+APT_PACKAGES=("${DEMO_PACKAGES[@]}")
+if [ "$set_name" = all ]; then APT_PACKAGES+=("${TEST_PACKAGES[@]}"); fi
 # Node.js and npm: the machine's own if present, else Debian's.
 command -v npm >/dev/null 2>&1 || APT_PACKAGES+=(nodejs npm)
 

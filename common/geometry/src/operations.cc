@@ -1,9 +1,7 @@
-// operations.cc — transforms, CSG, offsets, arrays and the measures built on
-// them (ΔG of Fab Forms Eq. 2, morphological opening).
+// operations.cc — CSG, offsets, arrays and the measures built on them (ΔG of
+// Fab Forms Eq. 2, morphological opening); transforms are in transforms.cc.
 #include <openvdb/tools/Composite.h>
 #include <openvdb/tools/LevelSetRebuild.h>
-#include <openvdb/tools/Interpolation.h>
-#include <openvdb/tools/Morphology.h>
 #include <openvdb/tools/SignedFloodFill.h>
 #include <tbb/parallel_for.h>
 
@@ -14,6 +12,7 @@
 #include <numbers>
 
 #include "fabatlas/mesh/column_overlap.h"
+#include "narrow_band.h"
 #include "solid_impl.h"
 
 namespace fabatlas::geometry {
@@ -21,27 +20,30 @@ namespace fabatlas::geometry {
 using openvdb::FloatGrid;
 using LeafT = openvdb::FloatTree::LeafNodeType;
 
-namespace {
-
-FloatGrid::Ptr EmptyGrid(const GridSpec& spec) {
+FloatGrid::Ptr internal::EmptyGrid(const GridSpec& spec) {
   FloatGrid::Ptr grid = FloatGrid::create(static_cast<float>(spec.half_width_voxels * spec.voxel_size));
   grid->setTransform(internal::CanonicalTransform(spec.voxel_size));
   return grid;
 }
 
-Solid EmptyLike(const Solid& s) { return internal::MakeSolid(EmptyGrid(s.impl()->spec), s.impl()->spec); }
+Solid internal::EmptyLike(const Solid& s) { return internal::MakeSolid(EmptyGrid(s.impl()->spec), s.impl()->spec); }
 
-double ActiveVoxels(const Solid& s) { return static_cast<double>(s.impl()->Grid()->activeVoxelCount()); }
+double internal::ActiveVoxels(const Solid& s) { return static_cast<double>(s.impl()->Grid()->activeVoxelCount()); }
 
-// Rebuild the zero level set of `src` (whose transform may be any affine map)
-// as a narrow band on the canonical transform of `spec`.
-Solid Rebuild(const FloatGrid& src, const GridSpec& spec) {
+Solid internal::Rebuild(const FloatGrid& src, const GridSpec& spec) {
   auto xform = internal::CanonicalTransform(spec.voxel_size);
   const float hw = static_cast<float>(spec.half_width_voxels);
   FloatGrid::Ptr out =
       openvdb::tools::levelSetRebuild(src, static_cast<float>(kMeshIso * src.voxelSize()[0]), hw, hw, xform.get());
   return internal::MakeSolid(out, spec);
 }
+
+namespace {
+
+using internal::ActiveVoxels;
+using internal::AssembleNarrowBand;
+using internal::EmptyLike;
+using internal::Rebuild;
 
 // `b` expressed on `a`'s grid spec (voxel size, band), resampling if needed.
 FloatGrid::ConstPtr OnSpecOf(const Solid& a, const Solid& b) {
@@ -52,171 +54,7 @@ FloatGrid::ConstPtr OnSpecOf(const Solid& a, const Solid& b) {
   return Rebuild(*b.impl()->Grid(), target).impl()->Grid();
 }
 
-// Builds a narrow-band level set leaf by leaf, in parallel over leaves (TBB):
-// `fill(i, emit)` visits the candidate voxels of the leaf at origins[i] and
-// calls emit(pos, v, candidate). A voxel becomes active with value v when it
-// is a candidate and |v| is inside the band half width `bg` (world units);
-// every other visited voxel is stored inactive at +bg or -bg by the sign of
-// v. Leaves with no active voxel are dropped; the result is sign-flooded.
-// `fill` runs concurrently for different i and must be thread-safe.
-template <class Fill>
-Solid AssembleNarrowBand(const GridSpec& spec, double bg, const std::vector<openvdb::Coord>& origins, Fill fill) {
-  std::vector<LeafT*> out_leaves(origins.size(), nullptr);
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, origins.size()), [&](const tbb::blocked_range<size_t>& r) {
-    for (size_t i = r.begin(); i != r.end(); ++i) {
-      auto leaf = std::make_unique<LeafT>(origins[i], static_cast<float>(bg), false);
-      bool any = false;
-      fill(i, [&](openvdb::Index pos, double v, bool candidate) {
-        if (candidate && std::abs(v) < bg) {
-          leaf->setValueOn(pos, static_cast<float>(v));
-          any = true;
-        } else {
-          leaf->setValueOff(pos, static_cast<float>(v > 0 ? bg : -bg));
-        }
-      });
-      if (any) out_leaves[i] = leaf.release();
-    }
-  });
-  FloatGrid::Ptr out = EmptyGrid(spec);
-  for (LeafT* leaf : out_leaves)
-    if (leaf) out->tree().addLeaf(leaf);
-  openvdb::tools::signedFloodFill(out->tree());
-  return internal::MakeSolid(out, spec);
-}
-
-// Resample s after mapping its geometry by `post` (applied after s's
-// canonical index-to-world map). For rigid maps and enlargements the signed
-// distances themselves are interpolated (triquadratic) at the new voxel
-// centres, which keeps sharp edges and curvature; shrinking maps would thin
-// the narrow band, so they rebuild from the mesh of the zero level set.
-template <typename Fn>
-Solid MapAndRebuild(const Solid& s, Fn post, double scale = 1.0) {
-  const GridSpec& spec = s.impl()->spec;
-  const FloatGrid& in = *s.impl()->Grid();
-  auto xform = in.transform().copy();
-  post(*xform);
-  if (scale < 1.0) {
-    // A new grid object sharing the (unmodified) tree, with its own transform.
-    FloatGrid::Ptr src = openvdb::ConstPtrCast<FloatGrid>(in.copy());
-    src->setTransform(xform);
-    return Rebuild(*src, spec);
-  }
-  const auto out_xform = internal::CanonicalTransform(spec.voxel_size);
-  const double bg = spec.half_width_voxels * spec.voxel_size;
-  // Candidate output voxels: the images of the input's active voxels,
-  // dilated to close the gaps a rotation or enlargement leaves.
-  openvdb::MaskGrid::Ptr mask = openvdb::MaskGrid::create(false);
-  {
-    auto macc = mask->getAccessor();
-    for (auto it = in.tree().cbeginValueOn(); it; ++it) {
-      const openvdb::Vec3d w = xform->indexToWorld(it.getCoord());
-      macc.setValueOn(openvdb::Coord::floor(out_xform->worldToIndex(w)));
-    }
-  }
-  openvdb::tools::dilateActiveValues(mask->tree(), static_cast<int>(std::ceil(scale)) + 1,
-                                     openvdb::tools::NN_FACE_EDGE_VERTEX, openvdb::tools::IGNORE_TILES);
-  std::vector<openvdb::MaskTree::LeafNodeType*> mleaves;
-  mask->tree().getNodes(mleaves);
-  std::vector<openvdb::Coord> origins;
-  for (const auto* m : mleaves) origins.push_back(m->origin());
-  return AssembleNarrowBand(spec, bg, origins, [&](size_t i, auto&& emit) {
-    auto acc = in.getConstAccessor();  // one accessor per leaf (not thread-safe)
-    for (auto it = mleaves[i]->cbeginValueOn(); it; ++it) {
-      const openvdb::Vec3d w = out_xform->indexToWorld(it.getCoord());
-      emit(it.pos(), scale * openvdb::tools::QuadraticSampler::sample(acc, xform->worldToIndex(w)), true);
-    }
-  });
-}
-
-bool IsLatticeShift(const Vec3& t, double vs, openvdb::Coord& shift) {
-  for (int k = 0; k < 3; ++k) {
-    const double n = t[k] / vs;
-    const double r = std::round(n);
-    if (std::abs(n - r) > 1e-9 || std::abs(r) > 1e9) return false;
-    shift[k] = static_cast<openvdb::Int32>(r);
-  }
-  return true;
-}
-
 }  // namespace
-
-// ---- Transforms -----------------------------------------------------------------
-
-namespace {
-// A mesh solid mapped vertex by vertex (x -> f(x)): it stays a mesh solid.
-template <typename F>
-Solid MapBoundary(const Solid& s, F&& f) {
-  mesh::TriangleMesh m = *s.boundary();
-  for (auto& v : m.vertices) v = f(v);
-  return MeshSolid(s.impl()->spec, std::move(m));
-}
-}  // namespace
-
-Solid Translate(const Solid& s, const Vec3& t) {
-  for (double v : t)
-    if (!std::isfinite(v)) throw InputError("translate: offset must be finite");
-  if (!s.impl()) return s;
-  if (s.boundary())
-    return MapBoundary(s, [&](const std::array<double, 3>& v) {
-      return std::array<double, 3>{v[0] + t[0], v[1] + t[1], v[2] + t[2]};
-    });
-  openvdb::Coord shift;
-  if (IsLatticeShift(t, s.voxel_size(), shift)) {
-    // Exact: move every active voxel by a whole number of voxels.
-    const FloatGrid& src = *s.impl()->Grid();
-    FloatGrid::Ptr out = EmptyGrid(s.impl()->spec);
-    auto acc = out->getAccessor();
-    for (auto it = src.tree().cbeginValueOn(); it; ++it) {
-      if (it.isVoxelValue()) {
-        acc.setValueOn(it.getCoord() + shift, *it);
-      } else {
-        openvdb::CoordBBox b = it.getBoundingBox();
-        b.translate(shift);
-        out->tree().fill(b, *it, true);
-      }
-    }
-    openvdb::tools::signedFloodFill(out->tree());
-    return internal::MakeSolid(out, s.impl()->spec);
-  }
-  return MapAndRebuild(s, [&](openvdb::math::Transform& x) { x.postTranslate(openvdb::Vec3d(t[0], t[1], t[2])); });
-}
-
-Solid Rotate(const Solid& s, const Vec3& euler_xyz_deg) {
-  for (double v : euler_xyz_deg)
-    if (!std::isfinite(v)) throw InputError("rotate: angles must be finite");
-  if (!s.impl()) return s;
-  if (euler_xyz_deg[0] == 0 && euler_xyz_deg[1] == 0 && euler_xyz_deg[2] == 0) return s;
-  const double k = std::numbers::pi / 180.0;
-  if (s.boundary()) {
-    const double cx = std::cos(euler_xyz_deg[0] * k), sx = std::sin(euler_xyz_deg[0] * k);
-    const double cy = std::cos(euler_xyz_deg[1] * k), sy = std::sin(euler_xyz_deg[1] * k);
-    const double cz = std::cos(euler_xyz_deg[2] * k), sz = std::sin(euler_xyz_deg[2] * k);
-    return MapBoundary(s, [&](const std::array<double, 3>& v) {
-      const double y1 = cx * v[1] - sx * v[2], z1 = sx * v[1] + cx * v[2];     // about x
-      const double x2 = cy * v[0] + sy * z1, z2 = -sy * v[0] + cy * z1;        // about y
-      return std::array<double, 3>{cz * x2 - sz * y1, sz * x2 + cz * y1, z2};  // about z
-    });
-  }
-  return MapAndRebuild(s, [&](openvdb::math::Transform& x) {
-    // R = Rz * Ry * Rx on column vectors: rotate about x first.
-    x.postRotate(euler_xyz_deg[0] * k, openvdb::math::X_AXIS);
-    x.postRotate(euler_xyz_deg[1] * k, openvdb::math::Y_AXIS);
-    x.postRotate(euler_xyz_deg[2] * k, openvdb::math::Z_AXIS);
-  });
-}
-
-Solid Scale(const Solid& s, double factor) {
-  internal::RequirePositive(factor, "scale", "factor");
-  if (!s.impl()) return s;
-  if (factor == 1.0) return s;
-  if (s.boundary())
-    return MapBoundary(s, [&](const std::array<double, 3>& v) {
-      return std::array<double, 3>{v[0] * factor, v[1] * factor, v[2] * factor};
-    });
-  internal::CheckActiveVoxelEstimate(s.impl()->spec, ActiveVoxels(s) * factor * factor, "the scaled solid");
-  return MapAndRebuild(
-      s, [&](openvdb::math::Transform& x) { x.postScale(factor); }, factor);
-}
 
 // ---- CSG ------------------------------------------------------------------------
 
