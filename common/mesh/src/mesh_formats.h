@@ -41,4 +41,8 @@ TriangleMesh Read3mf(const std::filesystem::path& path, std::string_view data);
 // it.
 TriangleMesh ReadAmf(const std::filesystem::path& path, std::string_view data);
 
+// read_ply.cc: a PLY file's bytes as a mesh. Throws InputError "PATH: ..."
+// for anything malformed.
+TriangleMesh ReadPly(const std::filesystem::path& path, std::string_view data);
+
 }  // namespace fabatlas::mesh::internal
