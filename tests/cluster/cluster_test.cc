@@ -251,9 +251,14 @@ Placement GeometryChangesWithTheirSamples(const fs::path& state, const std::stri
 }  // namespace
 
 // Lease affinity (worker.proto): with two 1-slot workers, ΔG tasks go to the
-// worker that evaluated their samples, so far fewer solids cross between
-// workers than when leases go oldest-first to whoever asks; the artifact is
-// the same byte for byte either way (RunJobOnWorkers checks it).
+// worker that evaluated their samples; the artifact is the same byte for
+// byte with or without it (RunJobOnWorkers checks it). With affinity, at most
+// one ΔG task in six runs on a worker holding neither sample (only steals at
+// a batch's end). Oldest-first leasing (--no-lease-affinity) is run beside it
+// and its placement printed, but not compared: on a loaded machine one
+// worker can take most of a batch, and then oldest-first places well by
+// chance (of 41 ΔG tasks, 3 to 17 ran on a worker holding neither sample in
+// four runs at load 3–6, against 2 to 3 with affinity; docs/testing.md).
 TEST(ClusterLoopback, LeaseAffinityKeepsGeometryChangesWithTheirSolids) {
   std::string on_id, off_id;
   EXPECT_EQ(RunJobOnWorkers("affinity_on", 2, 1, &on_id), ReferenceForm());
@@ -271,10 +276,7 @@ TEST(ClusterLoopback, LeaseAffinityKeepsGeometryChangesWithTheirSolids) {
   ASSERT_GT(on.total, 20);
   EXPECT_EQ(on.total, off.total);
   EXPECT_GT(downloads_off, 0);
-  EXPECT_LT(downloads_on, downloads_off);
-  EXPECT_GT(on.both, off.both);
-  EXPECT_LE(on.neither, off.neither);
-  EXPECT_LE(4 * on.neither, on.total);  // mostly with a holder: only steals at a batch's end
+  EXPECT_LE(6 * on.neither, on.total);  // mostly with a holder: only steals at a batch's end
 }
 
 TEST(ClusterFaults, TwentyWorkerKillsMidTaskLoseNothing) {
