@@ -160,6 +160,31 @@ TEST(ScadNative, DebianExamplesTakenAreOpenScadsExportTheRestDeclined) {
   EXPECT_GE(taken, 34);
 }
 
+// OpenSCAD's own modifier regression models (openscad-testing-data's
+// 3D/features: background `%`, highlight `#`, disable `*`, root `!`, and
+// `%child()` inside a module, whose modifier OpenSCAD 2021.01 drops): what
+// the evaluator takes is OpenSCAD's export byte for byte; the rest is
+// declined naming a line of the model.
+TEST(ScadNative, ModifierModelsAreOpenScadsExport) {
+  const fs::path features = "/usr/share/openscad/testdata/scad/3D/features";
+  if (!fs::exists(features)) GTEST_SKIP() << "openscad-testing-data not installed";
+  const fs::path dir = fabatlas::testing::FreshTempDir("scad-native-modifiers");
+  int taken = 0;
+  for (const char* name : {"background-modifier.scad", "background-modifier2.scad", "child-background.scad",
+                           "disable-modifier.scad", "highlight-and-background-modifier.scad", "highlight-modifier.scad",
+                           "highlight-modifier2.scad", "root-modifier.scad"}) {
+    const fs::path model = features / name;
+    const scad::ModelEvaluation own = scad::EvaluateModel(model, {});
+    if (!own.evaluated) {
+      EXPECT_EQ(own.declined.rfind(model.string() + ":", 0), 0u) << own.declined;
+      continue;
+    }
+    ++taken;
+    EXPECT_EQ(own.csg, OpenScadCsg(model, {}, dir)) << model;
+  }
+  EXPECT_GE(taken, 6);
+}
+
 // Models that include and use other files, nobody on the team wrote but
 // the README's spur gear: models calling MCAD's modules (openscad-mcad),
 // every MCAD library file read as a model, and OpenSCAD's own include/use

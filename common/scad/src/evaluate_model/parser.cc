@@ -132,7 +132,8 @@ StmtPtr Parser::Block(std::shared_ptr<Stmt> s) {
 }
 
 // `#` (highlight) or `%` (background) before a statement: written before
-// the node.
+// the node. Both (`%#` or `#%`) are written "%#", as OpenSCAD 2021.01 writes
+// a node that is both.
 StmtPtr Parser::Modified() {
   const std::string modifier = Peek().text;
   ++i_;
@@ -141,7 +142,9 @@ StmtPtr Parser::Modified() {
       inner->kind != Stmt::Kind::kLet)
     Fail("modifier '" + modifier + "' on a definition, assignment or block");
   auto copy = std::make_shared<Stmt>(*inner);
-  copy->modifier = modifier;
+  const std::string both = modifier + inner->modifier;
+  copy->modifier =
+      std::string(both.find('%') != std::string::npos ? "%" : "") + (both.find('#') != std::string::npos ? "#" : "");
   return copy;
 }
 

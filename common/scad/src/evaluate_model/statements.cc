@@ -119,10 +119,17 @@ void Evaluator::InstantiateHere(const Stmt& s, Scope& scope, std::vector<CsgOut>
   }
 }
 
-// `#` or `%` before a statement that makes at most one node.
+// `#` or `%` before a statement that makes at most one node. Before
+// `child()` or `children()` OpenSCAD 2021.01 drops it: the children keep
+// their own (testing-data's child-background.scad, whose `%child()` cylinder
+// its export and render still subtract).
 void Evaluator::Modified(const Stmt& s, Scope& scope, std::vector<CsgOut>& out) {
   Stmt plain = s;
   plain.modifier.clear();
+  if (s.kind == Stmt::Kind::kCall && (s.name == "child" || s.name == "children")) {
+    Instantiate(plain, scope, out);
+    return;
+  }
   const std::size_t before = out.size();
   Instantiate(plain, scope, out);
   if (out.size() > before + 1) throw NotNative{s.line, "modifier '" + s.modifier + "' on several nodes"};
