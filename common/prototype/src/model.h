@@ -44,6 +44,9 @@ struct LinearConstraint {
 
 Eigen::Matrix3d AxisRotation(int axis, double degrees);  // exact for multiples of 90
 
+// A cuboid's six variables in order (the variables above).
+inline constexpr const char* kCoord[6] = {"x0", "x1", "y0", "y1", "z0", "z1"};
+
 class Model {
  public:
   explicit Model(const Prototype& p);
