@@ -100,6 +100,9 @@ class Evaluator {
   std::shared_ptr<const ModuleDef> FindModule(const std::string& name, const Scope& scope, Definition* where);
   std::shared_ptr<const FunctionDef> FindFunction(const std::string& name, const Scope& scope, Definition* where);
   const SourceFile* Used(const std::string& path);
+  // FindModule and FindFunction: Def is ModuleDef or FunctionDef.
+  template <typename Def>
+  std::shared_ptr<const Def> Find(const std::string& name, const Scope& scope, Definition* where);
   // The lexical and dynamic parents of a call's scope `inner` for a
   // definition found at `where`, called from `caller`. A used file's
   // definitions see its top-level assignments, evaluated as OpenSCAD

@@ -270,41 +270,32 @@ const SourceFile* Evaluator::Used(const std::string& path) {
   return it->second.get();
 }
 
-std::shared_ptr<const ModuleDef> Evaluator::FindModule(const std::string& name, const Scope& scope, Definition* where) {
+template <typename Def>
+std::shared_ptr<const Def> Evaluator::Find(const std::string& name, const Scope& scope, Definition* where) {
   for (const Scope* s = &scope; s; s = s->lexical) {
-    if (auto m = Own<ModuleDef>(*s, name)) {
+    if (auto d = Own<Def>(*s, name)) {
       if (where) *where = {s, nullptr};
-      return m;
+      return d;
     }
     if (s->uses)
       for (const std::string& path : *s->uses) {
         const SourceFile* used = Used(path);
-        if (auto m = Own<ModuleDef>(*used, name)) {
+        if (auto d = Own<Def>(*used, name)) {
           if (where) *where = {nullptr, used};
-          return m;
+          return d;
         }
       }
   }
   return nullptr;
 }
 
+std::shared_ptr<const ModuleDef> Evaluator::FindModule(const std::string& name, const Scope& scope, Definition* where) {
+  return Find<ModuleDef>(name, scope, where);
+}
+
 std::shared_ptr<const FunctionDef> Evaluator::FindFunction(const std::string& name, const Scope& scope,
                                                            Definition* where) {
-  for (const Scope* s = &scope; s; s = s->lexical) {
-    if (auto f = Own<FunctionDef>(*s, name)) {
-      if (where) *where = {s, nullptr};
-      return f;
-    }
-    if (s->uses)
-      for (const std::string& path : *s->uses) {
-        const SourceFile* used = Used(path);
-        if (auto f = Own<FunctionDef>(*used, name)) {
-          if (where) *where = {nullptr, used};
-          return f;
-        }
-      }
-  }
-  return nullptr;
+  return Find<FunctionDef>(name, scope, where);
 }
 
 void Evaluator::CallScopes(const Definition& where, const Scope& caller, Scope& inner,
